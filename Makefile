@@ -1,0 +1,36 @@
+# tzsl developer entry points. Every target installs what it needs into $(VENV) itself.
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV ?= .venv
+BIN := $(VENV)/bin
+SHARED_DATA := $(abspath ../shared/data)
+# Point tzsl at the shared real data when it sits beside the checkout.
+ifneq ($(wildcard $(SHARED_DATA)),)
+export TZSL_DATA_DIR ?= $(SHARED_DATA)
+endif
+RESULTS ?= results
+N_JOBS ?= 2
+
+.PHONY: install test reproduce-tables bench clean
+
+$(BIN)/activate:
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install --upgrade --quiet pip
+
+$(VENV)/.installed: pyproject.toml $(BIN)/activate
+	$(BIN)/pip install --quiet -e '.[test,dask]'
+	touch $@
+
+install: $(VENV)/.installed
+
+test: install
+	$(BIN)/pytest -q
+
+reproduce-tables: install
+	$(BIN)/tzsl reproduce-tables --out $(RESULTS) --n-jobs $(N_JOBS) --force
+
+bench: install
+	$(BIN)/tzsl bench --n-jobs $(N_JOBS)
+
+clean:
+	rm -rf $(VENV) .pytest_cache .hypothesis $(RESULTS) .tzsl_cache

@@ -1,0 +1,3 @@
+"""Splits and metrics."""
+
+__all__: list[str] = []

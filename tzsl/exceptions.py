@@ -1,0 +1,59 @@
+"""Errors raised by tzsl.
+
+Every error a user can cause with bad input is a :class:`TzslError`. The command line
+catches these and prints their message (never a traceback) with a non-zero exit code.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class TzslError(Exception):
+    """Base class of every error tzsl raises on purpose."""
+
+
+class DataFileError(TzslError):
+    """A data file is missing, unreadable, corrupt or holds unexpected content.
+
+    Parameters
+    ----------
+    path : str or Path or None
+        The file concerned.
+    problem : str
+        What is wrong, in words a user can act on.
+    trial : str or None
+        The trial concerned, when the problem is local to one trial.
+    """
+
+    def __init__(self, path: str | Path | None, problem: str, trial: str | None = None) -> None:
+        self.path = None if path is None else str(path)
+        self.problem = problem
+        self.trial = trial
+        where = []
+        if self.path is not None:
+            where.append(self.path)
+        if trial is not None:
+            where.append(f"trial {trial}")
+        prefix = ": ".join([", ".join(where)]) + ": " if where else ""
+        super().__init__(prefix + problem)
+
+
+class DataMissingError(DataFileError):
+    """A dataset file is not where tzsl looks for it; the message says what to download."""
+
+
+class ChecksumError(DataFileError):
+    """A dataset file exists but its sha256 differs from the registry's."""
+
+
+class ConfigError(TzslError):
+    """An experiment configuration or command-line option is invalid."""
+
+
+class SplitError(TzslError):
+    """A train/test split cannot be made or a supplied split is invalid."""
+
+
+class ModelBundleError(TzslError):
+    """A saved model bundle is corrupt, tampered with or from another tzsl version."""

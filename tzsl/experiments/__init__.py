@@ -1,0 +1,1 @@
+"""Studies: compose data, features, models and evaluation; write tables, figures, manifest."""

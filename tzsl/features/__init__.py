@@ -1,0 +1,3 @@
+"""Feature extraction as scikit-learn transformers."""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""Zero-shot models as scikit-learn estimators."""
+
+__all__: list[str] = []
