@@ -1,0 +1,161 @@
+"""Writing results: atomic files, no silent overwrite, a manifest beside every study.
+
+Every file a study writes goes through :class:`ResultsDir`: it is written to a temporary
+file in the same folder and moved into place with :func:`os.replace`, so a crash or Ctrl-C
+never leaves a half-written table. Existing results are only replaced when ``force=True``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import platform
+import sys
+import tempfile
+from collections.abc import Callable, Iterable
+from datetime import datetime, timezone
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from tzsl.exceptions import ConfigError
+
+#: Packages whose versions every manifest records.
+RECORDED_PACKAGES: tuple[str, ...] = (
+    "tzsl", "numpy", "scipy", "scikit-learn", "pandas", "joblib", "imbalanced-learn",
+    "h5py", "matplotlib", "scikit-image", "imageio", "dask", "distributed", "torch",
+)
+
+
+def atomic_write(path: Path, write: Callable[[Path], None]) -> Path:
+    """Call ``write(tmp_path)`` and move the result to ``path`` atomically.
+
+    Parameters
+    ----------
+    path : Path
+        Final destination; its folder is created if needed.
+    write : callable
+        Receives a temporary path in the same folder and writes the full content there.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    tmp_path = Path(tmp)
+    try:
+        write(tmp_path)
+        os.replace(tmp_path, path)
+    finally:
+        if tmp_path.exists():
+            tmp_path.unlink()
+    return path
+
+
+def package_versions(names: Iterable[str] = RECORDED_PACKAGES) -> dict[str, str | None]:
+    """Installed version of each package, ``None`` when it is not installed."""
+    versions: dict[str, str | None] = {}
+    for name in names:
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            versions[name] = None
+    return versions
+
+
+def file_sha256(path: Path) -> str:
+    """Hex sha256 of a file's bytes."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+class ResultsDir:
+    """A results folder that refuses to overwrite earlier results unless forced.
+
+    Parameters
+    ----------
+    root : Path
+        Output folder (created when missing).
+    force : bool
+        Replace files that already exist. Without it, writing an existing file raises
+        :class:`~tzsl.exceptions.ConfigError` naming the file and the ``--force`` option.
+    """
+
+    def __init__(self, root: str | Path, force: bool = False) -> None:
+        self.root = Path(root)
+        self.force = force
+        self.written: list[Path] = []
+
+    def path(self, name: str) -> Path:
+        """Destination of ``name``, checked against overwriting."""
+        target = self.root / name
+        if target.exists() and not self.force and target not in self.written:
+            raise ConfigError(
+                f"{target} already exists; use --force to overwrite existing results "
+                "or choose another --out folder"
+            )
+        return target
+
+    def check_free(self, names: Iterable[str]) -> None:
+        """Fail early, before any computation, if one of ``names`` would be overwritten."""
+        for name in names:
+            self.path(name)
+
+    def _record(self, path: Path) -> Path:
+        self.written.append(path)
+        return path
+
+    def write_csv(self, name: str, table: pd.DataFrame, index: bool = False) -> Path:
+        """Write ``table`` as CSV at full float precision."""
+        target = self.path(name)
+        return self._record(atomic_write(target, lambda p: table.to_csv(p, index=index)))
+
+    def write_json(self, name: str, payload: Any) -> Path:
+        """Write ``payload`` as indented JSON."""
+        target = self.path(name)
+        text = json.dumps(payload, indent=2, sort_keys=True, default=str)
+        return self._record(atomic_write(target, lambda p: p.write_text(text + "\n")))
+
+    def write_figure(self, name: str, figure: Any, dpi: int = 120) -> Path:
+        """Save a matplotlib figure as PNG and close it."""
+        import matplotlib.pyplot as plt
+
+        target = self.path(name)
+        try:
+            return self._record(
+                atomic_write(target, lambda p: figure.savefig(p, format="png", dpi=dpi, bbox_inches="tight"))
+            )
+        finally:
+            plt.close(figure)
+
+    def write_manifest(
+        self,
+        config: dict[str, Any],
+        data_files: Iterable[Path] = (),
+        name: str = "manifest.json",
+        extra: dict[str, Any] | None = None,
+    ) -> Path:
+        """Record configuration, seeds, data checksums and package versions.
+
+        The manifest lists every file written so far by this object with its sha256 too.
+        """
+        manifest = {
+            "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+            "command": " ".join(sys.argv),
+            "python": sys.version.split()[0],
+            "platform": platform.platform(),
+            "packages": package_versions(),
+            "config": config,
+            "data_files": {str(p): file_sha256(Path(p)) for p in data_files},
+            "outputs": {
+                str(p.relative_to(self.root)): file_sha256(p) for p in self.written if p.exists()
+            },
+        }
+        if extra:
+            manifest.update(extra)
+        return self.write_json(name, manifest)
