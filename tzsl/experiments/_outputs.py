@@ -7,13 +7,10 @@ never leaves a half-written table. Existing results are only replaced when ``for
 
 from __future__ import annotations
 
-import hashlib
 import json
-import os
 import platform
 import sys
-import tempfile
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from datetime import datetime, timezone
 from importlib import metadata
 from pathlib import Path
@@ -21,6 +18,7 @@ from typing import Any
 
 import pandas as pd
 
+from tzsl._io import atomic_write, file_sha256
 from tzsl.exceptions import ConfigError
 
 #: Packages whose versions every manifest records.
@@ -28,30 +26,6 @@ RECORDED_PACKAGES: tuple[str, ...] = (
     "tzsl", "numpy", "scipy", "scikit-learn", "pandas", "joblib", "imbalanced-learn",
     "h5py", "matplotlib", "scikit-image", "imageio", "dask", "distributed", "torch",
 )
-
-
-def atomic_write(path: Path, write: Callable[[Path], None]) -> Path:
-    """Call ``write(tmp_path)`` and move the result to ``path`` atomically.
-
-    Parameters
-    ----------
-    path : Path
-        Final destination; its folder is created if needed.
-    write : callable
-        Receives a temporary path in the same folder and writes the full content there.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    tmp_path = Path(tmp)
-    try:
-        write(tmp_path)
-        os.replace(tmp_path, path)
-    finally:
-        if tmp_path.exists():
-            tmp_path.unlink()
-    return path
 
 
 def package_versions(names: Iterable[str] = RECORDED_PACKAGES) -> dict[str, str | None]:
@@ -63,15 +37,6 @@ def package_versions(names: Iterable[str] = RECORDED_PACKAGES) -> dict[str, str 
         except metadata.PackageNotFoundError:
             versions[name] = None
     return versions
-
-
-def file_sha256(path: Path) -> str:
-    """Hex sha256 of a file's bytes."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 class ResultsDir:
