@@ -1,5 +1,41 @@
 """Dataset registry, data home and loaders (files -> arrays + a trial table)."""
 
+from tzsl.datasets._home import get_cache_dir, get_data_home
+from tzsl.datasets._phac2_hold_mat import (
+    load_phac2_hold_mat,
+    load_phac2_labels,
+    parse_trial_id,
+    read_hold_mat,
+    read_phac2_labels_csv,
+)
+from tzsl.datasets._phac2_penn import (
+    PENN_FEATURE_NAMES,
+    PennStaticData,
+    load_phac2_penn,
+    read_penn_static_pickles,
+)
+from tzsl.datasets._registry import fetch, registered_files
+from tzsl.datasets._safe_pickle import safe_load_pickle
 from tzsl.datasets._types import PHAC2_EPS, TRIAL_COLUMNS, BiotacSignals, FeatureSet, RawTrial
 
-__all__ = ["PHAC2_EPS", "TRIAL_COLUMNS", "BiotacSignals", "FeatureSet", "RawTrial"]
+__all__ = [
+    "PHAC2_EPS",
+    "TRIAL_COLUMNS",
+    "BiotacSignals",
+    "FeatureSet",
+    "RawTrial",
+    "get_data_home",
+    "get_cache_dir",
+    "fetch",
+    "registered_files",
+    "safe_load_pickle",
+    "PENN_FEATURE_NAMES",
+    "PennStaticData",
+    "load_phac2_penn",
+    "read_penn_static_pickles",
+    "load_phac2_hold_mat",
+    "load_phac2_labels",
+    "read_hold_mat",
+    "read_phac2_labels_csv",
+    "parse_trial_id",
+]

@@ -1,0 +1,214 @@
+"""The dataset registry: every known data file with its sha256, verified on first use.
+
+The registry lives in ``registry.txt`` beside this module (pooch's registry-file format,
+generated once from the sha256 tables of the shared data's PROVENANCE.md files; the
+file header names the source of every hash). :func:`fetch` resolves a registered path
+under the data home, checks that it exists and that its sha256 matches (once per
+process and file state), and returns its absolute path.
+
+Nothing here touches the network unless :func:`fetch` is called with
+``download=True`` (then pooch downloads the file from its public URL, when the registry
+has one, and checks its hash).
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+
+import pooch
+
+from tzsl.datasets._home import DATA_DIR_ENV, get_data_home
+from tzsl.exceptions import ChecksumError, DataMissingError
+
+#: Registry value meaning "listed, but no hash known" (the fabric depth PNGs).
+NO_HASH = "none"
+
+# Where each group of files comes from (prefix -> human-readable public source).
+_SOURCES: tuple[tuple[str, str], ...] = (
+    (
+        "phac2/penn_bolt_ml_data/static_adjective_phase_set/",
+        "the Penn static feature pickles from https://github.com/IanTheEngineer/Penn-haptics-bolt "
+        "at commit a89498a58d82ba0d4fac22e85cc2e755eeb67aaf, folder "
+        "ml_data/mkl_unstandard_1_28/static/adjective_phase_set/",
+    ),
+    (
+        "phac2/imperial_cvpr2021_hold/",
+        "the HOLD-phase MATLAB files from https://github.com/arahosu/cvpr_imperial2 at commit "
+        "04932b5235f0b8026bed13547941a61cb7adcf60, folder data/ (Imperial College CVPR "
+        "coursework 2021 copy of PHAC-2)",
+    ),
+    (
+        "phac2/penn_bolt_pilot_2012_training_tests/",
+        "the Penn 2012 pilot recordings from https://github.com/IanTheEngineer/Penn-haptics-bolt "
+        "at commit 441c64d94cbc898c65ee7e3d684857fab96f6782, folder training_tests/",
+    ),
+    (
+        "phac2/derived/",
+        "the derived PHAC-2 files (built from the Penn static pickles; see data/README.md and "
+        "phac2/PROVENANCE.md section 7)",
+    ),
+    (
+        "fabric/fabric_properties_100x4.npy",
+        "https://github.com/GitGroot/gelsight_zeroshot_for_instance at commit "
+        "87991b140864d225790bfd7966b773051c9c5d0c, file data/class_attribute_matrix.npy "
+        "(save it under the registered name)",
+    ),
+    (
+        "fabric/fabric_groups.csv",
+        "the fabric group list (re-typed from Data2.py of "
+        "https://github.com/GitGroot/gelsight_zeroshot_category; see data/README.md)",
+    ),
+    (
+        "fabric/",
+        "https://github.com/GitGroot/gelsight_zeroshot_category at commit "
+        "a20cbfa4057a33888f6c1be106407e8a607a89ad, folder data/",
+    ),
+    (
+        "gelsight_press/",
+        "https://github.com/GelSight-lab/EstimateModulus at commit "
+        "12cb13717ac71c09aae428b1efd0fe0190599372, folder example_data/2023-12-06/",
+    ),
+)
+
+# (resolved path, size, mtime_ns) -> None once the file was verified in this process.
+_VERIFIED: set[tuple[str, int, int]] = set()
+_LOCK = threading.Lock()
+
+
+@lru_cache(maxsize=1)
+def _registry() -> pooch.Pooch:
+    """The pooch registry (data home is substituted per call in :func:`fetch`)."""
+    pup = pooch.create(path=".", base_url="", registry=None, retry_if_failed=0)
+    with resources.files("tzsl.datasets").joinpath("registry.txt").open("r", encoding="utf-8") as fh:
+        pup.load_registry(fh)
+    return pup
+
+
+def registered_files(prefix: str = "") -> list[str]:
+    """All registered relative paths starting with ``prefix``, sorted.
+
+    Parameters
+    ----------
+    prefix : str
+        E.g. ``"phac2/imperial_cvpr2021_hold/"``.
+
+    Returns
+    -------
+    list of str
+        Paths relative to the data home, with ``/`` separators.
+    """
+    return sorted(name for name in _registry().registry if name.startswith(prefix))
+
+
+def registered_hash(relpath: str) -> str | None:
+    """The registered ``"sha256:<hex>"`` of ``relpath``, or None if it is listed without one.
+
+    Raises
+    ------
+    KeyError
+        ``relpath`` is not in the registry.
+    """
+    value = _registry().registry[relpath]
+    return None if value == NO_HASH else value
+
+
+def source_of(relpath: str) -> str:
+    """Human-readable public source of a registered file (used in error messages)."""
+    url = _registry().urls.get(relpath)
+    for prefix, text in _SOURCES:
+        if relpath.startswith(prefix):
+            return text + (f"; direct link: {url}" if url else "")
+    return f"see data/README.md{'; direct link: ' + url if url else ''}"
+
+
+def missing_message(relpath: str, home: Path) -> str:
+    """What to download, from where, and where to put it."""
+    return (
+        f"dataset file {relpath!r} is missing. Download {source_of(relpath)} and save it as "
+        f"{home / relpath} (data home {home}; choose another with --data-dir or "
+        f"{DATA_DIR_ENV}). data/README.md lists every source."
+    )
+
+
+def fetch(relpath: str, data_dir: str | os.PathLike | None = None, *, download: bool = False) -> Path:
+    """Absolute path of a registered data file, verified against its sha256.
+
+    The hash is checked on the first use of the file in this process; the verdict is
+    cached for as long as the file's size and modification time do not change.
+
+    Parameters
+    ----------
+    relpath : str
+        Registered path relative to the data home, e.g.
+        ``"phac2/derived/phac2_labels_60x24.csv"``.
+    data_dir : str or path-like or None
+        Data home; see :func:`tzsl.datasets.get_data_home`.
+    download : bool
+        If True and the file is missing, download it from its registered public URL
+        with pooch (network access). Never done implicitly.
+
+    Returns
+    -------
+    Path
+        ``<data home>/<relpath>``.
+
+    Raises
+    ------
+    KeyError
+        ``relpath`` is not registered (a programming error).
+    DataMissingError
+        The file does not exist (message: what to download, from where, and where to
+        save it).
+    ChecksumError
+        The file's sha256 differs from the registry's (message gives both).
+    """
+    pup = _registry()
+    if relpath not in pup.registry:
+        raise KeyError(f"{relpath!r} is not in the tzsl dataset registry")
+    home = get_data_home(data_dir)
+    path = home / relpath
+    if not path.is_file():
+        if download and relpath in pup.urls:
+            return _download(relpath, home)
+        raise DataMissingError(path, missing_message(relpath, home))
+    stat = path.stat()
+    key = (str(path.resolve()), stat.st_size, stat.st_mtime_ns)
+    with _LOCK:
+        if key in _VERIFIED:
+            return path
+    expected = registered_hash(relpath)
+    if expected is not None:
+        alg, _, want = expected.partition(":")
+        got = pooch.file_hash(str(path), alg=alg)
+        if got.lower() != want.lower():
+            raise ChecksumError(
+                path,
+                f"{alg} mismatch for {relpath!r}: expected {want}, got {got}. The file is "
+                f"corrupt or a different version; download it again from {source_of(relpath)}.",
+            )
+    with _LOCK:
+        _VERIFIED.add(key)
+    return path
+
+
+def _download(relpath: str, home: Path) -> Path:
+    """Download one registered file into the data home with pooch (hash-checked)."""
+    pup = _registry()
+    downloader = pooch.create(
+        path=home, base_url="", registry={relpath: registered_hash(relpath)},
+        urls={relpath: pup.urls[relpath]}, retry_if_failed=2,
+    )
+    try:
+        return Path(downloader.fetch(relpath))
+    except ValueError as exc:  # pooch's hash mismatch
+        raise ChecksumError(home / relpath, str(exc)) from None
+
+
+def clear_verification_cache() -> None:
+    """Forget which files were verified (next :func:`fetch` re-hashes them)."""
+    with _LOCK:
+        _VERIFIED.clear()
