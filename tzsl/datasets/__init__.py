@@ -1,6 +1,7 @@
 """Dataset registry, data home and loaders (files -> arrays + a trial table)."""
 
 from tzsl.datasets._home import get_cache_dir, get_data_home
+from tzsl.datasets._phac2_h5 import list_phac2_h5_trials, load_phac2_h5, require_eps, write_phac2_h5
 from tzsl.datasets._phac2_hold_mat import (
     load_phac2_hold_mat,
     load_phac2_labels,
@@ -38,4 +39,8 @@ __all__ = [
     "read_hold_mat",
     "read_phac2_labels_csv",
     "parse_trial_id",
+    "load_phac2_h5",
+    "write_phac2_h5",
+    "list_phac2_h5_trials",
+    "require_eps",
 ]
