@@ -100,3 +100,30 @@ def test_verdict_is_cached_per_file_state(data_dir, tmp_path, monkeypatch):
     with pytest.raises(ChecksumError):
         fetch(LABELS, tmp_path)
     assert len(calls) == 2
+
+
+@pytest.mark.realdata
+def test_explicit_download_verifies_the_hash(data_dir, tmp_path):
+    """download=True goes through pooch; here with a local 'downloader' (no network)."""
+    rel = "phac2/imperial_cvpr2021_hold/acrylic_211_01_HOLD.mat"
+    seen = []
+
+    def copy_from_shared(url, output_file, pup):
+        seen.append(url)
+        shutil.copyfile(data_dir / rel, output_file)
+
+    path = fetch(rel, tmp_path / "home", download=True, downloader=copy_from_shared)
+    assert path == tmp_path / "home" / rel and path.is_file()
+    assert seen == [
+        "https://raw.githubusercontent.com/arahosu/cvpr_imperial2/"
+        "04932b5235f0b8026bed13547941a61cb7adcf60/data/acrylic_211_01_HOLD.mat"
+    ]
+
+    def corrupt(url, output_file, pup):
+        with open(output_file, "wb") as fh:
+            fh.write(b"not the file")
+
+    other = "phac2/imperial_cvpr2021_hold/acrylic_211_02_HOLD.mat"
+    with pytest.raises(ChecksumError):
+        fetch(other, tmp_path / "home", download=True, downloader=corrupt)
+    assert not (tmp_path / "home" / other).exists()

@@ -134,7 +134,13 @@ def missing_message(relpath: str, home: Path) -> str:
     )
 
 
-def fetch(relpath: str, data_dir: str | os.PathLike | None = None, *, download: bool = False) -> Path:
+def fetch(
+    relpath: str,
+    data_dir: str | os.PathLike | None = None,
+    *,
+    download: bool = False,
+    downloader=None,
+) -> Path:
     """Absolute path of a registered data file, verified against its sha256.
 
     The hash is checked on the first use of the file in this process; the verdict is
@@ -149,7 +155,10 @@ def fetch(relpath: str, data_dir: str | os.PathLike | None = None, *, download: 
         Data home; see :func:`tzsl.datasets.get_data_home`.
     download : bool
         If True and the file is missing, download it from its registered public URL
-        with pooch (network access). Never done implicitly.
+        with pooch (network access) and verify its hash. Never done implicitly.
+    downloader : callable or None
+        A pooch downloader (``downloader(url, output_file, pooch)``) used with
+        ``download=True``; default: pooch's HTTP downloader.
 
     Returns
     -------
@@ -173,7 +182,7 @@ def fetch(relpath: str, data_dir: str | os.PathLike | None = None, *, download: 
     path = home / relpath
     if not path.is_file():
         if download and relpath in pup.urls:
-            return _download(relpath, home)
+            return _download(relpath, home, downloader)
         raise DataMissingError(path, missing_message(relpath, home))
     stat = path.stat()
     key = (str(path.resolve()), stat.st_size, stat.st_mtime_ns)
@@ -195,17 +204,23 @@ def fetch(relpath: str, data_dir: str | os.PathLike | None = None, *, download: 
     return path
 
 
-def _download(relpath: str, home: Path) -> Path:
+def _download(relpath: str, home: Path, downloader=None) -> Path:
     """Download one registered file into the data home with pooch (hash-checked)."""
     pup = _registry()
-    downloader = pooch.create(
+    pup_home = pooch.create(
         path=home, base_url="", registry={relpath: registered_hash(relpath)},
-        urls={relpath: pup.urls[relpath]}, retry_if_failed=2,
+        urls={relpath: pup.urls[relpath]},
+        # network downloads are retried; a caller-supplied downloader handles its own failures
+        retry_if_failed=2 if downloader is None else 0,
     )
     try:
-        return Path(downloader.fetch(relpath))
+        path = Path(pup_home.fetch(relpath, downloader=downloader))
     except ValueError as exc:  # pooch's hash mismatch
         raise ChecksumError(home / relpath, str(exc)) from None
+    stat = path.stat()
+    with _LOCK:
+        _VERIFIED.add((str(path.resolve()), stat.st_size, stat.st_mtime_ns))
+    return path
 
 
 def clear_verification_cache() -> None:
