@@ -1,3 +1,41 @@
-"""Splits and metrics."""
+"""Splits and metrics.
 
-__all__: list[str] = []
+Object splits for zero-shot evaluation (random and challenging, DAP paper 4.2 and 4.6),
+their CSV files, and the metrics reported per split (trial accuracy, per-class mean
+accuracy, per-attribute balanced accuracy, generalised-ZSL scores).
+"""
+
+from tzsl.evaluation._metrics import (
+    gzsl_scores,
+    per_attribute_balanced_accuracy,
+    per_class_accuracy,
+    per_class_mean_accuracy,
+    summarise_over_splits,
+    trial_accuracy,
+)
+from tzsl.evaluation._split_io import read_splits_csv, write_splits_csv
+from tzsl.evaluation._splits import (
+    Split,
+    attribute_exclusions,
+    challenging_splits,
+    check_attribute_table,
+    duplicate_attribute_groups,
+    random_object_splits,
+)
+
+__all__: list[str] = [
+    "Split",
+    "attribute_exclusions",
+    "challenging_splits",
+    "check_attribute_table",
+    "duplicate_attribute_groups",
+    "gzsl_scores",
+    "per_attribute_balanced_accuracy",
+    "per_class_accuracy",
+    "per_class_mean_accuracy",
+    "random_object_splits",
+    "read_splits_csv",
+    "summarise_over_splits",
+    "trial_accuracy",
+    "write_splits_csv",
+]
