@@ -8,6 +8,7 @@ import pytest
 
 from tzsl.datasets import (
     PHAC2_EPS,
+    iter_phac2_h5,
     BiotacSignals,
     RawTrial,
     list_phac2_h5_trials,
@@ -72,6 +73,14 @@ def test_round_trip(h5file):
         assert b.adjectives == a.adjectives
         for ep in PHAC2_EPS:  # segmentation by controller_detail_state
             assert b.ep_mask(ep).sum() == (40 if b.object_id == 101 else 25)
+
+
+def test_iterator_yields_the_same_trials(h5file):
+    path, trials = h5file
+    it = iter_phac2_h5(path, trials=["rock_202_02", "car_sponge_101_01"])
+    first = next(it)
+    assert first.trial_id == "rock_202_02" and first.n_rows == 150
+    assert [t.trial_id for t in it] == ["car_sponge_101_01"]
 
 
 def test_layout_is_the_release_layout(h5file):

@@ -1,7 +1,13 @@
 """Dataset registry, data home and loaders (files -> arrays + a trial table)."""
 
 from tzsl.datasets._home import get_cache_dir, get_data_home
-from tzsl.datasets._phac2_h5 import list_phac2_h5_trials, load_phac2_h5, require_eps, write_phac2_h5
+from tzsl.datasets._phac2_h5 import (
+    iter_phac2_h5,
+    list_phac2_h5_trials,
+    load_phac2_h5,
+    require_eps,
+    write_phac2_h5,
+)
 from tzsl.datasets._phac2_hold_mat import (
     load_phac2_hold_mat,
     load_phac2_labels,
@@ -40,6 +46,7 @@ __all__ = [
     "read_phac2_labels_csv",
     "parse_trial_id",
     "load_phac2_h5",
+    "iter_phac2_h5",
     "write_phac2_h5",
     "list_phac2_h5_trials",
     "require_eps",

@@ -17,7 +17,7 @@ Rows are 100 Hz. The official file also holds non-trial groups ``adjectives``,
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 
 import h5py
@@ -210,6 +210,40 @@ def require_eps(trial: RawTrial, eps: Iterable[str] = tuple(PHAC2_EPS)) -> None:
             )
 
 
+def iter_phac2_h5(
+    path: str | os.PathLike,
+    trials: Sequence[str] | None = None,
+    *,
+    eps: Iterable[str] | None = None,
+) -> Iterator[RawTrial]:
+    """Yield the trials of a PHAC-2 HDF5 file one at a time (constant memory).
+
+    Same parameters, checks and errors as :func:`load_phac2_h5`; the file stays open
+    while the iterator is alive. Requested ``trials`` are checked to exist before the
+    first trial is yielded.
+    """
+    path = Path(path)
+    eps = None if eps is None else tuple(eps)
+    with _open(path) as fh:
+        names = _trial_names(fh, path)
+        if trials is not None:
+            known = set(names)
+            for t in trials:
+                if t not in known:
+                    raise DataFileError(path, "trial not in file", trial=t)
+            names = list(trials)
+        for name in names:
+            try:
+                trial = _read_trial(fh[name], path, name)
+            except OSError as exc:  # h5py raises OSError on truncated data blocks
+                raise DataFileError(
+                    path, f"cannot read trial (truncated or corrupt?): {exc}", trial=name
+                ) from None
+            if eps is not None:
+                require_eps(trial, eps)
+            yield trial
+
+
 def load_phac2_h5(
     path: str | os.PathLike,
     trials: Sequence[str] | None = None,
@@ -224,7 +258,8 @@ def load_phac2_h5(
         The HDF5 file (e.g. ``phac_train_test_pos_neg_90_10_1_20.h5`` of the release, or a
         file written by :func:`write_phac2_h5`).
     trials : sequence of str or None
-        Trial ids to read (file order if None: all trial groups).
+        Trial ids to read (file order if None: all trial groups). For the full release
+        (600 trials, several GB as float64) prefer :func:`iter_phac2_h5`.
     eps : iterable of str or None
         If given, every returned trial must contain these EPs (see :func:`require_eps`).
 
@@ -243,25 +278,7 @@ def load_phac2_h5(
         missing finger or signal (names file, trial and dataset path); wrong shape;
         inconsistent lengths; NaN/inf; an EP in ``eps`` absent.
     """
-    path = Path(path)
-    out = []
-    with _open(path) as fh:
-        names = _trial_names(fh, path)
-        if trials is not None:
-            known = set(names)
-            for t in trials:
-                if t not in known:
-                    raise DataFileError(path, "trial not in file", trial=t)
-            names = list(trials)
-        for name in names:
-            try:
-                trial = _read_trial(fh[name], path, name)
-            except OSError as exc:  # h5py raises OSError on truncated data blocks
-                raise DataFileError(path, f"cannot read trial (truncated or corrupt?): {exc}", trial=name) from None
-            if eps is not None:
-                require_eps(trial, eps)
-            out.append(trial)
-    return out
+    return list(iter_phac2_h5(path, trials, eps=eps))
 
 
 def write_phac2_h5(path: str | os.PathLike, trials: Sequence[RawTrial]) -> Path:
