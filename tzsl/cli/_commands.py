@@ -1,0 +1,3 @@
+"""Imports every command module so each registers its commands on the root group."""
+
+from tzsl.cli import _data_commands  # noqa: F401
