@@ -1,3 +1,44 @@
 """Feature extraction as scikit-learn transformers."""
 
-__all__: list[str] = []
+from tzsl.features._attribute_filter import check_attribute_table, filter_attributes
+from tzsl.features._baseline import (
+    PHAC2_EP_NAMES,
+    BaselineRemover,
+    check_raw_trial,
+    ep_masks,
+    remove_baseline,
+)
+from tzsl.features._feature_sets import penn_feature_set, raw_feature_set
+from tzsl.features._kinesthetic import KinestheticFeatures, kinesthetic_ep_features
+from tzsl.features._pca import VariancePCA
+from tzsl.features._penn_columns import (
+    PENN_DROPPED_COLUMNS,
+    PENN_FEATURES_PER_EP,
+    PennColumnSelector,
+    select_penn_columns,
+)
+from tzsl.features._raw_features import RawTrialFeatures
+from tzsl.features._time_average import BIOTAC_CHANNELS, BiotacTimeAverage, biotac_ep_means
+
+__all__: list[str] = [
+    "BIOTAC_CHANNELS",
+    "PENN_DROPPED_COLUMNS",
+    "PENN_FEATURES_PER_EP",
+    "PHAC2_EP_NAMES",
+    "BaselineRemover",
+    "BiotacTimeAverage",
+    "KinestheticFeatures",
+    "PennColumnSelector",
+    "RawTrialFeatures",
+    "VariancePCA",
+    "biotac_ep_means",
+    "check_attribute_table",
+    "check_raw_trial",
+    "ep_masks",
+    "filter_attributes",
+    "kinesthetic_ep_features",
+    "penn_feature_set",
+    "raw_feature_set",
+    "remove_baseline",
+    "select_penn_columns",
+]
