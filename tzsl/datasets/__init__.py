@@ -1,5 +1,15 @@
 """Dataset registry, data home and loaders (files -> arrays + a trial table)."""
 
+from tzsl.datasets._grasps import (
+    FINGER_NAMES,
+    JOINT_NAMES,
+    Grasp,
+    HandTable,
+    load_hand_table4,
+    read_grasps,
+    write_grasps,
+)
+from tzsl.datasets._hand_simulator import SimulatedGrasps, simulate_grasps
 from tzsl.datasets._home import get_cache_dir, get_data_home
 from tzsl.datasets._phac2_h5 import (
     iter_phac2_h5,
@@ -26,6 +36,15 @@ from tzsl.datasets._safe_pickle import safe_load_pickle
 from tzsl.datasets._types import PHAC2_EPS, TRIAL_COLUMNS, BiotacSignals, FeatureSet, RawTrial
 
 __all__ = [
+    "FINGER_NAMES",
+    "JOINT_NAMES",
+    "Grasp",
+    "HandTable",
+    "load_hand_table4",
+    "read_grasps",
+    "write_grasps",
+    "SimulatedGrasps",
+    "simulate_grasps",
     "PHAC2_EPS",
     "TRIAL_COLUMNS",
     "BiotacSignals",
