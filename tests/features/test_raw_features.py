@@ -107,3 +107,23 @@ def test_hold_mat_gripper_matches_penn_static_features(hold_trials, penn_data):
     assert np.isfinite(X).all()
     # BioTac averages relative to the first second of the hold are small but not all zero
     assert np.abs(X[:, :, :23]).max() > 0
+
+
+def test_release_layout_hdf5_round_trip(make_trial, four_ep, tmp_path):
+    """Trials written in the PHAC-2 release layout and read back give the same 104-d vectors."""
+    from tzsl.datasets import load_phac2_h5, write_phac2_h5
+
+    trials = [
+        make_trial(four_ep(), trial_id="car_sponge_101_01"),
+        make_trial(four_ep(pre=110, lengths=(12, 25, 31, 44)), trial_id="car_sponge_101_02"),
+    ]
+    path = write_phac2_h5(tmp_path / "phac2.h5", trials)
+    back = load_phac2_h5(path)
+    assert [t.trial_id for t in back] == ["car_sponge_101_01", "car_sponge_101_02"]
+    est = RawTrialFeatures()
+    X_back = est.fit_transform(back)
+    assert est.travel_ == "tool_z"
+    np.testing.assert_allclose(X_back, RawTrialFeatures().fit_transform(trials), rtol=0, atol=1e-12)
+    # slow slide of trial 2: rows 147..177, tool_z = 1 - 0.001 r drops 30 mm
+    names = list(est.get_feature_names_out())
+    np.testing.assert_allclose(X_back[1, 0, names.index("slow_slide:tool_z_drop")], 0.030, rtol=1e-12)
