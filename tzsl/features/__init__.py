@@ -9,6 +9,15 @@ from tzsl.features._baseline import (
     remove_baseline,
 )
 from tzsl.features._feature_sets import penn_feature_set, raw_feature_set
+from tzsl.features._grasp_features import (
+    CLOSING_JOINTS,
+    MATERIAL_FEATURES,
+    GraspFeatures,
+    detect_contacts,
+    grasp_features,
+    pack_grasp_features,
+    unpack_grasp_features,
+)
 from tzsl.features._kinesthetic import KinestheticFeatures, kinesthetic_ep_features
 from tzsl.features._pca import VariancePCA
 from tzsl.features._penn_columns import (
@@ -21,6 +30,13 @@ from tzsl.features._raw_features import RawTrialFeatures
 from tzsl.features._time_average import BIOTAC_CHANNELS, BiotacTimeAverage, biotac_ep_means
 
 __all__: list[str] = [
+    "CLOSING_JOINTS",
+    "MATERIAL_FEATURES",
+    "GraspFeatures",
+    "detect_contacts",
+    "grasp_features",
+    "pack_grasp_features",
+    "unpack_grasp_features",
     "BIOTAC_CHANNELS",
     "PENN_DROPPED_COLUMNS",
     "PENN_FEATURES_PER_EP",
