@@ -34,6 +34,20 @@ from tzsl.datasets._phac2_penn import (
 from tzsl.datasets._registry import fetch, registered_files
 from tzsl.datasets._safe_pickle import safe_load_pickle
 from tzsl.datasets._types import PHAC2_EPS, TRIAL_COLUMNS, BiotacSignals, FeatureSet, RawTrial
+from tzsl.datasets._fabric import (
+    FABRIC_ATTRIBUTE_SETS,
+    FABRIC_ZSL_CONFIGS,
+    PAPER_ATTRIBUTE_NAMES,
+    FabricData,
+    FabricSplit,
+    fabric_zsl_split,
+    load_fabric,
+    load_gelsight_fabric_videos,
+    read_depth_images,
+    read_fabric_groups,
+)
+from tzsl.datasets._gelsight_press import PressRecord, load_gelsight_press
+from tzsl.datasets._video import avi_frame_count, read_video
 
 __all__ = [
     "FINGER_NAMES",
@@ -69,4 +83,18 @@ __all__ = [
     "write_phac2_h5",
     "list_phac2_h5_trials",
     "require_eps",
+    "FABRIC_ATTRIBUTE_SETS",
+    "FABRIC_ZSL_CONFIGS",
+    "PAPER_ATTRIBUTE_NAMES",
+    "FabricData",
+    "FabricSplit",
+    "fabric_zsl_split",
+    "load_fabric",
+    "load_gelsight_fabric_videos",
+    "read_depth_images",
+    "read_fabric_groups",
+    "PressRecord",
+    "load_gelsight_press",
+    "avi_frame_count",
+    "read_video",
 ]
