@@ -28,6 +28,8 @@ from tzsl.features._penn_columns import (
 )
 from tzsl.features._raw_features import RawTrialFeatures
 from tzsl.features._time_average import BIOTAC_CHANNELS, BiotacTimeAverage, biotac_ep_means
+from tzsl.features._keyframes import KeyFrames, KeyFrameSelector, frame_differences, key_frame_indices
+from tzsl.features._texture import TextureDescriptor, texture_feature_names
 
 __all__: list[str] = [
     "CLOSING_JOINTS",
@@ -57,4 +59,10 @@ __all__: list[str] = [
     "raw_feature_set",
     "remove_baseline",
     "select_penn_columns",
+    "KeyFrames",
+    "KeyFrameSelector",
+    "frame_differences",
+    "key_frame_indices",
+    "TextureDescriptor",
+    "texture_feature_names",
 ]
