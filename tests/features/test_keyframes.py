@@ -261,3 +261,26 @@ def test_mean_abs_start_follows_force_onset(real_key_frames):
         indices, forces, _, _ = real_key_frames[name, "mean_abs"]
         onset = int(np.argmax(forces > 0.1 * forces.max()))
         assert abs(int(indices[0]) - onset) <= 5, (name, int(indices[0]), onset)
+
+
+def test_pipeline_video_files_to_texture_descriptors(tmp_path):
+    """Paths of press videos -> 5 grey key frames -> per-frame texture descriptors."""
+    import imageio.v3 as iio
+    from sklearn.pipeline import make_pipeline
+
+    from tzsl.features import TextureDescriptor
+
+    paths = []
+    for k, (t0, tp) in enumerate([(5, 20), (8, 24)]):
+        video, _ = press_video(T=30, t0=t0, t_peak=tp, h=32, w=32)
+        paths.append(tmp_path / f"press_{k}.avi")
+        iio.imwrite(paths[-1], video, plugin="FFMPEG", fps=30, codec="mjpeg", quality=10)
+    pipe = make_pipeline(
+        KeyFrameSelector(as_gray=True, threshold=5, threshold_mode="absolute"),
+        TextureDescriptor(lbp_radii=(1,), glcm_distances=(1,), gabor_frequencies=(0.2,)),
+    )
+    F = pipe.fit_transform(paths)
+    d = pipe[-1].n_features_per_image_
+    assert F.shape == (2, 5 * d) and np.isfinite(F).all()
+    kf = pipe[0].select_one(paths[1])
+    assert kf.end == 24 and 8 <= kf.start <= 10  # MJPG may shift grey levels slightly
