@@ -5,9 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tzsl.datasets._grasps import BIOTAC_ARRAYS, FINGER_NAMES, JOINT_NAMES, grasp_from_arrays
+from tzsl.datasets._grasps import (
+    BIOTAC_ARRAYS,
+    FINGER_NAMES,
+    JOINT_NAMES,
+    grasp_from_arrays,
+    load_hand_table4,
+)
 from tzsl.datasets._hand_simulator import simulate_grasps
-from tzsl.datasets._grasps import load_hand_table4
 from tzsl.exceptions import ConfigError, DataFileError
 from tzsl.features._grasp_features import (
     CLOSING_JOINTS,
@@ -68,6 +73,8 @@ def test_detect_contacts_variable_lengths():
     np.testing.assert_array_equal(
         detect_contacts(pdc, lengths, baseline_rows=2, contact_threshold=30.0), [[False, True]]
     )
+    with pytest.raises(ValueError, match="lengths"):
+        detect_contacts(pdc, np.array([[2, 12]]), baseline_rows=2)
 
 
 def test_material_and_shape_features_values():

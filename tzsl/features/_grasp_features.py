@@ -200,6 +200,10 @@ def detect_contacts(
     n, F, R = pdc.shape
     lengths = np.full((n, F), R) if lengths is None else np.asarray(lengths, dtype=int)
     _check_windows(baseline_rows, hold_fraction, contact_threshold)
+    if lengths.shape != (n, F) or (lengths <= baseline_rows).any() or (lengths > R).any():
+        raise ValueError(
+            f"lengths must have shape ({n}, {F}) with baseline_rows={baseline_rows} < length <= {R}"
+        )
     baseline, hold = _windows(lengths.reshape(-1), R, baseline_rows, hold_fraction)
     base = _masked_mean(pdc, np.broadcast_to(baseline, (n * F, R)).reshape(n, F, R))
     level = _masked_mean(pdc, hold.reshape(n, F, R))
