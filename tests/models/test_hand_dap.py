@@ -19,24 +19,8 @@ from tzsl.datasets._grasps import load_hand_table4
 from tzsl.datasets._hand_simulator import simulate_grasps
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.features._grasp_features import grasp_features
-from tzsl.models import _hand_dap
+from tzsl.models._dap import dap_log_scores
 from tzsl.models._hand_dap import FUSIONS, HandDAPClassifier, NoContactError, fuse_grasp_posteriors
-
-try:
-    from tzsl.models._dap import dap_log_scores
-except ImportError:  # tzsl.models._dap (another helper's) not committed yet: a double of its signature
-
-    def dap_log_scores(P, K, prior):
-        """Log-space DAP, eq. (3): sum_m log p(a_m = K_zm | x) - log p(a_m = K_zm)."""
-        P, K, prior = np.clip(P, 1e-6, 1 - 1e-6), np.asarray(K, float), np.clip(prior, 1e-6, 1 - 1e-6)
-        like = np.log(P) @ K.T + np.log1p(-P) @ (1 - K).T
-        return like - (K @ np.log(prior) + (1 - K) @ np.log1p(-prior))[None, :]
-
-
-@pytest.fixture(autouse=True)
-def _dap(monkeypatch):
-    monkeypatch.setattr(_hand_dap, "_dap_log_scores", dap_log_scores)
-
 
 TABLE = load_hand_table4()
 

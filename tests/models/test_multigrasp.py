@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from tzsl.exceptions import ConfigError
-from tzsl.models import _multigrasp
+from tzsl.models._dap import dap_log_scores
 from tzsl.models._hand_dap import fuse_grasp_posteriors
 from tzsl.models._multigrasp import (
     attribute_distance_matrix,
@@ -16,22 +16,6 @@ from tzsl.models._multigrasp import (
     sample_grasp_sequences,
     sc_mdap,
 )
-
-
-try:
-    from tzsl.models._dap import dap_log_scores
-except ImportError:  # tzsl.models._dap (another helper's) not committed yet: a double of its signature
-
-    def dap_log_scores(P, K, prior):
-        """Log-space DAP, eq. (3): sum_m log p(a_m = K_zm | x) - log p(a_m = K_zm)."""
-        P, K, prior = np.clip(P, 1e-6, 1 - 1e-6), np.asarray(K, float), np.clip(prior, 1e-6, 1 - 1e-6)
-        like = np.log(P) @ K.T + np.log1p(-P) @ (1 - K).T
-        return like - (K @ np.log(prior) + (1 - K) @ np.log1p(-prior))[None, :]
-
-
-@pytest.fixture(autouse=True)
-def _dap(monkeypatch):
-    monkeypatch.setattr(_multigrasp, "_dap_log_scores", dap_log_scores)
 
 
 def test_df_mdap_eqs11_12_by_hand():

@@ -10,10 +10,28 @@ from tzsl.models._dap import (
     fuse_attribute_posteriors,
 )
 from tzsl.models._embedding import EmbeddingZSL
+from tzsl.models._hand_dap import FUSIONS as HAND_FUSIONS
+from tzsl.models._hand_dap import HandDAPClassifier, NoContactError, fuse_grasp_posteriors
+from tzsl.models._multigrasp import (
+    attribute_distance_matrix,
+    df_mdap,
+    df_mdap_log_scores,
+    sample_grasp_sequences,
+    sc_mdap,
+)
 from tzsl.models._multilabel import MultiLabelAttributeClassifier
 from tzsl.models._eszsl import ESZSL, ESZSLCV
 
 __all__: list[str] = [
+    "HAND_FUSIONS",
+    "HandDAPClassifier",
+    "NoContactError",
+    "fuse_grasp_posteriors",
+    "attribute_distance_matrix",
+    "df_mdap",
+    "df_mdap_log_scores",
+    "sample_grasp_sequences",
+    "sc_mdap",
     "AttributeClassifierBank",
     "AttributeSVM",
     "AttributeTrainingError",

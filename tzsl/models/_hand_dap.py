@@ -49,6 +49,7 @@ from threadpoolctl import threadpool_limits
 
 from tzsl.exceptions import ConfigError, SplitError, TzslError
 from tzsl.features._grasp_features import unpack_grasp_features
+from tzsl.models._dap import dap_log_scores
 
 __all__ = ["FUSIONS", "HandDAPClassifier", "NoContactError", "fuse_grasp_posteriors"]
 
@@ -61,12 +62,6 @@ class NoContactError(TzslError, ValueError):
 
     The paper drops such grasps (section 5.5); select grasps with ``contact.any(axis=1)`` first.
     """
-
-
-def _dap_log_scores(P: np.ndarray, K: np.ndarray, prior: np.ndarray) -> np.ndarray:
-    from tzsl.models._dap import dap_log_scores
-
-    return dap_log_scores(P, K, prior)
 
 
 def fuse_grasp_posteriors(
@@ -398,7 +393,7 @@ class HandDAPClassifier(ClassifierMixin, BaseEstimator):
         Kc = self._class_matrix(K)
         P = self.predict_attribute_proba(X, fusion)
         prior = np.full(P.shape[1], float(self.prior))
-        return _dap_log_scores(P, Kc.to_numpy(dtype=float), prior)
+        return dap_log_scores(P, Kc.to_numpy(dtype=float), prior)
 
     def predict(self, X, K: pd.DataFrame | None = None, fusion: str | None = None) -> np.ndarray:
         """Most probable object of every grasp (eq. 4), shape (n,); names from ``K``'s index."""

@@ -27,6 +27,7 @@ import pandas as pd
 from sklearn.utils import check_random_state
 
 from tzsl.exceptions import ConfigError
+from tzsl.models._dap import dap_log_scores
 
 __all__ = [
     "attribute_distance_matrix",
@@ -35,12 +36,6 @@ __all__ = [
     "sample_grasp_sequences",
     "sc_mdap",
 ]
-
-
-def _dap_log_scores(P: np.ndarray, K: np.ndarray, prior: np.ndarray) -> np.ndarray:
-    from tzsl.models._dap import dap_log_scores
-
-    return dap_log_scores(P, K, prior)
 
 
 def df_mdap(P_ldap: np.ndarray) -> np.ndarray:
@@ -82,7 +77,7 @@ def df_mdap_log_scores(P_ldap: np.ndarray, K: np.ndarray | pd.DataFrame, prior: 
     if P.ndim != 3:
         raise ConfigError(f"P_ldap must have shape (n_sequences, T, m), got {P.shape}")
     K = np.asarray(K, dtype=float)
-    return _dap_log_scores(df_mdap(P), K, np.full(P.shape[-1], float(prior)))
+    return dap_log_scores(df_mdap(P), K, np.full(P.shape[-1], float(prior)))
 
 
 def sc_mdap(decisions: np.ndarray, k_equal: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
