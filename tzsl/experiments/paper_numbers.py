@@ -47,3 +47,26 @@ DAP_INDEPENDENT_ACCURACY: float = 0.39
 DAP_MEAN_ATTRIBUTE_ACCURACY: float = 0.78
 #: Per-attribute accuracies quoted in the text of section 4.4 (the figure's other bars are not printed).
 DAP_ATTRIBUTE_ACCURACY_QUOTED: dict[str, float] = {"solid": 0.92, "smooth": 0.64, "textured": 0.64}
+
+#: DAP paper Table 5 (section 5.8.2): single-grasp accuracy on the test objects of the Shadow-hand
+#: experiment, by object subset. method -> {subset: accuracy}; subsets as in ``hand_table4.csv``.
+DAP_HAND_TABLE5: dict[str, dict[str, float]] = {
+    "maxdap": {"homogeneous": 0.7778, "heterogeneous_shape": 0.4483, "heterogeneous_material": 0.20, "all": 0.5229},
+    "avgdap": {"homogeneous": 0.7778, "heterogeneous_shape": 0.50, "heterogeneous_material": 0.3333, "all": 0.5688},
+    "ldap": {"homogeneous": 0.75, "heterogeneous_shape": 0.5517, "heterogeneous_material": 0.40, "all": 0.5963},
+}
+
+#: Section 5.8.3: best single-grasp accuracy (LDAP, all test objects).
+DAP_HAND_SINGLE_GRASP_BEST: float = 0.5963
+#: Section 5.8.3 / Fig. 12: settings of the multi-grasp confusion matrices (DF-MDAP T, SC-MDAP k).
+DAP_HAND_CONFUSION_T: int = 5
+DAP_HAND_CONFUSION_K: int = 4
+#: Section 5.8.3: "the best accuracies were obtained between k = 2 and k = 4" (SC-MDAP).
+DAP_HAND_SC_BEST_K_RANGE: tuple[int, int] = (2, 4)
+#: Fig. 12 caption / section 6: SC-MDAP (k = 4) "achieved perfect recognition of 8 out of 10 new objects".
+DAP_HAND_SC_OBJECTS_PERFECT: tuple[int, int] = (8, 10)
+#: Section 5.8.1: mean attribute classification accuracy on the test grasps, and the one attribute quoted.
+DAP_HAND_MEAN_ATTRIBUTE_ACCURACY: float = 0.89
+DAP_HAND_ATTRIBUTE_ACCURACY_QUOTED: dict[str, float] = {"plastic": 0.45}
+#: Section 5.5: test objects were grasped "up to 15 times" (the longest grasp sequence).
+DAP_HAND_MAX_TEST_GRASPS: int = 15
