@@ -31,11 +31,8 @@ from scipy.optimize import minimize
 from scipy.special import expit, log_expit
 from sklearn import config_context
 from sklearn.base import BaseEstimator, ClassifierMixin, clone
-from sklearn.decomposition import PCA
 from sklearn.metrics.pairwise import euclidean_distances, rbf_kernel
 from sklearn.model_selection import LeaveOneGroupOut, StratifiedGroupKFold
-from sklearn.pipeline import Pipeline
-from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC
 from sklearn.utils import check_random_state
 from sklearn.utils.multiclass import check_classification_targets
@@ -43,6 +40,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 from tqdm.auto import tqdm
 
 from tzsl.exceptions import ConfigError, SplitError
+from tzsl.features import VariancePCA
 from tzsl.models._cache import fit_clone, parallel_context, resolve_memory, spawn_seeds
 
 __all__ = [
@@ -68,14 +66,9 @@ def default_preprocessor() -> BaseEstimator:
 
     Returns
     -------
-    estimator
-        ``tzsl.features.VariancePCA(variance=0.95, max_components=25)`` when available, else an
-        equivalent ``Pipeline(StandardScaler(), PCA(n_components=0.95))``.
+    tzsl.features.VariancePCA
+        ``VariancePCA(variance=0.95, max_components=25)``, unfitted.
     """
-    try:  # written by the features helper; falls back until it lands
-        from tzsl.features import VariancePCA  # type: ignore[attr-defined]
-    except ImportError:
-        return Pipeline([("scale", StandardScaler()), ("pca", PCA(n_components=0.95))])
     return VariancePCA(variance=0.95, max_components=25)
 
 
@@ -139,7 +132,7 @@ class AttributeSVM(ClassifierMixin, BaseEstimator):
     ----------
     preprocessor : transformer or None, default=None
         Fitted on the training trials given to :meth:`fit` (no labels used), before the SVM.
-        ``None`` uses :func:`default_preprocessor` (z-score + PCA to 95% variance, cap 25).
+        ``None`` uses :func:`default_preprocessor`: ``tzsl.features.VariancePCA(0.95, max_components=25)``.
     C_range : (float, float), default=(1.0, 100.0)
         Ends of the log-spaced grid of SVM ``C``.
     gamma_range : (float, float), default=(0.01, 1.0)
