@@ -1,3 +1,4 @@
 """Imports every command module so each registers its commands on the root group."""
 
 from tzsl.cli import _data_commands  # noqa: F401
+from tzsl.cli import _dataset_commands  # noqa: F401

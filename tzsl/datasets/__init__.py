@@ -48,6 +48,8 @@ from tzsl.datasets._fabric import (
 )
 from tzsl.datasets._gelsight_press import PressRecord, load_gelsight_press
 from tzsl.datasets._video import avi_frame_count, read_video
+from tzsl.datasets._plain import PlainDataset, feature_set_to_plain, read_plain_dataset, write_plain_dataset
+from tzsl.datasets._validate import Problem, read_signal_file, validate_dataset
 
 __all__ = [
     "FINGER_NAMES",
@@ -97,4 +99,11 @@ __all__ = [
     "load_gelsight_press",
     "avi_frame_count",
     "read_video",
+    "PlainDataset",
+    "feature_set_to_plain",
+    "read_plain_dataset",
+    "write_plain_dataset",
+    "Problem",
+    "read_signal_file",
+    "validate_dataset",
 ]

@@ -30,6 +30,8 @@ from tzsl.features._raw_features import RawTrialFeatures
 from tzsl.features._time_average import BIOTAC_CHANNELS, BiotacTimeAverage, biotac_ep_means
 from tzsl.features._keyframes import KeyFrames, KeyFrameSelector, frame_differences, key_frame_indices
 from tzsl.features._texture import TextureDescriptor, texture_feature_names
+from tzsl.features._signal_stats import DEFAULT_SIGNAL_STATISTICS, SIGNAL_STATISTICS, SignalStatistics, subtract_baseline
+from tzsl.features._signal_features import load_plain_dataset, plain_feature_set, raw_trial_signals
 
 __all__: list[str] = [
     "CLOSING_JOINTS",
@@ -65,4 +67,11 @@ __all__: list[str] = [
     "key_frame_indices",
     "TextureDescriptor",
     "texture_feature_names",
+    "DEFAULT_SIGNAL_STATISTICS",
+    "SIGNAL_STATISTICS",
+    "SignalStatistics",
+    "subtract_baseline",
+    "load_plain_dataset",
+    "plain_feature_set",
+    "raw_trial_signals",
 ]

@@ -1,0 +1,168 @@
+"""Plain-file dataset commands: ``formats``, ``validate``, ``convert``."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import click
+
+from tzsl.cli._main import cli, data_dir_option, force_option
+from tzsl.datasets._plain import PLAIN_FORMAT_HELP
+from tzsl.exceptions import ConfigError, DataFileError
+
+#: Datasets ``tzsl convert`` writes as plain-file folders.
+CONVERTIBLE = ("phac2-penn", "phac2-hold-mat")
+
+
+def _statistics_help() -> str:
+    from tzsl.features._signal_stats import SIGNAL_STATISTICS  # noqa: PLC0415
+
+    width = max(map(len, SIGNAL_STATISTICS))
+    rows = [f"    {name:<{width}}  {text}" for name, text in SIGNAL_STATISTICS.items()]
+    return ("signal statistics ([signals] statistics), per channel over the rows of a trial;\n"
+            "features are named <channel>_<statistic>, channel-major\n" + "\n".join(rows) + "\n")
+
+
+def format_text() -> str:
+    """The full format description printed by ``tzsl formats``."""
+    return PLAIN_FORMAT_HELP + "\n" + _statistics_help()
+
+
+def _unwrapped(text: str) -> str:
+    """Keep click from re-wrapping the paragraphs of ``text`` in --help."""
+    return "\n\n".join("\b\n" + para for para in text.strip().split("\n\n"))
+
+
+@cli.command(help="Describe the plain-file dataset format (also in data/README.md).\n\n"
+             + _unwrapped(PLAIN_FORMAT_HELP))
+def formats() -> None:
+    click.echo(format_text(), nl=False)
+
+
+def _split_problems(folder: Path, attributes) -> list:
+    """Problems ``tzsl.evaluation.read_splits_csv`` finds in ``splits.csv`` (its full checks)."""
+    from tzsl.datasets._validate import SPLITS_FILE, Problem  # noqa: PLC0415
+    from tzsl.evaluation import read_splits_csv  # noqa: PLC0415
+    from tzsl.exceptions import SplitError  # noqa: PLC0415
+
+    path = folder / SPLITS_FILE
+    if not path.is_file():
+        return []
+    try:
+        read_splits_csv(path, attributes)
+    except (SplitError, DataFileError) as exc:
+        lines = str(exc).splitlines()
+        found = []
+        for text in lines[1:] if len(lines) > 1 else lines:
+            text = text.strip()
+            match = re.match(rf"^{re.escape(str(path))}(?::(\d+))?: (.*)$", text)
+            if match:
+                found.append(Problem(SPLITS_FILE, int(match.group(1)) if match.group(1) else None, match.group(2)))
+            else:
+                found.append(Problem(SPLITS_FILE, None, text))
+        return found
+    return []
+
+
+def summary_lines(features_dims: str, data) -> list[str]:
+    groups = data.attribute_groups
+    group_text = ""
+    if groups:
+        counts: dict[str, int] = {}
+        for g in groups.values():
+            counts[g] = counts.get(g, 0) + 1
+        group_text = " (" + ", ".join(f"{g}: {n}" for g, n in counts.items()) + ")"
+    n_objects = data.trials["object_name"].nunique()
+    with_trials = data.trials["class"].nunique()
+    return [
+        f"dataset:    {data.name}",
+        f"classes:    {len(data.classes)} ({with_trials} with trials)",
+        f"attributes: {data.classes.shape[1]}{group_text}",
+        f"trials:     {data.n_trials}",
+        f"objects:    {n_objects}",
+        f"sensors:    {len(data.sensors)} ({', '.join(data.sensors)})",
+        f"features:   {features_dims}",
+        f"splits:     {'splits.csv' if data.splits_file is not None else 'none'}",
+    ]
+
+
+@cli.command()
+@click.argument("dataset_dir", type=click.Path(path_type=Path))
+def validate(dataset_dir: Path) -> None:
+    """Check a plain-file dataset folder; list every problem with file and line.
+
+    Exit code 0 and a summary when the folder is valid, 2 and the list of problems
+    otherwise. See 'tzsl formats' for the format.
+    """
+    from tzsl.datasets import read_plain_dataset, validate_dataset  # noqa: PLC0415
+    from tzsl.features import DEFAULT_SIGNAL_STATISTICS, SIGNAL_STATISTICS  # noqa: PLC0415
+
+    problems = validate_dataset(dataset_dir, statistics=tuple(SIGNAL_STATISTICS))
+    data = None
+    if not problems:
+        data = read_plain_dataset(dataset_dir)
+        problems = _split_problems(dataset_dir, data.object_attributes)
+    if problems:
+        for problem in problems:
+            click.echo(str(problem))
+        raise DataFileError(dataset_dir, f"{len(problems)} problem(s); see the list above")
+    if data.kind == "columns":
+        dims = f"{len(data.feature_names)} feature columns per sensor"
+    else:
+        config = data.settings.get("signals", {})
+        stats = config.get("statistics", list(DEFAULT_SIGNAL_STATISTICS))
+        baseline = config.get("baseline_rows", 0)
+        dims = (f"{len(data.channels) * len(stats)} per sensor from signal files: {len(data.channels)} channels x "
+                f"{len(stats)} statistics ({', '.join(stats)}), baseline_rows={baseline}")
+    for line in summary_lines(dims, data):
+        click.echo(line)
+    click.echo(f"{dataset_dir}: valid")
+
+
+@cli.command()
+@click.option("--dataset", type=click.Choice(CONVERTIBLE), required=True,
+              help="phac2-penn: Penn per-trial features as feature columns; phac2-hold-mat: the raw "
+                   "HOLD-phase BioTac signals as one .npz signal file per trial and finger.")
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), required=True,
+              help="Dataset folder to write (must not exist or be empty, unless --force).")
+@click.option("--min-objects", type=int, default=3, show_default=True,
+              help="Keep attributes present in at least this many objects.")
+@click.option("--signal-format", type=click.Choice(["npz", "csv"]), default="npz", show_default=True,
+              help="Signal file type for phac2-hold-mat.")
+@data_dir_option
+@force_option
+def convert(dataset: str, out: Path, min_objects: int, signal_format: str, data_dir: Path | None,
+            force: bool) -> None:
+    """Write a built-in dataset as a plain-file dataset folder (see 'tzsl formats').
+
+    In PHAC-2 every object is its own class; objects sharing an adjective row are allowed
+    by '[classes] allow_identical_rows = true' in the written dataset.toml.
+    """
+    from tzsl.datasets import feature_set_to_plain, load_phac2_hold_mat, write_plain_dataset  # noqa: PLC0415
+    from tzsl.experiments.extract import extract_features  # noqa: PLC0415
+    from tzsl.features import BIOTAC_CHANNELS, raw_trial_signals  # noqa: PLC0415
+
+    if out.exists() and (not out.is_dir() or any(out.iterdir())) and not force:
+        raise ConfigError(f"{out} already exists; use --force to overwrite")
+    features = extract_features(dataset, data_dir=data_dir, min_objects=min_objects)
+    if dataset == "phac2-penn":
+        feature_set_to_plain(features, out, force=force)
+        what = f"{features.X.shape[2]} feature columns per sensor"
+    else:
+        raw = {t.trial_id: t for t in load_phac2_hold_mat(data_dir)}
+        trials = features.trials
+        signals = [raw_trial_signals(raw[tid]) for tid in trials["trial_id"]]
+        classes = features.attributes.rename_axis("class")
+        table = trials[["trial_id", "object_name", "object_id", "trial_index"]].rename(columns={"object_name": "object"})
+        table.insert(1, "class", table["object"])
+        settings = {
+            "name": features.dataset,
+            "classes": {"allow_identical_rows": bool(classes.duplicated().any())},
+            "signals": {"channels": list(BIOTAC_CHANNELS), "baseline_rows": 100, "statistics": ["mean"]},
+        }
+        write_plain_dataset(out, classes, table, sensors=features.sensors, signals=signals,
+                            channels=BIOTAC_CHANNELS, settings=settings, signal_format=signal_format, force=force)
+        what = f"{len(signals) * len(features.sensors)} signal files of {len(BIOTAC_CHANNELS)} channels"
+    click.echo(f"wrote {out}: {len(features.attributes)} classes x {features.attributes.shape[1]} attributes, "
+               f"{features.n_trials} trials, {len(features.sensors)} sensors, {what}")
