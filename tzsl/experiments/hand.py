@@ -1,0 +1,647 @@
+"""The Shadow-hand study (DAP paper section 5.8): Table 5, multi-grasp curves, confusion matrices, S.
+
+One call of :func:`run_hand_study` does, for every seed:
+
+1. takes the grasps (a grasp folder, or - when none is given - a fresh simulated data set for
+   that seed, :func:`tzsl.datasets.simulate_grasps`; simulated numbers say nothing about robots);
+2. extracts contacts, material and shape features (:func:`tzsl.features.grasp_features`);
+3. fits :class:`tzsl.models.HandDAPClassifier` on the grasps of the **training objects only**
+   (scaling, PCA, SVMs and sigmoids never see a test object); grasps of test objects in which no
+   BioTac touched are dropped, as in the paper (section 5.5), and counted;
+4. scores the test grasps against the test objects' rows of K:
+
+   * Table 5: single-grasp accuracy of MAXDAP, AVGDAP, LDAP per object subset (per grasp);
+   * DF-MDAP (eqs. 11-12) accuracy vs the number of grasps T, SC-MDAP accuracy, mean grasps used
+     and fraction decided vs k, over ``n_sequences`` random grasp orders per test object (the
+     same orders for every T and k; the T-grasp sequence is the first T grasps of the order);
+   * confusion matrices of LDAP (single grasp), DF-MDAP at ``confusion_T`` and SC-MDAP at
+     ``confusion_k`` (the paper's Fig. 12 settings, T=5 and k=4: fixed in advance, not chosen on
+     test results); an object counts as "all correct" when every one of its grasps / sequences is
+     classified correctly (the paper's "perfect recognition of 8 out of 10 objects");
+   * per-attribute accuracy on the test grasps (material attributes per touching BioTac, as in
+     the paper's Fig. 8) and the distance matrix S of eq. 13 from the AVGDAP-fused posteriors
+     (eq. 8; LDAP's ``max(0.5, p)`` would cap every distance of a present attribute at 0.5).
+
+Every table has one row per seed plus ``mean`` and ``std`` rows (std over seeds, ``ddof=1``:
+empty for a single seed), and the paper's number beside ours where the paper prints one.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from tzsl.datasets import Grasp, HandTable, read_grasps, simulate_grasps
+from tzsl.exceptions import ConfigError, DataFileError, SplitError
+from tzsl.experiments import paper_numbers as paper
+from tzsl.experiments._outputs import ResultsDir
+from tzsl.features import GraspFeatures, grasp_features
+from tzsl.models import (
+    HAND_FUSIONS,
+    HandDAPClassifier,
+    attribute_distance_matrix,
+    dap_log_scores,
+    df_mdap,
+    fuse_grasp_posteriors,
+    sample_grasp_sequences,
+    sc_mdap,
+)
+
+__all__ = [
+    "HAND_OUTPUTS",
+    "HandStudyConfig",
+    "HandStudyResult",
+    "feature_params",
+    "fit_hand_model",
+    "format_hand_summary",
+    "hand_features",
+    "run_hand_study",
+]
+
+#: Table 5 columns: the paper's object subsets (section 5.8), then all test objects.
+SUBSETS: tuple[str, ...] = ("homogeneous", "heterogeneous_shape", "heterogeneous_material")
+
+#: Every file :func:`run_hand_study` writes (checked before any computation).
+HAND_OUTPUTS: tuple[str, ...] = (
+    "hand_table5.csv",
+    "hand_multigrasp_T.csv",
+    "hand_multigrasp_T.png",
+    "hand_multigrasp_k.csv",
+    "hand_multigrasp_k.png",
+    "hand_confusion.csv",
+    "hand_confusion.png",
+    "hand_attribute_accuracy.csv",
+    "hand_attribute_accuracy.png",
+    "hand_attribute_distance.csv",
+    "hand_attribute_distance.png",
+    "manifest.json",
+)
+
+
+@dataclass
+class HandStudyConfig:
+    """Settings of the hand study; every field is recorded in the manifest.
+
+    Attributes
+    ----------
+    n_grasps_per_object, noise, difficulty, shape_miss_rate : simulator settings
+        Used only when no grasp data are given (see :func:`tzsl.datasets.simulate_grasps`).
+    contact_threshold, baseline_rows, hold_fraction, end_rows : feature settings
+        See :func:`tzsl.features.grasp_features` (ADC counts, rows, fraction, rows).
+    model_params : dict
+        Further :class:`~tzsl.models.HandDAPClassifier` parameters (``material_C``, ``shape_C``,
+        ``n_components``, ...); ``fusion`` is irrelevant here (all three are scored).
+    max_T : int
+        DF-MDAP is scored for T = 1 .. ``max_T`` (capped by the sequence length).
+    max_k : int
+        SC-MDAP is scored for k = 1 .. ``max_k``.
+    sequence_length : int
+        Grasps per random sequence (paper: each test object grasped "up to 15 times"); capped by
+        the fewest grasps any test object has.
+    n_sequences : int
+        Random grasp orders per test object and seed.
+    confusion_T, confusion_k : int
+        DF-MDAP T and SC-MDAP k of the confusion matrices (paper's Fig. 12: 5 and 4).
+    n_jobs : int or None
+        Parallel attribute-classifier fits (joblib).
+    """
+
+    n_grasps_per_object: int = 30
+    noise: float = 1.0
+    difficulty: float = 0.5
+    shape_miss_rate: float = 0.3
+    contact_threshold: float = 20.0
+    baseline_rows: int = 10
+    hold_fraction: float = 0.5
+    end_rows: int = 5
+    model_params: dict = field(default_factory=dict)
+    max_T: int = 10
+    max_k: int = 7
+    sequence_length: int = paper.DAP_HAND_MAX_TEST_GRASPS
+    n_sequences: int = 200
+    confusion_T: int = paper.DAP_HAND_CONFUSION_T
+    confusion_k: int = paper.DAP_HAND_CONFUSION_K
+    n_jobs: int | None = 1
+
+    def check(self) -> None:
+        """Raise ConfigError for settings that cannot work."""
+        for name in ("max_T", "max_k", "sequence_length", "n_sequences", "confusion_T", "confusion_k",
+                     "n_grasps_per_object"):
+            value = getattr(self, name)
+            if not isinstance(value, int | np.integer) or value < 1:
+                raise ConfigError(f"{name} must be a positive integer, got {value!r}")
+        if "material_attributes" in self.model_params:
+            raise ConfigError("model_params must not set material_attributes (they come from the table)")
+
+
+@dataclass
+class HandStudyResult:
+    """Tables of one :func:`run_hand_study` call (each with per-seed, ``mean`` and ``std`` rows).
+
+    Attributes
+    ----------
+    table5, multigrasp_T, multigrasp_k, attribute_accuracy, attribute_distance, confusion : DataFrame
+    simulated : bool
+        Whether the grasps came from the simulator.
+    notes : list of str
+        Grasps dropped, sequence lengths capped, ...
+    written : list of Path
+    """
+
+    table5: pd.DataFrame
+    multigrasp_T: pd.DataFrame
+    multigrasp_k: pd.DataFrame
+    attribute_accuracy: pd.DataFrame
+    attribute_distance: pd.DataFrame
+    confusion: pd.DataFrame
+    simulated: bool
+    notes: list[str] = field(default_factory=list)
+    written: list[Path] = field(default_factory=list)
+
+
+# ---------------------------------------------------------------------------- data and model
+def feature_params(config: HandStudyConfig) -> dict:
+    """Keyword arguments of :func:`tzsl.features.grasp_features` taken from ``config``."""
+    return {
+        "contact_threshold": float(config.contact_threshold),
+        "baseline_rows": int(config.baseline_rows),
+        "hold_fraction": float(config.hold_fraction),
+        "end_rows": int(config.end_rows),
+    }
+
+
+def hand_features(grasps: Sequence[Grasp], table: HandTable, config: HandStudyConfig) -> GraspFeatures:
+    """Features of labelled grasps, checking every grasp's object is a row of the table.
+
+    Raises
+    ------
+    DataFileError
+        A grasp without object label, or of an object missing from the table (naming both).
+    """
+    grasps = list(grasps)
+    if not grasps:
+        raise DataFileError(None, "no grasps to evaluate")
+    unlabelled = [g.grasp_id for g in grasps if not g.object_name]
+    if unlabelled:
+        raise DataFileError(grasps[0].source or None, f"grasp(s) without object label: {unlabelled[:5]}")
+    unknown = sorted({g.object_name for g in grasps} - set(table.K.index))
+    if unknown:
+        raise DataFileError(table.source, f"object(s) {unknown} of the grasps have no row in the class-attribute table")
+    return grasp_features(grasps, **feature_params(config))
+
+
+def fit_hand_model(
+    features: GraspFeatures, table: HandTable, config: HandStudyConfig, seed: int, **overrides
+) -> HandDAPClassifier:
+    """Fit the hand DAP model on the grasps of the table's training objects only.
+
+    Parameters
+    ----------
+    features : GraspFeatures
+        Any grasps; only those of ``table.train_objects`` are used.
+    table : HandTable
+    config : HandStudyConfig
+    seed : int
+        ``random_state`` of the model.
+    **overrides
+        Extra :class:`~tzsl.models.HandDAPClassifier` parameters (e.g. ``fusion``).
+
+    Raises
+    ------
+    SplitError
+        No grasp of any training object.
+    """
+    train = np.isin(features.objects, table.train_objects)
+    if not train.any():
+        raise SplitError(f"no grasp of a training object ({table.train_objects}) to fit the attribute classifiers on")
+    tr = features.subset(train)
+    params = {**config.model_params, **overrides}
+    model = HandDAPClassifier(
+        material_attributes=tuple(table.material_attributes),
+        random_state=seed,
+        n_jobs=config.n_jobs,
+        **params,
+    )
+    return model.fit(tr.to_array(), tr.objects, table.K)
+
+
+# ---------------------------------------------------------------------------- one seed
+def _object_counts(pred: np.ndarray, own: np.ndarray, names: np.ndarray) -> tuple[int, int]:
+    """Objects whose samples are all / mostly (> 50%) classified correctly."""
+    rates = np.array([(pred[own == o] == o).mean() for o in names if (own == o).any()])
+    return int((rates == 1.0).sum()), int((rates > 0.5).sum())
+
+
+def _confusion_rows(label: str, seed: int, true: np.ndarray, pred: np.ndarray, names: np.ndarray) -> list[dict]:
+    tab = pd.crosstab(pd.Categorical(true, categories=names), pd.Categorical(pred, categories=names), dropna=False)
+    return [
+        {"seed": seed, "method": label, "true": t, "predicted": p, "count": int(tab.loc[t, p])}
+        for t in names if (true == t).any() for p in names
+    ]
+
+
+def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandStudyConfig, seed: int,
+                   notes: list[str]) -> dict[str, list]:
+    model = fit_hand_model(features, table, config, seed)
+    columns = list(model.K_.columns)
+    test_objects = table.test_objects
+    Kc = table.K.loc[test_objects, columns].astype(int)
+    names = Kc.index.to_numpy()
+    K = Kc.to_numpy(dtype=float)
+    prior = np.full(K.shape[1], float(model.prior))
+
+    test = np.isin(features.objects, test_objects)
+    touched = features.contact.any(axis=1)
+    dropped = int((test & ~touched).sum())
+    if dropped:
+        notes.append(f"seed {seed}: dropped {dropped} test grasp(s) in which no BioTac touched the object")
+    te = features.subset(test & touched)
+    if len(te) == 0:
+        raise SplitError(f"no test grasp with a touching BioTac (test objects {test_objects})")
+    y = te.objects.astype(object)
+    P_mat, contact, P_sh = model.attribute_posteriors(te.to_array())
+    fused = {f: fuse_grasp_posteriors(P_mat, contact, P_sh, f) for f in HAND_FUSIONS}
+    pred = {f: names[dap_log_scores(fused[f], K, prior).argmax(axis=1)] for f in HAND_FUSIONS}
+    subset_of = table.subset.reindex(y).fillna("").to_numpy()
+    subsets = [s for s in SUBSETS if (subset_of == s).any()] + sorted(
+        {s for s in subset_of if s and s not in SUBSETS}
+    )
+
+    out: dict[str, list] = {k: [] for k in ("table5", "T", "k", "attr", "S", "confusion")}
+    for f in HAND_FUSIONS:
+        ok = pred[f] == y
+        row: dict = {"seed": seed, "method": f.upper()}
+        for s in subsets:
+            row[s] = float(ok[subset_of == s].mean())
+        row["all"] = float(ok.mean())
+        row["all_per_class_mean"] = float(np.mean([ok[y == o].mean() for o in pd.unique(y)]))
+        row["objects_all_correct"], row["objects_majority_correct"] = _object_counts(pred[f], y, names)
+        row["n_test_grasps"] = int(len(y))
+        out["table5"].append(row)
+    out["confusion"] += _confusion_rows("LDAP", seed, y, pred["ldap"], names)
+
+    # multi-grasp: the same random orders of each object's grasps for every T and k
+    counts = pd.Series(y).value_counts()
+    L = int(min(config.sequence_length, counts.min()))
+    if L < config.sequence_length:
+        notes.append(f"seed {seed}: sequences of {L} grasps (object {counts.idxmin()!r} has only {counts.min()})")
+    idx, own = sample_grasp_sequences(y, L, config.n_sequences, random_state=seed)
+    P_ldap = fused["ldap"]
+    for T in range(1, min(config.max_T, L) + 1):
+        p = names[dap_log_scores(df_mdap(P_ldap[idx[:, :T]]), K, prior).argmax(axis=1)]
+        all_ok, most_ok = _object_counts(p, own, names)
+        out["T"].append({"seed": seed, "T": T, "accuracy": float((p == own).mean()),
+                         "objects_all_correct": all_ok, "objects_majority_correct": most_ok,
+                         "n_sequences": int(len(own))})
+        if T == min(config.confusion_T, L):
+            out["confusion"] += _confusion_rows(f"DF-MDAP (T={T})", seed, own, p, names)
+    decisions = dap_log_scores(P_ldap, K, prior).argmax(axis=1)  # LDAP per grasp (as the paper)
+    for k in range(1, config.max_k + 1):
+        d, used, decided = sc_mdap(decisions[idx], k)
+        p = names[d]
+        all_ok, most_ok = _object_counts(p, own, names)
+        out["k"].append({"seed": seed, "k": k, "accuracy": float((p == own).mean()),
+                         "mean_grasps_used": float(used.mean()), "decided_fraction": float(decided.mean()),
+                         "objects_all_correct": all_ok, "objects_majority_correct": most_ok,
+                         "sequence_length": L, "n_sequences": int(len(own))})
+        if k == config.confusion_k:
+            out["confusion"] += _confusion_rows(f"SC-MDAP (k={k})", seed, own, p, names)
+
+    # attributes: per touching BioTac for materials (paper Fig. 8), joint angles for shapes
+    A = Kc.loc[y].to_numpy()  # (n, m) labels of the test grasps
+    n_mat = len(model.material_attributes_)
+    for j, name in enumerate(columns):
+        if j < n_mat:
+            hits = (P_mat[:, :, j] > 0.5) == (A[:, j][:, None] == 1)
+            lab = np.broadcast_to(A[:, j][:, None], contact.shape)[contact]
+            hit = hits[contact]
+            kind = "material"
+        else:
+            hit = (P_sh[:, j - n_mat] > 0.5) == (A[:, j] == 1)
+            lab = A[:, j]
+            kind = "shape"
+        both = (lab == 1).any() and (lab == 0).any()
+        out["attr"].append({
+            "seed": seed, "attribute": name, "kind": kind, "accuracy": float(hit.mean()),
+            "balanced_accuracy": float((hit[lab == 1].mean() + hit[lab == 0].mean()) / 2) if both else np.nan,
+            "n_predictions": int(hit.size), "test_objects_with_attribute": int(Kc[name].sum()),
+        })
+    S = attribute_distance_matrix(fused["avgdap"], y, Kc)
+    S.insert(0, "seed", seed)
+    out["S"].append(S.rename_axis("object").reset_index())
+    return out
+
+
+# ---------------------------------------------------------------------------- tables
+def _summarise(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
+    """Per-seed rows followed by ``mean`` and ``std`` rows over seeds for each ``by`` group."""
+    numeric = [c for c in df.columns if c not in by + ["seed"] and pd.api.types.is_numeric_dtype(df[c])]
+    grouped = df.groupby(by, sort=False)[numeric]
+    mean = grouped.mean().reset_index().assign(seed="mean")
+    std = grouped.std(ddof=1).reset_index().assign(seed="std")
+    out = pd.concat([df.assign(seed=df["seed"].astype(object)), mean, std], ignore_index=True)
+    return out[["seed"] + by + [c for c in df.columns if c not in by + ["seed"]]]
+
+
+def _table5(rows: list[dict]) -> pd.DataFrame:
+    df = _summarise(pd.DataFrame(rows), ["method"])
+    for col in [*SUBSETS, "all"]:
+        df[f"paper_{col}"] = [
+            np.nan if seed == "std" else paper.DAP_HAND_TABLE5.get(m.lower(), {}).get(col, np.nan)
+            for seed, m in zip(df["seed"], df["method"], strict=True)
+        ]
+    return df
+
+
+def _attribute_table(rows: list[dict]) -> pd.DataFrame:
+    df = _summarise(pd.DataFrame(rows), ["attribute", "kind"])
+    df["paper_accuracy"] = df["attribute"].map(paper.DAP_HAND_ATTRIBUTE_ACCURACY_QUOTED).where(df["seed"] != "std")
+    per_seed = pd.DataFrame(rows).groupby("seed")["accuracy"].mean()
+    mean_rows = pd.DataFrame({
+        "seed": [*per_seed.index.astype(object), "mean", "std"],
+        "attribute": "mean", "kind": "all",
+        "accuracy": [*per_seed.to_numpy(), per_seed.mean(), per_seed.std(ddof=1)],
+        "paper_accuracy": [paper.DAP_HAND_MEAN_ATTRIBUTE_ACCURACY] * (len(per_seed) + 1) + [np.nan],
+    })
+    return pd.concat([df, mean_rows], ignore_index=True)
+
+
+def _distance_table(frames: list[pd.DataFrame]) -> pd.DataFrame:
+    df = pd.concat(frames, ignore_index=True)
+    attrs = [c for c in df.columns if c not in ("seed", "object")]
+    mean = df.groupby("object", sort=False)[attrs].mean().reset_index().assign(seed="mean")
+    return pd.concat([df.assign(seed=df["seed"].astype(object)), mean], ignore_index=True)[["seed", "object", *attrs]]
+
+
+# ---------------------------------------------------------------------------- figures
+def _plt():
+    import matplotlib  # noqa: PLC0415
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    return plt
+
+
+def _curve(ax, df: pd.DataFrame, x: str, y: str, label: str, color: str) -> None:
+    per_seed = df[~df["seed"].isin(["mean", "std"])]
+    for _, g in per_seed.groupby("seed"):
+        ax.plot(g[x], g[y], color=color, alpha=0.25, lw=0.8)
+    mean = df[df["seed"] == "mean"]
+    std = df[df["seed"] == "std"][y].fillna(0.0).to_numpy()
+    ax.plot(mean[x], mean[y], "o-", color=color, label=label)
+    ax.fill_between(mean[x], mean[y] - std, mean[y] + std, color=color, alpha=0.15)
+
+
+def _figure_T(df: pd.DataFrame, data_label: str):
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6, 4))
+    _curve(ax, df, "T", "accuracy", "DF-MDAP (ours)", "C0")
+    ax.scatter([1], [paper.DAP_HAND_SINGLE_GRASP_BEST], marker="*", s=120, color="k", zorder=3,
+               label="paper: LDAP single grasp (T=1)")
+    ax.set_xlabel("number of fused grasps T")
+    ax.set_ylabel("accuracy on test objects")
+    ax.set_ylim(0, 1.02)
+    ax.set_title(f"DF-MDAP accuracy vs T\n{data_label}", fontsize=10)
+    ax.legend(loc="lower right", fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def _figure_k(df: pd.DataFrame, data_label: str):
+    plt = _plt()
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
+    lo, hi = paper.DAP_HAND_SC_BEST_K_RANGE
+    _curve(a1, df, "k", "accuracy", "SC-MDAP (ours)", "C1")
+    a1.axvspan(lo - 0.5, hi + 0.5, color="grey", alpha=0.15, label=f"paper: best k in {lo}..{hi}")
+    a1.scatter([1], [paper.DAP_HAND_SINGLE_GRASP_BEST], marker="*", s=120, color="k", zorder=3,
+               label="paper: LDAP single grasp (k=1)")
+    a1.set_ylim(0, 1.02)
+    a1.set_xlabel("equal classifications required k")
+    a1.set_ylabel("accuracy on test objects")
+    a1.legend(loc="lower right", fontsize=8)
+    _curve(a2, df, "k", "mean_grasps_used", "mean grasps used", "C2")
+    a2.set_xlabel("equal classifications required k")
+    a2.set_ylabel("grasps used per decision")
+    a2.legend(loc="upper left", fontsize=8)
+    fig.suptitle(f"SC-MDAP vs k - {data_label}", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def _figure_confusion(conf: pd.DataFrame, names: list[str], data_label: str):
+    plt = _plt()
+    methods = list(pd.unique(conf["method"]))
+    fig, axes = plt.subplots(1, len(methods), figsize=(5.2 * len(methods), 5.2))
+    axes = np.atleast_1d(axes)
+    for ax, method in zip(axes, methods, strict=True):
+        c = conf[conf["method"] == method].pivot_table(index="true", columns="predicted", values="count",
+                                                       aggfunc="sum")
+        rows = [n for n in names if n in c.index]
+        c = c.reindex(index=rows, columns=names).fillna(0)
+        frac = c.to_numpy() / c.to_numpy().sum(axis=1, keepdims=True)
+        ax.imshow(frac, vmin=0, vmax=1, cmap="Blues")
+        for (i, j), v in np.ndenumerate(frac):
+            if v >= 0.005:
+                ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize=6,
+                        color="white" if v > 0.6 else "black")
+        n_all = int(sum(frac[i, names.index(r)] == 1.0 for i, r in enumerate(rows)))
+        ax.set_title(f"{method}\nobjects all correct: {n_all}/{len(rows)}", fontsize=9)
+        ax.set_xticks(range(len(names)), names, rotation=70, ha="right", fontsize=7)
+        ax.set_yticks(range(len(rows)), rows, fontsize=7)
+        ax.set_xlabel("predicted")
+    axes[0].set_ylabel("true object")
+    fig.suptitle(f"Confusion (rows sum to 1, pooled over seeds) - {data_label}; "
+                 f"paper Fig. 12: SC-MDAP k=4 all correct on 8/10", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def _figure_distance(S: pd.DataFrame, data_label: str):
+    plt = _plt()
+    mean = S[S["seed"] == "mean"].set_index("object").drop(columns="seed")
+    fig, ax = plt.subplots(figsize=(8, 5))
+    im = ax.imshow(mean.to_numpy(dtype=float), vmin=0, vmax=1, cmap="viridis")
+    for (i, j), v in np.ndenumerate(mean.to_numpy(dtype=float)):
+        ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize=6, color="white" if v < 0.5 else "black")
+    ax.set_xticks(range(mean.shape[1]), mean.columns, rotation=60, ha="right", fontsize=8)
+    ax.set_yticks(range(mean.shape[0]), mean.index, fontsize=8)
+    fig.colorbar(im, ax=ax, label="S (eq. 13)")
+    ax.set_title(f"Attribute distance S = |a - mean p(a=1|x)| (AVGDAP posteriors)\n{data_label}", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def _figure_attributes(df: pd.DataFrame, data_label: str):
+    plt = _plt()
+    mean = df[(df["seed"] == "mean") & (df["attribute"] != "mean")]
+    x = np.arange(len(mean))
+    fig, ax = plt.subplots(figsize=(8, 4))
+    ax.bar(x - 0.2, mean["accuracy"], width=0.4, label="accuracy (ours)")
+    ax.bar(x + 0.2, mean["balanced_accuracy"].fillna(0), width=0.4, label="balanced accuracy (ours)")
+    quoted = mean["paper_accuracy"].notna().to_numpy()
+    ax.scatter(x[quoted], mean.loc[quoted, "paper_accuracy"], marker="_", s=300, color="k", zorder=3,
+               label="paper (quoted in text)")
+    ax.axhline(paper.DAP_HAND_MEAN_ATTRIBUTE_ACCURACY, color="k", ls=":", lw=0.8, label="paper: mean 0.89")
+    ax.set_xticks(x, mean["attribute"], rotation=60, ha="right")
+    ax.set_ylim(0, 1.02)
+    ax.set_ylabel("test accuracy")
+    ax.set_title(f"Attribute classification on test grasps\n{data_label}", fontsize=9)
+    ax.legend(loc="lower right", fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
+# ---------------------------------------------------------------------------- the study
+def run_hand_study(
+    grasps: str | Path | Sequence[Grasp] | None,
+    table: HandTable,
+    out: str | Path | ResultsDir,
+    seeds: Sequence[int] = (0,),
+    config: HandStudyConfig | None = None,
+    *,
+    force: bool = False,
+    log: Callable[[str], None] | None = None,
+) -> HandStudyResult:
+    """Run the hand study and write its tables, figures and manifest to ``out``.
+
+    Parameters
+    ----------
+    grasps : grasp folder, sequence of Grasp, or None
+        The labelled grasps. ``None``: simulate a data set per seed from ``table.K`` with the
+        simulator settings of ``config`` (simulated data; results say so in every figure).
+    table : HandTable
+        Class-attribute table with train/test split and object subsets (e.g.
+        :func:`tzsl.datasets.load_hand_table4`).
+    out : folder or ResultsDir
+        Output folder; existing files are refused unless ``force`` (checked before computing).
+    seeds : sequence of int
+        One model fit (and, when simulating, one data set) and one set of grasp orders per seed.
+    config : HandStudyConfig, optional
+    force : bool
+        Overwrite existing results.
+    log : callable, optional
+        Receives progress lines.
+
+    Returns
+    -------
+    HandStudyResult
+    """
+    config = HandStudyConfig() if config is None else config
+    config.check()
+    seeds = [int(s) for s in seeds]
+    if not seeds or len(set(seeds)) != len(seeds):
+        raise ConfigError(f"seeds must be distinct integers, got {seeds}")
+    results = out if isinstance(out, ResultsDir) else ResultsDir(out, force=force)
+    results.check_free(HAND_OUTPUTS)
+    log = log or (lambda _msg: None)
+
+    simulated = grasps is None
+    data_files: list[Path] = []
+    fixed: GraspFeatures | None = None
+    source = "simulated"
+    if not simulated:
+        if isinstance(grasps, str | Path):
+            source = str(grasps)
+            data_files.append(Path(grasps) / "grasps.csv")
+            grasps = read_grasps(grasps)
+        else:
+            source = "in-memory grasps"
+        fixed = hand_features(grasps, table, config)
+    data_label = (f"SIMULATED grasps (tzsl simulator, seeds {seeds}) - not the paper's data"
+                  if simulated else f"grasps: {source}")
+
+    notes: list[str] = []
+    parts: dict[str, list] = {k: [] for k in ("table5", "T", "k", "attr", "S", "confusion")}
+    simulation: dict[str, dict] = {}
+    for seed in seeds:
+        if simulated:
+            sim = simulate_grasps(
+                table.K, config.n_grasps_per_object, config.noise, config.difficulty, config.shape_miss_rate,
+                material_attributes=table.material_attributes, random_state=seed,
+            )
+            simulation[str(seed)] = sim.params
+            features = hand_features(sim.grasps, table, config)
+            log(f"seed {seed}: simulated {len(sim.grasps)} grasps of {len(table.K)} objects")
+        else:
+            features = fixed
+        res = _evaluate_seed(features, table, config, seed, notes)
+        for key, rows in res.items():
+            parts[key] += rows
+        ldap = [r for r in res["table5"] if r["method"] == "LDAP"][0]["all"]
+        log(f"seed {seed}: LDAP single-grasp accuracy {ldap:.3f}")
+
+    names = list(table.test_objects)
+    result = HandStudyResult(
+        table5=_table5(parts["table5"]),
+        multigrasp_T=_summarise(pd.DataFrame(parts["T"]), ["T"]),
+        multigrasp_k=_summarise(pd.DataFrame(parts["k"]), ["k"]),
+        attribute_accuracy=_attribute_table(parts["attr"]),
+        attribute_distance=_distance_table(parts["S"]),
+        confusion=pd.DataFrame(parts["confusion"]),
+        simulated=simulated,
+        notes=notes,
+    )
+    result.multigrasp_T["paper_T1_ldap"] = paper.DAP_HAND_SINGLE_GRASP_BEST
+    results.write_csv("hand_table5.csv", result.table5)
+    results.write_csv("hand_multigrasp_T.csv", result.multigrasp_T)
+    results.write_figure("hand_multigrasp_T.png", _figure_T(result.multigrasp_T, data_label))
+    results.write_csv("hand_multigrasp_k.csv", result.multigrasp_k)
+    results.write_figure("hand_multigrasp_k.png", _figure_k(result.multigrasp_k, data_label))
+    results.write_csv("hand_confusion.csv", result.confusion)
+    results.write_figure("hand_confusion.png", _figure_confusion(result.confusion, names, data_label))
+    results.write_csv("hand_attribute_accuracy.csv", result.attribute_accuracy)
+    results.write_figure("hand_attribute_accuracy.png", _figure_attributes(result.attribute_accuracy, data_label))
+    results.write_csv("hand_attribute_distance.csv", result.attribute_distance)
+    results.write_figure("hand_attribute_distance.png", _figure_distance(result.attribute_distance, data_label))
+    results.write_manifest(
+        {
+            "study": "hand (DAP paper section 5.8)",
+            "seeds": seeds,
+            "grasps": source,
+            "simulated": simulated,
+            "table": table.source,
+            "train_objects": table.train_objects,
+            "test_objects": table.test_objects,
+            **asdict(config),
+        },
+        data_files=data_files,
+        extra={"notes": notes, "simulation": simulation} if simulated else {"notes": notes},
+    )
+    result.written = list(results.written)
+    return result
+
+
+def format_hand_summary(result: HandStudyResult) -> str:
+    """Table 5, the T and k curves (means over seeds) beside the paper, as plain text."""
+    pct = lambda v: "" if pd.isna(v) else f"{100 * v:6.2f}%"  # noqa: E731
+    lines = []
+    if result.simulated:
+        lines.append("NOTE: these numbers come from SIMULATED grasps, not from the paper's robot data.")
+    t5 = result.table5[result.table5["seed"] == "mean"]
+    cols = [c for c in (*SUBSETS, "all") if c in t5.columns]
+    lines.append("Table 5, single-grasp accuracy, mean over seeds (paper in brackets):")
+    lines.append(f"  {'method':<8}" + "".join(f"{c:>32}" for c in cols))
+    for _, r in t5.iterrows():
+        cells = [f"{pct(r[c]).strip()} ({pct(r.get('paper_' + c, np.nan)).strip() or '-'})" for c in cols]
+        lines.append(f"  {r['method']:<8}" + "".join(f"{c:>32}" for c in cells))
+    T = result.multigrasp_T[result.multigrasp_T["seed"] == "mean"]
+    lines.append("DF-MDAP accuracy vs T: " + ", ".join(f"T={int(t)}: {pct(a).strip()}"
+                                                      for t, a in zip(T["T"], T["accuracy"], strict=True)))
+    k = result.multigrasp_k[result.multigrasp_k["seed"] == "mean"]
+    lines.append("SC-MDAP accuracy vs k: " + ", ".join(
+        f"k={int(kk)}: {pct(a).strip()} ({g:.1f} grasps)"
+        for kk, a, g in zip(k["k"], k["accuracy"], k["mean_grasps_used"], strict=True)))
+    conf = result.confusion
+    for method in pd.unique(conf["method"]):
+        c = conf[conf["method"] == method].groupby(["true", "predicted"])["count"].sum().unstack(fill_value=0)
+        correct = np.array([c.loc[t, t] == c.loc[t].sum() if t in c.columns else False for t in c.index])
+        lines.append(f"{method}: objects all correct (pooled over seeds) {int(correct.sum())}/{len(c)}")
+    lines.append(f"paper: LDAP {pct(paper.DAP_HAND_SINGLE_GRASP_BEST).strip()}, SC-MDAP (k=4) all correct on "
+                 f"{paper.DAP_HAND_SC_OBJECTS_PERFECT[0]}/{paper.DAP_HAND_SC_OBJECTS_PERFECT[1]} objects")
+    lines += [f"note: {n}" for n in result.notes]
+    return "\n".join(lines)
