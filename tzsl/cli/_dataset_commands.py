@@ -154,7 +154,8 @@ def convert(dataset: str, out: Path, min_objects: int, signal_format: str, data_
         trials = features.trials
         signals = [raw_trial_signals(raw[tid]) for tid in trials["trial_id"]]
         classes = features.attributes.rename_axis("class")
-        table = trials[["trial_id", "object_name", "object_id", "trial_index"]].rename(columns={"object_name": "object"})
+        table = trials[["trial_id", "object_name", "object_id", "trial_index"]].rename(
+            columns={"object_name": "object"})
         table.insert(1, "class", table["object"])
         settings = {
             "name": features.dataset,

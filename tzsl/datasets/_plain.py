@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from tzsl.datasets._types import TRIAL_COLUMNS, FeatureSet
+from tzsl.datasets._types import FeatureSet
 from tzsl.datasets._validate import (
     CLASS_COLUMN,
     CLASSES_FILE,

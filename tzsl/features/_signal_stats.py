@@ -287,8 +287,9 @@ class SignalStatistics(TransformerMixin, BaseEstimator):
         finite = np.isfinite(values)
         if not finite.all():
             row = int(np.argwhere(~finite)[0, 0])
-            i = int(np.searchsorted(np.cumsum(lengths), row, side="right"))
-            raise DataFileError(None, f"signal {i} holds NaN/inf (first at row {row - (np.cumsum(lengths)[i] - lengths[i])})")
+            ends = np.cumsum(lengths)
+            i = int(np.searchsorted(ends, row, side="right"))
+            raise DataFileError(None, f"signal {i} holds NaN/inf (first at row {row - (ends[i] - lengths[i])})")
         return signal_statistics(values, lengths, stats, baseline)
 
     def get_feature_names_out(self, input_features: object = None) -> np.ndarray:
