@@ -2,3 +2,4 @@
 
 from tzsl.cli import _data_commands  # noqa: F401
 from tzsl.cli import _dataset_commands  # noqa: F401
+from tzsl.cli import _hand_commands  # noqa: F401
