@@ -10,6 +10,7 @@ from tzsl.models._dap import (
     fuse_attribute_posteriors,
 )
 from tzsl.models._embedding import EmbeddingZSL
+from tzsl.models._deep import DeepAttributeEmbedding, load_deep_bundle, save_deep_bundle
 from tzsl.models._hand_dap import FUSIONS as HAND_FUSIONS
 from tzsl.models._hand_dap import HandDAPClassifier, NoContactError, fuse_grasp_posteriors
 from tzsl.models._multigrasp import (
@@ -23,6 +24,9 @@ from tzsl.models._multilabel import MultiLabelAttributeClassifier
 from tzsl.models._eszsl import ESZSL, ESZSLCV
 
 __all__: list[str] = [
+    "DeepAttributeEmbedding",
+    "load_deep_bundle",
+    "save_deep_bundle",
     "HAND_FUSIONS",
     "HandDAPClassifier",
     "NoContactError",

@@ -1,0 +1,106 @@
+"""``tzsl train-deep`` end to end: fabric depth images (real data) and user GelSight videos."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from tzsl.cli import cli
+from tzsl.cli._main import EXIT_TZSL_ERROR, _register_commands
+
+_register_commands()
+
+SKIP_REASON = "PyTorch is not installed (the optional deep extra: pip install 'tzsl[deep]')"
+# A small run: random frozen CNN on 16 x 16 frames, a few epochs (checks plumbing, not accuracy).
+FAST = ["--backbone", "small-cnn", "--image-size", "16", "--hidden-size", "8", "--epochs", "3", "--quiet"]
+
+
+@pytest.fixture
+def torch():
+    return pytest.importorskip("torch", reason=SKIP_REASON)
+
+
+def _run(*args: str):
+    return CliRunner().invoke(cli, list(args), catch_exceptions=False)
+
+
+def _accuracies(output: str) -> tuple[float, float]:
+    train = float(re.search(r"train accuracy: ([\d.]+) %", output).group(1))
+    test = float(re.search(r"test accuracy: +([\d.]+) %", output).group(1))
+    return train, test
+
+
+def test_option_errors_are_one_line(tmp_path):
+    out = tmp_path / "m.tzsl-deep"
+    for args, message in [
+        (["--lam", "much"], "--lam"),
+        (["--finetune", "deep"], "--finetune"),
+        (["--resume"], "--resume needs --checkpoint-dir"),
+        (["--condition", "Flat"], "--condition needs --gelsight-root"),
+    ]:
+        result = _run("train-deep", "--out", str(out), *args)
+        assert result.exit_code == EXIT_TZSL_ERROR, result.output
+        assert message in result.output
+    out.write_text("keep me")
+    result = _run("train-deep", "--out", str(out))
+    assert result.exit_code == EXIT_TZSL_ERROR and "--force" in result.output
+    assert out.read_text() == "keep me"
+
+
+def test_train_deep_on_fabric_depth_images(torch, data_dir, tmp_path):
+    from tzsl.models import load_deep_bundle
+
+    out = tmp_path / "m.tzsl-deep"
+    ckpt = tmp_path / "ckpt"
+    result = _run("train-deep", "--out", str(out), "--data-dir", str(data_dir), "--checkpoint-dir", str(ckpt),
+                  *FAST)
+    assert result.exit_code == 0, result.output
+    assert "sequences: 92 train, 27 test" in result.output  # config 1: one sequence per fabric
+    train, test = _accuracies(result.output)
+    assert 0 <= train <= 100 and 0 <= test <= 100
+    model = load_deep_bundle(out)
+    assert model.sequence_shape_ == (5, 224, 224, 1) and model.n_epochs_ == 3
+    assert sorted(model.classes_.tolist()) == [1, 2, 3, 4, 6]
+    # resume from the last epoch: nothing left to train for the same --epochs, same model
+    again = _run("train-deep", "--out", str(out), "--data-dir", str(data_dir), "--checkpoint-dir", str(ckpt),
+                 "--resume", "--force", *FAST)
+    assert again.exit_code == 0, again.output
+    assert _accuracies(again.output) == (train, test)
+
+
+def _write_press(path, group: int, rng):
+    """A 14-frame 32 x 32 MJPG press: contact-free start, then a group-specific pattern grows."""
+    import imageio.v3 as iio
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    ramp = np.clip(np.arange(14) - 3, 0, 8)[:, None, None] / 8.0
+    xx = np.arange(32)[None, None, :]
+    pattern = 60 + 50 * np.sin(xx * (group + 1) * 0.4) + 10 * group
+    frames = 40 + ramp * pattern + rng.normal(0, 2, (14, 32, 32))
+    frames = np.repeat(np.clip(frames, 0, 255).astype(np.uint8)[..., None], 3, axis=-1)
+    iio.imwrite(path, frames, plugin="FFMPEG", fps=30, codec="mjpeg", quality=10, macro_block_size=16)
+
+
+def test_train_deep_on_user_gelsight_videos(torch, data_dir, tmp_path):
+    from tzsl.models import load_deep_bundle
+
+    rng = np.random.default_rng(0)
+    root = tmp_path / "gelsight"
+    root.mkdir()
+    rows = ["fabric_id,fabric_name,group"]
+    for g in range(8):
+        name = f"F{g + 1:04d}"
+        rows.append(f"{g + 1},{name},{g}")
+        for press in range(2):
+            _write_press(root / "Flat" / name / f"{press}.avi", g, rng)
+    (root / "fabric_groups.csv").write_text("\n".join(rows) + "\n")
+    out = tmp_path / "v.tzsl-deep"
+    result = _run("train-deep", "--out", str(out), "--data-dir", str(data_dir), "--gelsight-root", str(root),
+                  "--condition", "Flat", *FAST)
+    assert result.exit_code == 0, result.output
+    assert "GelSight videos" in result.output
+    assert "sequences: 10 train, 6 test" in result.output
+    assert load_deep_bundle(out).sequence_shape_ == (5, 32, 32, 3)
