@@ -636,11 +636,18 @@ def format_hand_summary(result: HandStudyResult) -> str:
     lines.append("SC-MDAP accuracy vs k: " + ", ".join(
         f"k={int(kk)}: {pct(a).strip()} ({g:.1f} grasps)"
         for kk, a, g in zip(k["k"], k["accuracy"], k["mean_grasps_used"], strict=True)))
-    conf = result.confusion
-    for method in pd.unique(conf["method"]):
-        c = conf[conf["method"] == method].groupby(["true", "predicted"])["count"].sum().unstack(fill_value=0)
-        correct = np.array([c.loc[t, t] == c.loc[t].sum() if t in c.columns else False for t in c.index])
-        lines.append(f"{method}: objects all correct (pooled over seeds) {int(correct.sum())}/{len(c)}")
+    objects = [("LDAP (single grasp)", t5[t5["method"] == "LDAP"])]
+    for label, df, col in (("DF-MDAP", T, "T"), ("SC-MDAP", k, "k")):
+        methods = [m for m in pd.unique(result.confusion["method"]) if m.startswith(label)]
+        if methods:
+            setting = int(methods[0].split("=")[1].rstrip(")"))
+            objects.append((methods[0], df[df[col] == setting]))
+    n_objects = result.confusion.groupby("seed")["true"].nunique().max()
+    for label, row in objects:
+        if len(row):
+            lines.append(f"{label}: test objects with all grasps/sequences correct {row['objects_all_correct'].item():.1f}"
+                         f"/{n_objects}, with most correct {row['objects_majority_correct'].item():.1f}/{n_objects} "
+                         "(mean over seeds)")
     lines.append(f"paper: LDAP {pct(paper.DAP_HAND_SINGLE_GRASP_BEST).strip()}, SC-MDAP (k=4) all correct on "
                  f"{paper.DAP_HAND_SC_OBJECTS_PERFECT[0]}/{paper.DAP_HAND_SC_OBJECTS_PERFECT[1]} objects")
     lines += [f"note: {n}" for n in result.notes]
