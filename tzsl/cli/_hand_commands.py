@@ -156,7 +156,12 @@ def predict(model_path: Path, classes: Path, mode: str, k: int, top: int, grasp:
     GRASP: for hand models, grasp .npz files (or grasp folders); for PHAC-2 models, feature
     tables written by 'tzsl extract --out' (one trial = one grasp).
     """
-    from tzsl.experiments.predict import format_prediction, load_adapter, predict_grasps, read_class_table  # noqa: PLC0415
+    from tzsl.experiments.predict import (  # noqa: PLC0415
+        format_prediction,
+        load_adapter,
+        predict_grasps,
+        read_class_table,
+    )
 
     if k < 1:
         raise ConfigError(f"--k must be >= 1, got {k}")

@@ -325,9 +325,10 @@ class Phac2Adapter(ModelAdapter):
         return [str(a) for a in self.metadata["attribute_names"]]
 
     def describe(self) -> str:
+        prior = self.metadata["prior"]
+        prior = prior if isinstance(prior, str) else "as saved (e.g. training)"
         return (f"phac2-dap model ({type(self.model).__name__}, {self.metadata['fusion'].upper()}DAP over "
-                f"{len(self.metadata['sensors'])} sensors, prior {self.metadata['prior'] if isinstance(self.metadata['prior'], str) else 'from training'}), "
-                f"{len(self.attribute_names)} attributes")
+                f"{len(self.metadata['sensors'])} sensors, prior {prior}), {len(self.attribute_names)} attributes")
 
     def _features(self, path: Path) -> tuple[np.ndarray, list[str]]:
         table = read_feature_table(path)
