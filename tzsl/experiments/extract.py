@@ -41,16 +41,24 @@ def extract_features(
         Keep attributes present in at least this many objects.
     """
     if dataset == "phac2-penn":
-        return penn_feature_set(load_phac2_penn(data_dir), min_objects=min_objects)
+        penn = load_phac2_penn(data_dir)
+        features = penn_feature_set(penn, min_objects=min_objects)
+        features.info["data_files"] = sorted(str(p) for p in penn.sources)
+        return features
     if dataset == "phac2-hold-mat":
-        return raw_feature_set(load_phac2_hold_mat(data_dir), load_phac2_labels(data_dir), eps=("hold",),
-                               min_objects=min_objects, dataset="phac2-hold-mat")
+        trials = load_phac2_hold_mat(data_dir)
+        features = raw_feature_set(trials, load_phac2_labels(data_dir), eps=("hold",), min_objects=min_objects,
+                                   dataset="phac2-hold-mat")
+        features.info["data_files"] = sorted({t.source for t in trials})
+        return features
     if dataset == "phac2-h5":
         if path is None:
             raise ConfigError("--dataset phac2-h5 needs --path pointing at the PHAC-2 HDF5 release file")
         trials = load_phac2_h5(path)
-        labels = load_phac2_labels(data_dir)
-        return raw_feature_set(trials, labels, min_objects=min_objects, dataset="phac2-h5")
+        features = raw_feature_set(trials, load_phac2_labels(data_dir), min_objects=min_objects,
+                                   dataset="phac2-h5")
+        features.info["data_files"] = [str(path)]
+        return features
     raise ConfigError(f"unknown dataset {dataset!r}; choose one of {', '.join(DATASETS)}")
 
 

@@ -1,0 +1,536 @@
+"""The PHAC-2 DAP study (DAP paper section 4): Tables 1-3, multi-label comparison, sweep.
+
+One call of :func:`run_dap_study` fits the attribute classifiers once per split and scores
+every DAP variant from the same test posteriors, so MAXDAP/AVGDAP and the three priors are
+compared on identical fits. The attribute-count sweep (section 4.7) reuses those posteriors.
+
+Everything that is fitted (z-scoring, PCA, SVM hyper-parameters, under-sampling draw, Platt
+sigmoid) sees training objects only. Splits are drawn from the class-attribute table (random)
+or from an unsupervised 2-D map of all objects' features (challenging), as in the paper.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from dataclasses import asdict, dataclass, field
+from itertools import combinations
+from math import comb
+
+import numpy as np
+import pandas as pd
+
+from tzsl.datasets import FeatureSet
+from tzsl.evaluation import (
+    Split,
+    challenging_splits,
+    per_class_mean_accuracy,
+    random_object_splits,
+    summarise_over_splits,
+)
+from tzsl.exceptions import ConfigError, SplitError
+from tzsl.models import AttributeClassifierBank, AttributeSVM, MultiLabelAttributeClassifier
+from tzsl.models._dap import attribute_prior, dap_accuracy_over_subsets, dap_log_scores, fuse_attribute_posteriors
+
+FUSIONS = ("max", "avg")
+PRIORS = ("uni", "test", "train")
+
+
+@dataclass
+class DapStudyConfig:
+    """Settings of the PHAC-2 DAP study; every field is recorded in the manifest.
+
+    Attributes
+    ----------
+    n_splits, n_test : int
+        Random splits and test objects per random split (paper: 5 and 10).
+    seed : int
+        Seeds the split draws, the under-sampling draws and the sweep's subsets.
+    random_min_train_positives : int
+        Random splits leave out an attribute with fewer positive training objects. 2 is the
+        least object-grouped cross-validation can work with; the paper states no rule.
+    challenging_min_train_positives : int
+        The paper's rule for challenging splits: each attribute trained on >= 3 objects.
+    undersampling : {"select", "bagging", "none"}
+        Class-0 under-sampling of the attribute SVMs (see :class:`tzsl.models.AttributeSVM`).
+    svm_params : dict
+        Further :class:`~tzsl.models.AttributeSVM` parameters (grids, draws, cv).
+    multilabel : bool
+        Also fit the joint (multi-label) attribute model on the random splits (section 4.4).
+    sweep_min_attributes, sweep_max_subsets : int
+        Attribute-count sweep: j from this many to all attributes, at most this many subsets
+        per j (paper: 7 and 1000).
+    n_jobs, backend, scheduler
+        Parallel fits; ``backend="dask"`` with ``scheduler=None`` starts a local cluster.
+    progress : bool
+        tqdm progress bars over the fits.
+    """
+
+    n_splits: int = 5
+    n_test: int = 10
+    seed: int = 0
+    random_min_train_positives: int = 2
+    challenging_min_train_positives: int = 3
+    undersampling: str = "select"
+    svm_params: dict = field(default_factory=dict)
+    multilabel: bool = True
+    sweep_min_attributes: int = 7
+    sweep_max_subsets: int = 1000
+    n_jobs: int = 1
+    backend: str = "loky"
+    scheduler: str | None = None
+    progress: bool = True
+
+
+@dataclass
+class SplitPosteriors:
+    """Test-set attribute posteriors of one split, enough to score every DAP variant.
+
+    Attributes
+    ----------
+    split : Split
+    attributes : tuple of str, length m
+        Attributes the split's classifiers were trained on.
+    P : ndarray of shape (n_test_trials, n_sensors, m)
+        ``p(a_m = 1 | x_s)`` of every test trial from the independent classifiers.
+    K : ndarray of shape (n_test_objects, m)
+        Test objects' attribute rows (the unseen classes), in ``split.test_objects`` order.
+    y : ndarray of shape (n_test_trials,)
+        Row of ``K`` of each test trial's object.
+    train_prior : ndarray of shape (m,)
+        Attribute frequency over training objects.
+    P_multilabel : ndarray of shape (n_test_trials, n_sensors, m) or None
+        Posteriors of the joint (multi-label) model, when fitted.
+    model : AttributeClassifierBank or None
+        The fitted independent attribute classifiers.
+    """
+
+    split: Split
+    attributes: tuple[str, ...]
+    P: np.ndarray
+    K: np.ndarray
+    y: np.ndarray
+    train_prior: np.ndarray
+    P_multilabel: np.ndarray | None = None
+    model: AttributeClassifierBank | None = None
+
+    def accuracy(self, fusion: str = "avg", prior: str = "uni", multilabel: bool = False) -> float:
+        """DAP trial accuracy on this split's test objects."""
+        return float((self.predict(fusion, prior, multilabel) == self.y).mean())
+
+    def predict(self, fusion: str = "avg", prior: str = "uni", multilabel: bool = False) -> np.ndarray:
+        """Predicted test-object row of every test trial, shape (n_test_trials,)."""
+        P = self.P_multilabel if multilabel else self.P
+        if P is None:
+            raise ConfigError("no multi-label posteriors were computed for this split")
+        present, absent = fuse_attribute_posteriors(P, fusion)
+        return dap_log_scores(present, self.K, self._prior(prior), P_absent=absent).argmax(axis=1)
+
+    def _prior(self, prior: str) -> np.ndarray:
+        if prior == "train":
+            return self.train_prior
+        return attribute_prior(prior, class_attributes=self.K)
+
+
+# --------------------------------------------------------------------------- splits
+
+
+def object_map_features(features: FeatureSet) -> pd.DataFrame:
+    """Per-trial feature rows indexed by object, both sensors side by side (n_trials, s * d)."""
+    n, s, d = features.X.shape
+    return pd.DataFrame(features.X.reshape(n, s * d), index=pd.Index(features.objects, name="object_name"))
+
+
+def make_splits(features: FeatureSet, kind: str, config: DapStudyConfig) -> tuple[list[Split], pd.DataFrame | None]:
+    """Random (F5) or challenging (F6) object splits of ``features``; the map for challenging."""
+    if kind == "random":
+        splits = random_object_splits(
+            features.attributes, n_test=config.n_test, n_splits=config.n_splits, random_state=config.seed,
+            min_train_positives=config.random_min_train_positives,
+        )
+        return splits, None
+    if kind == "challenging":
+        return challenging_splits(
+            object_map_features(features), features.attributes,
+            min_train_positives=config.challenging_min_train_positives,
+        )
+    raise ConfigError(f"unknown split kind {kind!r}; choose random or challenging")
+
+
+# --------------------------------------------------------------------------- fitting
+
+
+def attribute_estimator(config: DapStudyConfig, seed: int) -> AttributeSVM:
+    """The per-(attribute, sensor) SVM template of the study."""
+    return AttributeSVM(undersampling=config.undersampling, random_state=seed, **config.svm_params)
+
+
+def attribute_bank(config: DapStudyConfig, attributes, seed: int) -> AttributeClassifierBank:
+    """Independent per-(attribute, sensor) classifiers, parallel and cached."""
+    return AttributeClassifierBank(
+        estimator=attribute_estimator(config, seed), attribute_names=list(attributes), n_jobs=config.n_jobs,
+        backend=config.backend, progress=config.progress, random_state=seed,
+    )
+
+
+def _split_masks(features: FeatureSet, split: Split) -> tuple[np.ndarray, np.ndarray]:
+    objects = features.objects
+    unknown = (set(split.train_objects) | set(split.test_objects)) - set(objects)
+    if unknown:
+        raise SplitError(f"split {split.name}: objects without trials: {sorted(unknown)}")
+    return np.isin(objects, split.train_objects), np.isin(objects, split.test_objects)
+
+
+def fit_split(features: FeatureSet, split: Split, config: DapStudyConfig, index: int,
+              multilabel: bool = False) -> SplitPosteriors:
+    """Fit the attribute classifiers on the split's training objects; posteriors of its test trials."""
+    attributes = split.kept_attributes
+    train, test = _split_masks(features, split)
+    A = features.attributes.loc[features.objects, list(attributes)].to_numpy(dtype=int)
+    groups = features.objects
+    seed = int(np.random.SeedSequence([config.seed, index]).generate_state(1)[0])
+    bank = attribute_bank(config, attributes, seed)
+    bank.fit(features.X[train], A[train], groups[train])
+    P = bank.predict_proba(features.X[test])
+    P_ml = None
+    if multilabel:
+        joint = MultiLabelAttributeClassifier(
+            estimator=attribute_estimator(config, seed), attribute_names=list(attributes), n_jobs=config.n_jobs,
+            backend=config.backend, progress=config.progress, random_state=seed,
+        )
+        joint.fit(features.X[train], A[train], groups[train])
+        P_ml = joint.predict_proba(features.X[test])
+    K = features.attributes.loc[list(split.test_objects), list(attributes)].to_numpy(dtype=int)
+    y = pd.Index(split.test_objects).get_indexer(groups[test])
+    prior = attribute_prior("train", train_attributes=A[train], groups=groups[train])
+    return SplitPosteriors(split=split, attributes=tuple(attributes), P=P, K=K, y=y, train_prior=prior,
+                           P_multilabel=P_ml, model=bank)
+
+
+@contextlib.contextmanager
+def compute_context(config: DapStudyConfig):
+    """A Dask client for ``backend="dask"`` (the scheduler's, or a local cluster); else nothing."""
+    if config.backend != "dask":
+        yield None
+        return
+    try:
+        from dask.distributed import Client, LocalCluster  # noqa: PLC0415
+    except ImportError as exc:  # pragma: no cover - depends on the install
+        raise ConfigError("--backend dask needs dask.distributed: pip install 'tzsl[dask]'") from exc
+    if config.scheduler:
+        with Client(config.scheduler) as client:
+            yield client
+    else:
+        workers = max(1, config.n_jobs if config.n_jobs and config.n_jobs > 0 else 2)
+        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                          dashboard_address=None) as cluster, Client(cluster) as client:
+            yield client
+
+
+def fit_splits(features: FeatureSet, splits: list[Split], config: DapStudyConfig,
+               multilabel: bool = False, offset: int = 0) -> list[SplitPosteriors]:
+    """:func:`fit_split` for every split (index ``offset + i`` seeds split ``i``)."""
+    with compute_context(config):
+        return [fit_split(features, s, config, offset + i, multilabel=multilabel) for i, s in enumerate(splits)]
+
+
+# --------------------------------------------------------------------------- tables
+
+
+def _split_label(split: Split) -> str:
+    return split.name.rsplit("-", 1)[-1]
+
+
+def _with_summary(rows: list[dict]) -> pd.DataFrame:
+    return summarise_over_splits(pd.DataFrame(rows), split_column="split").reset_index()
+
+
+def _paper(table: dict, split: str, i: int):
+    key = "average" if split == "mean" else split
+    value = table.get(key)
+    return np.nan if value is None or value[i] is None else value[i]
+
+
+def table1_fusion(results: list[SplitPosteriors]) -> pd.DataFrame:
+    """Table 1: MAXDAP vs AVGDAP, uni-prior, per random split + mean/std, paper beside."""
+    from tzsl.experiments.paper_numbers import DAP_TABLE1  # noqa: PLC0415
+
+    rows = [{
+        "split": _split_label(r.split), "n_test_objects": r.split.n_test, "chance": r.split.chance,
+        "maxdap": r.accuracy("max", "uni"), "avgdap": r.accuracy("avg", "uni"),
+        "avgdap_per_class_mean": per_class_mean_accuracy(r.y, r.predict("avg", "uni")),
+        "n_attributes": len(r.attributes),
+    } for r in results]
+    table = _with_summary(rows)
+    table["paper_maxdap"] = [_paper(DAP_TABLE1, s, 0) for s in table["split"]]
+    table["paper_avgdap"] = [_paper(DAP_TABLE1, s, 1) for s in table["split"]]
+    return table
+
+
+def table2_priors(results: list[SplitPosteriors]) -> pd.DataFrame:
+    """Table 2: AVGDAP with uni / test / train attribute priors, paper beside."""
+    from tzsl.experiments.paper_numbers import DAP_TABLE2  # noqa: PLC0415
+
+    rows = [{"split": _split_label(r.split), **{p: r.accuracy("avg", p) for p in PRIORS}} for r in results]
+    table = _with_summary(rows)
+    for i, p in enumerate(PRIORS):
+        table[f"paper_{p}"] = [_paper(DAP_TABLE2, s, i) for s in table["split"]]
+    return table
+
+
+def table3_challenging(results: list[SplitPosteriors], map_coords: pd.DataFrame | None = None) -> pd.DataFrame:
+    """Table 3: challenging splits (AVGDAP, uni-prior), sizes and chance, paper beside."""
+    from tzsl.experiments.paper_numbers import DAP_TABLE3  # noqa: PLC0415
+
+    rows = []
+    for r in results:
+        label = _split_label(r.split)
+        part = ""
+        if map_coords is not None:
+            labels = map_coords.loc[map_coords["partition"] == int(label), "partition_label"]
+            part = labels.iloc[0] if len(labels) else ""
+        rows.append({
+            "split": label, "partition": part, "n_objects": r.split.n_test, "chance": r.split.chance,
+            "avgdap": r.accuracy("avg", "uni"),
+            "avgdap_per_class_mean": per_class_mean_accuracy(r.y, r.predict("avg", "uni")),
+            "excluded_attributes": ";".join(a for a, _ in r.split.excluded_attributes),
+            "dropped_duplicate_objects": ";".join(o for o, _ in r.split.dropped_objects),
+        })
+    table = _with_summary(rows)
+    for i, name in enumerate(("paper_n_objects", "paper_chance", "paper_avgdap")):
+        table[name] = [_paper(DAP_TABLE3, s, i) for s in table["split"]]
+    return table
+
+
+def multilabel_table(results: list[SplitPosteriors]) -> pd.DataFrame:
+    """Independent vs joint attribute classifiers (AVGDAP, uni-prior), paper beside (0.39 vs 0.31)."""
+    from tzsl.experiments.paper_numbers import DAP_INDEPENDENT_ACCURACY, DAP_MULTILABEL_ACCURACY  # noqa: PLC0415
+
+    rows = [{"split": _split_label(r.split), "independent": r.accuracy("avg", "uni"),
+             "multilabel": r.accuracy("avg", "uni", multilabel=True)} for r in results if r.P_multilabel is not None]
+    table = _with_summary(rows)
+    mean = table["split"] == "mean"
+    table["paper_independent"] = np.where(mean, DAP_INDEPENDENT_ACCURACY, np.nan)
+    table["paper_multilabel"] = np.where(mean, DAP_MULTILABEL_ACCURACY, np.nan)
+    return table
+
+
+def attribute_accuracy_table(results: list[SplitPosteriors], sensors: tuple[str, ...]) -> pd.DataFrame:
+    """Per-attribute accuracy and balanced accuracy on test trials (threshold 0.5), per split and sensor.
+
+    Rows: one per (split, attribute, sensor), plus ``sensor="mean"`` rows averaging the
+    sensors as the paper's Fig. 2a does. Balanced accuracy is NaN where an attribute takes a
+    single value on the split's test objects.
+    """
+    rows = []
+    for r in results:
+        truth = r.K[r.y].astype(bool)  # (n, m)
+        pred = r.P >= 0.5  # (n, s, m)
+        correct = pred == truth[:, None, :]
+        acc = correct.mean(axis=0)  # (s, m)
+        pos, neg = truth.sum(axis=0), (~truth).sum(axis=0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            tpr = (pred & truth[:, None, :]).sum(axis=0) / pos
+            tnr = (~pred & ~truth[:, None, :]).sum(axis=0) / neg
+        bal = np.where((pos > 0) & (neg > 0), (tpr + tnr) / 2, np.nan)
+        for j, attr in enumerate(r.attributes):
+            for s, sensor in enumerate(sensors):
+                rows.append({"split": _split_label(r.split), "attribute": attr, "sensor": sensor,
+                             "accuracy": acc[s, j], "balanced_accuracy": bal[s, j]})
+            rows.append({"split": _split_label(r.split), "attribute": attr, "sensor": "mean",
+                         "accuracy": acc[:, j].mean(), "balanced_accuracy": np.nanmean(bal[:, j])
+                         if np.isfinite(bal[:, j]).any() else np.nan})
+    return pd.DataFrame(rows)
+
+
+def attribute_accuracy_summary(per_split: pd.DataFrame) -> pd.DataFrame:
+    """Mean over splits of the sensor-averaged per-attribute accuracy, with the paper's quoted values."""
+    from tzsl.experiments.paper_numbers import DAP_ATTRIBUTE_ACCURACY_QUOTED, DAP_MEAN_ATTRIBUTE_ACCURACY  # noqa: PLC0415
+
+    mean_rows = per_split[per_split["sensor"] == "mean"]
+    summary = mean_rows.groupby("attribute", sort=False)[["accuracy", "balanced_accuracy"]].mean().reset_index()
+    summary["paper_accuracy"] = summary["attribute"].map(DAP_ATTRIBUTE_ACCURACY_QUOTED)
+    overall = pd.DataFrame([{"attribute": "mean", "accuracy": summary["accuracy"].mean(),
+                             "balanced_accuracy": summary["balanced_accuracy"].mean(),
+                             "paper_accuracy": DAP_MEAN_ATTRIBUTE_ACCURACY}])
+    return pd.concat([summary, overall], ignore_index=True)
+
+
+def attribute_subsets(m: int, j: int, max_subsets: int, rng: np.random.Generator) -> np.ndarray:
+    """Up to ``max_subsets`` distinct j-subsets of m attributes as (r, j) column indices."""
+    total = comb(m, j)
+    if total <= max_subsets:
+        return np.array(list(combinations(range(m), j)), dtype=np.intp).reshape(-1, j)
+    chosen: set[tuple[int, ...]] = set()
+    while len(chosen) < max_subsets:
+        draws = np.sort(rng.random((max_subsets, m)).argsort(axis=1)[:, :j], axis=1)
+        chosen.update(map(tuple, draws.tolist()))
+    return np.array(sorted(chosen)[:max_subsets], dtype=np.intp)
+
+
+def attribute_sweep(results: list[SplitPosteriors], min_attributes: int = 7, max_subsets: int = 1000,
+                    seed: int = 0, fusion: str = "avg", prior: str = "uni") -> pd.DataFrame:
+    """Accuracy vs number of attributes j (section 4.7), reusing the fitted posteriors.
+
+    For each split and each j from ``min_attributes`` to the split's attribute count, up to
+    ``max_subsets`` random j-subsets are scored in one vectorised pass. Rows: (split, j) with
+    the mean and std over subsets, and ``split="mean"`` rows averaging the splits.
+    """
+    rng = np.random.default_rng(seed)
+    rows = []
+    for r in results:
+        m = len(r.attributes)
+        for j in range(min_attributes, m + 1):
+            subsets = attribute_subsets(m, j, max_subsets, rng)
+            acc = dap_accuracy_over_subsets(r.P, r.K, r.y, subsets, fusion=fusion, prior=prior)
+            rows.append({"split": _split_label(r.split), "n_attributes": j, "n_subsets": len(subsets),
+                         "accuracy_mean": acc.mean(), "accuracy_std": acc.std(), "chance": r.split.chance})
+    table = pd.DataFrame(rows)
+    mean = table.groupby("n_attributes", as_index=False).agg(
+        n_subsets=("n_subsets", "sum"), accuracy_mean=("accuracy_mean", "mean"),
+        accuracy_std=("accuracy_mean", "std"), chance=("chance", "mean"))
+    mean.insert(0, "split", "mean")
+    return pd.concat([table, mean], ignore_index=True)
+
+
+def study_config_record(config: DapStudyConfig) -> dict:
+    """JSON-ready configuration for the manifest."""
+    return asdict(config)
+
+
+# --------------------------------------------------------------------------- the study
+
+
+def _print(echo, title: str, table: pd.DataFrame) -> None:
+    if echo is None:
+        return
+    echo(f"\n{title}")
+    echo(table.to_string(index=False, float_format=lambda v: f"{v:.3f}", na_rep="-"))
+
+
+def run_dap_study(
+    features: FeatureSet,
+    out,
+    config: DapStudyConfig | None = None,
+    kinds: tuple[str, ...] = ("random", "challenging"),
+    splits: list[Split] | None = None,
+    sweep: bool = True,
+    echo=None,
+) -> dict[str, pd.DataFrame]:
+    """Run the PHAC-2 DAP study and write its tables and figures into ``out``.
+
+    Parameters
+    ----------
+    features : FeatureSet
+        Per-trial, per-sensor features (e.g. ``extract_features("phac2-penn")``).
+    out : tzsl.experiments._outputs.ResultsDir
+        Where tables (CSV) and figures (PNG) go; existing files need ``force``.
+    config : DapStudyConfig or None
+    kinds : tuple of {"random", "challenging"}
+        Which split families to run. Ignored when ``splits`` is given.
+    splits : list of Split or None
+        User-supplied splits (``tzsl evaluate --splits FILE``): scored like random splits
+        (Tables 1 and 2), no paper numbers are matched to them beyond the split label.
+    sweep : bool
+        Run the attribute-count sweep on the random splits.
+    echo : callable or None
+        Receives human-readable tables (the CLI passes ``click.echo``).
+
+    Returns
+    -------
+    dict of DataFrame
+        Every table written, keyed by file stem.
+    """
+    from tzsl.experiments._figures import (  # noqa: PLC0415
+        attribute_accuracy_figure,
+        attribute_sweep_figure,
+        object_map_figure,
+    )
+
+    config = config or DapStudyConfig()
+    tables: dict[str, pd.DataFrame] = {}
+    random_results: list[SplitPosteriors] = []
+    if splits is not None:
+        random_results = fit_splits(features, splits, config, multilabel=config.multilabel)
+    elif "random" in kinds:
+        random_splits, _ = make_splits(features, "random", config)
+        random_results = fit_splits(features, random_splits, config, multilabel=config.multilabel)
+    if random_results:
+        tables["table1_fusion"] = table1_fusion(random_results)
+        tables["table2_priors"] = table2_priors(random_results)
+        if config.multilabel:
+            tables["multilabel"] = multilabel_table(random_results)
+        per_split = attribute_accuracy_table(random_results, features.sensors)
+        tables["attribute_accuracy_per_split"] = per_split
+        tables["attribute_accuracy"] = attribute_accuracy_summary(per_split)
+        out.write_figure("attribute_accuracy.png", attribute_accuracy_figure(tables["attribute_accuracy"]))
+        if sweep:
+            tables["attribute_sweep"] = attribute_sweep(
+                random_results, config.sweep_min_attributes, config.sweep_max_subsets, seed=config.seed)
+            out.write_figure("attribute_sweep.png", attribute_sweep_figure(tables["attribute_sweep"]))
+    if splits is None and "challenging" in kinds:
+        challenging, map_coords = make_splits(features, "challenging", config)
+        results = fit_splits(features, challenging, config, offset=100)
+        tables["table3_challenging"] = table3_challenging(results, map_coords)
+        tables["object_map"] = map_coords
+        out.write_figure("object_map.png", object_map_figure(map_coords))
+    titles = {
+        "table1_fusion": "Table 1: MAXDAP vs AVGDAP (uni-prior), random splits - ours beside the paper",
+        "table2_priors": "Table 2: AVGDAP by attribute prior, random splits - ours beside the paper",
+        "table3_challenging": "Table 3: challenging splits (AVGDAP, uni-prior) - ours beside the paper",
+        "multilabel": "Independent vs multi-label attribute classifiers (AVGDAP, uni-prior)",
+        "attribute_accuracy": "Per-attribute test accuracy (mean over random splits and BioTacs)",
+    }
+    for name, table in tables.items():
+        out.write_csv(f"{name}.csv", table)
+        if name in titles:
+            _print(echo, titles[name], table)
+    return tables
+
+
+def train_attribute_model(
+    features: FeatureSet,
+    config: DapStudyConfig,
+    save,
+    splits_file=None,
+    split_name: str | None = None,
+    fusion: str = "avg",
+    prior: str = "uni",
+    force: bool = False,
+) -> pd.DataFrame:
+    """Fit the attribute classifiers (all objects, or one split's training objects) and save a bundle.
+
+    Returns a table with one row per (attribute, sensor): the chosen ``C``, ``gamma``, the
+    under-sampling draw and the training objects' positive count.
+    """
+    from tzsl.evaluation import read_splits_csv  # noqa: PLC0415
+    from tzsl.experiments.predict import save_phac2_bundle  # noqa: PLC0415
+
+    objects = features.objects
+    attributes = list(features.attributes.columns)
+    train = np.ones(len(objects), dtype=bool)
+    split_record = None
+    if splits_file is not None:
+        splits = read_splits_csv(splits_file, features.attributes, min_train_positives=config.random_min_train_positives)
+        chosen = splits[0] if split_name is None else next((s for s in splits if s.name == split_name), None)
+        if chosen is None:
+            raise ConfigError(f"{splits_file}: no split named {split_name!r}; have {[s.name for s in splits]}")
+        train = np.isin(objects, chosen.train_objects)
+        attributes = list(chosen.kept_attributes)
+        split_record = chosen.name
+    sub = features.subset(train)
+    sub.attributes = sub.attributes[attributes]
+    A = sub.trial_attributes()
+    with compute_context(config):
+        bank = attribute_bank(config, attributes, config.seed).fit(sub.X, A, sub.objects)
+    prior_value = attribute_prior("train", train_attributes=A, groups=sub.objects) if prior == "train" else prior
+    save_phac2_bundle(save, bank, sub, fusion=fusion, prior=prior_value, force=force,
+                      training_objects=sorted(set(sub.objects)), split=split_record, seed=config.seed,
+                      undersampling=config.undersampling)
+    rows = []
+    for j, name in enumerate(attributes):
+        for s, sensor in enumerate(sub.sensors):
+            est = bank.estimators_[j][s]
+            rows.append({"attribute": name, "sensor": sensor, "C": getattr(est, "C_", np.nan),
+                         "gamma": getattr(est, "gamma_", np.nan), "draw": getattr(est, "draw_", -1),
+                         "positive_objects": int(sub.attributes[name].sum())})
+    return pd.DataFrame(rows)
