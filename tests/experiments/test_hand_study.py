@@ -62,9 +62,9 @@ def test_every_file_is_written_with_its_columns(study, folder):
     assert set(conf["method"]) == {"LDAP", "DF-MDAP (T=3)", "SC-MDAP (k=2)"}
     for png in out.glob("*.png"):
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    manifest = json.loads((out / "manifest.json").read_text())
+    manifest = json.loads((out / "hand_manifest.json").read_text())
     assert manifest["config"]["seeds"] == [0, 1] and manifest["config"]["simulated"] is False
-    assert set(manifest["outputs"]) == set(HAND_OUTPUTS) - {"manifest.json"}
+    assert set(manifest["outputs"]) == set(HAND_OUTPUTS) - {"hand_manifest.json"}
     assert str(folder / "grasps.csv") in manifest["data_files"]
 
 
@@ -143,7 +143,7 @@ def test_simulated_when_no_grasps_and_refuses_overwrite(tmp_path):
     result = run_hand_study(None, TABLE, tmp_path, seeds=[3], config=cfg)
     assert result.simulated
     assert "SIMULATED" in format_hand_summary(result)
-    manifest = json.loads((tmp_path / "manifest.json").read_text())
+    manifest = json.loads((tmp_path / "hand_manifest.json").read_text())
     assert manifest["config"]["simulated"] is True
     assert manifest["simulation"]["3"]["random_state"] == 3
     with pytest.raises(ConfigError, match="--force"):

@@ -78,7 +78,7 @@ HAND_OUTPUTS: tuple[str, ...] = (
     "hand_attribute_accuracy.png",
     "hand_attribute_distance.csv",
     "hand_attribute_distance.png",
-    "manifest.json",
+    "hand_manifest.json",
 )
 
 
@@ -610,6 +610,7 @@ def run_hand_study(
             **asdict(config),
         },
         data_files=data_files,
+        name="hand_manifest.json",
         extra={"notes": notes, "simulation": simulation} if simulated else {"notes": notes},
     )
     result.written = list(results.written)
