@@ -48,6 +48,19 @@ DAP_MEAN_ATTRIBUTE_ACCURACY: float = 0.78
 #: Per-attribute accuracies quoted in the text of section 4.4 (the figure's other bars are not printed).
 DAP_ATTRIBUTE_ACCURACY_QUOTED: dict[str, float] = {"solid": 0.92, "smooth": 0.64, "textured": 0.64}
 
+#: Fabric paper Table 1: zero-shot accuracy of the CNN+LSTM embedding for each lambda of the loss
+#: ``C + lambda R`` and of ESZSL, on the GelSight press videos (train classes 2, 3, 4, 5, 7 of the
+#: paper, i.e. 0-indexed groups 1, 2, 3, 4, 6; tzsl fabric config 1). The paper prints percent;
+#: stored here as fractions. row (Flat / Fold / Rand / Average) -> column ("0", "0.1", "1", "10",
+#: "inf", "ESZSL") -> accuracy. The paper's caption reads "inf" as the classification term C only;
+#: tzsl's ``EmbeddingZSL(lam="inf")`` is the regression term R only (see tzsl.models._embedding).
+FABRIC_TABLE1: dict[str, dict[str, float]] = {
+    "Flat": {"0": 0.6357, "0.1": 0.6701, "1": 0.6014, "10": 0.6529, "inf": 0.6460, "ESZSL": 0.5738},
+    "Fold": {"0": 0.8941, "0.1": 0.8613, "1": 0.8722, "10": 0.8412, "inf": 0.8320, "ESZSL": 0.7603},
+    "Rand": {"0": 0.7340, "0.1": 0.8230, "1": 0.7930, "10": 0.7460, "inf": 0.7340, "ESZSL": 0.7123},
+    "Average": {"0": 0.7545, "0.1": 0.7848, "1": 0.7555, "10": 0.7467, "inf": 0.7373, "ESZSL": 0.6821},
+}
+
 #: DAP paper Table 5 (section 5.8.2): single-grasp accuracy on the test objects of the Shadow-hand
 #: experiment, by object subset. method -> {subset: accuracy}; subsets as in ``hand_table4.csv``.
 DAP_HAND_TABLE5: dict[str, dict[str, float]] = {
