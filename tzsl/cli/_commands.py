@@ -4,3 +4,4 @@ from tzsl.cli import _data_commands  # noqa: F401
 from tzsl.cli import _dataset_commands  # noqa: F401
 from tzsl.cli import _deep_commands  # noqa: F401
 from tzsl.cli import _hand_commands  # noqa: F401
+from tzsl.cli import _fabric_commands  # noqa: F401
