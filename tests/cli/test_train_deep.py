@@ -15,7 +15,8 @@ _register_commands()
 
 SKIP_REASON = "PyTorch is not installed (the optional deep extra: pip install 'tzsl[deep]')"
 # A small run: random frozen CNN on 16 x 16 frames, a few epochs (checks plumbing, not accuracy).
-FAST = ["--backbone", "small-cnn", "--image-size", "16", "--hidden-size", "8", "--epochs", "3", "--quiet"]
+FAST = ["--backbone", "small-cnn", "--image-size", "16", "--hidden-size", "8", "--epochs", "3", "--quiet",
+        "--n-threads", "1"]
 
 
 @pytest.fixture
@@ -50,6 +51,7 @@ def test_option_errors_are_one_line(tmp_path):
     assert out.read_text() == "keep me"
 
 
+@pytest.mark.slow
 def test_train_deep_on_fabric_depth_images(torch, data_dir, tmp_path):
     from tzsl.models import load_deep_bundle
 
@@ -104,3 +106,27 @@ def test_train_deep_on_user_gelsight_videos(torch, data_dir, tmp_path):
     assert "GelSight videos" in result.output
     assert "sequences: 10 train, 6 test" in result.output
     assert load_deep_bundle(out).sequence_shape_ == (5, 32, 32, 3)
+
+
+@pytest.mark.slow
+def test_deep_fabric_study_table(torch, data_dir, tmp_path):
+    """The study behind ``evaluate-fabric --model deep``: runs, table, manifest; refuses overwrites."""
+    from tzsl.exceptions import ConfigError
+    from tzsl.experiments._outputs import ResultsDir
+    from tzsl.experiments.deep import format_deep_table, run_deep_fabric_study
+
+    params = {"backbone": "small-cnn", "image_size": 16, "hidden_size": 8, "epochs": 2, "n_threads": 1}
+    kwargs = dict(data_dir=data_dir, seeds=2, configs=(1,), progress=False, lams=(0.1, "inf"),
+                  model_params=params, cache_dir=tmp_path / "cache")
+    result = run_deep_fabric_study(ResultsDir(tmp_path / "out"), **kwargs)
+    runs, table = result["runs"], result["table"]
+    assert len(runs) == 4 and set(runs["method"]) == {"lam_0.1", "lam_inf"}
+    assert (runs["n_train"] == 92).all() and (runs["n_test"] == 27).all()
+    assert table["n_seeds"].tolist() == [2, 2]
+    mean = runs.groupby("method", sort=False)["accuracy"].mean().to_numpy()
+    np.testing.assert_allclose(table["accuracy"].to_numpy(), mean)
+    for name in ("fabric_deep_table.csv", "fabric_deep_runs.csv", "fabric_deep_manifest.json"):
+        assert (tmp_path / "out" / name).is_file()
+    assert "lam_inf" in format_deep_table(table)
+    with pytest.raises(ConfigError, match="--force"):
+        run_deep_fabric_study(ResultsDir(tmp_path / "out"), **kwargs)

@@ -62,6 +62,8 @@ def deep_model_options(func):
                      help="Write a checkpoint after every epoch (and cache the frozen CNN features) here."),
         click.option("--resume", is_flag=True,
                      help="Continue from the checkpoint in --checkpoint-dir (same settings and data)."),
+        click.option("--n-threads", type=int, default=None,
+                     help="Torch CPU threads (default: torch's; 1 avoids oversubscription on a shared machine)."),
     ]
     for option in reversed(options):
         func = option(func)
@@ -69,7 +71,7 @@ def deep_model_options(func):
 
 
 def build_deep_model(*, epochs, lam, backbone, weights_path, finetune, image_size, hidden_size, batch_size,
-                     lr, weight_decay, optimizer, checkpoint_dir, resume, seed, verbose=True):
+                     lr, weight_decay, optimizer, checkpoint_dir, resume, seed, n_threads=None, verbose=True):
     """A :class:`~tzsl.models.DeepAttributeEmbedding` from parsed command-line options."""
     from tzsl.models import DeepAttributeEmbedding  # noqa: PLC0415
 
@@ -79,7 +81,7 @@ def build_deep_model(*, epochs, lam, backbone, weights_path, finetune, image_siz
         backbone=backbone, weights_path=weights_path, finetune=parse_finetune(str(finetune)),
         image_size=image_size, hidden_size=hidden_size, lam=parse_lam(str(lam)), epochs=epochs,
         batch_size=batch_size, lr=lr, weight_decay=weight_decay, optimizer=optimizer,
-        checkpoint_dir=checkpoint_dir, resume=resume, verbose=verbose, random_state=seed,
+        checkpoint_dir=checkpoint_dir, resume=resume, verbose=verbose, n_threads=n_threads, random_state=seed,
     )
     model._check_params()  # fail on bad options before any data is read
     return model

