@@ -43,7 +43,7 @@ def test_evaluate_fabric_prints_table_and_refuses_overwrite(data_dir, tmp_path):
 
 
 def test_evaluate_fabric_option_errors(tmp_path, data_dir):
-    bad_model = _run("evaluate-fabric", "--model", "deep", "--out", str(tmp_path))
+    bad_model = _run("evaluate-fabric", "--model", "quantum", "--out", str(tmp_path))
     assert bad_model.exit_code == 2 and "Invalid value for '--model'" in bad_model.output
     bad_config = _run("evaluate-fabric", "--config", "3", "--out", str(tmp_path))
     assert bad_config.exit_code == 2
