@@ -130,3 +130,29 @@ def test_deep_fabric_study_table(torch, data_dir, tmp_path):
     assert "lam_inf" in format_deep_table(table)
     with pytest.raises(ConfigError, match="--force"):
         run_deep_fabric_study(ResultsDir(tmp_path / "out"), **kwargs)
+
+
+def test_evaluate_fabric_model_deep_calls_the_deep_study(torch, tmp_path, monkeypatch):
+    """``evaluate-fabric --model deep`` hands its options to run_deep_fabric_study (the study
+    itself is tested above)."""
+    import pandas as pd
+
+    import tzsl.experiments.deep as deep
+
+    seen = {}
+
+    def fake_study(out, **kwargs):
+        seen.update(kwargs, out=out.root)
+        table = pd.DataFrame({"condition": ["depth-sequence"], "config": [1], "method": ["lam_0.1"], "n_seeds": [2],
+                              **{c: [0.5] for c in ("accuracy", "per_class_mean_accuracy", "train_accuracy")},
+                              **{f"{c}_std": [0.0] for c in ("accuracy", "per_class_mean_accuracy", "train_accuracy")},
+                              "seconds_per_epoch": [0.1]})
+        return {"table": table, "runs": table}
+
+    monkeypatch.setattr(deep, "run_deep_fabric_study", fake_study)
+    result = _run("evaluate-fabric", "--model", "deep", "--out", str(tmp_path / "res"), "--seeds", "2",
+                  "--config", "1", "--no-progress", "--data-dir", str(tmp_path / "data"))
+    assert result.exit_code == 0, result.output
+    assert seen["seeds"] == 2 and seen["configs"] == (1,) and seen["progress"] is False
+    assert seen["out"] == tmp_path / "res"
+    assert "50.00 +- 0.00" in result.output and "fabric_deep_table.csv" in result.output

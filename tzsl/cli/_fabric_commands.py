@@ -8,8 +8,9 @@ import click
 
 from tzsl.cli._main import cli, data_dir_option, force_option, n_jobs_option, seed_option
 
-#: Model families of ``evaluate-fabric``; "classical" = texture descriptors + EmbeddingZSL / ESZSL.
-FABRIC_MODELS = ("classical",)
+#: Model families of ``evaluate-fabric``; "classical" = texture descriptors + EmbeddingZSL / ESZSL;
+#: "deep" = the CNN + LSTM of tzsl.experiments.deep (needs the deep extra).
+FABRIC_MODELS = ("classical", "deep")
 
 
 @cli.command("evaluate-fabric")
@@ -27,7 +28,8 @@ FABRIC_MODELS = ("classical",)
 @click.option("--attributes", default="a8", show_default=True,
               help="Group x attribute matrix: a8, a4, a12, three_value_a8, three_value_a8v2.")
 @click.option("--model", type=click.Choice(FABRIC_MODELS), default="classical", show_default=True,
-              help="classical: texture descriptors with EmbeddingZSL (lambda grid) and ESZSL.")
+              help="classical: texture descriptors with EmbeddingZSL (lambda grid) and ESZSL; deep: the "
+                   "CNN + LSTM (lambda grid; needs tzsl[deep]) -> fabric_deep_table.csv.")
 @click.option("--no-progress", is_flag=True, help="No progress bar.")
 @data_dir_option
 @force_option
@@ -44,6 +46,19 @@ def evaluate_fabric(out: Path, seeds: int, configs: tuple[str, ...], gelsight_ro
     from tzsl.experiments._outputs import ResultsDir  # noqa: PLC0415
     from tzsl.experiments.fabric import format_fabric_table, run_fabric_study  # noqa: PLC0415
 
+    if model == "deep":
+        from tzsl.experiments.deep import format_deep_table, run_deep_fabric_study  # noqa: PLC0415
+        from tzsl.models._deep import require_torch  # noqa: PLC0415
+
+        require_torch()
+        deep = run_deep_fabric_study(
+            ResultsDir(out, force=force), data_dir=data_dir, seeds=seeds,
+            configs=tuple(int(c) for c in configs) or (1, 2), gelsight_root=gelsight_root,
+            attributes=attributes, progress=not no_progress, seed=seed,
+        )
+        click.echo(format_deep_table(deep["table"]))
+        click.echo(f"wrote {out / 'fabric_deep_table.csv'}, fabric_deep_runs.csv, fabric_deep_manifest.json")
+        return
     result = run_fabric_study(
         ResultsDir(out, force=force),
         data_dir=data_dir,
