@@ -30,7 +30,7 @@ reproduce-tables: install
 	$(BIN)/tzsl reproduce-tables --out $(RESULTS) --n-jobs $(N_JOBS) --force
 
 bench: install
-	$(BIN)/tzsl bench --n-jobs $(N_JOBS)
+	$(BIN)/tzsl bench
 
 clean:
 	rm -rf $(VENV) .pytest_cache .hypothesis $(RESULTS) .tzsl_cache

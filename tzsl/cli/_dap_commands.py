@@ -195,3 +195,30 @@ def reproduce_tables(out, fabric_seeds, hand_seeds, undersampling, cv, no_progre
     results = run(out, data_dir=data_dir, config=config, force=force, hand_seeds=tuple(range(hand_seeds)),
                   fabric_seeds=fabric_seeds, echo=click.echo)
     click.echo(f"\nwrote {len(results.written)} files to {out} in {time.perf_counter() - start:.0f} s")
+
+
+@cli.command()
+@click.option("--split-index", type=int, default=0, show_default=True, help="Which random split to time.")
+@click.option("--skip-literal", is_flag=True, help="Time only tzsl (the literal recipe takes tens of minutes).")
+@click.option("--out", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Also write the timings as CSV.")
+@seed_option
+@data_dir_option
+@force_option
+def bench(split_index, skip_literal, out, seed, data_dir, force):
+    """Time one random PHAC-2 split: the paper's literal recipe vs tzsl (n_jobs 1 and 2), with accuracies."""
+    from tzsl.experiments.bench import run_bench  # noqa: PLC0415
+    from tzsl.experiments.extract import extract_features  # noqa: PLC0415
+    from tzsl.experiments.phac2_dap import DapStudyConfig  # noqa: PLC0415
+
+    if out is not None and out.exists() and not force:
+        raise ConfigError(f"{out} already exists; use --force to overwrite")
+    features = extract_features("phac2-penn", data_dir=data_dir)
+    table = run_bench(features, DapStudyConfig(seed=seed), split_index=split_index, skip_literal=skip_literal,
+                      echo=click.echo)
+    click.echo(table.to_string(index=False, float_format=lambda v: f"{v:.3f}"))
+    if out is not None:
+        from tzsl._io import atomic_write  # noqa: PLC0415
+
+        atomic_write(out, lambda p: table.to_csv(p, index=False))
+        click.echo(f"wrote {out}")
