@@ -235,6 +235,14 @@ class ModelAdapter(ABC):
         """One line naming the model."""
         return f"{self.kind} model, {len(self.attribute_names)} attributes"
 
+    def class_scores(self, present: np.ndarray, absent: np.ndarray, K: np.ndarray) -> np.ndarray:
+        """Log-scores (n, c) of the candidate classes ``K`` (c, m); DAP (eq. 3) unless overridden.
+
+        ``present`` / ``absent`` are per-grasp ``p(a_m = 1 | x)`` / ``p(a_m = 0 | x)``, shape (n, m),
+        or their running means over grasps for DF-MDAP.
+        """
+        return dap_log_scores(present, K, self.prior(K), P_absent=absent)
+
 
 def _read_grasp_inputs(inputs: Sequence[str | Path]) -> list:
     grasps = []
@@ -374,8 +382,68 @@ class Phac2Adapter(ModelAdapter):
         return attribute_prior(np.asarray(prior, dtype=float))
 
 
+class DeepAdapter(ModelAdapter):
+    """``deep`` bundles: the CNN + LSTM attribute embedding on press videos or key-frame arrays.
+
+    An input is a video file (``.avi`` etc.; 5 key frames are selected with
+    :class:`tzsl.features.KeyFrameSelector`) or an ``.npz`` holding ``frames`` of shape
+    (5, H, W[, C]). The model's "posteriors" are its attribute estimates ``f(x)`` in (0, 1);
+    classes are scored by ``-||f - a_c||^2`` (nearest attribute vector, fabric paper section 4.2),
+    and DF-MDAP averages ``f`` over grasps before scoring.
+    """
+
+    kind = "deep"
+    inputs = "press videos (.avi) or .npz files with a 'frames' array (5, H, W[, C])"
+
+    @property
+    def attribute_names(self) -> list[str]:
+        names = self.metadata.get("attribute_names")
+        if names is None:
+            names = [f"attr_{j}" for j in range(int(self.model.n_attributes_))]
+        return [str(a) for a in names]
+
+    def _frames(self, path: Path) -> np.ndarray:
+        if not path.is_file():
+            raise DataFileError(path, "input file not found")
+        if path.suffix == ".npz":
+            try:
+                with np.load(path, allow_pickle=False) as npz:
+                    if "frames" not in npz.files:
+                        raise DataFileError(path, f"no 'frames' array (found {npz.files})")
+                    return np.asarray(npz["frames"])
+            except (OSError, ValueError, EOFError) as exc:
+                raise DataFileError(path, f"cannot read the .npz file ({exc})") from None
+        from tzsl.features import KeyFrameSelector  # noqa: PLC0415
+
+        return KeyFrameSelector().transform([str(path)])[0]
+
+    def posteriors(self, inputs: Sequence[str | Path]) -> GraspPosteriors:
+        if not inputs:
+            raise DataFileError(None, "no input given")
+        paths = [Path(p) for p in inputs]
+        frames = [self._frames(p) for p in paths]
+        shapes = {f.shape for f in frames}
+        if len(shapes) != 1:
+            raise DataFileError(None, f"inputs have different frame shapes {sorted(shapes)}")
+        F = np.asarray(self.model.transform(np.stack(frames)), dtype=float)
+        info = [f"{f.shape[0]} key frames" for f in frames]
+        return GraspPosteriors([p.stem for p in paths], [str(p) for p in paths], info, F, 1.0 - F, F, 1.0 - F)
+
+    def prior(self, K: np.ndarray) -> np.ndarray:  # not used by the nearest-attribute rule
+        return np.full(K.shape[1], 0.5)
+
+    def class_scores(self, present: np.ndarray, absent: np.ndarray, K: np.ndarray) -> np.ndarray:
+        return -((present[:, None, :] - K[None, :, :]) ** 2).sum(axis=2)
+
+
+def _deep_adapter(model: Any, metadata: dict) -> DeepAdapter:
+    return DeepAdapter(model, metadata)
+
+
 #: Bundle kind -> adapter class (or any callable ``(model, metadata) -> ModelAdapter``).
-ADAPTERS: dict[str, Callable[[Any, dict], ModelAdapter]] = {HAND_KIND: HandAdapter, PHAC2_KIND: Phac2Adapter}
+ADAPTERS: dict[str, Callable[[Any, dict], ModelAdapter]] = {
+    HAND_KIND: HandAdapter, PHAC2_KIND: Phac2Adapter, "deep": _deep_adapter,
+}
 
 
 def register_adapter(kind: str, factory: Callable[[Any, dict], ModelAdapter]) -> None:
@@ -396,6 +464,12 @@ def load_adapter(path: str | Path) -> ModelAdapter:
     kind = read_bundle_header(path).kind  # verified, nothing unpickled yet
     if kind not in ADAPTERS:
         raise ModelBundleError(f"{path}: no predictor for bundles of kind {kind!r} (known: {sorted(ADAPTERS)})")
+    if kind == "deep":
+        from tzsl.models._deep import load_deep_bundle  # noqa: PLC0415 - needs the deep extra
+
+        model = load_deep_bundle(path)
+        metadata = dict(read_bundle_header(path).metadata)
+        return ADAPTERS[kind](model, metadata)
     model, metadata = load_bundle(path, expected_kind=kind)
     return ADAPTERS[kind](model, metadata)
 
@@ -468,9 +542,8 @@ def predict_grasps(
     if list(classes.columns) != adapter.attribute_names:
         raise ConfigError("class table columns are not in the model's attribute order; read it with read_class_table")
     K = classes.to_numpy(dtype=float)
-    prior = adapter.prior(K)
     post = adapter.posteriors(inputs)
-    scores = dap_log_scores(post.present, K, prior, P_absent=post.absent)
+    scores = adapter.class_scores(post.present, post.absent, K)
     grasp_p = softmax(scores, axis=1)
     decisions = scores.argmax(axis=1)
     n = len(decisions)
@@ -482,7 +555,7 @@ def predict_grasps(
         steps = np.arange(1, n + 1)[:, None]
         cum_p = np.cumsum(post.df_present, axis=0) / steps  # (n, m): super grasp of the first t grasps
         cum_a = np.cumsum(post.df_absent, axis=0) / steps
-        run_scores = dap_log_scores(cum_p, K, prior, P_absent=cum_a)
+        run_scores = adapter.class_scores(cum_p, cum_a, K)
         running = run_scores.argmax(axis=1)
         final_p = softmax(run_scores[-1])
         final, n_used, decided = int(running[-1]), n, True
