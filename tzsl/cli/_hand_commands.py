@@ -154,7 +154,8 @@ def predict(model_path: Path, classes: Path, mode: str, k: int, top: int, grasp:
     """Classify GRASP... (in arrival order) with a saved model and fuse the grasps.
 
     GRASP: for hand models, grasp .npz files (or grasp folders); for PHAC-2 models, feature
-    tables written by 'tzsl extract --out' (one trial = one grasp).
+    tables written by 'tzsl extract --out' (one trial = one grasp); for deep (CNN + LSTM) models,
+    press videos (.avi) or .npz files with a 'frames' array (5, H, W[, C]).
     """
     from tzsl.experiments.predict import (  # noqa: PLC0415
         format_prediction,
