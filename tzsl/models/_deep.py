@@ -36,7 +36,6 @@ import contextlib
 import hashlib
 import importlib
 import json
-import numbers
 import time
 from pathlib import Path
 
@@ -52,7 +51,9 @@ from tzsl.exceptions import ConfigError, ModelBundleError, TzslError
 from tzsl.models._embedding import loss_weights
 from tzsl.models._eszsl import (
     ZSLInputError,
+    _check_int,
     _check_no_duplicate_rows,
+    _check_positive,
     _encode_training_classes,
     _validate_attributes,
 )
@@ -285,31 +286,20 @@ class DeepAttributeEmbedding(BaseEstimator):
             weights = loss_weights(self.lam)
         except ConfigError as exc:
             raise ConfigError(f"{name}: {exc}") from None
-
-        def _int(value, label, low):
-            if not isinstance(value, numbers.Integral) or isinstance(value, bool) or value < low:
-                raise ConfigError(f"{name}: {label} must be an integer >= {low}, got {value!r}")
-
-        def _pos(value, label, allow_zero=False):
-            ok = isinstance(value, numbers.Real) and not isinstance(value, bool) and np.isfinite(value)
-            if not ok or value < 0 or (value == 0 and not allow_zero):
-                raise ConfigError(f"{name}: {label} must be a finite number {'>=' if allow_zero else '>'} 0, "
-                                  f"got {value!r}")
-
         backbones = ("efficientnet-lite0", "vgg16", "small-cnn")
         if self.backbone not in backbones:
             raise ConfigError(f"{name}: backbone must be one of {backbones}, got {self.backbone!r}")
         if self.finetune != "all":
-            _int(self.finetune, 'finetune (or "all")', 0)
+            _check_int(self.finetune, 'finetune (or "all")', 0, name)
         if self.image_size is not None:
-            _int(self.image_size, "image_size", 8)
-        _int(self.hidden_size, "hidden_size", 1)
+            _check_int(self.image_size, "image_size", 8, name)
+        _check_int(self.hidden_size, "hidden_size", 1, name)
         if self.n_threads is not None:
-            _int(self.n_threads, "n_threads", 1)
-        _int(self.epochs, "epochs", 1)
-        _int(self.batch_size, "batch_size", 1)
-        _pos(self.lr, "lr")
-        _pos(self.weight_decay, "weight_decay", allow_zero=True)
+            _check_int(self.n_threads, "n_threads", 1, name)
+        _check_int(self.epochs, "epochs", 1, name)
+        _check_int(self.batch_size, "batch_size", 1, name)
+        _check_positive(self.lr, "lr", name)
+        _check_positive(self.weight_decay, "weight_decay", name, allow_zero=True)
         if self.optimizer not in _OPTIMIZERS:
             raise ConfigError(f"{name}: optimizer must be one of {_OPTIMIZERS}, got {self.optimizer!r}")
         if self.resume and self.checkpoint_dir is None:

@@ -47,6 +47,7 @@ from sklearn.utils.validation import check_is_fitted
 from tzsl.exceptions import ConfigError
 from tzsl.models._eszsl import (
     ZSLInputError,
+    _check_int,
     _encode_training_classes,
     _validate_X,
     _validate_Xy,
@@ -269,16 +270,10 @@ class EmbeddingZSL(_ZSLScorerMixin, BaseEstimator):
             weights = loss_weights(self.lam)
         except ConfigError as exc:
             raise ConfigError(f"{name}: {exc}") from exc
-
-        def _int(value, label, low):
-            if not isinstance(value, numbers.Integral) or isinstance(value, bool) or value < low:
-                raise ConfigError(f"{name}: {label} must be an integer >= {low}, got {value!r}")
-            return int(value)
-
         if self.hidden_units is not None:
-            _int(self.hidden_units, "hidden_units", 1)
-        _int(self.max_iter, "max_iter", 1)
-        _int(self.n_iter_no_change, "n_iter_no_change", 1)
+            _check_int(self.hidden_units, "hidden_units", 1, name)
+        _check_int(self.max_iter, "max_iter", 1, name)
+        _check_int(self.n_iter_no_change, "n_iter_no_change", 1, name)
         if (
             not isinstance(self.alpha, numbers.Real)
             or not np.isfinite(self.alpha)

@@ -171,15 +171,26 @@ def _encode_training_classes(
     return classes, S, S_unique, y_unique
 
 
-def _check_positive(value, name: str, est_name: str) -> float:
+def _check_positive(value, name: str, est_name: str, *, allow_zero: bool = False) -> float:
+    """``value`` as a float; a ConfigError unless it is a finite real (not bool) > 0 (>= 0)."""
     if (
         not isinstance(value, numbers.Real)
         or isinstance(value, bool)
         or not np.isfinite(value)
-        or value <= 0
+        or value < 0
+        or (value == 0 and not allow_zero)
     ):
-        raise ConfigError(f"{est_name}: {name} must be a finite number > 0, got {value!r}")
+        raise ConfigError(
+            f"{est_name}: {name} must be a finite number {'>=' if allow_zero else '>'} 0, got {value!r}"
+        )
     return float(value)
+
+
+def _check_int(value, name: str, low: int, est_name: str) -> int:
+    """``value`` as an int; a ConfigError unless it is an integer (not bool) >= ``low``."""
+    if not isinstance(value, numbers.Integral) or isinstance(value, bool) or value < low:
+        raise ConfigError(f"{est_name}: {name} must be an integer >= {low}, got {value!r}")
+    return int(value)
 
 
 # --------------------------------------------------------------------------------------------
