@@ -25,13 +25,13 @@ Every backbone is a sequence of *stages* (:attr:`FrameBackbone.stages`); fine-tu
 
 from __future__ import annotations
 
-import hashlib
 from pathlib import Path
 
 import torch
 from torch import nn
 from torch.nn import functional as nnf
 
+from tzsl._io import file_sha256
 from tzsl.exceptions import ConfigError, DataFileError
 
 __all__ = [
@@ -52,14 +52,6 @@ BACKBONES: dict[str, tuple[int, int | None, bool]] = {
 
 # VGG-16 conv configuration ("M" = max-pool), as in torchvision's ``cfgs["D"]``.
 _VGG16_CFG = (64, 64, "M", 128, 128, "M", 256, 256, 256, "M", 512, 512, 512, "M", 512, 512, 512, "M")
-
-
-def _sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for chunk in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(chunk)
-    return digest.hexdigest()
 
 
 def bundled_weights_path(name: str) -> Path | None:
@@ -307,7 +299,7 @@ def build_backbone(name: str, weights_path=None, *, load_weights: bool = True) -
                 "file with the ImageNet weights (torchvision key names)"
             )
         state = _load_state_dict(path, name)
-        sha = _sha256(path)
+        sha = file_sha256(path)
     elif name == "small-cnn" and weights_path is not None:
         raise ConfigError("backbone 'small-cnn' is trained from scratch; it takes no weights_path")
     try:
