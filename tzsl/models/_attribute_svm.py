@@ -519,6 +519,33 @@ class AttributeClassifierBank(BaseEstimator):
     def _template(self):
         return AttributeSVM() if self.estimator is None else self.estimator
 
+    def _check_fit_input(self, X, A) -> tuple[np.ndarray, np.ndarray, list[str]]:
+        """``(X, A, names)``: X (n_trials, n_sensors, n_features) float64, A (n_trials, n_attributes) 0/1."""
+        X = _check_3d(X)
+        n = X.shape[0]
+        if np.ndim(A) != 2:
+            raise ConfigError(f"attribute targets must have shape ({n}, n_attributes), got {np.shape(A)}")
+        names = self._names(np.shape(A)[1])
+        return X, _check_attribute_matrix(A, n, names), names
+
+    def _run_fits(self, tasks: list, desc: str) -> list:
+        """Run joblib ``tasks`` on ``self.backend`` / ``self.n_jobs``; results in task order."""
+        with parallel_context(self.backend):
+            backend = None if self.backend == "dask" else self.backend
+            results = Parallel(n_jobs=self.n_jobs, backend=backend, return_as="generator")(tasks)
+            return list(tqdm(results, total=len(tasks), desc=desc, disable=not self.progress))
+
+    def _check_predict_input(self, X) -> np.ndarray:
+        """``X`` as float64 (n_trials, n_sensors_, n_features_in_), after the fitted check."""
+        check_is_fitted(self)
+        X = _check_3d(X)
+        if X.shape[1:] != (self.n_sensors_, self.n_features_in_):
+            raise ConfigError(
+                f"X has {X.shape[1]} sensors x {X.shape[2]} features; the model was fitted on "
+                f"{self.n_sensors_} x {self.n_features_in_}"
+            )
+        return X
+
     def fit(self, X, A, groups=None):
         """Fit one classifier per (attribute, sensor).
 
@@ -535,12 +562,8 @@ class AttributeClassifierBank(BaseEstimator):
         -------
         self
         """
-        X = _check_3d(X)
+        X, A, names = self._check_fit_input(X, A)
         n, s, d = X.shape
-        if np.ndim(A) != 2:
-            raise ConfigError(f"attribute targets must have shape ({n}, n_attributes), got {np.shape(A)}")
-        names = self._names(np.shape(A)[1])
-        A = _check_attribute_matrix(A, n, names)
         groups = None if groups is None else np.asarray(groups)
         if groups is not None and groups.shape != (n,):
             raise ConfigError(f"groups must have shape ({n},), got {groups.shape}")
@@ -567,10 +590,7 @@ class AttributeClassifierBank(BaseEstimator):
                 if "name" in params:
                     est.set_params(name=f"{nm} (sensor {k})")
                 tasks.append(delayed(fit_one)(est, X[:, k, :], A[:, j], groups))
-        with parallel_context(self.backend):
-            backend = None if self.backend == "dask" else self.backend
-            results = Parallel(n_jobs=self.n_jobs, backend=backend, return_as="generator")(tasks)
-            fitted = list(tqdm(results, total=len(tasks), desc="attribute fits", disable=not self.progress))
+        fitted = self._run_fits(tasks, "attribute fits")
         self.estimators_ = [fitted[j * s : (j + 1) * s] for j in range(A.shape[1])]
         self.n_sensors_, self.n_attributes_, self.n_features_in_ = s, A.shape[1], d
         return self
@@ -587,13 +607,7 @@ class AttributeClassifierBank(BaseEstimator):
         ndarray of shape (n_trials, n_sensors, n_attributes)
             ``p(a_m = 1 | x_s)``.
         """
-        check_is_fitted(self)
-        X = _check_3d(X)
-        if X.shape[1:] != (self.n_sensors_, self.n_features_in_):
-            raise ConfigError(
-                f"X has {X.shape[1]} sensors x {X.shape[2]} features; the model was fitted on "
-                f"{self.n_sensors_} x {self.n_features_in_}"
-            )
+        X = self._check_predict_input(X)
         P = np.empty((X.shape[0], self.n_sensors_, self.n_attributes_))
         for j, per_sensor in enumerate(self.estimators_):
             for k, est in enumerate(per_sensor):

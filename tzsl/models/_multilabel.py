@@ -22,22 +22,14 @@ unchanged.
 from __future__ import annotations
 
 import numpy as np
-from joblib import Parallel, delayed
-from sklearn.base import BaseEstimator, clone
+from joblib import delayed
+from sklearn.base import clone
 from sklearn.compose import ColumnTransformer
 from sklearn.utils import check_random_state
-from sklearn.utils.validation import check_is_fitted
-from tqdm.auto import tqdm
 
 from tzsl.exceptions import ConfigError
-from tzsl.models._attribute_svm import (
-    AttributeClassifierBank,
-    AttributeSVM,
-    _check_3d,
-    _check_attribute_matrix,
-    default_preprocessor,
-)
-from tzsl.models._cache import fit_clone, parallel_context, resolve_memory, spawn_seeds
+from tzsl.models._attribute_svm import AttributeClassifierBank, default_preprocessor
+from tzsl.models._cache import fit_clone, resolve_memory, spawn_seeds
 
 __all__ = ["MultiLabelAttributeClassifier"]
 
@@ -107,12 +99,8 @@ class MultiLabelAttributeClassifier(AttributeClassifierBank):
         -------
         self
         """
-        X = _check_3d(X)
+        X, A, names = self._check_fit_input(X, A)
         n, s, d = X.shape
-        if np.ndim(A) != 2:
-            raise ConfigError(f"attribute targets must have shape ({n}, n_attributes), got {np.shape(A)}")
-        names = self._names(np.shape(A)[1])
-        A = _check_attribute_matrix(A, n, names)
         m = A.shape[1]
         seeds = spawn_seeds(self.random_state, m * s + 1)
         if self.order is None or (isinstance(self.order, str) and self.order == "random"):
@@ -121,7 +109,7 @@ class MultiLabelAttributeClassifier(AttributeClassifierBank):
             order = np.asarray(self.order, dtype=int)
             if sorted(order.tolist()) != list(range(m)):
                 raise ConfigError(f"order must be a permutation of 0..{m - 1}, got {self.order!r}")
-        template = AttributeSVM() if self.estimator is None else self.estimator
+        template = self._template()
         base_pre = template.get_params().get("preprocessor") or default_preprocessor()
         fit_one = resolve_memory(self.memory).cache(fit_clone)
         tasks = []
@@ -134,10 +122,7 @@ class MultiLabelAttributeClassifier(AttributeClassifierBank):
                     name=f"{names[j]} (sensor {k}, chain position {t})",
                 )
                 tasks.append(delayed(fit_one)(est, np.hstack([X[:, k, :], prev]), A[:, j], groups))
-        with parallel_context(self.backend):
-            backend = None if self.backend == "dask" else self.backend
-            results = Parallel(n_jobs=self.n_jobs, backend=backend, return_as="generator")(tasks)
-            fitted = list(tqdm(results, total=len(tasks), desc="chain fits", disable=not self.progress))
+        fitted = self._run_fits(tasks, "chain fits")
         self.estimators_ = [fitted[t * s : (t + 1) * s] for t in range(m)]
         self.order_ = order
         self.n_sensors_, self.n_attributes_, self.n_features_in_ = s, m, d
@@ -155,13 +140,7 @@ class MultiLabelAttributeClassifier(AttributeClassifierBank):
         ndarray of shape (n_trials, n_sensors, n_attributes)
             ``p(a_m = 1 | x_s)`` with earlier attributes' posteriors as chain inputs.
         """
-        check_is_fitted(self)
-        X = _check_3d(X)
-        if X.shape[1:] != (self.n_sensors_, self.n_features_in_):
-            raise ConfigError(
-                f"X has {X.shape[1]} sensors x {X.shape[2]} features; the model was fitted on "
-                f"{self.n_sensors_} x {self.n_features_in_}"
-            )
+        X = self._check_predict_input(X)
         P = np.empty((X.shape[0], self.n_sensors_, self.n_attributes_))
         for k in range(self.n_sensors_):
             for t, j in enumerate(self.order_):
