@@ -1,0 +1,453 @@
+"""Generalised zero-shot (GZSL) evaluation beside the classic one, for DAP and ESZSL.
+
+Classic zero-shot evaluation (the DAP paper's) asks a test trial "which of the *unseen*
+classes is it?". GZSL asks "which of *all* classes, seen or unseen?": a model that is biased
+towards the classes it was trained on scores well on seen classes and poorly on unseen ones,
+and the harmonic mean of the two exposes it.
+
+Protocol, per object split (:class:`tzsl.evaluation.Split`):
+
+* **Classes are unique attribute rows.** Over the split's kept attributes, every distinct
+  attribute row of the split's objects (training + test) is one class. An attribute-based model
+  scores a class from its attribute row alone, so two objects sharing a row always get the same
+  score and "which of the two" is a coin toss decided by their order; merging them makes every
+  prediction well defined (PHAC-2: 60 objects, 45 distinct rows over the 19 attributes). A class
+  is **seen** when a training object has its row, **unseen** otherwise. A test object whose row
+  equals a training object's row therefore belongs to a *seen* class (its trials count in the
+  seen score; ``n_test_objects_in_seen_classes`` reports how many); random splits make the test
+  objects' rows mutually different, not different from the training rows.
+* **Seen-class test trials** are held out of the training objects: per training object,
+  ``round(holdout_fraction * n_trials)`` trials (at least 1, at most all but one), drawn at
+  random with a recorded seed (PHAC-2, 10 trials per object, default 0.3: 3 held out, 7 fitted).
+  The models are fitted on the remaining trials of the training objects only; the held-out
+  trials and every trial of the test objects are scored over all classes.
+* **Scores**: DAP (the study's attribute classifiers, fusion and prior as configured, default
+  AVGDAP / uni-prior) and ESZSL (:class:`tzsl.models.ESZSLCV`, both BioTacs side by side).
+  ``seen``, ``unseen`` are per-class mean accuracies and ``harmonic`` their harmonic mean
+  (:func:`tzsl.evaluation.gzsl_scores`); ``zsl`` is the classic per-class mean accuracy of the
+  unseen trials among the unseen classes only, from the same fit.
+* **Calibrated stacking** (Chao et al., ECCV 2016), optional: a constant ``gamma`` is
+  subtracted from every seen class's score before the argmax. ``gamma`` is chosen on training
+  data only: some of the seen classes (as many as the split has unseen classes, drawn so that
+  every attribute keeps ``min_train_positives`` positive training objects and one negative)
+  play "unseen"; the model is refitted on the other training objects' fitting trials and
+  ``gamma`` maximises the harmonic mean on their held-out trials plus every trial of the
+  pseudo-unseen objects. The test objects are never looked at. Rows with ``calibrated=True``
+  report the result and ``stacking_constant`` the chosen value.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from tzsl.datasets import FeatureSet
+from tzsl.evaluation import Split, gzsl_scores, per_class_mean_accuracy
+from tzsl.exceptions import ConfigError, SplitError
+from tzsl.experiments.phac2_dap import DapStudyConfig, attribute_bank, compute_context
+from tzsl.models import ESZSLCV, attribute_prior, dap_log_scores, fuse_attribute_posteriors
+
+__all__ = [
+    "GZSL_FILE",
+    "GZSL_METHODS",
+    "GzslConfig",
+    "GzslProblem",
+    "choose_stacking_constant",
+    "gzsl_problem",
+    "gzsl_split",
+    "gzsl_table",
+    "holdout_trials",
+    "run_gzsl",
+    "stacked_predict",
+]
+
+#: Output table of :func:`run_gzsl` in a results folder.
+GZSL_FILE = "gzsl.csv"
+
+#: Methods :class:`GzslConfig` can score.
+GZSL_METHODS: tuple[str, ...] = ("dap", "eszsl")
+
+
+@dataclass
+class GzslConfig:
+    """Settings of the GZSL evaluation; recorded in the manifest.
+
+    Attributes
+    ----------
+    holdout_fraction : float in (0, 1)
+        Fraction of each training object's trials held out as seen-class test trials.
+    methods : tuple of {"dap", "eszsl"}
+    fusion : {"avg", "max"}
+        DAP sensor fusion.
+    prior : {"uni", "train", "test"}
+        DAP attribute prior ("train": training objects' rows, "test": all candidate classes).
+    calibrated_stacking : bool
+        Also report calibrated stacking with the constant chosen on training data.
+    max_draws : int
+        Draws of pseudo-unseen classes tried before giving up (calibration only).
+    """
+
+    holdout_fraction: float = 0.3
+    methods: tuple[str, ...] = GZSL_METHODS
+    fusion: str = "avg"
+    prior: str = "uni"
+    calibrated_stacking: bool = True
+    max_draws: int = 1000
+
+    def check(self) -> None:
+        """Raise ConfigError for settings that cannot work."""
+        if not 0.0 < float(self.holdout_fraction) < 1.0:
+            raise ConfigError(f"gzsl holdout_fraction must be in (0, 1), got {self.holdout_fraction!r}")
+        unknown = [m for m in self.methods if m not in GZSL_METHODS]
+        if unknown or not self.methods:
+            raise ConfigError(f"gzsl methods must be a non-empty subset of {list(GZSL_METHODS)}, got "
+                              f"{list(self.methods)}")
+        if self.fusion not in ("avg", "max"):
+            raise ConfigError(f"gzsl fusion must be 'avg' or 'max', got {self.fusion!r}")
+        if self.prior not in ("uni", "train", "test"):
+            raise ConfigError(f"gzsl prior must be 'uni', 'train' or 'test', got {self.prior!r}")
+        if int(self.max_draws) < 1:
+            raise ConfigError(f"gzsl max_draws must be >= 1, got {self.max_draws!r}")
+
+
+@dataclass
+class GzslProblem:
+    """One split's GZSL set-up: classes, which are seen, which trials fit and which are scored.
+
+    Attributes
+    ----------
+    split : Split
+    attributes : tuple of str, length m
+    class_rows : ndarray of shape (n_classes, m), int 0/1
+        The distinct attribute rows of the split's objects (one class each).
+    seen : ndarray of shape (n_classes,), bool
+        Classes with a training object.
+    trial_class : ndarray of shape (n_trials,), int
+        Class of every trial of ``features`` (-1 for objects outside the split).
+    fit : ndarray of shape (n_trials,), bool
+        Training-object trials the models are fitted on.
+    heldout : ndarray of shape (n_trials,), bool
+        Training-object trials held out (seen-class test trials).
+    test : ndarray of shape (n_trials,), bool
+        Trials of the split's test objects.
+    """
+
+    split: Split
+    attributes: tuple[str, ...]
+    class_rows: np.ndarray
+    seen: np.ndarray
+    trial_class: np.ndarray
+    fit: np.ndarray
+    heldout: np.ndarray
+    test: np.ndarray
+    info: dict = field(default_factory=dict)
+
+    @property
+    def evaluate(self) -> np.ndarray:
+        """Trials scored over all classes: held-out training trials and test trials."""
+        return self.heldout | self.test
+
+
+# --------------------------------------------------------------------------- set-up
+
+
+def holdout_trials(objects: np.ndarray, holdout_objects: Sequence[str], fraction: float,
+                   rng: np.random.Generator) -> np.ndarray:
+    """Hold out ``round(fraction * n)`` random trials (1 .. n-1) of every object in ``holdout_objects``.
+
+    Parameters
+    ----------
+    objects : ndarray of shape (n_trials,)
+        Object of every trial.
+    holdout_objects : sequence of str
+    fraction : float in (0, 1)
+    rng : numpy Generator
+
+    Returns
+    -------
+    ndarray of shape (n_trials,), bool
+        True for held-out trials.
+    """
+    objects = np.asarray(objects)
+    member = np.isin(objects, list(holdout_objects))
+    names, inverse, counts = np.unique(objects[member], return_inverse=True, return_counts=True)
+    if counts.size and counts.min() < 2:
+        raise SplitError(f"GZSL needs at least 2 trials per training object to hold one out; "
+                         f"{names[counts < 2][:5].tolist()} have 1")
+    n_hold = np.clip(np.rint(fraction * counts).astype(int), 1, counts - 1)
+    # random rank of every trial within its object: sort by (object, random key)
+    keys = rng.random(inverse.size)
+    order = np.lexsort((keys, inverse))
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    rank = np.empty(inverse.size, dtype=int)
+    rank[order] = np.arange(inverse.size) - np.repeat(starts, counts)
+    out = np.zeros(objects.size, dtype=bool)
+    out[np.flatnonzero(member)] = rank < n_hold[inverse]
+    return out
+
+
+def gzsl_problem(features: FeatureSet, split: Split, fraction: float, rng: np.random.Generator) -> GzslProblem:
+    """Classes (unique attribute rows), seen mask and trial masks of one split."""
+    attributes = split.kept_attributes
+    objects = features.objects
+    split_objects = list(split.train_objects) + list(split.test_objects)
+    unknown = set(split_objects) - set(objects)
+    if unknown:
+        raise SplitError(f"split {split.name}: objects without trials: {sorted(unknown)}")
+    A = features.attributes.loc[split_objects, list(attributes)].to_numpy(dtype=int)
+    rows, inverse = np.unique(A, axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    object_class = pd.Series(inverse, index=split_objects)
+    n_train = len(split.train_objects)
+    seen = np.zeros(len(rows), dtype=bool)
+    seen[inverse[:n_train]] = True
+    if seen.all():
+        raise SplitError(f"split {split.name}: every test object shares its attribute row with a training "
+                         "object, so there is no unseen class for GZSL")
+    trial_class = object_class.reindex(objects).fillna(-1).to_numpy(dtype=int)
+    train = np.isin(objects, split.train_objects)
+    heldout = holdout_trials(objects, split.train_objects, fraction, rng)
+    test = np.isin(objects, split.test_objects)
+    in_seen = [o for o in split.test_objects if seen[object_class[o]]]
+    info = {"n_test_objects_in_seen_classes": len(in_seen)}
+    return GzslProblem(split=split, attributes=tuple(attributes), class_rows=rows, seen=seen,
+                       trial_class=trial_class, fit=train & ~heldout, heldout=heldout, test=test, info=info)
+
+
+def _pseudo_problem(features: FeatureSet, problem: GzslProblem, min_train_positives: int, max_draws: int,
+                    rng: np.random.Generator) -> GzslProblem:
+    """A GZSL problem inside the training objects: some seen classes play unseen (calibration)."""
+    split = problem.split
+    train_objects = np.array(split.train_objects)
+    A = features.attributes.loc[list(train_objects), list(problem.attributes)].to_numpy(dtype=int)
+    rows, inverse = np.unique(A, axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    n_unseen = int((~problem.seen).sum())
+    if len(rows) - n_unseen < 2:
+        raise SplitError(f"split {split.name}: too few training classes ({len(rows)}) to calibrate stacking "
+                         f"with {n_unseen} pseudo-unseen classes; set calibrated_stacking = false")
+    for _ in range(max_draws):
+        pseudo = rng.choice(len(rows), size=n_unseen, replace=False)
+        keep = ~np.isin(inverse, pseudo)
+        positives = A[keep].sum(axis=0)
+        if (positives >= min_train_positives).all() and (positives < keep.sum()).all():
+            break
+    else:
+        raise SplitError(f"split {split.name}: no draw of {n_unseen} pseudo-unseen training classes in "
+                         f"{max_draws} leaves every attribute with >= {min_train_positives} positive and one "
+                         "negative training object; set calibrated_stacking = false")
+    objects = features.objects
+    pseudo_train = train_objects[keep]
+    pseudo_test = train_objects[~keep]
+    seen = np.zeros(len(rows), dtype=bool)
+    seen[inverse[keep]] = True
+    trial_class = pd.Series(inverse, index=train_objects).reindex(objects).fillna(-1).to_numpy(dtype=int)
+    in_train = np.isin(objects, pseudo_train)
+    sub = Split(name=f"{split.name}-calibration", train_objects=tuple(pseudo_train),
+                test_objects=tuple(pseudo_test), attributes=problem.attributes, kind="calibration")
+    return GzslProblem(split=sub, attributes=problem.attributes, class_rows=rows, seen=seen,
+                       trial_class=trial_class, fit=in_train & problem.fit, heldout=in_train & problem.heldout,
+                       test=np.isin(objects, pseudo_test), info={})
+
+
+# --------------------------------------------------------------------------- scores
+
+
+def _dap_scores(features: FeatureSet, problem: GzslProblem, config: DapStudyConfig, gzsl: GzslConfig,
+                seed: int) -> np.ndarray:
+    """DAP log-scores (n_evaluated, n_classes) of the evaluated trials, bank fitted on ``problem.fit``."""
+    attrs = list(problem.attributes)
+    A = features.attributes.loc[features.objects, attrs].to_numpy(dtype=int)
+    fit = problem.fit
+    bank = attribute_bank(config, attrs, seed)
+    bank.fit(features.X[fit], A[fit], features.objects[fit])
+    present, absent = fuse_attribute_posteriors(bank.predict_proba(features.X[problem.evaluate]), gzsl.fusion)
+    prior = attribute_prior(gzsl.prior, train_attributes=A[fit], class_attributes=problem.class_rows,
+                            groups=features.objects[fit])
+    return dap_log_scores(present, problem.class_rows, prior, P_absent=absent)
+
+
+def _eszsl_scores(features: FeatureSet, problem: GzslProblem) -> np.ndarray:
+    """ESZSL compatibilities (n_evaluated, n_classes); both sensors' features side by side."""
+    n, s, d = features.X.shape
+    X = features.X.reshape(n, s * d)
+    fit = problem.fit
+    objects = features.objects[fit]
+    classes = np.unique(objects)
+    S = features.attributes.loc[classes, list(problem.attributes)].to_numpy(dtype=float)
+    model = ESZSLCV(duplicate_attributes="merge").fit(X[fit], objects, S)
+    return model.decision_function(X[problem.evaluate], problem.class_rows.astype(float))
+
+
+def _scores(method: str, features, problem, config, gzsl, seed) -> np.ndarray:
+    if method == "dap":
+        return _dap_scores(features, problem, config, gzsl, seed)
+    return _eszsl_scores(features, problem)
+
+
+# --------------------------------------------------------------------------- calibrated stacking
+
+
+def stacked_predict(scores: np.ndarray, seen: np.ndarray, gamma: float = 0.0) -> np.ndarray:
+    """Argmax of ``scores - gamma * seen``: (n, n_classes) scores, (n_classes,) bool -> (n,) class."""
+    return np.argmax(scores - gamma * seen[None, :].astype(float), axis=1)
+
+
+def choose_stacking_constant(scores: np.ndarray, y: np.ndarray, seen: np.ndarray) -> float:
+    """The calibrated-stacking constant maximising the harmonic mean on labelled data.
+
+    With ``gamma`` subtracted from the seen classes, sample ``i`` is predicted as its best seen
+    class while ``gamma < d_i = max_seen - max_unseen`` and as its best unseen class beyond, so
+    the harmonic mean is piecewise constant in ``gamma`` with breaks at the ``d_i``. Every piece
+    is scored at once (midpoints between sorted breaks, below the first and above the last);
+    ties go to the ``gamma`` closest to 0.
+
+    Parameters
+    ----------
+    scores : ndarray of shape (n, n_classes)
+    y : ndarray of shape (n,), int
+        True class of each sample (index into the columns of ``scores``).
+    seen : ndarray of shape (n_classes,), bool
+
+    Returns
+    -------
+    float
+    """
+    seen = np.asarray(seen, dtype=bool)
+    y = np.asarray(y)
+    best_seen = np.argmax(np.where(seen, scores, -np.inf), axis=1)
+    best_unseen = np.argmax(np.where(seen, -np.inf, scores), axis=1)
+    rows = np.arange(len(y))
+    d = scores[rows, best_seen] - scores[rows, best_unseen]
+    breaks = np.unique(d)
+    candidates = np.concatenate([[breaks[0] - 1.0], (breaks[:-1] + breaks[1:]) / 2, [breaks[-1] + 1.0], [0.0]])
+    correct = np.where(candidates[:, None] < d[None, :], best_seen == y, best_unseen == y)  # (g, n)
+    # per-class mean accuracy of each group = sum of correct weighted by 1 / (class size * n classes)
+    y_seen = seen[y]
+    scores_by_group = []
+    for mask in (y_seen, ~y_seen):
+        classes, inv, counts = np.unique(y[mask], return_inverse=True, return_counts=True)
+        w = 1.0 / (counts[inv] * len(classes))
+        scores_by_group.append(correct[:, mask].astype(float) @ w)
+    s, u = scores_by_group
+    with np.errstate(invalid="ignore", divide="ignore"):
+        h = np.where(s + u > 0, 2 * s * u / (s + u), 0.0)
+    best = np.flatnonzero(np.isclose(h, h.max(), rtol=0, atol=1e-12))
+    return float(candidates[best[np.argmin(np.abs(candidates[best]))]])
+
+
+# --------------------------------------------------------------------------- one split, all splits
+
+
+def _label(split: Split) -> str:
+    return split.name.rsplit("-", 1)[-1]
+
+
+def _method_name(method: str, gzsl: GzslConfig) -> str:
+    return f"dap_{gzsl.fusion}_{gzsl.prior}" if method == "dap" else method
+
+
+def gzsl_split(features: FeatureSet, split: Split, config: DapStudyConfig, gzsl: GzslConfig,
+               index: int) -> list[dict]:
+    """GZSL rows of one split: one per method (and per calibration when enabled).
+
+    Seeds: the attribute classifiers use the same seed as split ``index`` of the classic study
+    (:func:`tzsl.experiments.phac2_dap.fit_split`); the held-out trials and the pseudo-unseen
+    draw use ``SeedSequence([config.seed, index, 1])`` and ``[..., 2]``.
+    """
+    seed = int(np.random.SeedSequence([config.seed, index]).generate_state(1)[0])
+    problem = gzsl_problem(features, split, gzsl.holdout_fraction,
+                           np.random.default_rng(np.random.SeedSequence([config.seed, index, 1])))
+    pseudo = None
+    if gzsl.calibrated_stacking:
+        pseudo = _pseudo_problem(features, problem, config.random_min_train_positives, gzsl.max_draws,
+                                 np.random.default_rng(np.random.SeedSequence([config.seed, index, 2])))
+    y = problem.trial_class[problem.evaluate]
+    seen_classes = np.flatnonzero(problem.seen)
+    unseen_classes = np.flatnonzero(~problem.seen)
+    is_unseen = ~problem.seen[y]
+    base = {
+        "split": _label(split), "n_classes": len(problem.seen), "n_seen_classes": len(seen_classes),
+        "n_unseen_classes": len(unseen_classes), "n_fit_trials": int(problem.fit.sum()),
+        "n_seen_trials": int((~is_unseen).sum()), "n_unseen_trials": int(is_unseen.sum()),
+        "n_attributes": len(problem.attributes), **problem.info,
+    }
+    rows = []
+    for method in gzsl.methods:
+        scores = _scores(method, features, problem, config, gzsl, seed)
+        zsl_pred = unseen_classes[np.argmax(scores[is_unseen][:, unseen_classes], axis=1)]
+        zsl = per_class_mean_accuracy(y[is_unseen], zsl_pred)
+        gammas = [(False, 0.0)]
+        if pseudo is not None:
+            val_scores = _scores(method, features, pseudo, config, gzsl, seed)
+            gammas.append((True, choose_stacking_constant(val_scores, pseudo.trial_class[pseudo.evaluate],
+                                                          pseudo.seen)))
+        for calibrated, gamma in gammas:
+            pred = stacked_predict(scores, problem.seen, gamma)
+            result = gzsl_scores(y, pred, seen_classes, unseen_classes)
+            rows.append({**base, "method": _method_name(method, gzsl), "calibrated": calibrated,
+                         "stacking_constant": gamma, **result, "zsl": zsl})
+    return rows
+
+
+def gzsl_table(rows: list[dict]) -> pd.DataFrame:
+    """Per-split rows followed by ``mean`` and ``std`` rows (over splits) per method and calibration."""
+    table = pd.DataFrame(rows)
+    front = ["split", "method", "calibrated", "seen", "unseen", "harmonic", "zsl", "stacking_constant"]
+    table = table[front + [c for c in table.columns if c not in front]]
+    numeric = [c for c in table.columns if c not in ("split", "method", "calibrated")]
+    grouped = table.groupby(["method", "calibrated"], sort=False)[numeric]
+    summary = []
+    for stat in ("mean", "std"):
+        part = grouped.agg(stat).reset_index()
+        part.insert(0, "split", stat)
+        summary.append(part)
+    return pd.concat([table, *summary], ignore_index=True)[table.columns]
+
+
+def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: DapStudyConfig | None = None,
+             gzsl: GzslConfig | None = None, echo: Callable[[str], None] | None = None) -> pd.DataFrame:
+    """GZSL evaluation of every split (see the module docstring for the protocol).
+
+    Parameters
+    ----------
+    features : FeatureSet
+        Per-trial, per-sensor features (n_trials, n_sensors, d).
+    splits : sequence of Split
+        Object splits (e.g. the random splits of the DAP study); split ``i`` uses the seeds of
+        the study's split ``i``.
+    config : DapStudyConfig
+        Attribute-classifier settings (grids, under-sampling, cv, n_jobs, cache).
+    gzsl : GzslConfig
+
+    Returns
+    -------
+    DataFrame
+        :func:`gzsl_table`: columns ``split, method, calibrated, seen, unseen, harmonic, zsl,
+        stacking_constant`` and counts (classes, trials, attributes).
+    """
+    config = config or DapStudyConfig()
+    gzsl = gzsl or GzslConfig()
+    gzsl.check()
+    if not splits:
+        raise ConfigError("GZSL evaluation needs at least one split")
+    rows: list[dict] = []
+    with compute_context(config):
+        for i, split in enumerate(splits):
+            part = gzsl_split(features, split, config, gzsl, i)
+            rows += part
+            if echo is not None:
+                text = ", ".join(f"{r['method']}{'+cs' if r['calibrated'] else ''} H={r['harmonic']:.3f}"
+                                 for r in part)
+                echo(f"GZSL {split.name}: {text}")
+    return gzsl_table(rows)
+
+
+def gzsl_config_record(gzsl: GzslConfig) -> dict:
+    """JSON-ready settings for the manifest."""
+    record = asdict(gzsl)
+    record["methods"] = list(gzsl.methods)
+    return record
