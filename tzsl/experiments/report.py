@@ -96,6 +96,18 @@ def _anchor(kind: str, i: int) -> str:
     return f"{kind}-{i}"
 
 
+def _formatters(table: pd.DataFrame) -> dict:
+    """Float columns holding only whole numbers (counts read back as float) print without decimals."""
+    out = {}
+    for column in table.columns:
+        values = table[column]
+        if pd.api.types.is_float_dtype(values):
+            finite = values.dropna()
+            if len(finite) and (finite == finite.round()).all() and finite.abs().max() < 1e15:
+                out[column] = lambda v: "-" if pd.isna(v) else f"{v:.0f}"
+    return out
+
+
 def _table_html(path: Path, root: Path, table_id: str) -> str:
     try:
         table = pd.read_csv(path)
@@ -106,7 +118,7 @@ def _table_html(path: Path, root: Path, table_id: str) -> str:
     if paper:
         cells = ", ".join(f"#{table_id} td:nth-child({i}), #{table_id} th:nth-child({i})" for i in paper)
         style = f"<style>{cells} {{ background: #fff1c9; }}</style>\n"
-    body = table.to_html(index=False, table_id=table_id, na_rep="-", border=0,
+    body = table.to_html(index=False, table_id=table_id, na_rep="-", border=0, formatters=_formatters(table),
                          float_format=lambda v: f"{v:.3f}", escape=True)
     block = f'{style}<div class="scroll">{body}</div>'
     if len(table) > FOLD_ROWS:

@@ -1,0 +1,151 @@
+"""tzsl report: one valid, self-contained HTML page with every table, figure and manifest."""
+
+from __future__ import annotations
+
+import base64
+import json
+from html.parser import HTMLParser
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+import pytest  # noqa: E402
+
+from tzsl import __version__  # noqa: E402
+from tzsl.exceptions import ConfigError, DataFileError  # noqa: E402
+from tzsl.experiments.report import FOLD_ROWS, render_report, write_report  # noqa: E402
+
+VOID = {"area", "base", "br", "col", "embed", "hr", "img", "input", "link", "meta", "source", "track", "wbr"}
+
+
+class PageChecker(HTMLParser):
+    """Balanced tags, tables by id, images and <details> blocks."""
+
+    def __init__(self) -> None:
+        super().__init__(convert_charrefs=True)
+        self.stack: list[str] = []
+        self.errors: list[str] = []
+        self.tables: list[str] = []
+        self.images: list[dict] = []
+        self.external: list[str] = []
+        self.details = 0
+        self.text: list[str] = []
+
+    def handle_starttag(self, tag, attrs):
+        attrs = dict(attrs)
+        if tag == "img":
+            self.images.append(attrs)
+        if tag == "table":
+            self.tables.append(attrs.get("id", ""))
+        if tag == "details":
+            self.details += 1
+        if tag in ("script", "link") or (tag == "img" and not attrs.get("src", "").startswith("data:")):
+            self.external.append(tag)
+        if tag not in VOID:
+            self.stack.append(tag)
+
+    def handle_startendtag(self, tag, attrs):
+        self.handle_starttag(tag, attrs)
+        if tag not in VOID:
+            self.stack.pop()
+
+    def handle_endtag(self, tag):
+        if tag in VOID:
+            return
+        if not self.stack or self.stack[-1] != tag:
+            self.errors.append(f"</{tag}> closes <{self.stack[-1] if self.stack else None}>")
+            return
+        self.stack.pop()
+
+    def handle_data(self, data):
+        self.text.append(data)
+
+
+def _parse(page: str) -> PageChecker:
+    checker = PageChecker()
+    checker.feed(page)
+    checker.close()
+    return checker
+
+
+def _figure(path: Path, value: float) -> None:
+    fig, ax = plt.subplots(figsize=(2, 2))
+    ax.plot([0, 1], [0, value])
+    fig.savefig(path, format="png", dpi=40)
+    plt.close(fig)
+
+
+@pytest.fixture
+def results(tmp_path) -> Path:
+    root = tmp_path / "results"
+    (root / "fabric").mkdir(parents=True)
+    pd.DataFrame({"split": ["1", "2", "mean"], "maxdap": [0.3, 0.4, 0.35], "avgdap": [0.31, 0.42, 0.365],
+                  "paper_maxdap": [np.nan, np.nan, 0.39], "paper_avgdap": [np.nan, np.nan, 0.41]}
+                 ).to_csv(root / "table1_fusion.csv", index=False)
+    pd.DataFrame({"attribute": [f"a{i}" for i in range(FOLD_ROWS + 5)], "accuracy": 0.5}
+                 ).to_csv(root / "attribute_accuracy_per_split.csv", index=False)
+    pd.DataFrame({"method": ["<script>alert(1)</script>"], "accuracy": [1.0]}
+                 ).to_csv(root / "fabric" / "fabric_table1.csv", index=False)
+    _figure(root / "attribute_sweep.png", 1.0)
+    _figure(root / "fabric" / "fabric_lambda.png", 2.0)
+    (root / "manifest.json").write_text(json.dumps({"config": {"seed": 0, "note": "a < b & c"}}))
+    (root / "fabric" / "fabric_manifest.json").write_text(json.dumps({"study": "fabric"}))
+    (root / ".hidden").mkdir()
+    pd.DataFrame({"x": [1]}).to_csv(root / ".hidden" / "skip.csv", index=False)
+    return root
+
+
+def test_report_is_valid_html_with_every_table_figure_and_manifest(results):
+    path = write_report(results)
+    assert path == results / "report.html"
+    page = path.read_text(encoding="utf-8")
+    checker = _parse(page)
+    assert checker.errors == []
+    assert checker.stack == []
+    assert not checker.external  # self-contained: no scripts, style sheets or linked images
+    # every CSV is a table, hidden folders skipped
+    assert len(checker.tables) == 3
+    for name in ("table1_fusion.csv", "attribute_accuracy_per_split.csv", "fabric/fabric_table1.csv"):
+        assert name in page
+    assert "skip.csv" not in page
+    # every PNG embedded byte for byte
+    embedded = [base64.b64decode(img["src"].split(",", 1)[1]) for img in checker.images]
+    assert len(embedded) == 2
+    assert (results / "attribute_sweep.png").read_bytes() in embedded
+    assert (results / "fabric" / "fabric_lambda.png").read_bytes() in embedded
+    assert all(img["src"].startswith("data:image/png;base64,") for img in checker.images)
+    # manifests (collapsible) and the long table folded; text escaped, not interpreted
+    assert checker.details == 3
+    text = "".join(checker.text)
+    assert '"note": "a < b & c"' in text and '"study": "fabric"' in text
+    assert "<script>alert(1)</script>" in text
+    assert f"tzsl {__version__}" in text
+    # Table 1 first (known tables lead), paper columns shaded
+    assert page.index("table1_fusion.csv") < page.index("attribute_accuracy_per_split.csv")
+    assert "#t0 td:nth-child(4), #t0 th:nth-child(4)" in page and "nth-child(5)" in page
+    assert "0.390" in page
+
+
+def test_report_refuses_overwrite_and_writes_atomically(results, tmp_path):
+    out = tmp_path / "page.html"
+    write_report(results, out=out)
+    with pytest.raises(ConfigError, match="already exists"):
+        write_report(results, out=out)
+    write_report(results, out=out, force=True)
+    assert not list(tmp_path.glob(".page.html.*"))
+    # a report inside the folder does not report itself
+    write_report(results)
+    page = write_report(results, force=True).read_text()
+    assert page.count("<table") == 3 and "report.html</a>" not in page
+
+
+def test_report_of_missing_or_empty_folder(tmp_path):
+    with pytest.raises(DataFileError, match="not found"):
+        render_report(tmp_path / "nope")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(DataFileError, match="no CSV table"):
+        render_report(tmp_path / "empty")
