@@ -141,3 +141,17 @@ def test_sweep_full_set_equals_split_accuracy():
     full = sweep[(sweep["split"] == "1") & (sweep["n_attributes"] == 2)]
     assert full["accuracy_mean"].item() == pytest.approx(r.accuracy("avg", "uni"))
     assert set(sweep["split"]) == {"1", "mean"}
+
+
+def test_dask_cluster_gives_the_local_results():
+    """The study's --backend dask path (a local Dask cluster of worker processes) equals loky."""
+    pytest.importorskip("dask.distributed")
+    from tzsl.experiments.phac2_dap import fit_splits, make_splits
+
+    features = synthetic_features()
+    local = _config(n_splits=1, cache=False, n_jobs=2)
+    splits, _ = make_splits(features, "random", local)
+    on_dask = fit_splits(features, splits, _config(n_splits=1, cache=False, n_jobs=2, backend="dask"))
+    on_loky = fit_splits(features, splits, local)
+    np.testing.assert_array_equal(on_dask[0].P, on_loky[0].P)
+    assert on_dask[0].accuracy("avg", "uni") == on_loky[0].accuracy("avg", "uni")
