@@ -176,3 +176,28 @@ def test_dap_classifier_uses_train_prior_and_normalises():
     np.testing.assert_array_equal(dap.predict(X, K2), [0, 1])
     with pytest.raises(DataFileError, match="3 attribute columns"):
         dap.predict(X, np.ones((2, 3)))
+
+
+def test_mathematically_equal_scores_are_exact_ties():
+    """LDAP-style p = 0.5 on the one attribute two classes differ in: the scores must be equal floats."""
+    from tzsl.models._dap import dap_log_scores
+
+    rng = np.random.default_rng(0)
+    P = rng.uniform(0.05, 0.95, size=(50, 7))
+    P[:, 3] = 0.5
+    K = rng.integers(0, 2, size=(6, 7)).astype(float)
+    K[1] = K[0]
+    K[0, 3], K[1, 3] = 0.0, 1.0
+    scores = dap_log_scores(P, K, np.full(7, 0.5))
+    np.testing.assert_array_equal(scores[:, 0], scores[:, 1])
+
+
+def test_break_ties_is_uniform_and_seeded():
+    from tzsl.models._dap import break_ties
+
+    scores = np.array([[1.0, 3.0, 3.0, 0.0]] * 4000)
+    picks = break_ties(scores, 0)
+    assert set(np.unique(picks)) == {1, 2}
+    assert abs((picks == 1).mean() - 0.5) < 0.05  # not always the first tied class
+    np.testing.assert_array_equal(picks, break_ties(scores, 0))
+    np.testing.assert_array_equal(break_ties(np.array([[0.0, 2.0, 1.0]]), 5), [1])

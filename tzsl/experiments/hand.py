@@ -44,6 +44,7 @@ from tzsl.models import (
     HAND_FUSIONS,
     HandDAPClassifier,
     attribute_distance_matrix,
+    break_ties,
     dap_log_scores,
     df_mdap,
     fuse_grasp_posteriors,
@@ -265,7 +266,10 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandStudyC
     y = te.objects.astype(object)
     P_mat, contact, P_sh = model.attribute_posteriors(te.to_array())
     fused = {f: fuse_grasp_posteriors(P_mat, contact, P_sh, f) for f in HAND_FUSIONS}
-    pred = {f: names[dap_log_scores(fused[f], K, prior).argmax(axis=1)] for f in HAND_FUSIONS}
+    # exact ties (e.g. LDAP's max(0.5, p) when a grasp misses the attribute two classes differ in)
+    # are broken uniformly at random, seeded, so no class wins ties by its place in Table 4
+    ties = np.random.default_rng([seed, 7])
+    pred = {f: names[break_ties(dap_log_scores(fused[f], K, prior), ties)] for f in HAND_FUSIONS}
     subset_of = table.subset.reindex(y).fillna("").to_numpy()
     subsets = [s for s in SUBSETS if (subset_of == s).any()] + sorted(
         {s for s in subset_of if s and s not in SUBSETS}
@@ -292,14 +296,14 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandStudyC
     idx, own = sample_grasp_sequences(y, L, config.n_sequences, random_state=seed)
     P_ldap = fused["ldap"]
     for T in range(1, min(config.max_T, L) + 1):
-        p = names[dap_log_scores(df_mdap(P_ldap[idx[:, :T]]), K, prior).argmax(axis=1)]
+        p = names[break_ties(dap_log_scores(df_mdap(P_ldap[idx[:, :T]]), K, prior), ties)]
         all_ok, most_ok = _object_counts(p, own, names)
         out["T"].append({"seed": seed, "T": T, "accuracy": float((p == own).mean()),
                          "objects_all_correct": all_ok, "objects_majority_correct": most_ok,
                          "n_sequences": int(len(own))})
         if T == min(config.confusion_T, L):
             out["confusion"] += _confusion_rows(f"DF-MDAP (T={T})", seed, own, p, names)
-    decisions = dap_log_scores(P_ldap, K, prior).argmax(axis=1)  # LDAP per grasp (as the paper)
+    decisions = break_ties(dap_log_scores(P_ldap, K, prior), ties)  # LDAP per grasp (as the paper)
     for k in range(1, config.max_k + 1):
         d, used, decided = sc_mdap(decisions[idx], k)
         p = names[d]

@@ -4,6 +4,7 @@ from tzsl.models._attribute_svm import AttributeClassifierBank, AttributeSVM, At
 from tzsl.models._dap import (
     DAPClassifier,
     attribute_prior,
+    break_ties,
     check_class_attributes,
     dap_accuracy_over_subsets,
     dap_log_scores,
@@ -44,6 +45,7 @@ __all__: list[str] = [
     "attribute_prior",
     "check_class_attributes",
     "dap_accuracy_over_subsets",
+    "break_ties",
     "dap_log_scores",
     "fuse_attribute_posteriors",
     "ESZSL", "ESZSLCV", "EmbeddingZSL"]

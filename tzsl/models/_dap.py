@@ -30,6 +30,7 @@ from tzsl.exceptions import ConfigError, DataFileError
 __all__ = [
     "DAPClassifier",
     "attribute_prior",
+    "break_ties",
     "check_class_attributes",
     "dap_accuracy_over_subsets",
     "dap_log_scores",
@@ -39,6 +40,7 @@ __all__ = [
 FUSIONS = ("avg", "max")
 PRIORS = ("uni", "train", "test")
 DEFAULT_EPS = 1e-6
+_TERMS_PER_CHUNK = 4_000_000  # floats of one (rows, classes, attributes) block in dap_log_scores
 
 
 def check_class_attributes(K, n_attributes: int | None = None, what: str = "class-attribute table") -> np.ndarray:
@@ -208,13 +210,38 @@ def dap_log_scores(P, K, prior, *, P_absent=None, eps: float = DEFAULT_EPS) -> n
     K = check_class_attributes(K, P.shape[1])
     absent = 1.0 - P if P_absent is None else _check_posteriors(P_absent, ndim=(2,))
     prior = np.broadcast_to(np.asarray(prior, dtype=float), (P.shape[1],))
-    lp1 = np.log(np.clip(P, eps, 1.0 - eps))
-    lp0 = np.log(np.clip(absent, eps, 1.0 - eps))
-    pr = np.clip(prior, eps, 1.0 - eps)
-    # (n, m) @ (m, k): one matmul per value instead of an (n, k, m) tensor
-    like = lp1 @ K.T + lp0 @ (1.0 - K).T
-    norm = K @ np.log(pr) + (1.0 - K) @ np.log1p(-pr)
-    return like - norm[None, :]
+    # Per-attribute terms summed in the same order for every class, so classes whose scores are
+    # mathematically equal (e.g. LDAP's p = 0.5 on the attribute they differ in) get exactly equal
+    # floats: ties stay ties instead of being settled by matmul rounding (see break_ties).
+    rows = max(1, _TERMS_PER_CHUNK // max(1, K.shape[0] * K.shape[1]))  # bound the (rows, k, m) tensor
+    return np.concatenate([
+        _per_attribute_terms(P[i : i + rows], absent[i : i + rows], K, prior, eps).sum(axis=2)
+        for i in range(0, P.shape[0], rows)
+    ]) if P.shape[0] else np.zeros((0, K.shape[0]))
+
+
+def break_ties(scores, random_state=None) -> np.ndarray:
+    """Row-wise argmax with exact ties broken uniformly at random (seeded).
+
+    ``np.argmax`` always returns the first of tied classes, so a class listed early in the
+    class table would win every tie. Here each of the tied classes is equally likely, so tied
+    evidence is scored at its expected accuracy over many trials.
+
+    Parameters
+    ----------
+    scores : array-like of shape (n, k)
+    random_state : int, Generator or None
+
+    Returns
+    -------
+    ndarray of shape (n,), int
+    """
+    scores = np.asarray(scores, dtype=float)
+    top = scores == scores.max(axis=1, keepdims=True)
+    if (top.sum(axis=1) == 1).all():
+        return scores.argmax(axis=1)
+    rng = np.random.default_rng(random_state)
+    return np.where(top, rng.random(scores.shape) + 1.0, 0.0).argmax(axis=1)
 
 
 def dap_accuracy_over_subsets(
