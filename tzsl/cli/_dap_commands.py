@@ -33,7 +33,9 @@ def _source_options(func):
 
 
 def _study_options(func):
-    """Options of the attribute-classifier fits shared by train/evaluate/reproduce."""
+    """Options of the attribute-classifier fits shared by train/evaluate/reproduce (incl. seed and compute)."""
+    for option in (scheduler_option, backend_option, n_jobs_option, seed_option):
+        func = option(func)
     func = click.option("--undersampling", type=click.Choice(["select", "bagging", "none"]), default="select",
                         show_default=True, help="Class-0 under-sampling: keep the best draw (chosen on training "
                         "objects by grouped CV), bag all draws, or none.")(func)
@@ -97,10 +99,6 @@ def splits(kind, n_splits, n_test, out, dataset, features_file, plain_dir, path,
               help="Model bundle to write (e.g. model.tzsl).")
 @_source_options
 @_study_options
-@seed_option
-@n_jobs_option
-@backend_option
-@scheduler_option
 @data_dir_option
 @force_option
 def train_attributes(splits_file, split_name, fusion, prior, save, dataset, features_file, plain_dir, path,
@@ -137,10 +135,6 @@ def train_attributes(splits_file, split_name, fusion, prior, save, dataset, feat
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True)
 @_source_options
 @_study_options
-@seed_option
-@n_jobs_option
-@backend_option
-@scheduler_option
 @data_dir_option
 @force_option
 def evaluate(kind, splits_file, n_splits, n_test, multilabel, sweep, out, dataset, features_file, plain_dir, path,
@@ -173,10 +167,6 @@ def evaluate(kind, splits_file, n_splits, n_test, multilabel, sweep, out, datase
 @click.option("--fabric-seeds", type=int, default=5, show_default=True, help="Seeds of the fabric embedding model.")
 @click.option("--hand-seeds", type=int, default=5, show_default=True, help="Simulated hand data sets (seeds 0..N-1).")
 @_study_options
-@seed_option
-@n_jobs_option
-@backend_option
-@scheduler_option
 @data_dir_option
 @force_option
 def reproduce_tables(out, fabric_seeds, hand_seeds, undersampling, cv, no_progress, no_cache, seed, n_jobs, backend, scheduler,
