@@ -416,10 +416,16 @@ def study_config_record(config: DapStudyConfig) -> dict:
 
 
 def _print(echo, title: str, table: pd.DataFrame) -> None:
+    """Echo ``table`` for people: 3 decimals, whole-number columns (counts) without decimals."""
     if echo is None:
         return
+    shown = table.copy()
+    for column in shown.select_dtypes("number").columns:
+        values = shown[column].dropna()
+        if len(values) and np.all(np.isclose(values, np.round(values))):
+            shown[column] = shown[column].map(lambda v: "-" if pd.isna(v) else f"{v:.0f}")
     echo(f"\n{title}")
-    echo(table.to_string(index=False, float_format=lambda v: f"{v:.3f}", na_rep="-"))
+    echo(shown.to_string(index=False, float_format=lambda v: f"{v:.3f}", na_rep="-"))
 
 
 def run_dap_study(
