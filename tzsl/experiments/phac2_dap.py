@@ -231,6 +231,13 @@ def compute_context(config: DapStudyConfig):
         from dask.distributed import Client, LocalCluster  # noqa: PLC0415
     except ImportError as exc:  # pragma: no cover - depends on the install
         raise ConfigError("--backend dask needs dask.distributed: pip install 'tzsl[dask]'") from exc
+    from dask.distributed import default_client  # noqa: PLC0415
+
+    try:  # nested use (a study calling fit_splits twice): keep the cluster that is already up
+        yield default_client()
+        return
+    except ValueError:
+        pass
     if config.scheduler:
         with Client(config.scheduler) as client:
             yield client
@@ -476,34 +483,35 @@ def run_dap_study(
 
     config = config or DapStudyConfig()
     tables: dict[str, pd.DataFrame] = {}
-    random_results: list[SplitPosteriors] = []
-    if splits is not None:
-        random_results = fit_splits(features, splits, config, multilabel=config.multilabel)
-    elif "random" in kinds:
-        random_splits, _ = make_splits(features, "random", config)
-        random_results = fit_splits(features, random_splits, config, multilabel=config.multilabel)
-    if random_results:
-        tables["table1_fusion"] = table1_fusion(random_results)
-        tables["table2_priors"] = table2_priors(random_results)
-        if config.multilabel:
-            tables["multilabel"] = multilabel_table(random_results)
-        per_split = attribute_accuracy_table(random_results, features.sensors)
-        tables["attribute_accuracy_per_split"] = per_split
-        tables["attribute_accuracy"] = attribute_accuracy_summary(per_split)
-        out.write_figure("attribute_accuracy.png", attribute_accuracy_figure(tables["attribute_accuracy"]))
-        if sweep:
-            tables["attribute_sweep"] = attribute_sweep(
-                random_results, config.sweep_min_attributes, config.sweep_max_subsets, seed=config.seed)
-            out.write_figure("attribute_sweep.png", attribute_sweep_figure(tables["attribute_sweep"]))
-        if compare_methods:
-            tables["phac2_methods"] = method_comparison(features, random_results, seed=config.seed,
-                                                        **(method_options or {}))
-    if splits is None and "challenging" in kinds:
-        challenging, map_coords = make_splits(features, "challenging", config)
-        results = fit_splits(features, challenging, config, offset=100)
-        tables["table3_challenging"] = table3_challenging(results, map_coords)
-        tables["object_map"] = map_coords
-        out.write_figure("object_map.png", object_map_figure(map_coords))
+    with compute_context(config):  # one Dask cluster for all the study's fits
+        random_results: list[SplitPosteriors] = []
+        if splits is not None:
+            random_results = fit_splits(features, splits, config, multilabel=config.multilabel)
+        elif "random" in kinds:
+            random_splits, _ = make_splits(features, "random", config)
+            random_results = fit_splits(features, random_splits, config, multilabel=config.multilabel)
+        if random_results:
+            tables["table1_fusion"] = table1_fusion(random_results)
+            tables["table2_priors"] = table2_priors(random_results)
+            if config.multilabel:
+                tables["multilabel"] = multilabel_table(random_results)
+            per_split = attribute_accuracy_table(random_results, features.sensors)
+            tables["attribute_accuracy_per_split"] = per_split
+            tables["attribute_accuracy"] = attribute_accuracy_summary(per_split)
+            out.write_figure("attribute_accuracy.png", attribute_accuracy_figure(tables["attribute_accuracy"]))
+            if sweep:
+                tables["attribute_sweep"] = attribute_sweep(
+                    random_results, config.sweep_min_attributes, config.sweep_max_subsets, seed=config.seed)
+                out.write_figure("attribute_sweep.png", attribute_sweep_figure(tables["attribute_sweep"]))
+            if compare_methods:
+                tables["phac2_methods"] = method_comparison(features, random_results, seed=config.seed,
+                                                            **(method_options or {}))
+        if splits is None and "challenging" in kinds:
+            challenging, map_coords = make_splits(features, "challenging", config)
+            results = fit_splits(features, challenging, config, offset=100)
+            tables["table3_challenging"] = table3_challenging(results, map_coords)
+            tables["object_map"] = map_coords
+            out.write_figure("object_map.png", object_map_figure(map_coords))
     titles = {
         "table1_fusion": "Table 1: MAXDAP vs AVGDAP (uni-prior), random splits - ours beside the paper",
         "table2_priors": "Table 2: AVGDAP by attribute prior, random splits - ours beside the paper",
