@@ -25,13 +25,13 @@ from tzsl.exceptions import ConfigError
 def extract(dataset: str, path: Path | None, out: Path | None, min_objects: int, data_dir: Path | None,
             force: bool) -> None:
     """Extract per-trial, per-sensor features and print a summary."""
-    from tzsl.datasets._feature_table import write_feature_table  # noqa: PLC0415
-    from tzsl.experiments.extract import extract_features, format_summary, output_paths, summarise  # noqa: PLC0415
+    from tzsl.datasets._feature_table import feature_table_paths, write_feature_table  # noqa: PLC0415
+    from tzsl.experiments.extract import extract_features, format_summary, summarise  # noqa: PLC0415
 
     if out is not None:
         if out.suffix not in (".csv", ".npz"):
             raise ConfigError(f"--out {out}: use a .csv or .npz file name")
-        existing = [p for p in output_paths(out) if p.exists()]
+        existing = [p for p in feature_table_paths(out) if p.exists()]
         if existing and not force:
             raise ConfigError(f"{existing[0]} already exists; use --force to overwrite")
     features = extract_features(dataset, data_dir=data_dir, path=path, min_objects=min_objects)

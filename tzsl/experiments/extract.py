@@ -90,9 +90,3 @@ def format_summary(summary: dict[str, object]) -> str:
         f"dropped:    {len(dropped)} ({', '.join(dropped) if dropped else 'none'})",
     ])
 
-
-def output_paths(out: Path) -> list[Path]:
-    """Files ``tzsl extract --out`` writes."""
-    from tzsl.datasets._feature_table import feature_table_paths  # noqa: PLC0415
-
-    return feature_table_paths(out)
