@@ -282,10 +282,7 @@ class DeepAttributeEmbedding(BaseEstimator):
     # ------------------------------------------------------------------ parameters
     def _check_params(self):
         name = type(self).__name__
-        try:
-            weights = loss_weights(self.lam)
-        except ConfigError as exc:
-            raise ConfigError(f"{name}: {exc}") from None
+        weights = loss_weights(self.lam, owner=name)
         backbones = ("efficientnet-lite0", "vgg16", "small-cnn")
         if self.backbone not in backbones:
             raise ConfigError(f"{name}: backbone must be one of {backbones}, got {self.backbone!r}")

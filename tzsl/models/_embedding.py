@@ -57,7 +57,7 @@ from tzsl.models._eszsl import (
 __all__ = ["EmbeddingZSL", "loss_weights"]
 
 
-def loss_weights(lam) -> tuple[float, float]:
+def loss_weights(lam, owner: str | None = None) -> tuple[float, float]:
     """Weights ``(w_C, w_R)`` of the classification and regression terms for a paper lambda.
 
     Parameters
@@ -65,17 +65,20 @@ def loss_weights(lam) -> tuple[float, float]:
     lam : float >= 0, or "inf" / ``float("inf")``
         Finite lambda gives ``(1, lambda)``: ``L = C + lambda R``. ``"inf"`` gives ``(0, 1)``:
         the regression term alone (see the module docstring for why).
+    owner : str or None
+        Estimator name put in front of the error message.
 
     Returns
     -------
     (w_C, w_R) : tuple of float
     """
+    prefix = f"{owner}: " if owner else ""
     if isinstance(lam, str):
         if lam.strip().lower() in ("inf", "infinity"):
             return 0.0, 1.0
-        raise ConfigError(f'lam must be a number >= 0 or "inf", got {lam!r}')
+        raise ConfigError(f'{prefix}lam must be a number >= 0 or "inf", got {lam!r}')
     if not isinstance(lam, numbers.Real) or isinstance(lam, bool) or np.isnan(lam) or lam < 0:
-        raise ConfigError(f'lam must be a number >= 0 or "inf", got {lam!r}')
+        raise ConfigError(f'{prefix}lam must be a number >= 0 or "inf", got {lam!r}')
     if np.isinf(lam):
         return 0.0, 1.0
     return 1.0, float(lam)
@@ -266,10 +269,7 @@ class EmbeddingZSL(_ZSLScorerMixin, BaseEstimator):
     # ---------------------------------------------------------------- parameter checks
     def _check_params(self):
         name = type(self).__name__
-        try:
-            weights = loss_weights(self.lam)
-        except ConfigError as exc:
-            raise ConfigError(f"{name}: {exc}") from exc
+        weights = loss_weights(self.lam, owner=name)
         if self.hidden_units is not None:
             _check_int(self.hidden_units, "hidden_units", 1, name)
         _check_int(self.max_iter, "max_iter", 1, name)
