@@ -12,7 +12,7 @@ or from an unsupervised 2-D map of all objects' features (challenging), as in th
 from __future__ import annotations
 
 import contextlib
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from itertools import combinations
 from math import comb
 
@@ -412,11 +412,6 @@ def attribute_sweep(results: list[SplitPosteriors], min_attributes: int = 7, max
         accuracy_std=("accuracy_mean", "std"), chance=("chance", "mean"))
     mean.insert(0, "split", "mean")
     return pd.concat([table, mean], ignore_index=True)
-
-
-def study_config_record(config: DapStudyConfig) -> dict:
-    """JSON-ready configuration for the manifest."""
-    return asdict(config)
 
 
 # --------------------------------------------------------------------------- the study
