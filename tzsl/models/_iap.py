@@ -14,6 +14,8 @@ distinct attribute rows of the fit ``A``; the classifier is any scikit-learn cla
 
 from __future__ import annotations
 
+import inspect
+
 import numpy as np
 from sklearn.base import BaseEstimator, _fit_context, clone
 from sklearn.linear_model import LogisticRegression
@@ -87,8 +89,10 @@ class IAP(BaseEstimator):
             ``A``: the attribute row of each trial's class; the distinct rows are the training
             classes. 0/1 (or in [0, 1]) for the output to be probabilities.
         groups : array-like of shape (n_trials,) or None
-            Object id per trial; passed on as ``classifier.fit(X, z, groups=groups)`` only if
-            given (use a classifier that accepts it, e.g. a GridSearchCV with GroupKFold).
+            Object id per trial. Passed on as ``classifier.fit(X, z, groups=groups)`` when the
+            classifier's ``fit`` has a ``groups`` parameter (e.g. a GridSearchCV with
+            GroupKFold, to select its hyper-parameters on training objects); the default
+            classifier selects nothing and does not take it.
 
         Returns
         -------
@@ -97,7 +101,10 @@ class IAP(BaseEstimator):
         X, A = validate_fit_data(self, X, y)
         self.class_attributes_, z = training_classes(A, "IAP")
         clf = default_iap_classifier() if self.classifier is None else clone(self.classifier)
-        self.classifier_ = clf.fit(X, z) if groups is None else clf.fit(X, z, groups=groups)
+        if groups is not None and "groups" in inspect.signature(clf.fit).parameters:
+            self.classifier_ = clf.fit(X, z, groups=groups)
+        else:
+            self.classifier_ = clf.fit(X, z)
         self.n_attributes_ = A.shape[1]
         return self
 

@@ -1,0 +1,117 @@
+"""SAE, the semantic autoencoder (Kodirov et al. CVPR 2017), closed form."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.linalg
+from sklearn.utils._param_validation import InvalidParameterError
+from sklearn.utils.estimator_checks import parametrize_with_checks
+
+from tzsl.models._eszsl import ZSLInputError
+from tzsl.models._sae import SAE, sylvester_solution
+
+#: check_estimator checks SAE is allowed to fail, with the reason (merged into the project list).
+EXPECTED_FAILED_CHECKS: dict[str, str] = {}
+
+
+def sylvester_residual(A, X, W, lam):
+    """Relative residual of ``A^T A W + lam W X^T X = (1 + lam) A^T X``."""
+    rhs = (1 + lam) * A.T @ X
+    lhs = A.T @ A @ W + lam * W @ (X.T @ X)
+    return np.linalg.norm(lhs - rhs) / np.linalg.norm(rhs)
+
+
+@pytest.mark.parametrize("lam", [0.01, 1.0, 300.0])
+def test_closed_form_solves_the_sylvester_equation(lam):
+    rng = np.random.default_rng(0)
+    X = rng.normal(size=(60, 7))
+    A = rng.normal(size=(60, 4))
+    W = sylvester_solution(A, X, lam)
+    assert W.shape == (4, 7)
+    assert sylvester_residual(A, X, W, lam) < 1e-8
+    reference = scipy.linalg.solve_sylvester(A.T @ A, lam * X.T @ X, (1 + lam) * A.T @ X)
+    np.testing.assert_allclose(W, reference, rtol=1e-7, atol=1e-10)
+
+
+def test_fitted_encoder_satisfies_its_equation_on_standardised_features(zero_shot_problem):
+    # 16 training classes, 10 attributes: A^T A is full rank; the fitted coef_ is the encoder W
+    p = zero_shot_problem(seed=3)
+    model = SAE(lam=2.0).fit(p.X_train, p.A_train)
+    Xs = (p.X_train - p.X_train.mean(axis=0)) / p.X_train.std(axis=0)
+    assert sylvester_residual(p.A_train, Xs, model.coef_, 2.0) < 1e-8
+
+
+def test_rank_deficient_problem_gets_the_minimum_norm_solution():
+    # 3 distinct rows in 5 attributes and a zero feature column: A^T A and X^T X are both singular,
+    # solve_sylvester's problem is singular, yet the equation has solutions; we return the one
+    # with no component in the joint null directions.
+    rng = np.random.default_rng(1)
+    rows = rng.integers(0, 2, (3, 5)).astype(float)
+    A = rows[np.arange(30) % 3]
+    X = np.column_stack([rng.normal(size=(30, 4)), np.zeros(30)])
+    W = sylvester_solution(A, X, 1.0)
+    assert np.isfinite(W).all()
+    assert sylvester_residual(A, X, W, 1.0) < 1e-8
+    np.testing.assert_allclose(W[:, -1], 0.0, atol=1e-12)  # zero feature: decoder-free direction
+    null = scipy.linalg.null_space(A)  # attribute directions no training row has
+    np.testing.assert_allclose(null.T @ W, 0.0, atol=1e-10)
+
+
+def test_recognises_unseen_classes(zero_shot_problem):
+    accuracies = []
+    for seed in range(3):
+        p = zero_shot_problem(seed=seed)
+        model = SAE().fit(p.X_train, p.A_train)
+        pred = np.argmax(model.class_scores(p.X_test, p.S_test), axis=1)
+        accuracies.append(np.mean(pred == p.y_test))
+    assert p.chance == 0.125
+    assert np.mean(accuracies) >= 0.8, accuracies
+
+
+def test_predict_is_the_projection_and_class_scores_are_cosines(zero_shot_problem):
+    p = zero_shot_problem(seed=4)
+    model = SAE(lam=0.5).fit(p.X_train, p.A_train)
+    E = model.predict(p.X_test)
+    Xs = model.scaler_.transform(p.X_test)
+    np.testing.assert_allclose(E, Xs @ model.coef_.T)
+    np.testing.assert_allclose(model.decision_function(p.X_test), E)
+    cos = np.array([[e @ s / np.linalg.norm(e) / np.linalg.norm(s) for s in p.S_test] for e in E])
+    np.testing.assert_allclose(model.class_scores(p.X_test, p.S_test), cos, atol=1e-12)
+    assert model.score_kind == "embedding" and model.default_rule == "cosine"
+    np.testing.assert_array_equal(model.class_attributes_, np.unique(p.A_train, axis=0))
+
+
+def test_without_standardisation_uses_raw_features():
+    rng = np.random.default_rng(2)
+    X = 3.0 + rng.normal(size=(40, 6))
+    A = rng.integers(0, 2, (4, 3)).astype(float)[np.arange(40) % 4]
+    model = SAE(lam=0.7, standardize=False).fit(X, A)
+    assert model.scaler_ is None
+    np.testing.assert_allclose(model.coef_, sylvester_solution(A, X, 0.7))
+
+
+@pytest.mark.parametrize(
+    "params", [{"lam": 0.0}, {"lam": -1.0}, {"lam": "big"}, {"standardize": "yes"}]
+)
+def test_bad_parameters_raise_invalid_parameter_error(params):
+    X = np.random.default_rng(0).normal(size=(10, 3))
+    A = np.eye(2)[np.arange(10) % 2]
+    with pytest.raises(InvalidParameterError):
+        SAE(**params).fit(X, A)
+
+
+def test_bad_targets_raise_one_line_errors():
+    X = np.random.default_rng(0).normal(size=(10, 3))
+    with pytest.raises(ZSLInputError, match="2-D"):
+        SAE().fit(X, np.arange(10) % 2)
+    with pytest.raises(ZSLInputError, match="one class"):
+        SAE().fit(X, np.ones((10, 4)))
+    model = SAE().fit(X, np.eye(2)[np.arange(10) % 2])
+    with pytest.raises(ZSLInputError, match="class_attributes"):
+        model.class_scores(X, np.ones((3, 5)))
+
+
+@parametrize_with_checks([SAE()], expected_failed_checks=lambda est: EXPECTED_FAILED_CHECKS)
+def test_sklearn_compatible(estimator, check):
+    check(estimator)
