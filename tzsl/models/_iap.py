@@ -14,8 +14,6 @@ distinct attribute rows of the fit ``A``; the classifier is any scikit-learn cla
 
 from __future__ import annotations
 
-import inspect
-
 import numpy as np
 from sklearn.base import BaseEstimator, _fit_context, clone
 from sklearn.linear_model import LogisticRegression
@@ -50,6 +48,10 @@ class IAP(BaseEstimator):
     classifier : estimator with ``fit`` and ``predict_proba``, or None, default=None
         Multi-class classifier over the training classes; cloned in ``fit``. None means
         :func:`default_iap_classifier` (StandardScaler + LogisticRegression).
+    classifier_groups : bool, default=False
+        Pass ``fit``'s ``groups`` to ``classifier.fit``: for a classifier that selects its
+        hyper-parameters by grouped cross-validation, e.g.
+        ``GridSearchCV(..., cv=GroupKFold())``, so that held-out folds are whole objects.
 
     Attributes
     ----------
@@ -70,10 +72,12 @@ class IAP(BaseEstimator):
 
     _parameter_constraints: dict = {
         "classifier": [HasMethods(["fit", "predict_proba"]), None],
+        "classifier_groups": ["boolean"],
     }
 
-    def __init__(self, *, classifier=None):
+    def __init__(self, *, classifier=None, classifier_groups: bool = False):
         self.classifier = classifier
+        self.classifier_groups = classifier_groups
 
     def __sklearn_tags__(self):
         return attribute_model_tags(super().__sklearn_tags__())
@@ -89,10 +93,8 @@ class IAP(BaseEstimator):
             ``A``: the attribute row of each trial's class; the distinct rows are the training
             classes. 0/1 (or in [0, 1]) for the output to be probabilities.
         groups : array-like of shape (n_trials,) or None
-            Object id per trial. Passed on as ``classifier.fit(X, z, groups=groups)`` when the
-            classifier's ``fit`` has a ``groups`` parameter (e.g. a GridSearchCV with
-            GroupKFold, to select its hyper-parameters on training objects); the default
-            classifier selects nothing and does not take it.
+            Object id per trial. Passed on as ``classifier.fit(X, z, groups=groups)`` if
+            ``classifier_groups``, else unused.
 
         Returns
         -------
@@ -101,7 +103,7 @@ class IAP(BaseEstimator):
         X, A = validate_fit_data(self, X, y)
         self.class_attributes_, z = training_classes(A, "IAP")
         clf = default_iap_classifier() if self.classifier is None else clone(self.classifier)
-        if groups is not None and "groups" in inspect.signature(clf.fit).parameters:
+        if self.classifier_groups:
             self.classifier_ = clf.fit(X, z, groups=groups)
         else:
             self.classifier_ = clf.fit(X, z)
