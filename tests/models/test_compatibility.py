@@ -27,10 +27,12 @@ def test_loss_weights_worked_by_hand():
     # sample 0: hinge terms 0.5 and 2.0 on classes 1 and 2 (class 0 true), class 3 not violating
     # sample 1: nothing violates
     hinge = np.array([[0.0, 0.5, 2.0, 0.0], [0.0, 0.0, 0.0, 0.0]])
-    np.testing.assert_array_equal(ranking_loss_weights(hinge, "devise"), [[0, 1, 1, 0], [0, 0, 0, 0]])
+    devise = ranking_loss_weights(hinge, "devise")
+    np.testing.assert_array_equal(devise, [[0, 1, 1, 0], [0, 0, 0, 0]])
     np.testing.assert_array_equal(ranking_loss_weights(hinge, "sje"), [[0, 0, 1, 0], [0, 0, 0, 0]])
     # ALE: r = 2 violators, beta_2 = 1 + 1/2, weight beta_r / r = 0.75 on each
-    np.testing.assert_allclose(ranking_loss_weights(hinge, "ale"), [[0, 0.75, 0.75, 0], [0, 0, 0, 0]])
+    ale = ranking_loss_weights(hinge, "ale")
+    np.testing.assert_allclose(ale, [[0, 0.75, 0.75, 0], [0, 0, 0, 0]])
     with pytest.raises(ValueError, match="unknown ranking loss"):
         ranking_loss_weights(hinge, "warp")
 
@@ -57,9 +59,9 @@ def test_gradient_matches_finite_differences(loss):
         Wp, Wm = W.copy(), W.copy()
         Wp[idx] += h
         Wm[idx] -= h
-        numeric[idx] = (
-            ranking_loss_and_gradient(Wp, X, y, Phi, loss)[0] - ranking_loss_and_gradient(Wm, X, y, Phi, loss)[0]
-        ) / (2 * h)
+        up = ranking_loss_and_gradient(Wp, X, y, Phi, loss)[0]
+        down = ranking_loss_and_gradient(Wm, X, y, Phi, loss)[0]
+        numeric[idx] = (up - down) / (2 * h)
     np.testing.assert_allclose(grad, numeric, atol=1e-6)
 
 
@@ -85,8 +87,9 @@ def test_ranking_loss_decreases(model_class, zero_shot_problem):
     # the final W ranks the training classes better than the initial one
     Xs = model.scaler_.transform(p.X_train)
     rows, cls = np.unique(p.A_train, axis=0, return_inverse=True)
-    final, _ = ranking_loss_and_gradient(model.coef_.T, Xs, cls.ravel(), rows, LOSS_OF[model_class])
-    initial, _ = ranking_loss_and_gradient(np.zeros_like(model.coef_.T), Xs, cls.ravel(), rows, LOSS_OF[model_class])
+    loss = LOSS_OF[model_class]
+    final, _ = ranking_loss_and_gradient(model.coef_.T, Xs, cls.ravel(), rows, loss)
+    initial, _ = ranking_loss_and_gradient(np.zeros_like(model.coef_.T), Xs, cls.ravel(), rows, loss)
     assert final < 0.25 * initial
 
 

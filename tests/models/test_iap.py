@@ -44,7 +44,8 @@ def test_rows_follow_the_classifier_class_order():
     X = np.array([[0.0], [0.1], [5.0], [5.1], [10.0], [10.1]])
     A = np.array([[1, 0], [1, 0], [0, 1], [0, 1], [1, 1], [1, 1]], dtype=float)
     model = IAP(classifier=GaussianNB()).fit(X, A)
-    np.testing.assert_allclose(model.predict_proba([[0.05], [5.05], [10.05]]), [[1, 0], [0, 1], [1, 1]], atol=1e-6)
+    P = model.predict_proba([[0.05], [5.05], [10.05]])
+    np.testing.assert_allclose(P, [[1, 0], [0, 1], [1, 1]], atol=1e-6)
 
 
 def test_recognises_unseen_classes(zero_shot_problem):
@@ -70,7 +71,8 @@ def test_groups_reach_a_classifier_that_takes_them(zero_shot_problem):
     p = zero_shot_problem(seed=2, per_class=6)
     objects = np.arange(p.X_train.shape[0]) // 3  # two objects per class
     search = GridSearchCV(GaussianNB(), {"var_smoothing": [1e-9, 1e-3]}, cv=GroupKFold(4))
-    model = IAP(classifier=search, classifier_groups=True).fit(p.X_train, p.A_train, groups=objects)
+    model = IAP(classifier=search, classifier_groups=True)
+    model.fit(p.X_train, p.A_train, groups=objects)
     folds = list(model.classifier_.cv.split(p.X_train, None, objects))
     assert all(not set(objects[tr]) & set(objects[te]) for tr, te in folds)
     assert model.classifier_.best_params_["var_smoothing"] in (1e-9, 1e-3)

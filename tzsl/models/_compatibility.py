@@ -115,7 +115,7 @@ def ranking_loss_and_gradient(
     grad : ndarray of shape (n_features, n_attributes)
         ``X^T C Phi / b`` with ``C[i, y] = w_iy`` and ``C[i, y_i] = -sum_y w_iy``.
     """
-    hinge = _hinge(X @ W @ Phi.T, y)
+    hinge = _hinge(X @ W @ Phi.T, y)  # (b, n_classes)
     C = ranking_loss_weights(hinge, loss)
     value = float((C * hinge).sum()) / X.shape[0]
     C[np.arange(X.shape[0]), y] -= C.sum(axis=1)
@@ -132,6 +132,37 @@ def _step_scale(X: np.ndarray, Phi: np.ndarray) -> float:
     mean_sq = float(np.mean(np.sum(Phi**2, axis=1)))
     pair_sq = 2.0 * (mean_sq - float(np.sum(Phi.mean(axis=0) ** 2))) * z / (z - 1)
     return float(np.mean(np.sum(X**2, axis=1))) * pair_sq
+
+
+_DOC_PARAMS = """
+    Parameters
+    ----------
+    learning_rate : float, default=1.0
+        SGD step in margin units (> 0): about how far one step moves the margin of a violated
+        pair of classes for a trial of the minibatch; see the module docstring.
+    n_epochs : int, default=50
+        Passes over the training trials (the papers stop early on a validation split).
+    batch_size : int, default=32
+        Trials per SGD step (the gradient is vectorised over the minibatch).
+    alpha : float, default=1e-3
+        L2 weight decay ``alpha / 2 ||W||^2`` (>= 0).
+    standardize : bool, default=True
+        Z-score features with a StandardScaler fitted on the training trials inside ``fit``.
+    random_state : int, RandomState or None, default=None
+        Seeds the initial ``W`` (tiny Gaussian) and the minibatch shuffling.
+
+    Attributes
+    ----------
+    coef_ : ndarray of shape (n_attributes, n_features)
+        ``W^T``: ``predict(X) = X W`` (on standardised features), compared with class rows by
+        dot product (``default_rule = "dot"``).
+    class_attributes_ : ndarray of shape (n_train_classes, n_attributes)
+        Distinct training attribute rows (the training classes).
+    loss_curve_ : ndarray of shape (n_epochs,)
+        Mean ranking loss per trial during each epoch (without the ``alpha`` term).
+    scaler_ : StandardScaler or None
+    n_attributes_, n_features_in_, n_iter_ : int
+"""
 
 
 class _BilinearCompatibility(EmbeddingAttributeModel):
@@ -211,58 +242,37 @@ class _BilinearCompatibility(EmbeddingAttributeModel):
         return self
 
 
-_DOC_PARAMS = """
-    Parameters
-    ----------
-    learning_rate : float, default=1.0
-        SGD step in margin units (> 0): about how far one step moves the margin of a violated
-        pair of classes for a trial of the minibatch; see the module docstring.
-    n_epochs : int, default=50
-        Passes over the training trials (the papers stop early on a validation split).
-    batch_size : int, default=32
-        Trials per SGD step (the gradient is vectorised over the minibatch).
-    alpha : float, default=1e-3
-        L2 weight decay ``alpha / 2 ||W||^2`` (>= 0).
-    standardize : bool, default=True
-        Z-score features with a StandardScaler fitted on the training trials inside ``fit``.
-    random_state : int, RandomState or None, default=None
-        Seeds the initial ``W`` (tiny Gaussian) and the minibatch shuffling.
-
-    Attributes
-    ----------
-    coef_ : ndarray of shape (n_attributes, n_features)
-        ``W^T``: ``predict(X) = X W`` (on standardised features), compared with class rows by
-        dot product (``default_rule = "dot"``).
-    class_attributes_ : ndarray of shape (n_train_classes, n_attributes)
-        Distinct training attribute rows (the training classes).
-    loss_curve_ : ndarray of shape (n_epochs,)
-        Mean ranking loss per trial during each epoch (without the ``alpha`` term).
-    scaler_ : StandardScaler or None
-    n_attributes_, n_features_in_, n_iter_ : int
-"""
-
-
 class ALE(_BilinearCompatibility):
-    """Attribute label embedding (Akata et al., CVPR 2013 / TPAMI 2016), WARP ranking loss."""
+    __doc__ = (
+        """Attribute label embedding (Akata et al., CVPR 2013 / TPAMI 2016), WARP ranking loss.
 
+    An attribute model: ``fit(X, A)`` learns ``F(x, y) = x^T W phi(y)`` over the distinct rows of
+    ``A`` with ``l_i = (beta_r / r) sum_y h_y`` (TPAMI eq. 7-8); ``predict(X)`` returns ``X W``.
+"""
+        + _DOC_PARAMS
+    )
     _loss = "ale"
 
 
 class SJE(_BilinearCompatibility):
-    """Structured joint embedding (Akata et al., CVPR 2015), multiclass structured hinge loss."""
+    __doc__ = (
+        """Structured joint embedding (Akata et al., CVPR 2015), multiclass structured hinge loss.
 
+    An attribute model: ``fit(X, A)`` learns ``F(x, y) = x^T W phi(y)`` over the distinct rows of
+    ``A`` with ``l_i = max_y h_y`` (eq. 4); ``predict(X)`` returns ``X W``.
+"""
+        + _DOC_PARAMS
+    )
     _loss = "sje"
 
 
 class DeViSE(_BilinearCompatibility):
-    """DeViSE (Frome et al., NIPS 2013): hinge rank loss summed over all violating classes."""
+    __doc__ = (
+        """DeViSE (Frome et al., NIPS 2013): hinge rank loss summed over all violating classes.
 
-    _loss = "devise"
-
-
-for _cls in (ALE, SJE, DeViSE):
-    _cls.__doc__ += (
-        "\n    An attribute model: ``fit(X, A)`` learns ``F(x, y) = x^T W phi(y)`` over the distinct"
-        "\n    rows of ``A``; ``predict(X)`` returns ``X W`` (n_trials, n_attributes).\n" + _DOC_PARAMS
+    An attribute model: ``fit(X, A)`` learns ``F(x, y) = x^T W phi(y)`` over the distinct rows of
+    ``A`` with ``l_i = sum_{y != y_i} h_y`` (eq. 1); ``predict(X)`` returns ``X W``.
+"""
+        + _DOC_PARAMS
     )
-del _cls
+    _loss = "devise"
