@@ -9,13 +9,13 @@ and learn ``W`` from the training classes (the distinct attribute rows of the fi
 ranking loss over the hinge terms ``h_y = [Delta(y_i, y) + F(x_i, y) - F(x_i, y_i)]_+`` with the
 0/1 label loss ``Delta(y_i, y) = 1[y != y_i]`` (margin 1):
 
-* **DeViSE**, Frome et al., "DeViSE: A Deep Visual-Semantic Embedding Model", NIPS 2013, eq. 1:
+* **DeViSE**, Frome et al., "DeViSE: A Deep Visual-Semantic Embedding Model", NIPS 2013:
   the hinge rank loss summed over every violating class, ``l_i = sum_{y != y_i} h_y``.
 * **SJE**, Akata, Reed, Walter, Lee and Schiele, "Evaluation of Output Embeddings for
-  Fine-Grained Image Classification", CVPR 2015, eq. 4 (structured joint embedding): the
+  Fine-Grained Image Classification", CVPR 2015 (structured joint embedding): the
   multiclass structured SVM loss on the most violating class, ``l_i = max_y h_y``.
 * **ALE**, Akata, Perronnin, Harchaoui and Schmid, "Label-Embedding for Attribute-Based
-  Classification", CVPR 2013 / "Label-Embedding for Image Classification", TPAMI 2016, eq. 7-8:
+  Classification", CVPR 2013 / "Label-Embedding for Image Classification", TPAMI 2016:
   the weighted approximate ranking (WARP) loss ``l_i = (beta_r / r) sum_{y != y_i} h_y`` with
   ``r`` the number of violating classes (``h_y > 0``) and ``beta_r = sum_{k=1..r} 1/k``, which
   weights a true class ranked low more heavily (rank-weighted with alpha_k = 1/k).
@@ -247,7 +247,7 @@ class ALE(_BilinearCompatibility):
         """Attribute label embedding (Akata et al., CVPR 2013 / TPAMI 2016), WARP ranking loss.
 
     An attribute model: ``fit(X, A)`` learns ``F(x, y) = x^T W phi(y)`` over the distinct rows of
-    ``A`` with ``l_i = (beta_r / r) sum_y h_y`` (TPAMI eq. 7-8); ``predict(X)`` returns ``X W``.
+    ``A`` with ``l_i = (beta_r / r) sum_y h_y``; ``predict(X)`` returns ``X W``.
 """
         + _DOC_PARAMS
     )
@@ -259,7 +259,7 @@ class SJE(_BilinearCompatibility):
         """Structured joint embedding (Akata et al., CVPR 2015), multiclass structured hinge loss.
 
     An attribute model: ``fit(X, A)`` learns ``F(x, y) = x^T W phi(y)`` over the distinct rows of
-    ``A`` with ``l_i = max_y h_y`` (eq. 4); ``predict(X)`` returns ``X W``.
+    ``A`` with ``l_i = max_y h_y``; ``predict(X)`` returns ``X W``.
 """
         + _DOC_PARAMS
     )
@@ -271,7 +271,7 @@ class DeViSE(_BilinearCompatibility):
         """DeViSE (Frome et al., NIPS 2013): hinge rank loss summed over all violating classes.
 
     An attribute model: ``fit(X, A)`` learns ``F(x, y) = x^T W phi(y)`` over the distinct rows of
-    ``A`` with ``l_i = sum_{y != y_i} h_y`` (eq. 1); ``predict(X)`` returns ``X W``.
+    ``A`` with ``l_i = sum_{y != y_i} h_y``; ``predict(X)`` returns ``X W``.
 """
         + _DOC_PARAMS
     )

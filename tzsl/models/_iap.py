@@ -5,7 +5,7 @@ Attribute Transfer", CVPR 2009 (and TPAMI 2014). A probabilistic multi-class cla
 TRAINING classes ``z_1 .. z_K`` gives ``p(z_k | x)``; the class-attribute table ``A_k,m`` (0/1)
 turns those into attribute posteriors
 
-    p(a_m = 1 | x) = sum_k p(z_k | x) A_k,m                                  (paper, eq. 4)
+    p(a_m = 1 | x) = sum_k p(z_k | x) A_k,m                  (paper, section 3.2, "IAP")
 
 which a DAP-style decision rule then maps to unseen classes. Here the training classes are the
 distinct attribute rows of the fit ``A``; the classifier is any scikit-learn classifier with
@@ -41,7 +41,7 @@ class IAP(BaseEstimator):
 
     An attribute model: ``fit(X, A)`` trains ``classifier`` to recognise the training classes
     (distinct rows of ``A``); ``predict_proba(X)`` returns ``p(a_m = 1 | x) = sum_k p(z_k | x)
-    A_k,m`` (eq. 4 of the paper).
+    A_k,m``.
 
     Parameters
     ----------
