@@ -5,11 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.linalg
+from sklearn.model_selection import GroupKFold
 from sklearn.utils._param_validation import InvalidParameterError
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from tzsl.models._eszsl import ZSLInputError
-from tzsl.models._sae import SAE, sylvester_solution
+from tzsl.models._sae import SAE, SAECV, sylvester_solution
 
 #: check_estimator checks SAE is allowed to fail, with the reason (merged into the project list).
 EXPECTED_FAILED_CHECKS: dict[str, str] = {}
@@ -112,6 +113,65 @@ def test_bad_targets_raise_one_line_errors():
         model.class_scores(X, np.ones((3, 5)))
 
 
-@parametrize_with_checks([SAE()], expected_failed_checks=lambda est: EXPECTED_FAILED_CHECKS)
+def held_out_accuracy_by_hand(X, A, lams, n_splits):
+    """Class-held-out CV written with plain SAE fits: (n_lams, n_splits) accuracies."""
+    rows, cls = np.unique(A, axis=0, return_inverse=True)
+    cls = cls.ravel()
+    out = []
+    for train, held_out in GroupKFold(n_splits).split(X, cls, cls):
+        held = np.unique(cls[held_out])
+        truth = np.searchsorted(held, cls[held_out])
+        fold = []
+        for lam in lams:
+            model = SAE(lam=lam).fit(X[train], A[train])
+            fold.append(np.mean(model.class_scores(X[held_out], rows[held]).argmax(axis=1) == truth))
+        out.append(fold)
+    return np.array(out).T
+
+
+def test_cv_scores_equal_plain_sae_fits_on_held_out_classes(zero_shot_problem):
+    p = zero_shot_problem(seed=5, noise=3.0)
+    lams = (0.01, 1.0, 100.0)
+    model = SAECV(lams=lams, n_splits=4).fit(p.X_train, p.A_train)
+    expected = held_out_accuracy_by_hand(p.X_train, p.A_train, lams, 4)
+    np.testing.assert_allclose(model.cv_scores_, expected)
+    best = int(np.argmax(expected.mean(axis=1)))
+    assert model.best_lam_ == lams[best]
+    assert model.best_score_ == pytest.approx(expected.mean(axis=1)[best])
+    refit = SAE(lam=model.best_lam_).fit(p.X_train, p.A_train)
+    np.testing.assert_allclose(model.coef_, refit.coef_)
+    np.testing.assert_allclose(model.class_scores(p.X_test, p.S_test), refit.class_scores(p.X_test, p.S_test))
+
+
+def test_cv_recognises_unseen_classes(zero_shot_problem):
+    accuracies = []
+    for seed in range(3):
+        p = zero_shot_problem(seed=seed)
+        model = SAECV().fit(p.X_train, p.A_train)
+        accuracies.append(np.mean(np.argmax(model.class_scores(p.X_test, p.S_test), axis=1) == p.y_test))
+    assert np.mean(accuracies) >= 0.8, accuracies
+
+
+def test_cv_with_few_classes_holds_out_one_class_against_all_rows():
+    rng = np.random.default_rng(0)
+    rows = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
+    A = rows[np.arange(30) % 3]
+    X = A @ rng.normal(size=(2, 4)) + 0.1 * rng.normal(size=(30, 4))
+    model = SAECV(lams=(0.1, 10.0)).fit(X, A)
+    assert model.cv_scores_.shape == (2, 3)  # leave-one-class-out
+    assert np.all((model.cv_scores_ >= 0) & (model.cv_scores_ <= 1))
+
+
+@pytest.mark.parametrize(
+    "params", [{"lams": []}, {"lams": [1.0, 0.0]}, {"lams": [np.nan]}, {"lams": "x"}, {"n_splits": 1}]
+)
+def test_cv_bad_parameters_raise_invalid_parameter_error(params):
+    X = np.random.default_rng(0).normal(size=(16, 3))
+    A = np.eye(4)[np.arange(16) % 4]
+    with pytest.raises(InvalidParameterError):
+        SAECV(**params).fit(X, A)
+
+
+@parametrize_with_checks([SAE(), SAECV()], expected_failed_checks=lambda est: EXPECTED_FAILED_CHECKS)
 def test_sklearn_compatible(estimator, check):
     check(estimator)

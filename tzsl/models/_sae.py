@@ -29,22 +29,46 @@ the minimum-norm solution, instead of failing.
 
 from __future__ import annotations
 
-from numbers import Real
+from numbers import Integral, Real
 
 import numpy as np
 from sklearn.base import _fit_context
-from sklearn.utils._param_validation import Interval
+from sklearn.model_selection import GroupKFold
+from sklearn.preprocessing import StandardScaler
+from sklearn.utils._param_validation import Interval, InvalidParameterError
 
 from tzsl.models._attribute_model_base import (
     EmbeddingAttributeModel,
+    cosine_scores,
     training_classes,
     validate_fit_data,
 )
 
-__all__ = ["SAE", "sylvester_solution"]
+__all__ = ["DEFAULT_LAMS", "SAE", "SAECV", "sylvester_solution"]
+
+#: Default lambda grid of :class:`SAECV`.
+DEFAULT_LAMS: tuple[float, ...] = (1e-2, 1e-1, 1.0, 10.0, 100.0, 1e3, 1e4, 1e5)
 
 #: Relative size below which ``a_i + lambda b_j`` counts as zero (rank deficiency).
 _RCOND = 1e-12
+
+
+def _sylvester_parts(A: np.ndarray, X: np.ndarray):
+    """Eigendecompositions shared by every lambda: ``a, P`` of A^T A, ``b, Q`` of X^T X, P^T A^T X Q."""
+    a, P = np.linalg.eigh(A.T @ A)
+    b, Q = np.linalg.eigh(X.T @ X)
+    a = np.clip(a, 0.0, None)  # PSD: clip round-off below zero
+    b = np.clip(b, 0.0, None)
+    return a, P, b, Q, P.T @ (A.T @ X) @ Q
+
+
+def _solve_parts(parts, lam: float) -> np.ndarray:
+    """``W`` (m, d) from :func:`_sylvester_parts` for one lambda (minimum-norm where singular)."""
+    a, P, b, Q, M = parts
+    denom = a[:, None] + lam * b[None, :]
+    tiny = _RCOND * max(float(denom.max()), np.finfo(float).tiny)
+    inv = np.divide(1.0, denom, out=np.zeros_like(denom), where=denom > tiny)
+    return P @ ((1.0 + lam) * M * inv) @ Q.T
 
 
 def sylvester_solution(A: np.ndarray, X: np.ndarray, lam: float) -> np.ndarray:
@@ -63,15 +87,7 @@ def sylvester_solution(A: np.ndarray, X: np.ndarray, lam: float) -> np.ndarray:
     -------
     W : ndarray of shape (m, d)
     """
-    a, P = np.linalg.eigh(A.T @ A)
-    b, Q = np.linalg.eigh(X.T @ X)
-    a = np.clip(a, 0.0, None)  # PSD: clip round-off below zero
-    b = np.clip(b, 0.0, None)
-    denom = a[:, None] + lam * b[None, :]
-    tiny = _RCOND * max(float(denom.max()), np.finfo(float).tiny)
-    inv = np.divide(1.0, denom, out=np.zeros_like(denom), where=denom > tiny)
-    C = (1.0 + lam) * (P.T @ (A.T @ X) @ Q)
-    return P @ (C * inv) @ Q.T
+    return _solve_parts(_sylvester_parts(A, X), lam)
 
 
 class SAE(EmbeddingAttributeModel):
@@ -139,5 +155,116 @@ class SAE(EmbeddingAttributeModel):
         self.class_attributes_, _ = training_classes(A, type(self).__name__)
         Xs = self._fit_scaler(X)
         self.coef_ = sylvester_solution(A, Xs, float(self.lam))
+        self.n_attributes_ = A.shape[1]
+        return self
+
+
+class SAECV(EmbeddingAttributeModel):
+    """SAE with ``lam`` chosen by class-held-out cross-validation on the training data.
+
+    The training classes (distinct rows of ``A``) are split by
+    :class:`~sklearn.model_selection.GroupKFold`; for every fold and every ``lam`` the encoder is
+    fitted on the other classes (one pair of eigendecompositions per fold serves the whole grid)
+    and scored by zero-shot accuracy among the fold's held-out classes (cosine to their rows), the
+    situation of the test. Holding out classes holds out whole objects; test objects are never
+    used. The best ``lam`` (mean accuracy over folds; ties: the first in ``lams``) is refitted on
+    all training trials.
+
+    Parameters
+    ----------
+    lams : array-like of float, default=(1e-2, 1e-1, ..., 1e5)
+        Candidate lambdas (each > 0), see :class:`SAE`.
+    n_splits : int, default=5
+        Folds of classes, capped at ``n_classes // 2`` so that each fold holds out >= 2 classes
+        (see Notes for fewer than 4 classes).
+    standardize : bool, default=True
+        As in :class:`SAE`; the scaler is refitted on each fold's training part.
+
+    Attributes
+    ----------
+    best_lam_ : float
+    best_score_ : float
+        Mean held-out zero-shot accuracy of ``best_lam_``.
+    cv_scores_ : ndarray of shape (n_lams, n_splits)
+        Held-out accuracy of every lambda in every fold.
+    coef_, class_attributes_, scaler_, n_attributes_, n_features_in_
+        As in :class:`SAE`, refitted with ``best_lam_``.
+
+    Notes
+    -----
+    With fewer than 4 training classes no fold can hold out 2 classes and train on 2: each fold
+    then holds out one class, whose trials are classified among ALL training class rows.
+    """
+
+    default_rule = "cosine"
+
+    _parameter_constraints: dict = {
+        "lams": ["array-like"],
+        "n_splits": [Interval(Integral, 2, None, closed="left")],
+        "standardize": ["boolean"],
+    }
+
+    def __init__(self, *, lams=DEFAULT_LAMS, n_splits: int = 5, standardize: bool = True):
+        self.lams = lams
+        self.n_splits = n_splits
+        self.standardize = standardize
+
+    def _lam_grid(self) -> np.ndarray:
+        try:
+            lams = np.asarray(self.lams, dtype=np.float64).ravel()
+        except (TypeError, ValueError):
+            lams = np.array([np.nan])
+        if lams.size == 0 or not np.all(np.isfinite(lams) & (lams > 0)):
+            raise InvalidParameterError(
+                f"The 'lams' parameter of SAECV must be a non-empty array of finite floats > 0. "
+                f"Got {self.lams!r} instead."
+            )
+        return lams
+
+    @_fit_context(prefer_skip_nested_validation=True)
+    def fit(self, X, y, groups=None):
+        """Choose ``lam`` by class-held-out CV, then refit on all training trials.
+
+        Parameters
+        ----------
+        X : array-like of shape (n_trials, n_features)
+        y : array-like of shape (n_trials, n_attributes)
+            ``A``: the attribute row of each trial's class; the distinct rows are the training
+            classes (0/1 or real).
+        groups : array-like of shape (n_trials,) or None
+            Object id per trial; unused: folds hold out whole classes, hence whole objects.
+
+        Returns
+        -------
+        self : SAECV
+        """
+        lams = self._lam_grid()
+        X, A = validate_fit_data(self, X, y)
+        rows, cls = training_classes(A, "SAECV")
+        n_classes = rows.shape[0]
+        n_folds = min(self.n_splits, n_classes // 2) if n_classes >= 4 else n_classes
+        scores = []
+        for train, held_out in GroupKFold(n_splits=n_folds).split(X, cls, cls):
+            held_rows = np.unique(cls[held_out])
+            candidates = held_rows if held_rows.size >= 2 else np.arange(n_classes)
+            X_tr, X_va = X[train], X[held_out]
+            if self.standardize:
+                scaler = StandardScaler().fit(X_tr)
+                X_tr, X_va = scaler.transform(X_tr), scaler.transform(X_va)
+            parts = _sylvester_parts(A[train], X_tr)
+            truth = np.searchsorted(candidates, cls[held_out])
+            candidate_rows = rows[candidates]
+            fold = []
+            for lam in lams:
+                E = X_va @ _solve_parts(parts, lam).T  # (n_held_out, n_attributes)
+                fold.append(np.mean(np.argmax(cosine_scores(E, candidate_rows), axis=1) == truth))
+            scores.append(fold)
+        self.cv_scores_ = np.asarray(scores).T
+        mean = self.cv_scores_.mean(axis=1)
+        best = int(np.argmax(mean))
+        self.best_lam_ = float(lams[best])
+        self.best_score_ = float(mean[best])
+        self.class_attributes_ = rows
+        self.coef_ = sylvester_solution(A, self._fit_scaler(X), self.best_lam_)
         self.n_attributes_ = A.shape[1]
         return self
