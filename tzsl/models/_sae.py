@@ -3,12 +3,12 @@
 Kodirov, Xiang and Gong, "Semantic Autoencoder for Zero-Shot Learning", CVPR 2017. A linear
 encoder ``W`` projects features into attribute space and its transpose decodes them back:
 
-    min_W  ||X - W^T S||_F^2 + lambda ||W X - S||_F^2                        (paper, eq. 6)
+    min_W  ||X - W^T S||_F^2 + lambda ||W X - S||_F^2          (paper, section 3, relaxed objective)
 
 with samples as COLUMNS (``X`` d x N, ``S`` k x N). Setting the derivative to zero gives the
 Sylvester equation
 
-    S S^T W + W (lambda X X^T) = (1 + lambda) S X^T                            (paper, eq. 8-9)
+    S S^T W + W (lambda X X^T) = (1 + lambda) S X^T            (paper, section 3, A W + W B = C)
 
 tzsl stores samples as ROWS (``X`` (n, d), ``A`` (n, m) = the class attribute row of every
 trial), so the same equation reads
@@ -93,9 +93,9 @@ def sylvester_solution(A: np.ndarray, X: np.ndarray, lam: float) -> np.ndarray:
 class SAE(EmbeddingAttributeModel):
     """Semantic autoencoder (Kodirov, Xiang and Gong, CVPR 2017), closed form.
 
-    An attribute model: ``fit(X, A)`` learns the encoder ``W`` of the paper's eq. 6 by solving its
-    Sylvester equation (eq. 9); ``predict(X)`` returns the attribute-space projection ``X W^T``,
-    which a decision rule compares with class attribute rows by cosine similarity.
+    An attribute model: ``fit(X, A)`` learns the encoder ``W`` of the paper's relaxed objective by
+    solving its Sylvester equation ``A W + W B = C``; ``predict(X)`` returns the attribute-space
+    projection ``X W^T``, which a decision rule compares with class rows by cosine similarity.
 
     Parameters
     ----------
