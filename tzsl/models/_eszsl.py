@@ -14,10 +14,12 @@ row per training class, so the same estimator reads
 ``gamma`` regularises the feature side and ``lam`` (the paper's lambda) the attribute side, as in
 the paper. A sample is classified among any set of (unseen) classes by ``argmax_c x^T V s_c``.
 
-Class order convention (shared by every tzsl zero-shot estimator): the rows of the
-``class_attributes`` passed to ``fit`` belong to the classes in SORTED order of the unique labels
-of ``y`` (``classes_ = np.unique(y)``); ``predict(X, class_attributes)`` returns indices into the
-rows of the ``class_attributes`` it is given.
+Attribute-model protocol (shared by every tzsl zero-shot attribute model): ``fit(X, Y)`` takes
+each training trial's class attribute row ``Y`` (n, m); the training classes are the distinct rows
+of ``Y`` in ``np.unique(Y, axis=0)`` order (trials of classes that share an attribute row are one
+class). ``decision_function(X)`` gives attribute-space scores (n, m); a decision rule of
+:mod:`tzsl.models` ranks any (unseen) class table against them (:class:`tzsl.models.ZeroShotClassifier`).
+For binary attributes ``V`` does not depend on the order of the classes (all sums are of integers).
 
 Computation: a thin SVD ``X = Q diag(s) R^T`` and an eigendecomposition ``S^T S = P diag(b) P^T``
 give ``V = R diag(s / (s^2 + gamma)) Q^T (Y S) P diag(1 / (b + lam)) P^T``; the SVD form never
@@ -29,17 +31,19 @@ from __future__ import annotations
 
 import numbers
 from collections.abc import Sequence
+from numbers import Integral, Real
 
 import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.model_selection import GroupKFold
 from sklearn.preprocessing import StandardScaler
-from sklearn.utils.multiclass import check_classification_targets
+from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from tzsl.exceptions import ConfigError, TzslError
+from tzsl.models._validation import ParameterError, ValidatedParamsMixin
 
-__all__ = ["ESZSL", "ESZSLCV", "ZSLInputError"]
+__all__ = ["AttributeEmbeddingModel", "ESZSL", "ESZSLCV", "ZSLInputError", "attribute_rows", "training_classes"]
 
 #: Default regulariser grid of :class:`ESZSLCV` (the paper's 10^-3 .. 10^3).
 DEFAULT_GRID: tuple[float, ...] = (1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0, 1000.0)
@@ -68,18 +72,93 @@ def _validate_X(est: BaseEstimator, X, *, reset: bool) -> np.ndarray:
         raise ZSLInputError(f"{type(est).__name__}: X (features): {exc}") from exc
 
 
-def _validate_Xy(est: BaseEstimator, X, y) -> tuple[np.ndarray, np.ndarray]:
-    """Validate training features (n, d) and class labels (n,)."""
-    if y is None:
+def _validate_XY(est: BaseEstimator, X, Y) -> tuple[np.ndarray, np.ndarray]:
+    """Validate training features (n, d) and attribute rows (n, m) (1-D: one attribute)."""
+    if Y is None:
         raise ZSLInputError(
             f"{type(est).__name__} requires y to be passed, but the target y is None"
         )
     try:
-        X, y = validate_data(est, X, y, reset=True, dtype=np.float64)
-        check_classification_targets(y)
+        X, Y = validate_data(est, X, Y, reset=True, dtype=np.float64, multi_output=True, y_numeric=True)
     except ValueError as exc:
-        raise ZSLInputError(f"{type(est).__name__}: X, y: {exc}") from exc
-    return X, y
+        raise ZSLInputError(f"{type(est).__name__}: X, Y (attribute rows): {exc}") from exc
+    return X, (Y.reshape(-1, 1) if Y.ndim == 1 else Y).astype(np.float64)
+
+
+def training_classes(Y: np.ndarray, est_name: str, groups=None) -> tuple[np.ndarray, np.ndarray]:
+    """Training classes of a zero-shot attribute model: the distinct rows of ``Y``.
+
+    Parameters
+    ----------
+    Y : ndarray of shape (n_trials, n_attributes)
+        Attribute row of each training trial's class.
+    est_name : str
+        Estimator name for the error message.
+    groups : array-like of shape (n_trials,), optional
+        Object or class of each trial. When the groups are the classes themselves (each group
+        has one attribute row and no two groups share one, e.g. PHAC-2 objects or fabric
+        classes), the classes are put in sorted group order, as scikit-learn orders
+        ``classes_ = np.unique(y)``. The order fixes class-grouped CV folds and early-stopping
+        hold-outs, not the model's definition.
+
+    Returns
+    -------
+    class_attributes : ndarray of shape (n_classes, n_attributes)
+        Distinct rows, in ``np.unique(Y, axis=0)`` (lexicographic) order unless the groups
+        are the classes (then sorted group order).
+    y : ndarray of shape (n_trials,), int
+        Each trial's row in ``class_attributes``.
+
+    Raises
+    ------
+    ZSLInputError
+        Fewer than 2 distinct rows, or ``groups`` of the wrong length.
+    """
+    S, y = np.unique(Y, axis=0, return_inverse=True)
+    y = y.ravel()
+    if S.shape[0] < 2:
+        raise ZSLInputError(
+            f"{est_name}: only one class (one distinct attribute row) in the training data; "
+            "at least 2 are needed"
+        )
+    if groups is not None:
+        groups = np.asarray(groups)
+        if groups.shape != (Y.shape[0],):
+            raise ZSLInputError(f"{est_name}: groups must have shape ({Y.shape[0]},), got {groups.shape}")
+        _, g = np.unique(groups, return_inverse=True)
+        g = g.ravel()
+        pairs = np.unique(np.column_stack([g, y]), axis=0)
+        if pairs.shape[0] == S.shape[0] == g.max() + 1:  # one row per group, one group per row
+            order = pairs[np.argsort(pairs[:, 0]), 1]  # row of each group, in sorted group order
+            rank = np.empty_like(order)
+            rank[order] = np.arange(order.size)
+            return S[order], rank[y]
+    return S, y
+
+
+def attribute_rows(y, class_attributes) -> np.ndarray:
+    """Each trial's attribute row from class labels and one row per class.
+
+    Parameters
+    ----------
+    y : array-like of shape (n_trials,)
+        Class labels.
+    class_attributes : array-like of shape (n_classes, n_attributes)
+        One row per class of ``np.unique(y)``, in that (sorted) order.
+
+    Returns
+    -------
+    ndarray of shape (n_trials, n_attributes), float64
+        ``Y`` for ``fit(X, Y)`` of an attribute model.
+    """
+    classes, idx = np.unique(np.asarray(y), return_inverse=True)
+    S = _validate_attributes(class_attributes)
+    if S.shape[0] != classes.size:
+        raise ZSLInputError(
+            f"class_attributes has {S.shape[0]} rows but y has {classes.size} classes "
+            f"{classes.tolist()}; give one row per class, in sorted label order"
+        )
+    return S[idx.ravel()]
 
 
 def _validate_attributes(S, *, n_attributes: int | None = None, what: str = "class_attributes"):
@@ -221,75 +300,66 @@ def _closed_form(X: np.ndarray, y: np.ndarray, S: np.ndarray, gamma: float, lam:
     return (R * (s / (s**2 + gamma))) @ C @ (P / (b + lam)).T
 
 
-class _ZSLScorerMixin:
-    """``decision_function`` / ``predict`` over any set of candidate classes."""
+class AttributeEmbeddingModel(ValidatedParamsMixin, BaseEstimator):
+    """Shared predict side of the linear/learned attribute embeddings (attribute-model protocol).
 
-    def _embed_scores(self, X: np.ndarray, S: np.ndarray) -> np.ndarray:  # pragma: no cover
+    ``decision_function(X)`` (== ``predict(X)``) maps trials to attribute space, (n, m); a
+    decision rule (:class:`tzsl.models.CompatibilityRule` or
+    :class:`tzsl.models.NearestAttributeRule`) turns that into class scores for any table.
+    """
+
+    #: What :meth:`decision_function` returns, read by :class:`tzsl.models.ZeroShotClassifier`.
+    score_kind = "embedding"
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.target_tags.required = True
+        tags.target_tags.multi_output = True
+        return tags
+
+    def _embed(self, X: np.ndarray) -> np.ndarray:  # pragma: no cover
         raise NotImplementedError
 
-    def _prepare_predict(self, X, class_attributes):
-        check_is_fitted(self)
-        X = _validate_X(self, X, reset=False)
-        S = _validate_attributes(class_attributes, n_attributes=self.n_attributes_)
-        if self.scaler_ is not None:
-            X = self.scaler_.transform(X)
-        return X, S
-
-    def decision_function(self, X, class_attributes) -> np.ndarray:
-        """Compatibility of each sample with each candidate class.
+    def decision_function(self, X) -> np.ndarray:
+        """Attribute-space scores of the trials.
 
         Parameters
         ----------
         X : array-like of shape (n_samples, n_features)
             Features, in the units they were fitted with.
-        class_attributes : array-like of shape (n_classes, n_attributes)
-            Attribute vectors of the candidate (typically unseen) classes, one row per class.
 
         Returns
         -------
-        scores : ndarray of shape (n_samples, n_classes)
-            Larger means more compatible.
+        ndarray of shape (n_samples, n_attributes)
         """
-        X, S = self._prepare_predict(X, class_attributes)
-        return self._embed_scores(X, S)
+        check_is_fitted(self)
+        X = _validate_X(self, X, reset=False)
+        if self.scaler_ is not None:
+            X = self.scaler_.transform(X)
+        return self._embed(X)
 
-    def predict(self, X, class_attributes) -> np.ndarray:
-        """Index of the best-scoring candidate class per sample.
-
-        Parameters
-        ----------
-        X : array-like of shape (n_samples, n_features)
-        class_attributes : array-like of shape (n_classes, n_attributes)
-            Candidate classes; rows must be pairwise different.
-
-        Returns
-        -------
-        rows : ndarray of shape (n_samples,), int
-            Indices into the rows of ``class_attributes``.
-        """
-        X, S = self._prepare_predict(X, class_attributes)
-        _check_no_duplicate_rows(S)
-        return np.argmax(self._embed_scores(X, S), axis=1)
+    def predict(self, X) -> np.ndarray:
+        """Same as :meth:`decision_function`: (n_samples, n_attributes) attribute-space scores."""
+        return self.decision_function(X)
 
 
-class _ESZSLBase(_ZSLScorerMixin, BaseEstimator):
-    def _embed_scores(self, X, S):
-        return X @ self.coef_ @ S.T
+_COMMON_CONSTRAINTS: dict = {"standardize": ["boolean"]}
 
-    def _start_fit(self, X, y, class_attributes):
-        X, y = _validate_Xy(self, X, y)
-        name = type(self).__name__
-        classes, S, S_u, y_u = _encode_training_classes(
-            y, class_attributes, self.duplicate_attributes, name
-        )
-        return X, classes, S, S_u, y_u
 
-    def _finish_fit(self, X, classes, S, S_u, y_u, gamma, lam):
+class _ESZSLBase(AttributeEmbeddingModel):
+    def _embed(self, X):
+        return X @ self.coef_
+
+    def _start_fit(self, X, Y, groups):
+        X, Y = _validate_XY(self, X, Y)
+        S_u, y_u = training_classes(Y, type(self).__name__, groups)
+        return X, S_u, y_u
+
+    def _finish_fit(self, X, S_u, y_u, gamma, lam):
         self.scaler_ = StandardScaler().fit(X) if self.standardize else None
         Xs = X if self.scaler_ is None else self.scaler_.transform(X)
-        self.classes_ = classes
-        self.class_attributes_ = S
-        self.n_attributes_ = S.shape[1]
+        self.class_attributes_ = S_u
+        self.n_attributes_ = S_u.shape[1]
         self.coef_ = _closed_form(Xs, y_u, S_u, gamma, lam)
         return self
 
@@ -297,85 +367,84 @@ class _ESZSLBase(_ZSLScorerMixin, BaseEstimator):
 class ESZSL(_ESZSLBase):
     """Embarrassingly simple zero-shot learning (Romera-Paredes and Torr 2015), closed form.
 
+    An attribute model: ``fit(X, Y)`` learns ``V`` from trials and their classes' attribute rows
+    (the training classes are the distinct rows of ``Y``); ``decision_function(X) = X V`` in
+    attribute space, scored against any class table by :class:`tzsl.models.CompatibilityRule`
+    (``x^T V s_c``).
+
     Parameters
     ----------
-    gamma : float, default=1.0
-        Feature-side ridge (> 0): the ``gamma`` of ``(X^T X + gamma I)^-1``.
-    lam : float, default=1.0
-        Attribute-side ridge (> 0): the paper's lambda, in ``(S^T S + lam I)^-1``.
+    gamma : float > 0, default=1.0
+        Feature-side ridge: the ``gamma`` of ``(X^T X + gamma I)^-1``.
+    lam : float > 0, default=1.0
+        Attribute-side ridge (the paper's lambda), in ``(S^T S + lam I)^-1``.
     standardize : bool, default=True
         Z-score features with a :class:`~sklearn.preprocessing.StandardScaler` fitted on the
         training samples inside ``fit`` (ESZSL has no intercept, so centring matters).
-    duplicate_attributes : {"error", "merge"}, default="error"
-        Training classes with identical attribute rows: raise, or treat each such set as one
-        class (its samples then share one +1 column of ``Y``; with ``{-1, 1}`` targets two
-        identical rows would otherwise cancel each other's signal).
 
     Attributes
     ----------
     coef_ : ndarray of shape (n_features, n_attributes)
         ``V``, mapping (standardised) features to attribute space.
-    classes_ : ndarray of shape (n_train_classes,)
-        Sorted training labels; row ``j`` of the fit ``class_attributes`` belongs to ``classes_[j]``.
     class_attributes_ : ndarray of shape (n_train_classes, n_attributes)
+        Distinct training attribute rows (``np.unique(Y, axis=0)``); trials sharing a row are
+        one class (one +1 column of the paper's ``Y``).
     scaler_ : StandardScaler or None
     n_attributes_, n_features_in_ : int
-
-    Notes
-    -----
-    ``fit(X, y, class_attributes)``: ``X`` (n, d) features, ``y`` (n,) labels, ``class_attributes``
-    (k_train, m) one row per training class in sorted label order. ``predict(X, class_attributes)``
-    returns indices into the rows of the given (k_test, m) table. Attributes may be real-valued.
     """
 
-    def __init__(self, gamma=1.0, lam=1.0, standardize=True, duplicate_attributes="error"):
+    _parameter_constraints: dict = {
+        **_COMMON_CONSTRAINTS,
+        "gamma": [Interval(Real, 0, None, closed="neither")],
+        "lam": [Interval(Real, 0, None, closed="neither")],
+    }
+
+    def __init__(self, *, gamma=1.0, lam=1.0, standardize=True):
         self.gamma = gamma
         self.lam = lam
         self.standardize = standardize
-        self.duplicate_attributes = duplicate_attributes
 
-    def fit(self, X, y, class_attributes):
+    def fit(self, X, Y, groups=None):
         """Fit ``V`` in closed form.
 
         Parameters
         ----------
         X : array-like of shape (n_samples, n_features)
-        y : array-like of shape (n_samples,)
-            Class labels of the training samples.
-        class_attributes : array-like of shape (n_train_classes, n_attributes)
-            One row per class of ``np.unique(y)``, in that (sorted) order.
+        Y : array-like of shape (n_samples, n_attributes)
+            Attribute row of each sample's class; attributes may be real-valued.
+        groups : array-like of shape (n_samples,), optional
+            Object or class of each sample; only orders the classes (see :func:`training_classes`).
 
         Returns
         -------
         self : ESZSL
         """
-        name = type(self).__name__
-        gamma = _check_positive(self.gamma, "gamma", name)
-        lam = _check_positive(self.lam, "lam", name)
-        X, classes, S, S_u, y_u = self._start_fit(X, y, class_attributes)
-        return self._finish_fit(X, classes, S, S_u, y_u, gamma, lam)
+        self._validate_params()
+        X, S_u, y_u = self._start_fit(X, Y, groups)
+        return self._finish_fit(X, S_u, y_u, float(self.gamma), float(self.lam))
 
 
 class ESZSLCV(_ESZSLBase):
     """ESZSL with ``gamma`` and ``lam`` chosen by class-grouped cross-validation.
 
-    Every fold holds out whole training classes and scores zero-shot recognition among the
-    held-out classes only, so tuning mimics the test situation and never needs the test classes.
-    The full grid is scored from one SVD and one eigendecomposition per fold.
+    Every fold holds out whole training classes (distinct attribute rows of ``Y``) and scores
+    zero-shot recognition among the held-out classes only, so tuning mimics the test situation
+    and never needs the test classes. The full grid is scored from one SVD and one
+    eigendecomposition per fold.
 
     Parameters
     ----------
-    gammas, lams : sequence of float, default=10^-3 .. 10^3 (7 values each)
-        Grids of the feature-side and attribute-side ridges (all > 0).
-    cv : None, int or splitter, default=None
-        ``None``: :class:`~sklearn.model_selection.GroupKFold` with
-        ``min(5, n_classes // 2)`` splits (each validation fold needs >= 2 classes). An int:
-        ``GroupKFold(cv)``. Otherwise any object with ``split(X, y, groups)``; it receives
-        ``groups`` = class (merged class with ``duplicate_attributes="merge"``), and every fold
-        must hold out whole classes, at least 2 of them, and train on at least 2.
+    gammas, lams : array-like of float > 0, default=10^-3 .. 10^3 (7 values each)
+        Grids of the feature-side and attribute-side ridges.
+    cv : None, int >= 2 or splitter, default=None
+        ``None``: :class:`~sklearn.model_selection.GroupKFold` with ``min(5, n_classes // 2)``
+        splits (each validation fold needs >= 2 classes). An int: ``GroupKFold(cv)``. Otherwise
+        any object with ``split(X, y, groups)``; it receives ``groups`` = class (row of
+        ``class_attributes_``), and every fold must hold out whole classes, at least 2 of them,
+        and train on at least 2.
     scoring : {"accuracy", "balanced_accuracy"}, default="accuracy"
         Per-sample accuracy or mean per-class accuracy on the held-out classes.
-    standardize, duplicate_attributes
+    standardize : bool, default=True
         As in :class:`ESZSL`; the scaler is refitted on each fold's training part.
 
     Attributes
@@ -386,38 +455,45 @@ class ESZSLCV(_ESZSLBase):
     mean_cv_scores_ : ndarray of shape (n_gammas, n_lams)
     best_score_ : float
     cv_val_classes_ : list of ndarray
-        Labels held out in each fold (all of them training classes).
-    coef_, classes_, class_attributes_, scaler_, n_attributes_, n_features_in_
+        Rows of ``class_attributes_`` held out in each fold.
+    coef_, class_attributes_, scaler_, n_attributes_, n_features_in_
         As in :class:`ESZSL`, refitted on all training samples with the chosen pair.
     """
 
+    _parameter_constraints: dict = {
+        **_COMMON_CONSTRAINTS,
+        "gammas": ["array-like"],
+        "lams": ["array-like"],
+        "cv": [None, Interval(Integral, 2, None, closed="left"), HasMethods(["split"])],
+        "scoring": [StrOptions({"accuracy", "balanced_accuracy"})],
+    }
+
     def __init__(
         self,
+        *,
         gammas: Sequence[float] = DEFAULT_GRID,
         lams: Sequence[float] = DEFAULT_GRID,
         cv=None,
         scoring="accuracy",
         standardize=True,
-        duplicate_attributes="error",
     ):
         self.gammas = gammas
         self.lams = lams
         self.cv = cv
         self.scoring = scoring
         self.standardize = standardize
-        self.duplicate_attributes = duplicate_attributes
 
-    def _grid(self, values, name):
-        est = type(self).__name__
-        try:
-            arr = np.asarray(values, dtype=np.float64).ravel()
-        except (TypeError, ValueError) as exc:
-            raise ConfigError(f"{est}: {name} must be a sequence of numbers: {exc}") from exc
-        if arr.size == 0:
-            raise ConfigError(f"{est}: {name} is empty")
-        for v in arr:
-            _check_positive(float(v), name, est)
-        return arr
+    def _check_param_values(self) -> None:
+        for name in ("gammas", "lams"):
+            try:
+                arr = np.asarray(getattr(self, name), dtype=np.float64).ravel()
+            except (TypeError, ValueError):
+                arr = np.array([np.nan])
+            if arr.size == 0 or not np.all(np.isfinite(arr) & (arr > 0)):
+                raise ParameterError(
+                    f"The {name!r} parameter of {type(self).__name__} must be a non-empty sequence of "
+                    f"finite numbers > 0. Got {getattr(self, name)!r} instead."
+                )
 
     def _splitter(self, n_groups: int):
         name = type(self).__name__
@@ -429,36 +505,31 @@ class ESZSLCV(_ESZSLBase):
                     "gamma and lam instead"
                 )
             return GroupKFold(n_splits=min(5, n_groups // 2))
-        if isinstance(self.cv, numbers.Integral) and not isinstance(self.cv, bool):
-            if self.cv < 2:
-                raise ConfigError(f"{name}: cv must be >= 2, got {self.cv}")
+        if isinstance(self.cv, numbers.Integral):
             return GroupKFold(n_splits=int(self.cv))
-        if not hasattr(self.cv, "split"):
-            raise ConfigError(f"{name}: cv must be None, an int or a splitter, got {self.cv!r}")
         return self.cv
 
-    def fit(self, X, y, class_attributes):
+    def fit(self, X, Y, groups=None):
         """Choose ``(gamma, lam)`` by class-grouped CV, then refit on all training samples.
 
         Parameters
         ----------
         X : array-like of shape (n_samples, n_features)
-        y : array-like of shape (n_samples,)
-        class_attributes : array-like of shape (n_train_classes, n_attributes)
-            One row per class of ``np.unique(y)``, in that (sorted) order.
+        Y : array-like of shape (n_samples, n_attributes)
+            Attribute row of each sample's class.
+        groups : array-like of shape (n_samples,), optional
+            Object or class of each sample; orders the classes (:func:`training_classes`), which
+            fixes the folds. The CV groups are always the classes (distinct rows of ``Y``).
 
         Returns
         -------
         self : ESZSLCV
         """
+        self._validate_params()
         name = type(self).__name__
-        gammas = self._grid(self.gammas, "gammas")
-        lams = self._grid(self.lams, "lams")
-        if self.scoring not in ("accuracy", "balanced_accuracy"):
-            raise ConfigError(
-                f"{name}: scoring must be 'accuracy' or 'balanced_accuracy', got {self.scoring!r}"
-            )
-        X, classes, S, S_u, y_u = self._start_fit(X, y, class_attributes)
+        gammas = np.asarray(self.gammas, dtype=np.float64).ravel()
+        lams = np.asarray(self.lams, dtype=np.float64).ravel()
+        X, S_u, y_u = self._start_fit(X, Y, groups)
         splitter = self._splitter(S_u.shape[0])
         try:
             folds = list(splitter.split(X, y_u, groups=y_u))
@@ -466,7 +537,6 @@ class ESZSLCV(_ESZSLBase):
             raise ZSLInputError(f"{name}: cannot split the training classes: {exc}") from exc
 
         scores, val_classes = [], []
-        class_of_sample = np.unique(np.asarray(y), return_inverse=True)[1].ravel()
         for i, (tr, va) in enumerate(folds):
             g_tr, g_va = np.unique(y_u[tr]), np.unique(y_u[va])
             if np.intersect1d(g_tr, g_va).size:
@@ -480,7 +550,7 @@ class ESZSLCV(_ESZSLBase):
                     "classes; both need at least 2"
                 )
             scores.append(self._score_fold(X[tr], y_u[tr], X[va], y_u[va], S_u, gammas, lams))
-            val_classes.append(classes[np.unique(class_of_sample[va])])
+            val_classes.append(g_va)
 
         self.cv_scores_ = np.stack(scores, axis=-1)
         self.mean_cv_scores_ = self.cv_scores_.mean(axis=-1)
@@ -489,7 +559,7 @@ class ESZSLCV(_ESZSLBase):
         self.best_lam_ = float(lams[li])
         self.best_score_ = float(self.mean_cv_scores_[gi, li])
         self.cv_val_classes_ = val_classes
-        return self._finish_fit(X, classes, S, S_u, y_u, self.best_gamma_, self.best_lam_)
+        return self._finish_fit(X, S_u, y_u, self.best_gamma_, self.best_lam_)
 
     def _score_fold(self, X_tr, y_tr, X_va, y_va, S_u, gammas, lams) -> np.ndarray:
         """Zero-shot score on the held-out classes for every grid point: (n_gammas, n_lams)."""
