@@ -39,6 +39,7 @@ from numbers import Integral, Real
 import numpy as np
 from scipy.optimize import minimize
 from scipy.special import expit, log_softmax
+from sklearn.base import TransformerMixin
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.preprocessing import StandardScaler
 from sklearn.utils import check_random_state
@@ -174,7 +175,7 @@ def _glorot_init(shapes, rng: np.random.RandomState) -> np.ndarray:
     return np.concatenate(parts)
 
 
-class EmbeddingZSL(AttributeEmbeddingModel):
+class EmbeddingZSL(TransformerMixin, AttributeEmbeddingModel):
     """Features -> attribute embedding with the fabric paper's ``C + lambda R`` loss.
 
     An attribute model: ``fit(X, Y)`` with ``Y`` (n, m) the attribute row of each trial's class

@@ -435,7 +435,8 @@ class ESZSLCV(_ESZSLBase):
     Parameters
     ----------
     gammas, lams : array-like of float > 0, default=10^-3 .. 10^3 (7 values each)
-        Grids of the feature-side and attribute-side ridges.
+        Grids of the feature-side and attribute-side ridges. A single pair is fitted without
+        cross-validation (``best_score_`` is then NaN and ``cv_scores_`` has no folds).
     cv : None, int >= 2 or splitter, default=None
         ``None``: :class:`~sklearn.model_selection.GroupKFold` with ``min(5, n_classes // 2)``
         splits (each validation fold needs >= 2 classes). An int: ``GroupKFold(cv)``. Otherwise
@@ -530,6 +531,12 @@ class ESZSLCV(_ESZSLBase):
         gammas = np.asarray(self.gammas, dtype=np.float64).ravel()
         lams = np.asarray(self.lams, dtype=np.float64).ravel()
         X, S_u, y_u = self._start_fit(X, Y, groups)
+        if gammas.size == lams.size == 1:  # nothing to choose: no cross-validation
+            self.cv_scores_ = np.empty((1, 1, 0))
+            self.mean_cv_scores_ = np.full((1, 1), np.nan)
+            self.best_gamma_, self.best_lam_, self.best_score_ = float(gammas[0]), float(lams[0]), float("nan")
+            self.cv_val_classes_ = []
+            return self._finish_fit(X, S_u, y_u, self.best_gamma_, self.best_lam_)
         splitter = self._splitter(S_u.shape[0])
         try:
             folds = list(splitter.split(X, y_u, groups=y_u))

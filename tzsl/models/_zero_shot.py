@@ -105,17 +105,19 @@ class ZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
                 f"{type(self.attribute_model).__name__} gives {kind!r} scores"
             )
 
-    def fit(self, X, A, groups=None):
+    def fit(self, X, Y, groups=None):
         """Fit the attribute model and the decision rule on training trials.
 
         Parameters
         ----------
         X : array-like of shape (n_trials, n_features) or (n_trials, n_sensors, n_features)
             Features, as the attribute model takes them.
-        A : array-like of shape (n_trials, n_attributes)
-            Attribute row of each trial's (training) class; 1-D means one attribute.
+        Y : array-like of shape (n_trials, n_attributes)
+            The protocol's ``A``: attribute row of each trial's (training) class (named ``Y``
+            as scikit-learn names a multi-output target); 1-D means one attribute.
         groups : array-like of shape (n_trials,), optional
-            Object of each trial (grouped tuning, one ``train`` prior row per object).
+            Object of each trial (grouped tuning, one ``train`` prior row per object, class
+            order; see :func:`tzsl.models.training_classes`).
 
         Returns
         -------
@@ -123,14 +125,15 @@ class ZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
         """
         self._validate_params()
         self._check_compatible(self.decision_rule)
-        A_arr = np.asarray(A)
-        if A_arr.ndim == 1:
-            A_arr = A_arr.reshape(-1, 1)
-        model = clone(self.attribute_model)
-        model = model.fit(X, A_arr, groups=groups)
+        if Y is None:
+            raise ValueError(f"{type(self).__name__} requires y to be passed, but the target y is None")
+        A = np.asarray(Y)
+        if A.ndim == 1:
+            A = A.reshape(-1, 1)
+        model = clone(self.attribute_model).fit(X, A, groups=groups)
         self.attribute_model_ = model
-        self.decision_rule_ = clone(self.decision_rule).fit(A_arr, groups)
-        self.train_attributes_ = np.asarray(A_arr, dtype=np.float64)
+        self.decision_rule_ = clone(self.decision_rule).fit(A, groups)
+        self.train_attributes_ = np.asarray(A, dtype=np.float64)
         self.train_groups_ = None if groups is None else np.asarray(groups)
         self.class_attributes_ = np.unique(self.train_attributes_, axis=0)
         self.n_attributes_ = self.train_attributes_.shape[1]
