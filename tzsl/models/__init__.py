@@ -33,7 +33,8 @@ from tzsl.models._multigrasp import (
     sc_mdap,
 )
 from tzsl.models._multilabel import MultiLabelAttributeClassifier
-from tzsl.models._eszsl import ESZSL, ESZSLCV, ZSLInputError, attribute_rows, training_classes
+from tzsl.models._eszsl import ESZSL, ESZSLCV
+from tzsl.models._zsl_input import ZSLInputError, attribute_rows, training_classes
 from tzsl.models._validation import ParameterError
 from tzsl.models._zero_shot import ZeroShotClassifier, score_kind
 from tzsl.models._registry import (

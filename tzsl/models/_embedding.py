@@ -47,7 +47,8 @@ from sklearn.utils._param_validation import Interval, StrOptions
 
 from tzsl.exceptions import ConfigError
 from tzsl.models._decision import squared_distances
-from tzsl.models._eszsl import AttributeEmbeddingModel, ZSLInputError, _validate_X, _validate_XY, training_classes
+from tzsl.models._eszsl import AttributeEmbeddingModel
+from tzsl.models._zsl_input import ZSLInputError, training_classes, validate_features_and_rows
 
 __all__ = ["EmbeddingZSL", "loss_weights"]
 
@@ -303,7 +304,7 @@ class EmbeddingZSL(TransformerMixin, AttributeEmbeddingModel):
         self._validate_params()
         name = type(self).__name__
         weights = loss_weights(self.lam, owner=name)
-        X, Y = _validate_XY(self, X, Y)
+        X, Y = validate_features_and_rows(self, X, Y)
         S_u, y_u = training_classes(Y, name, groups)
         rng = check_random_state(self.random_state)
         self.scaler_ = StandardScaler().fit(X) if self.standardize else None
