@@ -24,7 +24,7 @@ from tzsl.experiments.fabric import (
     zero_shot_run,
 )
 from tzsl.experiments.paper_numbers import FABRIC_TABLE1
-from tzsl.models import EmbeddingZSL
+from tzsl.models import attribute_rows, build_method
 
 A8_LIKE = np.array(  # 8 groups x 4 attributes; groups 3, 4 and 5 share a row, like a8
     [[1, 0, 1, 0], [1, 0, 0, 1], [0, 1, 0, 0], [0, 1, 1, 1], [0, 1, 1, 1], [0, 1, 1, 1], [0, 0, 1, 0],
@@ -81,15 +81,15 @@ def test_zero_shot_run_fits_on_training_groups_only():
 
     def fit_model(X_tr, y_tr, S_tr):
         seen.update(X=X_tr, y=y_tr, S=S_tr)
-        return EmbeddingZSL(lam=1, early_stopping=False, duplicate_attributes="merge", random_state=0).fit(
-            X_tr, y_tr, S_tr
+        return build_method("embedding", lam=1, early_stopping=False, random_state=0).fit(
+            X_tr, attribute_rows(y_tr, S_tr), y_tr
         )
 
     run = zero_shot_run(fit_model, X, groups, A8_LIKE, split)
     assert np.unique(seen["y"]).tolist() == [1, 2, 3, 4, 6] == run.train_classes.tolist()
     np.testing.assert_array_equal(seen["X"], X[np.isin(groups, [1, 2, 3, 4, 6])])
     np.testing.assert_array_equal(seen["S"], A8_LIKE[[1, 2, 3, 4, 6]])
-    assert run.model.classes_.tolist() == [1, 2, 3, 4, 6]
+    assert run.model.attribute_model_.class_attributes_.shape[0] == len(np.unique(A8_LIKE[[1, 2, 3, 4, 6]], axis=0))
     assert set(run.y_true) == {0, 5, 7} and set(run.y_pred) <= {0, 5, 7}
     assert run.y_true.size == 36
     # attributes are linear in the features: recognition of unseen groups is well above chance
@@ -200,11 +200,11 @@ def test_real_descriptors_cached_and_fit_on_training_groups(real_study, data_dir
     A = fabric.attributes.to_numpy(float)
     split = fabric_zsl_split(1, A)
     run = zero_shot_run(
-        lambda X, y, S: EmbeddingZSL(lam=0.1, alpha=0.1, early_stopping=False, duplicate_attributes="merge",
-                                     random_state=0).fit(X, y, S),
+        lambda X, y, S: build_method("embedding", lam=0.1, alpha=0.1, early_stopping=False,
+                                     random_state=0).fit(X, attribute_rows(y, S), y),
         seq.X, seq.groups, A, split,
     )
-    assert run.model.classes_.tolist() == [1, 2, 3, 4, 6]
+    assert run.train_classes.tolist() == [1, 2, 3, 4, 6]
     assert set(run.y_pred) <= {0, 5, 7} and run.y_true.size == 27
 
 

@@ -117,7 +117,7 @@ def test_test_objects_never_influence_fitted_parameters():
     A2[~tr] = 1 - A2[~tr]
     fits = []
     for XX, AA in ((X, A), (X2, A2)):
-        bank = AttributeClassifierBank(AttributeSVM(**TINY), n_jobs=1, memory=None, random_state=0)
+        bank = AttributeClassifierBank(estimator=AttributeSVM(**TINY), n_jobs=1, memory=None, random_state=0)
         bank.fit(XX[tr], AA[tr], g[tr])
         fits.append(bank)
     for row_a, row_b in zip(fits[0].estimators_, fits[1].estimators_):
@@ -147,7 +147,7 @@ def test_seeds_are_deterministic_and_distinct():
 
 def test_bank_shapes_and_errors():
     X, A, g = make_problem()
-    bank = AttributeClassifierBank(AttributeSVM(**TINY), attribute_names=["hard", "soft", "cool"], random_state=0)
+    bank = AttributeClassifierBank(estimator=AttributeSVM(**TINY), attribute_names=["hard", "soft", "cool"], random_state=0)
     bank.fit(X, A, g)
     P = bank.predict_proba(X[:5])
     assert P.shape == (5, 2, 3) and np.all((P >= 0) & (P <= 1))
@@ -165,8 +165,8 @@ def test_bank_shapes_and_errors():
 
 def test_bank_n_jobs_1_equals_2():
     X, A, g = make_problem()
-    P1 = AttributeClassifierBank(AttributeSVM(**TINY), n_jobs=1, memory=None, random_state=0).fit(X, A, g).predict_proba(X)
-    P2 = AttributeClassifierBank(AttributeSVM(**TINY), n_jobs=2, memory=None, random_state=0).fit(X, A, g).predict_proba(X)
+    P1 = AttributeClassifierBank(estimator=AttributeSVM(**TINY), n_jobs=1, memory=None, random_state=0).fit(X, A, g).predict_proba(X)
+    P2 = AttributeClassifierBank(estimator=AttributeSVM(**TINY), n_jobs=2, memory=None, random_state=0).fit(X, A, g).predict_proba(X)
     np.testing.assert_array_equal(P1, P2)
 
 
@@ -183,7 +183,7 @@ class CountingSVM(AttributeSVM):
 def test_bank_cache_avoids_refits(tmp_path):
     X, A, g = make_problem()
     CountingSVM.calls = 0
-    bank = AttributeClassifierBank(CountingSVM(**TINY), n_jobs=1, memory=tmp_path, random_state=0)
+    bank = AttributeClassifierBank(estimator=CountingSVM(**TINY), n_jobs=1, memory=tmp_path, random_state=0)
     P1 = bank.fit(X, A, g).predict_proba(X)
     assert CountingSVM.calls == 6  # 3 attributes x 2 sensors
     P2 = bank.fit(X, A, g).predict_proba(X)
@@ -196,23 +196,23 @@ def test_bank_cache_avoids_refits(tmp_path):
 def test_cache_dir_from_environment(tmp_path, monkeypatch):
     monkeypatch.setenv("TZSL_CACHE_DIR", str(tmp_path / "envcache"))
     X, A, g = make_problem(n_attributes=1, n_sensors=1)
-    AttributeClassifierBank(AttributeSVM(**TINY), random_state=0).fit(X, A, g)
+    AttributeClassifierBank(estimator=AttributeSVM(**TINY), random_state=0).fit(X, A, g)
     assert any((tmp_path / "envcache").rglob("output.pkl"))
 
 
 def test_dask_backend_needs_a_client():
     X, A, g = make_problem(n_attributes=1, n_sensors=1)
     with pytest.raises(ConfigError, match="Client"):
-        AttributeClassifierBank(AttributeSVM(**TINY), backend="dask", memory=None).fit(X, A, g)
+        AttributeClassifierBank(estimator=AttributeSVM(**TINY), backend="dask", memory=None).fit(X, A, g)
 
 
 def test_dask_equals_loky():
     distributed = pytest.importorskip("distributed")
     X, A, g = make_problem(n_attributes=2)
-    ref = AttributeClassifierBank(AttributeSVM(**TINY), n_jobs=2, memory=None, random_state=0)
+    ref = AttributeClassifierBank(estimator=AttributeSVM(**TINY), n_jobs=2, memory=None, random_state=0)
     P_loky = ref.fit(X, A, g).predict_proba(X)
     with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cluster:
         with distributed.Client(cluster):
-            bank = AttributeClassifierBank(AttributeSVM(**TINY), backend="dask", memory=None, random_state=0)
+            bank = AttributeClassifierBank(estimator=AttributeSVM(**TINY), backend="dask", memory=None, random_state=0)
             P_dask = bank.fit(X, A, g).predict_proba(X)
     np.testing.assert_array_equal(P_loky, P_dask)

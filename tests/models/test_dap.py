@@ -8,7 +8,8 @@ from sklearn.base import BaseEstimator
 
 from tzsl.exceptions import ConfigError, DataFileError
 from tzsl.models import (
-    DAPClassifier,
+    DAPRule,
+    ZeroShotClassifier,
     attribute_prior,
     check_class_attributes,
     dap_accuracy_over_subsets,
@@ -150,6 +151,8 @@ def test_subset_sweep_equals_loop(fusion, prior_kind):
 class _FixedPosteriors(BaseEstimator):
     """Attribute model returning stored posteriors (a test double)."""
 
+    score_kind = "probability"
+
     def __init__(self, P=None):
         self.P = P
 
@@ -166,8 +169,9 @@ def test_dap_classifier_uses_train_prior_and_normalises():
     A = np.array([[1, 0], [1, 0], [1, 0], [0, 1]])
     groups = np.array([0, 0, 1, 2])  # objects: (1,0), (1,0), (0,1) -> prior (2/3, 1/3)
     X = np.zeros((2, 2, 3))
-    dap = DAPClassifier(_FixedPosteriors(P), fusion="avg", prior="train").fit(np.zeros((4, 2, 3)), A, groups)
-    np.testing.assert_allclose(dap.train_prior_, [2 / 3, 1 / 3])
+    dap = ZeroShotClassifier(attribute_model=_FixedPosteriors(P=P), decision_rule=DAPRule(fusion="avg", prior="train"))
+    dap.fit(np.zeros((4, 2, 3)), A, groups)
+    np.testing.assert_allclose(dap.decision_rule_.train_prior_, [2 / 3, 1 / 3])
     proba = dap.predict_proba(X, K2)
     np.testing.assert_allclose(proba.sum(1), 1.0)
     # hand: trial 0 avg posteriors (0.8, 0.3); class 0: 0.8*0.7/(2/3*2/3); class 1: 0.2*0.3/(1/3*1/3)

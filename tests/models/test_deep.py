@@ -337,3 +337,31 @@ def test_bad_inputs_and_parameters(torch):
         m.predict(X, A4[:, :3])
     with pytest.raises(ZSLInputError, match="identical"):
         m.predict(X, np.vstack([A4, A4[:1]]))
+
+
+# ------------------------------------------------------------------------- scikit-learn contract
+@pytest.mark.parametrize(
+    "params",
+    [{"backbone": "resnet"}, {"lam": -1.0}, {"epochs": 0}, {"finetune": "some"}, {"optimizer": "rmsprop"},
+     {"image_size": 4}, {"lr": 0.0}],
+)
+def test_bad_parameters_raise_invalid_parameter_error(params):
+    """Held to the check_estimator contract by hand (it takes frame sequences, not a 2-D matrix)."""
+    from sklearn.utils._param_validation import InvalidParameterError
+
+    X, y = sequences(n_per_class=2)
+    with pytest.raises(InvalidParameterError) as info:
+        DeepAttributeEmbedding(**params).fit(X, y, A4)
+    assert isinstance(info.value, TzslError)  # the CLI prints it in one line
+
+
+def test_keyword_only_clone_and_params_round_trip():
+    from sklearn.base import clone
+
+    with pytest.raises(TypeError):
+        DeepAttributeEmbedding("small-cnn")  # keyword-only
+    model = small(lam="inf")
+    params = model.get_params()
+    assert clone(model).get_params() == params
+    assert clone(model).set_params(lam=0.1).lam == 0.1 and model.lam == "inf"
+    assert set(DeepAttributeEmbedding._parameter_constraints) == set(params)

@@ -6,14 +6,19 @@ import numpy as np
 import pytest
 from scipy.optimize import check_grad
 from scipy.special import expit
-from sklearn.base import BaseEstimator, ClassifierMixin, clone
-from sklearn.utils.estimator_checks import parametrize_with_checks
+from sklearn.base import clone
+from sklearn.utils._param_validation import InvalidParameterError
 from sklearn.utils.validation import check_is_fitted
 
 from tzsl.exceptions import ConfigError, TzslError
-from tzsl.models import EmbeddingZSL
+from tzsl.models import EmbeddingZSL, NearestAttributeRule, ZeroShotClassifier, ZSLInputError, attribute_rows
 from tzsl.models._embedding import _glorot_init, _layer_shapes, _loss_and_grad, loss_weights
-from tzsl.models._eszsl import ZSLInputError
+
+
+def zsl(model, X, y, S):
+    """``model`` inside a ZeroShotClassifier (nearest attribute row), fitted on labelled trials."""
+    clf = ZeroShotClassifier(attribute_model=model, decision_rule=NearestAttributeRule())
+    return clf.fit(X, attribute_rows(y, S), y)
 
 
 def zsl_problem(n_classes=12, n_attributes=10, n_features=30, per_class=20, noise=0.5, seed=0):
@@ -100,7 +105,7 @@ def test_learns_a_synthetic_zero_shot_problem():
     X, y, A = zsl_problem()
     train = y < 8
     for lam in (1.0, "inf"):
-        model = EmbeddingZSL(lam=lam, random_state=0).fit(X[train], y[train], A[:8])
+        model = zsl(EmbeddingZSL(lam=lam, random_state=0), X[train], y[train], A[:8])
         accuracy = np.mean(model.predict(X[~train], A[8:]) == y[~train] - 8)
         assert accuracy > 0.5, lam  # chance is 0.25
 
@@ -108,16 +113,16 @@ def test_learns_a_synthetic_zero_shot_problem():
 def test_hidden_layer_model_learns_too():
     X, y, A = zsl_problem(seed=1)
     train = y < 8
-    model = EmbeddingZSL(lam=0.1, hidden_units=16, random_state=0).fit(X[train], y[train], A[:8])
-    assert [W.shape for W in model.coefs_] == [(16, 30), (16,), (10, 16), (10,)]
+    model = zsl(EmbeddingZSL(lam=0.1, hidden_units=16, random_state=0), X[train], y[train], A[:8])
+    assert [W.shape for W in model.attribute_model_.coefs_] == [(16, 30), (16,), (10, 16), (10,)]
     assert np.mean(model.predict(X[~train], A[8:]) == y[~train] - 8) > 0.45
 
 
 def test_seeded_fits_are_identical_and_seeds_matter():
     X, y, A = zsl_problem(n_classes=8, per_class=8, seed=2)
-    a = EmbeddingZSL(random_state=3, max_iter=60).fit(X, y, A)
-    b = EmbeddingZSL(random_state=3, max_iter=60).fit(X, y, A)
-    c = EmbeddingZSL(random_state=4, max_iter=60).fit(X, y, A)
+    a = EmbeddingZSL(random_state=3, max_iter=60).fit(X, A[y], y)
+    b = EmbeddingZSL(random_state=3, max_iter=60).fit(X, A[y], y)
+    c = EmbeddingZSL(random_state=4, max_iter=60).fit(X, A[y], y)
     for wa, wb in zip(a.coefs_, b.coefs_, strict=True):
         np.testing.assert_array_equal(wa, wb)
     np.testing.assert_array_equal(a.validation_classes_, b.validation_classes_)
@@ -127,7 +132,7 @@ def test_seeded_fits_are_identical_and_seeds_matter():
 def test_early_stopping_holds_out_whole_training_classes():
     X, y, A = zsl_problem(n_classes=10, per_class=8, seed=3)
     model = EmbeddingZSL(validation_fraction=0.3, n_iter_no_change=5, random_state=0)
-    model.fit(X, y, A)
+    model.fit(X, A[y], y)
     assert len(model.validation_classes_) == 3
     assert set(model.validation_classes_) <= set(range(10))
     losses = model.validation_losses_
@@ -141,15 +146,15 @@ def test_without_early_stopping_runs_to_convergence_or_warns():
     from sklearn.exceptions import ConvergenceWarning
 
     with pytest.warns(ConvergenceWarning, match="max_iter=2"):
-        EmbeddingZSL(early_stopping=False, max_iter=2, random_state=0).fit(X, y, A)
-    model = EmbeddingZSL(early_stopping=False, random_state=0).fit(X, y, A)
+        EmbeddingZSL(early_stopping=False, max_iter=2, random_state=0).fit(X, A[y], y)
+    model = EmbeddingZSL(early_stopping=False, random_state=0).fit(X, A[y], y)
     assert model.validation_classes_ is None and model.n_iter_ < model.max_iter
 
 
 def test_predict_is_the_nearest_attribute_vector():
     X, y, A = zsl_problem(n_classes=6, per_class=6, seed=5)
-    model = EmbeddingZSL(lam=0.1, random_state=0).fit(X[y < 4], y[y < 4], A[:4])
-    F = model.transform(X)
+    model = zsl(EmbeddingZSL(lam=0.1, random_state=0), X[y < 4], y[y < 4], A[:4])
+    F = model.attribute_model_.transform(X)
     assert F.shape == (len(X), A.shape[1]) and np.all((F > 0) & (F < 1))
     distances = ((F[:, None, :] - A[None, 4:, :]) ** 2).sum(axis=-1)
     np.testing.assert_array_equal(model.predict(X, A[4:]), np.argmin(distances, axis=1))
@@ -158,13 +163,11 @@ def test_predict_is_the_nearest_attribute_vector():
     np.testing.assert_array_equal(np.argmax(proba, axis=1), model.predict(X, A[4:]))
 
 
-def test_duplicate_training_rows_error_or_merge():
+def test_shared_attribute_rows_are_one_class():
     X, y, A = zsl_problem(n_classes=6, per_class=6, seed=6)
     A[4] = A[1]
-    with pytest.raises(ZSLInputError, match=r"\{1, 4\}"):
-        EmbeddingZSL().fit(X, y, A)
-    model = EmbeddingZSL(duplicate_attributes="merge", random_state=0).fit(X, y, A)
-    assert model.classes_.tolist() == list(range(6))
+    model = EmbeddingZSL(random_state=0).fit(X, A[y], y)
+    assert model.class_attributes_.shape == (5, A.shape[1])
 
 
 # ----------------------------------------------------------------------------------- bad input
@@ -179,13 +182,13 @@ def test_duplicate_training_rows_error_or_merge():
         {"max_iter": 0},
         {"alpha": -1e-3},
         {"validation_fraction": 1.5},
-        {"duplicate_attributes": "keep"},
     ],
 )
 def test_bad_parameters_rejected(params):
     X, y, A = zsl_problem(n_classes=5, per_class=3)
-    with pytest.raises(ConfigError):
-        EmbeddingZSL(**params).fit(X, y, A)
+    with pytest.raises(InvalidParameterError) as info:
+        EmbeddingZSL(**params).fit(X, A[y])
+    assert isinstance(info.value, ConfigError)
 
 
 def test_bad_arrays_rejected():
@@ -193,17 +196,14 @@ def test_bad_arrays_rejected():
     X_bad = X.copy()
     X_bad[0, 0] = np.nan
     with pytest.raises(ZSLInputError, match="NaN") as info:
-        EmbeddingZSL().fit(X_bad, y, A)
+        EmbeddingZSL().fit(X_bad, A[y])
     assert isinstance(info.value, TzslError)
     A_bad = A.copy()
     A_bad[1, 2] = np.inf
-    with pytest.raises(ZSLInputError, match="row 1 attribute 2"):
-        EmbeddingZSL().fit(X, y, A_bad)
+    with pytest.raises(ZSLInputError, match="infinity"):
+        EmbeddingZSL().fit(X, A_bad[y])
     with pytest.raises(ZSLInputError, match="fewer than 2 to train on"):
-        EmbeddingZSL(validation_fraction=0.5).fit(X[y < 2], y[y < 2], A[:2])
-    model = EmbeddingZSL(max_iter=20, random_state=0).fit(X, y, A)
-    with pytest.raises(ZSLInputError, match="identical attribute rows"):
-        model.predict(X, A[[0, 0, 1]])
+        EmbeddingZSL(validation_fraction=0.5).fit(X[y < 2], A[y[y < 2]])
 
 
 # ------------------------------------------------------------------------ scikit-learn contract
@@ -216,46 +216,7 @@ def test_params_round_trip_and_clone():
     changed = clone(model).set_params(lam=0.1)
     assert changed.lam == 0.1 and model.lam == "inf"
     X, y, A = zsl_problem(n_classes=6, per_class=4)
-    fitted = clone(model).set_params(max_iter=10).fit(X, y, A)
+    fitted = clone(model).set_params(max_iter=10).fit(X, A[y])
     check_is_fitted(fitted)
     assert fitted.lam == "inf"
-
-
-class SupervisedAdapter(ClassifierMixin, BaseEstimator):
-    """Test-only wrapper: with one-hot attributes the zero-shot model is a plain classifier.
-
-    ``check_estimator`` cannot call ``fit(X, y, class_attributes)``; with the identity matrix as
-    the attribute table it exercises the wrapped model's validation, determinism and invariances.
-    """
-
-    def __init__(self, estimator=None):
-        self.estimator = estimator
-
-    def fit(self, X, y):
-        self.estimator_ = clone(self.estimator)
-        n_classes = len(np.unique(np.asarray(y))) if y is not None else 1
-        self.estimator_.fit(X, y, np.eye(n_classes))
-        self.classes_ = self.estimator_.classes_
-        self.n_features_in_ = self.estimator_.n_features_in_
-        return self
-
-    def decision_function(self, X):
-        check_is_fitted(self)
-        scores = self.estimator_.decision_function(X, np.eye(len(self.classes_)))
-        return scores[:, 1] - scores[:, 0] if len(self.classes_) == 2 else scores
-
-    def predict_proba(self, X):
-        check_is_fitted(self)
-        return self.estimator_.predict_proba(X, np.eye(len(self.classes_)))
-
-    def predict(self, X):
-        check_is_fitted(self)
-        return self.classes_[self.estimator_.predict(X, np.eye(len(self.classes_)))]
-
-
-# early_stopping=False: the checks' datasets have 2-3 classes, too few to hold one out.
-@parametrize_with_checks(
-    [SupervisedAdapter(EmbeddingZSL(early_stopping=False, max_iter=100, random_state=0))]
-)
-def test_sklearn_checks_through_supervised_adapter(estimator, check):
-    check(estimator)
+# check_estimator: tests/models/test_estimator_checks.py runs it on every estimator of all_estimators().

@@ -173,3 +173,20 @@ def test_simulator_knobs_make_recognition_harder():
 
     easy, hard = ldap_accuracy(0.3, 0.0), ldap_accuracy(2.0, 1.5)
     assert easy > hard + 0.1, (easy, hard)
+
+
+def test_hand_decision_is_the_dap_rule(hand_data, fitted):
+    """The hand's decision (LDAP fusion inside its attribute layer, then DAP with p = 0.5) is DAPRule."""
+    from tzsl.models import DAPRule, ParameterError
+
+    train, test = hand_data
+    X = test.to_array()
+    K = fitted.K_.to_numpy(dtype=float)
+    rule = DAPRule(prior="uni").fit(K)
+    np.testing.assert_array_equal(
+        fitted.predict_log_scores(X), rule.decision_function(fitted.predict_attribute_proba(X), K)
+    )
+    with pytest.raises(ParameterError, match="prior"):
+        HandDAPClassifier(prior=1.5).fit(train.to_array(), train.objects, TABLE.K)
+    with pytest.raises(TypeError):
+        HandDAPClassifier(("glass",))  # keyword-only

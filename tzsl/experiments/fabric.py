@@ -104,7 +104,7 @@ from tzsl.exceptions import ConfigError, DataFileError
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.paper_numbers import FABRIC_TABLE1
 from tzsl.features import KeyFrameSelector, TextureDescriptor
-from tzsl.models import ESZSLCV, EmbeddingZSL
+from tzsl.models import attribute_rows, build_method
 from tzsl.models._embedding import loss_weights
 
 __all__ = [
@@ -619,10 +619,10 @@ def select_embedding_alpha(
                 # a fold fit stopped at max_iter is still scored (weakly regularised fits on
                 # 2 classes can take long); the final fit records its convergence
                 warnings.simplefilter("ignore", ConvergenceWarning)
-                model = EmbeddingZSL(
-                    lam=lam, alpha=alpha, early_stopping=False, max_iter=max_iter,
-                    duplicate_attributes="merge", random_state=random_state,
-                ).fit(X[tr], y[tr], S_tr)
+                model = build_method(
+                    "embedding", lam=lam, alpha=alpha, early_stopping=False, max_iter=max_iter,
+                    random_state=random_state,
+                ).fit(X[tr], attribute_rows(y[tr], S_tr), y[tr])
             scores[a, f] = float(np.mean(model.predict(X[va], S_u[va_groups]) == y_va.ravel()))
     best = int(np.argmax(scores.mean(axis=1)))
     return alphas[best], scores
@@ -648,21 +648,22 @@ def _run_job(
         )
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", ConvergenceWarning)
-            model = EmbeddingZSL(
-                lam=lam, alpha=alpha, early_stopping=False, max_iter=max_iter,
-                duplicate_attributes="merge", random_state=seed,
-            ).fit(X_tr, y_tr, S_tr)
+            model = build_method(
+                "embedding", lam=lam, alpha=alpha, early_stopping=False, max_iter=max_iter,
+                random_state=seed,
+            ).fit(X_tr, attribute_rows(y_tr, S_tr), y_tr)
         info.update(
             alpha=alpha,
             cv_score=np.nan if scores is None else float(scores.mean(axis=1).max()),
-            n_iter=model.n_iter_,
+            n_iter=model.attribute_model_.n_iter_,
             converged=not any(issubclass(w.category, ConvergenceWarning) for w in caught),
         )
         return model
 
     def fit_eszsl(X_tr, y_tr, S_tr):
-        model = ESZSLCV(duplicate_attributes="merge").fit(X_tr, y_tr, S_tr)
-        info.update(gamma=model.best_gamma_, eszsl_lam=model.best_lam_, cv_score=model.best_score_)
+        model = build_method("eszsl").fit(X_tr, attribute_rows(y_tr, S_tr), y_tr)
+        cv = model.attribute_model_
+        info.update(gamma=cv.best_gamma_, eszsl_lam=cv.best_lam_, cv_score=cv.best_score_)
         return model
 
     with threadpool_limits(limits=1):  # many small fits: one BLAS thread each, parallel over fits

@@ -48,7 +48,7 @@ from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, gzsl_scores, per_class_mean_accuracy
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.experiments.phac2_dap import DapStudyConfig, attribute_bank, compute_context
-from tzsl.models import ESZSLCV, attribute_prior, dap_log_scores, fuse_attribute_posteriors
+from tzsl.models import attribute_prior, attribute_rows, build_method, dap_log_scores, fuse_attribute_posteriors
 
 __all__ = [
     "GZSL_FILE",
@@ -278,7 +278,7 @@ def _eszsl_scores(features: FeatureSet, problem: GzslProblem) -> np.ndarray:
     objects = features.objects[fit]
     classes = np.unique(objects)
     S = features.attributes.loc[classes, list(problem.attributes)].to_numpy(dtype=float)
-    model = ESZSLCV(duplicate_attributes="merge").fit(X[fit], objects, S)
+    model = build_method("eszsl").fit(X[fit], attribute_rows(objects, S), objects)
     return model.decision_function(X[problem.evaluate], problem.class_rows.astype(float))
 
 

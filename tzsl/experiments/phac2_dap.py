@@ -28,7 +28,7 @@ from tzsl.evaluation import (
     summarise_over_splits,
 )
 from tzsl.exceptions import ConfigError, SplitError
-from tzsl.models import AttributeClassifierBank, AttributeSVM, MultiLabelAttributeClassifier
+from tzsl.models import AttributeClassifierBank, AttributeSVM, MultiLabelAttributeClassifier, attribute_rows
 from tzsl.models._dap import attribute_prior, dap_accuracy_over_subsets, dap_log_scores, fuse_attribute_posteriors
 
 FUSIONS = ("max", "avg")
@@ -583,7 +583,7 @@ def _fit_predict_zsl(model, features: FeatureSet, split: Split) -> tuple[np.ndar
     objects = features.objects
     train_objects = np.unique(objects[train])
     class_rows = features.attributes.loc[train_objects, attributes].to_numpy(dtype=float)
-    model.fit(X[train], objects[train], class_rows)
+    model.fit(X[train], attribute_rows(objects[train], class_rows), objects[train])
     K = features.attributes.loc[list(split.test_objects), attributes].to_numpy(dtype=float)
     y = pd.Index(split.test_objects).get_indexer(objects[test])
     return model.predict(X[test], K), y
@@ -599,16 +599,16 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
     merged into one training class. DAP numbers are AVGDAP / uni-prior from ``results``.
     ``eszsl=False`` leaves ESZSL out; ``embedding_lams=()`` the embedding model.
     """
-    from tzsl.models import ESZSLCV, EmbeddingZSL  # noqa: PLC0415
+    from tzsl.models import build_method  # noqa: PLC0415
 
     rows = []
     for i, r in enumerate(results):
         row = {"split": _split_label(r.split), "chance": r.split.chance, "dap_avg_uni": r.accuracy("avg", "uni")}
         if eszsl:
-            pred, y = _fit_predict_zsl(ESZSLCV(duplicate_attributes="merge"), features, r.split)
+            pred, y = _fit_predict_zsl(build_method("eszsl"), features, r.split)
             row["eszsl"] = float((pred == y).mean())
         for lam in embedding_lams:
-            model = EmbeddingZSL(lam=lam, duplicate_attributes="merge", random_state=seed + i)
+            model = build_method("embedding", lam=lam, random_state=seed + i)
             pred, y = _fit_predict_zsl(model, features, r.split)
             row[f"embedding_lam_{lam:g}"] = float((pred == y).mean())
         rows.append(row)

@@ -1,14 +1,25 @@
-"""Zero-shot models as scikit-learn estimators."""
+"""Zero-shot models as scikit-learn estimators.
+
+One protocol (:class:`ZeroShotClassifier` = attribute model + decision rule), a method registry
+(:func:`build_method`, :func:`available_methods`) and :func:`all_estimators`.
+"""
 
 from tzsl.models._attribute_svm import AttributeClassifierBank, AttributeSVM, AttributeTrainingError
 from tzsl.models._dap import (
-    DAPClassifier,
     attribute_prior,
     break_ties,
+    check_attribute_posteriors,
     check_class_attributes,
     dap_accuracy_over_subsets,
     dap_log_scores,
     fuse_attribute_posteriors,
+)
+from tzsl.models._decision import (
+    CompatibilityRule,
+    DAPRule,
+    DecisionRule,
+    NearestAttributeRule,
+    squared_distances,
 )
 from tzsl.models._embedding import EmbeddingZSL
 from tzsl.models._deep import DeepAttributeEmbedding, load_deep_bundle, save_deep_bundle
@@ -23,6 +34,20 @@ from tzsl.models._multigrasp import (
 )
 from tzsl.models._multilabel import MultiLabelAttributeClassifier
 from tzsl.models._eszsl import ESZSL, ESZSLCV
+from tzsl.models._zsl_input import ZSLInputError, attribute_rows, training_classes
+from tzsl.models._validation import ParameterError
+from tzsl.models._zero_shot import ZeroShotClassifier, score_kind
+from tzsl.models._registry import (
+    FAMILIES,
+    Method,
+    all_estimators,
+    available_methods,
+    build_method,
+    get_method,
+    register_method,
+    unregister_method,
+)
+from tzsl.models import _builtin_methods  # noqa: F401,E402  (registers the shipped methods)
 
 __all__: list[str] = [
     "DeepAttributeEmbedding",
@@ -40,12 +65,31 @@ __all__: list[str] = [
     "AttributeClassifierBank",
     "AttributeSVM",
     "AttributeTrainingError",
-    "DAPClassifier",
     "MultiLabelAttributeClassifier",
     "attribute_prior",
+    "check_attribute_posteriors",
     "check_class_attributes",
     "dap_accuracy_over_subsets",
     "break_ties",
     "dap_log_scores",
     "fuse_attribute_posteriors",
+    "CompatibilityRule",
+    "DAPRule",
+    "DecisionRule",
+    "NearestAttributeRule",
+    "squared_distances",
+    "ZeroShotClassifier",
+    "score_kind",
+    "ParameterError",
+    "ZSLInputError",
+    "attribute_rows",
+    "training_classes",
+    "FAMILIES",
+    "Method",
+    "all_estimators",
+    "available_methods",
+    "build_method",
+    "get_method",
+    "register_method",
+    "unregister_method",
     "ESZSL", "ESZSLCV", "EmbeddingZSL"]

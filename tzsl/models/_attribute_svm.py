@@ -23,7 +23,8 @@ refit: with ``m`` objects in a draw and a ``g x c`` grid that is ``g * c * (m + 
 
 from __future__ import annotations
 
-from numbers import Integral
+import os
+from numbers import Integral, Real
 
 import numpy as np
 from joblib import Parallel, delayed
@@ -35,6 +36,7 @@ from sklearn.metrics.pairwise import euclidean_distances, rbf_kernel
 from sklearn.model_selection import LeaveOneGroupOut, StratifiedGroupKFold
 from sklearn.svm import SVC
 from sklearn.utils import check_random_state
+from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 from tqdm.auto import tqdm
@@ -42,6 +44,7 @@ from tqdm.auto import tqdm
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.features import VariancePCA
 from tzsl.models._cache import fit_clone, parallel_context, resolve_memory, spawn_seeds
+from tzsl.models._validation import ParameterError, ValidatedParamsMixin
 
 __all__ = [
     "AttributeClassifierBank",
@@ -125,7 +128,7 @@ def _balanced_weights(y: np.ndarray) -> np.ndarray:
     return w * y.size
 
 
-class AttributeSVM(ClassifierMixin, BaseEstimator):
+class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
     """Binary RBF-SVM for one attribute and one sensor, under-sampled, group-tuned, Platt-calibrated.
 
     Parameters
@@ -185,8 +188,24 @@ class AttributeSVM(ClassifierMixin, BaseEstimator):
         stored negated).
     """
 
+    _parameter_constraints: dict = {
+        "preprocessor": [None, HasMethods(["fit", "transform"])],
+        "C_range": ["array-like"],
+        "gamma_range": ["array-like"],
+        "n_C": [Interval(Integral, 1, None, closed="left")],
+        "n_gamma": [Interval(Integral, 1, None, closed="left")],
+        "cv": [None, Interval(Integral, 2, None, closed="left"), HasMethods(["split"])],
+        "undersampling": [StrOptions(set(_UNDERSAMPLING))],
+        "n_draws": [Interval(Integral, 1, None, closed="left")],
+        "scoring": [StrOptions(set(_SCORING))],
+        "platt_weighting": [StrOptions(set(_PLATT_WEIGHTING))],
+        "name": [None, str],
+        "random_state": ["random_state"],
+    }
+
     def __init__(
         self,
+        *,
         preprocessor=None,
         C_range=(1.0, 100.0),
         gamma_range=(0.01, 1.0),
@@ -222,21 +241,15 @@ class AttributeSVM(ClassifierMixin, BaseEstimator):
     def _label(self) -> str:
         return f"attribute {self.name!r}" if self.name is not None else "attribute"
 
-    def _check_params(self) -> None:
-        if self.undersampling not in _UNDERSAMPLING:
-            raise ConfigError(f"undersampling must be one of {_UNDERSAMPLING}, got {self.undersampling!r}")
-        if self.scoring not in _SCORING:
-            raise ConfigError(f"scoring must be one of {_SCORING}, got {self.scoring!r}")
-        if self.platt_weighting not in _PLATT_WEIGHTING:
-            raise ConfigError(f"platt_weighting must be one of {_PLATT_WEIGHTING}, got {self.platt_weighting!r}")
-        for nm in ("n_C", "n_gamma", "n_draws"):
-            v = getattr(self, nm)
-            if not isinstance(v, Integral) or v < 1:
-                raise ConfigError(f"{nm} must be a positive integer, got {v!r}")
+    def _check_param_values(self) -> None:
         for nm in ("C_range", "gamma_range"):
-            lo, hi = getattr(self, nm)
-            if not (0 < lo <= hi):
-                raise ConfigError(f"{nm} must be (low, high) with 0 < low <= high, got {getattr(self, nm)!r}")
+            rng = np.asarray(getattr(self, nm), dtype=object).ravel()
+            ok = rng.size == 2 and all(isinstance(v, Real) for v in rng) and 0 < rng[0] <= rng[1]
+            if not ok:
+                raise ParameterError(
+                    f"The {nm!r} parameter of {type(self).__name__} must be (low, high) with "
+                    f"0 < low <= high. Got {getattr(self, nm)!r} instead."
+                )
 
     def _folds(self, yb, groups, seed: int) -> list[np.ndarray]:
         if self.cv is None:
@@ -343,7 +356,7 @@ class AttributeSVM(ClassifierMixin, BaseEstimator):
         -------
         self
         """
-        self._check_params()
+        self._validate_params()
         X, y = validate_data(self, X, y, dtype=np.float64)
         check_classification_targets(y)
         self.classes_ = np.unique(y)
@@ -457,7 +470,7 @@ def _check_attribute_matrix(A, n: int, names) -> np.ndarray:
     return Af.astype(np.int64)
 
 
-class AttributeClassifierBank(BaseEstimator):
+class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
     """Independent attribute classifiers: one per (attribute, sensor), fitted in parallel and cached.
 
     This is the attribute layer of DAP (paper §3.3, §4.4): attributes are assumed independent,
@@ -490,8 +503,22 @@ class AttributeClassifierBank(BaseEstimator):
     n_sensors_, n_attributes_, n_features_in_ : int
     """
 
+    #: Attribute-model protocol: ``predict_proba`` gives ``p(a_m = 1 | x_s)`` (read by DAPRule).
+    score_kind = "probability"
+
+    _parameter_constraints: dict = {
+        "estimator": [None, HasMethods(["fit", "predict_proba"])],
+        "attribute_names": [None, "array-like"],
+        "n_jobs": [None, Integral],
+        "backend": [StrOptions({"loky", "dask", "threading", "sequential", "multiprocessing"})],
+        "memory": [None, str, os.PathLike, HasMethods(["cache"])],
+        "progress": ["boolean"],
+        "random_state": ["random_state"],
+    }
+
     def __init__(
         self,
+        *,
         estimator=None,
         attribute_names=None,
         n_jobs=None,
@@ -562,6 +589,7 @@ class AttributeClassifierBank(BaseEstimator):
         -------
         self
         """
+        self._validate_params()
         X, A, names = self._check_fit_input(X, A)
         n, s, d = X.shape
         groups = None if groups is None else np.asarray(groups)

@@ -1,5 +1,8 @@
 """Direct Attribute Prediction (DAP) with sensor fusion, in log space and vectorised.
 
+The functions here are the DAP arithmetic; :class:`tzsl.models.DAPRule` is the decision rule
+that applies them inside :class:`tzsl.models.ZeroShotClassifier`.
+
 Equations refer to the DAP paper (``haptic_zsl_dap``):
 
 * (3) ``p(z | x) ∝ prod_m p(a_m = a^z_m | x) / p(a_m = a^z_m)`` (uniform class prior); here as
@@ -21,16 +24,13 @@ rows, ``"test"`` = mean over the test classes' rows of the class-attribute table
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import softmax
-from sklearn.base import BaseEstimator, clone
-from sklearn.utils.validation import check_is_fitted
 
 from tzsl.exceptions import ConfigError, DataFileError
 
 __all__ = [
-    "DAPClassifier",
     "attribute_prior",
     "break_ties",
+    "check_attribute_posteriors",
     "check_class_attributes",
     "dap_accuracy_over_subsets",
     "dap_log_scores",
@@ -87,7 +87,20 @@ def check_class_attributes(K, n_attributes: int | None = None, what: str = "clas
     return Kf
 
 
-def _check_posteriors(P, ndim: tuple[int, ...] = (2, 3)) -> np.ndarray:
+def check_attribute_posteriors(P, ndim: tuple[int, ...] = (2, 3)) -> np.ndarray:
+    """Attribute posteriors ``p(a_m = 1 | x)`` as float64 in [0, 1].
+
+    Parameters
+    ----------
+    P : array-like of shape (n_trials, n_attributes) or (n_trials, n_sensors, n_attributes)
+    ndim : tuple of int
+        Allowed dimensionalities.
+
+    Raises
+    ------
+    ConfigError
+        Wrong dimensionality, or a value outside [0, 1] or NaN (naming its index).
+    """
     P = np.asarray(P, dtype=np.float64)
     if P.ndim not in ndim:
         raise ConfigError(f"attribute posteriors must have {' or '.join(map(str, ndim))} dimensions, got {P.shape}")
@@ -114,7 +127,7 @@ def fuse_attribute_posteriors(P, fusion: str = "avg") -> tuple[np.ndarray, np.nd
     absent : ndarray of shape (n_trials, n_attributes)
         Fused ``p(a_m = 0 | x)`` (``1 - present`` for ``"avg"``; ``1 - min_s p`` for ``"max"``).
     """
-    P = _check_posteriors(P)
+    P = check_attribute_posteriors(P)
     if P.ndim == 2:
         P = P[:, None, :]
     if fusion == "avg":
@@ -206,9 +219,9 @@ def dap_log_scores(P, K, prior, *, P_absent=None, eps: float = DEFAULT_EPS) -> n
     ndarray of shape (n_trials, n_classes)
         Natural-log scores; argmax gives eq. (4).
     """
-    P = _check_posteriors(P, ndim=(2,))
+    P = check_attribute_posteriors(P, ndim=(2,))
     K = check_class_attributes(K, P.shape[1])
-    absent = 1.0 - P if P_absent is None else _check_posteriors(P_absent, ndim=(2,))
+    absent = 1.0 - P if P_absent is None else check_attribute_posteriors(P_absent, ndim=(2,))
     prior = np.broadcast_to(np.asarray(prior, dtype=float), (P.shape[1],))
     # Per-attribute terms summed in the same order for every class, so classes whose scores are
     # mathematically equal (e.g. LDAP's p = 0.5 on the attribute they differ in) get exactly equal
@@ -296,124 +309,3 @@ def dap_accuracy_over_subsets(
         S = np.einsum("nkm,rm->rnk", T, mask[start : start + chunk], optimize=True)
         out[start : start + chunk] = (S.argmax(axis=2) == y[None, :]).mean(axis=1)
     return out
-
-
-class DAPClassifier(BaseEstimator):
-    """Zero-shot classifier: attribute model + DAP (paper §3.3, §4.5).
-
-    Parameters
-    ----------
-    attribute_model : estimator or None, default=None
-        ``fit(X (n, s, d), A (n, m), groups)`` and ``predict_proba(X) -> (n, s, m)``.
-        ``None``: :class:`tzsl.models.AttributeClassifierBank` with defaults.
-    fusion : {"avg", "max"}, default="avg"
-        AVGDAP (eq. 6) or MAXDAP (eq. 5) over sensors.
-    prior : {"uni", "train", "test"} or array-like of shape (n_attributes,), default="train"
-        Attribute prior ``p(a_m = 1)``.
-    eps : float, default=1e-6
-        Probability clipping in the log-space product.
-
-    Attributes
-    ----------
-    attribute_model_ : fitted attribute model
-    train_prior_ : ndarray of shape (n_attributes,)
-        Mean attribute row of the training objects.
-    n_attributes_ : int
-    """
-
-    def __init__(self, attribute_model=None, fusion="avg", prior="train", eps=DEFAULT_EPS):
-        self.attribute_model = attribute_model
-        self.fusion = fusion
-        self.prior = prior
-        self.eps = eps
-
-    def fit(self, X, A, groups=None):
-        """Fit the attribute model on training trials.
-
-        Parameters
-        ----------
-        X : array-like of shape (n_trials, n_sensors, n_features)
-        A : array-like of shape (n_trials, n_attributes)
-            0/1 attribute row of each trial's (training) class.
-        groups : array-like of shape (n_trials,), optional
-            Object of each trial (grouped CV; one prior row per object).
-
-        Returns
-        -------
-        self
-        """
-        if self.fusion not in FUSIONS:
-            raise ConfigError(f"fusion must be one of {FUSIONS}, got {self.fusion!r}")
-        A = check_class_attributes(A, what="training attribute rows")
-        if self.attribute_model is None:
-            from tzsl.models._attribute_svm import AttributeClassifierBank
-
-            model = AttributeClassifierBank()
-        else:
-            model = clone(self.attribute_model)
-        self.attribute_model_ = model.fit(X, A, groups)
-        self.train_prior_ = attribute_prior("train", train_attributes=A, groups=groups)
-        self.n_attributes_ = A.shape[1]
-        return self
-
-    def _prior(self, K: np.ndarray) -> np.ndarray:
-        if isinstance(self.prior, str) and self.prior == "train":
-            return self.train_prior_
-        pr = attribute_prior(self.prior, class_attributes=K) if isinstance(self.prior, str) else attribute_prior(self.prior)
-        if pr.shape != (K.shape[1],):
-            raise ConfigError(f"prior has {pr.size} entries for {K.shape[1]} attributes")
-        return pr
-
-    def decision_function_from_posteriors(self, P, class_attributes) -> np.ndarray:
-        """Log DAP scores from precomputed posteriors.
-
-        Parameters
-        ----------
-        P : array-like of shape (n_trials, n_sensors, n_attributes)
-            ``p(a_m = 1 | x_s)``.
-        class_attributes : array-like of shape (n_classes, n_attributes)
-
-        Returns
-        -------
-        ndarray of shape (n_trials, n_classes)
-        """
-        check_is_fitted(self)
-        P = _check_posteriors(P)
-        K = check_class_attributes(class_attributes, P.shape[-1])
-        if K.shape[1] != self.n_attributes_:
-            raise DataFileError(
-                None, f"class-attribute table has {K.shape[1]} columns; the model knows {self.n_attributes_} attributes"
-            )
-        present, absent = fuse_attribute_posteriors(P, self.fusion)
-        return dap_log_scores(present, K, self._prior(K), P_absent=absent, eps=self.eps)
-
-    def predict_proba_from_posteriors(self, P, class_attributes) -> np.ndarray:
-        """Normalised class posteriors ``p(z | x)`` from precomputed attribute posteriors.
-
-        Returns
-        -------
-        ndarray of shape (n_trials, n_classes)
-            Rows sum to 1.
-        """
-        return softmax(self.decision_function_from_posteriors(P, class_attributes), axis=1)
-
-    def predict_proba(self, X, class_attributes) -> np.ndarray:
-        """Class posteriors of test trials over the given (unseen) classes.
-
-        Parameters
-        ----------
-        X : array-like of shape (n_trials, n_sensors, n_features)
-        class_attributes : array-like of shape (n_classes, n_attributes)
-
-        Returns
-        -------
-        ndarray of shape (n_trials, n_classes)
-        """
-        check_is_fitted(self)
-        return self.predict_proba_from_posteriors(self.attribute_model_.predict_proba(X), class_attributes)
-
-    def predict(self, X, class_attributes) -> np.ndarray:
-        """Most probable class (eq. 4) as a row index into ``class_attributes``; shape (n_trials,)."""
-        check_is_fitted(self)
-        P = self.attribute_model_.predict_proba(X)
-        return self.decision_function_from_posteriors(P, class_attributes).argmax(axis=1)

@@ -36,19 +36,23 @@ import contextlib
 import hashlib
 import importlib
 import json
+import os
 import time
+from numbers import Integral, Real
 from pathlib import Path
 
 import numpy as np
 from scipy.special import softmax
 from sklearn.base import BaseEstimator
 from sklearn.utils import check_random_state
+from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted
 
 from tzsl._io import atomic_write
 from tzsl.exceptions import ConfigError, ModelBundleError, TzslError
 from tzsl.models._embedding import loss_weights
+from tzsl.models._validation import ValidatedParamsMixin
 from tzsl.models._eszsl import (
     ZSLInputError,
     _check_int,
@@ -163,7 +167,7 @@ def _pixel_stats(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return mean, std
 
 
-class DeepAttributeEmbedding(BaseEstimator):
+class DeepAttributeEmbedding(ValidatedParamsMixin, BaseEstimator):
     """CNN + LSTM over key-frame sequences -> attribute vector, trained with ``C + lambda R``.
 
     Parameters
@@ -237,8 +241,31 @@ class DeepAttributeEmbedding(BaseEstimator):
         sha256 of the backbone weights file used.
     """
 
+    _parameter_constraints: dict = {
+        "backbone": [StrOptions({"efficientnet-lite0", "vgg16", "small-cnn"})],
+        "weights_path": [None, str, os.PathLike],
+        "finetune": [Interval(Integral, 0, None, closed="left"), StrOptions({"all"})],
+        "image_size": [None, Interval(Integral, 8, None, closed="left")],
+        "hidden_size": [Interval(Integral, 1, None, closed="left")],
+        "lam": [Interval(Real, 0, None, closed="left"), StrOptions({"inf"})],
+        "epochs": [Interval(Integral, 1, None, closed="left")],
+        "batch_size": [Interval(Integral, 1, None, closed="left")],
+        "lr": [Interval(Real, 0, None, closed="neither")],
+        "weight_decay": [Interval(Real, 0, None, closed="left")],
+        "optimizer": [StrOptions({"adam", "sgd"})],
+        "duplicate_attributes": [StrOptions({"error", "merge"})],
+        "checkpoint_dir": [None, str, os.PathLike],
+        "cache_dir": [None, str, os.PathLike],
+        "resume": ["boolean"],
+        "verbose": ["boolean"],
+        "device": [str],
+        "n_threads": [None, Interval(Integral, 1, None, closed="left")],
+        "random_state": ["random_state"],
+    }
+
     def __init__(
         self,
+        *,
         backbone="efficientnet-lite0",
         weights_path=None,
         finetune=0,
@@ -281,6 +308,7 @@ class DeepAttributeEmbedding(BaseEstimator):
 
     # ------------------------------------------------------------------ parameters
     def _check_params(self):
+        self._validate_params()  # _parameter_constraints: scikit-learn's InvalidParameterError
         name = type(self).__name__
         weights = loss_weights(self.lam, owner=name)
         backbones = ("efficientnet-lite0", "vgg16", "small-cnn")

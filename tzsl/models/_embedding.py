@@ -34,25 +34,21 @@ from __future__ import annotations
 
 import numbers
 import warnings
+from numbers import Integral, Real
 
 import numpy as np
 from scipy.optimize import minimize
-from scipy.special import expit, log_softmax, softmax
-from sklearn.base import BaseEstimator
+from scipy.special import expit, log_softmax
+from sklearn.base import TransformerMixin
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.preprocessing import StandardScaler
 from sklearn.utils import check_random_state
-from sklearn.utils.validation import check_is_fitted
+from sklearn.utils._param_validation import Interval, StrOptions
 
 from tzsl.exceptions import ConfigError
-from tzsl.models._eszsl import (
-    ZSLInputError,
-    _check_int,
-    _encode_training_classes,
-    _validate_X,
-    _validate_Xy,
-    _ZSLScorerMixin,
-)
+from tzsl.models._decision import squared_distances
+from tzsl.models._eszsl import AttributeEmbeddingModel
+from tzsl.models._zsl_input import ZSLInputError, training_classes, validate_features_and_rows
 
 __all__ = ["EmbeddingZSL", "loss_weights"]
 
@@ -115,9 +111,7 @@ def _forward(params: list[np.ndarray], X: np.ndarray):
     return expit(H @ W2.T + b2), H
 
 
-def _sq_dist(F: np.ndarray, L: np.ndarray) -> np.ndarray:
-    """Squared Euclidean distances (n, k) between rows of ``F`` (n, m) and ``L`` (k, m)."""
-    return (F**2).sum(axis=1)[:, None] - 2.0 * F @ L.T + (L**2).sum(axis=1)[None, :]
+_sq_dist = squared_distances  # one formula for training (here) and NearestAttributeRule
 
 
 def _loss_and_grad(theta, shapes, X, y, L, w_c, w_r, alpha, with_grad=True):
@@ -182,8 +176,13 @@ def _glorot_init(shapes, rng: np.random.RandomState) -> np.ndarray:
     return np.concatenate(parts)
 
 
-class EmbeddingZSL(_ZSLScorerMixin, BaseEstimator):
+class EmbeddingZSL(TransformerMixin, AttributeEmbeddingModel):
     """Features -> attribute embedding with the fabric paper's ``C + lambda R`` loss.
+
+    An attribute model: ``fit(X, Y)`` with ``Y`` (n, m) the attribute row of each trial's class
+    (the training classes are the distinct rows of ``Y``); ``decision_function(X)`` (and
+    ``transform``) give the estimated attribute vector ``f(x)`` (n, m), ranked against any class
+    table by :class:`tzsl.models.NearestAttributeRule` (``argmin_g ||f - a_g||``).
 
     Parameters
     ----------
@@ -211,9 +210,6 @@ class EmbeddingZSL(_ZSLScorerMixin, BaseEstimator):
     standardize : bool, default=True
         Z-score features with a StandardScaler fitted on the training samples inside ``fit``
         (sigmoid units saturate on raw scales).
-    duplicate_attributes : {"error", "merge"}, default="error"
-        Training classes with identical attribute rows: raise, or treat each such set as one
-        class (for this loss merging only removes a constant from C).
     random_state : int, RandomState or None, default=None
         Seeds the weight initialisation and the choice of validation classes.
 
@@ -221,16 +217,15 @@ class EmbeddingZSL(_ZSLScorerMixin, BaseEstimator):
     ----------
     coefs_ : list of ndarray
         ``[W1, b1]`` or ``[W1, b1, W2, b2]``; weights are (out, in).
-    classes_ : ndarray (n_train_classes,)
-        Sorted training labels; row ``j`` of the fit ``class_attributes`` belongs to ``classes_[j]``.
     class_attributes_ : ndarray (n_train_classes, n_attributes)
+        Distinct training attribute rows (``np.unique(Y, axis=0)``).
     scaler_ : StandardScaler or None
     loss_ : float
         Final training loss (mean, with weight decay).
     n_iter_ : int
         L-BFGS iterations of the final fit.
     validation_classes_ : ndarray or None
-        Labels held out for early stopping.
+        Rows of ``class_attributes_`` held out for early stopping.
     validation_losses_ : ndarray or None
         Held-out loss after each iteration of the early-stopping run.
     best_iteration_ : int or None
@@ -242,8 +237,21 @@ class EmbeddingZSL(_ZSLScorerMixin, BaseEstimator):
     that range can be approached but not reached by R.
     """
 
+    _parameter_constraints: dict = {
+        "lam": [Interval(Real, 0, None, closed="left"), StrOptions({"inf"})],
+        "hidden_units": [None, Interval(Integral, 1, None, closed="left")],
+        "alpha": [Interval(Real, 0, None, closed="left")],
+        "max_iter": [Interval(Integral, 1, None, closed="left")],
+        "early_stopping": ["boolean"],
+        "validation_fraction": [Interval(Real, 0, 1, closed="neither")],
+        "n_iter_no_change": [Interval(Integral, 1, None, closed="left")],
+        "standardize": ["boolean"],
+        "random_state": ["random_state"],
+    }
+
     def __init__(
         self,
+        *,
         lam=1.0,
         hidden_units=None,
         alpha=1e-3,
@@ -252,7 +260,6 @@ class EmbeddingZSL(_ZSLScorerMixin, BaseEstimator):
         validation_fraction=0.2,
         n_iter_no_change=20,
         standardize=True,
-        duplicate_attributes="error",
         random_state=None,
     ):
         self.lam = lam
@@ -263,31 +270,7 @@ class EmbeddingZSL(_ZSLScorerMixin, BaseEstimator):
         self.validation_fraction = validation_fraction
         self.n_iter_no_change = n_iter_no_change
         self.standardize = standardize
-        self.duplicate_attributes = duplicate_attributes
         self.random_state = random_state
-
-    # ---------------------------------------------------------------- parameter checks
-    def _check_params(self):
-        name = type(self).__name__
-        weights = loss_weights(self.lam, owner=name)
-        if self.hidden_units is not None:
-            _check_int(self.hidden_units, "hidden_units", 1, name)
-        _check_int(self.max_iter, "max_iter", 1, name)
-        _check_int(self.n_iter_no_change, "n_iter_no_change", 1, name)
-        if (
-            not isinstance(self.alpha, numbers.Real)
-            or not np.isfinite(self.alpha)
-            or self.alpha < 0
-        ):
-            raise ConfigError(f"{name}: alpha must be a finite number >= 0, got {self.alpha!r}")
-        if self.early_stopping and not (
-            isinstance(self.validation_fraction, numbers.Real)
-            and 0 < self.validation_fraction < 1
-        ):
-            raise ConfigError(
-                f"{name}: validation_fraction must lie in (0, 1), got {self.validation_fraction!r}"
-            )
-        return weights
 
     # ---------------------------------------------------------------- training
     def _minimize(self, theta0, shapes, X, y, L, weights, maxiter, callback=None):
@@ -302,31 +285,31 @@ class EmbeddingZSL(_ZSLScorerMixin, BaseEstimator):
             options={"maxiter": maxiter},
         )
 
-    def fit(self, X, y, class_attributes):
+    def fit(self, X, Y, groups=None):
         """Train the embedding.
 
         Parameters
         ----------
         X : array-like of shape (n_samples, n_features)
-        y : array-like of shape (n_samples,)
-            Class labels.
-        class_attributes : array-like of shape (n_train_classes, n_attributes)
-            One row per class of ``np.unique(y)``, in that (sorted) order.
+        Y : array-like of shape (n_samples, n_attributes)
+            Attribute row of each sample's class.
+        groups : array-like of shape (n_samples,), optional
+            Object or class of each sample; orders the classes (see
+            :func:`tzsl.models.training_classes`), which fixes the early-stopping hold-out.
 
         Returns
         -------
         self : EmbeddingZSL
         """
-        weights = self._check_params()
+        self._validate_params()
         name = type(self).__name__
-        X, y = _validate_Xy(self, X, y)
-        classes, S, S_u, y_u = _encode_training_classes(
-            y, class_attributes, self.duplicate_attributes, name
-        )
+        weights = loss_weights(self.lam, owner=name)
+        X, Y = validate_features_and_rows(self, X, Y)
+        S_u, y_u = training_classes(Y, name, groups)
         rng = check_random_state(self.random_state)
         self.scaler_ = StandardScaler().fit(X) if self.standardize else None
         Xs = X if self.scaler_ is None else self.scaler_.transform(X)
-        shapes = _layer_shapes(X.shape[1], S.shape[1], self.hidden_units)
+        shapes = _layer_shapes(X.shape[1], S_u.shape[1], self.hidden_units)
         theta0 = _glorot_init(shapes, rng)
 
         self.validation_classes_ = None
@@ -334,7 +317,7 @@ class EmbeddingZSL(_ZSLScorerMixin, BaseEstimator):
         self.best_iteration_ = None
         maxiter = int(self.max_iter)
         if self.early_stopping:
-            maxiter = self._early_stopping_run(Xs, y, y_u, S_u, shapes, theta0, weights, rng)
+            maxiter = self._early_stopping_run(Xs, y_u, S_u, shapes, theta0, weights, rng)
         result = self._minimize(theta0, shapes, Xs, y_u, S_u, weights, maxiter)
         if not self.early_stopping and result.nit >= maxiter and not result.success:
             warnings.warn(
@@ -346,12 +329,11 @@ class EmbeddingZSL(_ZSLScorerMixin, BaseEstimator):
         self.coefs_ = _unpack(result.x.copy(), shapes)
         self.loss_ = float(result.fun)
         self.n_iter_ = int(result.nit)
-        self.classes_ = classes
-        self.class_attributes_ = S
-        self.n_attributes_ = S.shape[1]
+        self.class_attributes_ = S_u
+        self.n_attributes_ = S_u.shape[1]
         return self
 
-    def _early_stopping_run(self, Xs, y, y_u, S_u, shapes, theta0, weights, rng) -> int:
+    def _early_stopping_run(self, Xs, y_u, S_u, shapes, theta0, weights, rng) -> int:
         """Choose the iteration count on held-out classes; returns it."""
         name = type(self).__name__
         n_groups = S_u.shape[0]
@@ -381,7 +363,7 @@ class EmbeddingZSL(_ZSLScorerMixin, BaseEstimator):
         self._minimize(
             theta0, shapes, X_tr, y_tr, S_u[tr_groups], weights, int(self.max_iter), callback
         )
-        self.validation_classes_ = np.unique(y[is_val])
+        self.validation_classes_ = val_groups
         self.validation_losses_ = np.asarray(losses)
         if not losses:  # converged before the first callback
             self.best_iteration_ = 1
@@ -390,21 +372,9 @@ class EmbeddingZSL(_ZSLScorerMixin, BaseEstimator):
         return self.best_iteration_
 
     # ---------------------------------------------------------------- inference
-    def _embed_scores(self, X, S):
-        F, _ = _forward(self.coefs_, X)
-        return -_sq_dist(F, S)
+    def _embed(self, X):
+        return _forward(self.coefs_, X)[0]
 
     def transform(self, X) -> np.ndarray:
         """Estimated attribute vectors ``f`` of shape (n_samples, n_attributes), in (0, 1)."""
-        check_is_fitted(self)
-        X = _validate_X(self, X, reset=False)
-        if self.scaler_ is not None:
-            X = self.scaler_.transform(X)
-        return _forward(self.coefs_, X)[0]
-
-    def predict_proba(self, X, class_attributes) -> np.ndarray:
-        """``softmax_c(-||f - a_c||^2)`` over the given classes, shape (n_samples, n_classes).
-
-        The same softmax the classification term C trains, over the candidate classes.
-        """
-        return softmax(self.decision_function(X, class_attributes), axis=1)
+        return self.decision_function(X)

@@ -14,10 +14,12 @@ row per training class, so the same estimator reads
 ``gamma`` regularises the feature side and ``lam`` (the paper's lambda) the attribute side, as in
 the paper. A sample is classified among any set of (unseen) classes by ``argmax_c x^T V s_c``.
 
-Class order convention (shared by every tzsl zero-shot estimator): the rows of the
-``class_attributes`` passed to ``fit`` belong to the classes in SORTED order of the unique labels
-of ``y`` (``classes_ = np.unique(y)``); ``predict(X, class_attributes)`` returns indices into the
-rows of the ``class_attributes`` it is given.
+Attribute-model protocol (shared by every tzsl zero-shot attribute model): ``fit(X, Y)`` takes
+each training trial's class attribute row ``Y`` (n, m); the training classes are the distinct rows
+of ``Y`` in ``np.unique(Y, axis=0)`` order (trials of classes that share an attribute row are one
+class). ``decision_function(X)`` gives attribute-space scores (n, m); a decision rule of
+:mod:`tzsl.models` ranks any (unseen) class table against them (:class:`tzsl.models.ZeroShotClassifier`).
+For binary attributes ``V`` does not depend on the order of the classes (all sums are of integers).
 
 Computation: a thin SVD ``X = Q diag(s) R^T`` and an eigendecomposition ``S^T S = P diag(b) P^T``
 give ``V = R diag(s / (s^2 + gamma)) Q^T (Y S) P diag(1 / (b + lam)) P^T``; the SVD form never
@@ -27,171 +29,36 @@ computed once per fold and the whole (gamma, lam) grid is scored with one einsum
 
 from __future__ import annotations
 
-import numbers
 from collections.abc import Sequence
+from numbers import Integral, Real
 
 import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.model_selection import GroupKFold
 from sklearn.preprocessing import StandardScaler
-from sklearn.utils.multiclass import check_classification_targets
-from sklearn.utils.validation import check_is_fitted, validate_data
+from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
+from sklearn.utils.validation import check_is_fitted
 
-from tzsl.exceptions import ConfigError, TzslError
+from tzsl.models._validation import ParameterError, ValidatedParamsMixin
+from tzsl.models._zsl_input import (
+    ZSLInputError,
+    attribute_rows,
+    training_classes,
+    validate_features,
+    validate_features_and_rows,
+)
 
-__all__ = ["ESZSL", "ESZSLCV", "ZSLInputError"]
+# Old private names, still imported by tzsl.models._deep.
+from tzsl.models._zsl_input import check_int as _check_int  # noqa: E402, F401
+from tzsl.models._zsl_input import check_no_duplicate_rows as _check_no_duplicate_rows  # noqa: E402, F401
+from tzsl.models._zsl_input import check_positive as _check_positive  # noqa: E402, F401
+from tzsl.models._zsl_input import encode_training_classes as _encode_training_classes  # noqa: E402, F401
+from tzsl.models._zsl_input import validate_class_table as _validate_attributes  # noqa: E402, F401
+
+__all__ = ["AttributeEmbeddingModel", "ESZSL", "ESZSLCV", "ZSLInputError", "attribute_rows", "training_classes"]
 
 #: Default regulariser grid of :class:`ESZSLCV` (the paper's 10^-3 .. 10^3).
 DEFAULT_GRID: tuple[float, ...] = (1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0, 1000.0)
-
-_DUPLICATE_MODES = ("error", "merge")
-
-
-class ZSLInputError(TzslError, ValueError):
-    """Arrays given to a zero-shot model are unusable.
-
-    Raised for non-finite or wrongly shaped features, a class-attribute table that does not match
-    the labels, or duplicate attribute rows. A :class:`ValueError` too, as scikit-learn expects.
-    """
-
-
-# --------------------------------------------------------------------------------------------
-# validation shared by the zero-shot estimators of tzsl.models
-# --------------------------------------------------------------------------------------------
-
-
-def _validate_X(est: BaseEstimator, X, *, reset: bool) -> np.ndarray:
-    """Validate features ``X`` (n, d) as float64, finite; set or check ``n_features_in_``."""
-    try:
-        return validate_data(est, X, reset=reset, dtype=np.float64)
-    except ValueError as exc:
-        raise ZSLInputError(f"{type(est).__name__}: X (features): {exc}") from exc
-
-
-def _validate_Xy(est: BaseEstimator, X, y) -> tuple[np.ndarray, np.ndarray]:
-    """Validate training features (n, d) and class labels (n,)."""
-    if y is None:
-        raise ZSLInputError(
-            f"{type(est).__name__} requires y to be passed, but the target y is None"
-        )
-    try:
-        X, y = validate_data(est, X, y, reset=True, dtype=np.float64)
-        check_classification_targets(y)
-    except ValueError as exc:
-        raise ZSLInputError(f"{type(est).__name__}: X, y: {exc}") from exc
-    return X, y
-
-
-def _validate_attributes(S, *, n_attributes: int | None = None, what: str = "class_attributes"):
-    """Validate a class-attribute table (k, m): 2-D, numeric, finite; attributes may be real."""
-    try:
-        S = np.asarray(S, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ZSLInputError(f"{what} must be a numeric (classes x attributes) array: {exc}") from exc
-    if S.ndim != 2 or S.shape[0] == 0 or S.shape[1] == 0:
-        raise ZSLInputError(
-            f"{what} must be a non-empty 2-D array (classes x attributes), got shape {S.shape}"
-        )
-    bad = np.argwhere(~np.isfinite(S))
-    if bad.size:
-        where = ", ".join(f"row {r} attribute {c} = {S[r, c]}" for r, c in bad[:5])
-        more = f" and {len(bad) - 5} more" if len(bad) > 5 else ""
-        raise ZSLInputError(f"{what} holds non-finite values (NaN or inf): {where}{more}")
-    if n_attributes is not None and S.shape[1] != n_attributes:
-        raise ZSLInputError(
-            f"{what} has {S.shape[1]} attributes (columns) but the model was fitted with "
-            f"{n_attributes}"
-        )
-    return S
-
-
-def _duplicate_row_groups(S: np.ndarray) -> list[np.ndarray]:
-    """Groups (index arrays, each of length >= 2) of identical rows of ``S``."""
-    _, inverse, counts = np.unique(S, axis=0, return_inverse=True, return_counts=True)
-    inverse = inverse.ravel()
-    return [np.flatnonzero(inverse == u) for u in np.flatnonzero(counts > 1)]
-
-
-def _check_no_duplicate_rows(S: np.ndarray, what: str = "class_attributes") -> None:
-    """Error when two candidate classes share an attribute vector (the argmax is undecidable)."""
-    groups = _duplicate_row_groups(S)
-    if groups:
-        listed = "; ".join("rows " + ", ".join(map(str, g)) for g in groups)
-        raise ZSLInputError(
-            f"{what} has identical attribute rows ({listed}): classes with the same attribute "
-            "vector cannot be told apart by a zero-shot model; merge them before predicting"
-        )
-
-
-def _encode_training_classes(
-    y: np.ndarray, S, duplicate_attributes: str, est_name: str
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Map labels to rows of the training attribute table.
-
-    Returns
-    -------
-    classes : ndarray (k,)
-        Sorted unique labels; row ``j`` of ``S`` belongs to ``classes[j]``.
-    S : ndarray (k, m)
-        The validated attribute table.
-    S_unique : ndarray (u, m)
-        Distinct attribute rows (``u == k`` unless ``duplicate_attributes="merge"``).
-    y_unique : ndarray (n,)
-        Each sample's row in ``S_unique``.
-    """
-    if duplicate_attributes not in _DUPLICATE_MODES:
-        raise ConfigError(
-            f"{est_name}: duplicate_attributes must be one of {_DUPLICATE_MODES}, "
-            f"got {duplicate_attributes!r}"
-        )
-    classes, y_idx = np.unique(y, return_inverse=True)
-    S = _validate_attributes(S)
-    if S.shape[0] != classes.size:
-        raise ZSLInputError(
-            f"{est_name}: class_attributes has {S.shape[0]} rows but y has {classes.size} classes "
-            f"{classes.tolist()}; give one row per class, in sorted label order"
-        )
-    groups = _duplicate_row_groups(S)
-    if groups and duplicate_attributes == "error":
-        listed = "; ".join("{" + ", ".join(str(classes[i]) for i in g) + "}" for g in groups)
-        raise ZSLInputError(
-            f"{est_name}: training classes with identical attribute rows: {listed}. Zero-shot "
-            'training cannot separate them; pass duplicate_attributes="merge" to treat each such '
-            "set as one class"
-        )
-    S_unique, row_of_class = np.unique(S, axis=0, return_inverse=True)
-    y_unique = row_of_class.ravel()[y_idx]
-    if S_unique.shape[0] < 2:
-        raise ZSLInputError(
-            f"{est_name}: only one class (one distinct attribute row) in the training data; "
-            "at least 2 are needed"
-        )
-    if not groups:  # keep the caller's row order when nothing was merged
-        S_unique, y_unique = S, y_idx
-    return classes, S, S_unique, y_unique
-
-
-def _check_positive(value, name: str, est_name: str, *, allow_zero: bool = False) -> float:
-    """``value`` as a float; a ConfigError unless it is a finite real (not bool) > 0 (>= 0)."""
-    if (
-        not isinstance(value, numbers.Real)
-        or isinstance(value, bool)
-        or not np.isfinite(value)
-        or value < 0
-        or (value == 0 and not allow_zero)
-    ):
-        raise ConfigError(
-            f"{est_name}: {name} must be a finite number {'>=' if allow_zero else '>'} 0, got {value!r}"
-        )
-    return float(value)
-
-
-def _check_int(value, name: str, low: int, est_name: str) -> int:
-    """``value`` as an int; a ConfigError unless it is an integer (not bool) >= ``low``."""
-    if not isinstance(value, numbers.Integral) or isinstance(value, bool) or value < low:
-        raise ConfigError(f"{est_name}: {name} must be an integer >= {low}, got {value!r}")
-    return int(value)
-
 
 # --------------------------------------------------------------------------------------------
 # closed form
@@ -221,75 +88,66 @@ def _closed_form(X: np.ndarray, y: np.ndarray, S: np.ndarray, gamma: float, lam:
     return (R * (s / (s**2 + gamma))) @ C @ (P / (b + lam)).T
 
 
-class _ZSLScorerMixin:
-    """``decision_function`` / ``predict`` over any set of candidate classes."""
+class AttributeEmbeddingModel(ValidatedParamsMixin, BaseEstimator):
+    """Shared predict side of the linear/learned attribute embeddings (attribute-model protocol).
 
-    def _embed_scores(self, X: np.ndarray, S: np.ndarray) -> np.ndarray:  # pragma: no cover
+    ``decision_function(X)`` (== ``predict(X)``) maps trials to attribute space, (n, m); a
+    decision rule (:class:`tzsl.models.CompatibilityRule` or
+    :class:`tzsl.models.NearestAttributeRule`) turns that into class scores for any table.
+    """
+
+    #: What :meth:`decision_function` returns, read by :class:`tzsl.models.ZeroShotClassifier`.
+    score_kind = "embedding"
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.target_tags.required = True
+        tags.target_tags.multi_output = True
+        return tags
+
+    def _embed(self, X: np.ndarray) -> np.ndarray:  # pragma: no cover
         raise NotImplementedError
 
-    def _prepare_predict(self, X, class_attributes):
-        check_is_fitted(self)
-        X = _validate_X(self, X, reset=False)
-        S = _validate_attributes(class_attributes, n_attributes=self.n_attributes_)
-        if self.scaler_ is not None:
-            X = self.scaler_.transform(X)
-        return X, S
-
-    def decision_function(self, X, class_attributes) -> np.ndarray:
-        """Compatibility of each sample with each candidate class.
+    def decision_function(self, X) -> np.ndarray:
+        """Attribute-space scores of the trials.
 
         Parameters
         ----------
         X : array-like of shape (n_samples, n_features)
             Features, in the units they were fitted with.
-        class_attributes : array-like of shape (n_classes, n_attributes)
-            Attribute vectors of the candidate (typically unseen) classes, one row per class.
 
         Returns
         -------
-        scores : ndarray of shape (n_samples, n_classes)
-            Larger means more compatible.
+        ndarray of shape (n_samples, n_attributes)
         """
-        X, S = self._prepare_predict(X, class_attributes)
-        return self._embed_scores(X, S)
+        check_is_fitted(self)
+        X = validate_features(self, X, reset=False)
+        if self.scaler_ is not None:
+            X = self.scaler_.transform(X)
+        return self._embed(X)
 
-    def predict(self, X, class_attributes) -> np.ndarray:
-        """Index of the best-scoring candidate class per sample.
-
-        Parameters
-        ----------
-        X : array-like of shape (n_samples, n_features)
-        class_attributes : array-like of shape (n_classes, n_attributes)
-            Candidate classes; rows must be pairwise different.
-
-        Returns
-        -------
-        rows : ndarray of shape (n_samples,), int
-            Indices into the rows of ``class_attributes``.
-        """
-        X, S = self._prepare_predict(X, class_attributes)
-        _check_no_duplicate_rows(S)
-        return np.argmax(self._embed_scores(X, S), axis=1)
+    def predict(self, X) -> np.ndarray:
+        """Same as :meth:`decision_function`: (n_samples, n_attributes) attribute-space scores."""
+        return self.decision_function(X)
 
 
-class _ESZSLBase(_ZSLScorerMixin, BaseEstimator):
-    def _embed_scores(self, X, S):
-        return X @ self.coef_ @ S.T
+_COMMON_CONSTRAINTS: dict = {"standardize": ["boolean"]}
 
-    def _start_fit(self, X, y, class_attributes):
-        X, y = _validate_Xy(self, X, y)
-        name = type(self).__name__
-        classes, S, S_u, y_u = _encode_training_classes(
-            y, class_attributes, self.duplicate_attributes, name
-        )
-        return X, classes, S, S_u, y_u
 
-    def _finish_fit(self, X, classes, S, S_u, y_u, gamma, lam):
+class _ESZSLBase(AttributeEmbeddingModel):
+    def _embed(self, X):
+        return X @ self.coef_
+
+    def _start_fit(self, X, Y, groups):
+        X, Y = validate_features_and_rows(self, X, Y)
+        S_u, y_u = training_classes(Y, type(self).__name__, groups)
+        return X, S_u, y_u
+
+    def _finish_fit(self, X, S_u, y_u, gamma, lam):
         self.scaler_ = StandardScaler().fit(X) if self.standardize else None
         Xs = X if self.scaler_ is None else self.scaler_.transform(X)
-        self.classes_ = classes
-        self.class_attributes_ = S
-        self.n_attributes_ = S.shape[1]
+        self.class_attributes_ = S_u
+        self.n_attributes_ = S_u.shape[1]
         self.coef_ = _closed_form(Xs, y_u, S_u, gamma, lam)
         return self
 
@@ -297,85 +155,85 @@ class _ESZSLBase(_ZSLScorerMixin, BaseEstimator):
 class ESZSL(_ESZSLBase):
     """Embarrassingly simple zero-shot learning (Romera-Paredes and Torr 2015), closed form.
 
+    An attribute model: ``fit(X, Y)`` learns ``V`` from trials and their classes' attribute rows
+    (the training classes are the distinct rows of ``Y``); ``decision_function(X) = X V`` in
+    attribute space, scored against any class table by :class:`tzsl.models.CompatibilityRule`
+    (``x^T V s_c``).
+
     Parameters
     ----------
-    gamma : float, default=1.0
-        Feature-side ridge (> 0): the ``gamma`` of ``(X^T X + gamma I)^-1``.
-    lam : float, default=1.0
-        Attribute-side ridge (> 0): the paper's lambda, in ``(S^T S + lam I)^-1``.
+    gamma : float > 0, default=1.0
+        Feature-side ridge: the ``gamma`` of ``(X^T X + gamma I)^-1``.
+    lam : float > 0, default=1.0
+        Attribute-side ridge (the paper's lambda), in ``(S^T S + lam I)^-1``.
     standardize : bool, default=True
         Z-score features with a :class:`~sklearn.preprocessing.StandardScaler` fitted on the
         training samples inside ``fit`` (ESZSL has no intercept, so centring matters).
-    duplicate_attributes : {"error", "merge"}, default="error"
-        Training classes with identical attribute rows: raise, or treat each such set as one
-        class (its samples then share one +1 column of ``Y``; with ``{-1, 1}`` targets two
-        identical rows would otherwise cancel each other's signal).
 
     Attributes
     ----------
     coef_ : ndarray of shape (n_features, n_attributes)
         ``V``, mapping (standardised) features to attribute space.
-    classes_ : ndarray of shape (n_train_classes,)
-        Sorted training labels; row ``j`` of the fit ``class_attributes`` belongs to ``classes_[j]``.
     class_attributes_ : ndarray of shape (n_train_classes, n_attributes)
+        Distinct training attribute rows (``np.unique(Y, axis=0)``); trials sharing a row are
+        one class (one +1 column of the paper's ``Y``).
     scaler_ : StandardScaler or None
     n_attributes_, n_features_in_ : int
-
-    Notes
-    -----
-    ``fit(X, y, class_attributes)``: ``X`` (n, d) features, ``y`` (n,) labels, ``class_attributes``
-    (k_train, m) one row per training class in sorted label order. ``predict(X, class_attributes)``
-    returns indices into the rows of the given (k_test, m) table. Attributes may be real-valued.
     """
 
-    def __init__(self, gamma=1.0, lam=1.0, standardize=True, duplicate_attributes="error"):
+    _parameter_constraints: dict = {
+        **_COMMON_CONSTRAINTS,
+        "gamma": [Interval(Real, 0, None, closed="neither")],
+        "lam": [Interval(Real, 0, None, closed="neither")],
+    }
+
+    def __init__(self, *, gamma=1.0, lam=1.0, standardize=True):
         self.gamma = gamma
         self.lam = lam
         self.standardize = standardize
-        self.duplicate_attributes = duplicate_attributes
 
-    def fit(self, X, y, class_attributes):
+    def fit(self, X, Y, groups=None):
         """Fit ``V`` in closed form.
 
         Parameters
         ----------
         X : array-like of shape (n_samples, n_features)
-        y : array-like of shape (n_samples,)
-            Class labels of the training samples.
-        class_attributes : array-like of shape (n_train_classes, n_attributes)
-            One row per class of ``np.unique(y)``, in that (sorted) order.
+        Y : array-like of shape (n_samples, n_attributes)
+            Attribute row of each sample's class; attributes may be real-valued.
+        groups : array-like of shape (n_samples,), optional
+            Object or class of each sample; only orders the classes (see :func:`training_classes`).
 
         Returns
         -------
         self : ESZSL
         """
-        name = type(self).__name__
-        gamma = _check_positive(self.gamma, "gamma", name)
-        lam = _check_positive(self.lam, "lam", name)
-        X, classes, S, S_u, y_u = self._start_fit(X, y, class_attributes)
-        return self._finish_fit(X, classes, S, S_u, y_u, gamma, lam)
+        self._validate_params()
+        X, S_u, y_u = self._start_fit(X, Y, groups)
+        return self._finish_fit(X, S_u, y_u, float(self.gamma), float(self.lam))
 
 
 class ESZSLCV(_ESZSLBase):
     """ESZSL with ``gamma`` and ``lam`` chosen by class-grouped cross-validation.
 
-    Every fold holds out whole training classes and scores zero-shot recognition among the
-    held-out classes only, so tuning mimics the test situation and never needs the test classes.
-    The full grid is scored from one SVD and one eigendecomposition per fold.
+    Every fold holds out whole training classes (distinct attribute rows of ``Y``) and scores
+    zero-shot recognition among the held-out classes only, so tuning mimics the test situation
+    and never needs the test classes. The full grid is scored from one SVD and one
+    eigendecomposition per fold.
 
     Parameters
     ----------
-    gammas, lams : sequence of float, default=10^-3 .. 10^3 (7 values each)
-        Grids of the feature-side and attribute-side ridges (all > 0).
-    cv : None, int or splitter, default=None
-        ``None``: :class:`~sklearn.model_selection.GroupKFold` with
-        ``min(5, n_classes // 2)`` splits (each validation fold needs >= 2 classes). An int:
-        ``GroupKFold(cv)``. Otherwise any object with ``split(X, y, groups)``; it receives
-        ``groups`` = class (merged class with ``duplicate_attributes="merge"``), and every fold
-        must hold out whole classes, at least 2 of them, and train on at least 2.
+    gammas, lams : array-like of float > 0, default=10^-3 .. 10^3 (7 values each)
+        Grids of the feature-side and attribute-side ridges. A single pair is fitted without
+        cross-validation (``best_score_`` is then NaN and ``cv_scores_`` has no folds).
+    cv : None, int >= 2 or splitter, default=None
+        ``None``: :class:`~sklearn.model_selection.GroupKFold` with ``min(5, n_classes // 2)``
+        splits (each validation fold needs >= 2 classes). An int: ``GroupKFold(cv)``. Otherwise
+        any object with ``split(X, y, groups)``; it receives ``groups`` = class (row of
+        ``class_attributes_``), and every fold must hold out whole classes, at least 2 of them,
+        and train on at least 2.
     scoring : {"accuracy", "balanced_accuracy"}, default="accuracy"
         Per-sample accuracy or mean per-class accuracy on the held-out classes.
-    standardize, duplicate_attributes
+    standardize : bool, default=True
         As in :class:`ESZSL`; the scaler is refitted on each fold's training part.
 
     Attributes
@@ -386,38 +244,45 @@ class ESZSLCV(_ESZSLBase):
     mean_cv_scores_ : ndarray of shape (n_gammas, n_lams)
     best_score_ : float
     cv_val_classes_ : list of ndarray
-        Labels held out in each fold (all of them training classes).
-    coef_, classes_, class_attributes_, scaler_, n_attributes_, n_features_in_
+        Rows of ``class_attributes_`` held out in each fold.
+    coef_, class_attributes_, scaler_, n_attributes_, n_features_in_
         As in :class:`ESZSL`, refitted on all training samples with the chosen pair.
     """
 
+    _parameter_constraints: dict = {
+        **_COMMON_CONSTRAINTS,
+        "gammas": ["array-like"],
+        "lams": ["array-like"],
+        "cv": [None, Interval(Integral, 2, None, closed="left"), HasMethods(["split"])],
+        "scoring": [StrOptions({"accuracy", "balanced_accuracy"})],
+    }
+
     def __init__(
         self,
+        *,
         gammas: Sequence[float] = DEFAULT_GRID,
         lams: Sequence[float] = DEFAULT_GRID,
         cv=None,
         scoring="accuracy",
         standardize=True,
-        duplicate_attributes="error",
     ):
         self.gammas = gammas
         self.lams = lams
         self.cv = cv
         self.scoring = scoring
         self.standardize = standardize
-        self.duplicate_attributes = duplicate_attributes
 
-    def _grid(self, values, name):
-        est = type(self).__name__
-        try:
-            arr = np.asarray(values, dtype=np.float64).ravel()
-        except (TypeError, ValueError) as exc:
-            raise ConfigError(f"{est}: {name} must be a sequence of numbers: {exc}") from exc
-        if arr.size == 0:
-            raise ConfigError(f"{est}: {name} is empty")
-        for v in arr:
-            _check_positive(float(v), name, est)
-        return arr
+    def _check_param_values(self) -> None:
+        for name in ("gammas", "lams"):
+            try:
+                arr = np.asarray(getattr(self, name), dtype=np.float64).ravel()
+            except (TypeError, ValueError):
+                arr = np.array([np.nan])
+            if arr.size == 0 or not np.all(np.isfinite(arr) & (arr > 0)):
+                raise ParameterError(
+                    f"The {name!r} parameter of {type(self).__name__} must be a non-empty sequence of "
+                    f"finite numbers > 0. Got {getattr(self, name)!r} instead."
+                )
 
     def _splitter(self, n_groups: int):
         name = type(self).__name__
@@ -429,36 +294,37 @@ class ESZSLCV(_ESZSLBase):
                     "gamma and lam instead"
                 )
             return GroupKFold(n_splits=min(5, n_groups // 2))
-        if isinstance(self.cv, numbers.Integral) and not isinstance(self.cv, bool):
-            if self.cv < 2:
-                raise ConfigError(f"{name}: cv must be >= 2, got {self.cv}")
+        if isinstance(self.cv, Integral):
             return GroupKFold(n_splits=int(self.cv))
-        if not hasattr(self.cv, "split"):
-            raise ConfigError(f"{name}: cv must be None, an int or a splitter, got {self.cv!r}")
         return self.cv
 
-    def fit(self, X, y, class_attributes):
+    def fit(self, X, Y, groups=None):
         """Choose ``(gamma, lam)`` by class-grouped CV, then refit on all training samples.
 
         Parameters
         ----------
         X : array-like of shape (n_samples, n_features)
-        y : array-like of shape (n_samples,)
-        class_attributes : array-like of shape (n_train_classes, n_attributes)
-            One row per class of ``np.unique(y)``, in that (sorted) order.
+        Y : array-like of shape (n_samples, n_attributes)
+            Attribute row of each sample's class.
+        groups : array-like of shape (n_samples,), optional
+            Object or class of each sample; orders the classes (:func:`training_classes`), which
+            fixes the folds. The CV groups are always the classes (distinct rows of ``Y``).
 
         Returns
         -------
         self : ESZSLCV
         """
+        self._validate_params()
         name = type(self).__name__
-        gammas = self._grid(self.gammas, "gammas")
-        lams = self._grid(self.lams, "lams")
-        if self.scoring not in ("accuracy", "balanced_accuracy"):
-            raise ConfigError(
-                f"{name}: scoring must be 'accuracy' or 'balanced_accuracy', got {self.scoring!r}"
-            )
-        X, classes, S, S_u, y_u = self._start_fit(X, y, class_attributes)
+        gammas = np.asarray(self.gammas, dtype=np.float64).ravel()
+        lams = np.asarray(self.lams, dtype=np.float64).ravel()
+        X, S_u, y_u = self._start_fit(X, Y, groups)
+        if gammas.size == lams.size == 1:  # nothing to choose: no cross-validation
+            self.cv_scores_ = np.empty((1, 1, 0))
+            self.mean_cv_scores_ = np.full((1, 1), np.nan)
+            self.best_gamma_, self.best_lam_, self.best_score_ = float(gammas[0]), float(lams[0]), float("nan")
+            self.cv_val_classes_ = []
+            return self._finish_fit(X, S_u, y_u, self.best_gamma_, self.best_lam_)
         splitter = self._splitter(S_u.shape[0])
         try:
             folds = list(splitter.split(X, y_u, groups=y_u))
@@ -466,7 +332,6 @@ class ESZSLCV(_ESZSLBase):
             raise ZSLInputError(f"{name}: cannot split the training classes: {exc}") from exc
 
         scores, val_classes = [], []
-        class_of_sample = np.unique(np.asarray(y), return_inverse=True)[1].ravel()
         for i, (tr, va) in enumerate(folds):
             g_tr, g_va = np.unique(y_u[tr]), np.unique(y_u[va])
             if np.intersect1d(g_tr, g_va).size:
@@ -480,7 +345,7 @@ class ESZSLCV(_ESZSLBase):
                     "classes; both need at least 2"
                 )
             scores.append(self._score_fold(X[tr], y_u[tr], X[va], y_u[va], S_u, gammas, lams))
-            val_classes.append(classes[np.unique(class_of_sample[va])])
+            val_classes.append(g_va)
 
         self.cv_scores_ = np.stack(scores, axis=-1)
         self.mean_cv_scores_ = self.cv_scores_.mean(axis=-1)
@@ -489,7 +354,7 @@ class ESZSLCV(_ESZSLBase):
         self.best_lam_ = float(lams[li])
         self.best_score_ = float(self.mean_cv_scores_[gi, li])
         self.cv_val_classes_ = val_classes
-        return self._finish_fit(X, classes, S, S_u, y_u, self.best_gamma_, self.best_lam_)
+        return self._finish_fit(X, S_u, y_u, self.best_gamma_, self.best_lam_)
 
     def _score_fold(self, X_tr, y_tr, X_va, y_va, S_u, gammas, lams) -> np.ndarray:
         """Zero-shot score on the held-out classes for every grid point: (n_gammas, n_lams)."""

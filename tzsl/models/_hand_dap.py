@@ -44,12 +44,14 @@ from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC, LinearSVC
 from sklearn.utils import check_random_state
+from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
 from tzsl.exceptions import ConfigError, SplitError, TzslError
 from tzsl.features._grasp_features import unpack_grasp_features
 from tzsl.models._dap import dap_log_scores
+from tzsl.models._validation import ParameterError, ValidatedParamsMixin
 
 __all__ = ["FUSIONS", "HandDAPClassifier", "NoContactError", "fuse_grasp_posteriors"]
 
@@ -126,7 +128,7 @@ def _fit_one(estimator, X: np.ndarray, y: np.ndarray):
         return clone(estimator).fit(X, y)
 
 
-class HandDAPClassifier(ClassifierMixin, BaseEstimator):
+class HandDAPClassifier(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
     """Zero-shot object recognition from one grasp of a 5-BioTac hand (DAP paper section 5).
 
     Parameters
@@ -176,8 +178,25 @@ class HandDAPClassifier(ClassifierMixin, BaseEstimator):
     (``GraspFeatures.to_array()``): per-BioTac material features, contact flags, shape features.
     """
 
+    _parameter_constraints: dict = {
+        "material_attributes": ["array-like"],
+        "fusion": [StrOptions(set(FUSIONS))],
+        "n_components": [Interval(Integral, 1, None, closed="left")],
+        "material_C": [Interval(Real, 0, None, closed="neither")],
+        "shape_C": [Interval(Real, 0, None, closed="neither")],
+        "shape_gamma": [Interval(Real, 0, None, closed="neither"), StrOptions({"scale", "auto"})],
+        "per_finger": ["boolean"],
+        "calibration_cv": [Interval(Integral, 2, None, closed="left")],
+        "prior": [Interval(Real, 0, 1, closed="neither")],
+        "n_fingers": [Interval(Integral, 1, None, closed="left")],
+        "n_material_features": [Interval(Integral, 1, None, closed="left")],
+        "n_jobs": [None, Integral],
+        "random_state": ["random_state"],
+    }
+
     def __init__(
         self,
+        *,
         material_attributes: Sequence[str] = ("porcelain", "plastic", "cardboard", "glass", "steel"),
         fusion: str = "ldap",
         n_components: int = 8,
@@ -207,25 +226,11 @@ class HandDAPClassifier(ClassifierMixin, BaseEstimator):
         self.random_state = random_state
 
     # ------------------------------------------------------------------ helpers
-    def _check_params(self) -> None:
-        if self.fusion not in FUSIONS:
-            raise ConfigError(f"fusion must be one of {FUSIONS}, got {self.fusion!r}")
-        for name in ("n_components", "calibration_cv", "n_fingers", "n_material_features"):
-            v = getattr(self, name)
-            if not isinstance(v, Integral) or v < 1:
-                raise ConfigError(f"{name} must be a positive integer, got {v!r}")
-        if self.calibration_cv < 2:
-            raise ConfigError(f"calibration_cv must be >= 2, got {self.calibration_cv!r}")
+    def _check_param_values(self) -> None:
         if self.n_components > self.n_material_features:
-            raise ConfigError(
+            raise ParameterError(
                 f"n_components={self.n_components} exceeds n_material_features={self.n_material_features}"
             )
-        for name in ("material_C", "shape_C"):
-            v = getattr(self, name)
-            if not isinstance(v, Real) or not v > 0:
-                raise ConfigError(f"{name} must be > 0, got {v!r}")
-        if not isinstance(self.prior, Real) or not 0 < self.prior < 1:
-            raise ConfigError(f"prior must be in (0, 1), got {self.prior!r}")
 
     def _unpack(self, X):
         try:
@@ -263,7 +268,7 @@ class HandDAPClassifier(ClassifierMixin, BaseEstimator):
         -------
         self
         """
-        self._check_params()
+        self._validate_params()
         material, contact, shape = self._unpack(X)
         y = np.asarray(y)
         if y.shape != (material.shape[0],):

@@ -26,6 +26,7 @@ from joblib import delayed
 from sklearn.base import clone
 from sklearn.compose import ColumnTransformer
 from sklearn.utils import check_random_state
+from sklearn.utils._param_validation import StrOptions
 
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_svm import AttributeClassifierBank, default_preprocessor
@@ -62,8 +63,14 @@ class MultiLabelAttributeClassifier(AttributeClassifierBank):
         ``estimators_[t][s]``: link ``t`` of the chain (attribute ``order_[t]``) on sensor ``s``.
     """
 
+    _parameter_constraints: dict = {
+        **AttributeClassifierBank._parameter_constraints,
+        "order": [None, StrOptions({"random"}), "array-like"],
+    }
+
     def __init__(
         self,
+        *,
         estimator=None,
         order=None,
         attribute_names=None,
@@ -99,6 +106,7 @@ class MultiLabelAttributeClassifier(AttributeClassifierBank):
         -------
         self
         """
+        self._validate_params()
         X, A, names = self._check_fit_input(X, A)
         n, s, d = X.shape
         m = A.shape[1]

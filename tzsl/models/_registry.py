@@ -1,0 +1,265 @@
+"""The method registry: every zero-shot method by name, and ``all_estimators()``.
+
+A method is an attribute model class plus a decision rule class (built into a
+:class:`tzsl.models.ZeroShotClassifier`), or one self-contained estimator class (the hand's
+:class:`~tzsl.models.HandDAPClassifier`, the CNN+LSTM). Adding a method is one class plus one
+line::
+
+    register_method("my-method", family="embedding", paper="Me et al. 2024",
+                    attribute_model=MyAttributeModel, decision_rule=NearestAttributeRule)
+
+or, as a decorator on the attribute model class::
+
+    @register_method("my-method", family="embedding", paper="...", decision_rule=NearestAttributeRule)
+    class MyAttributeModel(BaseEstimator): ...
+
+Parameters and their defaults are read from the classes' ``__init__`` signatures (never
+written twice); ``preset`` fixes some of them for the method (``dap-max`` is ``DAPRule``
+with ``fusion="max"``). A study builds a method with :func:`build_method`.
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+from sklearn.base import BaseEstimator
+
+from tzsl.exceptions import ConfigError
+
+__all__ = [
+    "FAMILIES",
+    "Method",
+    "all_estimators",
+    "available_methods",
+    "build_method",
+    "get_method",
+    "register_method",
+    "unregister_method",
+]
+
+#: Method families shown by ``tzsl methods``.
+FAMILIES = ("attribute-classifier", "embedding", "compatibility")
+
+DAP_PAPER = (
+    "Abderrahmane, Ganesh, Crosnier, Cherubini (2018): Haptic zero-shot learning: recognition of "
+    "objects never touched before. Robotics and Autonomous Systems 105"
+)
+FABRIC_PAPER = "Fabric recognition using zero-shot learning (Tsinghua Sci. Technol. 2019), F15 loss C + lambda R"
+ESZSL_PAPER = "Romera-Paredes, Torr (2015): An embarrassingly simple approach to zero-shot learning. ICML"
+
+_REGISTRY: dict[str, Method] = {}
+
+
+def _init_defaults(cls: type) -> dict[str, object]:
+    """Keyword parameters of ``cls.__init__`` with their defaults, in signature order."""
+    sig = inspect.signature(cls.__init__)
+    return {
+        name: p.default
+        for name, p in sig.parameters.items()
+        if name != "self" and p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)
+    }
+
+
+@dataclass(frozen=True)
+class Method:
+    """One registered zero-shot method.
+
+    Attributes
+    ----------
+    name : str
+        Registry name (``"dap-avg"``, ``"eszsl"``, ...).
+    family : str
+        One of :data:`FAMILIES`.
+    paper : str
+        Where the method comes from.
+    attribute_model, decision_rule : type or None
+        Classes composed into a :class:`~tzsl.models.ZeroShotClassifier`.
+    estimator : type or None
+        A self-contained estimator class instead (hand, deep).
+    preset : mapping
+        Parameters fixed for this method.
+    description : str
+        One line for ``tzsl methods``.
+    """
+
+    name: str
+    family: str
+    paper: str
+    attribute_model: type | None = None
+    decision_rule: type | None = None
+    estimator: type | None = None
+    preset: Mapping[str, object] = field(default_factory=dict)
+    description: str = ""
+
+    def components(self) -> list[type]:
+        """Classes whose parameters the method exposes (estimator, or model then rule)."""
+        if self.estimator is not None:
+            return [self.estimator]
+        return [self.attribute_model, self.decision_rule]
+
+    def parameters(self) -> dict[str, object]:
+        """Settable parameters and their defaults (presets excluded), read from the signatures."""
+        out: dict[str, object] = {}
+        for cls in self.components():
+            for name, default in _init_defaults(cls).items():
+                if name not in self.preset:
+                    out.setdefault(name, default)
+        if self.estimator is None:
+            out.setdefault("random_state", None)  # the classifier's tie-breaking seed
+        return out
+
+    def build(self, **params) -> BaseEstimator:
+        """An unfitted estimator of this method.
+
+        Parameters
+        ----------
+        **params
+            Any of :meth:`parameters`. ``random_state`` seeds the attribute model (when it has
+            one) and the tie-breaking of the :class:`~tzsl.models.ZeroShotClassifier`.
+
+        Returns
+        -------
+        estimator
+            A :class:`~tzsl.models.ZeroShotClassifier`, or the method's own estimator.
+
+        Raises
+        ------
+        ConfigError
+            An unknown parameter, or one fixed by the method's preset.
+        """
+        fixed = sorted(set(params) & set(self.preset))
+        if fixed:
+            raise ConfigError(f"method {self.name!r}: parameter(s) {fixed} are fixed ({dict(self.preset)})")
+        unknown = sorted(set(params) - set(self.parameters()))
+        if unknown:
+            raise ConfigError(
+                f"method {self.name!r}: unknown parameter(s) {unknown}; known: {sorted(self.parameters())}"
+            )
+        merged = {**self.preset, **params}
+        if self.estimator is not None:
+            return self.estimator(**merged)
+        from tzsl.models._zero_shot import ZeroShotClassifier  # noqa: PLC0415 (import cycle)
+
+        model_keys, rule_keys = _init_defaults(self.attribute_model), _init_defaults(self.decision_rule)
+        model = self.attribute_model(**{k: v for k, v in merged.items() if k in model_keys})
+        rule = self.decision_rule(**{k: v for k, v in merged.items() if k in rule_keys and k not in model_keys})
+        return ZeroShotClassifier(
+            attribute_model=model, decision_rule=rule, random_state=merged.get("random_state")
+        )
+
+
+def register_method(
+    name: str,
+    attribute_model: type | None = None,
+    *,
+    family: str,
+    paper: str,
+    decision_rule: type | None = None,
+    estimator: type | None = None,
+    preset: Mapping[str, object] | None = None,
+    description: str = "",
+    replace: bool = False,
+):
+    """Register a method; without a model class, return a class decorator that registers it.
+
+    Parameters
+    ----------
+    name : str
+    attribute_model : type, optional
+        Attribute model class (with ``decision_rule``).
+    family : str
+        One of :data:`FAMILIES`.
+    paper : str
+    decision_rule : type, optional
+        Decision rule class; required with an attribute model.
+    estimator : type, optional
+        Self-contained estimator class (instead of attribute model + rule).
+    preset : mapping, optional
+        Fixed parameters.
+    description : str
+    replace : bool, default=False
+        Allow replacing a method of the same name.
+
+    Returns
+    -------
+    Method, or a decorator returning the class unchanged
+    """
+    if attribute_model is None and estimator is None:
+
+        def decorator(cls: type) -> type:
+            kw = {"estimator": cls} if decision_rule is None else {"attribute_model": cls}
+            register_method(name, family=family, paper=paper, decision_rule=decision_rule, preset=preset,
+                            description=description, replace=replace, **kw)
+            return cls
+
+        return decorator
+    if family not in FAMILIES:
+        raise ConfigError(f"method {name!r}: family must be one of {FAMILIES}, got {family!r}")
+    if (estimator is None) == (attribute_model is None) or (attribute_model is not None) != (decision_rule is not None):
+        raise ConfigError(f"method {name!r}: give either attribute_model and decision_rule, or estimator")
+    if name in _REGISTRY and not replace:
+        raise ConfigError(f"method {name!r} is already registered")
+    method = Method(name=name, family=family, paper=paper, attribute_model=attribute_model,
+                    decision_rule=decision_rule, estimator=estimator,
+                    preset=MappingProxyType(dict(preset or {})), description=description)
+    unknown = sorted(set(method.preset) - {k for c in method.components() for k in _init_defaults(c)})
+    if unknown:
+        raise ConfigError(f"method {name!r}: preset names unknown parameter(s) {unknown}")
+    _REGISTRY[name] = method
+    return method
+
+
+def unregister_method(name: str) -> None:
+    """Remove a method (e.g. a test's toy method)."""
+    _REGISTRY.pop(name, None)
+
+
+def get_method(name: str) -> Method:
+    """The registered method called ``name``.
+
+    Raises
+    ------
+    ConfigError
+        No such method (the message lists the known ones).
+    """
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        raise ConfigError(f"unknown method {name!r}; known: {available_methods()}") from None
+
+
+def available_methods() -> list[str]:
+    """Names of every registered method, sorted."""
+    return sorted(_REGISTRY)
+
+
+def build_method(name: str, **params) -> BaseEstimator:
+    """``get_method(name).build(**params)``: an unfitted estimator of the named method."""
+    return get_method(name).build(**params)
+
+
+def all_estimators() -> list[tuple[str, type]]:
+    """Every public estimator class of :mod:`tzsl.models`, like scikit-learn's ``all_estimators``.
+
+    Decision rules are not estimators of trials (they fit attribute rows) and are left out.
+
+    Returns
+    -------
+    list of (name, class), sorted by name
+    """
+    import tzsl.models as models  # noqa: PLC0415 (the package imports this module)
+
+    out = []
+    for name in models.__all__:
+        obj = getattr(models, name)
+        if (
+            inspect.isclass(obj)
+            and issubclass(obj, BaseEstimator)
+            and not issubclass(obj, models.DecisionRule)
+            and not inspect.isabstract(obj)
+        ):
+            out.append((name, obj))
+    return sorted(out, key=lambda pair: pair[0])

@@ -1,0 +1,247 @@
+"""Input checks and training classes shared by the zero-shot attribute models of tzsl.models.
+
+:func:`training_classes` defines the protocol's training classes (distinct attribute rows) and
+their order; :func:`attribute_rows` turns labelled trials and one row per class into the
+attribute rows ``A`` that ``fit(X, A, groups)`` takes.
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+from sklearn.base import BaseEstimator
+from sklearn.utils.validation import validate_data
+
+from tzsl.exceptions import ConfigError, TzslError
+
+__all__ = [
+    "ZSLInputError",
+    "attribute_rows",
+    "check_int",
+    "check_no_duplicate_rows",
+    "check_positive",
+    "encode_training_classes",
+    "training_classes",
+    "validate_class_table",
+    "validate_features",
+    "validate_features_and_rows",
+]
+
+_DUPLICATE_MODES = ("error", "merge")
+
+
+class ZSLInputError(TzslError, ValueError):
+    """Arrays given to a zero-shot model are unusable.
+
+    Raised for non-finite or wrongly shaped features, a class-attribute table that does not match
+    the labels, or duplicate attribute rows. A :class:`ValueError` too, as scikit-learn expects.
+    """
+
+
+def validate_features(est: BaseEstimator, X, *, reset: bool) -> np.ndarray:
+    """Validate features ``X`` (n, d) as float64, finite; set or check ``n_features_in_``."""
+    try:
+        return validate_data(est, X, reset=reset, dtype=np.float64)
+    except ValueError as exc:
+        raise ZSLInputError(f"{type(est).__name__}: X (features): {exc}") from exc
+
+
+def validate_features_and_rows(est: BaseEstimator, X, Y) -> tuple[np.ndarray, np.ndarray]:
+    """Validate training features (n, d) and attribute rows (n, m) (1-D: one attribute)."""
+    if Y is None:
+        raise ZSLInputError(
+            f"{type(est).__name__} requires y to be passed, but the target y is None"
+        )
+    try:
+        X, Y = validate_data(est, X, Y, reset=True, dtype=np.float64, multi_output=True, y_numeric=True)
+    except ValueError as exc:
+        raise ZSLInputError(f"{type(est).__name__}: X, Y (attribute rows): {exc}") from exc
+    return X, (Y.reshape(-1, 1) if Y.ndim == 1 else Y).astype(np.float64)
+
+
+def training_classes(Y: np.ndarray, est_name: str, groups=None) -> tuple[np.ndarray, np.ndarray]:
+    """Training classes of a zero-shot attribute model: the distinct rows of ``Y``.
+
+    Parameters
+    ----------
+    Y : ndarray of shape (n_trials, n_attributes)
+        Attribute row of each training trial's class.
+    est_name : str
+        Estimator name for the error message.
+    groups : array-like of shape (n_trials,), optional
+        Object or class of each trial. When the groups are the classes themselves (each group
+        has one attribute row and no two groups share one, e.g. PHAC-2 objects or fabric
+        classes), the classes are put in sorted group order, as scikit-learn orders
+        ``classes_ = np.unique(y)``. The order fixes class-grouped CV folds and early-stopping
+        hold-outs, not the model's definition.
+
+    Returns
+    -------
+    class_attributes : ndarray of shape (n_classes, n_attributes)
+        Distinct rows, in ``np.unique(Y, axis=0)`` (lexicographic) order unless the groups
+        are the classes (then sorted group order).
+    y : ndarray of shape (n_trials,), int
+        Each trial's row in ``class_attributes``.
+
+    Raises
+    ------
+    ZSLInputError
+        Fewer than 2 distinct rows, or ``groups`` of the wrong length.
+    """
+    S, y = np.unique(Y, axis=0, return_inverse=True)
+    y = y.ravel()
+    if S.shape[0] < 2:
+        raise ZSLInputError(
+            f"{est_name}: only one class (one distinct attribute row) in the training data; "
+            "at least 2 are needed"
+        )
+    if groups is not None:
+        groups = np.asarray(groups)
+        if groups.shape != (Y.shape[0],):
+            raise ZSLInputError(f"{est_name}: groups must have shape ({Y.shape[0]},), got {groups.shape}")
+        _, g = np.unique(groups, return_inverse=True)
+        g = g.ravel()
+        pairs = np.unique(np.column_stack([g, y]), axis=0)
+        if pairs.shape[0] == S.shape[0] == g.max() + 1:  # one row per group, one group per row
+            order = pairs[np.argsort(pairs[:, 0]), 1]  # row of each group, in sorted group order
+            rank = np.empty_like(order)
+            rank[order] = np.arange(order.size)
+            return S[order], rank[y]
+    return S, y
+
+
+def attribute_rows(y, class_attributes) -> np.ndarray:
+    """Each trial's attribute row from class labels and one row per class.
+
+    Parameters
+    ----------
+    y : array-like of shape (n_trials,)
+        Class labels.
+    class_attributes : array-like of shape (n_classes, n_attributes)
+        One row per class of ``np.unique(y)``, in that (sorted) order.
+
+    Returns
+    -------
+    ndarray of shape (n_trials, n_attributes), float64
+        ``Y`` for ``fit(X, Y)`` of an attribute model.
+    """
+    classes, idx = np.unique(np.asarray(y), return_inverse=True)
+    S = validate_class_table(class_attributes)
+    if S.shape[0] != classes.size:
+        raise ZSLInputError(
+            f"class_attributes has {S.shape[0]} rows but y has {classes.size} classes "
+            f"{classes.tolist()}; give one row per class, in sorted label order"
+        )
+    return S[idx.ravel()]
+
+
+def validate_class_table(S, *, n_attributes: int | None = None, what: str = "class_attributes"):
+    """Validate a class-attribute table (k, m): 2-D, numeric, finite; attributes may be real."""
+    try:
+        S = np.asarray(S, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ZSLInputError(f"{what} must be a numeric (classes x attributes) array: {exc}") from exc
+    if S.ndim != 2 or S.shape[0] == 0 or S.shape[1] == 0:
+        raise ZSLInputError(
+            f"{what} must be a non-empty 2-D array (classes x attributes), got shape {S.shape}"
+        )
+    bad = np.argwhere(~np.isfinite(S))
+    if bad.size:
+        where = ", ".join(f"row {r} attribute {c} = {S[r, c]}" for r, c in bad[:5])
+        more = f" and {len(bad) - 5} more" if len(bad) > 5 else ""
+        raise ZSLInputError(f"{what} holds non-finite values (NaN or inf): {where}{more}")
+    if n_attributes is not None and S.shape[1] != n_attributes:
+        raise ZSLInputError(
+            f"{what} has {S.shape[1]} attributes (columns) but the model was fitted with "
+            f"{n_attributes}"
+        )
+    return S
+
+
+def duplicate_row_groups(S: np.ndarray) -> list[np.ndarray]:
+    """Groups (index arrays, each of length >= 2) of identical rows of ``S``."""
+    _, inverse, counts = np.unique(S, axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    return [np.flatnonzero(inverse == u) for u in np.flatnonzero(counts > 1)]
+
+
+def check_no_duplicate_rows(S: np.ndarray, what: str = "class_attributes") -> None:
+    """Error when two candidate classes share an attribute vector (the argmax is undecidable)."""
+    groups = duplicate_row_groups(S)
+    if groups:
+        listed = "; ".join("rows " + ", ".join(map(str, g)) for g in groups)
+        raise ZSLInputError(
+            f"{what} has identical attribute rows ({listed}): classes with the same attribute "
+            "vector cannot be told apart by a zero-shot model; merge them before predicting"
+        )
+
+
+def encode_training_classes(
+    y: np.ndarray, S, duplicate_attributes: str, est_name: str
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Map labels to rows of the training attribute table.
+
+    Returns
+    -------
+    classes : ndarray (k,)
+        Sorted unique labels; row ``j`` of ``S`` belongs to ``classes[j]``.
+    S : ndarray (k, m)
+        The validated attribute table.
+    S_unique : ndarray (u, m)
+        Distinct attribute rows (``u == k`` unless ``duplicate_attributes="merge"``).
+    y_unique : ndarray (n,)
+        Each sample's row in ``S_unique``.
+    """
+    if duplicate_attributes not in _DUPLICATE_MODES:
+        raise ConfigError(
+            f"{est_name}: duplicate_attributes must be one of {_DUPLICATE_MODES}, "
+            f"got {duplicate_attributes!r}"
+        )
+    classes, y_idx = np.unique(y, return_inverse=True)
+    S = validate_class_table(S)
+    if S.shape[0] != classes.size:
+        raise ZSLInputError(
+            f"{est_name}: class_attributes has {S.shape[0]} rows but y has {classes.size} classes "
+            f"{classes.tolist()}; give one row per class, in sorted label order"
+        )
+    groups = duplicate_row_groups(S)
+    if groups and duplicate_attributes == "error":
+        listed = "; ".join("{" + ", ".join(str(classes[i]) for i in g) + "}" for g in groups)
+        raise ZSLInputError(
+            f"{est_name}: training classes with identical attribute rows: {listed}. Zero-shot "
+            'training cannot separate them; pass duplicate_attributes="merge" to treat each such '
+            "set as one class"
+        )
+    S_unique, row_of_class = np.unique(S, axis=0, return_inverse=True)
+    y_unique = row_of_class.ravel()[y_idx]
+    if S_unique.shape[0] < 2:
+        raise ZSLInputError(
+            f"{est_name}: only one class (one distinct attribute row) in the training data; "
+            "at least 2 are needed"
+        )
+    if not groups:  # keep the caller's row order when nothing was merged
+        S_unique, y_unique = S, y_idx
+    return classes, S, S_unique, y_unique
+
+
+def check_positive(value, name: str, est_name: str, *, allow_zero: bool = False) -> float:
+    """``value`` as a float; a ConfigError unless it is a finite real (not bool) > 0 (>= 0)."""
+    if (
+        not isinstance(value, numbers.Real)
+        or isinstance(value, bool)
+        or not np.isfinite(value)
+        or value < 0
+        or (value == 0 and not allow_zero)
+    ):
+        raise ConfigError(
+            f"{est_name}: {name} must be a finite number {'>=' if allow_zero else '>'} 0, got {value!r}"
+        )
+    return float(value)
+
+
+def check_int(value, name: str, low: int, est_name: str) -> int:
+    """``value`` as an int; a ConfigError unless it is an integer (not bool) >= ``low``."""
+    if not isinstance(value, numbers.Integral) or isinstance(value, bool) or value < low:
+        raise ConfigError(f"{est_name}: {name} must be an integer >= {low}, got {value!r}")
+    return int(value)
