@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from sklearn.utils._param_validation import InvalidParameterError
-from sklearn.utils.estimator_checks import parametrize_with_checks
 
+from tzsl.models import CompatibilityRule, ZeroShotClassifier, build_method
 from tzsl.models._compatibility import (
     ALE,
     SJE,
@@ -17,11 +17,6 @@ from tzsl.models._compatibility import (
 
 MODELS = [ALE, SJE, DeViSE]
 LOSS_OF = {ALE: "ale", SJE: "sje", DeViSE: "devise"}
-
-#: check_estimator checks these models are allowed to fail, with the reason (merged into the
-#: project list by the lead). None fails today.
-EXPECTED_FAILED_CHECKS: dict[str, str] = {}
-
 
 def test_loss_weights_worked_by_hand():
     # sample 0: hinge terms 0.5 and 2.0 on classes 1 and 2 (class 0 true), class 3 not violating
@@ -70,8 +65,8 @@ def test_recognises_unseen_classes(model_class, zero_shot_problem):
     accuracies = []
     for seed in range(3):
         p = zero_shot_problem(seed=seed)
-        model = model_class(random_state=seed).fit(p.X_train, p.A_train)
-        pred = np.argmax(model.class_scores(p.X_test, p.S_test), axis=1)
+        method = ZeroShotClassifier(attribute_model=model_class(random_state=seed), decision_rule=CompatibilityRule())
+        pred = method.fit(p.X_train, p.A_train).predict(p.X_test, p.S_test)
         accuracies.append(np.mean(pred == p.y_test))
     assert np.mean(accuracies) >= 0.8, accuracies  # chance 0.125
 
@@ -116,8 +111,9 @@ def test_scores_are_dot_products_with_class_rows(model_class, zero_shot_problem)
     E = model.predict(p.X_test)
     np.testing.assert_allclose(E, model.scaler_.transform(p.X_test) @ model.coef_.T)
     np.testing.assert_allclose(model.decision_function(p.X_test), E)
-    np.testing.assert_allclose(model.class_scores(p.X_test, p.S_test), E @ p.S_test.T)
-    assert model.score_kind == "embedding" and model.default_rule == "dot"
+    method = build_method(model_class.__name__.lower(), random_state=0, n_epochs=3).fit(p.X_train, p.A_train)
+    np.testing.assert_allclose(method.decision_function(p.X_test, p.S_test), E @ p.S_test.T)
+    assert model.score_kind == "embedding"
     assert model.coef_.shape == (p.S.shape[1], p.X.shape[1])
 
 
@@ -139,10 +135,3 @@ def test_bad_parameters_raise_invalid_parameter_error(model_class, params):
     A = np.eye(2)[np.arange(10) % 2]
     with pytest.raises(InvalidParameterError):
         model_class(**params).fit(X, A)
-
-
-@parametrize_with_checks(
-    [m(n_epochs=3) for m in MODELS], expected_failed_checks=lambda est: EXPECTED_FAILED_CHECKS
-)
-def test_sklearn_compatible(estimator, check):
-    check(estimator)

@@ -19,6 +19,7 @@ from tzsl.models._decision import (
     DAPRule,
     DecisionRule,
     NearestAttributeRule,
+    cosine_similarities,
     squared_distances,
 )
 from tzsl.models._embedding import EmbeddingZSL
@@ -34,6 +35,9 @@ from tzsl.models._multigrasp import (
 )
 from tzsl.models._multilabel import MultiLabelAttributeClassifier
 from tzsl.models._eszsl import ESZSL, ESZSLCV
+from tzsl.models._iap import IAP
+from tzsl.models._sae import SAE, SAECV
+from tzsl.models._compatibility import ALE, SJE, DeViSE
 from tzsl.models._zsl_input import ZSLInputError, attribute_rows, training_classes
 from tzsl.models._validation import ParameterError
 from tzsl.models._zero_shot import ZeroShotClassifier, score_kind
@@ -78,6 +82,7 @@ __all__: list[str] = [
     "DecisionRule",
     "NearestAttributeRule",
     "squared_distances",
+    "cosine_similarities",
     "ZeroShotClassifier",
     "score_kind",
     "ParameterError",
@@ -92,4 +97,4 @@ __all__: list[str] = [
     "get_method",
     "register_method",
     "unregister_method",
-    "ESZSL", "ESZSLCV", "EmbeddingZSL"]
+    "ESZSL", "ESZSLCV", "EmbeddingZSL", "IAP", "SAE", "SAECV", "ALE", "SJE", "DeViSE"]

@@ -3,13 +3,22 @@
 from __future__ import annotations
 
 from tzsl.models._attribute_svm import AttributeClassifierBank
+from tzsl.models._compatibility import ALE, SJE, DeViSE
 from tzsl.models._decision import CompatibilityRule, DAPRule, NearestAttributeRule
 from tzsl.models._deep import DeepAttributeEmbedding
 from tzsl.models._embedding import EmbeddingZSL
 from tzsl.models._eszsl import ESZSLCV
 from tzsl.models._hand_dap import HandDAPClassifier
+from tzsl.models._iap import IAP
 from tzsl.models._multilabel import MultiLabelAttributeClassifier
 from tzsl.models._registry import DAP_PAPER, ESZSL_PAPER, FABRIC_PAPER, register_method
+from tzsl.models._sae import SAECV
+
+IAP_PAPER = "Lampert, Nickisch, Harmeling (2009): Learning to detect unseen object classes by between-class attribute transfer. CVPR"
+SAE_PAPER = "Kodirov, Xiang, Gong (2017): Semantic autoencoder for zero-shot learning. CVPR"
+ALE_PAPER = "Akata, Perronnin, Harchaoui, Schmid (2016): Label-embedding for image classification. TPAMI 38(7)"
+SJE_PAPER = "Akata, Reed, Walter, Lee, Schiele (2015): Evaluation of output embeddings for fine-grained image classification. CVPR"
+DEVISE_PAPER = "Frome, Corrado, Shlens, Bengio, Dean, Ranzato, Mikolov (2013): DeViSE: a deep visual-semantic embedding model. NIPS"
 
 _PROB = "attribute-classifier"
 register_method("dap-avg", family=_PROB, paper=DAP_PAPER, attribute_model=AttributeClassifierBank, decision_rule=DAPRule, preset={"fusion": "avg"}, description="per-(attribute, sensor) RBF-SVMs, AVGDAP over sensors (eq. 6)")
@@ -20,3 +29,8 @@ register_method("hand-dap", family=_PROB, paper=DAP_PAPER, estimator=HandDAPClas
 register_method("eszsl", family="compatibility", paper=ESZSL_PAPER, attribute_model=ESZSLCV, decision_rule=CompatibilityRule, description="closed-form bilinear compatibility, ridges by class-grouped CV")
 register_method("embedding", family="embedding", paper=FABRIC_PAPER, attribute_model=EmbeddingZSL, decision_rule=NearestAttributeRule, description="features -> attribute vector with loss C + lambda R, nearest class")
 register_method("cnn-lstm", family="embedding", paper=FABRIC_PAPER, estimator=DeepAttributeEmbedding, description="CNN+LSTM over key-frame sequences, loss C + lambda R (needs torch)")
+register_method("iap", family=_PROB, paper=IAP_PAPER, attribute_model=IAP, decision_rule=DAPRule, description="classifier over training classes, attribute posteriors through their rows, then DAP")
+register_method("sae", family="embedding", paper=SAE_PAPER, attribute_model=SAECV, decision_rule=NearestAttributeRule, preset={"metric": "cosine"}, description="semantic autoencoder (closed form), lambda by class-held-out CV, nearest class by cosine")
+register_method("ale", family="compatibility", paper=ALE_PAPER, attribute_model=ALE, decision_rule=CompatibilityRule, description="bilinear compatibility, weighted approximate ranking loss (SGD)")
+register_method("sje", family="compatibility", paper=SJE_PAPER, attribute_model=SJE, decision_rule=CompatibilityRule, description="bilinear compatibility, structured max-margin loss (SGD)")
+register_method("devise", family="compatibility", paper=DEVISE_PAPER, attribute_model=DeViSE, decision_rule=CompatibilityRule, description="bilinear compatibility, hinge rank loss over violating classes (SGD)")

@@ -41,11 +41,8 @@ from sklearn.base import _fit_context
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval
 
-from tzsl.models._attribute_model_base import (
-    EmbeddingAttributeModel,
-    training_classes,
-    validate_fit_data,
-)
+from tzsl.models._attribute_model_base import EmbeddingAttributeModel
+from tzsl.models._zsl_input import training_classes, validate_features_and_rows
 
 __all__ = ["ALE", "DeViSE", "SJE", "ranking_loss_and_gradient", "ranking_loss_weights"]
 
@@ -155,7 +152,7 @@ _DOC_PARAMS = """
     ----------
     coef_ : ndarray of shape (n_attributes, n_features)
         ``W^T``: ``predict(X) = X W`` (on standardised features), compared with class rows by
-        dot product (``default_rule = "dot"``).
+        dot product (:class:`~tzsl.models.CompatibilityRule`).
     class_attributes_ : ndarray of shape (n_train_classes, n_attributes)
         Distinct training attribute rows (the training classes).
     loss_curve_ : ndarray of shape (n_epochs,)
@@ -169,7 +166,6 @@ class _BilinearCompatibility(EmbeddingAttributeModel):
     """Shared SGD training of ``F(x, y) = x^T W phi(y)``; subclasses set ``_loss``."""
 
     _loss = "devise"
-    default_rule = "dot"
 
     _parameter_constraints: dict = {
         "learning_rate": [Interval(Real, 0, None, closed="neither")],
@@ -215,7 +211,7 @@ class _BilinearCompatibility(EmbeddingAttributeModel):
         -------
         self
         """
-        X, A = validate_fit_data(self, X, y)
+        X, A = validate_features_and_rows(self, X, y)
         Phi, cls = training_classes(A, type(self).__name__)  # (z, m), (n,)
         Xs = self._fit_scaler(X)
         rng = check_random_state(self.random_state)

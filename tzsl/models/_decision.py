@@ -53,6 +53,7 @@ __all__ = [
     "DecisionRule",
     "NearestAttributeRule",
     "check_real_class_attributes",
+    "cosine_similarities",
     "squared_distances",
 ]
 
@@ -286,6 +287,22 @@ class NearestAttributeRule(DecisionRule):
         F = self._check_scores(scores)
         if self.metric == "sqeuclidean":
             return -squared_distances(F, K)
-        nf = np.linalg.norm(F, axis=1, keepdims=True)
-        nk = np.linalg.norm(K, axis=1, keepdims=True)
-        return (F / np.where(nf > 0, nf, 1.0)) @ (K / np.where(nk > 0, nk, 1.0)).T
+        return cosine_similarities(F, K)
+
+
+def cosine_similarities(F: np.ndarray, K: np.ndarray) -> np.ndarray:
+    """Cosine similarity of estimated attribute vectors with class rows.
+
+    Parameters
+    ----------
+    F : ndarray of shape (n_trials, n_attributes)
+    K : ndarray of shape (n_classes, n_attributes)
+
+    Returns
+    -------
+    ndarray of shape (n_trials, n_classes), values in [-1, 1]
+        An all-zero vector (either side) has similarity 0 to everything.
+    """
+    nf = np.linalg.norm(F, axis=1, keepdims=True)
+    nk = np.linalg.norm(K, axis=1, keepdims=True)
+    return (F / np.where(nf > 0, nf, 1.0)) @ (K / np.where(nk > 0, nk, 1.0)).T

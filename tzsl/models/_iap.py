@@ -22,11 +22,8 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.utils._param_validation import HasMethods
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from tzsl.models._attribute_model_base import (
-    attribute_model_tags,
-    training_classes,
-    validate_fit_data,
-)
+from tzsl.models._attribute_model_base import attribute_model_tags
+from tzsl.models._zsl_input import training_classes, validate_features_and_rows
 
 __all__ = ["IAP", "default_iap_classifier"]
 
@@ -100,7 +97,7 @@ class IAP(BaseEstimator):
         -------
         self : IAP
         """
-        X, A = validate_fit_data(self, X, y)
+        X, A = validate_features_and_rows(self, X, y)
         self.class_attributes_, z = training_classes(A, "IAP")
         clf = default_iap_classifier() if self.classifier is None else clone(self.classifier)
         if self.classifier_groups:

@@ -37,12 +37,9 @@ from sklearn.model_selection import GroupKFold
 from sklearn.preprocessing import StandardScaler
 from sklearn.utils._param_validation import Interval, InvalidParameterError
 
-from tzsl.models._attribute_model_base import (
-    EmbeddingAttributeModel,
-    cosine_scores,
-    training_classes,
-    validate_fit_data,
-)
+from tzsl.models._attribute_model_base import EmbeddingAttributeModel
+from tzsl.models._decision import cosine_similarities
+from tzsl.models._zsl_input import training_classes, validate_features_and_rows
 
 __all__ = ["DEFAULT_LAMS", "SAE", "SAECV", "sylvester_solution"]
 
@@ -118,11 +115,9 @@ class SAE(EmbeddingAttributeModel):
 
     Notes
     -----
-    ``score_kind = "embedding"`` and ``default_rule = "cosine"``: :meth:`class_scores` gives the
-    cosine similarity of each projection with each candidate class row.
+    ``score_kind = "embedding"``; the registered method ``sae`` compares each projection with the
+    candidate class rows by cosine similarity (:class:`~tzsl.models.NearestAttributeRule`).
     """
-
-    default_rule = "cosine"
 
     _parameter_constraints: dict = {
         "lam": [Interval(Real, 0, None, closed="neither")],
@@ -151,7 +146,7 @@ class SAE(EmbeddingAttributeModel):
         -------
         self : SAE
         """
-        X, A = validate_fit_data(self, X, y)
+        X, A = validate_features_and_rows(self, X, y)
         self.class_attributes_, _ = training_classes(A, type(self).__name__)
         Xs = self._fit_scaler(X)
         self.coef_ = sylvester_solution(A, Xs, float(self.lam))
@@ -196,8 +191,6 @@ class SAECV(EmbeddingAttributeModel):
     then holds out one class, whose trials are classified among ALL training class rows.
     """
 
-    default_rule = "cosine"
-
     _parameter_constraints: dict = {
         "lams": ["array-like"],
         "n_splits": [Interval(Integral, 2, None, closed="left")],
@@ -239,7 +232,7 @@ class SAECV(EmbeddingAttributeModel):
         self : SAECV
         """
         lams = self._lam_grid()
-        X, A = validate_fit_data(self, X, y)
+        X, A = validate_features_and_rows(self, X, y)
         rows, cls = training_classes(A, "SAECV")
         n_classes = rows.shape[0]
         n_folds = min(self.n_splits, n_classes // 2) if n_classes >= 4 else n_classes
@@ -257,7 +250,7 @@ class SAECV(EmbeddingAttributeModel):
             fold = []
             for lam in lams:
                 E = X_va @ _solve_parts(parts, lam).T  # (n_held_out, n_attributes)
-                fold.append(np.mean(np.argmax(cosine_scores(E, candidate_rows), axis=1) == truth))
+                fold.append(np.mean(np.argmax(cosine_similarities(E, candidate_rows), axis=1) == truth))
             scores.append(fold)
         self.cv_scores_ = np.asarray(scores).T
         mean = self.cv_scores_.mean(axis=1)
