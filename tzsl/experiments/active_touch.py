@@ -17,7 +17,7 @@ Accuracy is trial accuracy pooled over the splits of a kind, with a 95% percenti
 from a two-level bootstrap (splits with replacement, then test objects with replacement within
 each drawn split, trials of an object kept together). Accuracy vs seconds uses each EP's
 duration (:data:`tzsl.models.PHAC2_EP_SECONDS`): at budget ``t`` a trial counts the prediction
-after the EPs it has completed by ``t`` (before any EP, a uniformly random guess).
+after the EPs it has completed by ``t`` (before any EP, the chance ``1 / n_classes`` of a guess).
 
 The stopping rule (top class posterior >= ``threshold``) is evaluated post hoc on the
 trajectory of the active policy and of the paper's order: the trajectory of a greedy policy does
@@ -117,9 +117,10 @@ def evaluate_split(features: FeatureSet, split: Split, *, seed: int, update: str
     Returns
     -------
     dict with ``correct`` (strategy -> bool (n_trials, n_eps) after 1..n_eps EPs), ``seconds``
-    (strategy -> cumulative seconds (n_trials, n_eps)), ``first`` (bool (n_trials,): the guess
-    before any EP), ``top`` (strategy -> top posterior (n_trials, n_eps)), ``objects``
-    (n_trials,), ``eps``, ``ep_seconds``, ``best_fixed_train`` (its order name), ``n_classes``.
+    (strategy -> cumulative seconds (n_trials, n_eps)), ``first`` ((n_trials,): expected
+    correctness of the uniform guess before any EP, ``1 / n_classes``), ``top`` (strategy -> top
+    posterior (n_trials, n_eps)), ``objects`` (n_trials,), ``eps``, ``ep_seconds``,
+    ``best_fixed_train`` (its order name), ``n_classes``.
     """
     attributes = list(split.kept_attributes)
     objects = features.objects
@@ -153,7 +154,7 @@ def evaluate_split(features: FeatureSet, split: Split, *, seed: int, update: str
         seconds[policy] = np.cumsum(sec[res["order"]], axis=1)
         top[policy] = res["top_probability"][:, 1:]
         correct[f"{policy}:first_ep"] = np.eye(len(eps), dtype=bool)[res["order"][:, 0]]  # which EP came first
-    first = res_paper["predictions"][:, 0] == y
+    first = np.full(y.shape, 1.0 / K.shape[0])  # before any EP: expected accuracy of a uniform guess
     return {"correct": correct, "seconds": seconds, "top": top, "first": first, "objects": objects[test],
             "eps": eps, "ep_seconds": sec, "best_fixed_train": best, "n_classes": K.shape[0]}
 
