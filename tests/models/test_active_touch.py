@@ -70,7 +70,6 @@ def test_ep_column_blocks_and_errors():
         ep_column_blocks(["hold:a"], eps=["hold", "squeeze"])
 
 
-@pytest.mark.slow
 def test_logistic_attribute_is_an_estimator():
     check_estimator(LogisticAttribute())
     with pytest.raises(InvalidParameterError):
