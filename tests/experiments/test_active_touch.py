@@ -1,0 +1,95 @@
+"""Active-touch study: bootstrap intervals, the written table and figure, and a real PHAC-2 split."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from tzsl.datasets import FeatureSet
+from tzsl.evaluation import random_object_splits
+from tzsl.exceptions import ConfigError
+from tzsl.experiments.active_touch import bootstrap_accuracy, evaluate_split, run_active_touch_study
+
+EPS = ("squeeze", "hold", "slow_slide", "fast_slide")
+
+
+def _feature_set(n_objects=24, n_trials=3, n_attributes=6, seed=0) -> FeatureSet:
+    """Synthetic PHAC-2-like features: the hold block carries the attributes, the others are noise."""
+    rng = np.random.default_rng(seed)
+    K = (rng.random((n_objects, n_attributes)) < 0.5).astype(int)
+    K[:6] = np.eye(6, n_attributes, dtype=int)
+    K[6:12] = 1 - K[:6]
+    objects = np.repeat([f"obj_{i:03d}" for i in range(n_objects)], n_trials)
+    codes = np.repeat(np.arange(n_objects), n_trials)
+    X = rng.normal(size=(codes.size, 2, 4 * n_attributes))
+    hold = slice(n_attributes, 2 * n_attributes)
+    X[:, :, hold] += 3.0 * (K[codes] - 0.5)[:, None, :]
+    trials = pd.DataFrame({"trial_id": [f"{o}_{t}" for o, t in zip(objects, np.tile(np.arange(n_trials), n_objects))],
+                           "object_id": codes, "object_name": objects,
+                           "trial_index": np.tile(np.arange(1, n_trials + 1), n_objects)})
+    attributes = pd.DataFrame(K, index=pd.Index([f"obj_{i:03d}" for i in range(n_objects)], name="object_name"),
+                              columns=[f"a{j}" for j in range(n_attributes)])
+    names = tuple(f"{ep}:f{j}" for ep in EPS for j in range(n_attributes))
+    return FeatureSet(X=X, trials=trials, sensors=("finger_0", "finger_1"), feature_names=names,
+                      attributes=attributes, dataset="synthetic")
+
+
+def test_bootstrap_accuracy_interval():
+    correct = np.array([[3, 0], [3, 1], [2, 2], [3, 3]], dtype=float)
+    trials = np.full(4, 3.0)
+    split = np.array([0, 0, 1, 1])
+    acc, low, high = bootstrap_accuracy(correct, trials, split, n_boot=500, random_state=0)
+    np.testing.assert_allclose(acc, [11 / 12, 6 / 12])
+    assert (low <= acc).all() and (acc <= high).all()
+    assert high[1] - low[1] > high[0] - low[0] > 0  # more spread, wider interval
+    acc, low, high = bootstrap_accuracy(np.full((4, 1), 3.0), trials, split, n_boot=50)
+    assert acc[0] == low[0] == high[0] == 1.0
+
+
+def test_study_writes_table_and_figure(tmp_path, monkeypatch):
+    monkeypatch.delenv("TZSL_CACHE_DIR", raising=False)
+    fs = _feature_set()
+    table = run_active_touch_study(fs, tmp_path, n_splits=2, seed=0, threshold=0.9, cv=3, n_samples=32,
+                                   n_boot=200, kinds=("random",))
+    assert {"active_touch.csv", "active_touch.png", "manifest.json"} <= {p.name for p in tmp_path.iterdir()}
+    written = pd.read_csv(tmp_path / "active_touch.csv")
+    assert len(written) == len(table)
+    eps_rows = table[table["x_kind"] == "eps"]
+    strategies = set(eps_rows["strategy"])
+    assert {"active", "active_per_second", "random", "paper", "best_fixed_train", "best_fixed_test"} <= strategies
+    assert sum(s.startswith("order:") for s in strategies) == 24
+    assert (eps_rows.groupby("strategy").size() == 4).all()
+    assert ((table["ci_low"] <= table["accuracy"] + 1e-12) & (table["accuracy"] <= table["ci_high"] + 1e-12)).all()
+    # the hold block is the informative one: the active policy explores it first and beats chance
+    first = eps_rows[(eps_rows["strategy"] == "active") & (eps_rows["x"] == 1)]
+    assert first["first_hold"].iloc[0] == 1.0
+    assert first["accuracy"].iloc[0] > 2 * first["chance"].iloc[0]
+    # random order is the mean of the 24 fixed orders
+    orders = eps_rows[eps_rows["strategy"].str.startswith("order:")].groupby("x")["accuracy"].mean()
+    np.testing.assert_allclose(eps_rows[eps_rows["strategy"] == "random"].set_index("x")["accuracy"], orders)
+    stop = table[table["x_kind"] == "stop"]
+    assert set(stop["strategy"]) == {"active+stop", "paper+stop"}
+    assert ((stop["mean_eps"] >= 1) & (stop["mean_eps"] <= 4)).all()
+    with pytest.raises(ConfigError, match="already exists"):
+        run_active_touch_study(fs, tmp_path, n_splits=1, kinds=("random",))
+
+
+@pytest.mark.slow
+@pytest.mark.realdata
+def test_one_real_phac2_split(data_dir, monkeypatch):
+    from tzsl.experiments.extract import extract_features
+
+    monkeypatch.delenv("TZSL_CACHE_DIR", raising=False)
+    fs = extract_features("phac2-penn", data_dir=data_dir)
+    split = random_object_splits(fs.attributes, n_test=10, n_splits=1, random_state=0)[0]
+    res = evaluate_split(fs, split, seed=0, cv=3, n_samples=32)
+    assert res["eps"] == EPS
+    n = len(res["objects"])
+    assert n == 100 and set(res["objects"]) == set(split.test_objects)
+    for s in ("active", "random", "paper", "best_fixed_train"):
+        assert res["correct"][s].shape == (n, 4)
+    # after all four EPs every order sees the same evidence, so the accuracies agree
+    finals = {s: res["correct"][s][:, -1].mean() for s in res["correct"] if s.startswith("order:")}
+    assert max(finals.values()) - min(finals.values()) < 0.05
+    assert res["correct"]["active"][:, -1].mean() > 1.5 / res["n_classes"]  # above chance with all EPs

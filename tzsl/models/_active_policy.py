@@ -1,0 +1,232 @@
+"""Active touch, the policy half: sequential posterior, expected information gain, stopping rule.
+
+Pure numpy functions on per-EP class log-scores ``(n_trials, n_eps, n_classes)`` and on a
+confusion model ``(n_eps, n_attributes, 2, n_bins)``; the fitted model that produces them is
+:class:`tzsl.models._active_touch.PerEPAttributeModel` (whose docstring states the model and its
+assumptions).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.special import logsumexp
+
+from tzsl.exceptions import ConfigError
+from tzsl.models._dap import break_ties, check_class_attributes
+
+__all__ = [
+    "expected_information_gain",
+    "outcome_log_likelihoods",
+    "run_policy",
+    "sequential_log_posterior",
+    "stop_reasons",
+]
+
+_LOG2 = np.log(2.0)
+
+
+def sequential_log_posterior(ep_scores, done) -> np.ndarray:
+    """Normalised log class posterior after the EPs in ``done`` (naive Bayes across EPs).
+
+    Parameters
+    ----------
+    ep_scores : array-like of shape (n_trials, n_eps, n_classes)
+        Per-EP DAP log-scores (:meth:`PerEPAttributeModel.ep_log_scores`).
+    done : array-like of shape (n_trials, n_eps) or (n_eps,), bool
+        EPs done so far; none done gives the uniform posterior.
+
+    Returns
+    -------
+    ndarray of shape (n_trials, n_classes)
+        ``log p(z | EPs done)``; ``logsumexp`` over classes is 0.
+    """
+    S = np.asarray(ep_scores, dtype=np.float64)
+    D = np.broadcast_to(np.asarray(done, dtype=bool), S.shape[:2])
+    total = np.where(D[:, :, None], S, 0.0).sum(axis=1)
+    return total - logsumexp(total, axis=1, keepdims=True)
+
+
+def outcome_log_likelihoods(confusion, class_attributes, n_samples: int = 256, random_state=0) -> np.ndarray:
+    """Monte-Carlo outcomes of every EP for every class, and their log-likelihood under every class.
+
+    For EP ``e``, sample ``s`` and true class ``z`` an outcome (one bin per attribute) is drawn
+    from ``confusion[e, m, a^z_m]`` (the same uniforms for all classes and EPs); the result is
+    ``L[e, s, z, z'] = sum_m log confusion[e, m, a^z'_m, bin]``.
+
+    Parameters
+    ----------
+    confusion : array-like of shape (n_eps, n_attributes, 2, n_bins)
+    class_attributes : array-like of shape (n_classes, n_attributes)
+    n_samples : int
+    random_state : int, Generator or None
+
+    Returns
+    -------
+    ndarray of shape (n_eps, n_samples, n_classes, n_classes)
+        Natural-log likelihoods (this array does not depend on the current belief).
+    """
+    C = np.asarray(confusion, dtype=np.float64)
+    K = check_class_attributes(class_attributes, C.shape[1]).astype(int)
+    if n_samples < 1:
+        raise ConfigError(f"n_samples must be >= 1, got {n_samples}")
+    rng = np.random.default_rng(random_state)
+    u = rng.random((n_samples, C.shape[1]))  # (S, m)
+    cdf = np.cumsum(C, axis=3)  # (E, m, 2, B)
+    cdf_z = cdf[:, np.arange(C.shape[1])[None, :], K]  # (E, Z, m, B)
+    bins = (u[None, :, None, :, None] > cdf_z[:, None]).sum(axis=4)  # (E, S, Z, m)
+    bins = np.minimum(bins, C.shape[3] - 1)
+    logC = np.log(C)  # (E, m, 2, B)
+    e_idx = np.arange(C.shape[0])[:, None, None, None, None]
+    m_idx = np.arange(C.shape[1])[None, None, None, None, :]
+    # (E, S, Z, Z', m): log p(bin of (s, z) | a_m = K[z', m])
+    terms = logC[e_idx, m_idx, K[None, None, None, :, :], bins[:, :, :, None, :]]
+    return terms.sum(axis=4)
+
+
+def expected_information_gain(log_belief, outcome_ll) -> np.ndarray:
+    """Expected reduction of class entropy (bits) of each EP, for each current belief.
+
+    Parameters
+    ----------
+    log_belief : array-like of shape (n_trials, n_classes)
+        Current normalised log posterior.
+    outcome_ll : array-like of shape (n_eps, n_samples, n_classes, n_classes)
+        From :func:`outcome_log_likelihoods`.
+
+    Returns
+    -------
+    ndarray of shape (n_trials, n_eps)
+        ``H(pi) - E_{z ~ pi} mean_s H(pi'(. | o_{s,z}))`` in bits; exactly 0 for an EP whose
+        outcome likelihoods do not depend on the class.
+    """
+    lb = np.asarray(log_belief, dtype=np.float64)
+    L = np.asarray(outcome_ll, dtype=np.float64)
+    pi = np.exp(lb)
+    H0 = -(pi * lb).sum(axis=1) / _LOG2
+    out = np.empty((lb.shape[0], L.shape[0]))
+    for e in range(L.shape[0]):  # (n, S, Z, Z') per EP keeps memory at n * S * Z^2
+        post = lb[:, None, None, :] + L[e][None]
+        post -= logsumexp(post, axis=3, keepdims=True)
+        H = -(np.exp(post) * post).sum(axis=3) / _LOG2  # (n, S, Z)
+        out[:, e] = H0 - (H.mean(axis=1) * pi).sum(axis=1)
+    return out
+
+
+def stop_reasons(log_belief, n_done, seconds_used, next_seconds, *, threshold: float = 0.9,
+                 max_eps: int | None = None, max_seconds: float | None = None) -> np.ndarray:
+    """Why each trial stops now (``""`` = continue).
+
+    Parameters
+    ----------
+    log_belief : array-like of shape (n_trials, n_classes)
+    n_done : array-like of shape (n_trials,)
+        EPs done.
+    seconds_used : array-like of shape (n_trials,)
+    next_seconds : array-like of shape (n_trials,)
+        Duration of the cheapest EP left (``inf`` when none is left).
+    threshold : float
+        Stop when the top class posterior is >= this.
+    max_eps : int or None
+    max_seconds : float or None
+        Stop when the cheapest EP left would end after this many seconds.
+
+    Returns
+    -------
+    ndarray of shape (n_trials,), dtype object
+        ``"threshold"``, ``"max_eps"``, ``"max_seconds"``, ``"no_ep_left"`` or ``""``.
+    """
+    top = np.exp(np.asarray(log_belief, dtype=np.float64).max(axis=1))
+    n_done, used, nxt = (np.asarray(a, dtype=float) for a in (n_done, seconds_used, next_seconds))
+    reason = np.full(top.shape, "", dtype=object)
+    conds = [
+        ("no_ep_left", ~np.isfinite(nxt)),
+        ("max_seconds", (used + nxt > max_seconds) if max_seconds is not None else np.zeros(top.shape, bool)),
+        ("max_eps", (n_done >= max_eps) if max_eps is not None else np.zeros(top.shape, bool)),
+        ("threshold", top >= threshold),
+    ]
+    for name, c in conds:  # the last true condition wins: the threshold is the most informative reason
+        reason[c] = name
+    return reason
+
+
+def run_policy(ep_scores, outcome_ll, ep_seconds, *, policy="active", threshold: float = 1.01,
+               max_eps: int | None = None, max_seconds: float | None = None, random_state=0) -> dict:
+    """Run a choice rule on many trials at once, one EP per step.
+
+    Parameters
+    ----------
+    ep_scores : array-like of shape (n_trials, n_eps, n_classes)
+        Per-EP DAP log-scores of the test trials.
+    outcome_ll : array-like of shape (n_eps, n_samples, n_classes, n_classes) or None
+        Needed by the active rules.
+    ep_seconds : array-like of shape (n_eps,)
+    policy : {"active", "active_per_second"} or sequence of int
+        Greedy expected information gain (per second), or a fixed order of EP indices.
+    threshold, max_eps, max_seconds
+        Stopping rule (:func:`stop_reasons`); the default threshold above 1 never stops early.
+    random_state : int or None
+        Seeds the tie-breaking of predictions.
+
+    Returns
+    -------
+    dict with
+        ``order`` (n_trials, n_eps) int: EP done at each step (-1 after stopping);
+        ``predictions`` (n_trials, n_eps + 1) int: argmax class before any EP and after each step
+        (frozen after stopping); ``top_probability`` (n_trials, n_eps + 1): top class posterior at
+        the same moments; ``gain`` (n_trials, n_eps): expected gain (bits) of the chosen
+        EP (NaN for fixed orders / after stopping); ``n_eps_used`` (n_trials,) int;
+        ``seconds_used`` (n_trials,); ``stop_reason`` (n_trials,) object; ``final`` (n_trials,) int.
+    """
+    S = np.asarray(ep_scores, dtype=np.float64)
+    n, E, Z = S.shape
+    sec = np.asarray(ep_seconds, dtype=float)
+    rng = np.random.default_rng(random_state)
+    done = np.zeros((n, E), dtype=bool)
+    active = np.ones(n, dtype=bool)
+    used = np.zeros(n)
+    order = np.full((n, E), -1)
+    gain = np.full((n, E), np.nan)
+    reason = np.full(n, "", dtype=object)
+    preds = np.empty((n, E + 1), dtype=int)
+    top = np.empty((n, E + 1))
+    lb = sequential_log_posterior(S, done)
+    preds[:, 0] = break_ties(lb, rng)
+    top[:, 0] = np.exp(lb.max(axis=1))
+    if isinstance(policy, str) and policy not in ("active", "active_per_second"):
+        raise ConfigError(f"policy must be 'active', 'active_per_second' or an EP order, got {policy!r}")
+    if isinstance(policy, str) and outcome_ll is None:
+        raise ConfigError("the active policy needs outcome_ll (the confusion model's outcome likelihoods)")
+    fixed = None if isinstance(policy, str) else np.asarray(policy, dtype=int)
+    for step in range(E):
+        left_sec = np.where(done, np.inf, sec[None, :]).min(axis=1)
+        r = stop_reasons(lb, done.sum(axis=1), used, left_sec, threshold=threshold, max_eps=max_eps,
+                         max_seconds=max_seconds)
+        newly = active & (r != "")
+        reason[newly] = r[newly]
+        active &= r == ""
+        if not active.any():
+            preds[:, step + 1:] = preds[:, step][:, None]
+            top[:, step + 1:] = top[:, step][:, None]
+            break
+        if fixed is not None:
+            choice = np.full(n, fixed[step])
+        else:
+            g = expected_information_gain(lb[active], outcome_ll)
+            score = g / sec[None, :] if policy == "active_per_second" else g
+            score = np.where(done[active], -np.inf, score)
+            if max_seconds is not None:
+                score = np.where(used[active, None] + sec[None, :] > max_seconds, -np.inf, score)
+            choice = np.zeros(n, dtype=int)
+            choice[active] = score.argmax(axis=1)
+            gain[active, step] = g[np.arange(g.shape[0]), choice[active]]
+        rows = np.flatnonzero(active)
+        done[rows, choice[rows]] = True
+        order[rows, step] = choice[rows]
+        used[rows] += sec[choice[rows]]
+        lb = np.where(active[:, None], sequential_log_posterior(S, done), lb)
+        preds[:, step + 1] = np.where(active, break_ties(lb, rng), preds[:, step])
+        top[:, step + 1] = np.exp(lb.max(axis=1))
+    r = np.where(done.all(axis=1) & active, "no_ep_left", "")
+    reason[(reason == "") & (r != "")] = "no_ep_left"
+    return {"order": order, "predictions": preds, "top_probability": top, "gain": gain, "n_eps_used": done.sum(axis=1),
+            "seconds_used": used, "stop_reason": reason, "final": preds[:, -1]}

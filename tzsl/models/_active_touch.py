@@ -1,0 +1,475 @@
+"""Active touch: per-EP attribute models, a sequential zero-shot posterior and a policy choosing the next EP.
+
+A robot pays for every exploratory procedure (EP) in seconds. Here the four PHAC-2 EPs (squeeze,
+hold, slow slide, fast slide) each get their own attribute classifiers, the class posterior over
+the *unseen* classes is updated after each EP, and the next EP is the one with the largest
+expected reduction of class entropy.
+
+Model (all fitted on training objects only):
+
+* **Per-EP attribute models.** One :class:`tzsl.models.AttributeClassifierBank` per EP on that
+  EP's feature block (sensors x EP features). The default per-(attribute, sensor) classifier is
+  :class:`LogisticAttribute` (z-score + L2 logistic regression, class-balanced): its posteriors
+  come straight from a log-loss fit (no separate Platt cross-validation), it has no
+  hyper-parameter grid, and a fit takes milliseconds, so the 5 extra cross-validation fits the
+  confusion estimate needs stay within seconds per split on one core. The RBF
+  :class:`tzsl.models.AttributeSVM` of the DAP study takes ~9 s per EP and split even with a
+  1 x 1 grid, which times 6 fits x 4 EPs x 10 splits is too slow for this evaluation.
+* **Sequential posterior (naive Bayes across EPs).** ``log p(z | EPs done) = sum_e s_e(z) + c``
+  with ``s_e`` the DAP log-scores (:func:`tzsl.models.dap_log_scores`) of EP ``e``'s fused
+  attribute posteriors (:func:`tzsl.models.fuse_attribute_posteriors`). With a uniform class
+  prior, ``s_e(z) = log p(z | x_e) - log p(z) + const``, so the sum is exactly Bayes' rule
+  under the assumption that the EPs' observations are conditionally independent given the
+  class. They are not (the same object is felt by every EP), so the summed posterior is
+  over-confident; it ranks classes correctly under the assumption, and the stopping threshold
+  should be read with that in mind.
+* **Confusion (predictive) model.** Grouped ``cv``-fold cross-validation over the *training*
+  objects gives out-of-fold fused posteriors ``p(a_m = 1 | x_e)``; per EP, attribute and true
+  value ``v`` they are binned into ``n_bins`` equal bins on [0, 1] with add-``smoothing``
+  counts: ``confusion_[e, m, v, b] = p(bin b | a_m = v)``. Given class ``z`` an EP's outcome is
+  the vector of bins, independent across attributes given ``a^z``.
+* **Policy.** Expected information gain ``I(Z; O_e) = H(pi) - E_{z ~ pi, o ~ p(o|z)} H(pi')``
+  with ``pi' ∝ pi(z') p(o | z')`` under the confusion model, estimated by Monte Carlo with
+  ``n_samples`` outcomes per class (common random numbers across classes and EPs); an EP whose
+  confusion does not depend on the attribute values gives exactly 0. Greedy: the EP with the
+  largest gain (``criterion="gain"``) or gain per second (``"gain_per_second"``).
+* **Stopping rule.** Stop when the top class posterior reaches ``threshold``, when ``max_eps``
+  EPs are done, when the next EP would exceed ``max_seconds``, or when no EP is left.
+
+EP durations (:data:`PHAC2_EP_SECONDS`, seconds): hold 10 (the controller state
+``HOLD_FOR_10_SECONDS``; Penn's ``pdc_area / pdc_max`` of the hold is ~960 samples at 100 Hz),
+slow slide 5 and fast slide 2 (Penn controller constants ``SlowSlideTime = 5``,
+``FastSlideTime = 2`` for the 5 cm slides, consistent with ``pdc_area / pdc_max`` lower bounds of
+~400 and ~146 samples), squeeze 6 (not fixed by the controller: it closes 2.5 mm/s until the
+pressure set-point and reopens at the same speed; the median over the 600 trials of
+``4 (gripper_mean - gripper_min) / 2.5 mm/s`` is 6.2 s).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from numbers import Integral, Real
+
+import numpy as np
+from sklearn.base import BaseEstimator, ClassifierMixin, _fit_context
+from sklearn.linear_model import LogisticRegression
+from sklearn.model_selection import GroupKFold
+from sklearn.pipeline import make_pipeline
+from sklearn.preprocessing import StandardScaler
+from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
+from sklearn.utils.multiclass import check_classification_targets
+from sklearn.utils.validation import check_is_fitted, validate_data
+
+from tzsl.exceptions import ConfigError
+from tzsl.models._active_policy import (
+    expected_information_gain,
+    outcome_log_likelihoods,
+    run_policy,
+    sequential_log_posterior,
+    stop_reasons,
+)
+from tzsl.models._attribute_svm import AttributeClassifierBank
+from tzsl.models._dap import (
+    attribute_prior,
+    check_class_attributes,
+    dap_log_scores,
+    fuse_attribute_posteriors,
+)
+
+__all__ = [
+    "PHAC2_EP_SECONDS",
+    "LogisticAttribute",
+    "PerEPAttributeModel",
+    "ep_column_blocks",
+    "expected_information_gain",
+    "outcome_log_likelihoods",
+    "run_policy",
+    "sequential_log_posterior",
+    "stop_reasons",
+    "suggest_next_ep",
+]
+
+#: Duration of each PHAC-2 EP in seconds (sources in the module docstring).
+PHAC2_EP_SECONDS: dict[str, float] = {"squeeze": 6.0, "hold": 10.0, "slow_slide": 5.0, "fast_slide": 2.0}
+
+
+def ep_column_blocks(feature_names: Sequence[str], eps: Sequence[str] | None = None) -> dict[str, np.ndarray]:
+    """Feature columns of each EP, from names ``"<ep>:<feature>"`` (e.g. ``"hold:pdc_max"``).
+
+    Parameters
+    ----------
+    feature_names : sequence of str, length n_features
+    eps : sequence of str, optional
+        EPs to return, in this order; default: every prefix in order of first appearance.
+
+    Returns
+    -------
+    dict of str -> int ndarray
+        Column indices of each EP's block.
+    """
+    prefixes = [str(n).partition(":")[0] if ":" in str(n) else None for n in feature_names]
+    if None in prefixes:
+        bad = feature_names[prefixes.index(None)]
+        raise ConfigError(f"feature name {bad!r} has no '<ep>:' prefix; per-EP models need EP-prefixed features")
+    order = list(dict.fromkeys(prefixes)) if eps is None else list(eps)
+    blocks = {ep: np.flatnonzero(np.array(prefixes) == ep) for ep in order}
+    empty = [ep for ep, cols in blocks.items() if cols.size == 0]
+    if empty:
+        raise ConfigError(f"no feature columns for EP(s) {empty}; the features have EPs {sorted(set(prefixes))}")
+    return blocks
+
+
+class LogisticAttribute(ClassifierMixin, BaseEstimator):
+    """z-score + L2 logistic regression for one attribute and one sensor.
+
+    ``fit(X, y, groups=None)`` accepts (and ignores) the object groups that
+    :class:`tzsl.models.AttributeClassifierBank` passes to every classifier.
+
+    Parameters
+    ----------
+    C : float, default=1.0
+        Inverse L2 strength (on z-scored features).
+    class_weight : {"balanced"}, dict or None, default="balanced"
+        ``"balanced"`` gives posteriors for a 50% attribute prior (as the DAP study's balanced Platt map).
+    max_iter : int, default=1000
+
+    Attributes
+    ----------
+    classes_ : ndarray of shape (2,)
+    pipeline_ : fitted Pipeline
+    n_iter_ : ndarray of shape (1,)
+    n_features_in_ : int
+    """
+
+    _parameter_constraints: dict = {
+        "C": [Interval(Real, 0, None, closed="neither")],
+        "class_weight": [dict, StrOptions({"balanced"}), None],
+        "max_iter": [Interval(Integral, 1, None, closed="left")],
+    }
+
+    def __init__(self, *, C=1.0, class_weight="balanced", max_iter=1000):
+        self.C = C
+        self.class_weight = class_weight
+        self.max_iter = max_iter
+
+    @_fit_context(prefer_skip_nested_validation=True)
+    def fit(self, X, y, groups=None):
+        """Fit on trials ``X`` of shape (n, d) with labels ``y`` of shape (n,); ``groups`` is unused."""
+        X, y = validate_data(self, X, y, dtype=np.float64)
+        check_classification_targets(y)
+        lr = LogisticRegression(C=self.C, class_weight=self.class_weight, max_iter=self.max_iter,
+                                solver="newton-cholesky")  # exact L2 fit, ~5x faster than lbfgs on ~50 columns
+        self.pipeline_ = make_pipeline(StandardScaler(), lr).fit(X, y)
+        self.classes_ = self.pipeline_.classes_
+        self.n_iter_ = self.pipeline_[-1].n_iter_
+        return self
+
+    def predict_proba(self, X) -> np.ndarray:
+        """Posteriors of shape (n, n_classes), columns ordered as ``classes_``."""
+        check_is_fitted(self)
+        return self.pipeline_.predict_proba(validate_data(self, X, dtype=np.float64, reset=False))
+
+    def decision_function(self, X) -> np.ndarray:
+        """Logit(s) of the fitted logistic regression."""
+        check_is_fitted(self)
+        return self.pipeline_.decision_function(validate_data(self, X, dtype=np.float64, reset=False))
+
+    def predict(self, X) -> np.ndarray:
+        """Most probable class, shape (n,)."""
+        check_is_fitted(self)
+        return self.classes_[self.predict_proba(X).argmax(axis=1)]
+
+
+def _trainable(A: np.ndarray, groups: np.ndarray) -> np.ndarray:
+    """Attributes with >= 2 objects of each value among the given trials, shape (m,) bool."""
+    _, inv = np.unique(groups, return_inverse=True)
+    per_object = np.zeros((inv.max() + 1, A.shape[1]))
+    np.maximum.at(per_object, inv, A)  # an object's trials share its attribute row
+    pos = per_object.sum(axis=0)
+    return (pos >= 2) & (per_object.shape[0] - pos >= 2)
+
+
+class PerEPAttributeModel(BaseEstimator):
+    """One attribute-classifier bank per EP, plus the EPs' confusion from grouped CV on training objects.
+
+    Parameters
+    ----------
+    ep_columns : mapping of str -> sequence of int
+        Feature columns of each EP (see :func:`ep_column_blocks`); required.
+    estimator : classifier or None, default=None
+        Per-(attribute, sensor) template for :class:`tzsl.models.AttributeClassifierBank`;
+        ``None``: :class:`LogisticAttribute`.
+    ep_seconds : mapping of str -> float or None, default=None
+        Duration of each EP in seconds; ``None``: :data:`PHAC2_EP_SECONDS` (must cover every EP).
+    cv : int, default=5
+        Object-grouped folds (shuffled ``GroupKFold``) for the out-of-fold posteriors.
+    n_bins : int, default=10
+        Equal-width bins of ``p(a = 1 | x_e)`` in the confusion model.
+    smoothing : float, default=1.0
+        Pseudo-count added to every bin.
+    fusion : {"avg", "max"}, default="avg"
+        Fusion of the sensors' posteriors in the DAP update (the confusion model always bins the
+        sensor average).
+    prior : {"uni", "train"}, default="uni"
+        DAP attribute prior. ``"uni"`` matches class-balanced classifiers (their posteriors
+        assume a 50% prior).
+    update : {"dap", "confusion"}, default="dap"
+        Per-EP class log-scores ``s_e(z)``: ``"dap"``, the DAP log-scores of the EP's fused
+        posteriors; ``"confusion"``, ``sum_m log confusion_[e, m, a^z_m, bin(p_em)]``, the
+        log-likelihood of the observed (binned, sensor-averaged) posteriors under the same
+        confusion model the policy plans with (calibrated on training objects, so less
+        over-confident than DAP).
+    random_state : int, RandomState or None, default=None
+        Seeds the fold shuffle and the banks.
+
+    Attributes
+    ----------
+    eps_ : tuple of str
+    banks_ : dict of str -> AttributeClassifierBank
+        Fitted on all training trials, one per EP.
+    oof_posteriors_ : ndarray of shape (n_eps, n_trials, n_attributes)
+        Out-of-fold sensor-averaged ``p(a = 1 | x_e)`` of the training trials; NaN where a fold's
+        training part has fewer than 2 objects of either value of the attribute.
+    oof_groups_ : ndarray of shape (n_trials,)
+        Training groups the out-of-fold posteriors belong to (the fit's ``groups``).
+    confusion_ : ndarray of shape (n_eps, n_attributes, 2, n_bins)
+        ``p(bin | a_m = v)`` per EP; sums to 1 over bins.
+    train_prior_ : ndarray of shape (n_attributes,)
+    ep_seconds_ : ndarray of shape (n_eps,)
+    n_attributes_, n_sensors_ : int
+    """
+
+    _parameter_constraints: dict = {
+        "ep_columns": [Mapping, None],
+        "estimator": [HasMethods(["fit", "predict_proba"]), None],
+        "ep_seconds": [Mapping, None],
+        "cv": [Interval(Integral, 2, None, closed="left")],
+        "n_bins": [Interval(Integral, 2, None, closed="left")],
+        "smoothing": [Interval(Real, 0, None, closed="neither")],
+        "fusion": [StrOptions({"avg", "max"})],
+        "prior": [StrOptions({"uni", "train"})],
+        "update": [StrOptions({"dap", "confusion"})],
+        "random_state": ["random_state"],
+    }
+
+    def __init__(self, *, ep_columns=None, estimator=None, ep_seconds=None, cv=5, n_bins=10, smoothing=1.0,
+                 fusion="avg", prior="uni", update="dap", random_state=None):
+        self.ep_columns = ep_columns
+        self.estimator = estimator
+        self.ep_seconds = ep_seconds
+        self.cv = cv
+        self.n_bins = n_bins
+        self.smoothing = smoothing
+        self.fusion = fusion
+        self.prior = prior
+        self.update = update
+        self.random_state = random_state
+
+    def _bank(self, seed: int) -> AttributeClassifierBank:
+        template = LogisticAttribute() if self.estimator is None else self.estimator
+        return AttributeClassifierBank(estimator=template, n_jobs=1, backend="sequential", random_state=seed)
+
+    @_fit_context(prefer_skip_nested_validation=False)
+    def fit(self, X, A, groups=None):
+        """Fit the per-EP banks and the confusion model on training trials.
+
+        Parameters
+        ----------
+        X : array-like of shape (n_trials, n_sensors, n_features)
+        A : array-like of shape (n_trials, n_attributes)
+            0/1 attribute row of each trial's object.
+        groups : array-like of shape (n_trials,), optional
+            Object of each trial; ``None``: every trial its own object.
+
+        Returns
+        -------
+        self
+        """
+        if not self.ep_columns:
+            raise ConfigError("ep_columns is required: the feature columns of each EP (see ep_column_blocks)")
+        X = np.asarray(X, dtype=np.float64)
+        if X.ndim != 3:
+            raise ConfigError(f"features must have shape (n_trials, n_sensors, n_features), got {X.shape}")
+        A = check_class_attributes(A, what="training attribute rows").astype(int)
+        n = X.shape[0]
+        groups = np.arange(n) if groups is None else np.asarray(groups)
+        if A.shape[0] != n or groups.shape != (n,):
+            raise ConfigError(f"X has {n} trials but A has {A.shape[0]} rows and groups {groups.shape[0]} entries")
+        self.eps_ = tuple(self.ep_columns)
+        cols = {ep: np.asarray(self.ep_columns[ep], dtype=np.intp) for ep in self.eps_}
+        for ep, c in cols.items():
+            if c.size == 0 or c.min() < 0 or c.max() >= X.shape[2]:
+                raise ConfigError(f"ep_columns[{ep!r}] must index the {X.shape[2]} feature columns")
+        seconds = PHAC2_EP_SECONDS if self.ep_seconds is None else self.ep_seconds
+        missing = [ep for ep in self.eps_ if ep not in seconds]
+        if missing:
+            raise ConfigError(f"ep_seconds has no duration for EP(s) {missing}")
+        self.ep_seconds_ = np.array([float(seconds[ep]) for ep in self.eps_])
+        seeds = np.random.SeedSequence(np.random.RandomState(self.random_state).randint(2**31)).generate_state(
+            len(self.eps_) + 1)
+        self.banks_ = {ep: self._bank(int(seeds[i])).fit(X[:, :, cols[ep]], A, groups)
+                       for i, ep in enumerate(self.eps_)}
+
+        m = A.shape[1]
+        oof = np.full((len(self.eps_), n, m), np.nan)
+        n_folds = min(self.cv, np.unique(groups).size)
+        folds = GroupKFold(n_splits=n_folds, shuffle=True, random_state=int(seeds[-1]))
+        for train, held in folds.split(X, A, groups):
+            ok = _trainable(A[train], groups[train])
+            if not ok.any():
+                continue
+            for i, ep in enumerate(self.eps_):
+                bank = self._bank(int(seeds[i])).fit(X[np.ix_(train, np.arange(X.shape[1]), cols[ep])],
+                                                     A[np.ix_(train, ok)], groups[train])
+                oof[i, held[:, None], np.flatnonzero(ok)[None, :]] = bank.predict_proba(
+                    X[np.ix_(held, np.arange(X.shape[1]), cols[ep])]).mean(axis=1)
+        self.oof_posteriors_, self.oof_groups_ = oof, groups.copy()
+        counts = np.full((len(self.eps_), m, 2, self.n_bins), float(self.smoothing))
+        e, t, j = np.nonzero(~np.isnan(oof))
+        bins = np.minimum((oof[e, t, j] * self.n_bins).astype(int), self.n_bins - 1)
+        np.add.at(counts, (e, j, A[t, j], bins), 1.0)
+        self.confusion_ = counts / counts.sum(axis=3, keepdims=True)
+        self.train_prior_ = attribute_prior("train", train_attributes=A, groups=groups)
+        self.n_attributes_, self.n_sensors_ = m, X.shape[1]
+        self.n_features_in_ = X.shape[2]
+        return self
+
+    def predict_ep_proba(self, ep: str, X_ep) -> np.ndarray:
+        """Attribute posteriors from one EP's feature block.
+
+        Parameters
+        ----------
+        ep : str
+        X_ep : array-like of shape (n_trials, n_sensors, n_ep_features)
+            The EP's columns only (``X[:, :, ep_columns[ep]]``).
+
+        Returns
+        -------
+        ndarray of shape (n_trials, n_sensors, n_attributes)
+        """
+        check_is_fitted(self)
+        if ep not in self.banks_:
+            raise ConfigError(f"unknown EP {ep!r}; the model knows {list(self.eps_)}")
+        return self.banks_[ep].predict_proba(X_ep)
+
+    def predict_proba(self, X) -> np.ndarray:
+        """Attribute posteriors of every EP, shape (n_trials, n_eps, n_sensors, n_attributes)."""
+        check_is_fitted(self)
+        X = np.asarray(X, dtype=np.float64)
+        return np.stack([self.predict_ep_proba(ep, X[:, :, np.asarray(self.ep_columns[ep])]) for ep in self.eps_],
+                        axis=1)
+
+    def dap_prior(self) -> np.ndarray:
+        """The DAP attribute prior ``p(a_m = 1)``, shape (n_attributes,)."""
+        check_is_fitted(self)
+        return self.train_prior_ if self.prior == "train" else np.full(self.n_attributes_, 0.5)
+
+    def ep_log_scores(self, P, class_attributes) -> np.ndarray:
+        """Class log-scores of every EP separately (DAP or confusion log-likelihood, see ``update``).
+
+        Parameters
+        ----------
+        P : array-like of shape (n_trials, n_eps, n_sensors, n_attributes)
+            From :meth:`predict_proba`.
+        class_attributes : array-like of shape (n_classes, n_attributes)
+
+        Returns
+        -------
+        ndarray of shape (n_trials, n_eps, n_classes)
+            Natural-log scores ``s_e(z)``.
+        """
+        check_is_fitted(self)
+        P = np.asarray(P, dtype=np.float64)
+        K = check_class_attributes(class_attributes, self.n_attributes_)
+        if P.ndim != 4 or P.shape[1] != len(self.eps_):
+            raise ConfigError(f"posteriors must have shape (n_trials, {len(self.eps_)}, n_sensors, n_attributes), "
+                              f"got {P.shape}")
+        out = []
+        for e in range(P.shape[1]):
+            if self.update == "confusion":
+                present, _ = fuse_attribute_posteriors(P[:, e], "avg")
+                bins = np.minimum((present * self.n_bins).astype(int), self.n_bins - 1)  # (n, m)
+                logC = np.log(self.confusion_[e])  # (m, 2, B)
+                terms = logC[np.arange(K.shape[1])[None, :, None], np.arange(2)[None, None, :], bins[:, :, None]]
+                out.append(terms[:, :, 0].sum(axis=1)[:, None] + (terms[:, :, 1] - terms[:, :, 0]) @ K.T)
+            else:
+                present, absent = fuse_attribute_posteriors(P[:, e], self.fusion)
+                out.append(dap_log_scores(present, K, self.dap_prior(), P_absent=absent))
+        return np.stack(out, axis=1)
+
+    def outcome_log_likelihoods(self, class_attributes, n_samples: int = 256, random_state=0) -> np.ndarray:
+        """:func:`outcome_log_likelihoods` with this model's confusion."""
+        check_is_fitted(self)
+        return outcome_log_likelihoods(self.confusion_, class_attributes, n_samples, random_state)
+
+
+def suggest_next_ep(model: PerEPAttributeModel, class_attributes, done_eps: Mapping[str, np.ndarray], *,
+                    class_names: Sequence[str] | None = None, threshold: float = 0.9, max_eps: int | None = None,
+                    max_seconds: float | None = None, n_samples: int = 256, random_state=0) -> dict:
+    """What a robot should do next: current ranking, whether it has decided, and the next EP.
+
+    Parameters
+    ----------
+    model : fitted PerEPAttributeModel
+    class_attributes : array-like of shape (n_classes, n_attributes)
+        0/1 attribute rows of the candidate (unseen) classes.
+    done_eps : mapping of str -> array-like of shape (n_sensors, n_ep_features)
+        The features of each EP done so far on the object (that EP's columns only).
+    class_names : sequence of str, optional
+        Default ``"0"``, ``"1"``, ...
+    threshold, max_eps, max_seconds
+        Stopping rule (:func:`stop_reasons`).
+    n_samples : int
+        Monte-Carlo outcomes per class for the expected gain.
+    random_state : int or None
+
+    Returns
+    -------
+    dict (JSON-serialisable)
+        ``ranking``: list of ``{"class", "probability"}``, best first; ``decided`` (bool);
+        ``decision`` (class or None); ``stop_reason`` (str or None); ``done_eps``; ``seconds_used``;
+        ``next_ep`` (str or None); ``expected_gain_bits`` (float or None); ``candidates``: list of
+        ``{"ep", "seconds", "expected_gain_bits"}`` for the EPs not done, best first.
+    """
+    check_is_fitted(model)
+    K = check_class_attributes(class_attributes, model.n_attributes_)
+    names = [str(i) for i in range(K.shape[0])] if class_names is None else [str(c) for c in class_names]
+    if len(names) != K.shape[0]:
+        raise ConfigError(f"{len(names)} class names for {K.shape[0]} classes")
+    unknown = [ep for ep in done_eps if ep not in model.eps_]
+    if unknown:
+        raise ConfigError(f"unknown EP(s) {unknown}; the model knows {list(model.eps_)}")
+    done = np.array([ep in done_eps for ep in model.eps_])
+    P = np.full((1, len(model.eps_), model.n_sensors_, model.n_attributes_), 0.5)  # EPs not done: unused
+    for i, ep in enumerate(model.eps_):
+        if done[i]:
+            P[0, i] = model.predict_ep_proba(ep, np.asarray(done_eps[ep], dtype=np.float64)[None])[0]
+    scores = model.ep_log_scores(P, K)
+    lb = sequential_log_posterior(scores, done[None])
+    used = float(model.ep_seconds_[done].sum())
+    left = np.flatnonzero(~done)
+    next_sec = float(model.ep_seconds_[left].min()) if left.size else np.inf
+    reason = stop_reasons(lb, [done.sum()], [used], [next_sec], threshold=threshold, max_eps=max_eps,
+                          max_seconds=max_seconds)[0]
+    prob = np.exp(lb[0])
+    rank = np.argsort(-prob, kind="stable")
+    candidates = []
+    if left.size:
+        g = expected_information_gain(lb, model.outcome_log_likelihoods(K, n_samples, random_state))[0]
+        affordable = [i for i in left if max_seconds is None or used + model.ep_seconds_[i] <= max_seconds]
+        candidates = sorted(({"ep": model.eps_[i], "seconds": float(model.ep_seconds_[i]),
+                              "expected_gain_bits": float(g[i])} for i in affordable),
+                            key=lambda c: -c["expected_gain_bits"])
+    decided = reason != ""
+    best = candidates[0] if candidates and not decided else None
+    return {
+        "ranking": [{"class": names[i], "probability": float(prob[i])} for i in rank],
+        "decided": bool(decided),
+        "decision": names[rank[0]] if decided else None,
+        "stop_reason": reason or None,
+        "done_eps": [ep for ep in model.eps_ if ep in done_eps],
+        "seconds_used": used,
+        "next_ep": best["ep"] if best else None,
+        "expected_gain_bits": best["expected_gain_bits"] if best else None,
+        "candidates": candidates,
+    }
