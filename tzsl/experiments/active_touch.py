@@ -38,8 +38,7 @@ from tzsl.evaluation import Split, challenging_splits, random_object_splits
 from tzsl.exceptions import ConfigError
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.phac2_dap import object_map_features
-# TODO(lead, at merge): re-export these from tzsl.models and import them from there.
-from tzsl.models._active_touch import PerEPAttributeModel, ep_column_blocks, run_policy
+from tzsl.models import PerEPAttributeModel, ep_column_blocks, run_policy
 
 __all__ = ["ACTIVE_TOUCH_OUTPUTS", "bootstrap_accuracy", "evaluate_split", "run_active_touch_study"]
 

@@ -38,6 +38,20 @@ from tzsl.models._eszsl import ESZSL, ESZSLCV
 from tzsl.models._iap import IAP
 from tzsl.models._sae import SAE, SAECV
 from tzsl.models._compatibility import ALE, SJE, DeViSE
+from tzsl.models._active_touch import (
+    PHAC2_EP_SECONDS,
+    LogisticAttribute,
+    PerEPAttributeModel,
+    ep_column_blocks,
+    suggest_next_ep,
+)
+from tzsl.models._active_policy import (
+    expected_information_gain,
+    outcome_log_likelihoods,
+    run_policy,
+    sequential_log_posterior,
+    stop_reasons,
+)
 from tzsl.models._zsl_input import ZSLInputError, attribute_rows, training_classes
 from tzsl.models._validation import ParameterError
 from tzsl.models._zero_shot import ZeroShotClassifier, score_kind
@@ -97,4 +111,7 @@ __all__: list[str] = [
     "get_method",
     "register_method",
     "unregister_method",
-    "ESZSL", "ESZSLCV", "EmbeddingZSL", "IAP", "SAE", "SAECV", "ALE", "SJE", "DeViSE"]
+    "ESZSL", "ESZSLCV", "EmbeddingZSL", "IAP", "SAE", "SAECV", "ALE", "SJE", "DeViSE",
+    "PHAC2_EP_SECONDS", "LogisticAttribute", "PerEPAttributeModel", "ep_column_blocks", "suggest_next_ep",
+    "expected_information_gain", "outcome_log_likelihoods", "run_policy", "sequential_log_posterior",
+    "stop_reasons"]

@@ -21,6 +21,9 @@ NOT_CHECKED: dict[str, str] = {
     "MultiLabelAttributeClassifier": "takes per-sensor features (n_trials, n_sensors, n_features); "
     "its links are AttributeSVMs, which pass check_estimator",
     "DeepAttributeEmbedding": "takes frame sequences (n, frames, H, W, C); tested in tests/models/test_deep.py",
+    "PerEPAttributeModel": "takes per-sensor features (n_trials, n_sensors, n_features) split into EP "
+    "column blocks by feature name; its per-EP LogisticAttribute passes check_estimator; tested in "
+    "tests/models/test_active_touch.py",
     "HandDAPClassifier": "takes the packed grasp layout and a class-attribute DataFrame in fit(X, y, K); "
     "tested in tests/models/test_hand_dap.py",
 }
