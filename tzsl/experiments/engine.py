@@ -10,6 +10,7 @@ file, an unreachable Dask scheduler, too many CV folds) before any fit.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import socket
 from collections.abc import Callable, Mapping
@@ -275,11 +276,8 @@ def run_experiment(
         exp = load_experiment(experiment, override_values(study, overrides))
     say = echo or (lambda _msg: None)
     results = results_folder(exp, force)
-    check_experiment(exp)
     say(f"{exp.source}: study {exp.study} -> {results.root}")
-    run = execute_study(exp, results, echo)
-    import hashlib  # noqa: PLC0415
-
+    run = execute_study(exp, results, echo)  # checks the experiment (check_experiment) before any fit
     results.write_manifest(manifest_record(exp, run), data_files=run.data_files,
                            extra={"experiment_sha256": hashlib.sha256(exp.text.encode()).hexdigest(),
                                   "experiment_toml": exp.text, "description": exp.config.description,
