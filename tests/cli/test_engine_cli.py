@@ -169,3 +169,11 @@ def test_help_imports_no_heavy_library():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                          env={"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin"})
     assert out.stdout.strip() == "[]", out.stdout + out.stderr
+
+
+def test_unreachable_scheduler_is_one_error_before_any_data(tmp_path):
+    pytest.importorskip("distributed")
+    result = _run("evaluate", "--backend", "dask", "--scheduler", "tcp://unreachable:8786", "--out", tmp_path / "o")
+    assert result.exit_code == EXIT_TZSL_ERROR
+    assert "command line: compute.scheduler: cannot reach the Dask scheduler tcp://unreachable:8786" in result.output
+    assert not (tmp_path / "o").exists()

@@ -133,7 +133,7 @@ def train_attributes(splits_file, split_name, fusion, prior, out, dataset, featu
     Without --splits every object trains the classifiers (a model for recognising new objects);
     with --splits only that split's training objects do.
     """
-    from tzsl.experiments.engine import dap_config  # noqa: PLC0415
+    from tzsl.experiments.engine import check_experiment, dap_config  # noqa: PLC0415
     from tzsl.experiments.phac2_dap import train_attribute_model  # noqa: PLC0415
     from tzsl.experiments.study_runners import phac2_features  # noqa: PLC0415
 
@@ -141,6 +141,7 @@ def train_attributes(splits_file, split_name, fusion, prior, out, dataset, featu
         raise ConfigError(f"{out} already exists; use --force to overwrite")
     exp = _experiment({**_dataset_values(dataset, features_file, plain_dir, path, data_dir),
                        **_study_values(seed, n_jobs, backend, scheduler, undersampling, cv, no_progress, no_cache)})
+    check_experiment(exp)  # paths and the Dask scheduler, before any data is read
     features = phac2_features(exp)
     start = time.perf_counter()
     summary = train_attribute_model(features, dap_config(exp), out, splits_file=splits_file, split_name=split_name,

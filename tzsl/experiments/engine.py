@@ -148,26 +148,26 @@ def hand_config(exp: Experiment):
 # --------------------------------------------------------------------------- checks before any fit
 
 
-def _check_scheduler(address: str, timeout: float) -> None:
+def _check_scheduler(address: str, timeout: float, source: str) -> None:
     """Refuse, within ``timeout`` seconds, a Dask scheduler that does not answer (instead of a long hang)."""
     url = urlparse(address if "://" in address else f"tcp://{address}")
     try:
         with socket.create_connection((url.hostname, url.port or 8786), timeout=timeout):
             pass
     except (OSError, ValueError) as exc:
-        _unreachable(address, timeout, getattr(exc, "strerror", None) or str(exc) or type(exc).__name__)
+        _unreachable(source, address, timeout, getattr(exc, "strerror", None) or str(exc) or type(exc).__name__)
     try:
         from distributed import Client  # noqa: PLC0415 - the Dask handshake, not only a TCP port
     except ImportError:
-        raise ConfigError("compute.backend: 'dask' needs dask.distributed: pip install 'tzsl[dask]'") from None
+        raise ConfigError(f"{source}: compute.backend: 'dask' needs dask.distributed: pip install 'tzsl[dask]'") from None
     try:
         Client(address, timeout=f"{timeout}s", set_as_default=False).close()
     except Exception as exc:  # noqa: BLE001 - whatever answered there is not a working Dask scheduler
-        _unreachable(address, timeout, f"no Dask handshake: {type(exc).__name__}")
+        _unreachable(source, address, timeout, f"no Dask handshake: {type(exc).__name__}")
 
 
-def _unreachable(address: str, timeout: float, reason: str) -> None:
-    raise ConfigError(f"compute.scheduler: cannot reach the Dask scheduler {address} within {timeout:g} s "
+def _unreachable(source: str, address: str, timeout: float, reason: str) -> None:
+    raise ConfigError(f"{source}: compute.scheduler: cannot reach the Dask scheduler {address} within {timeout:g} s "
                       f"({reason.splitlines()[0]}); start it or raise compute.connect_timeout")
 
 
@@ -203,7 +203,7 @@ def check_experiment(exp: Experiment) -> None:
         raise ConfigError(f"{exp.source}: {len(problems)} problem(s):\n" + "\n".join(problems))
     compute = exp.config.compute
     if getattr(compute, "backend", None) == "dask" and compute.scheduler is not None:
-        _check_scheduler(compute.scheduler, compute.connect_timeout)
+        _check_scheduler(compute.scheduler, compute.connect_timeout, exp.source)
     if exp.study == "fabric-deep":
         import importlib.util  # noqa: PLC0415
 
