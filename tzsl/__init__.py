@@ -7,10 +7,23 @@ Layers (lower never imports higher): ``tzsl.datasets`` (files -> arrays + trial 
 ``tzsl.features`` (scikit-learn transformers), ``tzsl.models`` (scikit-learn estimators),
 ``tzsl.evaluation`` (splits, metrics), ``tzsl.experiments`` (studies writing tables and
 figures) and ``tzsl.cli`` (the ``tzsl`` command).
+
+``tzsl.run(FILE_OR_NAME, **overrides)`` runs a study (an experiment file or a built-in study
+such as ``"phac2-dap"``) and returns its main table as a DataFrame; see
+:func:`tzsl.experiments.engine.run`.
 """
 
 from tzsl.exceptions import TzslError
 
 __version__ = "0.1.0"
 
-__all__ = ["TzslError", "__version__"]
+__all__ = ["TzslError", "__version__", "run"]
+
+
+def __getattr__(name: str):
+    """``tzsl.run``: imported on first use, so ``import tzsl`` stays light."""
+    if name == "run":
+        from tzsl.experiments.engine import run  # noqa: PLC0415
+
+        return run
+    raise AttributeError(f"module 'tzsl' has no attribute {name!r}")

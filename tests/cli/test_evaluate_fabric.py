@@ -19,7 +19,7 @@ def _run(*args: str):
 @pytest.mark.slow
 def test_evaluate_fabric_prints_table_and_refuses_overwrite(data_dir, tmp_path):
     out = tmp_path / "results"
-    args = ["evaluate-fabric", "--out", str(out), "--seeds", "1", "--config", "1", "--data-dir", str(data_dir),
+    args = ["evaluate-fabric", "--out", str(out), "--n-seeds", "1", "--config", "1", "--data-dir", str(data_dir),
             "--no-progress", "--n-jobs", "2"]
     result = _run(*args)
     assert result.exit_code == 0, result.output
@@ -50,5 +50,5 @@ def test_evaluate_fabric_option_errors(tmp_path, data_dir):
     missing = _run("evaluate-fabric", "--out", str(tmp_path / "o"), "--data-dir", str(data_dir),
                    "--gelsight-root", str(tmp_path / "nowhere"), "--no-progress")
     assert missing.exit_code == EXIT_TZSL_ERROR
-    assert "GelSight video folder not found" in missing.output
+    assert "dataset.gelsight_root: folder" in missing.output and "nowhere not found" in missing.output
     assert not (tmp_path / "o" / "fabric_table1.csv").exists()

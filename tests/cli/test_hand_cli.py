@@ -32,7 +32,7 @@ def trained(tmp_path_factory):
     root = tmp_path_factory.mktemp("hand_cli")
     sim = _run("simulate-grasps", "--out", root / "g", "--grasps-per-object", 20, "--seed", 2)
     assert sim.exit_code == 0, sim.output
-    train = _run("train-hand", "--grasps", root / "g", "--save", root / "m.tzsl", "--seed", 0)
+    train = _run("train-hand", "--grasps", root / "g", "--out", root / "m.tzsl", "--seed", 0)
     assert train.exit_code == 0, train.output
     classes = root / "classes.csv"
     TABLE.K.loc[TABLE.test_objects].rename_axis("object").to_csv(classes)
@@ -65,7 +65,7 @@ def test_predict_several_grasps_decides(trained):
     assert out.exit_code == 0, out.output
     assert out.output.count("grasp ") >= 6 and "per-grasp decisions:" in out.output
     assert "SC-MDAP (k=2): decided" in out.output
-    df = _run("predict", "--model", root / "m.tzsl", "--classes", classes, "--fusion", "df", *files)
+    df = _run("predict", "--model", root / "m.tzsl", "--classes", classes, "--multi-grasp", "df", *files)
     assert df.exit_code == 0 and "DF-MDAP: decided" in df.output
 
 
@@ -88,8 +88,8 @@ def test_predict_errors_are_one_line(trained, tmp_path):
 
 def test_train_hand_errors_are_one_line(trained, tmp_path):
     root, _, _, _ = trained
-    _one_line_error(_run("train-hand", "--grasps", root / "g", "--save", root / "m.tzsl"), "--force")
-    _one_line_error(_run("train-hand", "--grasps", tmp_path, "--save", tmp_path / "m.tzsl"), "grasps.csv")
+    _one_line_error(_run("train-hand", "--grasps", root / "g", "--out", root / "m.tzsl"), "--force")
+    _one_line_error(_run("train-hand", "--grasps", tmp_path, "--out", tmp_path / "m.tzsl"), "grasps.csv")
 
 
 @pytest.mark.slow
@@ -98,18 +98,21 @@ def test_evaluate_hand_on_a_grasp_folder(trained, tmp_path):
     out = tmp_path / "res"
     result = _run("evaluate-hand", "--grasps", root / "g", "--out", out, "--seeds", "0", "--n-sequences", 5)
     assert result.exit_code == 0, result.output
-    assert sorted(p.name for p in out.iterdir()) == sorted(HAND_OUTPUTS)
+    assert sorted(p.name for p in out.iterdir()) == sorted([*HAND_OUTPUTS, "manifest.json"])
     assert "Table 5" in result.output and "59.63%" in result.output and "simulating" not in result.output
     _one_line_error(_run("evaluate-hand", "--grasps", root / "g", "--out", out), "already exists", "--force")
 
 
 @pytest.mark.parametrize("seeds", ["a", "1,1", "3-x", ""])
 def test_bad_seeds(tmp_path, seeds):
-    _one_line_error(_run("evaluate-hand", "--out", tmp_path, "--seeds", seeds), "--seeds")
+    result = _run("evaluate-hand", "--out", tmp_path, "--seeds", seeds)
+    assert result.exit_code == 2, result.output  # a usage error, before any data is read
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("tzsl: error: ") and "--seeds" in lines[0], result.output
 
 
 def test_evaluate_hand_says_it_simulates(tmp_path):
     (tmp_path / "hand_table5.csv").write_text("x\n")  # refused before any simulation or fit
-    result = CliRunner().invoke(cli, ["evaluate-hand", "--out", str(tmp_path)], catch_exceptions=False)
+    result = CliRunner().invoke(cli, ["evaluate-hand", "--out", str(tmp_path), "--seeds", "0"], catch_exceptions=False)
     assert "no --grasps given: simulating grasps with seed(s) [0]" in result.output
     assert result.exit_code == EXIT_TZSL_ERROR and "hand_table5.csv already exists" in result.output

@@ -47,11 +47,10 @@ def _run(*args):
     return CliRunner().invoke(cli, [str(a) for a in args])
 
 
-def test_run_check_prints_resolved_settings():
-    result = _run("run", REPO / "experiments" / "phac2_dap.toml", "--check")
+def test_run_print_config_prints_resolved_settings():
+    result = _run("run", "phac2-dap", "--print-config")
     assert result.exit_code == 0, result.output
-    assert "valid (phac2-dap)" in result.output
-    assert "[svm]" in result.output and "cv = 5" in result.output
+    assert "[svm]" in result.output and "cv = 5" in result.output and 'undersampling = "select"' in result.output
 
 
 def test_run_reports_file_and_key_path_of_problems(tmp_path):
@@ -59,8 +58,8 @@ def test_run_reports_file_and_key_path_of_problems(tmp_path):
     path.write_text("study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[svm]\nn_C = 2.5\ngrid = 3\n")
     result = _run("run", path)
     assert result.exit_code == EXIT_TZSL_ERROR
-    assert f"{path}: [svm] n_C = 2.5: expected an integer" in result.output
-    assert f"{path}: unknown key [svm] grid" in result.output
+    assert f"{path}: svm.n_C: 2.5: expected a valid integer" in result.output
+    assert f"{path}: svm.grid: unknown key" in result.output
     assert "Traceback" not in result.output
 
 

@@ -15,7 +15,7 @@ _register_commands()
 
 SKIP_REASON = "PyTorch is not installed (the optional deep extra: pip install 'tzsl[deep]')"
 # A small run: random frozen CNN on 16 x 16 frames, a few epochs (checks plumbing, not accuracy).
-FAST = ["--backbone", "small-cnn", "--image-size", "16", "--hidden-size", "8", "--epochs", "3", "--quiet",
+FAST = ["--backbone", "small-cnn", "--image-size", "16", "--hidden-size", "8", "--epochs", "3", "--no-progress",
         "--n-threads", "1"]
 
 
@@ -150,9 +150,10 @@ def test_evaluate_fabric_model_deep_calls_the_deep_study(torch, tmp_path, monkey
         return {"table": table, "runs": table}
 
     monkeypatch.setattr(deep, "run_deep_fabric_study", fake_study)
-    result = _run("evaluate-fabric", "--model", "deep", "--out", str(tmp_path / "res"), "--seeds", "2",
+    (tmp_path / "data").mkdir()
+    result = _run("evaluate-fabric", "--model", "deep", "--out", str(tmp_path / "res"), "--n-seeds", "2",
                   "--config", "1", "--no-progress", "--data-dir", str(tmp_path / "data"))
     assert result.exit_code == 0, result.output
     assert seen["seeds"] == 2 and seen["configs"] == (1,) and seen["progress"] is False
     assert seen["out"] == tmp_path / "res"
-    assert "50.00 +- 0.00" in result.output and "fabric_deep_table.csv" in result.output
+    assert "50.00 +- 0.00" in result.output and "manifest.json" in result.output

@@ -1,4 +1,4 @@
-"""PHAC-2 end to end through the command line: splits -> train-attributes --save -> predict."""
+"""PHAC-2 end to end through the command line: splits -> train-attributes --out -> predict."""
 
 from __future__ import annotations
 
@@ -23,8 +23,8 @@ def _ok(args):
 
 def test_train_on_split_then_predict_unseen_object(data_dir, tmp_path):
     splits, model, feats = tmp_path / "splits.csv", tmp_path / "model.tzsl", tmp_path / "features.npz"
-    _ok(["splits", "--kind", "random", "--n-splits", "1", "--out", splits, "--data-dir", data_dir])
-    out = _ok(["train-attributes", "--splits", splits, "--save", model, "--cv", "3", "--no-progress", "--no-cache",
+    _ok(["splits", "--split", "random", "--n-splits", "1", "--out", splits, "--data-dir", data_dir])
+    out = _ok(["train-attributes", "--splits", splits, "--out", model, "--cv", "3", "--no-progress", "--no-cache",
                "--data-dir", data_dir])
     assert "wrote" in out
     header = read_bundle_header(model)
@@ -43,7 +43,7 @@ def test_train_on_split_then_predict_unseen_object(data_dir, tmp_path):
     obj = test_objects[0]
     one = tmp_path / "object.npz"
     write_feature_table(fs.subset(fs.objects == obj), one)
-    out = _ok(["predict", "--model", model, "--classes", classes, "--fusion", "df", one])
+    out = _ok(["predict", "--model", model, "--classes", classes, "--multi-grasp", "df", one])
     assert "DF-MDAP: decided" in out
     # the bundle predicts exactly what the saved attribute model gives
     adapter = load_adapter(model)
@@ -55,5 +55,5 @@ def test_train_on_split_then_predict_unseen_object(data_dir, tmp_path):
 def test_train_attributes_refuses_overwrite(data_dir, tmp_path):
     model = tmp_path / "model.tzsl"
     model.write_text("x")
-    result = CliRunner().invoke(cli, ["train-attributes", "--save", str(model), "--data-dir", str(data_dir)])
-    assert result.exit_code == 2 and "--force" in result.output
+    result = CliRunner().invoke(cli, ["train-attributes", "--out", str(model), "--data-dir", str(data_dir)])
+    assert result.exit_code == 3 and "--force" in result.output

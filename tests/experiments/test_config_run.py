@@ -1,9 +1,10 @@
-"""Experiment files: shipped files match reproduce-tables, every problem is named, a run end to end."""
+"""The experiment schema: built-in files, every problem named (file, key, reason), defaults written once."""
 
 from __future__ import annotations
 
 import inspect
 import json
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -12,18 +13,11 @@ import pytest
 
 from tzsl.datasets import FeatureSet, feature_set_to_plain
 from tzsl.exceptions import ConfigError
-from tzsl.experiments.config_run import (
-    SCHEMAS,
-    dap_config,
-    fabric_arguments,
-    gzsl_config,
-    hand_config,
-    load_experiment,
-    run_experiment,
-)
+from tzsl.experiments.config import STUDIES, builtin_names, load_experiment, to_toml, validate
+from tzsl.experiments.engine import check_experiment, dap_config, fabric_arguments, gzsl_config, hand_config, \
+    run_experiment
 
 REPO = Path(__file__).resolve().parents[2]
-EXPERIMENTS = REPO / "experiments"
 
 
 def _write(tmp_path: Path, text: str, name: str = "exp.toml") -> Path:
@@ -32,62 +26,74 @@ def _write(tmp_path: Path, text: str, name: str = "exp.toml") -> Path:
     return path
 
 
-# --------------------------------------------------------------------------- shipped files
+# --------------------------------------------------------------------------- built-in files
 
 
-def test_phac2_file_gives_reproduce_tables_settings():
-    """experiments/phac2_dap.toml == what `tzsl reproduce-tables` (default options) runs."""
-    from tzsl.cli._dap_commands import _config
-
-    exp = load_experiment(EXPERIMENTS / "phac2_dap.toml")
-    # reproduce-tables' CLI defaults: seed 0, n_jobs 1, loky, select, cv 5, progress, cache, multilabel
-    assert dap_config(exp) == _config(0, 1, "loky", None, "select", 5, False, False, multilabel=True)
-    methods = exp.settings["methods"]
-    # run_dap_study(kinds=("random", "challenging"), sweep=True, compare_methods=True) with
-    # method_comparison's defaults
-    from tzsl.experiments.phac2_dap import method_comparison
-
-    defaults = inspect.signature(method_comparison).parameters
-    assert exp.settings["splits"]["kinds"] == ["random", "challenging"]
-    assert methods["sweep"] and methods["eszsl"] and methods["embedding"] and not methods["gzsl"]
-    assert tuple(methods["embedding_lambdas"]) == defaults["embedding_lams"].default
-    assert methods["eszsl"] is defaults["eszsl"].default
-    assert exp.settings["dataset"]["builtin"] == "phac2-penn" and exp.settings["dataset"]["min_objects"] == 3
+def test_builtin_studies_ship_inside_the_package_only():
+    assert builtin_names() == ["fabric", "fabric-deep", "hand-simulated", "phac2-dap", "phac2-gzsl"]
+    for name in builtin_names():
+        assert load_experiment(name).study in STUDIES
+    # one copy: the top-level folder holds the README and the user template, no study file
+    assert sorted(p.name for p in (REPO / "experiments").iterdir()) == ["README.md", "my_dataset_template.toml"]
+    assert load_experiment(REPO / "experiments" / "my_dataset_template.toml").study == "phac2-dap"
 
 
-def test_fabric_and_hand_files_give_reproduce_tables_settings():
-    from tzsl.experiments.fabric import run_fabric_study
+def test_study_dataclasses_read_the_schema_defaults():
+    """DapStudyConfig, HandStudyConfig and GzslConfig take their defaults from the schema."""
+    from tzsl.experiments.gzsl import GzslConfig
     from tzsl.experiments.hand import HandStudyConfig
-    from tzsl.experiments.reproduce import reproduce_tables
+    from tzsl.experiments.phac2_dap import DapStudyConfig
 
-    fabric = fabric_arguments(load_experiment(EXPERIMENTS / "fabric.toml"))
+    minimal = validate({"study": "phac2-dap", "dataset": {"features": "x.csv"}}, "t", Path("."))
+    assert dap_config(minimal) == DapStudyConfig()
+    assert gzsl_config(minimal) == GzslConfig()
+    hand = validate({"study": "hand", "dataset": {"builtin": "hand-simulated"}}, "t", Path("."))
+    assert hand_config(hand) == HandStudyConfig()
+
+
+def test_svm_defaults_are_read_from_the_estimator():
+    from tzsl.models import AttributeSVM
+
+    svm = load_experiment("phac2-gzsl").config.svm  # the file leaves the grids out
+    params = AttributeSVM().get_params()
+    for key in ("C_range", "gamma_range", "n_C", "n_gamma", "n_draws", "scoring", "platt_weighting", "undersampling"):
+        value = getattr(svm, key)
+        assert (tuple(value) if isinstance(value, list) else value) == params[key], key
+
+
+def test_fabric_file_gives_the_study_function_defaults():
+    from tzsl.experiments.fabric import run_fabric_study
+
+    fabric = fabric_arguments(load_experiment("fabric"))
     params = inspect.signature(run_fabric_study).parameters
-    reproduce = inspect.signature(reproduce_tables).parameters
-    assert fabric["seeds"] == reproduce["fabric_seeds"].default
     for key in ("configs", "attributes", "lams", "alphas", "conditions", "seed", "max_iter", "gelsight_root",
                 "gelsight_conditions", "data_dir"):
         assert fabric[key] == params[key].default, key
-    exp = load_experiment(EXPERIMENTS / "hand_simulated.toml")
-    assert hand_config(exp) == HandStudyConfig()
-    assert tuple(exp.settings["splits"]["seeds"]) == reproduce["hand_seeds"].default
-    assert exp.settings["dataset"]["builtin"] == "hand-simulated"
+    assert fabric["seeds"] == 5
 
 
-def test_every_shipped_file_loads():
-    names = sorted(p.name for p in EXPERIMENTS.glob("*.toml"))
-    assert {"phac2_dap.toml", "fabric.toml", "hand_simulated.toml", "my_dataset_template.toml",
-            "phac2_gzsl.toml"} <= set(names)
-    for name in names:
-        exp = load_experiment(EXPERIMENTS / name)
-        assert exp.study in SCHEMAS
-    gzsl = gzsl_config(load_experiment(EXPERIMENTS / "phac2_gzsl.toml"))
-    assert gzsl.calibrated_stacking and gzsl.methods == ("dap", "eszsl") and gzsl.holdout_fraction == 0.3
+def test_print_config_round_trip(tmp_path):
+    """The printed config, read again, resolves to the same config (every built-in study)."""
+    for name in builtin_names():
+        exp = load_experiment(name)
+        text = to_toml(exp.config)
+        again = load_experiment(_write(tmp_path, text, f"{name}.toml"))
+        assert again.config == exp.config, name
+        assert to_toml(again.config) == text
+        assert tomllib.loads(text)["study"] == exp.study
+
+
+def test_template_promise_holds_keys_left_out_take_the_printed_defaults(tmp_path):
+    """Leaving a key out of a file gives the default --print-config shows (issue 11)."""
+    path = _write(tmp_path, "study = 'phac2-dap'\n[dataset]\nplain = 'd'\n")
+    printed = tomllib.loads(to_toml(load_experiment(path).config))
+    assert printed["methods"]["multilabel"] is False and printed["splits"]["n_test"] == 10
 
 
 # --------------------------------------------------------------------------- problems
 
 
-def test_every_problem_is_listed_with_file_and_key_path(tmp_path):
+def test_every_problem_is_listed_with_file_key_and_reason(tmp_path):
     path = _write(tmp_path, """
 study = "phac2-dap"
 [dataset]
@@ -101,61 +107,82 @@ C_range = [100.0, 1.0]
 [splits]
 n_splits = 0
 kinds = ["random", 3]
+seed = 4294967296
 [methods]
 embedding_lambdas = [0.1, 0.1]
+[compute]
+n_jobs = 0
 [extra]
 x = 1
 """)
     with pytest.raises(ConfigError) as err:
         load_experiment(path)
     text = str(err.value)
-    assert "9 problem(s)" in text
+    assert "11 problem(s)" in text
     for expected in (
-        f"{path}: unknown key [dataset] colour",
-        f"{path}: [svm] n_C = 'three': expected an integer",
-        f"{path}: [svm] cv = True: expected an integer",
-        f"{path}: [svm] undersampling = 'sometimes': 'sometimes' is not one of",
-        f"{path}: [svm] C_range = [100.0, 1.0]: expected [low, high]",
-        f"{path}: [splits] n_splits = 0: must be >= 1",
-        f"{path}: [splits] kinds = ['random', 3]: expected a list of strings, got 3",
-        f"{path}: [methods] embedding_lambdas = [0.1, 0.1]: lists a value twice",
-        f"{path}: unknown key 'extra'",
+        f"{path}: dataset.colour: unknown key",
+        f"{path}: svm.n_C: 'three': expected a valid integer",
+        f"{path}: svm.cv: True: expected a valid integer",
+        f"{path}: svm.undersampling: 'sometimes': expected 'select', 'bagging' or 'none'",
+        f"{path}: svm.C_range: expected [low, high] with 0 < low <= high",
+        f"{path}: splits.n_splits: 0: must be >= 1",
+        f"{path}: splits.kinds[1]: 3: expected 'random', 'challenging' or 'file'",
+        f"{path}: splits.seed: 4294967296: must be < 4294967296",
+        f"{path}: methods.embedding_lambdas: lists a value twice",
+        f"{path}: compute.n_jobs: n_jobs = 0 runs nothing",
+        f"{path}: extra: unknown key",
     ):
         assert expected in text, expected
+    assert "Traceback" not in text and "pydantic" not in text and "For further information" not in text
 
 
 @pytest.mark.parametrize(("text", "message"), [
-    ("study = 'phac2-dap'\n[dataset]\n", "needs exactly one of builtin, plain, features"),
+    ("study = 'phac2-dap'\n[dataset]\n", "dataset: needs exactly one of builtin, plain, features"),
     ("study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\nplain = 'x'\n", "needs exactly one of"),
     ("study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-h5'\n", "needs path"),
     ("study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[features]\nstatistics = ['mean']\n",
-     "apply to plain signal datasets only"),
+     "features: statistics apply to plain signal datasets only"),
     ("study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[splits]\nkinds = ['file', 'random']\n",
      "cannot be combined"),
-    ("study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[svm]\ncv = 1\n", "cv = 1"),
-    ("study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[methods]\ndap = false\n", "always runs DAP"),
-    ("study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[gzsl]\nholdout_fraction = 1.5\n", "(0, 1)"),
+    ("study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[splits]\nkinds = ['file']\n",
+     "splits.kinds: ['file'] needs file"),
+    ("study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[svm]\ncv = 1\n", "svm.cv: use 0"),
+    ("study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[methods]\ndap = false\n", "methods.dap"),
+    ("study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[gzsl]\nholdout_fraction = 1.5\n",
+     "gzsl.holdout_fraction: 1.5: must be < 1"),
     ("study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[compute]\nscheduler = 'tcp://x:1'\n",
-     "needs backend = 'dask'"),
+     "compute.scheduler: needs backend = 'dask'"),
+    ("study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[splits]\nn_test = nan\n", "finite"),
     ("study = 'hand'\n[dataset]\n", "exactly one of builtin = 'hand-simulated', grasps"),
-    ("study = 'fabric'\n[features]\nconditions = []\n", "conditions is empty"),
-    ("study = 'fabric'\n[splits]\nconfigs = [3]\n", "3 is not one of [1, 2]"),
-    ("study = 'clustering'\n", "expected one of phac2-dap, fabric, hand"),
-    ("[dataset]\nbuiltin = 'phac2-penn'\n", "missing key study"),
-    ("study = 'phac2-dap'\ndataset = 3\n", "dataset must be a table"),
+    ("study = 'hand'\n[dataset]\nbuiltin = 'hand-simulated'\n[methods.model]\nfoo = 1\n",
+     "methods.model: unknown HandDAPClassifier parameter(s) ['foo']"),
+    ("study = 'hand'\n[dataset]\nbuiltin = 'hand-simulated'\n[splits]\nseeds = [1, 1]\n", "lists a value twice"),
+    ("study = 'fabric'\n[features]\nconditions = []\n", "features.conditions: is empty"),
+    ("study = 'fabric'\n[splits]\nconfigs = [3]\n", "splits.configs[0]: 3: expected 1 or 2"),
+    ("study = 'fabric'\n[methods]\nembedding_lambdas = [0, 'x']\n", "embedding_lambdas[1]: 'x'"),
+    ("study = 'fabric-deep'\n[methods.model]\nlam = 1\n", "are set by the study"),
+    ("study = 'clustering'\n", "study: 'clustering': expected one of phac2-dap, fabric, fabric-deep, hand"),
+    ("[dataset]\nbuiltin = 'phac2-penn'\n", "study: missing"),
+    ("study = 'phac2-dap'\ndataset = 3\n", "dataset: 3: expected a table"),
     ("study = 'phac2-dap\n", "not valid TOML"),
 ])
 def test_bad_files_are_config_errors_naming_the_file(tmp_path, text, message):
     path = _write(tmp_path, text)
-    with pytest.raises(ConfigError, match=None) as err:
+    with pytest.raises(ConfigError) as err:
         load_experiment(path)
     assert message in str(err.value)
-    assert str(path) in str(err.value)
+    assert str(err.value).startswith(str(path))
 
 
-def test_missing_file(tmp_path):
+def test_binary_and_missing_files(tmp_path):
+    binary = tmp_path / "exp.toml"
+    binary.write_bytes(b"\x89PNG\r\n\x1a\n\xff\xfe\x00")
+    with pytest.raises(ConfigError, match="not a text .UTF-8. TOML file"):
+        load_experiment(binary)
     with pytest.raises(ConfigError, match="experiment file not found"):
         load_experiment(tmp_path / "nope.toml")
+    with pytest.raises(ConfigError, match="no such experiment file or built-in study .built-in: fabric"):
+        load_experiment("phac2-dapp")
 
 
 def test_svm_settings_keep_only_departures_from_attribute_svm_defaults(tmp_path):
@@ -164,15 +191,45 @@ def test_svm_settings_keep_only_departures_from_attribute_svm_defaults(tmp_path)
     config = dap_config(load_experiment(path))
     assert config.svm_params == {"n_gamma": 2, "C_range": (1.0, 10.0)}  # cv None and n_C 3 are the defaults
     assert config.n_jobs == 2
-    assert dap_config(load_experiment(path), n_jobs=4, progress=False).n_jobs == 4
+    assert dap_config(load_experiment(path, {"compute.n_jobs": 4})).n_jobs == 4
 
 
 def test_paths_are_relative_to_the_file(tmp_path):
     sub = tmp_path / "exps"
     sub.mkdir()
     exp = load_experiment(_write(sub, "study = 'phac2-dap'\n[dataset]\nplain = '../data/set'\n"))
-    assert exp.resolve(exp.settings["dataset"]["plain"]) == sub / "../data/set"
+    assert exp.resolve(exp.config.dataset.plain) == sub / "../data/set"
     assert exp.resolve("/abs/x") == Path("/abs/x")
+
+
+# --------------------------------------------------------------------------- checks before any fit
+
+
+def test_check_finds_what_a_run_would_fail_on(tmp_path):
+    (tmp_path / "toy").mkdir()
+    path = _write(tmp_path, "study = 'phac2-dap'\n[dataset]\nplain = 'toy'\ndata_dir = 'nowhere'\n"
+                            "[splits]\nkinds = ['file']\n")
+    with pytest.raises(ConfigError) as err:
+        check_experiment(load_experiment(path))
+    text = str(err.value)
+    assert f"{path}: dataset.data_dir: folder {tmp_path / 'nowhere'} not found" in text
+    assert f"{path}: splits.kinds: file {tmp_path / 'toy' / 'splits.csv'} not found" in text
+    missing = _write(tmp_path, "study = 'phac2-dap'\n[dataset]\nplain = 'gone'\n", "m.toml")
+    with pytest.raises(ConfigError, match="dataset.plain: folder .* not found"):
+        check_experiment(load_experiment(missing))
+
+
+@pytest.mark.parametrize("address", ["tcp://unreachable:8786", "tcp://127.0.0.1:1", "tcp://10.255.255.1:8786"])
+def test_unreachable_dask_scheduler_fails_fast(tmp_path, address):
+    import time
+
+    pytest.importorskip("distributed")
+    path = _write(tmp_path, "study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[compute]\nbackend = 'dask'\n"
+                            f"scheduler = '{address}'\nconnect_timeout = 1\n")
+    start = time.perf_counter()
+    with pytest.raises(ConfigError, match=f"compute.scheduler: cannot reach the Dask scheduler {address} within 1 s"):
+        check_experiment(load_experiment(path))
+    assert time.perf_counter() - start < 8
 
 
 # --------------------------------------------------------------------------- a run
@@ -206,10 +263,7 @@ plain = "toy"
 [methods]
 fusions = ["avg"]
 priors = ["uni", "train"]
-multilabel = false
-sweep = false
 eszsl = true
-embedding = false
 gzsl = true
 [gzsl]
 holdout_fraction = 0.25
@@ -237,7 +291,7 @@ def test_run_writes_selected_tables_and_manifest(tmp_path):
     _plain_dataset(tmp_path / "toy")
     path = _write(tmp_path, RUN_TOML)
     lines: list[str] = []
-    results = run_experiment(path, out=tmp_path / "res", echo=lines.append)
+    results, _ = run_experiment(path, out=tmp_path / "res", echo=lines.append)
     names = {p.name for p in results.written}
     assert {"table1_fusion.csv", "table2_priors.csv", "phac2_methods.csv", "gzsl.csv", "manifest.json",
             "attribute_accuracy.png"} <= names
@@ -254,9 +308,10 @@ def test_run_writes_selected_tables_and_manifest(tmp_path):
     assert manifest["experiment_toml"] == RUN_TOML
     assert manifest["config"]["phac2_dap"]["svm_params"] == {"cv": 3, "n_C": 1, "n_gamma": 1, "n_draws": 1}
     assert manifest["config"]["gzsl"]["holdout_fraction"] == 0.25
+    assert tomllib.loads(manifest["config"]["resolved_toml"])["splits"]["n_test"] == 4
     assert any("Generalised zero-shot" in line for line in lines)
     assert not any("maxdap" in line for line in lines)
-    # existing results are refused before any computation, replaced with force
+    # existing results are refused before any computation
     with pytest.raises(ConfigError, match="already exists"):
         run_experiment(path, out=tmp_path / "res")
 
@@ -275,3 +330,11 @@ def test_run_uses_the_plain_folder_splits_csv(tmp_path):
     run_experiment(_write(tmp_path, text), out=tmp_path / "res")
     t1 = pd.read_csv(tmp_path / "res" / "table1_fusion.csv")
     assert list(t1["split"][:1]) == ["1"] and t1["n_test_objects"].iloc[0] == 4
+
+
+def test_too_many_cv_folds_are_refused_before_any_fit(tmp_path):
+    _plain_dataset(tmp_path / "toy")
+    path = _write(tmp_path, RUN_TOML.replace("cv = 3", "cv = 50"))
+    with pytest.raises(ConfigError, match="svm.cv: 50 object-grouped folds, but a split has only 16 training"):
+        run_experiment(path, out=tmp_path / "res")
+    assert not (tmp_path / "res" / "table1_fusion.csv").exists()

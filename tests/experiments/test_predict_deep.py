@@ -72,4 +72,4 @@ def test_predict_cli_with_deep_bundle(deep_bundle, tmp_path):
     assert "SC-MDAP (k=2)" in result.output
     bad = CliRunner().invoke(cli, ["predict", "--model", str(path), "--classes", str(classes),
                                    str(tmp_path / "missing.npz")])
-    assert bad.exit_code == 2 and "missing.npz" in bad.output
+    assert bad.exit_code == 3 and "missing.npz" in bad.output

@@ -1,4 +1,10 @@
-"""PHAC-2 / DAP commands: ``splits``, ``train-attributes``, ``evaluate``, ``reproduce-tables``, ``bench``."""
+"""PHAC-2 / DAP commands: ``splits``, ``train-attributes``, ``evaluate``, ``bench``.
+
+``evaluate`` is a front-end of the engine: its options become a ``study = "phac2-dap"``
+experiment (:func:`tzsl.experiments.config.config_from_options`) run by
+:func:`tzsl.experiments.engine.run_experiment`, so it writes exactly what the matching TOML
+file writes. Option defaults come from the schema.
+"""
 
 from __future__ import annotations
 
@@ -13,10 +19,14 @@ from tzsl.cli._main import (
     data_dir_option,
     force_option,
     n_jobs_option,
+    no_progress_option,
     scheduler_option,
+    schema_option,
     seed_option,
 )
 from tzsl.exceptions import ConfigError
+
+STUDY = "phac2-dap"
 
 
 def _source_options(func):
@@ -28,42 +38,55 @@ def _source_options(func):
     func = click.option("--features", "features_file", type=click.Path(dir_okay=False, path_type=Path),
                         default=None, help="A feature table written by 'tzsl extract --out'.")(func)
     func = click.option("--dataset", type=click.Choice(["phac2-penn", "phac2-h5", "phac2-hold-mat"]),
-                        default="phac2-penn", show_default=True, help="Built-in dataset.")(func)
+                        default=None, help="Built-in dataset [default: phac2-penn unless --plain or --features].")(func)
     return func
 
 
 def _study_options(func):
-    """Options of the attribute-classifier fits shared by train/evaluate/reproduce (incl. seed and compute)."""
+    """Options of the attribute-classifier fits shared by train-attributes and evaluate."""
     for option in (scheduler_option, backend_option, n_jobs_option, seed_option):
         func = option(func)
-    func = click.option("--undersampling", type=click.Choice(["select", "bagging", "none"]), default="select",
-                        show_default=True, help="Class-0 under-sampling: keep the best draw (chosen on training "
-                        "objects by grouped CV), bag all draws, or none.")(func)
-    func = click.option("--cv", type=int, default=5, show_default=True,
-                        help="Object-grouped, stratified CV folds for tuning C, gamma and the under-sampling "
-                        "draw on training objects; 0 = leave-one-object-out as in the paper (about 7x slower, "
-                        "same accuracy in our measurements).")(func)
-    func = click.option("--no-progress", is_flag=True, help="Hide progress bars.")(func)
+    func = schema_option("--undersampling", study=STUDY, key="svm.undersampling",
+                         type=click.Choice(["select", "bagging", "none"]),
+                         help="Class-0 under-sampling: keep the best draw (chosen on training objects by grouped "
+                              "CV), bag all draws, or none.")(func)
+    func = schema_option("--cv", study=STUDY, key="svm.cv", type=click.IntRange(min=0),
+                         help="Object-grouped, stratified CV folds for tuning C, gamma and the under-sampling draw "
+                              "on training objects; 0 = leave-one-object-out as in the paper (about 7x slower, same "
+                              "accuracy in our measurements).")(func)
+    func = no_progress_option(func)
     func = click.option("--no-cache", is_flag=True, help="Do not cache fitted attribute models (default: cache "
                         "under $TZSL_CACHE_DIR or the user cache folder, so interrupted runs resume).")(func)
     return func
 
 
-def _config(seed, n_jobs, backend, scheduler, undersampling, cv, no_progress, no_cache, **extra):
-    from tzsl.experiments.phac2_dap import DapStudyConfig  # noqa: PLC0415
+def _dataset_values(dataset, features_file, plain_dir, path, data_dir) -> dict:
+    if dataset is None and features_file is None and plain_dir is None:
+        dataset = "phac2-penn"
+    values = {"dataset.builtin": dataset, "dataset.features": features_file, "dataset.plain": plain_dir,
+              "dataset.path": path, "dataset.data_dir": data_dir}
+    return {k: None if v is None else str(v) for k, v in values.items()}
 
-    if cv < 0 or cv == 1:
-        raise ConfigError(f"--cv {cv}: use 0 (leave-one-object-out) or at least 2 folds")
-    svm = {"cv": None if cv == 0 else cv}
-    return DapStudyConfig(seed=seed, n_jobs=n_jobs, backend=backend, scheduler=scheduler,
-                          undersampling=undersampling, svm_params=svm, progress=not no_progress,
-                          cache=not no_cache, **extra)
+
+def _study_values(seed, n_jobs, backend, scheduler, undersampling, cv, no_progress, no_cache) -> dict:
+    return {"splits.seed": seed, "compute.n_jobs": n_jobs, "compute.backend": backend,
+            "compute.scheduler": scheduler, "svm.undersampling": undersampling, "svm.cv": cv,
+            "compute.progress": not no_progress, "compute.cache": not no_cache}
+
+
+def _experiment(values: dict):
+    from tzsl.experiments.config import config_from_options  # noqa: PLC0415
+
+    return config_from_options(STUDY, values)
 
 
 @cli.command()
-@click.option("--kind", type=click.Choice(["random", "challenging"]), default="random", show_default=True)
-@click.option("--n-splits", type=int, default=5, show_default=True, help="Random splits to draw.")
-@click.option("--n-test", type=int, default=10, show_default=True, help="Test objects per random split.")
+@click.option("--split", "kind", type=click.Choice(["random", "challenging"]), default="random", show_default=True,
+              help="Split family.")
+@schema_option("--n-splits", study=STUDY, key="splits.n_splits", type=click.IntRange(min=1),
+               help="Random splits to draw.")
+@schema_option("--n-test", study=STUDY, key="splits.n_test", type=click.IntRange(min=1),
+               help="Test objects per random split.")
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path), required=True, help="Split CSV to write.")
 @_source_options
 @seed_option
@@ -72,13 +95,15 @@ def _config(seed, n_jobs, backend, scheduler, undersampling, cv, no_progress, no
 def splits(kind, n_splits, n_test, out, dataset, features_file, plain_dir, path, seed, data_dir, force):
     """Write object splits as CSV (split, object, role), usable with 'tzsl evaluate --splits'."""
     from tzsl.evaluation import write_splits_csv  # noqa: PLC0415
-    from tzsl.experiments.phac2_dap import DapStudyConfig, make_splits  # noqa: PLC0415
-    from tzsl.experiments.sources import load_study_features  # noqa: PLC0415
+    from tzsl.experiments.engine import dap_config  # noqa: PLC0415
+    from tzsl.experiments.phac2_dap import make_splits  # noqa: PLC0415
+    from tzsl.experiments.study_runners import phac2_features  # noqa: PLC0415
 
     if out.exists() and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite")
-    features = load_study_features(dataset, features_file, plain_dir, data_dir, path)
-    made, _ = make_splits(features, kind, DapStudyConfig(n_splits=n_splits, n_test=n_test, seed=seed))
+    exp = _experiment({**_dataset_values(dataset, features_file, plain_dir, path, data_dir),
+                       "splits.n_splits": n_splits, "splits.n_test": n_test, "splits.seed": seed})
+    made, _ = make_splits(phac2_features(exp), kind, dap_config(exp))
     write_splits_csv(made, out)
     for s in made:
         excluded = ", ".join(a for a, _ in s.excluded_attributes) or "none"
@@ -95,31 +120,46 @@ def splits(kind, n_splits, n_test, out, dataset, features_file, plain_dir, path,
               help="Sensor fusion stored in the bundle for 'tzsl predict'.")
 @click.option("--prior", type=click.Choice(["uni", "train", "test"]), default="uni", show_default=True,
               help="Attribute prior stored in the bundle.")
-@click.option("--save", type=click.Path(dir_okay=False, path_type=Path), required=True,
+@click.option("--out", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="Model bundle to write (e.g. model.tzsl).")
 @_source_options
 @_study_options
 @data_dir_option
 @force_option
-def train_attributes(splits_file, split_name, fusion, prior, save, dataset, features_file, plain_dir, path,
+def train_attributes(splits_file, split_name, fusion, prior, out, dataset, features_file, plain_dir, path,
                      undersampling, cv, no_progress, no_cache, seed, n_jobs, backend, scheduler, data_dir, force):
     """Fit the per-attribute, per-sensor SVMs and save them as a model bundle.
 
     Without --splits every object trains the classifiers (a model for recognising new objects);
     with --splits only that split's training objects do.
     """
+    from tzsl.experiments.engine import check_experiment, dap_config  # noqa: PLC0415
     from tzsl.experiments.phac2_dap import train_attribute_model  # noqa: PLC0415
-    from tzsl.experiments.sources import load_study_features  # noqa: PLC0415
+    from tzsl.experiments.study_runners import phac2_features  # noqa: PLC0415
 
-    if save.exists() and not force:
-        raise ConfigError(f"{save} already exists; use --force to overwrite")
-    features = load_study_features(dataset, features_file, plain_dir, data_dir, path)
-    config = _config(seed, n_jobs, backend, scheduler, undersampling, cv, no_progress, no_cache)
+    if out.exists() and not force:
+        raise ConfigError(f"{out} already exists; use --force to overwrite")
+    exp = _experiment({**_dataset_values(dataset, features_file, plain_dir, path, data_dir),
+                       **_study_values(seed, n_jobs, backend, scheduler, undersampling, cv, no_progress, no_cache)})
+    check_experiment(exp)  # paths and the Dask scheduler, before any data is read
+    features = phac2_features(exp)
     start = time.perf_counter()
-    summary = train_attribute_model(features, config, save, splits_file=splits_file, split_name=split_name,
+    summary = train_attribute_model(features, dap_config(exp), out, splits_file=splits_file, split_name=split_name,
                                     fusion=fusion, prior=prior, force=force)
     click.echo(summary.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
-    click.echo(f"fitted {len(summary)} attribute classifiers in {time.perf_counter() - start:.1f} s; wrote {save}")
+    click.echo(f"fitted {len(summary)} attribute classifiers in {time.perf_counter() - start:.1f} s; wrote {out}")
+
+
+def evaluate_values(kind, splits_file, n_splits, n_test, multilabel, sweep, out, dataset, features_file, plain_dir,
+                    path, undersampling, cv, no_progress, no_cache, seed, n_jobs, backend, scheduler,
+                    data_dir) -> dict:
+    """``tzsl evaluate``'s options as experiment keys (``{"table.key": value}``)."""
+    kinds = ["file"] if splits_file is not None else (["random", "challenging"] if kind == "both" else [kind])
+    return {**_dataset_values(dataset, features_file, plain_dir, path, data_dir),
+            **_study_values(seed, n_jobs, backend, scheduler, undersampling, cv, no_progress, no_cache),
+            "splits.kinds": kinds, "splits.file": None if splits_file is None else str(splits_file),
+            "splits.n_splits": n_splits, "splits.n_test": n_test, "methods.multilabel": multilabel,
+            "methods.sweep": sweep, "output.folder": str(out)}
 
 
 @cli.command()
@@ -127,64 +167,30 @@ def train_attributes(splits_file, split_name, fusion, prior, save, dataset, feat
               show_default=True, help="Split family (paper Tables 1-2: random; Table 3: challenging).")
 @click.option("--splits", "splits_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Use the splits of this CSV instead (see 'tzsl splits').")
-@click.option("--n-splits", type=int, default=5, show_default=True)
-@click.option("--n-test", type=int, default=10, show_default=True)
-@click.option("--multilabel/--no-multilabel", default=False, show_default=True,
-              help="Also fit the joint (multi-label) attribute model on the random splits.")
-@click.option("--sweep/--no-sweep", default=False, show_default=True, help="Attribute-count sweep (F10).")
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True)
+@schema_option("--n-splits", study=STUDY, key="splits.n_splits", type=click.IntRange(min=1),
+               help="Random splits.")
+@schema_option("--n-test", study=STUDY, key="splits.n_test", type=click.IntRange(min=1),
+               help="Test objects per random split.")
+@schema_option("--multilabel/--no-multilabel", study=STUDY, key="methods.multilabel",
+               help="Also fit the joint (multi-label) attribute model on the random splits.")
+@schema_option("--sweep/--no-sweep", study=STUDY, key="methods.sweep", help="Attribute-count sweep (F10).")
+@schema_option("--out", study=STUDY, key="output.folder", type=click.Path(file_okay=False, path_type=Path),
+               help="Results folder.")
 @_source_options
 @_study_options
 @data_dir_option
 @force_option
-def evaluate(kind, splits_file, n_splits, n_test, multilabel, sweep, out, dataset, features_file, plain_dir, path,
-             undersampling, cv, no_progress, no_cache, seed, n_jobs, backend, scheduler, data_dir, force):
-    """Zero-shot recognition with DAP per split and on average, beside the paper's numbers."""
-    from tzsl.evaluation import read_splits_csv  # noqa: PLC0415
-    from tzsl.experiments._outputs import ResultsDir  # noqa: PLC0415
-    from tzsl.experiments.phac2_dap import run_dap_study  # noqa: PLC0415
-    from tzsl.experiments.sources import load_study_features  # noqa: PLC0415
+def evaluate(force, **options):
+    """Zero-shot recognition with DAP per split and on average, beside the paper's numbers.
 
-    features = load_study_features(dataset, features_file, plain_dir, data_dir, path)
-    config = _config(seed, n_jobs, backend, scheduler, undersampling, cv, no_progress, no_cache, n_splits=n_splits,
-                     n_test=n_test, multilabel=multilabel)
-    results = ResultsDir(out, force=force)
-    user_splits = None
-    if splits_file is not None:
-        user_splits = read_splits_csv(splits_file, features.attributes,
-                                      min_train_positives=config.random_min_train_positives)
-    kinds = ("random", "challenging") if kind == "both" else (kind,)
-    run_dap_study(features, results, config, kinds=kinds, splits=user_splits, sweep=sweep, echo=click.echo)
-    results.write_manifest({"study": "phac2-dap", "dataset": features.dataset, "kinds": list(kinds),
-                            "splits_file": None if splits_file is None else str(splits_file),
-                            **config.__dict__}, data_files=features.info.get("data_files", []),
-                           name="manifest_evaluate.json")
-    click.echo(f"\nwrote {len(results.written)} files to {out}")
-
-
-@cli.command("reproduce-tables")
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True)
-@click.option("--fabric-seeds", type=int, default=5, show_default=True, help="Seeds of the fabric embedding model.")
-@click.option("--hand-seeds", type=int, default=5, show_default=True, help="Simulated hand data sets (seeds 0..N-1).")
-@_study_options
-@data_dir_option
-@force_option
-def reproduce_tables(out, fabric_seeds, hand_seeds, undersampling, cv, no_progress, no_cache, seed, n_jobs, backend, scheduler,
-                     data_dir, force):
-    """Every table (CSV) and figure (PNG) of both papers from the real data, paper numbers beside ours.
-
-    PHAC-2 DAP study (Tables 1-3, multi-label, per-attribute accuracy, attribute sweep, DAP vs
-    ESZSL vs embedding), fabric study (Table 1 analogue on the real depth images) and the hand
-    study on simulated grasps (the paper's Shadow-hand data are not public). A manifest records
-    configuration, seeds, data checksums and package versions.
+    The same as 'tzsl run' on the matching experiment file (study = "phac2-dap"); see
+    'tzsl run phac2-dap --print-config' for every setting.
     """
-    from tzsl.experiments.reproduce import reproduce_tables as run  # noqa: PLC0415
+    from tzsl.experiments.engine import run_experiment  # noqa: PLC0415
 
-    config = _config(seed, n_jobs, backend, scheduler, undersampling, cv, no_progress, no_cache, multilabel=True)
-    start = time.perf_counter()
-    results = run(out, data_dir=data_dir, config=config, force=force, hand_seeds=tuple(range(hand_seeds)),
-                  fabric_seeds=fabric_seeds, echo=click.echo)
-    click.echo(f"\nwrote {len(results.written)} files to {out} in {time.perf_counter() - start:.0f} s")
+    exp = _experiment(evaluate_values(**options))
+    results, _ = run_experiment(exp, force=force, echo=click.echo)
+    click.echo(f"\nwrote {len(results.written)} files to {results.root}")
 
 
 @cli.command()

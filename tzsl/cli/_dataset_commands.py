@@ -8,7 +8,6 @@ from pathlib import Path
 import click
 
 from tzsl.cli._main import cli, data_dir_option, force_option
-from tzsl.datasets._plain import PLAIN_FORMAT_HELP
 from tzsl.exceptions import ConfigError, DataFileError
 
 #: Datasets ``tzsl convert`` writes as plain-file folders.
@@ -26,7 +25,25 @@ def _statistics_help() -> str:
 
 def format_text() -> str:
     """The full format description printed by ``tzsl formats``."""
-    return PLAIN_FORMAT_HELP + "\n" + _statistics_help()
+    return _plain_format_help() + "\n" + _statistics_help()
+
+
+def _plain_format_help() -> str:
+    from tzsl.datasets._plain import PLAIN_FORMAT_HELP  # noqa: PLC0415 - when needed: keeps "tzsl --help" fast
+
+    return PLAIN_FORMAT_HELP
+
+
+class _LazyHelpCommand(click.Command):
+    """A command whose long help is built only when it is shown (``tzsl formats --help``)."""
+
+    @property
+    def help(self):
+        return "Describe the plain-file dataset format (also in data/README.md).\n\n" + _unwrapped(_plain_format_help())
+
+    @help.setter
+    def help(self, value):
+        pass
 
 
 def _unwrapped(text: str) -> str:
@@ -34,8 +51,7 @@ def _unwrapped(text: str) -> str:
     return "\n\n".join("\b\n" + para for para in text.strip().split("\n\n"))
 
 
-@cli.command(help="Describe the plain-file dataset format (also in data/README.md).\n\n"
-             + _unwrapped(PLAIN_FORMAT_HELP))
+@cli.command(cls=_LazyHelpCommand, short_help="Describe the plain-file dataset format (also in data/README.md).")
 def formats() -> None:
     click.echo(format_text(), nl=False)
 

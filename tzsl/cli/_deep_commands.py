@@ -6,8 +6,33 @@ from pathlib import Path
 
 import click
 
-from tzsl.cli._main import cli, data_dir_option, force_option, seed_option
+from tzsl.cli._main import SchemaOption, cli, data_dir_option, force_option, no_progress_option, seed_option
 from tzsl.exceptions import ConfigError
+
+
+def model_default(name: str):
+    """The default of :class:`~tzsl.models.DeepAttributeEmbedding`'s parameter ``name``, read when needed."""
+
+    def read():
+        from tzsl.experiments.config import estimator_parameters  # noqa: PLC0415
+
+        value = estimator_parameters("DeepAttributeEmbedding")[name]
+        return str(value) if name in ("lam", "finetune") else value
+
+    read.schema_key = name  # type: ignore[attr-defined]
+    return read
+
+
+def _model_option(*decls, name: str, **kwargs):
+    return click.option(*decls, cls=SchemaOption, default=model_default(name), show_default=True, **kwargs)
+
+
+def require_torch() -> None:
+    """Refuse, in one line, when the deep extra is not installed."""
+    import importlib.util  # noqa: PLC0415
+
+    if importlib.util.find_spec("torch") is None:
+        raise ConfigError("the deep model needs torch: pip install 'tzsl[deep]'")
 
 
 def parse_lam(text: str) -> float | str:
@@ -39,24 +64,23 @@ def parse_finetune(text: str) -> int | str:
 def deep_model_options(func):
     """Options shared by the commands that train the deep model."""
     options = [
-        click.option("--epochs", type=int, default=30, show_default=True, help="Training epochs."),
-        click.option("--lam", default="0.1", show_default=True,
+        _model_option("--epochs", name="epochs", type=click.IntRange(min=1), help="Training epochs."),
+        _model_option("--lam", name="lam",
                      help='Lambda of the loss C + lambda R; 0 = C only, "inf" = R only.'),
-        click.option("--backbone", type=click.Choice(["efficientnet-lite0", "vgg16", "small-cnn"]),
-                     default="efficientnet-lite0", show_default=True,
+        _model_option("--backbone", name="backbone", type=click.Choice(["efficientnet-lite0", "vgg16", "small-cnn"]),
                      help="Per-frame CNN. efficientnet-lite0: ImageNet weights shipped with tzsl[deep]; "
                           "vgg16 (the paper's): needs --weights-path; small-cnn: trained from scratch."),
         click.option("--weights-path", type=click.Path(dir_okay=False, path_type=Path), default=None,
                      help="Local backbone weights file (VGG-16: torchvision key names)."),
-        click.option("--finetune", default="0", show_default=True,
+        _model_option("--finetune", name="finetune",
                      help='Backbone stages trained (from the top); 0 = frozen backbone, "all" = every stage.'),
         click.option("--image-size", type=int, default=None,
                      help="Resize frames to this side length (default: the backbone's native size)."),
-        click.option("--hidden-size", type=int, default=200, show_default=True, help="LSTM hidden size."),
-        click.option("--batch-size", type=int, default=16, show_default=True, help="Sequences per mini-batch."),
-        click.option("--lr", type=float, default=1e-3, show_default=True, help="Learning rate."),
-        click.option("--weight-decay", type=float, default=1e-4, show_default=True, help="L2 penalty on weights."),
-        click.option("--optimizer", type=click.Choice(["adam", "sgd"]), default="adam", show_default=True,
+        _model_option("--hidden-size", name="hidden_size", type=click.IntRange(min=1), help="LSTM hidden size."),
+        _model_option("--batch-size", name="batch_size", type=click.IntRange(min=1), help="Sequences per mini-batch."),
+        _model_option("--lr", name="lr", type=float, help="Learning rate."),
+        _model_option("--weight-decay", name="weight_decay", type=float, help="L2 penalty on weights."),
+        _model_option("--optimizer", name="optimizer", type=click.Choice(["adam", "sgd"]),
                      help="sgd = the paper's (momentum 0.9)."),
         click.option("--checkpoint-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
                      help="Write a checkpoint after every epoch (and cache the frozen CNN features) here."),
@@ -101,11 +125,11 @@ def build_deep_model(*, epochs, lam, backbone, weights_path, finetune, image_siz
               help="With --gelsight-root: condition folder(s) to use (repeatable; default all).")
 @deep_model_options
 @data_dir_option
-@seed_option
+@seed_option(study=None)
 @force_option
-@click.option("--quiet", is_flag=True, help="No progress bars.")
+@no_progress_option
 def train_deep(out: Path, config: str, attributes: str, gelsight_root: Path | None, conditions: tuple[str, ...],
-               data_dir: Path | None, seed: int, force: bool, quiet: bool, **model_options) -> None:
+               data_dir: Path | None, seed: int, force: bool, no_progress: bool, **model_options) -> None:
     """Train the CNN + LSTM attribute model (fabric paper) and print train/test accuracy.
 
     Sequences: each fabric's depth images in capture order (5 evenly spaced), or the 5 key
@@ -113,14 +137,13 @@ def train_deep(out: Path, config: str, attributes: str, gelsight_root: Path | No
     """
     from tzsl.experiments.deep import format_deep_result, load_deep_sequences, run_deep_fabric  # noqa: PLC0415
     from tzsl.models import save_deep_bundle  # noqa: PLC0415
-    from tzsl.models._deep import require_torch  # noqa: PLC0415
 
     if out.exists() and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite it")
     if conditions and gelsight_root is None:
         raise ConfigError("--condition needs --gelsight-root")
     require_torch()
-    model = build_deep_model(seed=seed, verbose=not quiet, **model_options)
+    model = build_deep_model(seed=seed, verbose=not no_progress, **model_options)
     sequences, table = load_deep_sequences(
         data_dir=data_dir, gelsight_root=gelsight_root, conditions=list(conditions) or None, attributes=attributes
     )

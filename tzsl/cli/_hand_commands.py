@@ -2,14 +2,23 @@
 
 from __future__ import annotations
 
-import re
 import time
 from pathlib import Path
 
 import click
 
-from tzsl.cli._main import cli, force_option, n_jobs_option, seed_option
+from tzsl.cli._main import (
+    cli,
+    force_option,
+    n_jobs_option,
+    no_progress_option,
+    parse_seeds,
+    schema_option,
+    seed_option,
+)
 from tzsl.exceptions import ConfigError
+
+STUDY = "hand"
 
 _SIMULATOR_NOTE = (
     "SIMULATED data: no public Shadow-hand grasp data exist, so this simulator exists to exercise "
@@ -26,14 +35,15 @@ table_option = click.option(
 
 def _simulation_options(f):
     for option in reversed([
-        click.option("--grasps-per-object", type=int, default=30, show_default=True,
-                     help="Simulated grasps of every object."),
-        click.option("--noise", type=float, default=1.0, show_default=True,
-                     help="Sensor noise and per-grasp variation (0 = noiseless)."),
-        click.option("--difficulty", type=float, default=0.5, show_default=True,
-                     help="Object-to-object variation of materials and postures."),
-        click.option("--shape-miss-rate", type=float, default=0.3, show_default=True,
-                     help="Probability that a grasp misses each local shape attribute (handle, narrow neck, ...)."),
+        schema_option("--grasps-per-object", study=STUDY, key="simulation.n_grasps_per_object",
+                      type=click.IntRange(min=1), help="Simulated grasps of every object."),
+        schema_option("--noise", study=STUDY, key="simulation.noise", type=click.FloatRange(min=0),
+                      help="Sensor noise and per-grasp variation (0 = noiseless)."),
+        schema_option("--difficulty", study=STUDY, key="simulation.difficulty", type=click.FloatRange(min=0),
+                      help="Object-to-object variation of materials and postures."),
+        schema_option("--shape-miss-rate", study=STUDY, key="simulation.shape_miss_rate",
+                      type=click.FloatRange(0, 1),
+                      help="Probability that a grasp misses each local shape attribute (handle, narrow neck, ...)."),
     ]):
         f = option(f)
     return f
@@ -45,20 +55,6 @@ def _table(path: Path | None):
     return load_hand_table4(path)
 
 
-def _seeds(text: str) -> list[int]:
-    """'0,1,2' or '0-4' (or a mix) -> distinct non-negative integers."""
-    seeds: list[int] = []
-    for part in text.split(","):
-        m = re.fullmatch(r"\s*(\d+)\s*(?:-\s*(\d+)\s*)?", part)
-        if m is None:
-            raise ConfigError(f"--seeds {text!r}: use non-negative integers separated by commas, or a range like 0-4")
-        lo, hi = int(m.group(1)), int(m.group(2) or m.group(1))
-        seeds += list(range(lo, hi + 1))
-    if not seeds or len(set(seeds)) != len(seeds):
-        raise ConfigError(f"--seeds {text!r}: give distinct integers")
-    return seeds
-
-
 @cli.command("simulate-grasps", help=(
     "Write simulated Shadow-hand grasps (5 BioTacs, 19 joints) of the 16 objects of the DAP "
     "paper's Table 4 as a grasp folder (grasps.csv + one .npz per grasp; see data/README.md). "
@@ -67,7 +63,7 @@ def _seeds(text: str) -> list[int]:
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), required=True, help="Grasp folder to write.")
 @_simulation_options
 @table_option
-@seed_option
+@seed_option(study=None)
 @force_option
 def simulate_grasps_command(out: Path, grasps_per_object: int, noise: float, difficulty: float,
                             shape_miss_rate: float, table: Path | None, seed: int, force: bool) -> None:
@@ -84,37 +80,49 @@ def simulate_grasps_command(out: Path, grasps_per_object: int, noise: float, dif
     click.echo("note: " + _SIMULATOR_NOTE)
 
 
+def evaluate_hand_values(grasps, table, out, seeds, grasps_per_object, noise, difficulty, shape_miss_rate,
+                         n_sequences, n_jobs, no_progress) -> dict:
+    """``tzsl evaluate-hand``'s options as experiment keys (``{"table.key": value}``)."""
+    return {"dataset.builtin": "hand-simulated" if grasps is None else None,
+            "dataset.grasps": None if grasps is None else str(grasps),
+            "dataset.table": None if table is None else str(table), "output.folder": str(out),
+            "splits.seeds": list(seeds), "simulation.n_grasps_per_object": grasps_per_object,
+            "simulation.noise": noise, "simulation.difficulty": difficulty,
+            "simulation.shape_miss_rate": shape_miss_rate, "methods.n_sequences": n_sequences,
+            "compute.n_jobs": n_jobs, "compute.progress": not no_progress}
+
+
 @cli.command("evaluate-hand")
 @click.option("--grasps", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="Grasp folder with labelled grasps. Default: simulate a data set per seed (simulated data).")
 @table_option
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results/hand"),
-              show_default=True, help="Results folder.")
-@click.option("--seeds", default="0", show_default=True,
-              help="Seeds, e.g. '0,1,2' or '0-4': one model fit and one set of grasp orders each "
-                   "(and one simulated data set each when --grasps is omitted).")
+@schema_option("--out", study=STUDY, key="output.folder", type=click.Path(file_okay=False, path_type=Path),
+               help="Results folder.")
+@schema_option("--seeds", study=STUDY, key="splits.seeds", callback=parse_seeds,
+               help="Seeds, e.g. '0,1,2' or '0-4': one model fit and one set of grasp orders each "
+                    "(and one simulated data set each when --grasps is omitted).")
 @_simulation_options
-@click.option("--n-sequences", type=int, default=200, show_default=True,
-              help="Random grasp orders per test object for the multi-grasp curves.")
-@n_jobs_option
+@schema_option("--n-sequences", study=STUDY, key="methods.n_sequences", type=click.IntRange(min=1),
+               help="Random grasp orders per test object for the multi-grasp curves.")
+@n_jobs_option(study=STUDY)
+@no_progress_option
 @force_option
-def evaluate_hand(grasps: Path | None, table: Path | None, out: Path, seeds: str, grasps_per_object: int,
-                  noise: float, difficulty: float, shape_miss_rate: float, n_sequences: int, n_jobs: int,
-                  force: bool) -> None:
+def evaluate_hand(force: bool, **options) -> None:
     """Hand study (DAP paper section 5.8): Table 5, DF-MDAP vs T, SC-MDAP vs k, confusion
-    matrices, attribute accuracy and distance matrix S, fitted on training objects only."""
-    from tzsl.experiments.hand import HandStudyConfig, format_hand_summary, run_hand_study  # noqa: PLC0415
+    matrices, attribute accuracy and distance matrix S, fitted on training objects only.
 
-    seed_list = _seeds(seeds)
-    hand = _table(table)
-    config = HandStudyConfig(n_grasps_per_object=grasps_per_object, noise=noise, difficulty=difficulty,
-                             shape_miss_rate=shape_miss_rate, n_sequences=n_sequences, n_jobs=n_jobs)
-    if grasps is None:
-        click.echo(f"no --grasps given: simulating grasps with seed(s) {seed_list}. " + _SIMULATOR_NOTE)
+    The same as 'tzsl run' on a study = "hand" file with these settings ('tzsl run
+    hand-simulated --print-config' shows every setting).
+    """
+    from tzsl.experiments.config import config_from_options  # noqa: PLC0415
+    from tzsl.experiments.engine import run_experiment  # noqa: PLC0415
+
+    exp = config_from_options(STUDY, evaluate_hand_values(**options))
+    if options["grasps"] is None:
+        click.echo(f"no --grasps given: simulating grasps with seed(s) {list(options['seeds'])}. " + _SIMULATOR_NOTE)
     start = time.perf_counter()
-    result = run_hand_study(grasps, hand, out, seed_list, config, force=force, log=click.echo)
-    click.echo(format_hand_summary(result))
-    for path in result.written:
+    results, _ = run_experiment(exp, force=force, echo=click.echo)
+    for path in results.written:
         click.echo(f"wrote {path}")
     click.echo(f"done in {time.perf_counter() - start:.1f} s")
 
@@ -123,21 +131,21 @@ def evaluate_hand(grasps: Path | None, table: Path | None, out: Path, seeds: str
 @click.option("--grasps", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Grasp folder; the grasps of the table's training objects are used, the others ignored.")
 @table_option
-@click.option("--save", type=click.Path(dir_okay=False, path_type=Path), required=True,
+@click.option("--out", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="Model bundle to write (e.g. model.tzsl).")
 @click.option("--fusion", type=click.Choice(["ldap", "avgdap", "maxdap"]), default="ldap", show_default=True,
               help="Fusion over touching BioTacs for single-grasp classification.")
-@seed_option
+@seed_option(study=None)
 @force_option
-def train_hand(grasps: Path, table: Path | None, save: Path, fusion: str, seed: int, force: bool) -> None:
+def train_hand(grasps: Path, table: Path | None, out: Path, fusion: str, seed: int, force: bool) -> None:
     """Fit the hand attribute classifiers on the training objects and save a model bundle."""
     from tzsl.experiments.predict import train_hand_bundle  # noqa: PLC0415
 
     start = time.perf_counter()
-    model, meta = train_hand_bundle(grasps, _table(table), save, fusion=fusion, seed=seed, force=force)
+    model, meta = train_hand_bundle(grasps, _table(table), out, fusion=fusion, seed=seed, force=force)
     click.echo(f"fitted on {meta['n_training_grasps']} grasps of training objects {meta['training_objects']} "
                f"({meta['n_ignored_grasps']} grasps of other objects ignored) in {time.perf_counter() - start:.1f} s")
-    click.echo(f"saved {save} (kind hand-dap, {len(meta['attribute_names'])} attributes, fusion {fusion})")
+    click.echo(f"saved {out} (kind hand-dap, {len(meta['attribute_names'])} attributes, fusion {fusion})")
 
 
 @cli.command("predict", short_help="Classify new grasps with a saved model; fuse several (SC-/DF-MDAP).")
@@ -145,7 +153,7 @@ def train_hand(grasps: Path, table: Path | None, save: Path, fusion: str, seed: 
               help="Model bundle (only load bundles you trust: loading runs code from the file).")
 @click.option("--classes", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="Candidate classes: CSV with the class name first, then one 0/1 column per model attribute.")
-@click.option("--fusion", "mode", type=click.Choice(["sc", "df"]), default="sc", show_default=True,
+@click.option("--multi-grasp", "mode", type=click.Choice(["sc", "df"]), default="sc", show_default=True,
               help="Multi-grasp fusion: sc = SC-MDAP (stop at k equal decisions), df = DF-MDAP (average grasps).")
 @click.option("--k", type=int, default=3, show_default=True, help="Equal classifications SC-MDAP needs.")
 @click.option("--top", type=int, default=5, show_default=True, help="Classes listed per grasp (0 = all).")

@@ -1,4 +1,4 @@
-"""Config-driven commands: ``run`` (a whole study from a TOML file) and ``report`` (one HTML page)."""
+"""The engine's commands: ``run`` (an experiment file or a built-in study), ``reproduce-tables``, ``report``."""
 
 from __future__ import annotations
 
@@ -7,42 +7,94 @@ from pathlib import Path
 
 import click
 
-from tzsl.cli._main import cli, data_dir_option, force_option
+from tzsl.cli._main import (
+    backend_option,
+    cli,
+    data_dir_option,
+    force_option,
+    n_jobs_option,
+    no_progress_option,
+    scheduler_option,
+    seed_option,
+)
+
+
+def override_options(func):
+    """--out, --n-jobs, --seed, --backend, --scheduler, --no-progress, --data-dir: override the file."""
+    for option in (scheduler_option, backend_option(override=True), seed_option(override=True),
+                   n_jobs_option(override=True)):
+        func = option(func)
+    func = click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=None,
+                        help="Results folder (default: [output] folder, relative to the current directory).")(func)
+    return no_progress_option(data_dir_option(force_option(func)))
+
+
+def _overrides(out, n_jobs, seed, backend, scheduler, no_progress, data_dir) -> dict:
+    return {"out": out, "n_jobs": n_jobs, "seed": seed, "backend": backend, "scheduler": scheduler,
+            "progress": False if no_progress else None, "data_dir": data_dir}
 
 
 @cli.command()
-@click.argument("experiment", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=None,
-              help="Results folder (default: [output] folder of the file, relative to the current directory).")
-@click.option("--n-jobs", type=int, default=None, help="Parallel fits; overrides [compute] n_jobs.")
-@click.option("--no-progress", is_flag=True, help="Hide progress bars (overrides [compute] progress).")
-@click.option("--check", is_flag=True, help="Only check the experiment file and print its resolved settings.")
-@data_dir_option
-@force_option
-def run(experiment: Path, out: Path | None, n_jobs: int | None, no_progress: bool, check: bool,
-        data_dir: Path | None, force: bool) -> None:
-    """Run a whole study described by an experiment file (TOML).
+@click.argument("experiment")
+@override_options
+@click.option("--check", is_flag=True, help="Only check everything a run would fail on (settings, paths, split "
+              "file, Dask scheduler), before any fit.")
+@click.option("--print-config", is_flag=True, help="Print the resolved experiment as TOML (every default filled in) "
+              "and stop.")
+def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, data_dir, force, check: bool,
+        print_config: bool) -> None:
+    """Run a study: an experiment file (TOML) or a built-in study by NAME.
 
-    The file names the study (study = "phac2-dap", "fabric" or "hand"), the dataset (a
-    built-in one, a feature table or a plain-file folder; paths relative to the file), the
-    features, methods, splits, SVM grids and output folder. Every unknown key or wrong type
-    is reported with the file name and key path. Copy one of experiments/*.toml to start
-    (see experiments/README.md).
+    Built-in studies: phac2-dap, phac2-gzsl, fabric, fabric-deep, hand-simulated (the files
+    in tzsl/experiments/builtin/; print one with 'tzsl run NAME --print-config'). Every
+    unknown key, wrong type or bad value is reported as FILE: key.path: reason. Options
+    override the file's settings. See experiments/README.md.
     """
-    from tzsl.experiments.config_run import load_experiment, run_experiment  # noqa: PLC0415
+    from tzsl.experiments.config import load_experiment, to_toml  # noqa: PLC0415
+    from tzsl.experiments.engine import check_experiment, override_values, run_experiment  # noqa: PLC0415
 
+    overrides = _overrides(out, n_jobs, seed, backend, scheduler, no_progress, data_dir)
     exp = load_experiment(experiment)
+    if any(v is not None for v in overrides.values()):
+        exp = load_experiment(experiment, override_values(exp.study, overrides))
+    if print_config:
+        click.echo(to_toml(exp.config), nl=False)
+        return
     if check:
-        click.echo(f"{experiment}: valid ({exp.study})")
-        for table, values in exp.settings.items():
-            click.echo(f"[{table}]")
-            for key, value in values.items():
-                click.echo(f"  {key} = {value!r}")
+        check_experiment(exp)
+        if exp.study == "phac2-dap":
+            from tzsl.experiments.study_runners import prepare_phac2  # noqa: PLC0415
+
+            prepare_phac2(exp)  # reads the dataset and split file, checks the folds; no fit
+        click.echo(f"{exp.source}: valid ({exp.study}); 'tzsl run {experiment} --print-config' shows every value")
         return
     start = time.perf_counter()
-    results = run_experiment(exp, out=out, force=force, n_jobs=n_jobs, progress=False if no_progress else None,
-                             data_dir=data_dir, echo=click.echo)
+    results, _ = run_experiment(exp, force=force, echo=click.echo)
     click.echo(f"\nwrote {len(results.written)} files to {results.root} in {time.perf_counter() - start:.0f} s")
+
+
+@cli.command("reproduce-tables")
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results"), show_default=True,
+              help="Results folder.")
+@n_jobs_option(override=True)
+@backend_option(override=True)
+@scheduler_option
+@no_progress_option
+@data_dir_option
+@force_option
+def reproduce_tables(out, n_jobs, backend, scheduler, no_progress, data_dir, force):
+    """Every table (CSV) and figure (PNG) of both papers from the real data, paper numbers beside ours.
+
+    Runs the built-in studies phac2-dap, fabric and hand-simulated, in this order, exactly as
+    'tzsl run NAME' does, into one folder with one manifest.json. The hand study runs on
+    SIMULATED grasps (the paper's Shadow-hand data are not public).
+    """
+    from tzsl.experiments.reproduce import reproduce_tables as reproduce  # noqa: PLC0415
+
+    start = time.perf_counter()
+    results = reproduce(out, force=force, echo=click.echo, n_jobs=n_jobs, backend=backend, scheduler=scheduler,
+                        progress=False if no_progress else None, data_dir=data_dir)
+    click.echo(f"\nwrote {len(results.written)} files to {out} in {time.perf_counter() - start:.0f} s")
 
 
 @cli.command()

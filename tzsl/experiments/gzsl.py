@@ -47,6 +47,7 @@ import pandas as pd
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, gzsl_scores, per_class_mean_accuracy
 from tzsl.exceptions import ConfigError, SplitError
+from tzsl.experiments.config import Phac2Gzsl
 from tzsl.experiments.phac2_dap import DapStudyConfig, attribute_bank, compute_context
 from tzsl.models import attribute_prior, attribute_rows, build_method, dap_log_scores, fuse_attribute_posteriors
 
@@ -71,6 +72,9 @@ GZSL_FILE = "gzsl.csv"
 GZSL_METHODS: tuple[str, ...] = ("dap", "eszsl")
 
 
+_GZSL = Phac2Gzsl()
+
+
 @dataclass
 class GzslConfig:
     """Settings of the GZSL evaluation; recorded in the manifest.
@@ -90,12 +94,13 @@ class GzslConfig:
         Draws of pseudo-unseen classes tried before giving up (calibration only).
     """
 
-    holdout_fraction: float = 0.3
-    methods: tuple[str, ...] = GZSL_METHODS
-    fusion: str = "avg"
-    prior: str = "uni"
-    calibrated_stacking: bool = True
-    max_draws: int = 1000
+    # every default is the experiment schema's (tzsl.experiments.config), written once there
+    holdout_fraction: float = _GZSL.holdout_fraction
+    methods: tuple[str, ...] = tuple(_GZSL.methods)
+    fusion: str = _GZSL.fusion
+    prior: str = _GZSL.prior
+    calibrated_stacking: bool = _GZSL.calibrated_stacking
+    max_draws: int = _GZSL.max_draws
 
     def check(self) -> None:
         """Raise ConfigError for settings that cannot work."""

@@ -39,6 +39,7 @@ from tzsl.datasets import Grasp, HandTable, read_grasps, simulate_grasps
 from tzsl.exceptions import ConfigError, DataFileError, SplitError
 from tzsl.experiments import paper_numbers as paper
 from tzsl.experiments._outputs import ResultsDir
+from tzsl.experiments.config import Compute, HandFeatures, HandMethods, HandSimulation
 from tzsl.features import GraspFeatures, grasp_features
 from tzsl.models import (
     HAND_FUSIONS,
@@ -83,6 +84,9 @@ HAND_OUTPUTS: tuple[str, ...] = (
 )
 
 
+_SIM, _FEAT, _METH = HandSimulation(), HandFeatures(), HandMethods()
+
+
 @dataclass
 class HandStudyConfig:
     """Settings of the hand study; every field is recorded in the manifest.
@@ -111,22 +115,23 @@ class HandStudyConfig:
         Parallel attribute-classifier fits (joblib).
     """
 
-    n_grasps_per_object: int = 30
-    noise: float = 1.0
-    difficulty: float = 0.5
-    shape_miss_rate: float = 0.3
-    contact_threshold: float = 20.0
-    baseline_rows: int = 10
-    hold_fraction: float = 0.5
-    end_rows: int = 5
+    # every default is the experiment schema's (tzsl.experiments.config), written once there
+    n_grasps_per_object: int = _SIM.n_grasps_per_object
+    noise: float = _SIM.noise
+    difficulty: float = _SIM.difficulty
+    shape_miss_rate: float = _SIM.shape_miss_rate
+    contact_threshold: float = _FEAT.contact_threshold
+    baseline_rows: int = _FEAT.baseline_rows
+    hold_fraction: float = _FEAT.hold_fraction
+    end_rows: int = _FEAT.end_rows
     model_params: dict = field(default_factory=dict)
-    max_T: int = 10
-    max_k: int = 7
-    sequence_length: int = paper.DAP_HAND_MAX_TEST_GRASPS
-    n_sequences: int = 200
-    confusion_T: int = paper.DAP_HAND_CONFUSION_T
-    confusion_k: int = paper.DAP_HAND_CONFUSION_K
-    n_jobs: int | None = 1
+    max_T: int = _METH.max_T
+    max_k: int = _METH.max_k
+    sequence_length: int = _METH.sequence_length
+    n_sequences: int = _METH.n_sequences
+    confusion_T: int = _METH.confusion_T
+    confusion_k: int = _METH.confusion_k
+    n_jobs: int | None = Compute().n_jobs
 
     def check(self) -> None:
         """Raise ConfigError for settings that cannot work."""

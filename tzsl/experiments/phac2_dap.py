@@ -28,8 +28,11 @@ from tzsl.evaluation import (
     summarise_over_splits,
 )
 from tzsl.exceptions import ConfigError, SplitError
+from tzsl.experiments.config import DaskCompute, Phac2Methods, Phac2Splits, Phac2Svm
 from tzsl.models import AttributeClassifierBank, AttributeSVM, MultiLabelAttributeClassifier, attribute_rows
 from tzsl.models._dap import attribute_prior, dap_accuracy_over_subsets, dap_log_scores, fuse_attribute_posteriors
+
+_SPLITS, _SVM, _METHODS, _COMPUTE = Phac2Splits(), Phac2Svm(), Phac2Methods(), DaskCompute()
 
 FUSIONS = ("max", "avg")
 PRIORS = ("uni", "test", "train")
@@ -73,21 +76,22 @@ class DapStudyConfig:
         parameters, so an interrupted run resumes and a re-run does not refit.
     """
 
-    n_splits: int = 5
-    n_test: int = 10
-    seed: int = 0
-    random_min_train_positives: int = 2
-    challenging_min_train_positives: int = 3
-    undersampling: str = "select"
-    svm_params: dict = field(default_factory=lambda: {"cv": 5})
-    multilabel: bool = True
-    sweep_min_attributes: int = 7
-    sweep_max_subsets: int = 1000
-    n_jobs: int = 1
-    backend: str = "loky"
-    scheduler: str | None = None
-    progress: bool = True
-    cache: bool = True
+    # every default is the experiment schema's (tzsl.experiments.config), written once there
+    n_splits: int = _SPLITS.n_splits
+    n_test: int = _SPLITS.n_test
+    seed: int = _SPLITS.seed
+    random_min_train_positives: int = _SPLITS.random_min_train_positives
+    challenging_min_train_positives: int = _SPLITS.challenging_min_train_positives
+    undersampling: str = _SVM.undersampling
+    svm_params: dict = field(default_factory=lambda: {"cv": _SVM.cv})
+    multilabel: bool = _METHODS.multilabel
+    sweep_min_attributes: int = _METHODS.sweep_min_attributes
+    sweep_max_subsets: int = _METHODS.sweep_max_subsets
+    n_jobs: int = _COMPUTE.n_jobs
+    backend: str = _COMPUTE.backend
+    scheduler: str | None = _COMPUTE.scheduler
+    progress: bool = _COMPUTE.progress
+    cache: bool = _COMPUTE.cache
 
 
 @dataclass

@@ -1,0 +1,1 @@
+"""Built-in experiment files (``tzsl run NAME``), shipped as package data."""

@@ -1,0 +1,52 @@
+"""The experiment schema: one typed model per study kind, every default written once.
+
+``study = "phac2-dap"`` (:class:`Phac2Study`), ``"fabric"`` (:class:`FabricStudy`),
+``"fabric-deep"`` (:class:`FabricDeepStudy`) and ``"hand"`` (:class:`HandStudy`). Each table of
+an experiment file is a strict pydantic model (unknown keys, wrong types and bad ranges are
+errors, all reported at once as ``FILE: key.path: reason``). The study dataclasses
+(:class:`~tzsl.experiments.phac2_dap.DapStudyConfig`, ...) and the command-line options read
+their defaults from here; where a default is an estimator's, it is read from the estimator.
+
+A later ``methods = [{name = "...", ...}]`` list of registry names fits as one more key of a
+study's ``[methods]`` table.
+"""
+
+from tzsl.experiments.config._common import SEED_LIMIT, Compute, DaskCompute, Output
+from tzsl.experiments.config._load import (
+    STUDIES,
+    STUDY_MODELS,
+    Experiment,
+    builtin_names,
+    builtin_text,
+    config_from_options,
+    defaults,
+    load_experiment,
+    to_toml,
+    validate,
+)
+from tzsl.experiments.config._phac2 import (
+    Phac2Dataset,
+    Phac2Features,
+    Phac2Gzsl,
+    Phac2Methods,
+    Phac2Splits,
+    Phac2Study,
+    Phac2Svm,
+)
+from tzsl.experiments.config._studies import (
+    FabricDeepStudy,
+    FabricStudy,
+    HandFeatures,
+    HandMethods,
+    HandSimulation,
+    HandStudy,
+    estimator_parameters,
+)
+
+__all__ = [
+    "SEED_LIMIT", "STUDIES", "STUDY_MODELS", "Compute", "DaskCompute", "Experiment", "FabricDeepStudy",
+    "FabricStudy", "HandFeatures", "HandMethods", "HandSimulation", "HandStudy", "Output", "Phac2Dataset",
+    "Phac2Features", "Phac2Gzsl", "Phac2Methods", "Phac2Splits", "Phac2Study", "Phac2Svm", "builtin_names",
+    "builtin_text", "config_from_options", "defaults", "estimator_parameters", "load_experiment", "to_toml",
+    "validate",
+]

@@ -1,0 +1,79 @@
+"""Building blocks of the experiment schema: the strict section base and shared sections."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+#: Largest seed numpy's legacy RandomState and scikit-learn accept (exclusive).
+SEED_LIMIT = 2**32
+
+
+class Section(BaseModel):
+    """A table of an experiment file: unknown keys and wrong types are errors.
+
+    ``strict=True``: no silent conversions (``"3"`` is not an integer, ``true`` not a number);
+    an integer is accepted where a number is expected.
+    """
+
+    model_config = ConfigDict(extra="forbid", strict=True, validate_default=False, frozen=False)
+
+
+Seed = Field(0, ge=0, lt=SEED_LIMIT, description="random seed, 0 <= seed < 2**32")
+
+
+def distinct(values: list) -> list:
+    """Refuse lists that name one value twice."""
+    seen = [repr(v) for v in values]
+    if len(set(seen)) != len(seen):
+        raise ValueError("lists a value twice")
+    return values
+
+
+def non_empty(values: list) -> list:
+    if not values:
+        raise ValueError("must not be empty")
+    return values
+
+
+def check_n_jobs(value: int) -> int:
+    if value == 0:
+        raise ValueError("n_jobs = 0 runs nothing; use 1, 2, ... workers or -1 for every core")
+    return value
+
+
+class Compute(Section):
+    """``[compute]``: parallel fits and progress bars."""
+
+    n_jobs: int = Field(1, description="parallel fits (joblib); -1 = every core; never 0")
+    progress: bool = Field(True, description="progress bars")
+
+    _n_jobs = field_validator("n_jobs")(check_n_jobs)
+
+
+class DaskCompute(Compute):
+    """``[compute]`` of studies that can run their fits on a Dask cluster, with a fit cache."""
+
+    backend: Literal["loky", "dask"] = Field("loky", description="joblib backend")
+    scheduler: str | None = Field(None, description="Dask scheduler address (tcp://host:port) for backend = 'dask'; "
+                                                   "unset = a local cluster")
+    connect_timeout: float = Field(10.0, gt=0, description="seconds to wait for the Dask scheduler")
+    cache: bool = Field(True, description="cache fitted attribute models (resumable runs)")
+
+
+class Output(Section):
+    """``[output]``: where the results go."""
+
+    folder: str = Field("results", description="results folder, relative to the current directory")
+
+
+def lambdas_ok(values: list) -> list:
+    """The embedding model's lambdas: numbers >= 0 or the string "inf"."""
+    for v in values:
+        if isinstance(v, str):
+            if v != "inf":
+                raise ValueError(f'{v!r}: expected a number >= 0 or "inf"')
+        elif v < 0:
+            raise ValueError(f"{v!r}: expected a number >= 0 or \"inf\"")
+    return distinct(non_empty(values))

@@ -1,0 +1,225 @@
+"""Schemas of ``study = "fabric"``, ``"fabric-deep"`` and ``"hand"``.
+
+Estimator parameters (``[methods.model]``) are checked against the estimator's own
+``get_params`` names; their defaults stay the estimator's.
+"""
+
+from __future__ import annotations
+
+import inspect
+from typing import Any, Literal
+
+from pydantic import Field, field_validator, model_validator
+
+from tzsl.experiments.config._common import Compute, Output, Section, Seed, distinct, lambdas_ok, non_empty
+
+FABRIC_ATTRIBUTES = ("a8", "a4", "a12", "three_value_a8", "three_value_a8v2")
+FabricAttributes = Literal["a8", "a4", "a12", "three_value_a8", "three_value_a8v2"]
+PAPER_LAMBDAS = [0.0, 0.1, 1.0, 10.0, "inf"]
+
+
+def estimator_parameters(name: str) -> dict[str, Any]:
+    """Parameter names and defaults of the estimator ``name`` of :mod:`tzsl.models`."""
+    import tzsl.models  # noqa: PLC0415
+
+    cls = getattr(tzsl.models, name)
+    return {k: p.default for k, p in inspect.signature(cls).parameters.items() if p.kind == p.KEYWORD_ONLY
+            or p.kind == p.POSITIONAL_OR_KEYWORD}
+
+
+def _known_parameters(params: dict, estimator: str, refused: tuple[str, ...]) -> dict:
+    known = estimator_parameters(estimator)
+    unknown = sorted(set(params) - set(known))
+    if unknown:
+        raise ValueError(f"unknown {estimator} parameter(s) {unknown} (known: {', '.join(sorted(known))})")
+    bad = sorted(set(params) & set(refused))
+    if bad:
+        raise ValueError(f"{bad} are set by the study, not here")
+    return params
+
+
+# --------------------------------------------------------------------------- fabric
+
+
+class FabricDataset(Section):
+    builtin: Literal["fabric"] = "fabric"
+    data_dir: str | None = Field(None, description="data home (default: $TZSL_DATA_DIR or the user data folder)")
+    attributes: FabricAttributes = Field("a8", description="group x attribute matrix")
+    gelsight_root: str | None = Field(None, description="your GelSight fabric videos (adds gelsight-* rows)")
+
+
+class FabricFeatures(Section):
+    conditions: list[Literal["depth-sequence", "depth-image"]] = Field(["depth-sequence", "depth-image"])
+    gelsight_conditions: list[str] | None = Field(None, description="condition folders of gelsight_root "
+                                                                    "(unset: all)")
+
+    _conditions = field_validator("conditions")(distinct)
+
+
+class FabricMethods(Section):
+    """The embedding model over a lambda grid; ESZSL (closed form) always runs beside."""
+
+    embedding_lambdas: list[float | Literal["inf"]] = Field(PAPER_LAMBDAS, description="the paper's grid")
+    alphas: list[float] = Field([1.0, 0.1, 0.01, 0.001], description="weight decay, chosen by class-grouped CV")
+    max_iter: int = Field(500, ge=1, description="L-BFGS iterations per fit")
+
+    _lams = field_validator("embedding_lambdas")(lambdas_ok)
+
+    @field_validator("alphas")
+    @classmethod
+    def _alphas(cls, v):
+        if any(a < 0 for a in v):
+            raise ValueError("alphas must be >= 0")
+        return distinct(non_empty(v))
+
+
+class FabricSplits(Section):
+    configs: list[Literal[1, 2]] = Field([1, 2], description="1: test groups 0,5,7 (the paper's); 2: 0,4,7")
+    n_seeds: int = Field(5, ge=1, description="embedding-model seeds seed .. seed + n_seeds - 1")
+    seed: int = Seed
+
+    _configs = field_validator("configs")(lambda v: distinct(non_empty(v)))
+
+
+class FabricStudy(Section):
+    """``study = "fabric"``: texture descriptors + EmbeddingZSL / ESZSL (fabric paper Table 1)."""
+
+    study: Literal["fabric"] = "fabric"
+    description: str = ""
+    dataset: FabricDataset = Field(default_factory=FabricDataset)
+    features: FabricFeatures = Field(default_factory=FabricFeatures)
+    methods: FabricMethods = Field(default_factory=FabricMethods)
+    splits: FabricSplits = Field(default_factory=FabricSplits)
+    compute: Compute = Field(default_factory=Compute)
+    output: Output = Field(default_factory=Output)
+
+    @model_validator(mode="after")
+    def _something_to_run(self):
+        if not self.features.conditions and self.dataset.gelsight_root is None:
+            raise ValueError("@features.conditions: is empty and no [dataset] gelsight_root")
+        return self
+
+
+# --------------------------------------------------------------------------- fabric-deep
+
+
+class DeepMethods(Section):
+    embedding_lambdas: list[float | Literal["inf"]] = Field(PAPER_LAMBDAS, description="the paper's grid")
+    model: dict[str, Any] = Field(default_factory=dict, description="DeepAttributeEmbedding parameters "
+                                                                    "(backbone, epochs, ...); unset: its defaults")
+
+    _lams = field_validator("embedding_lambdas")(lambdas_ok)
+
+    @field_validator("model")
+    @classmethod
+    def _model(cls, v):
+        return _known_parameters(v, "DeepAttributeEmbedding", ("lam", "random_state"))
+
+
+class DeepFeatures(Section):
+    gelsight_conditions: list[str] | None = Field(None, description="condition folders of gelsight_root "
+                                                                    "(unset: all)")
+
+
+class DeepSplits(FabricSplits):
+    n_seeds: int = Field(1, ge=1, description="seeds per (condition, config, lambda): seed .. seed + n_seeds - 1")
+
+
+class DeepCompute(Section):
+    progress: bool = Field(True, description="progress bars (features, epochs)")
+
+
+class FabricDeepStudy(Section):
+    """``study = "fabric-deep"``: the CNN + LSTM over the lambda grid (needs tzsl[deep])."""
+
+    study: Literal["fabric-deep"] = "fabric-deep"
+    description: str = ""
+    dataset: FabricDataset = Field(default_factory=FabricDataset)
+    features: DeepFeatures = Field(default_factory=DeepFeatures)
+    methods: DeepMethods = Field(default_factory=DeepMethods)
+    splits: DeepSplits = Field(default_factory=DeepSplits)
+    compute: DeepCompute = Field(default_factory=DeepCompute)
+    output: Output = Field(default_factory=Output)
+
+
+# --------------------------------------------------------------------------- hand
+
+
+class HandDataset(Section):
+    builtin: Literal["hand-simulated"] | None = Field(None, description="simulated grasps from Table 4")
+    grasps: str | None = Field(None, description="a grasp folder (grasps.csv + .npz)")
+    table: str | None = Field(None, description="class-attribute table in Table 4's layout (default: Table 4)")
+
+    @model_validator(mode="after")
+    def _one_source(self):
+        if (self.builtin is None) == (self.grasps is None):
+            raise ValueError("needs exactly one of builtin = 'hand-simulated', grasps")
+        return self
+
+
+class HandSimulation(Section):
+    """Simulator settings (builtin = "hand-simulated" only)."""
+
+    n_grasps_per_object: int = Field(30, ge=1)
+    noise: float = Field(1.0, ge=0)
+    difficulty: float = Field(0.5, ge=0)
+    shape_miss_rate: float = Field(0.3, ge=0, le=1)
+
+
+class HandFeatures(Section):
+    contact_threshold: float = Field(20.0, ge=0, description="ADC counts")
+    baseline_rows: int = Field(10, ge=1)
+    hold_fraction: float = Field(0.5, gt=0, le=1)
+    end_rows: int = Field(5, ge=1)
+
+
+def _paper(name: str) -> int:
+    from tzsl.experiments import paper_numbers  # noqa: PLC0415
+
+    return getattr(paper_numbers, name)
+
+
+class HandMethods(Section):
+    max_T: int = Field(10, ge=1, description="DF-MDAP over T = 1..max_T grasps")
+    max_k: int = Field(7, ge=1, description="SC-MDAP stops at k equal decisions, k = 1..max_k")
+    sequence_length: int = Field(default_factory=lambda: _paper("DAP_HAND_MAX_TEST_GRASPS"), ge=1,
+                                 description="grasps per random sequence (paper: up to 15)")
+    n_sequences: int = Field(200, ge=1, description="random grasp orders per test object and seed")
+    confusion_T: int = Field(default_factory=lambda: _paper("DAP_HAND_CONFUSION_T"), ge=1)
+    confusion_k: int = Field(default_factory=lambda: _paper("DAP_HAND_CONFUSION_K"), ge=1)
+    model: dict[str, Any] = Field(default_factory=dict, description="HandDAPClassifier parameters; "
+                                                                    "unset: its defaults")
+
+    @field_validator("model")
+    @classmethod
+    def _model(cls, v):
+        return _known_parameters(v, "HandDAPClassifier", ("material_attributes",))
+
+
+class HandSplits(Section):
+    seeds: list[int] = Field([0, 1, 2, 3, 4], description="one simulated data set and model fit per seed")
+
+    @field_validator("seeds")
+    @classmethod
+    def _seeds(cls, v):
+        if any(not 0 <= s < 2**32 for s in v):
+            raise ValueError("seeds must be in 0 .. 2**32 - 1")
+        return distinct(non_empty(v))
+
+
+class HandCompute(Compute):
+    pass
+
+
+class HandStudy(Section):
+    """``study = "hand"``: Shadow hand with 5 BioTacs (DAP paper 5.6-5.8)."""
+
+    study: Literal["hand"] = "hand"
+    description: str = ""
+    dataset: HandDataset
+    simulation: HandSimulation = Field(default_factory=HandSimulation)
+    features: HandFeatures = Field(default_factory=HandFeatures)
+    methods: HandMethods = Field(default_factory=HandMethods)
+    splits: HandSplits = Field(default_factory=HandSplits)
+    compute: HandCompute = Field(default_factory=HandCompute)
+    output: Output = Field(default_factory=Output)

@@ -1,0 +1,210 @@
+"""One function per study kind: resolved settings -> the study's own call -> tables.
+
+Called only by :func:`tzsl.experiments.engine.execute_study`; each returns a
+:class:`~tzsl.experiments.engine.StudyRun` (tables written, manifest record, data files).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from pathlib import Path
+
+import pandas as pd
+
+from tzsl.exceptions import ConfigError
+from tzsl.experiments._outputs import ResultsDir
+from tzsl.experiments.config import Experiment
+from tzsl.experiments.engine import (
+    StudyRun,
+    dap_config,
+    deep_arguments,
+    fabric_arguments,
+    gzsl_config,
+    hand_config,
+    record_config,
+)
+
+
+class SelectedColumns(ResultsDir):
+    """A results folder that leaves unselected fusion / prior columns out of Tables 1 and 2."""
+
+    def __init__(self, root, force: bool, drop: Mapping[str, list[str]]) -> None:
+        super().__init__(root, force=force)
+        self.drop = dict(drop)
+
+    def write_csv(self, name: str, table: pd.DataFrame, index: bool = False) -> Path:
+        return super().write_csv(name, table.drop(columns=self.drop.get(name, []), errors="ignore"), index)
+
+
+def dropped_columns(methods) -> dict[str, list[str]]:
+    """Columns of Tables 1 and 2 that ``[methods] fusions`` / ``priors`` leave out."""
+    drop: dict[str, list[str]] = {"table1_fusion.csv": [], "table2_priors.csv": []}
+    for fusion in sorted({"max", "avg"} - set(methods.fusions)):
+        drop["table1_fusion.csv"] += [f"{fusion}dap", f"paper_{fusion}dap"]
+        if fusion == "avg":
+            drop["table1_fusion.csv"].append("avgdap_per_class_mean")
+    for prior in sorted({"uni", "test", "train"} - set(methods.priors)):
+        drop["table2_priors.csv"] += [prior, f"paper_{prior}"]
+    return drop
+
+
+def phac2_outputs(config) -> list[str]:
+    """Files a phac2-dap run writes (checked free before any computation)."""
+    kinds, methods = config.splits.kinds, config.methods
+    names = ["manifest.json"]
+    if "random" in kinds or "file" in kinds:
+        names += ["table1_fusion.csv", "table2_priors.csv", "attribute_accuracy.csv",
+                  "attribute_accuracy_per_split.csv", "attribute_accuracy.png"]
+        if methods.multilabel:
+            names.append("multilabel.csv")
+        if methods.sweep:
+            names += ["attribute_sweep.csv", "attribute_sweep.png"]
+        if methods.eszsl or methods.embedding:
+            names.append("phac2_methods.csv")
+        if methods.gzsl:
+            names.append("gzsl.csv")
+    if "challenging" in kinds:
+        names += ["table3_challenging.csv", "object_map.csv", "object_map.png"]
+    return names
+
+
+def phac2_features(exp: Experiment):
+    """The FeatureSet of a phac2-dap experiment's ``[dataset]`` and ``[features]``."""
+    ds, feat = exp.config.dataset, exp.config.features
+    if ds.builtin is not None:
+        from tzsl.experiments.extract import extract_features  # noqa: PLC0415
+
+        return extract_features(ds.builtin, data_dir=exp.resolve(ds.data_dir), path=exp.resolve(ds.path),
+                                min_objects=ds.min_objects)
+    if ds.plain is not None:
+        from tzsl.features import load_plain_dataset  # noqa: PLC0415
+
+        return load_plain_dataset(exp.resolve(ds.plain), statistics=feat.statistics,
+                                  baseline_rows=feat.baseline_rows, channels=feat.channels,
+                                  min_objects=ds.min_objects)
+    from tzsl.experiments.sources import load_study_features  # noqa: PLC0415
+
+    return load_study_features(None, features_file=exp.resolve(ds.features))
+
+
+def _check_folds(exp: Experiment, n_train_objects: int) -> None:
+    cv = exp.config.svm.cv
+    if cv > n_train_objects:
+        raise ConfigError(f"{exp.source}: svm.cv: {cv} object-grouped folds, but a split has only "
+                          f"{n_train_objects} training objects; use at most {n_train_objects} (0 = "
+                          "leave-one-object-out)")
+
+
+def _format(table: pd.DataFrame) -> str:
+    return table.to_string(index=False, float_format=lambda v: f"{v:.3f}", na_rep="-")
+
+
+_TITLES = {
+    "table1_fusion": "Table 1: DAP sensor fusion (uni-prior), random splits - ours beside the paper",
+    "table2_priors": "Table 2: AVGDAP by attribute prior, random splits - ours beside the paper",
+    "table3_challenging": "Table 3: challenging splits (AVGDAP, uni-prior) - ours beside the paper",
+    "multilabel": "Independent vs multi-label attribute classifiers (AVGDAP, uni-prior)",
+    "attribute_accuracy": "Per-attribute test accuracy (mean over random splits and sensors)",
+    "phac2_methods": "DAP vs ESZSL vs embedding model on the same random splits (trial accuracy)",
+    "gzsl": "Generalised zero-shot: seen / unseen per-class accuracy, harmonic mean (H)",
+}
+
+
+def prepare_phac2(exp: Experiment):
+    """Load the dataset and the split file of a phac2-dap experiment and check the CV folds fit.
+
+    Everything a phac2-dap run reads before its first fit (``tzsl run --check`` calls it too).
+    Returns ``(features, user_splits or None, split_file or None)``.
+    """
+    from tzsl.evaluation import read_splits_csv  # noqa: PLC0415
+
+    c = exp.config
+    features = phac2_features(exp)
+    user_splits, split_file = None, None
+    if c.splits.kinds == ["file"]:
+        split_file = exp.resolve(c.splits.file) if c.splits.file is not None else (
+            exp.resolve(c.dataset.plain) / "splits.csv")
+        user_splits = read_splits_csv(split_file, features.attributes,
+                                      min_train_positives=c.splits.random_min_train_positives)
+        _check_folds(exp, min(len(s.train_objects) for s in user_splits))
+    else:
+        _check_folds(exp, features.n_objects - (c.splits.n_test if "random" in c.splits.kinds else 0))
+    return features, user_splits, split_file
+
+
+def run_phac2(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
+    from tzsl.experiments.gzsl import GZSL_FILE, gzsl_config_record, run_gzsl  # noqa: PLC0415
+    from tzsl.experiments.phac2_dap import make_splits, run_dap_study  # noqa: PLC0415
+
+    c = exp.config
+    config = dap_config(exp)
+    features, user_splits, split_file = prepare_phac2(exp)
+    say(f"{features.dataset}: {features.n_trials} trials, {features.n_objects} objects, "
+        f"{len(features.sensors)} sensor(s), {features.X.shape[2]} features per sensor, "
+        f"{features.attributes.shape[1]} attributes")
+    kinds = tuple(c.splits.kinds)
+    methods = c.methods
+    options = {"eszsl": methods.eszsl,
+               "embedding_lams": tuple(float(v) for v in methods.embedding_lambdas) if methods.embedding else ()}
+    tables = run_dap_study(features, results, config, kinds=kinds, splits=user_splits, sweep=methods.sweep,
+                           compare_methods=methods.eszsl or methods.embedding, method_options=options)
+    gzsl_record = None
+    if methods.gzsl:
+        gzsl = gzsl_config(exp)
+        splits = user_splits if user_splits is not None else make_splits(features, "random", config)[0]
+        tables["gzsl"] = run_gzsl(features, splits, config, gzsl, echo=say)
+        results.write_csv(GZSL_FILE, tables["gzsl"])
+        gzsl_record = gzsl_config_record(gzsl)
+    drop = getattr(results, "drop", {})
+    for name, title in _TITLES.items():
+        if name in tables:
+            say(f"\n{title}\n{_format(tables[name].drop(columns=drop.get(f'{name}.csv', []), errors='ignore'))}")
+    shown = {name: t.drop(columns=drop.get(f"{name}.csv", []), errors="ignore") for name, t in tables.items()}
+    record = {"study_kind": "phac2-dap", "phac2_dap": record_config(config), "kinds": list(kinds),
+              "splits_file": None if split_file is None else str(split_file),
+              "method_options": {k: list(v) if isinstance(v, tuple) else v for k, v in options.items()},
+              "gzsl": gzsl_record, "dataset": features.dataset}
+    return StudyRun(shown, record, features.info.get("data_files", []))
+
+
+def run_fabric(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
+    from tzsl.experiments.fabric import format_fabric_table, run_fabric_study  # noqa: PLC0415
+
+    kwargs = fabric_arguments(exp)
+    tables = run_fabric_study(results, **kwargs)
+    say("\nFabric Table 1 analogue - ours beside the paper's\n" + format_fabric_table(tables["table1"]))
+    record = {k: (str(v) if isinstance(v, Path) else list(v) if isinstance(v, tuple) else v)
+              for k, v in kwargs.items()}
+    return StudyRun(dict(tables), {"study_kind": "fabric", "fabric": record})
+
+
+def run_fabric_deep(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
+    from tzsl.experiments.deep import format_deep_table, run_deep_fabric_study  # noqa: PLC0415
+
+    kwargs = deep_arguments(exp)
+    tables = run_deep_fabric_study(results, **kwargs)
+    say("\nFabric, CNN + LSTM over the lambda grid\n" + format_deep_table(tables["table"]))
+    record = {k: (str(v) if isinstance(v, Path) else list(v) if isinstance(v, tuple) else v)
+              for k, v in kwargs.items()}
+    return StudyRun(dict(tables), {"study_kind": "fabric-deep", "fabric_deep": record})
+
+
+def run_hand(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
+    from tzsl.datasets import load_hand_table4  # noqa: PLC0415
+    from tzsl.experiments.hand import format_hand_summary, run_hand_study  # noqa: PLC0415
+
+    ds = exp.config.dataset
+    config = hand_config(exp)
+    table = load_hand_table4(exp.resolve(ds.table))
+    grasps = exp.resolve(ds.grasps)
+    seeds = tuple(exp.config.splits.seeds)
+    result = run_hand_study(grasps, table, results, seeds=seeds, config=config, force=results.force,
+                            log=say if exp.config.compute.progress else None)
+    if result.simulated:
+        say("\nHand study on SIMULATED grasps (the paper's Shadow-hand data are not public)")
+    say(format_hand_summary(result))
+    tables = {name: getattr(result, name) for name in ("table5", "multigrasp_T", "multigrasp_k",
+                                                       "attribute_accuracy", "attribute_distance", "confusion")}
+    record = {"study_kind": "hand", "hand": record_config(config), "seeds": list(seeds),
+              "grasps": None if grasps is None else str(grasps), "table": ds.table}
+    return StudyRun(tables, record, [] if grasps is None else [grasps / "grasps.csv"])
