@@ -39,3 +39,22 @@ __all__: list[str] = [
     "trial_accuracy",
     "write_splits_csv",
 ]
+
+# Intervals: two-level bootstrap over splits and test classes, paired differences.
+from tzsl.evaluation._intervals import (  # noqa: E402
+    Interval,
+    add_interval_columns,
+    bootstrap_accuracy,
+    paired_difference_interval,
+    paired_differences_table,
+    splits_for_paired_interval,
+)
+
+__all__ += [
+    "Interval",
+    "add_interval_columns",
+    "bootstrap_accuracy",
+    "paired_difference_interval",
+    "paired_differences_table",
+    "splits_for_paired_interval",
+]
