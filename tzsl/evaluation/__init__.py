@@ -58,3 +58,20 @@ __all__ += [
     "paired_differences_table",
     "splits_for_paired_interval",
 ]
+
+# Baselines: chance, majority class, per-attribute majority, shuffled-rows negative control.
+from tzsl.evaluation._baselines import (  # noqa: E402
+    attribute_baselines,
+    chance_accuracy,
+    majority_class_accuracy,
+    shuffled_attribute_rows,
+    shuffled_rows_control,
+)
+
+__all__ += [
+    "attribute_baselines",
+    "chance_accuracy",
+    "majority_class_accuracy",
+    "shuffled_attribute_rows",
+    "shuffled_rows_control",
+]
