@@ -75,3 +75,12 @@ __all__ += [
     "shuffled_attribute_rows",
     "shuffled_rows_control",
 ]
+
+# Zero-shot validity: test classes whose attribute row occurs in training, and a valid variant.
+from tzsl.evaluation._zero_shot_check import (  # noqa: E402
+    ZeroShotVariant,
+    seen_test_classes,
+    zero_shot_variant,
+)
+
+__all__ += ["ZeroShotVariant", "seen_test_classes", "zero_shot_variant"]
