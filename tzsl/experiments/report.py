@@ -203,7 +203,7 @@ def table_view(table: pd.DataFrame) -> dict[str, Any]:
 
 def _table_entry(path: Path, root: Path, index: int) -> dict[str, Any]:
     rel = str(path.relative_to(root))
-    entry: dict[str, Any] = {"name": rel, "id": f"t{index}", "error": None, "simulated": False}
+    entry: dict[str, Any] = {"name": rel, "id": f"t{index}", "error": None, "simulated": False, "wide": False}
     try:
         table = pd.read_csv(path)
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
@@ -296,10 +296,13 @@ def deviations(manifests: dict[str, dict]) -> list[str]:
 
 
 def _environment() -> jinja2.Environment:
-    return jinja2.Environment(
+    env = jinja2.Environment(
         loader=jinja2.PackageLoader("tzsl.experiments", "templates"),
         autoescape=True, undefined=jinja2.StrictUndefined, trim_blocks=True, lstrip_blocks=True,
     )
+    # headers like n_test_objects may break after an underscore (zero-width space), not mid-word
+    env.filters["breakable"] = lambda text: str(text).replace("_", "_\u200b")
+    return env
 
 
 def _is_simulated_section(section: Section, tables: list[dict], manifests: dict[str, dict]) -> bool:
