@@ -33,7 +33,7 @@ CSV_FLOAT_FORMAT = "%.6g"
 #: Packages whose versions every manifest records.
 RECORDED_PACKAGES: tuple[str, ...] = (
     "tzsl", "numpy", "scipy", "scikit-learn", "pandas", "joblib", "imbalanced-learn",
-    "h5py", "matplotlib", "scikit-image", "imageio", "dask", "distributed", "torch",
+    "h5py", "matplotlib", "scikit-image", "imageio", "jinja2", "dask", "distributed", "torch",
 )
 
 
