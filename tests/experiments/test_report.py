@@ -198,3 +198,18 @@ def test_no_banner_without_simulated_evidence_outside_the_hand_section(tmp_path)
     root.mkdir()
     pd.DataFrame({"split": ["1"], "avgdap": [0.3]}).to_csv(root / "table1_fusion.csv", index=False)
     assert 'class="simulated"' not in render_report(root)
+
+
+def test_counts_text_and_transposed_wide_short_tables():
+    from tzsl.experiments.report import TRANSPOSE_COLUMNS, table_view
+
+    table = pd.DataFrame({"split": ["1", "2", "mean"], "n_attributes": [18.0, 19.0, 18.5],
+                          "excluded": ["bumpy;hairy", np.nan, np.nan], "avgdap": [0.3, 0.4, 0.35]})
+    view = table_view(table)
+    assert [row[1] for row in view["rows"]] == ["18", "19", "18.5"]  # a count; its mean with one decimal
+    assert view["rows"][0][2] == "bumpy; hairy" and view["classes"][2] == "text"
+    wide = pd.DataFrame({"condition": ["seq", "img"], "config": [1, 2],
+                         **{f"m{i}": [0.1 * i, 0.2] for i in range(TRANSPOSE_COLUMNS)}})
+    view = table_view(wide)
+    assert view["transposed"] and view["header"] == ["column", "seq / 1", "img / 2"]
+    assert view["rows"][0] == ["m0", "0.000", "0.200"] and view["n_rows"] == TRANSPOSE_COLUMNS

@@ -135,17 +135,38 @@ def collect_results(folder: str | os.PathLike, exclude: Sequence[Path] = ()) -> 
 # --------------------------------------------------------------------------- tables
 
 
-def _is_whole(values: pd.Series) -> bool:
-    present = pd.to_numeric(values, errors="coerce").dropna()
-    return bool(len(present)) and pd.api.types.is_numeric_dtype(values) and (present == present.round()).all()
+#: First-column values of summary rows (their counts may be fractional means).
+SUMMARY_ROWS = ("mean", "std", "sd", "average")
+
+#: Tables with more columns than this and at most :data:`TRANSPOSE_MAX_ROWS` rows are shown transposed.
+TRANSPOSE_COLUMNS = 12
+TRANSPOSE_MAX_ROWS = 8
 
 
-def _number(value: Any, whole: bool) -> str:
+def _summary_mask(table: pd.DataFrame) -> pd.Series:
+    if table.shape[1] == 0:
+        return pd.Series(False, index=table.index)
+    return table.iloc[:, 0].astype(str).str.lower().isin(SUMMARY_ROWS)
+
+
+def _is_count(values: pd.Series, summary: pd.Series) -> bool:
+    """Numeric column whose values are whole numbers outside the summary rows (a count)."""
+    if not pd.api.types.is_numeric_dtype(values) or pd.api.types.is_bool_dtype(values):
+        return False
+    present = values[~summary].dropna()
+    if not len(present):
+        present = values.dropna()
+    return bool(len(present)) and bool((present == present.round()).all())
+
+
+def _number(value: Any, count: bool) -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "-"
     if isinstance(value, (int, float)) and not isinstance(value, bool):
-        return f"{value:.0f}" if whole else f"{value:.3f}"
-    return str(value)
+        if count:
+            return f"{value:.0f}" if float(value).is_integer() else f"{value:.1f}"
+        return f"{value:.3f}"
+    return str(value).replace(";", "; ")
 
 
 def _interval_pairs(columns: list[str]) -> dict[str, tuple[str, str]]:
@@ -164,13 +185,17 @@ def table_view(table: pd.DataFrame) -> dict[str, Any]:
 
     A column ``X`` with ``paper_X`` becomes ``X [paper]`` with cells ``ours [paper]``; with
     ``X_ci95_low``/``X_ci95_high`` (or a generic ``ci95_low``/``ci95_high`` pair, attached to
-    the first of :data:`INTERVAL_TARGETS`), cells read ``ours (low-high)``. Whole-number
-    columns print without decimals, other numbers with 3, missing values as ``-``.
+    the first of :data:`INTERVAL_TARGETS`), cells read ``ours (low-high)``. Counts (columns
+    whole outside the mean/std rows) print without decimals (a mean count with one), other
+    numbers with 3, missing values as ``-``. A short table with very many columns (more than
+    :data:`TRANSPOSE_COLUMNS`, at most :data:`TRANSPOSE_MAX_ROWS` rows) is transposed: one
+    row per column, one column per original row, labelled by its leading text/count cells.
 
     Returns
     -------
-    dict with ``header`` (list of str), ``rows`` (list of list of str), ``paper`` (set of
-    header indices holding only paper numbers), ``n_rows``, ``n_columns``.
+    dict with ``header`` (list of str), ``rows`` (list of list of str), ``classes`` (CSS
+    class of each column: ``"paper"`` for columns of paper numbers only, ``"text"`` for
+    text, left-aligned), ``n_rows``, ``n_columns``, ``transposed`` (bool).
     """
     columns = [str(c) for c in table.columns]
     table = table.set_axis(columns, axis=1)
@@ -178,32 +203,42 @@ def table_view(table: pd.DataFrame) -> dict[str, Any]:
     merged = {c: f"paper_{c}" for c in columns if f"paper_{c}" in columns}
     hidden = set(merged.values()) | {x for pair in intervals.values() for x in pair}
     shown = [c for c in columns if c not in hidden]
-    whole = {c: _is_whole(table[c]) for c in columns}
-    header, paper = [], set()
-    for i, c in enumerate(shown):
-        label = c + (" (95% CI)" if c in intervals else "") + (" [paper]" if c in merged else "")
-        header.append(label)
-        if c.startswith("paper"):
-            paper.add(i)
-    rows = []
+    summary = _summary_mask(table)
+    count = {c: _is_count(table[c], summary) for c in columns}
+    labels = [c + (" (95% CI)" if c in intervals else "") + (" [paper]" if c in merged else "") for c in shown]
+    cells = []
     for record in table.to_dict("records"):
-        cells = []
+        row = []
         for c in shown:
-            text = _number(record[c], whole[c])
+            text = _number(record[c], count[c])
             if c in intervals:
                 low, high = (record[x] for x in intervals[c])
                 if not (pd.isna(low) or pd.isna(high)):
                     text += f" ({low:.3f}\u2013{high:.3f})"
             if c in merged and not pd.isna(record[merged[c]]):
-                text += f" [{_number(record[merged[c]], whole[merged[c]])}]"
-            cells.append(text)
-        rows.append(cells)
-    return {"header": header, "rows": rows, "paper": paper, "n_rows": len(rows), "n_columns": len(header)}
+                text += f" [{_number(record[merged[c]], count[merged[c]])}]"
+            row.append(text)
+        cells.append(row)
+    text_columns = {i for i, c in enumerate(shown) if not pd.api.types.is_numeric_dtype(table[c])}
+    if len(shown) > TRANSPOSE_COLUMNS and 0 < len(cells) <= TRANSPOSE_MAX_ROWS:
+        n_key = 0
+        while n_key < min(2, len(shown) - 1) and (n_key in text_columns or count[shown[n_key]]):
+            n_key += 1
+        n_key = max(n_key, 1)
+        header = ["column"] + [" / ".join(row[:n_key]) for row in cells]
+        rows = [[labels[j]] + [row[j] for row in cells] for j in range(n_key, len(shown))]
+        return {"header": header, "rows": rows, "classes": ["text"] + [""] * len(cells), "n_rows": len(rows),
+                "n_columns": len(header), "transposed": True}
+    classes = [" ".join(k for k, on in (("paper", c.startswith("paper")), ("text", i in text_columns)) if on)
+               for i, c in enumerate(shown)]
+    return {"header": labels, "rows": cells, "classes": classes, "n_rows": len(cells),
+            "n_columns": len(labels), "transposed": False}
 
 
 def _table_entry(path: Path, root: Path, index: int) -> dict[str, Any]:
     rel = str(path.relative_to(root))
-    entry: dict[str, Any] = {"name": rel, "id": f"t{index}", "error": None, "simulated": False, "wide": False}
+    entry: dict[str, Any] = {"name": rel, "id": f"t{index}", "error": None, "simulated": False, "wide": False,
+                             "transposed": False}
     try:
         table = pd.read_csv(path)
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
