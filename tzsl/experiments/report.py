@@ -351,6 +351,21 @@ def _is_simulated_section(section: Section, tables: list[dict], manifests: dict[
     return not flags or any(flag is True for flag in flags)
 
 
+def _blocks(tables: list[dict], stems: list[str], figure_stems: list[str], png_by_stem: dict[str, Path],
+            root: Path) -> list[dict]:
+    """Tables with the figure of the same name beside them; other figures beside the first table."""
+    blocks = [{"tables": [t], "figures": [_figure_entry(png_by_stem[s], root)] if s in figure_stems else []}
+              for t, s in zip(tables, stems)]
+    loose = [_figure_entry(png_by_stem[s], root) for s in figure_stems if s not in stems]
+    if blocks:
+        blocks[0]["figures"] += loose
+    elif loose:
+        blocks.append({"tables": [], "figures": loose})
+    for block in blocks:
+        block["stacked"] = any(t["wide"] for t in block["tables"])
+    return blocks
+
+
 def render_report(folder: str | os.PathLike, title: str | None = None, exclude: Sequence[Path] = ()) -> str:
     """The HTML page of a results folder (see the module docstring).
 
@@ -378,20 +393,25 @@ def render_report(folder: str | os.PathLike, title: str | None = None, exclude: 
     counter = iter(range(10**6))
     sections = []
     for section in SECTIONS:
-        tables = [_table_entry(csv_by_stem[s], root, next(counter)) for s in section.tables if s in csv_by_stem]
-        figures = [_figure_entry(png_by_stem[s], root) for s in section.figures if s in png_by_stem]
-        if not tables and not figures:
+        stems = [s for s in section.tables if s in csv_by_stem]
+        tables = [_table_entry(csv_by_stem[s], root, next(counter)) for s in stems]
+        figure_stems = [s for s in section.figures if s in png_by_stem]
+        if not tables and not figure_stems:
             continue
-        used.update(csv_by_stem[s] for s in section.tables if s in csv_by_stem)
-        used.update(png_by_stem[s] for s in section.figures if s in png_by_stem)
-        sections.append({"key": section.key, "title": section.title, "what": section.what, "tables": tables,
-                         "figures": figures, "simulated": _is_simulated_section(section, tables, manifests)})
-    other_tables = [_table_entry(p, root, next(counter)) for p in found["csv"] if p not in used]
-    other_figures = [_figure_entry(p, root) for p in found["png"] if p not in used]
-    if other_tables or other_figures:
+        used.update(csv_by_stem[s] for s in stems)
+        used.update(png_by_stem[s] for s in figure_stems)
+        sections.append({"key": section.key, "title": section.title, "what": section.what,
+                         "blocks": _blocks(tables, stems, figure_stems, png_by_stem, root),
+                         "simulated": _is_simulated_section(section, tables, manifests)})
+    other_csv = [p for p in found["csv"] if p not in used]
+    other_png = [p for p in found["png"] if p not in used]
+    if other_csv or other_png:
+        tables = [_table_entry(p, root, next(counter)) for p in other_csv]
         sections.append({"key": "other", "title": "Other results", "what": "Tables and figures of the folder "
-                         "that belong to no paper table.", "tables": other_tables, "figures": other_figures,
-                         "simulated": any(t["simulated"] for t in other_tables)})
+                         "that belong to no paper table.",
+                         "blocks": _blocks(tables, [p.stem for p in other_csv], [p.stem for p in other_png],
+                                           {p.stem: p for p in other_png}, root),
+                         "simulated": any(t["simulated"] for t in tables)})
 
     provenance = []
     for rel, manifest in manifests.items():
