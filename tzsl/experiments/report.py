@@ -319,8 +319,16 @@ def deviations(manifests: dict[str, dict]) -> list[str]:
         if c.get("duplicate_groups"):
             out.append(f"Fabric attribute rows shared by groups {c['duplicate_groups']}: a test group sharing "
                        f"its row with a training group is not zero-shot {where}.")
-        if "n_features" in c:
-            out.append(f"Features used: {c['n_features']} {where}.")
+        if c.get("dataset"):
+            out.append(f"Dataset and features: {c['dataset']} {where}.")
+        if isinstance(c.get("n_features"), dict):
+            units = c.get("units") if isinstance(c.get("units"), dict) else {}
+            described = "; ".join(f"{k}: {v} features per {units.get(k, 'sample')}" for k, v in c["n_features"].items())
+            out.append(f"Features used: {described} {where}.")
+        if c.get("lams") is not None and c.get("alphas") is not None:
+            lams, alphas = (", ".join(map(str, c[k])) for k in ("lams", "alphas"))
+            out.append(f"Embedding model: lambda in {{{lams}}}, alpha chosen from {{{alphas}}} by class-grouped "
+                       f"cross-validation on the training groups {where}.")
         for key in ("grid_edges", "grid_edge_warnings"):
             if manifest.get(key):
                 out.append(f"Selected hyper-parameters on a grid edge: {manifest[key]} {where}.")
