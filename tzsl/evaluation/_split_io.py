@@ -182,8 +182,9 @@ def read_splits_csv(
                 if obj in entry["rows"]:
                     prev_role, prev_line = entry["rows"][obj]
                     if prev_role != role:
+                        first, second = sorted((prev_role, role), key=ROLES.index)
                         problems.append(
-                            f"{where}: split {name!r}: object {obj!r} is in both {prev_role} and {role} "
+                            f"{where}: split {name!r}: object {obj!r} is in both {first} and {second} "
                             f"(also line {prev_line})"
                         )
                     else:
