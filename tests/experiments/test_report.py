@@ -189,7 +189,7 @@ def test_sections_banner_deviations_and_other_results(tmp_path):
     assert "5-fold object-grouped cross-validation" in text
     assert "n_splits = 20 (paper: 5)" in text and "SIMULATED grasps" in text
     assert "fewer than 2 positive training objects" in text
-    assert "/data/phac2.h5" in text and "numpy 2.0" in text
+    assert "/data/phac2.h5" in text and "numpy 2.0" in text and "1 file(s) read" in text
     assert page.index('id="deviations"') < page.index('id="provenance"')
 
 
