@@ -102,8 +102,9 @@ def test_plain_folder_from_convert_gives_the_builtin_accuracies(tmp_path, data_d
                             config, kinds=("random",), sweep=False)["table1_fusion"]
     assert list(ours["split"].astype(str)) == ["1", "2", "mean", "std"]
     for column in ("maxdap", "avgdap", "avgdap_per_class_mean", "n_attributes", "n_test_objects"):
+        # CSV numbers carry 6 significant digits (tzsl.experiments._outputs.CSV_FLOAT_FORMAT)
         np.testing.assert_allclose(ours[column].to_numpy(float), builtin[column].to_numpy(float), rtol=0,
-                                   atol=1e-12, err_msg=column)
+                                   atol=1e-6, err_msg=column)
     # the same splits: identical per-attribute test accuracies on every split
     per_plain = pd.read_csv(tmp_path / "plain_results" / "attribute_accuracy_per_split.csv")
     per_builtin = pd.read_csv(tmp_path / "builtin" / "attribute_accuracy_per_split.csv")

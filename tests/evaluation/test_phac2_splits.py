@@ -84,3 +84,17 @@ def test_phac2_challenging_splits(phac2, tmp_path, record_property):
     assert [(b.train_objects, b.test_objects, b.excluded_attributes) for b in back] == [
         (s.train_objects, s.test_objects, s.excluded_attributes) for s in splits
     ]
+
+
+def test_challenging_split_file_keeps_its_rule(phac2, tmp_path):
+    """`tzsl splits --kind challenging` then `tzsl evaluate --splits`: the reader's default is the
+    random-split rule (2 positives), yet every split keeps the challenging rule's attributes."""
+    features, table = phac2
+    splits, _ = challenging_splits(features, table, min_train_positives=3)
+    back = read_splits_csv(write_splits_csv(splits, tmp_path / "c.csv"), table, min_train_positives=2)
+    assert back == splits
+    assert [s.kept_attributes for s in back] == [s.kept_attributes for s in splits]
+    assert [s.dropped_objects for s in back] == [s.dropped_objects for s in splits]
+    # the random rule would keep more attributes on at least one split: the test can fail
+    relaxed, _ = challenging_splits(features, table, min_train_positives=2)
+    assert any(a.kept_attributes != b.kept_attributes for a, b in zip(relaxed, splits))

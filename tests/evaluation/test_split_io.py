@@ -41,7 +41,8 @@ def test_format_is_long_and_documented_columns(tmp_path):
     s = Split("mine", ("o0", "o1", "o2", "o3"), ("o4", "o5"), kind="random", seed=7)
     path = write_splits_csv([s], tmp_path / "s.csv")
     df = pd.read_csv(path)
-    assert list(df.columns) == ["split", "object", "role", "kind", "seed"]
+    assert list(df.columns) == ["split", "object", "role", "kind", "seed", "min_train_positives",
+                                "min_train_negatives"]
     assert df["role"].tolist() == ["train"] * 4 + ["test"] * 2
     assert set(df["split"]) == {"mine"} and set(df["seed"]) == {7}
 
@@ -141,3 +142,42 @@ def test_write_rejects_bad_names_and_folder(tmp_path):
     with pytest.raises(DataFileError, match="does not exist"):
         write_splits_csv([s], tmp_path / "missing" / "s.csv")
     assert not np.any([p.suffix == ".tmp" for p in tmp_path.iterdir()])
+
+
+def test_recorded_rule_wins_over_the_readers_default(tmp_path):
+    # a split made with the challenging rule (3 positives) read by a caller whose default is
+    # the random-split rule (2) keeps its own rule and so its kept attributes
+    splits = random_object_splits(TABLE, n_test=2, n_splits=3, random_state=1, min_train_positives=3)
+    back = read_splits_csv(write_splits_csv(splits, tmp_path / "s.csv"), TABLE, min_train_positives=0)
+    assert back == splits
+    assert [s.kept_attributes for s in back] == [s.kept_attributes for s in splits]
+    assert {s.min_train_positives for s in back} == {3}
+    # without the rule columns the reader's argument applies
+    df = pd.read_csv(tmp_path / "s.csv").drop(columns=["min_train_positives", "min_train_negatives"])
+    df.to_csv(tmp_path / "bare.csv", index=False)
+    bare = read_splits_csv(tmp_path / "bare.csv", TABLE, min_train_positives=0)
+    assert {s.min_train_positives for s in bare} == {0}
+    assert all(s.excluded_attributes == () for s in bare)
+
+
+def test_dropped_objects_round_trip(tmp_path):
+    s = Split("c", ("o0", "o1", "o2", "o3", "o4", "o5"), ("o6",), attributes=("a", "b", "c"),
+              dropped_objects=(("o7", "same attribute vector as test object 'o6'"),), kind="challenging",
+              min_train_positives=1, min_train_negatives=1)
+    path = write_splits_csv([s], tmp_path / "s.csv")
+    assert pd.read_csv(path)["role"].tolist()[-1] == "dropped"
+    assert read_splits_csv(path, TABLE) == [s]
+
+
+@pytest.mark.parametrize("cell, message", [("x", "min_train_positives 'x' is not a non-negative integer"),
+                                           ("-1", "min_train_positives '-1' is not a non-negative integer")])
+def test_bad_rule_cell(tmp_path, cell, message):
+    path = _write(tmp_path, f"split,object,role,min_train_positives\nx,o0,train,{cell}\nx,o1,test,{cell}\n")
+    with pytest.raises(SplitError, match=message):
+        read_splits_csv(path, TABLE)
+
+
+def test_rule_differs_between_rows(tmp_path):
+    path = _write(tmp_path, "split,object,role,min_train_positives\nx,o0,train,1\nx,o1,test,2\n")
+    with pytest.raises(SplitError, match="min_train_positives differs between its rows"):
+        read_splits_csv(path, TABLE)

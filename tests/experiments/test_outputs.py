@@ -42,3 +42,23 @@ def test_manifest_records_outputs_data_and_versions(tmp_path):
     assert manifest["data_files"][str(data)] == file_sha256(data)
     assert set(manifest["outputs"]) == {"t.csv"}
     assert manifest["packages"]["numpy"] == package_versions(["numpy"])["numpy"]
+
+
+def test_csv_numbers_have_one_format_and_counts_stay_integer(tmp_path):
+    from tzsl.experiments._outputs import csv_ready
+
+    table = pd.DataFrame({
+        "split": ["1", "2", "mean"],
+        "accuracy": [0.1 + 0.32, 0.27999999999999997, 0.35],
+        "n_objects": [10.0, 12.0, float("nan")],  # a count that became float through a NaN
+        "gamma": [1e-5, 0.01, 0.001],
+        "flag": [True, False, True],
+    })
+    path = ResultsDir(tmp_path).write_csv("t.csv", table)
+    lines = path.read_text().splitlines()
+    assert lines[0] == "split,accuracy,n_objects,gamma,flag"
+    assert lines[1:] == ["1,0.42,10,1e-05,True", "2,0.28,12,0.01,False", "mean,0.35,,0.001,True"]
+    back = pd.read_csv(path)
+    assert back["accuracy"].tolist() == [0.42, 0.28, 0.35]
+    assert str(csv_ready(table)["n_objects"].dtype) == "Int64"
+    assert table["n_objects"].dtype == float  # the caller's table is not changed

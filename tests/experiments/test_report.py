@@ -124,10 +124,10 @@ def test_report_is_valid_html_with_every_table_figure_and_manifest(results):
     assert '"note": "a < b & c"' in text and '"study": "fabric"' in text
     assert "<script>alert(1)</script>" in text
     assert f"tzsl {__version__}" in text
-    # Table 1 first (known tables lead), paper columns shaded
+    # Table 1 first (sections in paper order), ours beside the paper's in one cell
     assert page.index("table1_fusion.csv") < page.index("attribute_accuracy_per_split.csv")
-    assert "#t0 td:nth-child(4), #t0 th:nth-child(4)" in page and "nth-child(5)" in page
-    assert "0.390" in page
+    assert "<th>maxdap [paper]</th>" in page and "paper_maxdap" not in page
+    assert "<td>0.350 [0.390]</td>" in page and "<td>0.300</td>" in page
 
 
 def test_report_refuses_overwrite_and_writes_atomically(results, tmp_path):
@@ -149,3 +149,67 @@ def test_report_of_missing_or_empty_folder(tmp_path):
     (tmp_path / "empty").mkdir()
     with pytest.raises(DataFileError, match="no CSV table"):
         render_report(tmp_path / "empty")
+
+
+def test_table_view_merges_paper_and_interval_columns_and_prints_counts_whole():
+    from tzsl.experiments.report import table_view
+
+    table = pd.DataFrame({
+        "method": ["DAP", "ESZSL"], "n_objects": [10.0, 18.0], "accuracy": [0.31, 0.25],
+        "ci95_low": [0.25, 0.2], "ci95_high": [0.37, 0.3], "paper_accuracy": [0.35, np.nan],
+        "avgdap": [0.4, 0.5], "avgdap_ci95_low": [0.3, 0.4], "avgdap_ci95_high": [0.5, 0.6], "chance": 0.1,
+    })
+    view = table_view(table)
+    assert view["header"] == ["method", "n_objects", "accuracy (95% CI) [paper]", "avgdap (95% CI)", "chance"]
+    assert view["rows"][0] == ["DAP", "10", "0.310 (0.250\u20130.370) [0.350]", "0.400 (0.300\u20130.500)", "0.100"]
+    assert view["rows"][1][2] == "0.250 (0.200\u20130.300)"  # no paper number: nothing in brackets
+
+
+def test_sections_banner_deviations_and_other_results(tmp_path):
+    root = tmp_path / "res"
+    root.mkdir()
+    pd.DataFrame({"method": ["LDAP"], "accuracy": [0.5], "data": ["simulated"]}).to_csv(root / "hand_table5.csv",
+                                                                                       index=False)
+    pd.DataFrame({"lam": [0, 1], "acc": [0.4, 0.5]}).to_csv(root / "fabric_table1.csv", index=False)
+    pd.DataFrame({"x": [1, 2]}).to_csv(root / "my_extra.csv", index=False)
+    _figure(root / "fabric_lambda.png", 1.0)
+    (root / "manifest.json").write_text(json.dumps({
+        "config": {"phac2_dap": {"svm_params": {"cv": 5}, "random_min_train_positives": 2, "n_splits": 20},
+                   "hand_data": "simulated"},
+        "data_files": {"/data/phac2.h5": "ab" * 32}, "packages": {"numpy": "2.0"}}))
+    page = render_report(root)
+    checker = _parse(page)
+    assert checker.errors == [] and checker.stack == []
+    text = " ".join("".join(checker.text).split())
+    assert "SIMULATED DATA" in text and page.count('class="simulated"') == 1
+    # fabric figure beside its table, in the fabric section, before the hand section
+    fabric = page.index('id="fabric-table1"')
+    assert fabric < page.index("fabric_lambda.png") < page.index('id="hand-table5"')
+    assert page.index('id="other"') > page.index('id="hand-table5"') and "my_extra.csv" in page
+    assert "5-fold object-grouped cross-validation" in text
+    assert "n_splits = 20 (paper: 5)" in text and "SIMULATED grasps" in text
+    assert "fewer than 2 positive training objects" in text
+    assert "/data/phac2.h5" in text and "numpy 2.0" in text and "1 file(s) read" in text
+    assert page.index('id="deviations"') < page.index('id="provenance"')
+
+
+def test_no_banner_without_simulated_evidence_outside_the_hand_section(tmp_path):
+    root = tmp_path / "res"
+    root.mkdir()
+    pd.DataFrame({"split": ["1"], "avgdap": [0.3]}).to_csv(root / "table1_fusion.csv", index=False)
+    assert 'class="simulated"' not in render_report(root)
+
+
+def test_counts_text_and_transposed_wide_short_tables():
+    from tzsl.experiments.report import TRANSPOSE_COLUMNS, table_view
+
+    table = pd.DataFrame({"split": ["1", "2", "mean"], "n_attributes": [18.0, 19.0, 18.5],
+                          "excluded": ["bumpy;hairy", np.nan, np.nan], "avgdap": [0.3, 0.4, 0.35]})
+    view = table_view(table)
+    assert [row[1] for row in view["rows"]] == ["18", "19", "18.5"]  # a count; its mean with one decimal
+    assert view["rows"][0][2] == "bumpy; hairy" and view["classes"][2] == "text"
+    wide = pd.DataFrame({"condition": ["seq", "img"], "config": [1, 2],
+                         **{f"m{i}": [0.1 * i, 0.2] for i in range(TRANSPOSE_COLUMNS)}})
+    view = table_view(wide)
+    assert view["transposed"] and view["header"] == ["column", "seq / 1", "img / 2"]
+    assert view["rows"][0] == ["m0", "0.000", "0.200"] and view["n_rows"] == TRANSPOSE_COLUMNS

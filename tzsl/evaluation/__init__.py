@@ -39,3 +39,48 @@ __all__: list[str] = [
     "trial_accuracy",
     "write_splits_csv",
 ]
+
+# Intervals: two-level bootstrap over splits and test classes, paired differences.
+from tzsl.evaluation._intervals import (  # noqa: E402
+    Interval,
+    add_interval_columns,
+    bootstrap_accuracy,
+    paired_difference_interval,
+    paired_differences_table,
+    splits_for_paired_interval,
+)
+
+__all__ += [
+    "Interval",
+    "add_interval_columns",
+    "bootstrap_accuracy",
+    "paired_difference_interval",
+    "paired_differences_table",
+    "splits_for_paired_interval",
+]
+
+# Baselines: chance, majority class, per-attribute majority, shuffled-rows negative control.
+from tzsl.evaluation._baselines import (  # noqa: E402
+    attribute_baselines,
+    chance_accuracy,
+    majority_class_accuracy,
+    shuffled_attribute_rows,
+    shuffled_rows_control,
+)
+
+__all__ += [
+    "attribute_baselines",
+    "chance_accuracy",
+    "majority_class_accuracy",
+    "shuffled_attribute_rows",
+    "shuffled_rows_control",
+]
+
+# Zero-shot validity: test classes whose attribute row occurs in training, and a valid variant.
+from tzsl.evaluation._zero_shot_check import (  # noqa: E402
+    ZeroShotVariant,
+    seen_test_classes,
+    zero_shot_variant,
+)
+
+__all__ += ["ZeroShotVariant", "seen_test_classes", "zero_shot_variant"]

@@ -2,33 +2,42 @@
 
 Format (UTF-8, comma-separated, one header line)::
 
-    split,object,role,kind,seed
-    random-1,car_sponge_101,train,random,0
-    random-1,acrylic_211,test,random,0
+    split,object,role,kind,seed,min_train_positives,min_train_negatives
+    random-1,car_sponge_101,train,random,0,2,1
+    random-1,acrylic_211,test,random,0,2,1
+    challenging-3,foam_112,dropped,challenging,,3,1
     ...
 
 * ``split`` - split name; rows of one split need not be contiguous.
 * ``object`` - object name, as in the index of the object-attribute table.
-* ``role`` - ``train`` or ``test``.
+* ``role`` - ``train``, ``test`` or ``dropped`` (an object the split kind would have tested
+  but left out because it repeats another test object's attribute vector; it is in neither
+  set, see :attr:`Split.dropped_objects`).
 * ``kind``, ``seed`` - optional provenance columns (constant within a split; ``seed`` may
   be empty). Without them a split reads as ``kind="file"``, ``seed=None``.
+* ``min_train_positives``, ``min_train_negatives`` - optional: the exclusion rule of the
+  split (constant within a split). When present it is the rule the split is read back
+  with, so a challenging split (>= 3 positive training objects) keeps exactly the
+  attributes it was made with even when the reader's default rule is the random-split one.
+  Without them (user-written files, files of tzsl < 0.2) the reader's arguments apply.
 
-Objects a split does not list are simply not used by it. Excluded attributes are not
-stored: reading recomputes them from the attribute table with the paper's rule, so a
-user-written file gets the same checks as a generated one. Dropped objects of challenging
-splits (:attr:`Split.dropped_objects`) are not stored either (they are in neither set).
+Excluded attributes are not stored: reading recomputes them from the attribute table with
+the split's rule, so a user-written file gets the same checks as a generated one, and a
+written split reads back equal to the one written (:func:`read_splits_csv` of
+:func:`write_splits_csv` is the identity on splits made by this package).
 """
 
 from __future__ import annotations
 
 import csv
+import io
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from tzsl._io import atomic_write
 from tzsl.evaluation._splits import (
     Split,
     _check_min_counts,
@@ -42,15 +51,17 @@ from tzsl.exceptions import DataFileError, SplitError
 __all__ = ["read_splits_csv", "write_splits_csv"]
 
 REQUIRED_COLUMNS = ("split", "object", "role")
-OPTIONAL_COLUMNS = ("kind", "seed")
-ROLES = ("train", "test")
+OPTIONAL_COLUMNS = ("kind", "seed", "min_train_positives", "min_train_negatives")
+ROLES = ("train", "test", "dropped")
+RULE_COLUMNS = ("min_train_positives", "min_train_negatives")
 
 
 def write_splits_csv(splits: list[Split], path: str | os.PathLike) -> Path:
     """Write splits to ``path`` in the long format of this module, atomically.
 
-    The file is written to a temporary file in the same folder and moved into place with
-    :func:`os.replace`, so a reader never sees a half-written file.
+    The file is written to a temporary file in the same folder and moved into place
+    (:func:`tzsl._io.atomic_write`), so a reader never sees a half-written file. Each
+    split's exclusion rule and dropped objects are written too, so it reads back equal.
 
     Parameters
     ----------
@@ -73,21 +84,17 @@ def write_splits_csv(splits: list[Split], path: str | os.PathLike) -> Path:
         raise SplitError(f"duplicate split name(s) {dup}; cannot write {path}")
     if not path.parent.is_dir():
         raise DataFileError(path, f"folder {path.parent} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", newline="", encoding="utf-8") as fh:
-            writer = csv.writer(fh, lineterminator="\n")
-            writer.writerow(REQUIRED_COLUMNS + OPTIONAL_COLUMNS)
-            for s in splits:
-                seed = "" if s.seed is None else str(s.seed)
-                for role, objs in (("train", s.train_objects), ("test", s.test_objects)):
-                    writer.writerows((s.name, o, role, s.kind, seed) for o in objs)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(REQUIRED_COLUMNS + OPTIONAL_COLUMNS)
+    for s in splits:
+        seed = "" if s.seed is None else str(s.seed)
+        rule = tuple("" if v is None else str(int(v)) for v in (s.min_train_positives, s.min_train_negatives))
+        dropped = tuple(o for o, _ in s.dropped_objects)
+        for role, objs in (("train", s.train_objects), ("test", s.test_objects), ("dropped", dropped)):
+            writer.writerows((s.name, o, role, s.kind, seed, *rule) for o in objs)
+    text = buffer.getvalue()
+    atomic_write(path, lambda p: p.write_text(text, encoding="utf-8"))
     return path
 
 
@@ -111,12 +118,15 @@ def read_splits_csv(
     min_train_positives, min_train_negatives : int, default 3 and 1
         Attributes with fewer positive / negative training objects in a split are left out
         of that split and reported in :attr:`Split.excluded_attributes` (not an error).
+        Only for splits whose rows do not record a rule: the rule columns of the file win,
+        so a split is read back with the rule it was made with.
 
     Returns
     -------
     list of Split
         In order of first appearance in the file; objects within a split in attribute-table
-        order; ``kind`` and ``seed`` from the optional columns (else ``"file"`` / None).
+        order; ``kind``, ``seed`` and the rule from the optional columns (else ``"file"``,
+        None and the arguments).
 
     Raises
     ------
@@ -124,7 +134,7 @@ def read_splits_csv(
         Missing or unreadable file, missing columns, no rows.
     SplitError
         Content problems, all listed: unknown object, unknown role, empty cell, an object
-        twice in a split, an object in both train and test, inconsistent kind/seed, a split
+        twice in a split, an object in two roles, inconsistent kind/seed/rule, a split
         with no test or no train object, test objects with equal attribute vectors (over the
         split's kept attributes).
     """
@@ -160,9 +170,9 @@ def read_splits_csv(
                 if not name or not obj or not role:
                     problems.append(f"{where}: empty split, object or role cell")
                     continue
-                entry = found.setdefault(name, {"rows": {}, "kind": set(), "seed": set()})
-                entry["kind"].add((row.get("kind") or "").strip())
-                entry["seed"].add((row.get("seed") or "").strip())
+                entry = found.setdefault(name, {"rows": {}, **{c: set() for c in OPTIONAL_COLUMNS}})
+                for column in OPTIONAL_COLUMNS:
+                    entry[column].add((row.get(column) or "").strip())
                 if obj not in position:
                     problems.append(f"{where}: split {name!r}: unknown object {obj!r} (not in the attribute table)")
                     continue
@@ -172,8 +182,9 @@ def read_splits_csv(
                 if obj in entry["rows"]:
                     prev_role, prev_line = entry["rows"][obj]
                     if prev_role != role:
+                        first, second = sorted((prev_role, role), key=ROLES.index)
                         problems.append(
-                            f"{where}: split {name!r}: object {obj!r} is in both train and test "
+                            f"{where}: split {name!r}: object {obj!r} is in both {first} and {second} "
                             f"(also line {prev_line})"
                         )
                     else:
@@ -188,10 +199,10 @@ def read_splits_csv(
     splits = []
     for name, entry in found.items():
         rows = entry["rows"]
-        test = np.zeros(len(objects), dtype=bool)
-        train = np.zeros(len(objects), dtype=bool)
+        masks = {role: np.zeros(len(objects), dtype=bool) for role in ROLES}
         for obj, (role, _) in rows.items():
-            (test if role == "test" else train)[position[obj]] = True
+            masks[role][position[obj]] = True
+        train, test, dropped = masks["train"], masks["test"], masks["dropped"]
         if not test.any():
             problems.append(f"{path}: split {name!r}: empty test set")
         if not train.any():
@@ -207,7 +218,11 @@ def read_splits_csv(
             except ValueError:
                 problems.append(f"{path}: split {name!r}: seed {next(iter(seeds))!r} is not an integer")
                 continue
-        excluded = attribute_exclusions(A[train], attributes, min_train_positives, min_train_negatives)
+        rule = _split_rule(entry, (min_train_positives, min_train_negatives))
+        if isinstance(rule, str):
+            problems.append(f"{path}: split {name!r}: {rule}")
+            continue
+        excluded = attribute_exclusions(A[train], attributes, *rule)
         kept = _kept_mask(attributes, excluded)
         test_idx = np.flatnonzero(test)
         for group in duplicate_attribute_groups(A[test_idx][:, kept]):
@@ -224,10 +239,52 @@ def read_splits_csv(
                 test_objects=tuple(o for o, t in zip(objects, test) if t),
                 attributes=attributes,
                 excluded_attributes=excluded,
+                dropped_objects=_dropped_reasons(A, objects, kept, test, dropped),
                 kind=next(iter(kinds)) if kinds else "file",
                 seed=seed,
+                min_train_positives=rule[0],
+                min_train_negatives=rule[1],
             )
         )
     if problems:
         raise SplitError(f"invalid split file {path} ({len(problems)} problem(s)):\n  " + "\n  ".join(problems))
     return splits
+
+
+def _split_rule(entry: dict, default: tuple[int, int]) -> tuple[int, int] | str:
+    """The split's (min_train_positives, min_train_negatives): recorded, else ``default``.
+
+    Returns a problem description (str) when the rows disagree or a value is not a
+    non-negative integer.
+    """
+    rule = []
+    for column, fallback in zip(RULE_COLUMNS, default):
+        values = entry[column]
+        if len(values) > 1:
+            return f"{column} differs between its rows ({sorted(values)})"
+        (value,) = values
+        if value == "":
+            rule.append(int(fallback))
+            continue
+        try:
+            number = int(value)
+        except ValueError:
+            number = -1
+        if number < 0:
+            return f"{column} {value!r} is not a non-negative integer"
+        rule.append(number)
+    return rule[0], rule[1]
+
+
+def _dropped_reasons(
+    A: np.ndarray, objects: tuple[str, ...], kept: np.ndarray, test: np.ndarray, dropped: np.ndarray
+) -> tuple[tuple[str, str], ...]:
+    """``(object, reason)`` of dropped objects, the reason worded as :func:`challenging_splits` does."""
+    out = []
+    test_idx = np.flatnonzero(test)
+    for i in np.flatnonzero(dropped):
+        same = test_idx[(A[test_idx][:, kept] == A[i, kept]).all(axis=1)]
+        reason = (f"same attribute vector as test object {objects[same[0]]!r}" if same.size
+                  else "dropped in the split file")
+        out.append((objects[i], reason))
+    return tuple(out)

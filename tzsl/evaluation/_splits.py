@@ -78,6 +78,11 @@ class Split:
         ``"random"``, ``"challenging"`` or ``"file"``.
     seed : int or None
         The integer seed the split was drawn with (random splits), else None.
+    min_train_positives, min_train_negatives : int or None
+        The exclusion rule :attr:`excluded_attributes` was computed with (least number of
+        positive / negative training objects an attribute needs), None when unknown. Split
+        files record it, so a split read back keeps its rule (challenging: 3, random: 2 in
+        the PHAC-2 study) whatever rule the reader would apply to a file without one.
     """
 
     name: str
@@ -88,6 +93,8 @@ class Split:
     dropped_objects: tuple[tuple[str, str], ...] = ()
     kind: str = "random"
     seed: int | None = None
+    min_train_positives: int | None = None
+    min_train_negatives: int | None = None
 
     @property
     def kept_attributes(self) -> tuple[str, ...]:
@@ -321,6 +328,8 @@ def random_object_splits(
                 excluded_attributes=excluded,
                 kind="random",
                 seed=seed,
+                min_train_positives=int(min_train_positives),
+                min_train_negatives=int(min_train_negatives),
             )
         )
     return splits
@@ -514,6 +523,8 @@ def challenging_splits(
                 dropped_objects=tuple(sorted(dropped, key=lambda d: objects.index(d[0]))),
                 kind="challenging",
                 seed=None,
+                min_train_positives=int(min_train_positives),
+                min_train_negatives=int(min_train_negatives),
             )
         )
 

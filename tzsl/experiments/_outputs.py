@@ -3,6 +3,12 @@
 Every file a study writes goes through :class:`ResultsDir`: it is written to a temporary
 file in the same folder and moved into place with :func:`os.replace`, so a crash or Ctrl-C
 never leaves a half-written table. Existing results are only replaced when ``force=True``.
+
+Numbers in CSV tables are written in one format (:func:`csv_ready`): floats with
+:data:`CSV_FLOAT_FORMAT` (6 significant digits: ``0.42`` rather than
+``0.42000000000000004``, and a gamma of ``1e-05`` survives, which a fixed ``%.4f`` would
+print as ``0.0000``), and float columns holding only whole numbers (object counts read
+back or averaged as floats) as integers (``10``, not ``10.0``; missing values stay empty).
 """
 
 from __future__ import annotations
@@ -21,10 +27,13 @@ import pandas as pd
 from tzsl._io import atomic_write, file_sha256
 from tzsl.exceptions import ConfigError
 
+#: printf-style format of every float written to a CSV table (6 significant digits).
+CSV_FLOAT_FORMAT = "%.6g"
+
 #: Packages whose versions every manifest records.
 RECORDED_PACKAGES: tuple[str, ...] = (
     "tzsl", "numpy", "scipy", "scikit-learn", "pandas", "joblib", "imbalanced-learn",
-    "h5py", "matplotlib", "scikit-image", "imageio", "dask", "distributed", "torch",
+    "h5py", "matplotlib", "scikit-image", "imageio", "jinja2", "dask", "distributed", "torch",
 )
 
 
@@ -37,6 +46,25 @@ def package_versions(names: Iterable[str] = RECORDED_PACKAGES) -> dict[str, str 
         except metadata.PackageNotFoundError:
             versions[name] = None
     return versions
+
+
+def csv_ready(table: pd.DataFrame) -> pd.DataFrame:
+    """A copy of ``table`` whose float columns of whole numbers are integers (nullable ``Int64``).
+
+    A float column counts as whole when every non-missing value is an integer below 2**53
+    in magnitude and at least one value is present (counts such as ``n_objects`` that
+    became floats through a NaN or a mean row). Other columns are unchanged; floats are
+    formatted at write time with :data:`CSV_FLOAT_FORMAT`.
+    """
+    out = table.copy()
+    for column in out.columns:
+        values = out[column]
+        if not pd.api.types.is_float_dtype(values):
+            continue
+        present = values.dropna()
+        if len(present) and (present == present.round()).all() and (present.abs() < 2.0**53).all():
+            out[column] = values.astype("Int64")
+    return out
 
 
 class ResultsDir:
@@ -76,9 +104,12 @@ class ResultsDir:
         return path
 
     def write_csv(self, name: str, table: pd.DataFrame, index: bool = False) -> Path:
-        """Write ``table`` as CSV at full float precision."""
+        """Write ``table`` as CSV, numbers formatted by :func:`csv_ready` and :data:`CSV_FLOAT_FORMAT`."""
         target = self.path(name)
-        return self._record(atomic_write(target, lambda p: table.to_csv(p, index=index)))
+        ready = csv_ready(table)
+        return self._record(
+            atomic_write(target, lambda p: ready.to_csv(p, index=index, float_format=CSV_FLOAT_FORMAT))
+        )
 
     def write_json(self, name: str, payload: Any) -> Path:
         """Write ``payload`` as indented JSON."""
