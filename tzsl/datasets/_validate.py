@@ -25,6 +25,7 @@ from pathlib import Path, PurePosixPath
 import numpy as np
 import pandas as pd
 
+from tzsl.datasets._paths import check_inside, resolve_inside
 from tzsl.exceptions import DataFileError
 
 CLASSES_FILE = "classes.csv"
@@ -134,6 +135,10 @@ def _read_rows(
 ) -> tuple[list[str], list[tuple[int, list[str]]]] | None:
     """Header and (line, cells) rows of a CSV file; None if absent or unreadable."""
     path = folder / name
+    outside = check_inside(folder, name)
+    if outside is not None:
+        problems.append(Problem(name, None, outside))
+        return None
     if not path.is_file():
         if required:
             problems.append(Problem(name, None, f"file not found in {folder}"))
@@ -216,6 +221,10 @@ def _find_table(folder: Path, table: str) -> int | None:
 def read_settings(folder: Path, problems: list[Problem]) -> dict:
     """``dataset.toml`` checked against :data:`SETTINGS_SCHEMA` (``{}`` without the file)."""
     path = folder / SETTINGS_FILE
+    outside = check_inside(folder, SETTINGS_FILE)
+    if outside is not None:
+        problems.append(Problem(SETTINGS_FILE, None, outside))
+        return {}
     if not path.is_file():
         return {}
     try:
@@ -308,22 +317,53 @@ def read_signal_file(path: str | os.PathLike) -> tuple[tuple[str, ...], np.ndarr
         values = np.column_stack([arrays[c].astype(np.float64) for c in channels])
         return channels, values
     if suffix == ".csv":
-        try:
-            frame = pd.read_csv(path, skip_blank_lines=False)
-        except Exception as exc:  # pandas: EmptyDataError, ParserError, UnicodeDecodeError, OSError
-            raise DataFileError(path, f"not a readable CSV file ({type(exc).__name__}: {exc})") from None
-        channels = tuple(str(c).strip() for c in frame.columns)
-        if not channels:
-            raise DataFileError(path, "no channel columns in the header")
-        if len(set(channels)) != len(channels) or any(c.startswith("Unnamed:") for c in channels):
-            raise DataFileError(path, f"line 1: channel names must be non-empty and distinct, got {list(channels)}")
-        for c, col in zip(channels, frame.columns):
-            if not pd.api.types.is_numeric_dtype(frame[col]):
-                values = pd.to_numeric(frame[col], errors="coerce")
-                bad = int(np.flatnonzero(values.isna() & frame[col].notna())[0])
-                raise DataFileError(path, f"line {bad + 2}: channel {c!r} holds {frame[col].iloc[bad]!r}, not a number")
-        return channels, frame.to_numpy(dtype=np.float64)
+        return _read_signal_csv(path)
     raise DataFileError(path, f"unsupported signal file type {path.suffix!r}; use {' or '.join(SIGNAL_SUFFIXES)}")
+
+
+def _first_line(exc: Exception) -> str:
+    text = str(exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__
+
+
+def _read_signal_csv(path: Path) -> tuple[tuple[str, ...], np.ndarray]:
+    """Channels and values of a signal CSV file (see :func:`read_signal_file`)."""
+    try:
+        frame = pd.read_csv(path, skip_blank_lines=False)
+    except pd.errors.EmptyDataError:
+        raise DataFileError(path, "file is empty; expected a header line of channel names", line=1) from None
+    except pd.errors.ParserError as exc:
+        match = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", str(exc))
+        if match:
+            want, line, saw = (int(g) for g in match.groups())
+            raise DataFileError(path, f"line has {saw} fields; the header has {want}", line=line) from None
+        raise DataFileError(path, f"not a readable CSV file ({_first_line(exc)})") from None
+    except UnicodeDecodeError:
+        raise DataFileError(path, "not a UTF-8 text file (a binary file given as CSV?)") from None
+    except Exception as exc:  # noqa: BLE001 - pandas/OS raise many types for unreadable files
+        raise DataFileError(path, f"not a readable CSV file ({type(exc).__name__}: {_first_line(exc)})") from None
+    channels = tuple(str(c).strip() for c in frame.columns)
+    if not channels:
+        raise DataFileError(path, "no channel columns in the header", line=1)
+    if not frame.index.equals(pd.RangeIndex(len(frame))):
+        # pandas turns the surplus leading field(s) into the index when data lines are longer than the header
+        extra = frame.index.nlevels
+        trailing = frame.iloc[:, -1].isna().all() if frame.shape[1] else False
+        hint = " (each data line ends with a trailing comma? remove it)" if extra == 1 and trailing else ""
+        raise DataFileError(path, f"data lines have {len(channels) + extra} fields but the header names "
+                            f"{len(channels)} channels{hint}", line=2)
+    if len(set(channels)) != len(channels) or any(c.startswith("Unnamed:") for c in channels):
+        raise DataFileError(path, f"channel names must be non-empty and distinct, got {list(channels)}", line=1)
+    if frame.empty:
+        raise DataFileError(path, "has a header line but no data lines", line=1)
+    for c, col in zip(channels, frame.columns):
+        if not pd.api.types.is_numeric_dtype(frame[col]):
+            values = pd.to_numeric(frame[col], errors="coerce")
+            bad = np.flatnonzero(values.isna() & frame[col].notna())
+            if bad.size:
+                raise DataFileError(path, f"channel {c!r} holds {frame[col].iloc[int(bad[0])]!r}, not a number",
+                                    line=int(bad[0]) + 2)
+    return channels, frame.to_numpy(dtype=np.float64)
 
 
 def check_signal_values(
@@ -348,15 +388,11 @@ def check_signal_values(
 
 
 def resolve_signal_path(folder: Path, text: str) -> tuple[Path | None, str | None]:
-    """``signal_file`` cell -> absolute path, or None and the reason it is refused."""
-    if not text:
-        return None, "signal_file is empty"
+    """``signal_file`` cell -> resolved absolute path inside ``folder``, or None and why it is refused."""
     pure = PurePosixPath(text.replace("\\", "/"))
-    if pure.is_absolute() or re.match(r"^[A-Za-z]:", text) or ".." in pure.parts:
-        return None, f"signal_file {text!r} must be a path relative to the dataset folder, inside it"
-    if pure.suffix.lower() not in SIGNAL_SUFFIXES:
+    if text and pure.suffix.lower() not in SIGNAL_SUFFIXES:
         return None, f"signal_file {text!r}: unsupported type {pure.suffix!r}; use {' or '.join(SIGNAL_SUFFIXES)}"
-    return folder.joinpath(*pure.parts), None
+    return resolve_inside(folder, text, "signal_file")
 
 
 # --------------------------------------------------------------------------- the scan
@@ -405,6 +441,12 @@ def _scan_classes(folder: Path, settings: dict, problems: list[Problem], scan: S
     table = pd.DataFrame(np.array(values, dtype=np.int64), index=pd.Index(names, name=CLASS_COLUMN),
                          columns=pd.Index(attributes, name="attribute"))
     valid = (table.to_numpy() >= 0).all(axis=1)
+    if valid.all() and len(valid) >= 2:  # judged only on a table without bad entries
+        rows = table.to_numpy()
+        for j in np.flatnonzero((rows == rows[0]).all(axis=0)):
+            problems.append(Problem(CLASSES_FILE, 1, f"attribute {attributes[j]!r} is {rows[0, j]} for every class; "
+                                    "no attribute classifier can be trained on one value: remove the column "
+                                    "(or add a class that has the other value)"))
     if not settings.get("classes", {}).get("allow_identical_rows", False):
         first: dict[tuple, int] = {}
         for i in np.flatnonzero(valid):
@@ -611,7 +653,7 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
         try:
             channels, values = read_signal_file(path)
         except DataFileError as exc:
-            problems.append(Problem(text, None, f"{exc.problem} (trials.csv line {line})"))
+            problems.append(Problem(text, exc.line, f"{exc.problem} (trials.csv line {line})"))
             continue
         n_rows[i, s] = values.shape[0]
         if scan.channels is None:
