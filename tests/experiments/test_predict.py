@@ -155,7 +155,7 @@ def test_grasp_folder_input_and_no_contact_grasp_skipped(hand, tmp_path):
 
 @pytest.mark.parametrize("name, content, message", [
     ("g.csv", b"a,b\n", "grasp .npz file or a grasp folder"),
-    ("g.npz", b"not a zip", "cannot read the grasp file"),
+    ("g.npz", b"not a zip", "not a readable .npz archive"),
 ])
 def test_bad_grasp_files(hand, tmp_path, name, content, message):
     root, _, _, classes = hand

@@ -57,7 +57,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from tzsl._io import atomic_write
+from tzsl._io import atomic_write, read_npz
 from tzsl.datasets._paths import check_inside, resolve_inside
 from tzsl.datasets._types import BiotacSignals
 from tzsl.exceptions import DataFileError
@@ -405,14 +405,14 @@ def read_grasps(folder: str | Path, grasp_ids: Sequence[str] | None = None) -> l
         path, reason = resolve_inside(folder, file, "file")
         if path is None:
             raise DataFileError(folder / GRASP_TABLE, f"grasp {grasp_id!r}: {reason}", line=int(line))
+        shown = folder / file
         if not path.is_file():
-            raise DataFileError(path, "grasp file not found (named in grasps.csv)", trial=grasp_id)
+            raise DataFileError(shown, "grasp file not found (named in grasps.csv)", trial=grasp_id)
         try:
-            with np.load(path, allow_pickle=False) as npz:
-                arrays = {name: npz[name] for name in npz.files}
-        except (OSError, ValueError, EOFError) as exc:
-            raise DataFileError(path, f"cannot read the grasp file as .npz ({exc})", trial=grasp_id) from None
-        grasps.append(grasp_from_arrays(arrays, grasp_id, object_name, str(path)))
+            arrays = read_npz(path, name=shown)
+        except DataFileError as exc:
+            raise DataFileError(shown, exc.problem, trial=grasp_id) from None
+        grasps.append(grasp_from_arrays(arrays, grasp_id, object_name, str(shown)))
     return grasps
 
 

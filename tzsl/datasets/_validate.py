@@ -25,6 +25,7 @@ from pathlib import Path, PurePosixPath
 import numpy as np
 import pandas as pd
 
+from tzsl._io import read_npz
 from tzsl.datasets._paths import check_inside, resolve_inside
 from tzsl.exceptions import DataFileError
 
@@ -298,11 +299,7 @@ def read_signal_file(path: str | os.PathLike) -> tuple[tuple[str, ...], np.ndarr
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".npz":
-        try:
-            with np.load(path, allow_pickle=False) as npz:
-                arrays = {name: npz[name] for name in npz.files}
-        except Exception as exc:  # zipfile/numpy raise many types for corrupt archives
-            raise DataFileError(path, f"not a readable .npz archive ({type(exc).__name__}: {exc})") from None
+        arrays = read_npz(path)
         if not arrays:
             raise DataFileError(path, "archive holds no channel arrays")
         lengths = {}

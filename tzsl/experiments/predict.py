@@ -56,6 +56,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import softmax
 
+from tzsl._io import read_npz
 from tzsl.bundle import load_bundle, save_bundle
 from tzsl.datasets import HandTable, read_grasps
 from tzsl.datasets._feature_table import read_feature_table
@@ -255,11 +256,7 @@ def _read_grasp_inputs(inputs: Sequence[str | Path]) -> list:
             raise DataFileError(path, "a hand-model input must be a grasp .npz file or a grasp folder")
         if not path.is_file():
             raise DataFileError(path, "grasp file not found")
-        try:
-            with np.load(path, allow_pickle=False) as npz:
-                arrays = {name: npz[name] for name in npz.files}
-        except (OSError, ValueError, EOFError) as exc:
-            raise DataFileError(path, f"cannot read the grasp file as .npz ({exc})") from None
+        arrays = read_npz(path)
         grasps.append(grasp_from_arrays(arrays, path.stem, "", str(path)))
     return grasps
 
@@ -406,13 +403,10 @@ class DeepAdapter(ModelAdapter):
         if not path.is_file():
             raise DataFileError(path, "input file not found")
         if path.suffix == ".npz":
-            try:
-                with np.load(path, allow_pickle=False) as npz:
-                    if "frames" not in npz.files:
-                        raise DataFileError(path, f"no 'frames' array (found {npz.files})")
-                    return np.asarray(npz["frames"])
-            except (OSError, ValueError, EOFError) as exc:
-                raise DataFileError(path, f"cannot read the .npz file ({exc})") from None
+            arrays = read_npz(path)
+            if "frames" not in arrays:
+                raise DataFileError(path, f"no 'frames' array (found {list(arrays)})")
+            return np.asarray(arrays["frames"])
         from tzsl.features import KeyFrameSelector  # noqa: PLC0415
 
         return KeyFrameSelector().transform([str(path)])[0]
