@@ -445,8 +445,11 @@ def register_adapter(kind: str, factory: Callable[[Any, dict], ModelAdapter]) ->
     ADAPTERS[kind] = factory
 
 
-def load_adapter(path: str | Path) -> ModelAdapter:
-    """Load a bundle (see :func:`tzsl.bundle.load_bundle`; only load bundles you trust) and wrap it.
+def load_adapter(path: str | Path, *, trust_pickle: bool = False) -> ModelAdapter:
+    """Load a bundle (see :func:`tzsl.bundle.load_bundle`; no code is run) and wrap it.
+
+    ``trust_pickle=True`` also loads old (format version 1) pickle bundles, which can run code:
+    only for files whose author you trust.
 
     Raises
     ------
@@ -455,16 +458,16 @@ def load_adapter(path: str | Path) -> ModelAdapter:
     """
     from tzsl.bundle import read_bundle_header  # noqa: PLC0415
 
-    kind = read_bundle_header(path).kind  # verified, nothing unpickled yet
+    kind = read_bundle_header(path).kind  # verified, nothing deserialised yet
     if kind not in ADAPTERS:
         raise ModelBundleError(f"{path}: no predictor for bundles of kind {kind!r} (known: {sorted(ADAPTERS)})")
     if kind == "deep":
         from tzsl.models._deep import load_deep_bundle  # noqa: PLC0415 - needs the deep extra
 
-        model = load_deep_bundle(path)
+        model = load_deep_bundle(path, trust_pickle=trust_pickle)
         metadata = dict(read_bundle_header(path).metadata)
         return ADAPTERS[kind](model, metadata)
-    model, metadata = load_bundle(path, expected_kind=kind)
+    model, metadata = load_bundle(path, expected_kind=kind, trust_pickle=trust_pickle)
     return ADAPTERS[kind](model, metadata)
 
 
