@@ -98,6 +98,19 @@ def file_sha256(path: str | Path) -> str:
     return digest.hexdigest()
 
 
+def looks_binary(path: str | Path, probe: int = 8192) -> bool:
+    """Whether the first ``probe`` bytes of ``path`` hold a NUL byte or are not UTF-8 text."""
+    with open(path, "rb") as fh:
+        head = fh.read(probe)
+    if b"\0" in head:
+        return True
+    try:
+        head.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        return exc.start < len(head) - 4  # a multi-byte character cut by the probe is fine
+    return False
+
+
 def max_npz_bytes() -> int:
     """The largest declared ``.npz`` content read, from :data:`MAX_NPZ_BYTES_ENV` (default 2 GiB)."""
     text = os.environ.get(MAX_NPZ_BYTES_ENV, "").strip()

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from tzsl._io import atomic_write, read_npz
+from tzsl._io import atomic_write, looks_binary, read_npz
 from tzsl.datasets._types import TRIAL_COLUMNS, FeatureSet
 from tzsl.exceptions import DataFileError
 
@@ -82,6 +82,8 @@ def write_feature_table(features: FeatureSet, path: str | Path) -> list[Path]:
 def _read_csv(path: Path) -> pd.DataFrame:
     """A CSV table, or one line naming the file and what is wrong with it."""
     try:
+        if looks_binary(path):
+            raise UnicodeDecodeError("utf-8", b"", 0, 1, "binary")
         return pd.read_csv(path)
     except UnicodeDecodeError:
         raise DataFileError(path, "not a UTF-8 text file (a binary file given as CSV?)") from None

@@ -57,7 +57,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from tzsl._io import atomic_write, read_npz
+from tzsl._io import atomic_write, ensure_folder, read_npz
 from tzsl.datasets._paths import check_inside, resolve_inside
 from tzsl.datasets._types import BiotacSignals
 from tzsl.exceptions import DataFileError
@@ -273,7 +273,7 @@ def write_grasps(
             )
         seen[name] = grasp.grasp_id
         rows.append((grasp.grasp_id, grasp.object_name, name))
-    folder.mkdir(parents=True, exist_ok=True)
+    ensure_folder(folder, "grasp folder")
     save = np.savez_compressed if compress else np.savez
     for grasp, (_, _, name) in zip(grasps, rows, strict=True):
         arrays = grasp_arrays(grasp)

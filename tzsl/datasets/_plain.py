@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from tzsl._io import ensure_folder
 from tzsl.datasets._types import FeatureSet
 from tzsl.datasets._validate import (
     CLASS_COLUMN,
@@ -443,7 +444,7 @@ def write_plain_dataset(
     if sensors is not None:
         long["sensor"] = np.tile(np.asarray(sensors, dtype=object), n_trials)
 
-    folder.parent.mkdir(parents=True, exist_ok=True)
+    ensure_folder(folder.parent)
     tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.tmp-", dir=folder.parent))
     try:
         cls = classes.astype(np.int64).rename_axis(CLASS_COLUMN).reset_index()

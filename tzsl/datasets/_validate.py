@@ -25,7 +25,7 @@ from pathlib import Path, PurePosixPath
 import numpy as np
 import pandas as pd
 
-from tzsl._io import read_npz
+from tzsl._io import looks_binary, read_npz
 from tzsl.datasets._paths import check_inside, resolve_inside
 from tzsl.exceptions import DataFileError
 
@@ -326,6 +326,8 @@ def _first_line(exc: Exception) -> str:
 def _read_signal_csv(path: Path) -> tuple[tuple[str, ...], np.ndarray]:
     """Channels and values of a signal CSV file (see :func:`read_signal_file`)."""
     try:
+        if looks_binary(path):
+            raise UnicodeDecodeError("utf-8", b"", 0, 1, "binary")
         frame = pd.read_csv(path, skip_blank_lines=False)
     except pd.errors.EmptyDataError:
         raise DataFileError(path, "file is empty; expected a header line of channel names", line=1) from None
