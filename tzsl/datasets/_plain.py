@@ -18,6 +18,7 @@ import os
 import re
 import shutil
 import tempfile
+from concurrent.futures import ThreadPoolExecutor
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -189,6 +190,33 @@ class PlainDataset:
             raise DataFileError(self.folder, "; ".join(map(str, problems)), trial=tid)
         return values
 
+    def read_signals(self, trials: Sequence[int], sensor: int, min_rows: int = 1,
+                     n_threads: int | None = None) -> list[np.ndarray]:
+        """:meth:`read_signal` of several trials of one sensor, read in parallel threads.
+
+        Reading is I/O and zlib/CSV parsing, which release the GIL, so threads overlap them.
+
+        Parameters
+        ----------
+        trials : sequence of int
+            Trial indices.
+        sensor : int
+        min_rows : int, default 1
+        n_threads : int, optional
+            Default: ``min(8, os.cpu_count() + 4)``; 1 reads in this thread.
+
+        Returns
+        -------
+        list of ndarray (n_rows_i, n_channels)
+            In the order of ``trials``; the first failing file raises its :class:`DataFileError`.
+        """
+        trials = list(trials)
+        n_threads = min(8, (os.cpu_count() or 1) + 4) if n_threads is None else int(n_threads)
+        if n_threads <= 1 or len(trials) < 2:
+            return [self.read_signal(i, sensor, min_rows) for i in trials]
+        with ThreadPoolExecutor(max_workers=n_threads) as pool:
+            return list(pool.map(lambda i: self.read_signal(i, sensor, min_rows), trials))
+
     def to_feature_set(
         self,
         X: np.ndarray | None = None,
@@ -342,7 +370,7 @@ def _safe_name(text: str) -> str:
 
 
 def _looks_like_dataset(folder: Path) -> bool:
-    return any((folder / name).exists() for name in (CLASSES_FILE, TRIALS_FILE))
+    return any((folder / name).exists() for name in (CLASSES_FILE, TRIALS_FILE, "trials.parquet"))
 
 
 def _install_folder(tmp: Path, folder: Path, force: bool) -> None:

@@ -31,6 +31,8 @@ from tzsl.exceptions import DataFileError
 
 CLASSES_FILE = "classes.csv"
 TRIALS_FILE = "trials.csv"
+#: The trials table may be Parquet instead (needs pyarrow: the ``parquet`` extra).
+TRIALS_PARQUET = "trials.parquet"
 GROUPS_FILE = "attribute_groups.csv"
 SPLITS_FILE = "splits.csv"
 SETTINGS_FILE = "dataset.toml"
@@ -131,15 +133,53 @@ class ScannedDataset:
 # --------------------------------------------------------------------------- helpers
 
 
+def trials_file_name(folder: Path) -> str:
+    """``trials.csv``, or ``trials.parquet`` when only that one exists."""
+    if not (folder / TRIALS_FILE).exists() and (folder / TRIALS_PARQUET).exists():
+        return TRIALS_PARQUET
+    return TRIALS_FILE
+
+
+def _read_parquet_rows(path: Path, name: str, problems: list[Problem]
+                       ) -> tuple[list[str], list[tuple[int, list[str]]]] | None:
+    """Header and (line, cells) rows of a Parquet table, as text (row r is "line" r + 2, as in CSV).
+
+    Numbers become their shortest exact text (they read back to the same float64); nulls become ``""``.
+    """
+    try:
+        import pyarrow.parquet as pq  # noqa: PLC0415 - optional: the parquet extra
+    except ImportError:
+        problems.append(Problem(name, None, "reading Parquet needs pyarrow: pip install 'tzsl[parquet]'"))
+        return None
+    try:
+        frame = pq.read_table(path).to_pandas()
+    except Exception as exc:  # noqa: BLE001 - pyarrow raises many types for corrupt files
+        text = str(exc).strip().splitlines()
+        problems.append(Problem(name, None, f"not a readable Parquet file ({text[0] if text else type(exc).__name__})"))
+        return None
+    header = [str(c).strip() for c in frame.columns]
+    columns = []
+    for c in frame.columns:
+        col = frame[c]
+        text = col.to_numpy().astype(str) if col.dtype.kind in "iufb" else col.astype("string").fillna("").to_numpy()
+        if col.dtype.kind == "f":
+            text = np.where(col.isna().to_numpy(), "", text)
+        columns.append(np.char.strip(np.asarray(text, dtype=str)))
+    cells = np.column_stack(columns).tolist() if columns else []
+    return header, [(r + 2, row) for r, row in enumerate(cells)]
+
+
 def _read_rows(
     folder: Path, name: str, problems: list[Problem], required: bool = True
 ) -> tuple[list[str], list[tuple[int, list[str]]]] | None:
-    """Header and (line, cells) rows of a CSV file; None if absent or unreadable."""
+    """Header and (line, cells) rows of a CSV (or Parquet) file; None if absent or unreadable."""
     path = folder / name
     outside = check_inside(folder, name)
     if outside is not None:
         problems.append(Problem(name, None, outside))
         return None
+    if name.endswith(".parquet") and path.is_file():
+        return _read_parquet_rows(path, name, problems)
     if not path.is_file():
         if required:
             problems.append(Problem(name, None, f"file not found in {folder}"))
@@ -504,28 +544,29 @@ def _int_cell(text: str) -> int | None:
 
 def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: ScannedDataset,
                  check_signals: bool) -> None:
-    parsed = _read_rows(folder, TRIALS_FILE, problems)
+    tname = trials_file_name(folder)
+    parsed = _read_rows(folder, tname, problems)
     if parsed is None:
         return
     header, rows = parsed
     missing = [c for c in ("trial_id", "class") if c not in header]
     if missing:
-        problems.append(Problem(TRIALS_FILE, 1, f"header lacks the column(s) {missing}"))
+        problems.append(Problem(tname, 1, f"header lacks the column(s) {missing}"))
         return
     col = {name: i for i, name in enumerate(header)}
     features = [h for h in header if h and h not in TRIAL_RESERVED_COLUMNS]
     has_signals = "signal_file" in col
     if has_signals and features:
-        problems.append(Problem(TRIALS_FILE, 1, f"has a signal_file column and feature columns {features}; "
+        problems.append(Problem(tname, 1, f"has a signal_file column and feature columns {features}; "
                                 "a dataset has one or the other (every non-reserved column is a feature)"))
         return
     if not has_signals and not features:
-        problems.append(Problem(TRIALS_FILE, 1, "no feature columns and no signal_file column"))
+        problems.append(Problem(tname, 1, "no feature columns and no signal_file column"))
         return
     scan.kind = "signals" if has_signals else "columns"
     classes = None if scan.classes is None else set(scan.classes.index)
     if not rows:
-        problems.append(Problem(TRIALS_FILE, None, "no trial rows"))
+        problems.append(Problem(tname, None, "no trial rows"))
         return
 
     def cell(cells: list[str], name: str) -> str | None:
@@ -545,31 +586,31 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
         empty = [n for n, v in (("trial_id", tid), ("class", cls), ("object", obj), ("sensor", sensor))
                  if v is not None and not v]
         if empty:
-            problems.append(Problem(TRIALS_FILE, line, f"empty {', '.join(empty)} cell"))
+            problems.append(Problem(tname, line, f"empty {', '.join(empty)} cell"))
             continue
         obj = obj if obj is not None else cls
         if classes is not None and cls not in classes:
-            problems.append(Problem(TRIALS_FILE, line, f"trial {tid!r}: class {cls!r} is not in {CLASSES_FILE}"))
+            problems.append(Problem(tname, line, f"trial {tid!r}: class {cls!r} is not in {CLASSES_FILE}"))
         index_text, oid_text = cell(cells, "trial_index"), cell(cells, "object_id")
         trial_index = None if index_text is None else _int_cell(index_text)
         object_id = None if oid_text is None else _int_cell(oid_text)
         if index_text is not None and trial_index is None:
-            problems.append(Problem(TRIALS_FILE, line, f"trial {tid!r}: trial_index {index_text!r} is not an integer"))
+            problems.append(Problem(tname, line, f"trial {tid!r}: trial_index {index_text!r} is not an integer"))
         if oid_text is not None and object_id is None:
-            problems.append(Problem(TRIALS_FILE, line, f"trial {tid!r}: object_id {oid_text!r} is not an integer"))
+            problems.append(Problem(tname, line, f"trial {tid!r}: object_id {oid_text!r} is not an integer"))
         if (tid, sensor) in row_of:
             prev = kept_rows[row_of[(tid, sensor)]][0]
             what = f"trial id {tid!r}" + (f" with sensor {sensor!r}" if "sensor" in col else "")
-            problems.append(Problem(TRIALS_FILE, line, f"duplicate {what} (also line {prev})"))
+            problems.append(Problem(tname, line, f"duplicate {what} (also line {prev})"))
             continue
         if obj in object_class and object_class[obj][0] != cls:
             prev_cls, prev_line = object_class[obj]
-            problems.append(Problem(TRIALS_FILE, line, f"object {obj!r} has class {cls!r} here but {prev_cls!r} "
+            problems.append(Problem(tname, line, f"object {obj!r} has class {cls!r} here but {prev_cls!r} "
                                     f"on line {prev_line}; an object belongs to one class"))
         object_class.setdefault(obj, (cls, line))
         if object_id is not None:
             if obj in object_ids and object_ids[obj][0] != object_id:
-                problems.append(Problem(TRIALS_FILE, line, f"object {obj!r} has object_id {object_id} here but "
+                problems.append(Problem(tname, line, f"object {obj!r} has object_id {object_id} here but "
                                         f"{object_ids[obj][0]} on line {object_ids[obj][1]}"))
             object_ids.setdefault(obj, (object_id, line))
         if tid in trial_pos:
@@ -578,7 +619,7 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
                                        ("trial_index", trial_index, first["trial_index"]),
                                        ("object_id", object_id, first["object_id"])) if a != b]
             if diffs:
-                problems.append(Problem(TRIALS_FILE, line, f"trial {tid!r}: {', '.join(diffs)} differ(s) from its "
+                problems.append(Problem(tname, line, f"trial {tid!r}: {', '.join(diffs)} differ(s) from its "
                                         f"row on line {first['line']}"))
         else:
             trial_pos[tid] = len(meta)
@@ -597,7 +638,7 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
         where[trial_pos[tid], sensors[sensor]] = k
     for i, s in np.argwhere(where < 0):
         have = [sensor_names[j] for j in np.flatnonzero(where[i] >= 0)]
-        problems.append(Problem(TRIALS_FILE, meta[i]["line"], f"trial {meta[i]['trial_id']!r} has no row for "
+        problems.append(Problem(tname, meta[i]["line"], f"trial {meta[i]['trial_id']!r} has no row for "
                                 f"sensor {sensor_names[s]!r} (it has {have}; every trial needs one row per sensor)"))
     lines = np.array([kept_rows[k][0] if k >= 0 else 0 for k in where.reshape(-1)]).reshape(where.shape)
     scan.sensors = sensor_names
@@ -623,7 +664,7 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
             else:
                 msg = f"is {text} (NaN/inf)"
             tid = meta[r // n_sensors]["trial_id"]
-            problems.append(Problem(TRIALS_FILE, line, f"trial {tid!r}: feature {features[j]!r} {msg}"))
+            problems.append(Problem(tname, line, f"trial {tid!r}: feature {features[j]!r} {msg}"))
         scan.X = np.where(bad, np.nan, values).reshape(n_trials, n_sensors, len(features))
         scan.feature_names = tuple(features)
         return
@@ -642,17 +683,17 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
         tid = meta[i]["trial_id"]
         path, reason = resolve_signal_path(folder, text)
         if path is None:
-            problems.append(Problem(TRIALS_FILE, line, f"trial {tid!r}: {reason}"))
+            problems.append(Problem(tname, line, f"trial {tid!r}: {reason}"))
             continue
         if not path.is_file():
-            problems.append(Problem(TRIALS_FILE, line, f"trial {tid!r}: signal file {text!r} not found"))
+            problems.append(Problem(tname, line, f"trial {tid!r}: signal file {text!r} not found"))
             continue
         if not check_signals and scan.channels is not None:
             continue
         try:
             channels, values = read_signal_file(path)
         except DataFileError as exc:
-            problems.append(Problem(text, exc.line, f"{exc.problem} (trials.csv line {line})"))
+            problems.append(Problem(text, exc.line, f"{exc.problem} ({tname} line {line})"))
             continue
         n_rows[i, s] = values.shape[0]
         if scan.channels is None:
@@ -668,7 +709,7 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
             if extra and configured is None:
                 detail.append(f"extra {extra}")
             problems.append(Problem(text, None, f"has {len(channels)} channel(s), expected {len(expected)} as in "
-                                    f"{origin}: {'; '.join(detail)} (trials.csv line {line})"))
+                                    f"{origin}: {'; '.join(detail)} ({tname} line {line})"))
             continue
         if not check_signals:
             continue
