@@ -468,9 +468,9 @@ def _read(path: Path) -> tuple[dict, bytes]:
     if not _KIND.match(header["kind"]):
         raise fail(f"bundle kind {header['kind']!r} is not lower-case words joined by '-'")
     signed = _canonical(_signed_fields(header))
-    if not hmac.compare_digest(hashlib.sha256(signed).hexdigest(), header["header_sha256"]):
+    if not hmac.compare_digest(hashlib.sha256(signed).hexdigest().encode(), header["header_sha256"].encode()):
         raise fail("bundle header checksum mismatch: the header was edited or is corrupt")
-    if not hmac.compare_digest(hashlib.sha256(payload).hexdigest(), header["payload_sha256"]):
+    if not hmac.compare_digest(hashlib.sha256(payload).hexdigest().encode(), header["payload_sha256"].encode()):
         raise fail(
             f"model payload checksum mismatch ({len(payload)} bytes read, {header.get('payload_bytes')} "
             "written): the file is corrupt, truncated or was tampered with"
@@ -480,7 +480,7 @@ def _read(path: Path) -> tuple[dict, bytes]:
         if "hmac_sha256" not in header:
             raise fail(f"bundle is not signed, but {BUNDLE_KEY_ENV} is set: refusing to load an unsigned bundle")
         expected_mac = hmac.new(key, signed, hashlib.sha256).hexdigest()
-        if not hmac.compare_digest(expected_mac, str(header["hmac_sha256"])):
+        if not hmac.compare_digest(expected_mac.encode(), str(header["hmac_sha256"]).encode()):
             raise fail(f"bundle signature does not match {BUNDLE_KEY_ENV}: wrong key or tampered file")
     version = header["format_version"]
     if version not in (_PICKLE_VERSION, BUNDLE_FORMAT_VERSION):
