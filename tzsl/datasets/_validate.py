@@ -1,9 +1,10 @@
 """Check a plain-file dataset folder and list every problem, each with file and line.
 
 The format itself is described in ``data/README.md`` ("Plain-file dataset format") and by
-``tzsl formats``; :mod:`tzsl.datasets._plain` reads and writes it. This module holds the
-format's vocabulary (file names, reserved columns, ``dataset.toml`` keys) and the one scan
-both the validator and the reader use: :func:`scan_dataset` parses every file, collects a
+``tzsl formats``; :mod:`tzsl.datasets._plain` reads and writes it. The format's vocabulary
+(file names, reserved columns, ``dataset.toml`` keys) and table readers are in
+:mod:`tzsl.datasets._tables`, signal files in :mod:`tzsl.datasets._signal_files` (both
+re-exported here). This module holds the one scan both the validator and the reader use: :func:`scan_dataset` parses every file, collects a
 :class:`Problem` for everything wrong (it never stops at the first) and returns what it
 could parse.
 
@@ -13,76 +14,44 @@ skipped but counted). Rows must not contain line breaks inside quoted cells.
 
 from __future__ import annotations
 
-import csv
 import math
 import os
-import re
-import tomllib
-from collections.abc import Collection, Sequence
+from collections.abc import Collection
 from dataclasses import dataclass, field
-from pathlib import Path, PurePosixPath
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from tzsl._io import looks_binary, read_npz
-from tzsl.datasets._paths import check_inside, resolve_inside
-from tzsl.exceptions import DataFileError
-
-CLASSES_FILE = "classes.csv"
-TRIALS_FILE = "trials.csv"
-#: The trials table may be Parquet instead (needs pyarrow: the ``parquet`` extra).
-TRIALS_PARQUET = "trials.parquet"
-GROUPS_FILE = "attribute_groups.csv"
-SPLITS_FILE = "splits.csv"
-SETTINGS_FILE = "dataset.toml"
-
-#: First column of ``classes.csv``.
-CLASS_COLUMN = "class"
-#: Columns of ``trials.csv`` that are never features.
-TRIAL_RESERVED_COLUMNS: tuple[str, ...] = (
-    "trial_id", "class", "object", "sensor", "signal_file", "trial_index", "object_id",
+from tzsl.datasets._signal_files import (  # noqa: F401 - re-exported for the reader
+    check_signal_values,
+    read_signal_file,
+    resolve_signal_path,
 )
-#: Sensor name of datasets whose ``trials.csv`` has no ``sensor`` column.
-DEFAULT_SENSOR = "sensor_0"
-#: Suffixes of per-trial signal files.
-SIGNAL_SUFFIXES: tuple[str, ...] = (".npz", ".csv")
-#: Text accepted in an attribute cell of ``classes.csv``.
-BINARY_TEXT = {"0": 0, "1": 1, "0.0": 0, "1.0": 1}
-#: ``dataset.toml``: table -> key -> expected type ("" is the top level).
-SETTINGS_SCHEMA: dict[str, dict[str, type]] = {
-    "": {"name": str},
-    "classes": {"allow_identical_rows": bool},
-    "signals": {"channels": list, "baseline_rows": int, "statistics": list},
-}
-SPLIT_COLUMNS = ("split", "object", "role")
-SPLIT_ROLES = ("train", "test")
-
-
-@dataclass(frozen=True)
-class Problem:
-    """One problem in a dataset folder.
-
-    Attributes
-    ----------
-    file : str
-        Path of the file relative to the dataset folder (``"trials.csv"``,
-        ``"signals/t01.npz"``).
-    line : int or None
-        1-based line of the text file (header = line 1); None when the problem concerns the
-        whole file or a binary file.
-    message : str
-        What is wrong, in words a user can act on.
-    """
-
-    file: str
-    line: int | None
-    message: str
-
-    def __str__(self) -> str:
-        where = self.file if self.line is None else f"{self.file}:{self.line}"
-        return f"{where}: {self.message}"
-
+from tzsl.datasets._tables import (  # noqa: F401 - the format's vocabulary, re-exported
+    BINARY_TEXT,
+    CLASS_COLUMN,
+    CLASSES_FILE,
+    DEFAULT_SENSOR,
+    GROUPS_FILE,
+    SETTINGS_FILE,
+    SETTINGS_SCHEMA,
+    SIGNAL_SUFFIXES,
+    SPLIT_COLUMNS,
+    SPLIT_ROLES,
+    SPLITS_FILE,
+    TRIAL_RESERVED_COLUMNS,
+    TRIALS_FILE,
+    TRIALS_PARQUET,
+    Problem,
+    find_table,
+    key_line,
+    read_rows,
+    to_float,
+    read_settings,
+    trials_file_name,
+)
+from tzsl.exceptions import DataFileError
 
 @dataclass
 class ScannedDataset:
@@ -130,315 +99,11 @@ class ScannedDataset:
     signal_rows: np.ndarray | None = None
 
 
-# --------------------------------------------------------------------------- helpers
-
-
-def trials_file_name(folder: Path) -> str:
-    """``trials.csv``, or ``trials.parquet`` when only that one exists."""
-    if not (folder / TRIALS_FILE).exists() and (folder / TRIALS_PARQUET).exists():
-        return TRIALS_PARQUET
-    return TRIALS_FILE
-
-
-def _read_parquet_rows(path: Path, name: str, problems: list[Problem]
-                       ) -> tuple[list[str], list[tuple[int, list[str]]]] | None:
-    """Header and (line, cells) rows of a Parquet table, as text (row r is "line" r + 2, as in CSV).
-
-    Numbers become their shortest exact text (they read back to the same float64); nulls become ``""``.
-    """
-    try:
-        import pyarrow.parquet as pq  # noqa: PLC0415 - optional: the parquet extra
-    except ImportError:
-        problems.append(Problem(name, None, "reading Parquet needs pyarrow: pip install 'tzsl[parquet]'"))
-        return None
-    try:
-        frame = pq.read_table(path).to_pandas()
-    except Exception as exc:  # noqa: BLE001 - pyarrow raises many types for corrupt files
-        text = str(exc).strip().splitlines()
-        problems.append(Problem(name, None, f"not a readable Parquet file ({text[0] if text else type(exc).__name__})"))
-        return None
-    header = [str(c).strip() for c in frame.columns]
-    columns = []
-    for c in frame.columns:
-        col = frame[c]
-        text = col.to_numpy().astype(str) if col.dtype.kind in "iufb" else col.astype("string").fillna("").to_numpy()
-        if col.dtype.kind == "f":
-            text = np.where(col.isna().to_numpy(), "", text)
-        columns.append(np.char.strip(np.asarray(text, dtype=str)))
-    cells = np.column_stack(columns).tolist() if columns else []
-    return header, [(r + 2, row) for r, row in enumerate(cells)]
-
-
-def _read_rows(
-    folder: Path, name: str, problems: list[Problem], required: bool = True
-) -> tuple[list[str], list[tuple[int, list[str]]]] | None:
-    """Header and (line, cells) rows of a CSV (or Parquet) file; None if absent or unreadable."""
-    path = folder / name
-    outside = check_inside(folder, name)
-    if outside is not None:
-        problems.append(Problem(name, None, outside))
-        return None
-    if name.endswith(".parquet") and path.is_file():
-        return _read_parquet_rows(path, name, problems)
-    if not path.is_file():
-        if required:
-            problems.append(Problem(name, None, f"file not found in {folder}"))
-        return None
-    rows: list[tuple[int, list[str]]] = []
-    try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
-            reader = csv.reader(fh)
-            header = next(reader, None)
-            if header is None or not any(h.strip() for h in header):
-                problems.append(Problem(name, 1, "file is empty; expected a header line"))
-                return None
-            header = [h.strip() for h in header]
-            for row in reader:
-                if not any(cell.strip() for cell in row):
-                    continue
-                line = reader.line_num
-                if len(row) != len(header):
-                    problems.append(Problem(name, line, f"row has {len(row)} fields; the header has {len(header)}"))
-                    continue
-                rows.append((line, [cell.strip() for cell in row]))
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        problems.append(Problem(name, None, f"cannot read the file: {exc}"))
-        return None
-    empty = [i + 1 for i, h in enumerate(header) if not h]
-    if empty:
-        problems.append(Problem(name, 1, f"header column(s) {empty} have no name"))
-    dup = sorted({h for h in header if h and header.count(h) > 1})
-    if dup:
-        problems.append(Problem(name, 1, f"header names column(s) {dup} more than once"))
-    return header, rows
-
-
-def _to_float(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Text cells -> float64 values (exact round trip) and a mask of cells that are not numbers."""
-    cells = np.asarray(cells, dtype=str)
-    try:
-        return cells.astype(np.float64), np.zeros(cells.shape, dtype=bool)
-    except ValueError:
-        pass
-    flat = cells.reshape(-1)
-    values = np.full(flat.shape, np.nan)
-    bad = np.zeros(flat.shape, dtype=bool)
-    for k, text in enumerate(flat):  # only reached when some cell is not a number
-        try:
-            values[k] = float(text)
-        except ValueError:
-            bad[k] = True
-    return values.reshape(cells.shape), bad.reshape(cells.shape)
-
-
-def _key_line(folder: Path, table: str, key: str) -> int | None:
-    """Line of ``key = ...`` inside ``[table]`` of dataset.toml (best effort, for messages)."""
-    try:
-        lines = (folder / SETTINGS_FILE).read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError):
-        return None
-    current = ""
-    for i, text in enumerate(lines, start=1):
-        stripped = text.strip()
-        header = re.match(r"^\[\s*([^\]]+?)\s*\]", stripped)
-        if header:
-            current = header.group(1)
-        elif current == table and re.match(rf"^{re.escape(key)}\s*=", stripped):
-            return i
-    return None
-
-
-def _find_table(folder: Path, table: str) -> int | None:
-    try:
-        lines = (folder / SETTINGS_FILE).read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError):
-        return None
-    for i, text in enumerate(lines, start=1):
-        if re.match(rf"^\[\s*{re.escape(table)}\s*\]", text.strip()):
-            return i
-    return None
-
-
-def read_settings(folder: Path, problems: list[Problem]) -> dict:
-    """``dataset.toml`` checked against :data:`SETTINGS_SCHEMA` (``{}`` without the file)."""
-    path = folder / SETTINGS_FILE
-    outside = check_inside(folder, SETTINGS_FILE)
-    if outside is not None:
-        problems.append(Problem(SETTINGS_FILE, None, outside))
-        return {}
-    if not path.is_file():
-        return {}
-    try:
-        with open(path, "rb") as fh:
-            settings = tomllib.load(fh)
-    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        match = re.search(r"line (\d+)", str(exc))
-        problems.append(Problem(SETTINGS_FILE, int(match.group(1)) if match else None, f"not valid TOML: {exc}"))
-        return {}
-    clean: dict = {}
-    for key, value in settings.items():
-        if key in SETTINGS_SCHEMA[""]:
-            table, entries = "", {key: value}
-        elif key in SETTINGS_SCHEMA and key:
-            if not isinstance(value, dict):
-                problems.append(Problem(SETTINGS_FILE, _key_line(folder, "", key), f"{key!r} must be a table [{key}]"))
-                continue
-            table, entries = key, value
-        else:
-            known = [k for k in SETTINGS_SCHEMA[""]] + [f"[{t}]" for t in SETTINGS_SCHEMA if t]
-            problems.append(Problem(SETTINGS_FILE, _key_line(folder, "", key), f"unknown key {key!r}; known: {known}"))
-            continue
-        for sub, val in entries.items():
-            where = _key_line(folder, table, sub)
-            expected = SETTINGS_SCHEMA[table].get(sub)
-            label = f"[{table}] {sub}" if table else sub
-            if expected is None:
-                problems.append(Problem(SETTINGS_FILE, where, f"unknown key {label!r}; known in "
-                                        f"{'[' + table + ']' if table else 'the top level'}: "
-                                        f"{sorted(SETTINGS_SCHEMA[table])}"))
-                continue
-            ok = isinstance(val, expected) and not (expected is int and isinstance(val, bool))
-            if expected is list and ok:
-                ok = len(val) > 0 and all(isinstance(v, str) and v for v in val) and len(set(val)) == len(val)
-            if expected is int and ok:
-                ok = val >= 0
-            if not ok:
-                want = {str: "a string", bool: "true or false", int: "an integer >= 0",
-                        list: "a non-empty list of distinct non-empty strings"}[expected]
-                problems.append(Problem(SETTINGS_FILE, where, f"{label} is {val!r}; expected {want}"))
-                continue
-            if table:
-                clean.setdefault(table, {})[sub] = val
-            else:
-                clean[sub] = val
-    return clean
-
-
-def read_signal_file(path: str | os.PathLike) -> tuple[tuple[str, ...], np.ndarray]:
-    """Read one per-trial signal file.
-
-    Parameters
-    ----------
-    path : path-like
-        ``.npz``: one 1-D numeric array per channel, all of the same length, named by the
-        channel (channel order = order in the archive); ``.csv``: a header line of channel
-        names, then one line per time step.
-
-    Returns
-    -------
-    channels : tuple of str, length n_channels
-    values : ndarray of float64, shape (n_rows, n_channels)
-        May hold NaN/inf (checked by the caller, who knows the line numbers).
-
-    Raises
-    ------
-    DataFileError
-        Unreadable file, wrong suffix, no channels, arrays that are not 1-D numeric of one
-        length, non-numeric CSV cells.
-    """
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix == ".npz":
-        arrays = read_npz(path)
-        if not arrays:
-            raise DataFileError(path, "archive holds no channel arrays")
-        lengths = {}
-        for name, arr in arrays.items():
-            if arr.ndim != 1 or arr.dtype.kind not in "iufb":
-                raise DataFileError(path, f"channel {name!r} has shape {arr.shape} and dtype {arr.dtype}; "
-                                    "expected a 1-D numeric array per channel")
-            lengths[name] = arr.shape[0]
-        if len(set(lengths.values())) > 1:
-            raise DataFileError(path, f"channels have different lengths: {lengths}")
-        channels = tuple(arrays)
-        values = np.column_stack([arrays[c].astype(np.float64) for c in channels])
-        return channels, values
-    if suffix == ".csv":
-        return _read_signal_csv(path)
-    raise DataFileError(path, f"unsupported signal file type {path.suffix!r}; use {' or '.join(SIGNAL_SUFFIXES)}")
-
-
-def _first_line(exc: Exception) -> str:
-    text = str(exc).strip().splitlines()
-    return text[0] if text else type(exc).__name__
-
-
-def _read_signal_csv(path: Path) -> tuple[tuple[str, ...], np.ndarray]:
-    """Channels and values of a signal CSV file (see :func:`read_signal_file`)."""
-    try:
-        if looks_binary(path):
-            raise UnicodeDecodeError("utf-8", b"", 0, 1, "binary")
-        frame = pd.read_csv(path, skip_blank_lines=False)
-    except pd.errors.EmptyDataError:
-        raise DataFileError(path, "file is empty; expected a header line of channel names", line=1) from None
-    except pd.errors.ParserError as exc:
-        match = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", str(exc))
-        if match:
-            want, line, saw = (int(g) for g in match.groups())
-            raise DataFileError(path, f"line has {saw} fields; the header has {want}", line=line) from None
-        raise DataFileError(path, f"not a readable CSV file ({_first_line(exc)})") from None
-    except UnicodeDecodeError:
-        raise DataFileError(path, "not a UTF-8 text file (a binary file given as CSV?)") from None
-    except Exception as exc:  # noqa: BLE001 - pandas/OS raise many types for unreadable files
-        raise DataFileError(path, f"not a readable CSV file ({type(exc).__name__}: {_first_line(exc)})") from None
-    channels = tuple(str(c).strip() for c in frame.columns)
-    if not channels:
-        raise DataFileError(path, "no channel columns in the header", line=1)
-    if not frame.index.equals(pd.RangeIndex(len(frame))):
-        # pandas turns the surplus leading field(s) into the index when data lines are longer than the header
-        extra = frame.index.nlevels
-        trailing = frame.iloc[:, -1].isna().all() if frame.shape[1] else False
-        hint = " (each data line ends with a trailing comma? remove it)" if extra == 1 and trailing else ""
-        raise DataFileError(path, f"data lines have {len(channels) + extra} fields but the header names "
-                            f"{len(channels)} channels{hint}", line=2)
-    if len(set(channels)) != len(channels) or any(c.startswith("Unnamed:") for c in channels):
-        raise DataFileError(path, f"channel names must be non-empty and distinct, got {list(channels)}", line=1)
-    if frame.empty:
-        raise DataFileError(path, "has a header line but no data lines", line=1)
-    for c, col in zip(channels, frame.columns):
-        if not pd.api.types.is_numeric_dtype(frame[col]):
-            values = pd.to_numeric(frame[col], errors="coerce")
-            bad = np.flatnonzero(values.isna() & frame[col].notna())
-            if bad.size:
-                raise DataFileError(path, f"channel {c!r} holds {frame[col].iloc[int(bad[0])]!r}, not a number",
-                                    line=int(bad[0]) + 2)
-    return channels, frame.to_numpy(dtype=np.float64)
-
-
-def check_signal_values(
-    rel: str, channels: Sequence[str], values: np.ndarray, csv_file: bool, min_rows: int = 1
-) -> list[Problem]:
-    """Problems of a read signal: too few rows, NaN/inf (first one located; counted)."""
-    problems = []
-    if values.shape[0] < min_rows:
-        problems.append(Problem(rel, None, f"signal has {values.shape[0]} rows; at least {min_rows} needed"))
-    bad = ~np.isfinite(values)
-    if bad.any():
-        row, col = (int(v) for v in np.argwhere(bad)[0])
-        what = "NaN or empty" if np.isnan(values[row, col]) else "infinite"
-        count = int(bad.sum())
-        if csv_file:
-            problems.append(Problem(rel, row + 2, f"channel {channels[col]!r} is {what} "
-                                    f"({count} non-finite value(s) in the file)"))
-        else:
-            problems.append(Problem(rel, None, f"channel {channels[col]!r} is {what} at row {row} "
-                                    f"({count} non-finite value(s) in the file)"))
-    return problems
-
-
-def resolve_signal_path(folder: Path, text: str) -> tuple[Path | None, str | None]:
-    """``signal_file`` cell -> resolved absolute path inside ``folder``, or None and why it is refused."""
-    pure = PurePosixPath(text.replace("\\", "/"))
-    if text and pure.suffix.lower() not in SIGNAL_SUFFIXES:
-        return None, f"signal_file {text!r}: unsupported type {pure.suffix!r}; use {' or '.join(SIGNAL_SUFFIXES)}"
-    return resolve_inside(folder, text, "signal_file")
-
-
 # --------------------------------------------------------------------------- the scan
 
 
 def _scan_classes(folder: Path, settings: dict, problems: list[Problem], scan: ScannedDataset) -> None:
-    parsed = _read_rows(folder, CLASSES_FILE, problems)
+    parsed = read_rows(folder, CLASSES_FILE, problems)
     if parsed is None:
         return
     header, rows = parsed
@@ -502,7 +167,7 @@ def _scan_classes(folder: Path, settings: dict, problems: list[Problem], scan: S
 
 
 def _scan_groups(folder: Path, problems: list[Problem], scan: ScannedDataset) -> None:
-    parsed = _read_rows(folder, GROUPS_FILE, problems, required=False)
+    parsed = read_rows(folder, GROUPS_FILE, problems, required=False)
     if parsed is None:
         return
     header, rows = parsed
@@ -545,7 +210,7 @@ def _int_cell(text: str) -> int | None:
 def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: ScannedDataset,
                  check_signals: bool) -> None:
     tname = trials_file_name(folder)
-    parsed = _read_rows(folder, tname, problems)
+    parsed = read_rows(folder, tname, problems)
     if parsed is None:
         return
     header, rows = parsed
@@ -652,7 +317,7 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
         idx = [col[f] for f in features]
         cells = np.array([[kept_rows[k][1][j] for j in idx] if k >= 0 else [""] * len(idx)
                           for k in where.reshape(-1)], dtype=str)
-        values, bad = _to_float(cells)
+        values, bad = to_float(cells)
         present = (where.reshape(-1) >= 0)[:, None]
         for r, j in np.argwhere((bad | ~np.isfinite(values)) & present):
             text = str(cells[r, j])
@@ -720,7 +385,7 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
 
 
 def _scan_splits(folder: Path, problems: list[Problem], scan: ScannedDataset) -> None:
-    parsed = _read_rows(folder, SPLITS_FILE, problems, required=False)
+    parsed = read_rows(folder, SPLITS_FILE, problems, required=False)
     if parsed is None:
         return
     header, rows = parsed
@@ -767,7 +432,7 @@ def scan_dataset(folder: str | os.PathLike, *, check_signals: bool = True) -> tu
     _scan_groups(folder, problems, scan)
     _scan_trials(folder, scan.settings, problems, scan, check_signals)
     if scan.kind == "columns" and "signals" in scan.settings:
-        problems.append(Problem(SETTINGS_FILE, _key_line(folder, "", "signals") or _find_table(folder, "signals"),
+        problems.append(Problem(SETTINGS_FILE, key_line(folder, "", "signals") or find_table(folder, "signals"),
                                 f"[signals] settings given but {TRIALS_FILE} has feature columns, not signal_file"))
     _scan_splits(folder, problems, scan)
     return scan, problems
@@ -805,6 +470,6 @@ def validate_dataset(
     if statistics is not None and names:
         unknown = [s for s in names if s not in statistics]
         if unknown:
-            problems.append(Problem(SETTINGS_FILE, _key_line(Path(folder), "signals", "statistics"),
+            problems.append(Problem(SETTINGS_FILE, key_line(Path(folder), "signals", "statistics"),
                                     f"unknown statistic(s) {unknown}; choose from {', '.join(statistics)}"))
     return problems
