@@ -98,14 +98,10 @@ def test_edited_metadata_is_rejected(tmp_path, fitted):
 def _forge(path, fitted_model):
     """Swap in another payload and recompute both checksums, as an attacker could."""
     import hashlib
-    import io
-
-    import joblib
+    import skops.io as sio
 
     magic, header, _ = _split(path)
-    buf = io.BytesIO()
-    joblib.dump(fitted_model, buf)
-    payload = buf.getvalue()
+    payload = sio.dumps(fitted_model)
     header["payload_sha256"] = hashlib.sha256(payload).hexdigest()
     header["payload_bytes"] = len(payload)
     fields = {k: v for k, v in header.items() if k not in ("header_sha256", "hmac_sha256")}
@@ -183,3 +179,127 @@ def test_garbage_files_are_rejected(tmp_path, content, message):
 def test_missing_file(tmp_path):
     with pytest.raises(ModelBundleError, match="not found"):
         load_bundle(tmp_path / "absent.tzsl")
+
+
+# ---------------------------------------------------------------------- a bundle cannot run code
+def _craft(path, payload: bytes, **fields):
+    """Write a bundle around ``payload`` with valid checksums (what anyone can do)."""
+    import hashlib
+
+    header = {"format": "tzsl-model-bundle", "format_version": 2, "tzsl_version": tzsl.__version__,
+              "kind": "hand-dap", "created": "", "metadata": {}, "payload_format": "skops",
+              "payload_bytes": len(payload), "payload_sha256": hashlib.sha256(payload).hexdigest(), **fields}
+    canonical = json.dumps(header, sort_keys=True, separators=(",", ":")).encode()
+    header["header_sha256"] = hashlib.sha256(canonical).hexdigest()
+    path.write_bytes(b"TZSL-MODEL-BUNDLE\n" + json.dumps(header).encode() + b"\n" + payload)
+    return path
+
+
+def test_skops_payload_naming_os_system_is_refused(tmp_path):
+    import os
+
+    import skops.io as sio
+
+    path = _craft(tmp_path / "evil.tzsl", sio.dumps({"f": os.system, "g": eval}))
+    with pytest.raises(ModelBundleError, match=r"evil\.tzsl: the model names type\(s\) tzsl does not trust: "
+                       r"builtins\.eval, posix\.system") as info:
+        load_bundle(path)
+    assert "\n" not in str(info.value)
+
+
+def test_untrusted_class_is_refused_by_name(tmp_path):
+    from fractions import Fraction
+
+    import skops.io as sio
+
+    path = _craft(tmp_path / "odd.tzsl", sio.dumps({"x": Fraction(1, 3)}))
+    with pytest.raises(ModelBundleError, match="does not trust: fractions.Fraction"):
+        load_bundle(path)
+
+
+def test_trusted_types_cover_every_tzsl_model_class_and_nothing_else():
+    import inspect
+
+    import tzsl.models
+    from tzsl.bundle import is_trusted_type
+
+    classes = [obj for name in tzsl.models.__all__ if inspect.isclass(obj := getattr(tzsl.models, name))]
+    assert classes
+    for cls in classes:
+        assert is_trusted_type(f"{cls.__module__}.{cls.__qualname__}"), cls
+    assert is_trusted_type("sklearn.linear_model._logistic.LogisticRegression")
+    assert is_trusted_type("numpy.dtype")
+    for name in ("posix.system", "builtins.eval", "os.system", "tzsl.models.np", "tzsl.models._dap.np",
+                 "sklearn.utils._joblib.joblib", "tzsl.models", "subprocess.Popen", "tzsl.models.nonexistent",
+                 "sklearn.base.clone"):
+        assert not is_trusted_type(name), name
+
+
+def test_payload_that_is_not_skops_is_refused(tmp_path):
+    path = _craft(tmp_path / "junk.tzsl", b"PK\x03\x04 not really a zip")
+    with pytest.raises(ModelBundleError, match=r"junk\.tzsl: the model is not a readable skops file"):
+        load_bundle(path)
+
+
+@pytest.mark.parametrize(("fields", "message"), [
+    ({"metadata": [1, 2]}, "field 'metadata' is not a JSON object"),
+    ({"metadata": "text"}, "field 'metadata' is not a JSON object"),
+    ({"kind": 3}, "field 'kind' is not a JSON string"),
+    ({"kind": "../x"}, "kind '../x' is not lower-case"),
+    ({"format_version": "2"}, "field 'format_version' is not a JSON number"),
+    ({"payload_format": "pickle"}, "payload format 'pickle' is not one of"),
+])
+def test_header_fields_of_the_wrong_type_are_refused(tmp_path, fields, message):
+    import skops.io as sio
+
+    path = _craft(tmp_path / "m.tzsl", sio.dumps({"a": 1}), **fields)
+    with pytest.raises(ModelBundleError, match=message) as info:
+        load_bundle(path)
+    assert "\n" not in str(info.value)
+    with pytest.raises(ModelBundleError, match=message):
+        read_bundle_header(path)
+
+
+def test_header_that_is_json_but_not_an_object(tmp_path):
+    path = tmp_path / "x.tzsl"
+    path.write_bytes(b"TZSL-MODEL-BUNDLE\n[1, 2, 3]\n")
+    with pytest.raises(ModelBundleError, match="header is not a JSON object"):
+        load_bundle(path)
+
+
+def test_old_pickle_bundle_is_refused_unless_trusted(tmp_path, fitted):
+    import io
+
+    import joblib
+
+    buf = io.BytesIO()
+    joblib.dump(fitted[0], buf)
+    path = _craft(tmp_path / "old.tzsl", buf.getvalue(), format_version=1)
+    del_format = json.loads(path.read_bytes().split(b"\n")[1])
+    assert del_format["format_version"] == 1
+    with pytest.raises(ModelBundleError, match=r"old\.tzsl: old bundle format \(version 1\) holding a pickle.*"
+                       r"re-run the train command with --save.*--trust-pickle"):
+        load_bundle(path)
+    model, meta = load_bundle(path, trust_pickle=True)
+    assert model.C == fitted[0].C and meta["bundle"]["payload_format"] == "pickle"
+
+
+def test_arrays_round_trip_as_npz_and_pandas_inside_models(tmp_path):
+    import pandas as pd
+    from sklearn.dummy import DummyClassifier
+
+    arrays = {"state_dict": {"conv.weight": np.arange(6.0).reshape(2, 3)}, "classes": np.array(["a", "b"], dtype=object)}
+    path = save_bundle(tmp_path / "a.tzsl", arrays, kind="deep")
+    got, meta = load_bundle(path)
+    assert meta["bundle"]["payload_format"] == "npz"
+    assert got["state_dict"]["conv.weight"].tolist() == [[0, 1, 2], [3, 4, 5]]
+    assert got["classes"].tolist() == ["a", "b"]
+
+    model = DummyClassifier().fit([[0], [1]], [0, 1])
+    model.table_ = pd.DataFrame({"hard": [1, 0], "name": ["x", "y"]}, index=pd.Index(["cube", "ball"], name="object"))
+    model.series_ = pd.Series([0.5, 0.25], index=["hard", "soft"], name="prior")
+    path = save_bundle(tmp_path / "p.tzsl", model, kind="hand-dap")
+    loaded, meta = load_bundle(path)
+    assert meta["bundle"]["payload_format"] == "skops"
+    pd.testing.assert_frame_equal(loaded.table_, model.table_)
+    pd.testing.assert_series_equal(loaded.series_, model.series_)

@@ -5,29 +5,49 @@ A bundle (by convention ``*.tzsl``) is written by :func:`save_bundle` and read b
 
     TZSL-MODEL-BUNDLE\\n           # magic line
     {"format": ..., ...}\\n         # header: one line of JSON (UTF-8)
-    <payload bytes>               # the model, serialised by joblib (zlib-compressed pickle)
+    <payload bytes>               # the model: a skops file, or an .npz of arrays
 
 The header records the bundle format and its version, the tzsl version that wrote it, the model
 ``kind`` (``"hand-dap"``, ``"phac2-dap"``, ``"deep"``, ...), the creation time, the user's
-``metadata`` (JSON: attribute names, feature layout, fusion, ...), ``payload_sha256`` (sha256 of
-the payload bytes), ``header_sha256`` (sha256 of the canonical JSON of every other header field,
-so metadata edits are caught too) and, when the key is set, ``hmac_sha256`` (see below).
+``metadata`` (a JSON object: attribute names, feature layout, fusion, ...), ``payload_format``,
+``payload_sha256`` (sha256 of the payload bytes), ``header_sha256`` (sha256 of the canonical JSON of
+every other header field, so metadata edits are caught too) and, when the key is set,
+``hmac_sha256`` (see below).
 
-:func:`load_bundle` checks, *before* unpickling anything: the magic line, the header, both
-checksums, the signature (when ``TZSL_BUNDLE_KEY`` is set), the format version, the tzsl
-``major.minor`` version (models are not portable across minor versions: estimator internals and
-the feature layout may change) and the expected kind. Any failure raises
-:class:`~tzsl.exceptions.ModelBundleError` with the file and the reason.
+Payload formats (format version 2) - neither can run code when it is read:
 
-Security
---------
-The payload is a pickle: **loading a bundle runs code chosen by whoever wrote the file. Only load
-bundles you trust.** The sha256 checksums detect corruption (a truncated copy, a flipped byte, a
-hand-edited header); they do not stop an attacker, who can recompute them. For that, set the
-environment variable ``TZSL_BUNDLE_KEY`` to a secret shared by the machines that write and read
-bundles: :func:`save_bundle` then signs the header (which holds the payload's sha256) with
-HMAC-SHA256, and :func:`load_bundle` refuses any bundle whose signature is missing or wrong
-*before* unpickling it. Without the key, signatures are neither made nor checked.
+``"skops"``
+    Estimators (scikit-learn and tzsl models) serialised with :mod:`skops.io`. Loading refuses
+    every type that is not on tzsl's trusted list *before* anything is built, naming the type.
+    Trusted: the types skops trusts by default (builtins, numpy arrays and scalars), classes
+    defined in ``sklearn`` and in ``tzsl.models`` / ``tzsl.features`` (each resolved and checked to
+    be a class defined where its name says, so a name cannot smuggle in a function or a module),
+    and :data:`EXTRA_TRUSTED_TYPES`. pandas tables inside a model are stored as plain columns and
+    rebuilt on load.
+``"npz"``
+    A nested dict of numpy arrays (e.g. the weights of the deep model) as an ``.npz`` archive read
+    with ``allow_pickle=False`` (keys joined with ``/``).
+
+:func:`load_bundle` checks, before deserialising anything: the magic line, the header (a JSON
+object with well-typed fields), both checksums, the signature (when ``TZSL_BUNDLE_KEY`` is set),
+the format version, the tzsl ``major.minor`` version (models are not portable across minor
+versions: estimator internals and the feature layout may change) and the expected kind. Any
+failure raises :class:`~tzsl.exceptions.ModelBundleError`: one line with the file and the reason.
+
+Trust
+-----
+A bundle cannot run code when loaded, so a model file from a colleague is as safe to load as a
+data file. The sha256 checksums detect corruption (a truncated copy, a flipped byte, a hand-edited
+header); they do not stop someone who wants to pass off a different model, since they can be
+recomputed. To be sure a bundle comes from your own machines, set the environment variable
+``TZSL_BUNDLE_KEY`` to a secret shared by the machines that write and read bundles:
+:func:`save_bundle` then signs the header (which holds the payload's sha256) with HMAC-SHA256, and
+:func:`load_bundle` refuses any bundle whose signature is missing or wrong. Without the key,
+signatures are neither made nor checked.
+
+Bundles of format version 1 (tzsl before this format) hold a pickle, which *can* run code: they
+are refused with a message saying how to re-save them, unless ``trust_pickle=True``
+(``tzsl predict --trust-pickle``) is given for a file whose author you trust.
 """
 
 from __future__ import annotations
@@ -43,9 +63,15 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
-import joblib
 import numpy as np
 
+from tzsl._bundle_payload import (
+    EXTRA_TRUSTED_TYPES,
+    TRUSTED_MODULE_PREFIXES,
+    deserialise,
+    is_trusted_type,
+    serialise,
+)
 from tzsl._io import atomic_write
 from tzsl.exceptions import ConfigError, ModelBundleError
 
@@ -53,7 +79,10 @@ __all__ = [
     "BUNDLE_FORMAT",
     "BUNDLE_FORMAT_VERSION",
     "BUNDLE_KEY_ENV",
+    "EXTRA_TRUSTED_TYPES",
+    "TRUSTED_MODULE_PREFIXES",
     "BundleHeader",
+    "is_trusted_type",
     "load_bundle",
     "read_bundle_header",
     "save_bundle",
@@ -61,19 +90,21 @@ __all__ = [
 
 #: Name written in every header.
 BUNDLE_FORMAT = "tzsl-model-bundle"
-#: Version of the file layout described in the module docstring.
-BUNDLE_FORMAT_VERSION = 1
+#: Version of the file layout described in the module docstring (1: pickle payload, refused).
+BUNDLE_FORMAT_VERSION = 2
 #: Environment variable holding the HMAC key (any non-empty text).
 BUNDLE_KEY_ENV = "TZSL_BUNDLE_KEY"
 
 _MAGIC = b"TZSL-MODEL-BUNDLE\n"
 _KIND = re.compile(r"^[a-z0-9][a-z0-9-]*$")
 _MAX_HEADER = 16 * 1024 * 1024  # a header line longer than this is not ours
+_PAYLOAD_FORMATS = ("skops", "npz")
+_PICKLE_VERSION = 1
 
 
 @dataclass(frozen=True)
 class BundleHeader:
-    """What a bundle says about itself (readable without unpickling the model).
+    """What a bundle says about itself (readable without deserialising the model).
 
     Attributes
     ----------
@@ -88,6 +119,8 @@ class BundleHeader:
     payload_sha256 : str
     signed : bool
         Whether the bundle carries an HMAC signature.
+    payload_format : str
+        ``"skops"``, ``"npz"`` or (format version 1) ``"pickle"``.
     """
 
     path: Path
@@ -98,6 +131,7 @@ class BundleHeader:
     metadata: dict
     payload_sha256: str
     signed: bool
+    payload_format: str = "skops"
 
 
 def _tzsl_version() -> str:
@@ -135,6 +169,7 @@ def _signed_fields(header: dict) -> dict:
     return {k: v for k, v in header.items() if k not in ("header_sha256", "hmac_sha256")}
 
 
+# ----------------------------------------------------------------------------- writing
 def save_bundle(
     path: str | Path,
     model: Any,
@@ -150,7 +185,8 @@ def save_bundle(
     path : str or Path
         Destination (``.tzsl`` by convention); its folder is created if needed.
     model : object
-        A fitted model; anything joblib can pickle.
+        A fitted estimator (stored with skops; pandas tables inside it are supported), or a
+        dict (possibly nested) of numpy arrays (stored as ``.npz``, e.g. network weights).
     kind : str
         Model kind, lower-case words joined by ``-`` (``"hand-dap"``, ``"phac2-dap"``, ``"deep"``).
         :func:`load_bundle` can insist on it.
@@ -170,7 +206,7 @@ def save_bundle(
     ConfigError
         Bad ``kind``, metadata that is not JSON-serialisable, or ``path`` exists without ``force``.
     ModelBundleError
-        The model cannot be pickled.
+        The model cannot be serialised.
     """
     path = Path(path)
     if not isinstance(kind, str) or not _KIND.match(kind):
@@ -186,12 +222,12 @@ def save_bundle(
         metadata = json.loads(json.dumps(metadata, default=_jsonable))
     except (TypeError, ValueError) as exc:
         raise ConfigError(f"bundle metadata is not JSON-serialisable: {exc}") from None
-    buffer = io.BytesIO()
     try:
-        joblib.dump(model, buffer, compress=3)
-    except Exception as exc:  # noqa: BLE001 - any pickling failure is reported the same way
+        payload_format, payload = serialise(model)
+    except ConfigError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - any serialisation failure is reported the same way
         raise ModelBundleError(f"{path}: cannot serialise the model ({type(exc).__name__}: {exc})") from None
-    payload = buffer.getvalue()
     header: dict[str, Any] = {
         "format": BUNDLE_FORMAT,
         "format_version": BUNDLE_FORMAT_VERSION,
@@ -199,9 +235,16 @@ def save_bundle(
         "kind": kind,
         "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         "metadata": metadata,
+        "payload_format": payload_format,
         "payload_bytes": len(payload),
         "payload_sha256": hashlib.sha256(payload).hexdigest(),
     }
+    return _write(path, header, payload)
+
+
+def _write(path: Path, header: dict, payload: bytes) -> Path:
+    """Add the checksums (and signature) to ``header`` and write the bundle file."""
+    header = dict(header)
     signed = _canonical(header)
     header["header_sha256"] = hashlib.sha256(signed).hexdigest()
     key = _key()
@@ -209,17 +252,24 @@ def save_bundle(
         header["hmac_sha256"] = hmac.new(key, signed, hashlib.sha256).hexdigest()
     line = json.dumps(header, sort_keys=True, ensure_ascii=True).encode("ascii") + b"\n"
 
-    def _write(tmp: Path) -> None:
+    def _save(tmp: Path) -> None:
         with open(tmp, "wb") as fh:
             fh.write(_MAGIC)
             fh.write(line)
             fh.write(payload)
 
-    return atomic_write(path, _write)
+    return atomic_write(path, _save)
+
+
+# ----------------------------------------------------------------------------- reading
+_HEADER_TYPES: dict[str, type | tuple[type, ...]] = {
+    "format_version": int, "tzsl_version": str, "kind": str, "metadata": dict, "payload_sha256": str,
+    "header_sha256": str,
+}
 
 
 def _read(path: Path) -> tuple[dict, bytes]:
-    """Header and payload bytes of ``path``, with every check that needs no unpickling."""
+    """Header and payload bytes of ``path``, with every check that needs no deserialising."""
 
     def fail(problem: str) -> ModelBundleError:
         return ModelBundleError(f"{path}: {problem}")
@@ -241,18 +291,26 @@ def _read(path: Path) -> tuple[dict, bytes]:
         raise fail("bundle header is truncated or corrupt")
     try:
         header = json.loads(line.decode("ascii"))
-    except (UnicodeDecodeError, json.JSONDecodeError):
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):
         raise fail("bundle header is corrupt (not valid JSON)") from None
-    if not isinstance(header, dict) or header.get("format") != BUNDLE_FORMAT:
+    if not isinstance(header, dict):
+        raise fail("bundle header is not a JSON object")
+    if header.get("format") != BUNDLE_FORMAT:
         raise fail(f"bundle header does not name the format {BUNDLE_FORMAT!r}")
-    required = ("format_version", "tzsl_version", "kind", "metadata", "payload_sha256", "header_sha256")
-    missing = [k for k in required if k not in header]
+    missing = [k for k in _HEADER_TYPES if k not in header]
     if missing:
         raise fail(f"bundle header lacks {missing}; the file is corrupt or not written by tzsl")
+    for key, expected in _HEADER_TYPES.items():
+        value = header[key]
+        if not isinstance(value, expected) or (expected is int and isinstance(value, bool)):
+            what = "a JSON object" if expected is dict else f"a JSON {'number' if expected is int else 'string'}"
+            raise fail(f"bundle header field {key!r} is not {what}")
+    if not _KIND.match(header["kind"]):
+        raise fail(f"bundle kind {header['kind']!r} is not lower-case words joined by '-'")
     signed = _canonical(_signed_fields(header))
-    if not hmac.compare_digest(hashlib.sha256(signed).hexdigest(), str(header["header_sha256"])):
+    if not hmac.compare_digest(hashlib.sha256(signed).hexdigest().encode(), header["header_sha256"].encode()):
         raise fail("bundle header checksum mismatch: the header was edited or is corrupt")
-    if not hmac.compare_digest(hashlib.sha256(payload).hexdigest(), str(header["payload_sha256"])):
+    if not hmac.compare_digest(hashlib.sha256(payload).hexdigest().encode(), header["payload_sha256"].encode()):
         raise fail(
             f"model payload checksum mismatch ({len(payload)} bytes read, {header.get('payload_bytes')} "
             "written): the file is corrupt, truncated or was tampered with"
@@ -261,31 +319,34 @@ def _read(path: Path) -> tuple[dict, bytes]:
     if key is not None:
         if "hmac_sha256" not in header:
             raise fail(f"bundle is not signed, but {BUNDLE_KEY_ENV} is set: refusing to load an unsigned bundle")
-        expected = hmac.new(key, signed, hashlib.sha256).hexdigest()
-        if not hmac.compare_digest(expected, str(header["hmac_sha256"])):
+        expected_mac = hmac.new(key, signed, hashlib.sha256).hexdigest()
+        if not hmac.compare_digest(expected_mac.encode(), str(header["hmac_sha256"]).encode()):
             raise fail(f"bundle signature does not match {BUNDLE_KEY_ENV}: wrong key or tampered file")
-    if header["format_version"] != BUNDLE_FORMAT_VERSION:
-        raise fail(
-            f"bundle format version {header['format_version']!r}; this tzsl reads version {BUNDLE_FORMAT_VERSION}"
-        )
+    version = header["format_version"]
+    if version not in (_PICKLE_VERSION, BUNDLE_FORMAT_VERSION):
+        raise fail(f"bundle format version {version!r}; this tzsl reads version {BUNDLE_FORMAT_VERSION}")
+    if version == BUNDLE_FORMAT_VERSION and header.get("payload_format") not in _PAYLOAD_FORMATS:
+        raise fail(f"bundle payload format {header.get('payload_format')!r} is not one of {list(_PAYLOAD_FORMATS)}")
     return header, payload
 
 
 def _header(path: Path, header: dict) -> BundleHeader:
+    version = int(header["format_version"])
     return BundleHeader(
         path=path,
-        kind=str(header["kind"]),
-        tzsl_version=str(header["tzsl_version"]),
-        format_version=int(header["format_version"]),
+        kind=header["kind"],
+        tzsl_version=header["tzsl_version"],
+        format_version=version,
         created=str(header.get("created", "")),
         metadata=dict(header["metadata"]),
-        payload_sha256=str(header["payload_sha256"]),
+        payload_sha256=header["payload_sha256"],
         signed="hmac_sha256" in header,
+        payload_format="pickle" if version == _PICKLE_VERSION else str(header["payload_format"]),
     )
 
 
 def read_bundle_header(path: str | Path) -> BundleHeader:
-    """The verified header of a bundle, without unpickling its model (safe on untrusted files).
+    """The verified header of a bundle, without deserialising its model.
 
     Raises
     ------
@@ -297,29 +358,32 @@ def read_bundle_header(path: str | Path) -> BundleHeader:
     return _header(path, header)
 
 
-def load_bundle(path: str | Path, expected_kind: str | None = None) -> tuple[Any, dict]:
-    """Load a bundle written by :func:`save_bundle`.
-
-    **Unpickles the model: only load bundles you trust** (see the module docstring).
+def load_bundle(path: str | Path, expected_kind: str | None = None, *, trust_pickle: bool = False) -> tuple[Any, dict]:
+    """Load a bundle written by :func:`save_bundle` (no code is run; see the module docstring).
 
     Parameters
     ----------
     path : str or Path
     expected_kind : str, optional
         Refuse bundles of another kind.
+    trust_pickle : bool, default False
+        Also load bundles of format version 1, whose model is a pickle: **unpickling runs code
+        chosen by whoever wrote the file**; only for files whose author you trust.
 
     Returns
     -------
     model : object
+        The estimator, or for ``"npz"`` payloads the (nested) dict of arrays.
     metadata : dict
         The metadata saved with the model, plus ``"bundle"``: a dict with ``kind``,
-        ``tzsl_version``, ``created``, ``payload_sha256``, ``signed`` and ``path``.
+        ``tzsl_version``, ``created``, ``payload_sha256``, ``payload_format``, ``signed`` and ``path``.
 
     Raises
     ------
     ModelBundleError
         Missing or unreadable file, not a bundle, checksum or signature mismatch, written by a
-        tzsl of another ``major.minor`` version, of the wrong kind, or unpickling failed.
+        tzsl of another ``major.minor`` version, of the wrong kind, an old pickle bundle (without
+        ``trust_pickle``), a type tzsl does not trust, or deserialising failed.
     """
     path = Path(path)
     header, payload = _read(path)
@@ -332,19 +396,34 @@ def load_bundle(path: str | Path, expected_kind: str | None = None) -> tuple[Any
         )
     if expected_kind is not None and info.kind != expected_kind:
         raise ModelBundleError(f"{path}: bundle holds a {info.kind!r} model, expected a {expected_kind!r} model")
-    try:
-        model = joblib.load(io.BytesIO(payload))
-    except Exception as exc:  # noqa: BLE001 - report any unpickling failure as a bundle error
-        raise ModelBundleError(
-            f"{path}: cannot load the model ({type(exc).__name__}: {exc}); a package it needs may be missing"
-        ) from None
+    if info.payload_format == "pickle":
+        model = _load_pickle(path, payload, trust_pickle)
+    else:
+        model = deserialise(path, info.payload_format, payload)
     metadata = dict(info.metadata)
     metadata["bundle"] = {
         "kind": info.kind,
         "tzsl_version": info.tzsl_version,
         "created": info.created,
         "payload_sha256": info.payload_sha256,
+        "payload_format": info.payload_format,
         "signed": info.signed,
         "path": str(path),
     }
     return model, metadata
+
+
+def _load_pickle(path: Path, payload: bytes, trust_pickle: bool) -> Any:
+    if not trust_pickle:
+        raise ModelBundleError(
+            f"{path}: old bundle format (version 1) holding a pickle, which can run code when loaded; "
+            "re-save the model with this tzsl (re-run the train command with --save), or, only if you trust "
+            "whoever wrote the file, load it with 'tzsl predict --trust-pickle'")
+    import joblib  # noqa: PLC0415 - only for explicitly trusted old bundles
+
+    try:
+        return joblib.load(io.BytesIO(payload))
+    except Exception as exc:  # noqa: BLE001 - report any unpickling failure as a bundle error
+        raise ModelBundleError(
+            f"{path}: cannot load the model ({type(exc).__name__}: {exc}); a package it needs may be missing"
+        ) from None

@@ -16,6 +16,10 @@ class TzslError(Exception):
 class DataFileError(TzslError):
     """A data file is missing, unreadable, corrupt or holds unexpected content.
 
+    The message is ``path:line: problem`` (the format compilers and linters use, so editors
+    can jump to it), ``path: problem`` without a line, and ``path, trial T: problem`` when the
+    problem is local to one trial.
+
     Parameters
     ----------
     path : str or Path or None
@@ -24,18 +28,23 @@ class DataFileError(TzslError):
         What is wrong, in words a user can act on.
     trial : str or None
         The trial concerned, when the problem is local to one trial.
+    line : int or None
+        1-based line of a text file (header = line 1), when known.
     """
 
-    def __init__(self, path: str | Path | None, problem: str, trial: str | None = None) -> None:
+    def __init__(
+        self, path: str | Path | None, problem: str, trial: str | None = None, line: int | None = None
+    ) -> None:
         self.path = None if path is None else str(path)
         self.problem = problem
         self.trial = trial
+        self.line = line
         where = []
         if self.path is not None:
-            where.append(self.path)
+            where.append(self.path if line is None else f"{self.path}:{line}")
         if trial is not None:
             where.append(f"trial {trial}")
-        prefix = ": ".join([", ".join(where)]) + ": " if where else ""
+        prefix = ", ".join(where) + ": " if where else ""
         super().__init__(prefix + problem)
 
 

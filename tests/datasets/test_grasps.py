@@ -169,7 +169,7 @@ def test_missing_files_and_table_errors(tmp_path):
         read_grasps(tmp_path)
     assert info.value.trial == "bad_1"
     (tmp_path / "bad_1.npz").write_text("not a zip")
-    with pytest.raises(DataFileError, match="cannot read the grasp file"):
+    with pytest.raises(DataFileError, match="not a readable .npz archive"):
         read_grasps(tmp_path)
     pd.DataFrame({"grasp_id": ["a"], "file": ["a.npz"]}).to_csv(tmp_path / "grasps.csv", index=False)
     with pytest.raises(DataFileError, match=r"missing column\(s\) \['object'\]"):

@@ -172,7 +172,7 @@ def test_signal_file_unreadable(tmp_path):
     folder = signal_dataset(tmp_path, signals={"signals/t4.npz": b"not a zip archive"})
     _one(validate_dataset(folder), "signals/t4.npz", None, "not a readable .npz archive")
     folder = signal_dataset(tmp_path / "b", signals={"signals/t3.csv": b"p1,p2,p3\n1,2,x\n"})
-    _one(validate_dataset(folder), "signals/t3.csv", None, "line 2: channel 'p3' holds 'x'")
+    _one(validate_dataset(folder), "signals/t3.csv", 2, "channel 'p3' holds 'x'")
 
 
 def test_wrong_channel_count_and_names(tmp_path):
@@ -262,7 +262,7 @@ def test_signal_paths_must_stay_inside(tmp_path):
     trials = SIGNAL_TRIALS.replace("signals/t2.npz", "../t2.npz").replace("signals/t4.npz", "signals/t4.mat")
     problems = validate_dataset(signal_dataset(tmp_path, trials=trials))
     assert [(p.file, p.line) for p in problems] == [("trials.csv", 3), ("trials.csv", 5)]
-    assert "relative to the dataset folder" in problems[0].message
+    assert "relative to the folder, inside it" in problems[0].message
     assert "unsupported type '.mat'" in problems[1].message
 
 

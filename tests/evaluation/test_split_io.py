@@ -101,7 +101,7 @@ def test_empty_test_set_and_other_problems_listed_together(tmp_path):
 @pytest.mark.parametrize(
     "text, exc, match",
     [
-        ("split,object\nx,o0\n", DataFileError, r"line 1: header .* lacks column\(s\) \['role'\]"),
+        ("split,object\nx,o0\n", DataFileError, r"\.csv:1: header .* lacks column\(s\) \['role'\]"),
         ("split,object,role\n", DataFileError, "no rows"),
         ("split,object,role,kind,seed\nx,o0,train,random,1\nx,o1,test,random,2\n", SplitError, "kind/seed differ"),
         ("split,object,role,kind,seed\nx,o0,train,random,one\nx,o1,test,random,one\n", SplitError, "seed 'one' is not an integer"),

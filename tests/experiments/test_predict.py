@@ -155,7 +155,7 @@ def test_grasp_folder_input_and_no_contact_grasp_skipped(hand, tmp_path):
 
 @pytest.mark.parametrize("name, content, message", [
     ("g.csv", b"a,b\n", "grasp .npz file or a grasp folder"),
-    ("g.npz", b"not a zip", "cannot read the grasp file"),
+    ("g.npz", b"not a zip", "not a readable .npz archive"),
 ])
 def test_bad_grasp_files(hand, tmp_path, name, content, message):
     root, _, _, classes = hand
@@ -272,3 +272,103 @@ def test_phac2_metadata_is_checked(phac2, tmp_path):
     save_bundle(tmp_path / "c.tzsl", bank, kind=PHAC2_KIND, metadata={"attribute_names": ["hard"]})
     with pytest.raises(ModelBundleError, match="lacks"):
         load_adapter(tmp_path / "c.tzsl")
+
+
+# ---------------------------------------------------------------------------- bad inputs through the CLI
+def _cli(*args):
+    from click.testing import CliRunner
+
+    from tzsl.cli import cli
+    from tzsl.cli._main import _register_commands
+
+    _register_commands()
+    return CliRunner().invoke(cli, [str(a) for a in args])
+
+
+def _one_line_error(result, path):
+    from tzsl.cli._main import EXIT_TZSL_ERROR
+
+    assert result.exit_code == EXIT_TZSL_ERROR, result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and str(path) in lines[0] and "Traceback" not in result.output, result.stderr
+    return lines[0]
+
+
+def _lying_npz(path, shape):
+    import io
+    import zipfile
+
+    buf = io.BytesIO()
+    np.lib.format.write_array_header_1_0(buf, {"descr": "<f8", "fortran_order": False, "shape": shape})
+    with zipfile.ZipFile(path, "w") as zf:
+        zf.writestr("X.npy", buf.getvalue() + b"\0" * 64)
+    return path
+
+
+def test_predict_cli_bad_feature_files_are_one_line(phac2, tmp_path):
+    root, _, _, _, model, classes = phac2
+    truncated = tmp_path / "truncated.npz"
+    truncated.write_bytes((root / "test.npz").read_bytes()[:300])
+    assert "not a readable .npz archive" in _one_line_error(_cli("predict", "--model", model, "--classes", classes,
+                                                                 truncated), truncated)
+    huge = _lying_npz(tmp_path / "huge.npz", (10**7, 10**6))
+    assert "TZSL_MAX_NPZ_BYTES" in _one_line_error(_cli("predict", "--model", model, "--classes", classes, huge), huge)
+    binary = tmp_path / "binary.csv"
+    binary.write_bytes(bytes(range(256)) * 16)
+    assert "not a UTF-8 text file" in _one_line_error(_cli("predict", "--model", model, "--classes", classes,
+                                                           binary), binary)
+
+
+def test_predict_cli_old_pickle_bundle_needs_trust_pickle(phac2, tmp_path):
+    import hashlib
+    import io
+    import json
+
+    import joblib
+
+    import tzsl
+
+    root, bank, _, _, model, classes = phac2
+    raw = model.read_bytes()
+    header = json.loads(raw.split(b"\n")[1])
+    buf = io.BytesIO()
+    joblib.dump(bank, buf)
+    payload = buf.getvalue()
+    header = {k: v for k, v in header.items() if k not in ("header_sha256", "hmac_sha256", "payload_format")}
+    header.update(format_version=1, tzsl_version=tzsl.__version__, payload_bytes=len(payload),
+                  payload_sha256=hashlib.sha256(payload).hexdigest())
+    header["header_sha256"] = hashlib.sha256(json.dumps(header, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+    old = tmp_path / "old.tzsl"
+    old.write_bytes(b"TZSL-MODEL-BUNDLE\n" + json.dumps(header).encode() + b"\n" + payload)
+    message = _one_line_error(_cli("predict", "--model", old, "--classes", classes, root / "test.npz"), old)
+    assert "--save" in message and "--trust-pickle" in message
+    trusted = _cli("predict", "--model", old, "--classes", classes, "--trust-pickle", root / "test.npz")
+    assert trusted.exit_code == 0, trusted.output
+    fresh = _cli("predict", "--model", model, "--classes", classes, root / "test.npz")
+    assert trusted.stdout.splitlines()[1:] == fresh.stdout.splitlines()[1:]
+
+
+def test_predict_cli_refuses_crafted_bundle(phac2, tmp_path):
+    import hashlib
+    import json
+    import os
+
+    import skops.io as sio
+
+    root, _, _, _, model, classes = phac2
+    header = json.loads(model.read_bytes().split(b"\n")[1])
+    payload = sio.dumps({"f": os.system})
+    header = {k: v for k, v in header.items() if k not in ("header_sha256", "hmac_sha256")}
+    header.update(payload_bytes=len(payload), payload_sha256=hashlib.sha256(payload).hexdigest())
+    header["header_sha256"] = hashlib.sha256(json.dumps(header, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+    evil = tmp_path / "evil.tzsl"
+    evil.write_bytes(b"TZSL-MODEL-BUNDLE\n" + json.dumps(header).encode() + b"\n" + payload)
+    assert "does not trust: posix.system" in _one_line_error(
+        _cli("predict", "--model", evil, "--classes", classes, root / "test.npz"), evil)
+
+
+def test_simulate_grasps_out_under_a_file_is_one_line(tmp_path):
+    (tmp_path / "afile").write_text("x")
+    out = tmp_path / "afile" / "grasps"
+    assert "cannot create the grasp folder" in _one_line_error(
+        _cli("simulate-grasps", "--out", out, "--grasps-per-object", 1), out)

@@ -37,8 +37,8 @@ def test_threshold_and_order():
     assert kept.dtypes.eq(np.int64).all()
     kept, dropped = filter_attributes(_table(), min_objects=2)
     assert list(kept.columns) == ["three", "two", "five"] and dropped == ["none"]
-    kept, dropped = filter_attributes(_table(), min_objects=6)
-    assert kept.shape == (5, 0) and len(dropped) == 4
+    with pytest.raises(ConfigError, match="min_objects=6 drops every attribute"):  # an error, not an empty table
+        filter_attributes(_table(), min_objects=6)
 
 
 def test_bool_and_float_tables():

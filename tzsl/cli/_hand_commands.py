@@ -150,20 +150,26 @@ def train_hand(grasps: Path, table: Path | None, out: Path, fusion: str, seed: i
 
 @cli.command("predict", short_help="Classify new grasps with a saved model; fuse several (SC-/DF-MDAP).")
 @click.option("--model", "model_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
-              help="Model bundle (only load bundles you trust: loading runs code from the file).")
+              help="Model bundle written by a train command with --save (loading it runs no code).")
 @click.option("--classes", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="Candidate classes: CSV with the class name first, then one 0/1 column per model attribute.")
 @click.option("--multi-grasp", "mode", type=click.Choice(["sc", "df"]), default="sc", show_default=True,
               help="Multi-grasp fusion: sc = SC-MDAP (stop at k equal decisions), df = DF-MDAP (average grasps).")
 @click.option("--k", type=int, default=3, show_default=True, help="Equal classifications SC-MDAP needs.")
 @click.option("--top", type=int, default=5, show_default=True, help="Classes listed per grasp (0 = all).")
+@click.option("--trust-pickle", is_flag=True,
+              help="Also load an old (format 1) bundle holding a pickle, which runs code from the file: "
+                   "only for a file whose author you trust. Better: re-run the train command with --save.")
 @click.argument("grasp", nargs=-1, required=True, type=click.Path(path_type=Path))
-def predict(model_path: Path, classes: Path, mode: str, k: int, top: int, grasp: tuple[Path, ...]) -> None:
+def predict(model_path: Path, classes: Path, mode: str, k: int, top: int, trust_pickle: bool,
+            grasp: tuple[Path, ...]) -> None:
     """Classify GRASP... (in arrival order) with a saved model and fuse the grasps.
 
     GRASP: for hand models, grasp .npz files (or grasp folders); for PHAC-2 models, feature
     tables written by 'tzsl extract --out' (one trial = one grasp); for deep (CNN + LSTM) models,
-    press videos (.avi) or .npz files with a 'frames' array (5, H, W[, C]).
+    press videos (.avi) or .npz files with a 'frames' array (5, H, W[, C]). An .npz input whose
+    arrays declare more than 2 GiB is refused before loading; raise the limit (in bytes) with the
+    environment variable TZSL_MAX_NPZ_BYTES.
     """
     from tzsl.experiments.predict import (  # noqa: PLC0415
         format_prediction,
@@ -174,7 +180,7 @@ def predict(model_path: Path, classes: Path, mode: str, k: int, top: int, grasp:
 
     if k < 1:
         raise ConfigError(f"--k must be >= 1, got {k}")
-    adapter = load_adapter(model_path)
+    adapter = load_adapter(model_path, trust_pickle=trust_pickle)
     table = read_class_table(classes, adapter.attribute_names)
     result = predict_grasps(adapter, table, list(grasp), mode=mode, k=k)
     click.echo(f"model: {adapter.describe()}")

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from tzsl._io import atomic_write
+from tzsl._io import atomic_write, looks_binary, read_npz
 from tzsl.datasets._types import TRIAL_COLUMNS, FeatureSet
 from tzsl.exceptions import DataFileError
 
@@ -79,32 +79,49 @@ def write_feature_table(features: FeatureSet, path: str | Path) -> list[Path]:
     return feature_table_paths(path)
 
 
+def _read_csv(path: Path) -> pd.DataFrame:
+    """A CSV table, or one line naming the file and what is wrong with it."""
+    try:
+        if looks_binary(path):
+            raise UnicodeDecodeError("utf-8", b"", 0, 1, "binary")
+        return pd.read_csv(path)
+    except UnicodeDecodeError:
+        raise DataFileError(path, "not a UTF-8 text file (a binary file given as CSV?)") from None
+    except pd.errors.EmptyDataError:
+        raise DataFileError(path, "file is empty; expected a header line", line=1) from None
+    except (pd.errors.ParserError, OSError, ValueError) as exc:
+        text = str(exc).strip().splitlines()
+        raise DataFileError(path, f"not a readable CSV table ({text[0] if text else type(exc).__name__})") from None
+
+
 def read_feature_table(path: str | Path, dataset: str = "") -> FeatureSet:
     """Read a table written by :func:`write_feature_table` back into a :class:`FeatureSet`."""
     path = Path(path)
     if not path.is_file():
         raise DataFileError(path, "feature table not found")
     if path.suffix == ".npz":
-        try:
-            with np.load(path, allow_pickle=False) as npz:
-                data = {k: npz[k] for k in npz.files}
-        except (OSError, ValueError) as exc:
-            raise DataFileError(path, f"not a readable .npz feature table ({exc})") from exc
+        data = read_npz(path)
         missing = {"X", "sensors", "feature_names", "attributes", *TRIAL_COLUMNS} - set(data)
         if missing:
             raise DataFileError(path, f"missing arrays {sorted(missing)}")
-        trials = pd.DataFrame({c: data[c] for c in TRIAL_COLUMNS})
-        for column in ("trial_id", "object_name"):
-            trials[column] = trials[column].astype(str)
-        attributes = pd.DataFrame(
-            data["attributes"], index=pd.Index(data["attribute_objects"], name="object_name"),
-            columns=list(data["attribute_names"]),
-        )
-        X = data["X"].astype(float)
+        try:
+            trials = pd.DataFrame({c: data[c] for c in TRIAL_COLUMNS})
+            for column in ("trial_id", "object_name"):
+                trials[column] = trials[column].astype(str)
+            attributes = pd.DataFrame(
+                data["attributes"], index=pd.Index(data["attribute_objects"], name="object_name"),
+                columns=list(data["attribute_names"]),
+            )
+            X = data["X"].astype(float)
+        except (KeyError, TypeError, ValueError) as exc:
+            raise DataFileError(path, f"arrays do not form a feature table ({type(exc).__name__}: "
+                                f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
+        if X.ndim != 3 or X.shape[0] != len(trials):
+            raise DataFileError(path, f"X has shape {X.shape}; expected ({len(trials)}, n_sensors, n_features)")
         sensors = tuple(str(s) for s in data["sensors"])
         names = tuple(str(s) for s in data["feature_names"])
     elif path.suffix == ".csv":
-        frame = pd.read_csv(path)
+        frame = _read_csv(path)
         missing = [c for c in (*TRIAL_COLUMNS, "sensor") if c not in frame.columns]
         if missing:
             raise DataFileError(path, f"missing columns {missing}")
@@ -118,12 +135,19 @@ def read_feature_table(path: str | Path, dataset: str = "") -> FeatureSet:
         full = pd.MultiIndex.from_product([trial_order, sensors])
         if len(full) != len(wide):
             raise DataFileError(path, "every trial needs exactly one row per sensor")
-        X = wide.loc[full, list(names)].to_numpy(dtype=float).reshape(len(trial_order), len(sensors), len(names))
+        try:
+            X = wide.loc[full, list(names)].to_numpy(dtype=float)
+        except ValueError:
+            raise DataFileError(path, "a feature column holds text that is not a number") from None
+        X = X.reshape(len(trial_order), len(sensors), len(names))
         trials = frame.drop_duplicates("trial_id")[list(TRIAL_COLUMNS)].reset_index(drop=True)
         sidecar = _attributes_sidecar(path)
         if not sidecar.is_file():
             raise DataFileError(sidecar, "attribute table missing (written beside the feature CSV)")
-        attributes = pd.read_csv(sidecar).set_index("object_name")
+        attributes = _read_csv(sidecar)
+        if "object_name" not in attributes.columns:
+            raise DataFileError(sidecar, "header lacks the column 'object_name'", line=1)
+        attributes = attributes.set_index("object_name")
     else:
         raise DataFileError(path, f"unsupported feature table type {path.suffix!r}; use .csv or .npz")
     if not np.isfinite(X).all():

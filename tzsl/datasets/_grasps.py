@@ -57,7 +57,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from tzsl._io import atomic_write
+from tzsl._io import atomic_write, ensure_folder, read_npz
+from tzsl.datasets._paths import check_inside, resolve_inside
 from tzsl.datasets._types import BiotacSignals
 from tzsl.exceptions import DataFileError
 
@@ -272,7 +273,7 @@ def write_grasps(
             )
         seen[name] = grasp.grasp_id
         rows.append((grasp.grasp_id, grasp.object_name, name))
-    folder.mkdir(parents=True, exist_ok=True)
+    ensure_folder(folder, "grasp folder")
     save = np.savez_compressed if compress else np.savez
     for grasp, (_, _, name) in zip(grasps, rows, strict=True):
         arrays = grasp_arrays(grasp)
@@ -346,6 +347,9 @@ def read_grasp_table(folder: str | Path) -> pd.DataFrame:
     """Read and check ``grasps.csv`` of a grasp folder (columns :data:`GRASP_COLUMNS`, as str)."""
     folder = Path(folder)
     path = folder / GRASP_TABLE
+    outside = check_inside(folder, GRASP_TABLE)
+    if outside is not None:
+        raise DataFileError(path, outside)
     if not path.is_file():
         raise DataFileError(path, f"grasp table not found (a grasp folder needs {GRASP_TABLE})")
     try:
@@ -389,6 +393,7 @@ def read_grasps(folder: str | Path, grasp_ids: Sequence[str] | None = None) -> l
     """
     folder = Path(folder)
     table = read_grasp_table(folder)
+    table = table.assign(_line=np.arange(2, len(table) + 2))  # header = line 1 (blank lines not counted)
     if grasp_ids is not None:
         indexed = table.set_index("grasp_id", drop=False)
         unknown = [g for g in grasp_ids if g not in indexed.index]
@@ -396,16 +401,18 @@ def read_grasps(folder: str | Path, grasp_ids: Sequence[str] | None = None) -> l
             raise DataFileError(folder / GRASP_TABLE, f"unknown grasp id(s) {unknown}")
         table = indexed.loc[list(grasp_ids)].reset_index(drop=True)
     grasps = []
-    for grasp_id, object_name, file in table[list(GRASP_COLUMNS)].itertuples(index=False):
-        path = folder / file
+    for grasp_id, object_name, file, line in table[[*GRASP_COLUMNS, "_line"]].itertuples(index=False):
+        path, reason = resolve_inside(folder, file, "file")
+        if path is None:
+            raise DataFileError(folder / GRASP_TABLE, f"grasp {grasp_id!r}: {reason}", line=int(line))
+        shown = folder / file
         if not path.is_file():
-            raise DataFileError(path, "grasp file not found (named in grasps.csv)", trial=grasp_id)
+            raise DataFileError(shown, "grasp file not found (named in grasps.csv)", trial=grasp_id)
         try:
-            with np.load(path, allow_pickle=False) as npz:
-                arrays = {name: npz[name] for name in npz.files}
-        except (OSError, ValueError, EOFError) as exc:
-            raise DataFileError(path, f"cannot read the grasp file as .npz ({exc})", trial=grasp_id) from None
-        grasps.append(grasp_from_arrays(arrays, grasp_id, object_name, str(path)))
+            arrays = read_npz(path, name=shown)
+        except DataFileError as exc:
+            raise DataFileError(shown, exc.problem, trial=grasp_id) from None
+        grasps.append(grasp_from_arrays(arrays, grasp_id, object_name, str(shown)))
     return grasps
 
 

@@ -1,9 +1,10 @@
 """Check a plain-file dataset folder and list every problem, each with file and line.
 
 The format itself is described in ``data/README.md`` ("Plain-file dataset format") and by
-``tzsl formats``; :mod:`tzsl.datasets._plain` reads and writes it. This module holds the
-format's vocabulary (file names, reserved columns, ``dataset.toml`` keys) and the one scan
-both the validator and the reader use: :func:`scan_dataset` parses every file, collects a
+``tzsl formats``; :mod:`tzsl.datasets._plain` reads and writes it. The format's vocabulary
+(file names, reserved columns, ``dataset.toml`` keys) and table readers are in
+:mod:`tzsl.datasets._tables`, signal files in :mod:`tzsl.datasets._signal_files` (both
+re-exported here). This module holds the one scan both the validator and the reader use: :func:`scan_dataset` parses every file, collects a
 :class:`Problem` for everything wrong (it never stops at the first) and returns what it
 could parse.
 
@@ -13,72 +14,44 @@ skipped but counted). Rows must not contain line breaks inside quoted cells.
 
 from __future__ import annotations
 
-import csv
 import math
 import os
-import re
-import tomllib
-from collections.abc import Collection, Sequence
+from collections.abc import Collection
 from dataclasses import dataclass, field
-from pathlib import Path, PurePosixPath
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from tzsl.exceptions import DataFileError
-
-CLASSES_FILE = "classes.csv"
-TRIALS_FILE = "trials.csv"
-GROUPS_FILE = "attribute_groups.csv"
-SPLITS_FILE = "splits.csv"
-SETTINGS_FILE = "dataset.toml"
-
-#: First column of ``classes.csv``.
-CLASS_COLUMN = "class"
-#: Columns of ``trials.csv`` that are never features.
-TRIAL_RESERVED_COLUMNS: tuple[str, ...] = (
-    "trial_id", "class", "object", "sensor", "signal_file", "trial_index", "object_id",
+from tzsl.datasets._signal_files import (  # noqa: F401 - re-exported for the reader
+    check_signal_values,
+    read_signal_file,
+    resolve_signal_path,
 )
-#: Sensor name of datasets whose ``trials.csv`` has no ``sensor`` column.
-DEFAULT_SENSOR = "sensor_0"
-#: Suffixes of per-trial signal files.
-SIGNAL_SUFFIXES: tuple[str, ...] = (".npz", ".csv")
-#: Text accepted in an attribute cell of ``classes.csv``.
-BINARY_TEXT = {"0": 0, "1": 1, "0.0": 0, "1.0": 1}
-#: ``dataset.toml``: table -> key -> expected type ("" is the top level).
-SETTINGS_SCHEMA: dict[str, dict[str, type]] = {
-    "": {"name": str},
-    "classes": {"allow_identical_rows": bool},
-    "signals": {"channels": list, "baseline_rows": int, "statistics": list},
-}
-SPLIT_COLUMNS = ("split", "object", "role")
-SPLIT_ROLES = ("train", "test")
-
-
-@dataclass(frozen=True)
-class Problem:
-    """One problem in a dataset folder.
-
-    Attributes
-    ----------
-    file : str
-        Path of the file relative to the dataset folder (``"trials.csv"``,
-        ``"signals/t01.npz"``).
-    line : int or None
-        1-based line of the text file (header = line 1); None when the problem concerns the
-        whole file or a binary file.
-    message : str
-        What is wrong, in words a user can act on.
-    """
-
-    file: str
-    line: int | None
-    message: str
-
-    def __str__(self) -> str:
-        where = self.file if self.line is None else f"{self.file}:{self.line}"
-        return f"{where}: {self.message}"
-
+from tzsl.datasets._tables import (  # noqa: F401 - the format's vocabulary, re-exported
+    BINARY_TEXT,
+    CLASS_COLUMN,
+    CLASSES_FILE,
+    DEFAULT_SENSOR,
+    GROUPS_FILE,
+    SETTINGS_FILE,
+    SETTINGS_SCHEMA,
+    SIGNAL_SUFFIXES,
+    SPLIT_COLUMNS,
+    SPLIT_ROLES,
+    SPLITS_FILE,
+    TRIAL_RESERVED_COLUMNS,
+    TRIALS_FILE,
+    TRIALS_PARQUET,
+    Problem,
+    find_table,
+    key_line,
+    read_rows,
+    to_float,
+    read_settings,
+    trials_file_name,
+)
+from tzsl.exceptions import DataFileError
 
 @dataclass
 class ScannedDataset:
@@ -126,244 +99,11 @@ class ScannedDataset:
     signal_rows: np.ndarray | None = None
 
 
-# --------------------------------------------------------------------------- helpers
-
-
-def _read_rows(
-    folder: Path, name: str, problems: list[Problem], required: bool = True
-) -> tuple[list[str], list[tuple[int, list[str]]]] | None:
-    """Header and (line, cells) rows of a CSV file; None if absent or unreadable."""
-    path = folder / name
-    if not path.is_file():
-        if required:
-            problems.append(Problem(name, None, f"file not found in {folder}"))
-        return None
-    rows: list[tuple[int, list[str]]] = []
-    try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
-            reader = csv.reader(fh)
-            header = next(reader, None)
-            if header is None or not any(h.strip() for h in header):
-                problems.append(Problem(name, 1, "file is empty; expected a header line"))
-                return None
-            header = [h.strip() for h in header]
-            for row in reader:
-                if not any(cell.strip() for cell in row):
-                    continue
-                line = reader.line_num
-                if len(row) != len(header):
-                    problems.append(Problem(name, line, f"row has {len(row)} fields; the header has {len(header)}"))
-                    continue
-                rows.append((line, [cell.strip() for cell in row]))
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        problems.append(Problem(name, None, f"cannot read the file: {exc}"))
-        return None
-    empty = [i + 1 for i, h in enumerate(header) if not h]
-    if empty:
-        problems.append(Problem(name, 1, f"header column(s) {empty} have no name"))
-    dup = sorted({h for h in header if h and header.count(h) > 1})
-    if dup:
-        problems.append(Problem(name, 1, f"header names column(s) {dup} more than once"))
-    return header, rows
-
-
-def _to_float(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Text cells -> float64 values (exact round trip) and a mask of cells that are not numbers."""
-    cells = np.asarray(cells, dtype=str)
-    try:
-        return cells.astype(np.float64), np.zeros(cells.shape, dtype=bool)
-    except ValueError:
-        pass
-    flat = cells.reshape(-1)
-    values = np.full(flat.shape, np.nan)
-    bad = np.zeros(flat.shape, dtype=bool)
-    for k, text in enumerate(flat):  # only reached when some cell is not a number
-        try:
-            values[k] = float(text)
-        except ValueError:
-            bad[k] = True
-    return values.reshape(cells.shape), bad.reshape(cells.shape)
-
-
-def _key_line(folder: Path, table: str, key: str) -> int | None:
-    """Line of ``key = ...`` inside ``[table]`` of dataset.toml (best effort, for messages)."""
-    try:
-        lines = (folder / SETTINGS_FILE).read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError):
-        return None
-    current = ""
-    for i, text in enumerate(lines, start=1):
-        stripped = text.strip()
-        header = re.match(r"^\[\s*([^\]]+?)\s*\]", stripped)
-        if header:
-            current = header.group(1)
-        elif current == table and re.match(rf"^{re.escape(key)}\s*=", stripped):
-            return i
-    return None
-
-
-def _find_table(folder: Path, table: str) -> int | None:
-    try:
-        lines = (folder / SETTINGS_FILE).read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError):
-        return None
-    for i, text in enumerate(lines, start=1):
-        if re.match(rf"^\[\s*{re.escape(table)}\s*\]", text.strip()):
-            return i
-    return None
-
-
-def read_settings(folder: Path, problems: list[Problem]) -> dict:
-    """``dataset.toml`` checked against :data:`SETTINGS_SCHEMA` (``{}`` without the file)."""
-    path = folder / SETTINGS_FILE
-    if not path.is_file():
-        return {}
-    try:
-        with open(path, "rb") as fh:
-            settings = tomllib.load(fh)
-    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        match = re.search(r"line (\d+)", str(exc))
-        problems.append(Problem(SETTINGS_FILE, int(match.group(1)) if match else None, f"not valid TOML: {exc}"))
-        return {}
-    clean: dict = {}
-    for key, value in settings.items():
-        if key in SETTINGS_SCHEMA[""]:
-            table, entries = "", {key: value}
-        elif key in SETTINGS_SCHEMA and key:
-            if not isinstance(value, dict):
-                problems.append(Problem(SETTINGS_FILE, _key_line(folder, "", key), f"{key!r} must be a table [{key}]"))
-                continue
-            table, entries = key, value
-        else:
-            known = [k for k in SETTINGS_SCHEMA[""]] + [f"[{t}]" for t in SETTINGS_SCHEMA if t]
-            problems.append(Problem(SETTINGS_FILE, _key_line(folder, "", key), f"unknown key {key!r}; known: {known}"))
-            continue
-        for sub, val in entries.items():
-            where = _key_line(folder, table, sub)
-            expected = SETTINGS_SCHEMA[table].get(sub)
-            label = f"[{table}] {sub}" if table else sub
-            if expected is None:
-                problems.append(Problem(SETTINGS_FILE, where, f"unknown key {label!r}; known in "
-                                        f"{'[' + table + ']' if table else 'the top level'}: "
-                                        f"{sorted(SETTINGS_SCHEMA[table])}"))
-                continue
-            ok = isinstance(val, expected) and not (expected is int and isinstance(val, bool))
-            if expected is list and ok:
-                ok = len(val) > 0 and all(isinstance(v, str) and v for v in val) and len(set(val)) == len(val)
-            if expected is int and ok:
-                ok = val >= 0
-            if not ok:
-                want = {str: "a string", bool: "true or false", int: "an integer >= 0",
-                        list: "a non-empty list of distinct non-empty strings"}[expected]
-                problems.append(Problem(SETTINGS_FILE, where, f"{label} is {val!r}; expected {want}"))
-                continue
-            if table:
-                clean.setdefault(table, {})[sub] = val
-            else:
-                clean[sub] = val
-    return clean
-
-
-def read_signal_file(path: str | os.PathLike) -> tuple[tuple[str, ...], np.ndarray]:
-    """Read one per-trial signal file.
-
-    Parameters
-    ----------
-    path : path-like
-        ``.npz``: one 1-D numeric array per channel, all of the same length, named by the
-        channel (channel order = order in the archive); ``.csv``: a header line of channel
-        names, then one line per time step.
-
-    Returns
-    -------
-    channels : tuple of str, length n_channels
-    values : ndarray of float64, shape (n_rows, n_channels)
-        May hold NaN/inf (checked by the caller, who knows the line numbers).
-
-    Raises
-    ------
-    DataFileError
-        Unreadable file, wrong suffix, no channels, arrays that are not 1-D numeric of one
-        length, non-numeric CSV cells.
-    """
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix == ".npz":
-        try:
-            with np.load(path, allow_pickle=False) as npz:
-                arrays = {name: npz[name] for name in npz.files}
-        except Exception as exc:  # zipfile/numpy raise many types for corrupt archives
-            raise DataFileError(path, f"not a readable .npz archive ({type(exc).__name__}: {exc})") from None
-        if not arrays:
-            raise DataFileError(path, "archive holds no channel arrays")
-        lengths = {}
-        for name, arr in arrays.items():
-            if arr.ndim != 1 or arr.dtype.kind not in "iufb":
-                raise DataFileError(path, f"channel {name!r} has shape {arr.shape} and dtype {arr.dtype}; "
-                                    "expected a 1-D numeric array per channel")
-            lengths[name] = arr.shape[0]
-        if len(set(lengths.values())) > 1:
-            raise DataFileError(path, f"channels have different lengths: {lengths}")
-        channels = tuple(arrays)
-        values = np.column_stack([arrays[c].astype(np.float64) for c in channels])
-        return channels, values
-    if suffix == ".csv":
-        try:
-            frame = pd.read_csv(path, skip_blank_lines=False)
-        except Exception as exc:  # pandas: EmptyDataError, ParserError, UnicodeDecodeError, OSError
-            raise DataFileError(path, f"not a readable CSV file ({type(exc).__name__}: {exc})") from None
-        channels = tuple(str(c).strip() for c in frame.columns)
-        if not channels:
-            raise DataFileError(path, "no channel columns in the header")
-        if len(set(channels)) != len(channels) or any(c.startswith("Unnamed:") for c in channels):
-            raise DataFileError(path, f"line 1: channel names must be non-empty and distinct, got {list(channels)}")
-        for c, col in zip(channels, frame.columns):
-            if not pd.api.types.is_numeric_dtype(frame[col]):
-                values = pd.to_numeric(frame[col], errors="coerce")
-                bad = int(np.flatnonzero(values.isna() & frame[col].notna())[0])
-                raise DataFileError(path, f"line {bad + 2}: channel {c!r} holds {frame[col].iloc[bad]!r}, not a number")
-        return channels, frame.to_numpy(dtype=np.float64)
-    raise DataFileError(path, f"unsupported signal file type {path.suffix!r}; use {' or '.join(SIGNAL_SUFFIXES)}")
-
-
-def check_signal_values(
-    rel: str, channels: Sequence[str], values: np.ndarray, csv_file: bool, min_rows: int = 1
-) -> list[Problem]:
-    """Problems of a read signal: too few rows, NaN/inf (first one located; counted)."""
-    problems = []
-    if values.shape[0] < min_rows:
-        problems.append(Problem(rel, None, f"signal has {values.shape[0]} rows; at least {min_rows} needed"))
-    bad = ~np.isfinite(values)
-    if bad.any():
-        row, col = (int(v) for v in np.argwhere(bad)[0])
-        what = "NaN or empty" if np.isnan(values[row, col]) else "infinite"
-        count = int(bad.sum())
-        if csv_file:
-            problems.append(Problem(rel, row + 2, f"channel {channels[col]!r} is {what} "
-                                    f"({count} non-finite value(s) in the file)"))
-        else:
-            problems.append(Problem(rel, None, f"channel {channels[col]!r} is {what} at row {row} "
-                                    f"({count} non-finite value(s) in the file)"))
-    return problems
-
-
-def resolve_signal_path(folder: Path, text: str) -> tuple[Path | None, str | None]:
-    """``signal_file`` cell -> absolute path, or None and the reason it is refused."""
-    if not text:
-        return None, "signal_file is empty"
-    pure = PurePosixPath(text.replace("\\", "/"))
-    if pure.is_absolute() or re.match(r"^[A-Za-z]:", text) or ".." in pure.parts:
-        return None, f"signal_file {text!r} must be a path relative to the dataset folder, inside it"
-    if pure.suffix.lower() not in SIGNAL_SUFFIXES:
-        return None, f"signal_file {text!r}: unsupported type {pure.suffix!r}; use {' or '.join(SIGNAL_SUFFIXES)}"
-    return folder.joinpath(*pure.parts), None
-
-
 # --------------------------------------------------------------------------- the scan
 
 
 def _scan_classes(folder: Path, settings: dict, problems: list[Problem], scan: ScannedDataset) -> None:
-    parsed = _read_rows(folder, CLASSES_FILE, problems)
+    parsed = read_rows(folder, CLASSES_FILE, problems)
     if parsed is None:
         return
     header, rows = parsed
@@ -405,6 +145,12 @@ def _scan_classes(folder: Path, settings: dict, problems: list[Problem], scan: S
     table = pd.DataFrame(np.array(values, dtype=np.int64), index=pd.Index(names, name=CLASS_COLUMN),
                          columns=pd.Index(attributes, name="attribute"))
     valid = (table.to_numpy() >= 0).all(axis=1)
+    if valid.all() and len(valid) >= 2:  # judged only on a table without bad entries
+        rows = table.to_numpy()
+        for j in np.flatnonzero((rows == rows[0]).all(axis=0)):
+            problems.append(Problem(CLASSES_FILE, 1, f"attribute {attributes[j]!r} is {rows[0, j]} for every class; "
+                                    "no attribute classifier can be trained on one value: remove the column "
+                                    "(or add a class that has the other value)"))
     if not settings.get("classes", {}).get("allow_identical_rows", False):
         first: dict[tuple, int] = {}
         for i in np.flatnonzero(valid):
@@ -421,7 +167,7 @@ def _scan_classes(folder: Path, settings: dict, problems: list[Problem], scan: S
 
 
 def _scan_groups(folder: Path, problems: list[Problem], scan: ScannedDataset) -> None:
-    parsed = _read_rows(folder, GROUPS_FILE, problems, required=False)
+    parsed = read_rows(folder, GROUPS_FILE, problems, required=False)
     if parsed is None:
         return
     header, rows = parsed
@@ -463,28 +209,29 @@ def _int_cell(text: str) -> int | None:
 
 def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: ScannedDataset,
                  check_signals: bool) -> None:
-    parsed = _read_rows(folder, TRIALS_FILE, problems)
+    tname = trials_file_name(folder)
+    parsed = read_rows(folder, tname, problems)
     if parsed is None:
         return
     header, rows = parsed
     missing = [c for c in ("trial_id", "class") if c not in header]
     if missing:
-        problems.append(Problem(TRIALS_FILE, 1, f"header lacks the column(s) {missing}"))
+        problems.append(Problem(tname, 1, f"header lacks the column(s) {missing}"))
         return
     col = {name: i for i, name in enumerate(header)}
     features = [h for h in header if h and h not in TRIAL_RESERVED_COLUMNS]
     has_signals = "signal_file" in col
     if has_signals and features:
-        problems.append(Problem(TRIALS_FILE, 1, f"has a signal_file column and feature columns {features}; "
+        problems.append(Problem(tname, 1, f"has a signal_file column and feature columns {features}; "
                                 "a dataset has one or the other (every non-reserved column is a feature)"))
         return
     if not has_signals and not features:
-        problems.append(Problem(TRIALS_FILE, 1, "no feature columns and no signal_file column"))
+        problems.append(Problem(tname, 1, "no feature columns and no signal_file column"))
         return
     scan.kind = "signals" if has_signals else "columns"
     classes = None if scan.classes is None else set(scan.classes.index)
     if not rows:
-        problems.append(Problem(TRIALS_FILE, None, "no trial rows"))
+        problems.append(Problem(tname, None, "no trial rows"))
         return
 
     def cell(cells: list[str], name: str) -> str | None:
@@ -504,31 +251,31 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
         empty = [n for n, v in (("trial_id", tid), ("class", cls), ("object", obj), ("sensor", sensor))
                  if v is not None and not v]
         if empty:
-            problems.append(Problem(TRIALS_FILE, line, f"empty {', '.join(empty)} cell"))
+            problems.append(Problem(tname, line, f"empty {', '.join(empty)} cell"))
             continue
         obj = obj if obj is not None else cls
         if classes is not None and cls not in classes:
-            problems.append(Problem(TRIALS_FILE, line, f"trial {tid!r}: class {cls!r} is not in {CLASSES_FILE}"))
+            problems.append(Problem(tname, line, f"trial {tid!r}: class {cls!r} is not in {CLASSES_FILE}"))
         index_text, oid_text = cell(cells, "trial_index"), cell(cells, "object_id")
         trial_index = None if index_text is None else _int_cell(index_text)
         object_id = None if oid_text is None else _int_cell(oid_text)
         if index_text is not None and trial_index is None:
-            problems.append(Problem(TRIALS_FILE, line, f"trial {tid!r}: trial_index {index_text!r} is not an integer"))
+            problems.append(Problem(tname, line, f"trial {tid!r}: trial_index {index_text!r} is not an integer"))
         if oid_text is not None and object_id is None:
-            problems.append(Problem(TRIALS_FILE, line, f"trial {tid!r}: object_id {oid_text!r} is not an integer"))
+            problems.append(Problem(tname, line, f"trial {tid!r}: object_id {oid_text!r} is not an integer"))
         if (tid, sensor) in row_of:
             prev = kept_rows[row_of[(tid, sensor)]][0]
             what = f"trial id {tid!r}" + (f" with sensor {sensor!r}" if "sensor" in col else "")
-            problems.append(Problem(TRIALS_FILE, line, f"duplicate {what} (also line {prev})"))
+            problems.append(Problem(tname, line, f"duplicate {what} (also line {prev})"))
             continue
         if obj in object_class and object_class[obj][0] != cls:
             prev_cls, prev_line = object_class[obj]
-            problems.append(Problem(TRIALS_FILE, line, f"object {obj!r} has class {cls!r} here but {prev_cls!r} "
+            problems.append(Problem(tname, line, f"object {obj!r} has class {cls!r} here but {prev_cls!r} "
                                     f"on line {prev_line}; an object belongs to one class"))
         object_class.setdefault(obj, (cls, line))
         if object_id is not None:
             if obj in object_ids and object_ids[obj][0] != object_id:
-                problems.append(Problem(TRIALS_FILE, line, f"object {obj!r} has object_id {object_id} here but "
+                problems.append(Problem(tname, line, f"object {obj!r} has object_id {object_id} here but "
                                         f"{object_ids[obj][0]} on line {object_ids[obj][1]}"))
             object_ids.setdefault(obj, (object_id, line))
         if tid in trial_pos:
@@ -537,7 +284,7 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
                                        ("trial_index", trial_index, first["trial_index"]),
                                        ("object_id", object_id, first["object_id"])) if a != b]
             if diffs:
-                problems.append(Problem(TRIALS_FILE, line, f"trial {tid!r}: {', '.join(diffs)} differ(s) from its "
+                problems.append(Problem(tname, line, f"trial {tid!r}: {', '.join(diffs)} differ(s) from its "
                                         f"row on line {first['line']}"))
         else:
             trial_pos[tid] = len(meta)
@@ -556,7 +303,7 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
         where[trial_pos[tid], sensors[sensor]] = k
     for i, s in np.argwhere(where < 0):
         have = [sensor_names[j] for j in np.flatnonzero(where[i] >= 0)]
-        problems.append(Problem(TRIALS_FILE, meta[i]["line"], f"trial {meta[i]['trial_id']!r} has no row for "
+        problems.append(Problem(tname, meta[i]["line"], f"trial {meta[i]['trial_id']!r} has no row for "
                                 f"sensor {sensor_names[s]!r} (it has {have}; every trial needs one row per sensor)"))
     lines = np.array([kept_rows[k][0] if k >= 0 else 0 for k in where.reshape(-1)]).reshape(where.shape)
     scan.sensors = sensor_names
@@ -570,7 +317,7 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
         idx = [col[f] for f in features]
         cells = np.array([[kept_rows[k][1][j] for j in idx] if k >= 0 else [""] * len(idx)
                           for k in where.reshape(-1)], dtype=str)
-        values, bad = _to_float(cells)
+        values, bad = to_float(cells)
         present = (where.reshape(-1) >= 0)[:, None]
         for r, j in np.argwhere((bad | ~np.isfinite(values)) & present):
             text = str(cells[r, j])
@@ -582,7 +329,7 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
             else:
                 msg = f"is {text} (NaN/inf)"
             tid = meta[r // n_sensors]["trial_id"]
-            problems.append(Problem(TRIALS_FILE, line, f"trial {tid!r}: feature {features[j]!r} {msg}"))
+            problems.append(Problem(tname, line, f"trial {tid!r}: feature {features[j]!r} {msg}"))
         scan.X = np.where(bad, np.nan, values).reshape(n_trials, n_sensors, len(features))
         scan.feature_names = tuple(features)
         return
@@ -601,17 +348,17 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
         tid = meta[i]["trial_id"]
         path, reason = resolve_signal_path(folder, text)
         if path is None:
-            problems.append(Problem(TRIALS_FILE, line, f"trial {tid!r}: {reason}"))
+            problems.append(Problem(tname, line, f"trial {tid!r}: {reason}"))
             continue
         if not path.is_file():
-            problems.append(Problem(TRIALS_FILE, line, f"trial {tid!r}: signal file {text!r} not found"))
+            problems.append(Problem(tname, line, f"trial {tid!r}: signal file {text!r} not found"))
             continue
         if not check_signals and scan.channels is not None:
             continue
         try:
             channels, values = read_signal_file(path)
         except DataFileError as exc:
-            problems.append(Problem(text, None, f"{exc.problem} (trials.csv line {line})"))
+            problems.append(Problem(text, exc.line, f"{exc.problem} ({tname} line {line})"))
             continue
         n_rows[i, s] = values.shape[0]
         if scan.channels is None:
@@ -627,7 +374,7 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
             if extra and configured is None:
                 detail.append(f"extra {extra}")
             problems.append(Problem(text, None, f"has {len(channels)} channel(s), expected {len(expected)} as in "
-                                    f"{origin}: {'; '.join(detail)} (trials.csv line {line})"))
+                                    f"{origin}: {'; '.join(detail)} ({tname} line {line})"))
             continue
         if not check_signals:
             continue
@@ -638,7 +385,7 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
 
 
 def _scan_splits(folder: Path, problems: list[Problem], scan: ScannedDataset) -> None:
-    parsed = _read_rows(folder, SPLITS_FILE, problems, required=False)
+    parsed = read_rows(folder, SPLITS_FILE, problems, required=False)
     if parsed is None:
         return
     header, rows = parsed
@@ -685,7 +432,7 @@ def scan_dataset(folder: str | os.PathLike, *, check_signals: bool = True) -> tu
     _scan_groups(folder, problems, scan)
     _scan_trials(folder, scan.settings, problems, scan, check_signals)
     if scan.kind == "columns" and "signals" in scan.settings:
-        problems.append(Problem(SETTINGS_FILE, _key_line(folder, "", "signals") or _find_table(folder, "signals"),
+        problems.append(Problem(SETTINGS_FILE, key_line(folder, "", "signals") or find_table(folder, "signals"),
                                 f"[signals] settings given but {TRIALS_FILE} has feature columns, not signal_file"))
     _scan_splits(folder, problems, scan)
     return scan, problems
@@ -723,6 +470,6 @@ def validate_dataset(
     if statistics is not None and names:
         unknown = [s for s in names if s not in statistics]
         if unknown:
-            problems.append(Problem(SETTINGS_FILE, _key_line(Path(folder), "signals", "statistics"),
+            problems.append(Problem(SETTINGS_FILE, key_line(Path(folder), "signals", "statistics"),
                                     f"unknown statistic(s) {unknown}; choose from {', '.join(statistics)}"))
     return problems

@@ -157,8 +157,8 @@ def read_splits_csv(
             missing = [c for c in REQUIRED_COLUMNS if c not in header]
             if missing:
                 raise DataFileError(
-                    path, f"line 1: header {header} lacks column(s) {missing}; expected "
-                    f"{list(REQUIRED_COLUMNS)} (+ optional {list(OPTIONAL_COLUMNS)})"
+                    path, f"header {header} lacks column(s) {missing}; expected "
+                    f"{list(REQUIRED_COLUMNS)} (+ optional {list(OPTIONAL_COLUMNS)})", line=1
                 )
             reader.fieldnames = header
             for row in reader:

@@ -56,6 +56,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import softmax
 
+from tzsl._io import read_npz
 from tzsl.bundle import load_bundle, save_bundle
 from tzsl.datasets import HandTable, read_grasps
 from tzsl.datasets._feature_table import read_feature_table
@@ -255,11 +256,7 @@ def _read_grasp_inputs(inputs: Sequence[str | Path]) -> list:
             raise DataFileError(path, "a hand-model input must be a grasp .npz file or a grasp folder")
         if not path.is_file():
             raise DataFileError(path, "grasp file not found")
-        try:
-            with np.load(path, allow_pickle=False) as npz:
-                arrays = {name: npz[name] for name in npz.files}
-        except (OSError, ValueError, EOFError) as exc:
-            raise DataFileError(path, f"cannot read the grasp file as .npz ({exc})") from None
+        arrays = read_npz(path)
         grasps.append(grasp_from_arrays(arrays, path.stem, "", str(path)))
     return grasps
 
@@ -406,13 +403,10 @@ class DeepAdapter(ModelAdapter):
         if not path.is_file():
             raise DataFileError(path, "input file not found")
         if path.suffix == ".npz":
-            try:
-                with np.load(path, allow_pickle=False) as npz:
-                    if "frames" not in npz.files:
-                        raise DataFileError(path, f"no 'frames' array (found {npz.files})")
-                    return np.asarray(npz["frames"])
-            except (OSError, ValueError, EOFError) as exc:
-                raise DataFileError(path, f"cannot read the .npz file ({exc})") from None
+            arrays = read_npz(path)
+            if "frames" not in arrays:
+                raise DataFileError(path, f"no 'frames' array (found {list(arrays)})")
+            return np.asarray(arrays["frames"])
         from tzsl.features import KeyFrameSelector  # noqa: PLC0415
 
         return KeyFrameSelector().transform([str(path)])[0]
@@ -451,8 +445,11 @@ def register_adapter(kind: str, factory: Callable[[Any, dict], ModelAdapter]) ->
     ADAPTERS[kind] = factory
 
 
-def load_adapter(path: str | Path) -> ModelAdapter:
-    """Load a bundle (see :func:`tzsl.bundle.load_bundle`; only load bundles you trust) and wrap it.
+def load_adapter(path: str | Path, *, trust_pickle: bool = False) -> ModelAdapter:
+    """Load a bundle (see :func:`tzsl.bundle.load_bundle`; no code is run) and wrap it.
+
+    ``trust_pickle=True`` also loads old (format version 1) pickle bundles, which can run code:
+    only for files whose author you trust.
 
     Raises
     ------
@@ -461,16 +458,16 @@ def load_adapter(path: str | Path) -> ModelAdapter:
     """
     from tzsl.bundle import read_bundle_header  # noqa: PLC0415
 
-    kind = read_bundle_header(path).kind  # verified, nothing unpickled yet
+    kind = read_bundle_header(path).kind  # verified, nothing deserialised yet
     if kind not in ADAPTERS:
         raise ModelBundleError(f"{path}: no predictor for bundles of kind {kind!r} (known: {sorted(ADAPTERS)})")
     if kind == "deep":
         from tzsl.models._deep import load_deep_bundle  # noqa: PLC0415 - needs the deep extra
 
-        model = load_deep_bundle(path)
+        model = load_deep_bundle(path, trust_pickle=trust_pickle)
         metadata = dict(read_bundle_header(path).metadata)
         return ADAPTERS[kind](model, metadata)
-    model, metadata = load_bundle(path, expected_kind=kind)
+    model, metadata = load_bundle(path, expected_kind=kind, trust_pickle=trust_pickle)
     return ADAPTERS[kind](model, metadata)
 
 

@@ -105,7 +105,8 @@ def filter_attributes(
     DataFileError
         Invalid table (unknown / non-binary entries, duplicates).
     ConfigError
-        ``min_objects`` is not a positive integer.
+        ``min_objects`` is not a positive integer, or it drops every attribute (the message lists
+        how many objects each attribute has).
     """
     if (
         isinstance(min_objects, bool)
@@ -114,7 +115,14 @@ def filter_attributes(
     ):
         raise ConfigError(f"min_objects must be a positive integer, got {min_objects!r}")
     table = check_attribute_table(table)
-    keep = table.sum(axis=0) >= int(min_objects)
+    counts = table.sum(axis=0)
+    keep = counts >= int(min_objects)
+    if not keep.any():
+        ranked = counts.sort_values(ascending=False, kind="stable")
+        shown = ", ".join(f"{a}: {int(n)}" for a, n in ranked.iloc[:10].items())
+        more = f", ... ({len(ranked) - 10} more)" if len(ranked) > 10 else ""
+        raise ConfigError(f"min_objects={min_objects} drops every attribute: objects per attribute (of "
+                          f"{len(table)}) are {shown}{more}; use min_objects <= {int(ranked.iloc[0])}")
     kept = table.loc[:, keep.to_numpy()]
     dropped = [str(c) for c in table.columns[~keep.to_numpy()]]
     return kept, dropped

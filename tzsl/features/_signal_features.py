@@ -122,7 +122,7 @@ def _signal_feature_set(
     extractor.fit(first)
     for s in range(n_sensors):
         for lo in range(0, n_trials, _BATCH):
-            batch = [data.read_signal(i, s, need) for i in range(lo, min(lo + _BATCH, n_trials))]
+            batch = data.read_signals(range(lo, min(lo + _BATCH, n_trials)), s, need)
             X[lo:lo + len(batch), s] = extractor.transform(batch)
     return data.to_feature_set(
         X, tuple(extractor.get_feature_names_out()),

@@ -694,8 +694,8 @@ def save_deep_bundle(model: DeepAttributeEmbedding, path, *, force: bool = False
     """Save a fitted :class:`DeepAttributeEmbedding` as a tzsl model bundle (kind ``"deep"``).
 
     The file is a :mod:`tzsl.bundle` bundle (magic line, JSON header with the tzsl version and
-    sha256 checksums, optional HMAC). Its payload holds no torch object: the network's state
-    dict as numpy arrays, the training classes and their attribute table. The header metadata
+    sha256 checksums, optional HMAC). Its payload is an ``.npz`` archive (read without pickle) holding
+    no torch object: the network's state dict as numpy arrays, the training classes and their attribute table. The header metadata
     holds the parameters, the input shape and the training history. Frozen stages of a pretrained
     backbone are not stored; the metadata records the sha256 of their weights file, which
     :func:`load_deep_bundle` checks.
@@ -736,7 +736,7 @@ def save_deep_bundle(model: DeepAttributeEmbedding, path, *, force: bool = False
     return save_bundle(path, payload, kind=BUNDLE_KIND, metadata=metadata, force=force)
 
 
-def load_deep_bundle(path, *, weights_path=None) -> DeepAttributeEmbedding:
+def load_deep_bundle(path, *, weights_path=None, trust_pickle: bool = False) -> DeepAttributeEmbedding:
     """Load a bundle written by :func:`save_deep_bundle`.
 
     Parameters
@@ -745,6 +745,9 @@ def load_deep_bundle(path, *, weights_path=None) -> DeepAttributeEmbedding:
     weights_path : str or path-like or None
         Where the frozen backbone's weights file is on this machine, when the model was trained
         from a local file (VGG-16) at another path. Its sha256 must equal the recorded one.
+    trust_pickle : bool, default=False
+        Also load an old (format version 1) bundle, whose payload is a pickle that can run code
+        when loaded: only for files whose author you trust. Current bundles hold an ``.npz``.
 
     Returns
     -------
@@ -761,7 +764,7 @@ def load_deep_bundle(path, *, weights_path=None) -> DeepAttributeEmbedding:
 
     torch = require_torch()
     path = Path(path)
-    payload, meta = load_bundle(path, expected_kind=BUNDLE_KIND)
+    payload, meta = load_bundle(path, expected_kind=BUNDLE_KIND, trust_pickle=trust_pickle)
     try:
         params = dict(meta["params"])
         params.update(checkpoint_dir=None, cache_dir=None, resume=False)

@@ -1,0 +1,220 @@
+"""Fuzz: broken plain-file datasets, grasp folders and model bundles never end in a traceback.
+
+Each example starts from a valid input, applies one random damage (random bytes, truncation, a
+cell replaced by hostile text such as ``../x`` or ``nan``, a trailing comma, a deleted file, a
+symlink pointing outside, a header field of the wrong JSON type, ...) and runs the command. It
+must exit 0, or exit with tzsl's error code (2 = click usage, 3 = bad input; older builds used 2
+for both) with exactly one line on stderr naming the offending path; never a traceback, and it
+must not create or change any file (these commands write nothing).
+
+Bounded: ``max_examples`` per property keeps the suite under a minute. Experiment files are
+fuzzed with the engine's tests (TODO there).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from tzsl.cli import cli
+from tzsl.cli._main import EXIT_TZSL_ERROR, _register_commands
+from tzsl.datasets import read_grasps, write_plain_dataset
+from tzsl.exceptions import TzslError
+
+_register_commands()
+# CI: 25 fixed examples per property; TZSL_FUZZ_EXAMPLES=500 explores with fresh random examples
+_EXPLORE = os.environ.get("TZSL_FUZZ_EXAMPLES")
+FUZZ = settings(max_examples=int(_EXPLORE or 25), deadline=None, suppress_health_check=[HealthCheck.too_slow],
+                derandomize=not _EXPLORE)
+ERROR_CODES = {EXIT_TZSL_ERROR, 2, 3}
+HOSTILE = ["", "../x.npz", "/etc/passwd", "signals/../../x.csv", "nan", "inf", "-1e400", "0x1", "é", "\x00",
+           "1,2", '"', "a" * 300, "1.0", "2", "yes", "C:\\x.npz", "signals/t1.npz"]
+
+
+def _tree(root: Path) -> dict[str, tuple[int, int]]:
+    return {str(p.relative_to(root)): (p.lstat().st_size, p.lstat().st_mtime_ns) for p in root.rglob("*")}
+
+
+def _check(result, path: Path, before: dict, root: Path) -> None:
+    assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
+    assert "Traceback" not in result.output
+    assert _tree(root) == before, "a file was created or changed"
+    if result.exit_code == 0:
+        return
+    assert result.exit_code in ERROR_CODES, result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert str(path) in lines[0], lines[0]
+
+
+# ------------------------------------------------------------------ damage
+def _damage(folder: Path, files: list[str], data: st.DataObject) -> None:
+    name = data.draw(st.sampled_from(files), label="file")
+    path = folder / name
+    kind = data.draw(st.sampled_from(["bytes", "truncate", "cell", "trailing_comma", "delete", "line",
+                                      "symlink_out", "empty"]), label="damage")
+    raw = path.read_bytes() if path.is_file() else b""
+    if kind == "bytes":
+        path.write_bytes(data.draw(st.binary(min_size=0, max_size=200), label="bytes"))
+    elif kind == "truncate":
+        path.write_bytes(raw[: data.draw(st.integers(0, max(0, len(raw) - 1)), label="cut")])
+    elif kind == "empty":
+        path.write_bytes(b"")
+    elif kind == "delete":
+        path.unlink()
+    elif kind == "symlink_out":
+        outside = folder.parent / f"outside{path.suffix}"
+        outside.write_bytes(raw)
+        path.unlink()
+        os.symlink(outside, path)
+    elif path.suffix == ".csv":
+        lines = raw.decode("utf-8", "replace").splitlines() or [""]
+        row = data.draw(st.integers(0, len(lines) - 1), label="row")
+        if kind == "trailing_comma":
+            lines = [ln + "," if i else ln for i, ln in enumerate(lines)]
+        elif kind == "line":
+            lines.insert(row, data.draw(st.text(max_size=40), label="line"))
+        else:
+            cells = lines[row].split(",")
+            col = data.draw(st.integers(0, len(cells) - 1), label="col")
+            cells[col] = data.draw(st.sampled_from(HOSTILE) | st.text(max_size=12), label="cell")
+            lines[row] = ",".join(cells)
+        path.write_bytes(("\n".join(lines) + "\n").encode("utf-8", "surrogatepass"))
+    else:
+        path.write_bytes(raw[::-1])
+
+
+# ------------------------------------------------------------------ plain-file datasets
+def _dataset(root: Path, signals: bool) -> tuple[Path, list[str]]:
+    rng = np.random.default_rng(0)
+    classes = pd.DataFrame({"hard": [1, 0, 1], "soft": [0, 1, 1], "round": [0, 1, 0]},
+                           index=pd.Index(["cube", "ball", "disc"], name="class"))
+    trials = pd.DataFrame({"trial_id": ["t1", "t2", "t3", "t4"], "class": ["cube", "ball", "disc", "cube"],
+                           "object": ["c1", "b1", "d1", "c2"]})
+    groups = {"hard": "material", "soft": "material", "round": "shape"}
+    if signals:
+        sig = [[rng.normal(size=(6, 2))] for _ in range(4)]
+        folder = write_plain_dataset(root / "ds", classes, trials, signals=sig, channels=("p", "q"),
+                                     attribute_groups=groups, signal_format="csv",
+                                     settings={"signals": {"statistics": ["mean", "std"]}})
+    else:
+        folder = write_plain_dataset(root / "ds", classes, trials, sensors=("l", "r"), X=rng.normal(size=(4, 2, 2)),
+                                     feature_names=("f_a", "f_b"), attribute_groups=groups)
+    (folder / "splits.csv").write_text("split,object,role\ns1,c1,train\ns1,b1,train\ns1,d1,test\n")
+    files = sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file())
+    return folder, files
+
+
+@pytest.mark.parametrize("signals", [False, True], ids=["columns", "signals"])
+@FUZZ
+@given(data=st.data())
+def test_validate_broken_dataset(signals, data):
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        folder, files = _dataset(root, signals)
+        _damage(folder, files, data)
+        before = _tree(root)
+        result = CliRunner().invoke(cli, ["validate", str(folder)])
+        _check(result, folder, before, root)
+
+
+# ------------------------------------------------------------------ grasp folders
+@FUZZ
+@given(data=st.data())
+def test_read_broken_grasp_folder(data):
+    from tzsl.datasets import load_hand_table4, simulate_grasps
+
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        folder = root / "grasps"
+        simulate_grasps(load_hand_table4().K.iloc[:2], 1, random_state=0, folder=folder)
+        files = sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file())
+        _damage(folder, files, data)
+        before = _tree(root)
+        try:
+            read_grasps(folder)
+        except TzslError as exc:
+            text = str(exc)
+            assert "\n" not in text and str(folder) in text, text
+        assert _tree(root) == before
+
+
+# ------------------------------------------------------------------ bundles
+@pytest.fixture(scope="module")
+def phac2_model(tmp_path_factory):
+    from tzsl.datasets import FeatureSet
+    from tzsl.datasets._feature_table import write_feature_table
+    from tzsl.experiments.predict import save_phac2_bundle
+    from tzsl.models import AttributeClassifierBank, AttributeSVM
+
+    root = tmp_path_factory.mktemp("fuzz_model")
+    rng = np.random.default_rng(0)
+    objects = [f"o{i}" for i in range(4)]
+    A = pd.DataFrame([[1, 0], [0, 1], [1, 1], [0, 0]], index=pd.Index(objects, name="object_name"),
+                     columns=["hard", "soft"])
+    rows = [(o, t) for o in objects for t in range(4)]
+    X = A.loc[[o for o, _ in rows]].to_numpy() @ np.array([[2.0, 0, 1], [0, 2.0, 1]])
+    X = np.stack([X + rng.normal(0, 0.3, X.shape)] * 2, axis=1)
+    trials = pd.DataFrame({"trial_id": [f"{o}_{t}" for o, t in rows], "object_id": [objects.index(o) for o, _ in rows],
+                           "object_name": [o for o, _ in rows], "trial_index": [t for _, t in rows]})
+    fs = FeatureSet(X=X, trials=trials, sensors=("s0", "s1"), feature_names=("f0", "f1", "f2"), attributes=A)
+    svm = AttributeSVM(n_C=1, n_gamma=1, n_draws=1, cv=2, undersampling="none", random_state=0)
+    bank = AttributeClassifierBank(estimator=svm, attribute_names=["hard", "soft"], n_jobs=1, random_state=0)
+    bank.fit(fs.X, fs.trial_attributes(), fs.trials["object_name"])
+    model = save_phac2_bundle(root / "model.tzsl", bank, fs, fusion="avg", prior="uni")
+    write_feature_table(fs, root / "table.npz")
+    (root / "classes.csv").write_text("class,hard,soft\na,1,0\nb,0,1\n")
+    return root
+
+
+def _rechecksum(raw: bytes, edit: dict) -> bytes:
+    magic, line, payload = raw.split(b"\n", 2)
+    header = json.loads(line)
+    header.update(edit)
+    fields = {k: v for k, v in header.items() if k not in ("header_sha256", "hmac_sha256")}
+    header["header_sha256"] = hashlib.sha256(json.dumps(fields, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+    return magic + b"\n" + json.dumps(header).encode() + b"\n" + payload
+
+
+JSON = st.recursive(st.none() | st.booleans() | st.integers() | st.text(max_size=5),
+                    lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=3), inner, max_size=3),
+                    max_leaves=5)
+
+
+@FUZZ
+@given(data=st.data())
+def test_predict_with_broken_bundle(phac2_model, data):
+    raw = (phac2_model / "model.tzsl").read_bytes()
+    kind = data.draw(st.sampled_from(["flip", "truncate", "field", "payload"]), label="damage")
+    if kind == "flip":
+        pos = data.draw(st.integers(0, len(raw) - 1), label="pos")
+        raw = raw[:pos] + bytes([raw[pos] ^ 0xFF]) + raw[pos + 1:]
+    elif kind == "truncate":
+        raw = raw[: data.draw(st.integers(0, len(raw) - 1), label="cut")]
+    elif kind == "field":
+        key = data.draw(st.sampled_from(["metadata", "kind", "format_version", "tzsl_version", "payload_format",
+                                         "payload_sha256", "format"]), label="key")
+        raw = _rechecksum(raw, {key: data.draw(JSON, label="value")})
+    else:
+        payload = data.draw(st.binary(max_size=300), label="payload")
+        magic, line, _ = raw.split(b"\n", 2)
+        raw = _rechecksum(magic + b"\n" + line + b"\n" + payload,
+                          {"payload_sha256": hashlib.sha256(payload).hexdigest(), "payload_bytes": len(payload)})
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        bundle = root / "broken.tzsl"
+        bundle.write_bytes(raw)
+        before = _tree(root)
+        result = CliRunner().invoke(cli, ["predict", "--model", str(bundle), "--classes",
+                                          str(phac2_model / "classes.csv"), str(phac2_model / "table.npz")])
+        _check(result, bundle, before, root)

@@ -1,0 +1,187 @@
+"""Model payloads of :mod:`tzsl.bundle`: skops for estimators (with tzsl's trusted types), ``.npz`` for arrays.
+
+Nothing here runs code from a file: skops payloads naming a type outside the trusted list are
+refused before anything is built (:func:`is_trusted_type`), and ``.npz`` payloads are read with
+``allow_pickle=False``. pandas tables inside a model (skops cannot store them) are written as plain
+columns and rebuilt on load.
+"""
+
+from __future__ import annotations
+
+import copy
+import importlib
+import io
+import zipfile
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from tzsl._io import read_npz
+from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
+
+#: Packages whose *classes* a skops payload may name (each checked to be a class defined there).
+TRUSTED_MODULE_PREFIXES: tuple[str, ...] = ("sklearn.", "tzsl.models.", "tzsl.features.")
+#: Further type names trusted in skops payloads (skops leaves them out of its defaults).
+EXTRA_TRUSTED_TYPES: frozenset[str] = frozenset({"numpy.dtype"})
+
+_PANDAS = "__tzsl_pandas__"
+
+
+# ----------------------------------------------------------------------------- trusted types
+def _resolve(name: str) -> Any:
+    """The object a dotted type name designates (imports only modules under the trusted prefixes)."""
+    parts = name.split(".")
+    for i in range(len(parts) - 1, 0, -1):
+        module_name = ".".join(parts[:i])
+        if not (module_name + ".").startswith(TRUSTED_MODULE_PREFIXES) and module_name not in ("sklearn",):
+            continue
+        try:
+            obj: Any = importlib.import_module(module_name)
+        except ImportError:
+            continue
+        try:
+            for attr in parts[i:]:
+                obj = getattr(obj, attr)
+        except AttributeError:
+            return None
+        return obj
+    return None
+
+
+def is_trusted_type(name: str) -> bool:
+    """Whether a skops payload may name the type ``name`` (``"module.QualName"``).
+
+    True for :data:`EXTRA_TRUSTED_TYPES` and for classes defined in a module under
+    :data:`TRUSTED_MODULE_PREFIXES` (every class of ``tzsl.models``, present and future, and every
+    scikit-learn class). The name is resolved and must be a class whose ``__module__`` and
+    ``__qualname__`` give back ``name``: a function, a module or a name imported from elsewhere
+    (``tzsl.models._x.os``) is not trusted.
+    """
+    if name in EXTRA_TRUSTED_TYPES:
+        return True
+    if not name.startswith(TRUSTED_MODULE_PREFIXES):
+        return False
+    obj = _resolve(name)
+    return isinstance(obj, type) and f"{obj.__module__}.{obj.__qualname__}" == name
+
+
+# ----------------------------------------------------------------------------- payloads
+def _walkable(obj: Any) -> bool:
+    module = type(obj).__module__ or ""
+    return hasattr(obj, "__dict__") and not isinstance(obj, type) and module.startswith(("tzsl.", "sklearn."))
+
+
+def _encode(obj: Any) -> Any:
+    """``obj`` with every pandas table replaced by plain columns (skops cannot store pandas)."""
+    if isinstance(obj, pd.DataFrame):
+        return {_PANDAS: "DataFrame", "columns": [_plain(obj.columns)], "names": [obj.index.name, obj.columns.name],
+                "index": _plain(obj.index), "data": [_plain(obj[c]) for c in obj.columns]}
+    if isinstance(obj, pd.Series):
+        return {_PANDAS: "Series", "index": _plain(obj.index), "names": [obj.index.name, obj.name],
+                "data": _plain(obj)}
+    if isinstance(obj, dict):
+        return {k: _encode(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [_encode(v) for v in obj]
+    if isinstance(obj, tuple) and type(obj) is tuple:
+        return tuple(_encode(v) for v in obj)
+    if _walkable(obj):
+        clone = copy.copy(obj)
+        clone.__dict__.update({k: _encode(v) for k, v in vars(obj).items()})
+        return clone
+    return obj
+
+
+def _plain(values: Any) -> Any:
+    """A pandas column or index as a numpy array (numbers) or a list (text, mixed)."""
+    array = np.asarray(values)
+    return array.tolist() if array.dtype.kind in "OSUM" else array.copy()
+
+
+def _decode(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        if obj.get(_PANDAS) == "DataFrame":
+            index = pd.Index(obj["index"], name=obj["names"][0])
+            columns = pd.Index(obj["columns"][0], name=obj["names"][1])
+            return pd.DataFrame({i: np.asarray(col) if not isinstance(col, list) else col
+                                 for i, col in enumerate(obj["data"])}, index=index).set_axis(columns, axis=1)
+        if obj.get(_PANDAS) == "Series":
+            return pd.Series(obj["data"], index=pd.Index(obj["index"], name=obj["names"][0]), name=obj["names"][1])
+        return {k: _decode(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [_decode(v) for v in obj]
+    if isinstance(obj, tuple) and type(obj) is tuple:
+        return tuple(_decode(v) for v in obj)
+    if _walkable(obj):
+        obj.__dict__.update({k: _decode(v) for k, v in vars(obj).items()})
+    return obj
+
+
+def _is_array_tree(obj: Any) -> bool:
+    if isinstance(obj, np.ndarray):
+        return True
+    return isinstance(obj, Mapping) and len(obj) > 0 and all(
+        isinstance(k, str) and "/" not in k and _is_array_tree(v) for k, v in obj.items())
+
+
+def _flatten(tree: Mapping, prefix: str = "") -> dict[str, np.ndarray]:
+    flat: dict[str, np.ndarray] = {}
+    for key, value in tree.items():
+        if isinstance(value, Mapping):
+            flat.update(_flatten(value, f"{prefix}{key}/"))
+            continue
+        array = np.asarray(value)
+        if array.dtype.hasobject:
+            if not all(isinstance(v, str) for v in array.ravel()):
+                raise ConfigError(f"array {prefix}{key!r} holds Python objects; a bundle stores numbers and text only")
+            array = array.astype(str)
+        flat[prefix + key] = array
+    return flat
+
+
+def _unflatten(flat: Mapping[str, np.ndarray]) -> dict:
+    tree: dict = {}
+    for key, value in flat.items():
+        node = tree
+        *parents, leaf = key.split("/")
+        for part in parents:
+            node = node.setdefault(part, {})
+        node[leaf] = value
+    return tree
+
+
+def serialise(model: Any) -> tuple[str, bytes]:
+    buffer = io.BytesIO()
+    if _is_array_tree(model) and not isinstance(model, np.ndarray):
+        np.savez_compressed(buffer, **_flatten(model))
+        return "npz", buffer.getvalue()
+    import skops.io as sio  # noqa: PLC0415 - imported when a model is saved or loaded
+
+    return "skops", sio.dumps(_encode(model), compression=zipfile.ZIP_DEFLATED)
+
+
+def deserialise(path: Path, payload_format: str, payload: bytes) -> Any:
+    if payload_format == "npz":
+        try:
+            return _unflatten(read_npz(io.BytesIO(payload), name=path))
+        except DataFileError as exc:
+            raise ModelBundleError(f"{path}: model arrays unreadable: {exc.problem}") from None
+    import skops.io as sio  # noqa: PLC0415
+
+    try:
+        untrusted = sio.get_untrusted_types(data=payload)
+    except Exception as exc:  # noqa: BLE001 - a corrupt skops archive raises many types
+        raise ModelBundleError(f"{path}: the model is not a readable skops file ({type(exc).__name__})") from None
+    refused = sorted(t for t in untrusted if not is_trusted_type(t))
+    if refused:
+        raise ModelBundleError(
+            f"{path}: the model names type(s) tzsl does not trust: {', '.join(refused)}; refusing to load it "
+            "(a tzsl model holds only scikit-learn, numpy and tzsl.models classes)")
+    try:
+        return _decode(sio.loads(payload, trusted=list(untrusted)))
+    except Exception as exc:  # noqa: BLE001 - report any deserialisation failure as a bundle error
+        raise ModelBundleError(f"{path}: cannot load the model ({type(exc).__name__}: "
+                               f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
