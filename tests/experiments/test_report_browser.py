@@ -9,6 +9,7 @@ writes the measurements into the DOM, which ``chromium --headless --dump-dom`` p
 from __future__ import annotations
 
 import json
+import os
 import re
 import shutil
 import subprocess
@@ -26,6 +27,8 @@ import pytest  # noqa: E402
 from tzsl.experiments.report import write_report  # noqa: E402
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+if CHROMIUM is None and os.environ.get("CI"):
+    pytest.fail("headless Chromium is missing under CI: `make test` installs Debian's chromium", pytrace=False)
 pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="headless Chromium not installed (apt-get install chromium)")
 
 WIDTH = 1280
