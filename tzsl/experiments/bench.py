@@ -28,7 +28,7 @@ from sklearn.svm import SVC
 
 from tzsl.datasets import FeatureSet
 from tzsl.experiments.phac2_dap import DapStudyConfig, SplitPosteriors, _split_masks, fit_split, make_splits
-from tzsl.models._dap import attribute_prior
+from tzsl.models import attribute_prior
 
 
 def literal_posteriors(features: FeatureSet, train: np.ndarray, test: np.ndarray, attributes: list[str],

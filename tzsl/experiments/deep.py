@@ -32,7 +32,7 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets import FabricData, fabric_zsl_split, load_fabric, load_gelsight_fabric_videos
-from tzsl.evaluation import per_class_mean_accuracy, trial_accuracy
+from tzsl.evaluation import per_class_mean_accuracy, summarise_over_splits, trial_accuracy
 from tzsl.exceptions import ConfigError, DataFileError
 from tzsl.models import DeepAttributeEmbedding
 
@@ -401,9 +401,11 @@ def run_deep_fabric_study(
     runs = pd.DataFrame(rows)
     keys = ["condition", "config", "method"]
     stats = ["accuracy", "per_class_mean_accuracy", "train_accuracy", "seconds_per_epoch"]
-    grouped = runs.groupby(keys, sort=False)[stats]
-    table = grouped.mean().join(grouped.std(ddof=0).fillna(0.0), rsuffix="_std").reset_index()
-    table.insert(3, "n_seeds", grouped.size().to_numpy())
+    summary = summarise_over_splits(runs[["seed", *keys, *stats]], split_column="seed", by=keys, ddof=0)
+    mean = summary[summary["seed"] == "mean"].drop(columns="seed").reset_index(drop=True)
+    std = summary.loc[summary["seed"] == "std", stats].fillna(0.0).reset_index(drop=True)
+    table = pd.concat([mean, std.add_suffix("_std")], axis=1)
+    table.insert(3, "n_seeds", runs.groupby(keys, sort=False).size().to_numpy())
     out.write_csv(DEEP_RUNS_FILE, runs)
     out.write_csv(DEEP_TABLE_FILE, table)
     data_files = sorted({Path(p) for _, seqs in sources if "path" in seqs.table for p in seqs.table["path"]})

@@ -99,7 +99,7 @@ from tzsl.datasets import (
     load_gelsight_fabric_videos,
     read_depth_images,
 )
-from tzsl.evaluation import per_class_mean_accuracy, trial_accuracy
+from tzsl.evaluation import per_class_mean_accuracy, summarise_over_splits, trial_accuracy
 from tzsl.exceptions import ConfigError, DataFileError
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.paper_numbers import FABRIC_TABLE1
@@ -747,14 +747,14 @@ def fabric_table(runs: pd.DataFrame, lams: Sequence = PAPER_LAMBDAS) -> pd.DataF
         }
         stats = {}
         for m in methods:
-            got = sub[sub["method"] == m]
+            got = sub.loc[sub["method"] == m, ["accuracy", "per_class_mean_accuracy"]].reset_index(drop=True)
+            summary = summarise_over_splits(got) if len(got) else None  # rows mean, std over seeds
             for metric, suffix in (("accuracy", ""), ("per_class_mean_accuracy", "_pcma")):
-                vals = got[metric].astype(float)
-                stats[f"{m}{suffix}"] = float(vals.mean()) if len(vals) else np.nan
+                stats[f"{m}{suffix}"] = np.nan if summary is None else float(summary.loc["mean", metric])
                 if m == ESZSL_METHOD:
-                    std = 0.0 if len(vals) else np.nan  # deterministic: identical for every seed
+                    std = 0.0 if len(got) else np.nan  # deterministic: identical for every seed
                 else:
-                    std = float(vals.std(ddof=1)) if len(vals) > 1 else np.nan
+                    std = float(summary.loc["std", metric]) if len(got) > 1 else np.nan
                 stats[f"{m}{suffix}_std"] = std
         for m in methods:
             row[m] = stats[m]

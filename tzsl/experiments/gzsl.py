@@ -45,7 +45,7 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets import FeatureSet
-from tzsl.evaluation import Split, gzsl_scores, per_class_mean_accuracy
+from tzsl.evaluation import Split, gzsl_scores, per_class_mean_accuracy, summarise_over_splits
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.experiments.phac2_dap import DapStudyConfig, attribute_bank, compute_context
 from tzsl.models import ESZSLCV, attribute_prior, dap_log_scores, fuse_attribute_posteriors
@@ -398,14 +398,7 @@ def gzsl_table(rows: list[dict]) -> pd.DataFrame:
     table = pd.DataFrame(rows)
     front = ["split", "method", "calibrated", "seen", "unseen", "harmonic", "zsl", "stacking_constant"]
     table = table[front + [c for c in table.columns if c not in front]]
-    numeric = [c for c in table.columns if c not in ("split", "method", "calibrated")]
-    grouped = table.groupby(["method", "calibrated"], sort=False)[numeric]
-    summary = []
-    for stat in ("mean", "std"):
-        part = grouped.agg(stat).reset_index()
-        part.insert(0, "split", stat)
-        summary.append(part)
-    return pd.concat([table, *summary], ignore_index=True)[table.columns]
+    return summarise_over_splits(table, split_column="split", by=["method", "calibrated"])
 
 
 def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: DapStudyConfig | None = None,

@@ -36,6 +36,7 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets import Grasp, HandTable, read_grasps, simulate_grasps
+from tzsl.evaluation import summarise_over_splits
 from tzsl.exceptions import ConfigError, DataFileError, SplitError
 from tzsl.experiments import paper_numbers as paper
 from tzsl.experiments._outputs import ResultsDir
@@ -341,18 +342,8 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandStudyC
 
 
 # ---------------------------------------------------------------------------- tables
-def _summarise(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
-    """Per-seed rows followed by ``mean`` and ``std`` rows over seeds for each ``by`` group."""
-    numeric = [c for c in df.columns if c not in by + ["seed"] and pd.api.types.is_numeric_dtype(df[c])]
-    grouped = df.groupby(by, sort=False)[numeric]
-    mean = grouped.mean().reset_index().assign(seed="mean")
-    std = grouped.std(ddof=1).reset_index().assign(seed="std")
-    out = pd.concat([df.assign(seed=df["seed"].astype(object)), mean, std], ignore_index=True)
-    return out[["seed"] + by + [c for c in df.columns if c not in by + ["seed"]]]
-
-
 def _table5(rows: list[dict]) -> pd.DataFrame:
-    df = _summarise(pd.DataFrame(rows), ["method"])
+    df = summarise_over_splits(pd.DataFrame(rows), split_column="seed", by=["method"])
     for col in [*SUBSETS, "all"]:
         df[f"paper_{col}"] = [
             np.nan if seed == "std" else paper.DAP_HAND_TABLE5.get(m.lower(), {}).get(col, np.nan)
@@ -362,7 +353,7 @@ def _table5(rows: list[dict]) -> pd.DataFrame:
 
 
 def _attribute_table(rows: list[dict]) -> pd.DataFrame:
-    df = _summarise(pd.DataFrame(rows), ["attribute", "kind"])
+    df = summarise_over_splits(pd.DataFrame(rows), split_column="seed", by=["attribute", "kind"])
     df["paper_accuracy"] = df["attribute"].map(paper.DAP_HAND_ATTRIBUTE_ACCURACY_QUOTED).where(df["seed"] != "std")
     per_seed = pd.DataFrame(rows).groupby("seed")["accuracy"].mean()
     mean_rows = pd.DataFrame({
@@ -376,9 +367,8 @@ def _attribute_table(rows: list[dict]) -> pd.DataFrame:
 
 def _distance_table(frames: list[pd.DataFrame]) -> pd.DataFrame:
     df = pd.concat(frames, ignore_index=True)
-    attrs = [c for c in df.columns if c not in ("seed", "object")]
-    mean = df.groupby("object", sort=False)[attrs].mean().reset_index().assign(seed="mean")
-    return pd.concat([df.assign(seed=df["seed"].astype(object)), mean], ignore_index=True)[["seed", "object", *attrs]]
+    table = summarise_over_splits(df, split_column="seed", by=["object"])
+    return table[table["seed"] != "std"].reset_index(drop=True)  # S: mean over seeds, no std rows
 
 
 # ---------------------------------------------------------------------------- figures
@@ -582,8 +572,8 @@ def run_hand_study(
     names = list(table.test_objects)
     result = HandStudyResult(
         table5=_table5(parts["table5"]),
-        multigrasp_T=_summarise(pd.DataFrame(parts["T"]), ["T"]),
-        multigrasp_k=_summarise(pd.DataFrame(parts["k"]), ["k"]),
+        multigrasp_T=summarise_over_splits(pd.DataFrame(parts["T"]), split_column="seed", by=["T"]),
+        multigrasp_k=summarise_over_splits(pd.DataFrame(parts["k"]), split_column="seed", by=["k"]),
         attribute_accuracy=_attribute_table(parts["attr"]),
         attribute_distance=_distance_table(parts["S"]),
         confusion=pd.DataFrame(parts["confusion"]),

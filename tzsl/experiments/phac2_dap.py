@@ -28,8 +28,15 @@ from tzsl.evaluation import (
     summarise_over_splits,
 )
 from tzsl.exceptions import ConfigError, SplitError
-from tzsl.models import AttributeClassifierBank, AttributeSVM, MultiLabelAttributeClassifier
-from tzsl.models._dap import attribute_prior, dap_accuracy_over_subsets, dap_log_scores, fuse_attribute_posteriors
+from tzsl.models import (
+    AttributeClassifierBank,
+    AttributeSVM,
+    MultiLabelAttributeClassifier,
+    attribute_prior,
+    dap_accuracy_over_subsets,
+    dap_log_scores,
+    fuse_attribute_posteriors,
+)
 
 FUSIONS = ("max", "avg")
 PRIORS = ("uni", "test", "train")
@@ -262,10 +269,6 @@ def _split_label(split: Split) -> str:
     return split.name.rsplit("-", 1)[-1]
 
 
-def _with_summary(rows: list[dict]) -> pd.DataFrame:
-    return summarise_over_splits(pd.DataFrame(rows), split_column="split").reset_index()
-
-
 def _paper(table: dict, split: str, i: int):
     key = "average" if split == "mean" else split
     value = table.get(key)
@@ -282,7 +285,7 @@ def table1_fusion(results: list[SplitPosteriors]) -> pd.DataFrame:
         "avgdap_per_class_mean": per_class_mean_accuracy(r.y, r.predict("avg", "uni")),
         "n_attributes": len(r.attributes),
     } for r in results]
-    table = _with_summary(rows)
+    table = summarise_over_splits(pd.DataFrame(rows)).reset_index()
     table["paper_maxdap"] = [_paper(DAP_TABLE1, s, 0) for s in table["split"]]
     table["paper_avgdap"] = [_paper(DAP_TABLE1, s, 1) for s in table["split"]]
     return table
@@ -293,7 +296,7 @@ def table2_priors(results: list[SplitPosteriors]) -> pd.DataFrame:
     from tzsl.experiments.paper_numbers import DAP_TABLE2  # noqa: PLC0415
 
     rows = [{"split": _split_label(r.split), **{p: r.accuracy("avg", p) for p in PRIORS}} for r in results]
-    table = _with_summary(rows)
+    table = summarise_over_splits(pd.DataFrame(rows)).reset_index()
     for i, p in enumerate(PRIORS):
         table[f"paper_{p}"] = [_paper(DAP_TABLE2, s, i) for s in table["split"]]
     return table
@@ -317,7 +320,7 @@ def table3_challenging(results: list[SplitPosteriors], map_coords: pd.DataFrame 
             "excluded_attributes": ";".join(a for a, _ in r.split.excluded_attributes),
             "dropped_duplicate_objects": ";".join(o for o, _ in r.split.dropped_objects),
         })
-    table = _with_summary(rows)
+    table = summarise_over_splits(pd.DataFrame(rows)).reset_index()
     for i, name in enumerate(("paper_n_objects", "paper_chance", "paper_avgdap")):
         table[name] = [_paper(DAP_TABLE3, s, i) for s in table["split"]]
     return table
@@ -329,7 +332,7 @@ def multilabel_table(results: list[SplitPosteriors]) -> pd.DataFrame:
 
     rows = [{"split": _split_label(r.split), "independent": r.accuracy("avg", "uni"),
              "multilabel": r.accuracy("avg", "uni", multilabel=True)} for r in results if r.P_multilabel is not None]
-    table = _with_summary(rows)
+    table = summarise_over_splits(pd.DataFrame(rows)).reset_index()
     mean = table["split"] == "mean"
     table["paper_independent"] = np.where(mean, DAP_INDEPENDENT_ACCURACY, np.nan)
     table["paper_multilabel"] = np.where(mean, DAP_MULTILABEL_ACCURACY, np.nan)
@@ -612,4 +615,4 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
             pred, y = _fit_predict_zsl(model, features, r.split)
             row[f"embedding_lam_{lam:g}"] = float((pred == y).mean())
         rows.append(row)
-    return _with_summary(rows)
+    return summarise_over_splits(pd.DataFrame(rows)).reset_index()
