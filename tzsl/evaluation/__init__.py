@@ -39,3 +39,13 @@ __all__: list[str] = [
     "trial_accuracy",
     "write_splits_csv",
 ]
+
+# GZSL protocol pieces (moved from tzsl.experiments.gzsl)
+from tzsl.evaluation._gzsl import choose_stacking_constant, holdout_trials, stacked_predict  # noqa: E402
+
+__all__ += ["choose_stacking_constant", "holdout_trials", "stacked_predict"]
+
+# model selection on training classes (moved from tzsl.experiments.fabric)
+from tzsl.evaluation._model_selection import DEFAULT_ALPHAS, select_embedding_alpha  # noqa: E402
+
+__all__ += ["DEFAULT_ALPHAS", "select_embedding_alpha"]
