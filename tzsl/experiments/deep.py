@@ -34,6 +34,7 @@ import pandas as pd
 from tzsl.datasets import FabricData, fabric_zsl_split, load_fabric, load_gelsight_fabric_videos
 from tzsl.evaluation import per_class_mean_accuracy, summarise_over_splits, trial_accuracy
 from tzsl.exceptions import ConfigError, DataFileError
+from tzsl.experiments.fabric_tables import PAPER_LAMBDAS, lambda_label
 from tzsl.models import DeepAttributeEmbedding
 
 __all__ = [
@@ -291,18 +292,9 @@ def load_deep_sequences(
 # ---------------------------------------------------------------------------------------------
 # the study behind ``tzsl evaluate-fabric --model deep``
 # ---------------------------------------------------------------------------------------------
-#: The paper's lambda grid.
-PAPER_LAMBDAS: tuple = (0, 0.1, 1, 10, "inf")
 DEEP_TABLE_FILE = "fabric_deep_table.csv"
 DEEP_RUNS_FILE = "fabric_deep_runs.csv"
 DEEP_MANIFEST_FILE = "fabric_deep_manifest.json"
-
-
-def _lam_label(lam) -> str:
-    from tzsl.models._embedding import loss_weights  # noqa: PLC0415
-
-    w_c, _ = loss_weights(lam)  # validates
-    return "inf" if w_c == 0 else f"{float(lam):g}"
 
 
 def run_deep_fabric_study(
@@ -363,7 +355,7 @@ def run_deep_fabric_study(
     configs = [int(c) for c in configs]
     if not configs:
         raise ConfigError("configs is empty; choose from 1, 2")
-    labels = [_lam_label(lam) for lam in lams]
+    labels = [lambda_label(lam) for lam in lams]
     if not labels or len(set(labels)) != len(labels):
         raise ConfigError(f"lams must be a non-empty list without repeats; got {list(lams)}")
     params = dict(model_params or {})
