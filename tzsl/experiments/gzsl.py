@@ -56,6 +56,7 @@ from tzsl.evaluation import (
 )
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.experiments.phac2_dap import DapStudyConfig, attribute_bank, compute_context
+from tzsl.experiments.phac2_tables import split_label
 from tzsl.models import ESZSLCV, attribute_prior, dap_log_scores, fuse_attribute_posteriors
 
 __all__ = [
@@ -264,10 +265,6 @@ def _scores(method: str, features, problem, config, gzsl, seed) -> np.ndarray:
 # --------------------------------------------------------------------------- one split, all splits
 
 
-def _label(split: Split) -> str:
-    return split.name.rsplit("-", 1)[-1]
-
-
 def _method_name(method: str, gzsl: GzslConfig) -> str:
     return f"dap_{gzsl.fusion}_{gzsl.prior}" if method == "dap" else method
 
@@ -292,7 +289,7 @@ def gzsl_split(features: FeatureSet, split: Split, config: DapStudyConfig, gzsl:
     unseen_classes = np.flatnonzero(~problem.seen)
     is_unseen = ~problem.seen[y]
     base = {
-        "split": _label(split), "n_classes": len(problem.seen), "n_seen_classes": len(seen_classes),
+        "split": split_label(split), "n_classes": len(problem.seen), "n_seen_classes": len(seen_classes),
         "n_unseen_classes": len(unseen_classes), "n_fit_trials": int(problem.fit.sum()),
         "n_seen_trials": int((~is_unseen).sum()), "n_unseen_trials": int(is_unseen.sum()),
         "n_attributes": len(problem.attributes), **problem.info,
