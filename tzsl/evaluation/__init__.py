@@ -13,11 +13,11 @@ from tzsl.evaluation._metrics import (
     summarise_over_splits,
     trial_accuracy,
 )
+from tzsl.evaluation._challenging_splits import challenging_splits
 from tzsl.evaluation._split_io import read_splits_csv, write_splits_csv
 from tzsl.evaluation._splits import (
     Split,
     attribute_exclusions,
-    challenging_splits,
     check_attribute_table,
     duplicate_attribute_groups,
     random_object_splits,
