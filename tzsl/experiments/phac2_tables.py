@@ -14,7 +14,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from tzsl.evaluation import Split, per_class_mean_accuracy, summarise_over_splits
+from tzsl.evaluation import (
+    Split,
+    per_attribute_balanced_accuracy,
+    per_class_mean_accuracy,
+    summarise_over_splits,
+)
 from tzsl.models import dap_accuracy_over_subsets
 
 if TYPE_CHECKING:
@@ -129,11 +134,7 @@ def attribute_accuracy_table(results: list[SplitPosteriors], sensors: tuple[str,
         pred = r.P >= 0.5  # (n, s, m)
         correct = pred == truth[:, None, :]
         acc = correct.mean(axis=0)  # (s, m)
-        pos, neg = truth.sum(axis=0), (~truth).sum(axis=0)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            tpr = (pred & truth[:, None, :]).sum(axis=0) / pos
-            tnr = (~pred & ~truth[:, None, :]).sum(axis=0) / neg
-        bal = np.where((pos > 0) & (neg > 0), (tpr + tnr) / 2, np.nan)
+        bal = np.stack([per_attribute_balanced_accuracy(truth, pred[:, s, :]) for s in range(pred.shape[1])])
         for j, attr in enumerate(r.attributes):
             for s, sensor in enumerate(sensors):
                 rows.append({"split": split_label(r.split), "attribute": attr, "sensor": sensor,
