@@ -1,8 +1,12 @@
-"""Splits and metrics.
+"""Splits, metrics and the evaluation pieces every study composes.
 
 Object splits for zero-shot evaluation (random and challenging, DAP paper 4.2 and 4.6),
 their CSV files, and the metrics reported per split (trial accuracy, per-class mean
-accuracy, per-attribute balanced accuracy, generalised-ZSL scores).
+accuracy, per-attribute balanced accuracy, generalised-ZSL scores); mean and std rows over
+splits or seeds (:func:`summarise_over_splits`, the one place studies average); the GZSL
+protocol's held-out trials and calibrated stacking; hyper-parameter selection on training
+classes only (:func:`select_embedding_alpha`). The studies in :mod:`tzsl.experiments` import
+these from here.
 """
 
 from tzsl.evaluation._metrics import (
