@@ -117,3 +117,35 @@ def test_summarise_over_splits():
         summarise_over_splits(pd.DataFrame({"split": ["mean"], "acc": [1.0]}))
     with pytest.raises(TzslError, match="no numeric column"):
         summarise_over_splits(pd.DataFrame({"split": ["a"], "m": ["x"]}))
+
+
+def test_summarise_over_splits_by_groups():
+    """With ``by``: mean and std rows per group (over seeds here), keys kept, columns ordered."""
+    df = pd.DataFrame(
+        {
+            "method": ["DAP", "ESZSL", "DAP", "ESZSL", "DAP", "ESZSL"],
+            "seed": [0, 0, 1, 1, 2, 2],
+            "accuracy": [0.2, 0.5, 0.4, 0.5, 0.6, 0.8],
+            "note": ["x"] * 6,
+            "n_test": [10, 10, 10, 10, 10, 10],
+        }
+    )
+    out = summarise_over_splits(df, split_column="seed", by=["method"])
+    assert list(out.columns) == ["seed", "method", "accuracy", "note", "n_test"]
+    assert list(out["seed"]) == [0, 0, 1, 1, 2, 2, "mean", "mean", "std", "std"]
+    assert list(out["method"].iloc[6:]) == ["DAP", "ESZSL", "DAP", "ESZSL"]  # order of appearance
+    summary = out.iloc[6:].set_index(["seed", "method"])
+    assert summary.loc[("mean", "DAP"), "accuracy"] == pytest.approx(0.4)
+    assert summary.loc[("mean", "ESZSL"), "accuracy"] == pytest.approx(0.6)
+    assert summary.loc[("std", "DAP"), "accuracy"] == pytest.approx(0.2)  # ddof=1
+    assert summary.loc[("std", "ESZSL"), "accuracy"] == pytest.approx(np.std([0.5, 0.5, 0.8], ddof=1))
+    assert summary.loc[("std", "DAP"), "n_test"] == 0.0
+    assert out["note"].iloc[6:].isna().all()  # non-numeric columns stay empty
+    pop = summarise_over_splits(df, split_column="seed", by=["method"], ddof=0)
+    assert pop.iloc[8]["accuracy"] == pytest.approx(np.std([0.2, 0.4, 0.6]))
+    one = summarise_over_splits(df[df["seed"] == 0], split_column="seed", by=["method"])
+    assert one.iloc[-2:]["accuracy"].isna().all()  # std of one seed is undefined
+    with pytest.raises(TzslError, match="no column"):
+        summarise_over_splits(df, split_column="seed", by=["kind"])
+    with pytest.raises(TzslError, match="clash"):
+        summarise_over_splits(df.assign(seed="std"), split_column="seed", by=["method"])

@@ -19,7 +19,7 @@ from tzsl.experiments.phac2_dap import (
     table1_fusion,
     table2_priors,
 )
-from tzsl.models._dap import dap_log_scores
+from tzsl.models import dap_log_scores
 
 TINY_SVM = {"n_C": 2, "n_gamma": 2, "n_draws": 1, "cv": 3}
 

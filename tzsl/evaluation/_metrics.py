@@ -7,6 +7,8 @@ naming the argument and the problem.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 import pandas as pd
 from sklearn.metrics import accuracy_score, recall_score
@@ -189,15 +191,28 @@ def gzsl_scores(y_true, y_pred, seen_classes, unseen_classes) -> dict[str, float
     return {"seen": s, "unseen": u, "harmonic": h}
 
 
-def summarise_over_splits(df: pd.DataFrame, *, split_column: str = "split", ddof: int = 1) -> pd.DataFrame:
-    """Append ``mean`` and ``std`` rows over splits to a per-split results table.
+def summarise_over_splits(
+    df: pd.DataFrame, *, split_column: str = "split", by: Sequence[str] = (), ddof: int = 1
+) -> pd.DataFrame:
+    """Append ``mean`` and ``std`` rows over splits (or seeds) to a per-split results table.
+
+    The one place where tzsl averages a study's repetitions: the PHAC-2 tables (over splits),
+    the GZSL table (over splits, per method), the hand tables (over seeds, per method or
+    attribute), the fabric tables (over seeds, per condition, config and method).
 
     Parameters
     ----------
     df : DataFrame
-        One row per split; metric columns numeric. If it has a ``split_column`` column that
-        becomes the index; otherwise the index names the splits.
+        One row per split (per ``by`` group); metric columns numeric.
     split_column : str, default "split"
+        The column naming the repetition (a split, a seed).
+    by : sequence of str, default ()
+        Group columns: with none, the whole table is one group and ``split_column`` (if
+        present) becomes the index, as the split names index the rows. With ``by``, one
+        ``mean`` and one ``std`` row per group (groups in order of appearance, all ``mean``
+        rows before all ``std`` rows); ``split_column`` stays a column (object dtype, holding
+        ``"mean"`` / ``"std"`` in the summary rows), the columns are ordered
+        ``[split_column, *by, others...]`` and the index is a RangeIndex.
     ddof : int, default 1
         Delta degrees of freedom of the standard deviation (1: sample std over splits;
         NaN for a single split).
@@ -207,12 +222,15 @@ def summarise_over_splits(df: pd.DataFrame, *, split_column: str = "split", ddof
     DataFrame
         The per-split rows followed by rows ``mean`` and ``std`` of the numeric columns,
         NaN skipped (e.g. an attribute undefined on some split). Non-numeric columns are
-        left empty (NaN) in the two summary rows.
+        left empty (NaN) in the summary rows.
     """
     if not isinstance(df, pd.DataFrame):
         raise TzslError(f"summarise_over_splits expects a DataFrame, got {type(df).__name__}")
     if df.empty:
         raise TzslError("summarise_over_splits: the results table has no rows")
+    by = list(by)
+    if by:
+        return _summarise_groups(df, split_column, by, ddof)
     table = df.set_index(split_column) if split_column in df.columns else df.copy()
     reserved = {"mean", "std"} & set(map(str, table.index))
     if reserved:
@@ -225,3 +243,22 @@ def summarise_over_splits(df: pd.DataFrame, *, split_column: str = "split", ddof
         index=pd.Index(["mean", "std"], name=table.index.name),
     )
     return pd.concat([table, summary.reindex(columns=table.columns)], axis=0)
+
+
+def _summarise_groups(df: pd.DataFrame, split_column: str, by: list[str], ddof: int) -> pd.DataFrame:
+    """:func:`summarise_over_splits` with group columns ``by`` (see there)."""
+    missing = [c for c in [split_column, *by] if c not in df.columns]
+    if missing:
+        raise TzslError(f"summarise_over_splits: no column(s) {missing} in {list(df.columns)}")
+    reserved = {"mean", "std"} & set(map(str, df[split_column]))
+    if reserved:
+        raise TzslError(f"summarise_over_splits: split names {sorted(reserved)} clash with the summary rows")
+    keys = [split_column, *by]
+    numeric = [c for c in df.columns if c not in keys and pd.api.types.is_numeric_dtype(df[c])]
+    if not numeric:
+        raise TzslError(f"summarise_over_splits: no numeric column in {list(df.columns)}")
+    grouped = df.groupby(by, sort=False)[numeric]
+    mean = grouped.mean().reset_index().assign(**{split_column: "mean"})
+    std = grouped.std(ddof=ddof).reset_index().assign(**{split_column: "std"})
+    out = pd.concat([df.assign(**{split_column: df[split_column].astype(object)}), mean, std], ignore_index=True)
+    return out[keys + [c for c in df.columns if c not in keys]]

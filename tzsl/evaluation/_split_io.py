@@ -40,8 +40,8 @@ import pandas as pd
 from tzsl._io import atomic_write
 from tzsl.evaluation._splits import (
     Split,
-    _check_min_counts,
-    _kept_mask,
+    check_min_counts,
+    kept_mask,
     attribute_exclusions,
     check_attribute_table,
     duplicate_attribute_groups,
@@ -139,7 +139,7 @@ def read_splits_csv(
         split's kept attributes).
     """
     A = check_attribute_table(object_attributes)
-    _check_min_counts(min_train_positives, min_train_negatives)
+    check_min_counts(min_train_positives, min_train_negatives)
     objects = tuple(map(str, object_attributes.index))
     attributes = tuple(map(str, object_attributes.columns))
     position = {o: i for i, o in enumerate(objects)}
@@ -223,7 +223,7 @@ def read_splits_csv(
             problems.append(f"{path}: split {name!r}: {rule}")
             continue
         excluded = attribute_exclusions(A[train], attributes, *rule)
-        kept = _kept_mask(attributes, excluded)
+        kept = kept_mask(attributes, excluded)
         test_idx = np.flatnonzero(test)
         for group in duplicate_attribute_groups(A[test_idx][:, kept]):
             names = [objects[test_idx[g]] for g in group]

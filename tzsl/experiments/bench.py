@@ -27,8 +27,8 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC
 
 from tzsl.datasets import FeatureSet
-from tzsl.experiments.phac2_dap import DapStudyConfig, SplitPosteriors, _split_masks, fit_split, make_splits
-from tzsl.models._dap import attribute_prior
+from tzsl.experiments.phac2_dap import DapStudyConfig, SplitPosteriors, fit_split, make_splits, split_masks
+from tzsl.models import attribute_prior
 
 
 def literal_posteriors(features: FeatureSet, train: np.ndarray, test: np.ndarray, attributes: list[str],
@@ -74,7 +74,7 @@ def run_bench(features: FeatureSet, config: DapStudyConfig | None = None, split_
         if echo:
             echo(f"tzsl n_jobs={n_jobs}: {elapsed:.1f} s, AVGDAP accuracy {rows[-1]['avgdap_accuracy']:.3f}")
     if not skip_literal:
-        train, test = _split_masks(features, split)
+        train, test = split_masks(features, split)
         start = time.perf_counter()
         P = literal_posteriors(features, train, test, list(split.kept_attributes), seed=config.seed, progress=echo)
         elapsed = time.perf_counter() - start

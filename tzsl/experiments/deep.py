@@ -32,8 +32,9 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets import FabricData, fabric_zsl_split, load_fabric, load_gelsight_fabric_videos
-from tzsl.evaluation import per_class_mean_accuracy, trial_accuracy
+from tzsl.evaluation import per_class_mean_accuracy, summarise_over_splits, trial_accuracy
 from tzsl.exceptions import ConfigError, DataFileError
+from tzsl.experiments.fabric_tables import PAPER_LAMBDAS, lambda_label
 from tzsl.models import DeepAttributeEmbedding
 
 __all__ = [
@@ -291,18 +292,9 @@ def load_deep_sequences(
 # ---------------------------------------------------------------------------------------------
 # the study behind ``tzsl evaluate-fabric --model deep``
 # ---------------------------------------------------------------------------------------------
-#: The paper's lambda grid.
-PAPER_LAMBDAS: tuple = (0, 0.1, 1, 10, "inf")
 DEEP_TABLE_FILE = "fabric_deep_table.csv"
 DEEP_RUNS_FILE = "fabric_deep_runs.csv"
 DEEP_MANIFEST_FILE = "fabric_deep_manifest.json"
-
-
-def _lam_label(lam) -> str:
-    from tzsl.models._embedding import loss_weights  # noqa: PLC0415
-
-    w_c, _ = loss_weights(lam)  # validates
-    return "inf" if w_c == 0 else f"{float(lam):g}"
 
 
 def run_deep_fabric_study(
@@ -363,7 +355,7 @@ def run_deep_fabric_study(
     configs = [int(c) for c in configs]
     if not configs:
         raise ConfigError("configs is empty; choose from 1, 2")
-    labels = [_lam_label(lam) for lam in lams]
+    labels = [lambda_label(lam) for lam in lams]
     if not labels or len(set(labels)) != len(labels):
         raise ConfigError(f"lams must be a non-empty list without repeats; got {list(lams)}")
     params = dict(model_params or {})
@@ -401,9 +393,11 @@ def run_deep_fabric_study(
     runs = pd.DataFrame(rows)
     keys = ["condition", "config", "method"]
     stats = ["accuracy", "per_class_mean_accuracy", "train_accuracy", "seconds_per_epoch"]
-    grouped = runs.groupby(keys, sort=False)[stats]
-    table = grouped.mean().join(grouped.std(ddof=0).fillna(0.0), rsuffix="_std").reset_index()
-    table.insert(3, "n_seeds", grouped.size().to_numpy())
+    summary = summarise_over_splits(runs[["seed", *keys, *stats]], split_column="seed", by=keys, ddof=0)
+    mean = summary[summary["seed"] == "mean"].drop(columns="seed").reset_index(drop=True)
+    std = summary.loc[summary["seed"] == "std", stats].fillna(0.0).reset_index(drop=True)
+    table = pd.concat([mean, std.add_suffix("_std")], axis=1)
+    table.insert(3, "n_seeds", runs.groupby(keys, sort=False).size().to_numpy())
     out.write_csv(DEEP_RUNS_FILE, runs)
     out.write_csv(DEEP_TABLE_FILE, table)
     data_files = sorted({Path(p) for _, seqs in sources if "path" in seqs.table for p in seqs.table["path"]})

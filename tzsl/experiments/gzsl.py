@@ -45,10 +45,19 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets import FeatureSet
-from tzsl.evaluation import Split, gzsl_scores, per_class_mean_accuracy
+from tzsl.evaluation import (
+    Split,
+    choose_stacking_constant,
+    gzsl_scores,
+    holdout_trials,
+    per_class_mean_accuracy,
+    stacked_predict,
+    summarise_over_splits,
+)
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.experiments.config import Phac2Gzsl
 from tzsl.experiments.phac2_dap import DapStudyConfig, attribute_bank, compute_context
+from tzsl.experiments.phac2_tables import split_label
 from tzsl.models import attribute_prior, attribute_rows, build_method, dap_log_scores, fuse_attribute_posteriors
 
 __all__ = [
@@ -159,41 +168,6 @@ class GzslProblem:
 # --------------------------------------------------------------------------- set-up
 
 
-def holdout_trials(objects: np.ndarray, holdout_objects: Sequence[str], fraction: float,
-                   rng: np.random.Generator) -> np.ndarray:
-    """Hold out ``round(fraction * n)`` random trials (1 .. n-1) of every object in ``holdout_objects``.
-
-    Parameters
-    ----------
-    objects : ndarray of shape (n_trials,)
-        Object of every trial.
-    holdout_objects : sequence of str
-    fraction : float in (0, 1)
-    rng : numpy Generator
-
-    Returns
-    -------
-    ndarray of shape (n_trials,), bool
-        True for held-out trials.
-    """
-    objects = np.asarray(objects)
-    member = np.isin(objects, list(holdout_objects))
-    names, inverse, counts = np.unique(objects[member], return_inverse=True, return_counts=True)
-    if counts.size and counts.min() < 2:
-        raise SplitError(f"GZSL needs at least 2 trials per training object to hold one out; "
-                         f"{names[counts < 2][:5].tolist()} have 1")
-    n_hold = np.clip(np.rint(fraction * counts).astype(int), 1, counts - 1)
-    # random rank of every trial within its object: sort by (object, random key)
-    keys = rng.random(inverse.size)
-    order = np.lexsort((keys, inverse))
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    rank = np.empty(inverse.size, dtype=int)
-    rank[order] = np.arange(inverse.size) - np.repeat(starts, counts)
-    out = np.zeros(objects.size, dtype=bool)
-    out[np.flatnonzero(member)] = rank < n_hold[inverse]
-    return out
-
-
 def gzsl_problem(features: FeatureSet, split: Split, fraction: float, rng: np.random.Generator) -> GzslProblem:
     """Classes (unique attribute rows), seen mask and trial masks of one split."""
     attributes = split.kept_attributes
@@ -293,62 +267,7 @@ def _scores(method: str, features, problem, config, gzsl, seed) -> np.ndarray:
     return _eszsl_scores(features, problem)
 
 
-# --------------------------------------------------------------------------- calibrated stacking
-
-
-def stacked_predict(scores: np.ndarray, seen: np.ndarray, gamma: float = 0.0) -> np.ndarray:
-    """Argmax of ``scores - gamma * seen``: (n, n_classes) scores, (n_classes,) bool -> (n,) class."""
-    return np.argmax(scores - gamma * seen[None, :].astype(float), axis=1)
-
-
-def choose_stacking_constant(scores: np.ndarray, y: np.ndarray, seen: np.ndarray) -> float:
-    """The calibrated-stacking constant maximising the harmonic mean on labelled data.
-
-    With ``gamma`` subtracted from the seen classes, sample ``i`` is predicted as its best seen
-    class while ``gamma < d_i = max_seen - max_unseen`` and as its best unseen class beyond, so
-    the harmonic mean is piecewise constant in ``gamma`` with breaks at the ``d_i``. Every piece
-    is scored at once (midpoints between sorted breaks, below the first and above the last);
-    ties go to the ``gamma`` closest to 0.
-
-    Parameters
-    ----------
-    scores : ndarray of shape (n, n_classes)
-    y : ndarray of shape (n,), int
-        True class of each sample (index into the columns of ``scores``).
-    seen : ndarray of shape (n_classes,), bool
-
-    Returns
-    -------
-    float
-    """
-    seen = np.asarray(seen, dtype=bool)
-    y = np.asarray(y)
-    best_seen = np.argmax(np.where(seen, scores, -np.inf), axis=1)
-    best_unseen = np.argmax(np.where(seen, -np.inf, scores), axis=1)
-    rows = np.arange(len(y))
-    d = scores[rows, best_seen] - scores[rows, best_unseen]
-    breaks = np.unique(d)
-    candidates = np.concatenate([[breaks[0] - 1.0], (breaks[:-1] + breaks[1:]) / 2, [breaks[-1] + 1.0], [0.0]])
-    correct = np.where(candidates[:, None] < d[None, :], best_seen == y, best_unseen == y)  # (g, n)
-    # per-class mean accuracy of each group = sum of correct weighted by 1 / (class size * n classes)
-    y_seen = seen[y]
-    scores_by_group = []
-    for mask in (y_seen, ~y_seen):
-        classes, inv, counts = np.unique(y[mask], return_inverse=True, return_counts=True)
-        w = 1.0 / (counts[inv] * len(classes))
-        scores_by_group.append(correct[:, mask].astype(float) @ w)
-    s, u = scores_by_group
-    with np.errstate(invalid="ignore", divide="ignore"):
-        h = np.where(s + u > 0, 2 * s * u / (s + u), 0.0)
-    best = np.flatnonzero(np.isclose(h, h.max(), rtol=0, atol=1e-12))
-    return float(candidates[best[np.argmin(np.abs(candidates[best]))]])
-
-
 # --------------------------------------------------------------------------- one split, all splits
-
-
-def _label(split: Split) -> str:
-    return split.name.rsplit("-", 1)[-1]
 
 
 def _method_name(method: str, gzsl: GzslConfig) -> str:
@@ -375,7 +294,7 @@ def gzsl_split(features: FeatureSet, split: Split, config: DapStudyConfig, gzsl:
     unseen_classes = np.flatnonzero(~problem.seen)
     is_unseen = ~problem.seen[y]
     base = {
-        "split": _label(split), "n_classes": len(problem.seen), "n_seen_classes": len(seen_classes),
+        "split": split_label(split), "n_classes": len(problem.seen), "n_seen_classes": len(seen_classes),
         "n_unseen_classes": len(unseen_classes), "n_fit_trials": int(problem.fit.sum()),
         "n_seen_trials": int((~is_unseen).sum()), "n_unseen_trials": int(is_unseen.sum()),
         "n_attributes": len(problem.attributes), **problem.info,
@@ -403,14 +322,7 @@ def gzsl_table(rows: list[dict]) -> pd.DataFrame:
     table = pd.DataFrame(rows)
     front = ["split", "method", "calibrated", "seen", "unseen", "harmonic", "zsl", "stacking_constant"]
     table = table[front + [c for c in table.columns if c not in front]]
-    numeric = [c for c in table.columns if c not in ("split", "method", "calibrated")]
-    grouped = table.groupby(["method", "calibrated"], sort=False)[numeric]
-    summary = []
-    for stat in ("mean", "std"):
-        part = grouped.agg(stat).reset_index()
-        part.insert(0, "split", stat)
-        summary.append(part)
-    return pd.concat([table, *summary], ignore_index=True)[table.columns]
+    return summarise_over_splits(table, split_column="split", by=["method", "calibrated"])
 
 
 def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: DapStudyConfig | None = None,

@@ -36,10 +36,19 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets import Grasp, HandTable, read_grasps, simulate_grasps
+from tzsl.evaluation import summarise_over_splits
 from tzsl.exceptions import ConfigError, DataFileError, SplitError
 from tzsl.experiments import paper_numbers as paper
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.config import Compute, HandFeatures, HandMethods, HandSimulation
+from tzsl.experiments.hand_figures import (
+    attribute_accuracy_figure,
+    attribute_distance_figure,
+    confusion_figure,
+    multigrasp_k_figure,
+    multigrasp_T_figure,
+)
+from tzsl.experiments.hand_tables import SUBSETS, attribute_table, distance_table, format_hand_summary, table5
 from tzsl.features import GraspFeatures, grasp_features
 from tzsl.models import (
     HAND_FUSIONS,
@@ -63,9 +72,6 @@ __all__ = [
     "hand_features",
     "run_hand_study",
 ]
-
-#: Table 5 columns: the paper's object subsets (section 5.8), then all test objects.
-SUBSETS: tuple[str, ...] = ("homogeneous", "heterogeneous_shape", "heterogeneous_material")
 
 #: Every file :func:`run_hand_study` writes (checked before any computation).
 HAND_OUTPUTS: tuple[str, ...] = (
@@ -345,166 +351,6 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandStudyC
     return out
 
 
-# ---------------------------------------------------------------------------- tables
-def _summarise(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
-    """Per-seed rows followed by ``mean`` and ``std`` rows over seeds for each ``by`` group."""
-    numeric = [c for c in df.columns if c not in by + ["seed"] and pd.api.types.is_numeric_dtype(df[c])]
-    grouped = df.groupby(by, sort=False)[numeric]
-    mean = grouped.mean().reset_index().assign(seed="mean")
-    std = grouped.std(ddof=1).reset_index().assign(seed="std")
-    out = pd.concat([df.assign(seed=df["seed"].astype(object)), mean, std], ignore_index=True)
-    return out[["seed"] + by + [c for c in df.columns if c not in by + ["seed"]]]
-
-
-def _table5(rows: list[dict]) -> pd.DataFrame:
-    df = _summarise(pd.DataFrame(rows), ["method"])
-    for col in [*SUBSETS, "all"]:
-        df[f"paper_{col}"] = [
-            np.nan if seed == "std" else paper.DAP_HAND_TABLE5.get(m.lower(), {}).get(col, np.nan)
-            for seed, m in zip(df["seed"], df["method"], strict=True)
-        ]
-    return df
-
-
-def _attribute_table(rows: list[dict]) -> pd.DataFrame:
-    df = _summarise(pd.DataFrame(rows), ["attribute", "kind"])
-    df["paper_accuracy"] = df["attribute"].map(paper.DAP_HAND_ATTRIBUTE_ACCURACY_QUOTED).where(df["seed"] != "std")
-    per_seed = pd.DataFrame(rows).groupby("seed")["accuracy"].mean()
-    mean_rows = pd.DataFrame({
-        "seed": [*per_seed.index.astype(object), "mean", "std"],
-        "attribute": "mean", "kind": "all",
-        "accuracy": [*per_seed.to_numpy(), per_seed.mean(), per_seed.std(ddof=1)],
-        "paper_accuracy": [paper.DAP_HAND_MEAN_ATTRIBUTE_ACCURACY] * (len(per_seed) + 1) + [np.nan],
-    })
-    return pd.concat([df, mean_rows], ignore_index=True)
-
-
-def _distance_table(frames: list[pd.DataFrame]) -> pd.DataFrame:
-    df = pd.concat(frames, ignore_index=True)
-    attrs = [c for c in df.columns if c not in ("seed", "object")]
-    mean = df.groupby("object", sort=False)[attrs].mean().reset_index().assign(seed="mean")
-    return pd.concat([df.assign(seed=df["seed"].astype(object)), mean], ignore_index=True)[["seed", "object", *attrs]]
-
-
-# ---------------------------------------------------------------------------- figures
-def _plt():
-    import matplotlib  # noqa: PLC0415
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # noqa: PLC0415
-
-    return plt
-
-
-def _curve(ax, df: pd.DataFrame, x: str, y: str, label: str, color: str) -> None:
-    per_seed = df[~df["seed"].isin(["mean", "std"])]
-    for _, g in per_seed.groupby("seed"):
-        ax.plot(g[x], g[y], color=color, alpha=0.25, lw=0.8)
-    mean = df[df["seed"] == "mean"]
-    std = df[df["seed"] == "std"][y].fillna(0.0).to_numpy()
-    ax.plot(mean[x], mean[y], "o-", color=color, label=label)
-    ax.fill_between(mean[x], mean[y] - std, mean[y] + std, color=color, alpha=0.15)
-
-
-def _figure_T(df: pd.DataFrame, data_label: str):
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(6, 4))
-    _curve(ax, df, "T", "accuracy", "DF-MDAP (ours)", "C0")
-    ax.scatter([1], [paper.DAP_HAND_SINGLE_GRASP_BEST], marker="*", s=120, color="k", zorder=3,
-               label="paper: LDAP single grasp (T=1)")
-    ax.set_xlabel("number of fused grasps T")
-    ax.set_ylabel("accuracy on test objects")
-    ax.set_ylim(0, 1.02)
-    ax.set_title(f"DF-MDAP accuracy vs T\n{data_label}", fontsize=10)
-    ax.legend(loc="lower right", fontsize=8)
-    fig.tight_layout()
-    return fig
-
-
-def _figure_k(df: pd.DataFrame, data_label: str):
-    plt = _plt()
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
-    lo, hi = paper.DAP_HAND_SC_BEST_K_RANGE
-    _curve(a1, df, "k", "accuracy", "SC-MDAP (ours)", "C1")
-    a1.axvspan(lo - 0.5, hi + 0.5, color="grey", alpha=0.15, label=f"paper: best k in {lo}..{hi}")
-    a1.scatter([1], [paper.DAP_HAND_SINGLE_GRASP_BEST], marker="*", s=120, color="k", zorder=3,
-               label="paper: LDAP single grasp (k=1)")
-    a1.set_ylim(0, 1.02)
-    a1.set_xlabel("equal classifications required k")
-    a1.set_ylabel("accuracy on test objects")
-    a1.legend(loc="lower right", fontsize=8)
-    _curve(a2, df, "k", "mean_grasps_used", "mean grasps used", "C2")
-    a2.set_xlabel("equal classifications required k")
-    a2.set_ylabel("grasps used per decision")
-    a2.legend(loc="upper left", fontsize=8)
-    fig.suptitle(f"SC-MDAP vs k - {data_label}", fontsize=10)
-    fig.tight_layout()
-    return fig
-
-
-def _figure_confusion(conf: pd.DataFrame, names: list[str], data_label: str):
-    plt = _plt()
-    methods = list(pd.unique(conf["method"]))
-    fig, axes = plt.subplots(1, len(methods), figsize=(5.2 * len(methods), 5.2))
-    axes = np.atleast_1d(axes)
-    for ax, method in zip(axes, methods, strict=True):
-        c = conf[conf["method"] == method].pivot_table(index="true", columns="predicted", values="count",
-                                                       aggfunc="sum")
-        rows = [n for n in names if n in c.index]
-        c = c.reindex(index=rows, columns=names).fillna(0)
-        frac = c.to_numpy() / c.to_numpy().sum(axis=1, keepdims=True)
-        ax.imshow(frac, vmin=0, vmax=1, cmap="Blues")
-        for (i, j), v in np.ndenumerate(frac):
-            if v >= 0.005:
-                ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize=6,
-                        color="white" if v > 0.6 else "black")
-        n_all = int(sum(frac[i, names.index(r)] == 1.0 for i, r in enumerate(rows)))
-        ax.set_title(f"{method}\nobjects all correct: {n_all}/{len(rows)}", fontsize=9)
-        ax.set_xticks(range(len(names)), names, rotation=70, ha="right", fontsize=7)
-        ax.set_yticks(range(len(rows)), rows, fontsize=7)
-        ax.set_xlabel("predicted")
-    axes[0].set_ylabel("true object")
-    fig.suptitle(f"Confusion (rows sum to 1, pooled over seeds) - {data_label}; "
-                 f"paper Fig. 12: SC-MDAP k=4 all correct on 8/10", fontsize=9)
-    fig.tight_layout()
-    return fig
-
-
-def _figure_distance(S: pd.DataFrame, data_label: str):
-    plt = _plt()
-    mean = S[S["seed"] == "mean"].set_index("object").drop(columns="seed")
-    fig, ax = plt.subplots(figsize=(8, 5))
-    im = ax.imshow(mean.to_numpy(dtype=float), vmin=0, vmax=1, cmap="viridis")
-    for (i, j), v in np.ndenumerate(mean.to_numpy(dtype=float)):
-        ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize=6, color="white" if v < 0.5 else "black")
-    ax.set_xticks(range(mean.shape[1]), mean.columns, rotation=60, ha="right", fontsize=8)
-    ax.set_yticks(range(mean.shape[0]), mean.index, fontsize=8)
-    fig.colorbar(im, ax=ax, label="S (eq. 13)")
-    ax.set_title(f"Attribute distance S = |a - mean p(a=1|x)| (AVGDAP posteriors)\n{data_label}", fontsize=9)
-    fig.tight_layout()
-    return fig
-
-
-def _figure_attributes(df: pd.DataFrame, data_label: str):
-    plt = _plt()
-    mean = df[(df["seed"] == "mean") & (df["attribute"] != "mean")]
-    x = np.arange(len(mean))
-    fig, ax = plt.subplots(figsize=(8, 4))
-    ax.bar(x - 0.2, mean["accuracy"], width=0.4, label="accuracy (ours)")
-    ax.bar(x + 0.2, mean["balanced_accuracy"].fillna(0), width=0.4, label="balanced accuracy (ours)")
-    quoted = mean["paper_accuracy"].notna().to_numpy()
-    ax.scatter(x[quoted], mean.loc[quoted, "paper_accuracy"], marker="_", s=300, color="k", zorder=3,
-               label="paper (quoted in text)")
-    ax.axhline(paper.DAP_HAND_MEAN_ATTRIBUTE_ACCURACY, color="k", ls=":", lw=0.8, label="paper: mean 0.89")
-    ax.set_xticks(x, mean["attribute"], rotation=60, ha="right")
-    ax.set_ylim(0, 1.02)
-    ax.set_ylabel("test accuracy")
-    ax.set_title(f"Attribute classification on test grasps\n{data_label}", fontsize=9)
-    ax.legend(loc="lower right", fontsize=7)
-    fig.tight_layout()
-    return fig
-
-
 # ---------------------------------------------------------------------------- the study
 def run_hand_study(
     grasps: str | Path | Sequence[Grasp] | None,
@@ -586,11 +432,11 @@ def run_hand_study(
 
     names = list(table.test_objects)
     result = HandStudyResult(
-        table5=_table5(parts["table5"]),
-        multigrasp_T=_summarise(pd.DataFrame(parts["T"]), ["T"]),
-        multigrasp_k=_summarise(pd.DataFrame(parts["k"]), ["k"]),
-        attribute_accuracy=_attribute_table(parts["attr"]),
-        attribute_distance=_distance_table(parts["S"]),
+        table5=table5(parts["table5"]),
+        multigrasp_T=summarise_over_splits(pd.DataFrame(parts["T"]), split_column="seed", by=["T"]),
+        multigrasp_k=summarise_over_splits(pd.DataFrame(parts["k"]), split_column="seed", by=["k"]),
+        attribute_accuracy=attribute_table(parts["attr"]),
+        attribute_distance=distance_table(parts["S"]),
         confusion=pd.DataFrame(parts["confusion"]),
         simulated=simulated,
         notes=notes,
@@ -598,15 +444,15 @@ def run_hand_study(
     result.multigrasp_T["paper_T1_ldap"] = paper.DAP_HAND_SINGLE_GRASP_BEST
     results.write_csv("hand_table5.csv", result.table5)
     results.write_csv("hand_multigrasp_T.csv", result.multigrasp_T)
-    results.write_figure("hand_multigrasp_T.png", _figure_T(result.multigrasp_T, data_label))
+    results.write_figure("hand_multigrasp_T.png", multigrasp_T_figure(result.multigrasp_T, data_label))
     results.write_csv("hand_multigrasp_k.csv", result.multigrasp_k)
-    results.write_figure("hand_multigrasp_k.png", _figure_k(result.multigrasp_k, data_label))
+    results.write_figure("hand_multigrasp_k.png", multigrasp_k_figure(result.multigrasp_k, data_label))
     results.write_csv("hand_confusion.csv", result.confusion)
-    results.write_figure("hand_confusion.png", _figure_confusion(result.confusion, names, data_label))
+    results.write_figure("hand_confusion.png", confusion_figure(result.confusion, names, data_label))
     results.write_csv("hand_attribute_accuracy.csv", result.attribute_accuracy)
-    results.write_figure("hand_attribute_accuracy.png", _figure_attributes(result.attribute_accuracy, data_label))
+    results.write_figure("hand_attribute_accuracy.png", attribute_accuracy_figure(result.attribute_accuracy, data_label))
     results.write_csv("hand_attribute_distance.csv", result.attribute_distance)
-    results.write_figure("hand_attribute_distance.png", _figure_distance(result.attribute_distance, data_label))
+    results.write_figure("hand_attribute_distance.png", attribute_distance_figure(result.attribute_distance, data_label))
     results.write_manifest(
         {
             "study": "hand (DAP paper section 5.8)",
@@ -624,41 +470,3 @@ def run_hand_study(
     )
     result.written = list(results.written)
     return result
-
-
-def format_hand_summary(result: HandStudyResult) -> str:
-    """Table 5, the T and k curves (means over seeds) beside the paper, as plain text."""
-    pct = lambda v: "" if pd.isna(v) else f"{100 * v:6.2f}%"  # noqa: E731
-    lines = []
-    if result.simulated:
-        lines.append("NOTE: these numbers come from SIMULATED grasps, not from the paper's robot data.")
-    t5 = result.table5[result.table5["seed"] == "mean"]
-    cols = [c for c in (*SUBSETS, "all") if c in t5.columns]
-    lines.append("Table 5, single-grasp accuracy, mean over seeds (paper in brackets):")
-    lines.append(f"  {'method':<8}" + "".join(f"{c:>32}" for c in cols))
-    for _, r in t5.iterrows():
-        cells = [f"{pct(r[c]).strip()} ({pct(r.get('paper_' + c, np.nan)).strip() or '-'})" for c in cols]
-        lines.append(f"  {r['method']:<8}" + "".join(f"{c:>32}" for c in cells))
-    T = result.multigrasp_T[result.multigrasp_T["seed"] == "mean"]
-    lines.append("DF-MDAP accuracy vs T: " + ", ".join(f"T={int(t)}: {pct(a).strip()}"
-                                                      for t, a in zip(T["T"], T["accuracy"], strict=True)))
-    k = result.multigrasp_k[result.multigrasp_k["seed"] == "mean"]
-    lines.append("SC-MDAP accuracy vs k: " + ", ".join(
-        f"k={int(kk)}: {pct(a).strip()} ({g:.1f} grasps)"
-        for kk, a, g in zip(k["k"], k["accuracy"], k["mean_grasps_used"], strict=True)))
-    objects = [("LDAP (single grasp)", t5[t5["method"] == "LDAP"])]
-    for label, df, col in (("DF-MDAP", T, "T"), ("SC-MDAP", k, "k")):
-        methods = [m for m in pd.unique(result.confusion["method"]) if m.startswith(label)]
-        if methods:
-            setting = int(methods[0].split("=")[1].rstrip(")"))
-            objects.append((methods[0], df[df[col] == setting]))
-    n_objects = result.confusion.groupby("seed")["true"].nunique().max()
-    for label, row in objects:
-        if len(row):
-            lines.append(f"{label}: test objects with all grasps/sequences correct "
-                         f"{row['objects_all_correct'].item():.1f}/{n_objects}, with most correct {row['objects_majority_correct'].item():.1f}/{n_objects} "
-                         "(mean over seeds)")
-    lines.append(f"paper: LDAP {pct(paper.DAP_HAND_SINGLE_GRASP_BEST).strip()}, SC-MDAP (k=4) all correct on "
-                 f"{paper.DAP_HAND_SC_OBJECTS_PERFECT[0]}/{paper.DAP_HAND_SC_OBJECTS_PERFECT[1]} objects")
-    lines += [f"note: {n}" for n in result.notes]
-    return "\n".join(lines)

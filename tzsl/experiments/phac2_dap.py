@@ -13,30 +13,64 @@ from __future__ import annotations
 
 import contextlib
 from dataclasses import dataclass, field
-from itertools import combinations
-from math import comb
 
 import numpy as np
 import pandas as pd
 
 from tzsl.datasets import FeatureSet
-from tzsl.evaluation import (
-    Split,
-    challenging_splits,
-    per_class_mean_accuracy,
-    random_object_splits,
-    summarise_over_splits,
-)
+from tzsl.evaluation import Split, challenging_splits, random_object_splits
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.experiments.config import DaskCompute, Phac2Methods, Phac2Splits, Phac2Svm
-from tzsl.models import AttributeClassifierBank, AttributeSVM, MultiLabelAttributeClassifier, attribute_rows
-from tzsl.models._dap import attribute_prior, dap_accuracy_over_subsets, dap_log_scores, fuse_attribute_posteriors
+from tzsl.experiments.phac2_methods import method_comparison
+from tzsl.experiments.phac2_tables import (
+    FUSIONS,
+    PRIORS,
+    attribute_accuracy_summary,
+    attribute_accuracy_table,
+    attribute_subsets,
+    attribute_sweep,
+    multilabel_table,
+    table1_fusion,
+    table2_priors,
+    table3_challenging,
+)
+from tzsl.models import (
+    AttributeClassifierBank,
+    AttributeSVM,
+    MultiLabelAttributeClassifier,
+    attribute_prior,
+    dap_log_scores,
+    fuse_attribute_posteriors,
+)
 
 _SPLITS, _SVM, _METHODS, _COMPUTE = Phac2Splits(), Phac2Svm(), Phac2Methods(), DaskCompute()
 
-FUSIONS = ("max", "avg")
-PRIORS = ("uni", "test", "train")
 
+__all__ = [
+    "FUSIONS",
+    "PRIORS",
+    "DapStudyConfig",
+    "SplitPosteriors",
+    "attribute_accuracy_summary",
+    "attribute_accuracy_table",
+    "attribute_bank",
+    "attribute_estimator",
+    "attribute_subsets",
+    "attribute_sweep",
+    "compute_context",
+    "fit_split",
+    "fit_splits",
+    "make_splits",
+    "method_comparison",
+    "multilabel_table",
+    "object_map_features",
+    "run_dap_study",
+    "split_masks",
+    "table1_fusion",
+    "table2_priors",
+    "table3_challenging",
+    "train_attribute_model",
+]
 
 @dataclass
 class DapStudyConfig:
@@ -191,7 +225,8 @@ def attribute_bank(config: DapStudyConfig, attributes, seed: int) -> AttributeCl
     )
 
 
-def _split_masks(features: FeatureSet, split: Split) -> tuple[np.ndarray, np.ndarray]:
+def split_masks(features: FeatureSet, split: Split) -> tuple[np.ndarray, np.ndarray]:
+    """Boolean masks (n_trials,) of the split's training and test trials; unknown objects raise SplitError."""
     objects = features.objects
     unknown = (set(split.train_objects) | set(split.test_objects)) - set(objects)
     if unknown:
@@ -203,7 +238,7 @@ def fit_split(features: FeatureSet, split: Split, config: DapStudyConfig, index:
               multilabel: bool = False) -> SplitPosteriors:
     """Fit the attribute classifiers on the split's training objects; posteriors of its test trials."""
     attributes = split.kept_attributes
-    train, test = _split_masks(features, split)
+    train, test = split_masks(features, split)
     A = features.attributes.loc[features.objects, list(attributes)].to_numpy(dtype=int)
     groups = features.objects
     seed = int(np.random.SeedSequence([config.seed, index]).generate_state(1)[0])
@@ -257,165 +292,6 @@ def fit_splits(features: FeatureSet, splits: list[Split], config: DapStudyConfig
     """:func:`fit_split` for every split (index ``offset + i`` seeds split ``i``)."""
     with compute_context(config):
         return [fit_split(features, s, config, offset + i, multilabel=multilabel) for i, s in enumerate(splits)]
-
-
-# --------------------------------------------------------------------------- tables
-
-
-def _split_label(split: Split) -> str:
-    return split.name.rsplit("-", 1)[-1]
-
-
-def _with_summary(rows: list[dict]) -> pd.DataFrame:
-    return summarise_over_splits(pd.DataFrame(rows), split_column="split").reset_index()
-
-
-def _paper(table: dict, split: str, i: int):
-    key = "average" if split == "mean" else split
-    value = table.get(key)
-    return np.nan if value is None or value[i] is None else value[i]
-
-
-def table1_fusion(results: list[SplitPosteriors]) -> pd.DataFrame:
-    """Table 1: MAXDAP vs AVGDAP, uni-prior, per random split + mean/std, paper beside."""
-    from tzsl.experiments.paper_numbers import DAP_TABLE1  # noqa: PLC0415
-
-    rows = [{
-        "split": _split_label(r.split), "n_test_objects": r.split.n_test, "chance": r.split.chance,
-        "maxdap": r.accuracy("max", "uni"), "avgdap": r.accuracy("avg", "uni"),
-        "avgdap_per_class_mean": per_class_mean_accuracy(r.y, r.predict("avg", "uni")),
-        "n_attributes": len(r.attributes),
-    } for r in results]
-    table = _with_summary(rows)
-    table["paper_maxdap"] = [_paper(DAP_TABLE1, s, 0) for s in table["split"]]
-    table["paper_avgdap"] = [_paper(DAP_TABLE1, s, 1) for s in table["split"]]
-    return table
-
-
-def table2_priors(results: list[SplitPosteriors]) -> pd.DataFrame:
-    """Table 2: AVGDAP with uni / test / train attribute priors, paper beside."""
-    from tzsl.experiments.paper_numbers import DAP_TABLE2  # noqa: PLC0415
-
-    rows = [{"split": _split_label(r.split), **{p: r.accuracy("avg", p) for p in PRIORS}} for r in results]
-    table = _with_summary(rows)
-    for i, p in enumerate(PRIORS):
-        table[f"paper_{p}"] = [_paper(DAP_TABLE2, s, i) for s in table["split"]]
-    return table
-
-
-def table3_challenging(results: list[SplitPosteriors], map_coords: pd.DataFrame | None = None) -> pd.DataFrame:
-    """Table 3: challenging splits (AVGDAP, uni-prior), sizes and chance, paper beside."""
-    from tzsl.experiments.paper_numbers import DAP_TABLE3  # noqa: PLC0415
-
-    rows = []
-    for r in results:
-        label = _split_label(r.split)
-        part = ""
-        if map_coords is not None:
-            labels = map_coords.loc[map_coords["partition"] == int(label), "partition_label"]
-            part = labels.iloc[0] if len(labels) else ""
-        rows.append({
-            "split": label, "partition": part, "n_objects": r.split.n_test, "chance": r.split.chance,
-            "avgdap": r.accuracy("avg", "uni"),
-            "avgdap_per_class_mean": per_class_mean_accuracy(r.y, r.predict("avg", "uni")),
-            "excluded_attributes": ";".join(a for a, _ in r.split.excluded_attributes),
-            "dropped_duplicate_objects": ";".join(o for o, _ in r.split.dropped_objects),
-        })
-    table = _with_summary(rows)
-    for i, name in enumerate(("paper_n_objects", "paper_chance", "paper_avgdap")):
-        table[name] = [_paper(DAP_TABLE3, s, i) for s in table["split"]]
-    return table
-
-
-def multilabel_table(results: list[SplitPosteriors]) -> pd.DataFrame:
-    """Independent vs joint attribute classifiers (AVGDAP, uni-prior), paper beside (0.39 vs 0.31)."""
-    from tzsl.experiments.paper_numbers import DAP_INDEPENDENT_ACCURACY, DAP_MULTILABEL_ACCURACY  # noqa: PLC0415
-
-    rows = [{"split": _split_label(r.split), "independent": r.accuracy("avg", "uni"),
-             "multilabel": r.accuracy("avg", "uni", multilabel=True)} for r in results if r.P_multilabel is not None]
-    table = _with_summary(rows)
-    mean = table["split"] == "mean"
-    table["paper_independent"] = np.where(mean, DAP_INDEPENDENT_ACCURACY, np.nan)
-    table["paper_multilabel"] = np.where(mean, DAP_MULTILABEL_ACCURACY, np.nan)
-    return table
-
-
-def attribute_accuracy_table(results: list[SplitPosteriors], sensors: tuple[str, ...]) -> pd.DataFrame:
-    """Per-attribute accuracy and balanced accuracy on test trials (threshold 0.5), per split and sensor.
-
-    Rows: one per (split, attribute, sensor), plus ``sensor="mean"`` rows averaging the
-    sensors as the paper's Fig. 2a does. Balanced accuracy is NaN where an attribute takes a
-    single value on the split's test objects.
-    """
-    rows = []
-    for r in results:
-        truth = r.K[r.y].astype(bool)  # (n, m)
-        pred = r.P >= 0.5  # (n, s, m)
-        correct = pred == truth[:, None, :]
-        acc = correct.mean(axis=0)  # (s, m)
-        pos, neg = truth.sum(axis=0), (~truth).sum(axis=0)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            tpr = (pred & truth[:, None, :]).sum(axis=0) / pos
-            tnr = (~pred & ~truth[:, None, :]).sum(axis=0) / neg
-        bal = np.where((pos > 0) & (neg > 0), (tpr + tnr) / 2, np.nan)
-        for j, attr in enumerate(r.attributes):
-            for s, sensor in enumerate(sensors):
-                rows.append({"split": _split_label(r.split), "attribute": attr, "sensor": sensor,
-                             "accuracy": acc[s, j], "balanced_accuracy": bal[s, j]})
-            rows.append({"split": _split_label(r.split), "attribute": attr, "sensor": "mean",
-                         "accuracy": acc[:, j].mean(), "balanced_accuracy": np.nanmean(bal[:, j])
-                         if np.isfinite(bal[:, j]).any() else np.nan})
-    return pd.DataFrame(rows)
-
-
-def attribute_accuracy_summary(per_split: pd.DataFrame) -> pd.DataFrame:
-    """Mean over splits of the sensor-averaged per-attribute accuracy, with the paper's quoted values."""
-    from tzsl.experiments.paper_numbers import DAP_ATTRIBUTE_ACCURACY_QUOTED, DAP_MEAN_ATTRIBUTE_ACCURACY  # noqa: PLC0415
-
-    mean_rows = per_split[per_split["sensor"] == "mean"]
-    summary = mean_rows.groupby("attribute", sort=False)[["accuracy", "balanced_accuracy"]].mean().reset_index()
-    summary["paper_accuracy"] = summary["attribute"].map(DAP_ATTRIBUTE_ACCURACY_QUOTED)
-    overall = pd.DataFrame([{"attribute": "mean", "accuracy": summary["accuracy"].mean(),
-                             "balanced_accuracy": summary["balanced_accuracy"].mean(),
-                             "paper_accuracy": DAP_MEAN_ATTRIBUTE_ACCURACY}])
-    return pd.concat([summary, overall], ignore_index=True)
-
-
-def attribute_subsets(m: int, j: int, max_subsets: int, rng: np.random.Generator) -> np.ndarray:
-    """Up to ``max_subsets`` distinct j-subsets of m attributes as (r, j) column indices."""
-    total = comb(m, j)
-    if total <= max_subsets:
-        return np.array(list(combinations(range(m), j)), dtype=np.intp).reshape(-1, j)
-    chosen: set[tuple[int, ...]] = set()
-    while len(chosen) < max_subsets:
-        draws = np.sort(rng.random((max_subsets, m)).argsort(axis=1)[:, :j], axis=1)
-        chosen.update(map(tuple, draws.tolist()))
-    return np.array(sorted(chosen)[:max_subsets], dtype=np.intp)
-
-
-def attribute_sweep(results: list[SplitPosteriors], min_attributes: int = 7, max_subsets: int = 1000,
-                    seed: int = 0, fusion: str = "avg", prior: str = "uni") -> pd.DataFrame:
-    """Accuracy vs number of attributes j (section 4.7), reusing the fitted posteriors.
-
-    For each split and each j from ``min_attributes`` to the split's attribute count, up to
-    ``max_subsets`` random j-subsets are scored in one vectorised pass. Rows: (split, j) with
-    the mean and std over subsets, and ``split="mean"`` rows averaging the splits.
-    """
-    rng = np.random.default_rng(seed)
-    rows = []
-    for r in results:
-        m = len(r.attributes)
-        for j in range(min_attributes, m + 1):
-            subsets = attribute_subsets(m, j, max_subsets, rng)
-            acc = dap_accuracy_over_subsets(r.P, r.K, r.y, subsets, fusion=fusion, prior=prior)
-            rows.append({"split": _split_label(r.split), "n_attributes": j, "n_subsets": len(subsets),
-                         "accuracy_mean": acc.mean(), "accuracy_std": acc.std(), "chance": r.split.chance})
-    table = pd.DataFrame(rows)
-    mean = table.groupby("n_attributes", as_index=False).agg(
-        n_subsets=("n_subsets", "sum"), accuracy_mean=("accuracy_mean", "mean"),
-        accuracy_std=("accuracy_mean", "std"), chance=("chance", "mean"))
-    mean.insert(0, "split", "mean")
-    return pd.concat([table, mean], ignore_index=True)
 
 
 # --------------------------------------------------------------------------- the study
@@ -573,47 +449,3 @@ def train_attribute_model(
                          "gamma": getattr(est, "gamma_", np.nan), "draw": getattr(est, "draw_", -1),
                          "positive_objects": int(sub.attributes[name].sum())})
     return pd.DataFrame(rows)
-
-
-# --------------------------------------------------------------------------- DAP vs ESZSL vs embedding
-
-
-def _fit_predict_zsl(model, features: FeatureSet, split: Split) -> tuple[np.ndarray, np.ndarray]:
-    """Fit a feature->attribute ZSL model on the split's training objects; predicted/true test rows."""
-    attributes = list(split.kept_attributes)
-    train, test = _split_masks(features, split)
-    n, s, d = features.X.shape
-    X = features.X.reshape(n, s * d)
-    objects = features.objects
-    train_objects = np.unique(objects[train])
-    class_rows = features.attributes.loc[train_objects, attributes].to_numpy(dtype=float)
-    model.fit(X[train], attribute_rows(objects[train], class_rows), objects[train])
-    K = features.attributes.loc[list(split.test_objects), attributes].to_numpy(dtype=float)
-    y = pd.Index(split.test_objects).get_indexer(objects[test])
-    return model.predict(X[test], K), y
-
-
-def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed: int = 0,
-                      embedding_lams: tuple = (0.1, 1.0), eszsl: bool = True) -> pd.DataFrame:
-    """DAP, ESZSL and the fabric paper's embedding model on the same PHAC-2 splits (trial accuracy).
-
-    ESZSL's two ridges are tuned by class(object)-grouped CV on training objects; the embedding
-    model uses its documented defaults with class-grouped early stopping. Both see the two
-    BioTacs' features side by side (one vector per trial), objects sharing an attribute row are
-    merged into one training class. DAP numbers are AVGDAP / uni-prior from ``results``.
-    ``eszsl=False`` leaves ESZSL out; ``embedding_lams=()`` the embedding model.
-    """
-    from tzsl.models import build_method  # noqa: PLC0415
-
-    rows = []
-    for i, r in enumerate(results):
-        row = {"split": _split_label(r.split), "chance": r.split.chance, "dap_avg_uni": r.accuracy("avg", "uni")}
-        if eszsl:
-            pred, y = _fit_predict_zsl(build_method("eszsl"), features, r.split)
-            row["eszsl"] = float((pred == y).mean())
-        for lam in embedding_lams:
-            model = build_method("embedding", lam=lam, random_state=seed + i)
-            pred, y = _fit_predict_zsl(model, features, r.split)
-            row[f"embedding_lam_{lam:g}"] = float((pred == y).mean())
-        rows.append(row)
-    return _with_summary(rows)

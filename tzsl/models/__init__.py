@@ -22,7 +22,7 @@ from tzsl.models._decision import (
     cosine_similarities,
     squared_distances,
 )
-from tzsl.models._embedding import EmbeddingZSL
+from tzsl.models._embedding import EmbeddingZSL, loss_weights
 from tzsl.models._deep import DeepAttributeEmbedding, load_deep_bundle, save_deep_bundle
 from tzsl.models._hand_dap import FUSIONS as HAND_FUSIONS
 from tzsl.models._hand_dap import HandDAPClassifier, NoContactError, fuse_grasp_posteriors
@@ -111,7 +111,7 @@ __all__: list[str] = [
     "get_method",
     "register_method",
     "unregister_method",
-    "ESZSL", "ESZSLCV", "EmbeddingZSL", "IAP", "SAE", "SAECV", "ALE", "SJE", "DeViSE",
+    "ESZSL", "ESZSLCV", "EmbeddingZSL", "loss_weights", "IAP", "SAE", "SAECV", "ALE", "SJE", "DeViSE",
     "PHAC2_EP_SECONDS", "LogisticAttribute", "PerEPAttributeModel", "ep_column_blocks", "suggest_next_ep",
     "expected_information_gain", "outcome_log_likelihoods", "run_policy", "sequential_log_posterior",
     "stop_reasons"]

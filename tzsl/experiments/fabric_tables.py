@@ -1,0 +1,230 @@
+"""The fabric study's Table 1 analogue, its text form and Fig. 6 (accuracy vs lambda).
+
+Views of ``fabric_runs.csv`` (one row per fit, :func:`tzsl.experiments.fabric.run_fabric_study`):
+:func:`fabric_table` averages the seeds (:func:`tzsl.evaluation.summarise_over_splits`) and
+puts the paper's numbers beside ours, :func:`format_fabric_table` prints it,
+:func:`fabric_lambda_figure` draws it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+
+from tzsl.evaluation import summarise_over_splits
+from tzsl.experiments.fabric_samples import FabricSamples
+from tzsl.experiments.paper_numbers import FABRIC_TABLE1
+from tzsl.models import loss_weights
+
+__all__ = [
+    "ESZSL_METHOD",
+    "PAPER_CONFIG",
+    "PAPER_LAMBDAS",
+    "fabric_lambda_figure",
+    "fabric_note",
+    "fabric_table",
+    "format_fabric_table",
+    "lambda_label",
+    "method_names",
+    "paper_key",
+]
+
+#: The paper's lambda grid (Table 1); "inf" = regression term only (see :mod:`tzsl.experiments.fabric`).
+PAPER_LAMBDAS: tuple = (0, 0.1, 1, 10, "inf")
+#: Method name of ESZSL in the runs and the table.
+ESZSL_METHOD = "ESZSL"
+#: The split config the paper reports (its test groups 0, 5, 7).
+PAPER_CONFIG = 1
+
+
+def lambda_label(lam) -> str:
+    """Column label of a paper lambda: ``0 -> "0"``, ``0.1 -> "0.1"``, ``"inf" -> "inf"``."""
+    w_c, _ = loss_weights(lam)
+    if w_c == 0.0:
+        return "inf"
+    return f"{float(lam):g}"
+
+
+def method_names(lams: Sequence) -> list[str]:
+    """Method columns of the table: ``lam_<label>`` per lambda, then ``ESZSL``."""
+    return [f"lam_{lambda_label(lam)}" for lam in lams] + [ESZSL_METHOD]
+
+
+def paper_key(method: str) -> str:
+    """Key of a method column in :data:`~tzsl.experiments.paper_numbers.FABRIC_TABLE1`."""
+    return ESZSL_METHOD if method == ESZSL_METHOD else method[len("lam_"):]
+
+
+def fabric_note(samples: FabricSamples, config: int, duplicates: list[tuple[int, ...]], attributes: str) -> str:
+    """The ``note`` column of one (condition, config) row: data, paper row and deviations."""
+    parts = []
+    if samples.condition.startswith("depth"):
+        parts.append("public depth images, not the paper's GelSight videos")
+    if config != PAPER_CONFIG:
+        parts.append(f"the paper reports config {PAPER_CONFIG} only: no paper numbers")
+    elif samples.paper_row == "Average":
+        parts.append("paper columns = the paper's Average row over its GelSight Flat/Fold/Rand videos "
+                     "(CNN+LSTM), for orientation only")
+    elif samples.paper_row is not None:
+        parts.append(f"paper columns = the paper's {samples.paper_row} row")
+    else:
+        parts.append("no paper row of this name")
+    parts.append("lam_inf = regression term R only (the paper's caption says C only; see EmbeddingZSL)")
+    if duplicates:
+        dup = "; ".join(",".join(map(str, d)) for d in duplicates)
+        parts.append(f"{attributes}: groups {dup} share one attribute vector (merged in training)")
+    return "; ".join(parts)
+
+
+def fabric_table(runs: pd.DataFrame, lams: Sequence = PAPER_LAMBDAS) -> pd.DataFrame:
+    """Aggregate the runs into the Table 1 analogue.
+
+    Parameters
+    ----------
+    runs : DataFrame
+        ``fabric_runs.csv`` (one row per fit) with the per-row columns condition, config,
+        unit, test_groups, paper_row, note, n_train, n_test, method, seed, accuracy,
+        per_class_mean_accuracy.
+    lams : sequence
+        The lambdas run (column order).
+
+    Returns
+    -------
+    DataFrame
+        One row per (condition, config), in run order. Columns: condition, config, unit,
+        test_groups, n_train, n_test, chance (1 / number of test groups), n_seeds; for each
+        method M in ``lam_<lambda>...`` and ``ESZSL``: ``M`` (mean accuracy over seeds),
+        ``M_std`` (sample std over seeds, ddof=1; NaN for one seed; 0 for the deterministic
+        ESZSL), ``M_pcma`` and ``M_pcma_std`` (per-class mean accuracy); ``paper_M`` (the
+        paper's Table 1 number for ``paper_row``, NaN where it has none); paper_row, note.
+        Accuracies are fractions in [0, 1].
+    """
+    methods = method_names(lams)
+    keys = ["condition", "config"]
+    rows = []
+    for (cond, config), sub in runs.groupby(keys, sort=False):
+        first = sub.iloc[0]
+        n_test_groups = len(str(first["test_groups"]).split())
+        row = {
+            "condition": cond,
+            "config": int(config),
+            "unit": first["unit"],
+            "test_groups": first["test_groups"],
+            "n_train": int(first["n_train"]),
+            "n_test": int(first["n_test"]),
+            "chance": 1.0 / n_test_groups,
+            "n_seeds": int(sub.loc[sub["method"] != ESZSL_METHOD, "seed"].nunique()),
+        }
+        stats = {}
+        for m in methods:
+            got = sub.loc[sub["method"] == m, ["accuracy", "per_class_mean_accuracy"]].reset_index(drop=True)
+            summary = summarise_over_splits(got) if len(got) else None  # rows mean, std over seeds
+            for metric, suffix in (("accuracy", ""), ("per_class_mean_accuracy", "_pcma")):
+                stats[f"{m}{suffix}"] = np.nan if summary is None else float(summary.loc["mean", metric])
+                if m == ESZSL_METHOD:
+                    std = 0.0 if len(got) else np.nan  # deterministic: identical for every seed
+                else:
+                    std = float(summary.loc["std", metric]) if len(got) > 1 else np.nan
+                stats[f"{m}{suffix}_std"] = std
+        for m in methods:
+            row[m] = stats[m]
+        for m in methods:
+            row[f"{m}_std"] = stats[f"{m}_std"]
+        for m in methods:
+            row[f"{m}_pcma"] = stats[f"{m}_pcma"]
+        for m in methods:
+            row[f"{m}_pcma_std"] = stats[f"{m}_pcma_std"]
+        paper_row = first["paper_row"] if isinstance(first["paper_row"], str) and first["paper_row"] else None
+        for m in methods:
+            value = np.nan
+            if paper_row is not None and int(config) == PAPER_CONFIG:
+                value = FABRIC_TABLE1[paper_row].get(paper_key(m), np.nan)
+            row[f"paper_{m}"] = value
+        row["paper_row"] = paper_row if (paper_row and int(config) == PAPER_CONFIG) else ""
+        row["note"] = first["note"]
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def format_fabric_table(table: pd.DataFrame) -> str:
+    """Plain-text table: per method ``mean±std [paper]`` (accuracy in percent)."""
+    methods = [c for c in table.columns if f"paper_{c}" in table.columns]
+    n_seeds = int(table["n_seeds"].max()) if len(table) else 0
+    head = ["condition", "cfg", "test", "n_test", "chance"] + [
+        "ESZSL" if m == ESZSL_METHOD else f"lam={m[len('lam_'):]}" for m in methods
+    ]
+    lines = []
+    for _, r in table.iterrows():
+        cells = [str(r["condition"]), str(r["config"]), str(r["test_groups"]).replace(" ", ","),
+                 str(r["n_test"]), f"{100 * r['chance']:.1f}"]
+        for m in methods:
+            mean, std, paper = r[m], r[f"{m}_std"], r[f"paper_{m}"]
+            cell = f"{100 * mean:.1f}" + ("" if pd.isna(std) else f"±{100 * std:.1f}")
+            if not pd.isna(paper):
+                cell += f" [{100 * paper:.2f}]"  # the paper prints two decimals
+            cells.append(cell)
+        lines.append(cells)
+    widths = [max(len(h), *(len(c[i]) for c in lines)) for i, h in enumerate(head)] if lines else [len(h) for h in head]
+    fmt = lambda cells: "  ".join(c.ljust(w) for c, w in zip(cells, widths))  # noqa: E731
+    out = [
+        f"Fabric zero-shot accuracy (%) on unseen groups: ours mean±std over {n_seeds} seed(s), "
+        "[paper Table 1] beside (GelSight videos; Average row beside depth rows)",
+        fmt(head),
+        fmt(["-" * w for w in widths]),
+    ]
+    out += [fmt(c) for c in lines]
+    out.append("lam=inf: regression term R only (documented deviation from the paper's caption). "
+               "Per-class mean accuracy and notes: fabric_table1.csv.")
+    return "\n".join(out)
+
+
+def fabric_lambda_figure(table: pd.DataFrame, lams: Sequence = PAPER_LAMBDAS):
+    """Accuracy vs lambda, ours (mean ± std over seeds) and the paper's (its Fig. 6).
+
+    One panel per split config; ESZSL as a separate point right of the lambda axis; the
+    paper's Flat / Fold / Rand / Average rows (config 1 panel only) as dashed lines.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    methods = method_names(lams)
+    labels = [lambda_label(lam) for lam in lams]
+    x = np.arange(len(lams))
+    x_es = len(lams) + 0.5
+    configs = list(dict.fromkeys(table["config"].tolist()))
+    fig, axes = plt.subplots(1, len(configs), figsize=(6 * len(configs), 4.5), sharey=True, squeeze=False)
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for ax, config in zip(axes[0], configs):
+        sub = table[table["config"] == config]
+        for i, (_, r) in enumerate(sub.iterrows()):
+            c = colours[i % len(colours)]
+            mean = r[methods[:-1]].to_numpy(dtype=float)
+            std = np.nan_to_num(r[[f"{m}_std" for m in methods[:-1]]].to_numpy(dtype=float))
+            ax.errorbar(x, mean, yerr=std, color=c, marker="o", capsize=3, label=f"{r['condition']} (ours)")
+            ax.plot([x_es], [r[ESZSL_METHOD]], color=c, marker="s", ls="none")
+        if config == PAPER_CONFIG:
+            greys = {"Flat": "0.25", "Fold": "0.45", "Rand": "0.6", "Average": "0.0"}
+            for row, grey in greys.items():
+                vals = [FABRIC_TABLE1[row][paper_key(m)] for m in methods]
+                ax.plot(x, vals[:-1], color=grey, ls="--", marker="x", label=f"paper {row}")
+                ax.plot([x_es], [vals[-1]], color=grey, marker="x", ls="none")
+        chance = sub["chance"].iloc[0]
+        ax.axhline(chance, color="red", lw=0.8, ls=":", label=f"chance ({chance:.2f})")
+        ax.set_xticks(list(x) + [x_es], labels + ["ESZSL"])
+        ax.set_xlabel("lambda (loss C + lambda R; inf = R only)")
+        test = str(sub["test_groups"].iloc[0]).replace(" ", ", ")
+        ax.set_title(f"config {config}: test groups {test}")
+        ax.set_ylim(0, 1)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3)
+    axes[0][0].set_ylabel("zero-shot accuracy on unseen groups")
+    fig.tight_layout()
+    return fig
