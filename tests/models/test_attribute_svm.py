@@ -216,3 +216,43 @@ def test_dask_equals_loky():
             bank = AttributeClassifierBank(AttributeSVM(**TINY), backend="dask", memory=None, random_state=0)
             P_dask = bank.fit(X, A, g).predict_proba(X)
     np.testing.assert_array_equal(P_loky, P_dask)
+
+
+class ReferenceSVCGrid(AttributeSVM):
+    """The grid search as it was before libsvm was called directly: one ``SVC`` per fit (the reference)."""
+
+    def _grid_oof(self, D, yb, groups, draws, fold_seed, Cs, gammas, cw, oof) -> None:
+        from sklearn.svm import SVC
+
+        for di, keep in enumerate(draws):
+            idx = np.flatnonzero(keep)
+            folds = self._folds(yb[idx], groups[idx], fold_seed)
+            for gi, gamma in enumerate(gammas):
+                K = np.exp(-gamma * D[:, idx])
+                Kd = K[idx]
+                for ci, C in enumerate(Cs):
+                    svc = SVC(kernel="precomputed", C=C, class_weight=cw).fit(Kd, yb[idx])
+                    oof[di, gi, ci] = svc.decision_function(K)
+                for fold in folds:
+                    tr = ~fold
+                    Ktr, Kte = Kd[np.ix_(tr, tr)], Kd[np.ix_(fold, tr)]
+                    for ci, C in enumerate(Cs):
+                        svc = SVC(kernel="precomputed", C=C, class_weight=cw).fit(Ktr, yb[idx[tr]])
+                        oof[di, gi, ci, idx[fold]] = svc.decision_function(Kte)
+
+
+@pytest.mark.parametrize("params", [
+    dict(TINY, n_gamma=3, n_C=3), dict(TINY, cv=None), dict(TINY, undersampling="bagging"),
+    dict(TINY, undersampling="none"), dict(TINY, scoring="balanced_accuracy", n_draws=3),
+])
+def test_fast_grid_equals_svc_reference_bitwise(params):
+    """The shared-kernel libsvm grid gives exactly the numbers of one SVC per fit."""
+    X, A, g = make_problem(n_objects=18, seed=4)
+    tr = g < 14
+    for j in range(A.shape[1]):
+        fast = AttributeSVM(**params, random_state=j).fit(X[tr, 0], A[tr, j], g[tr])
+        ref = ReferenceSVCGrid(**params, random_state=j).fit(X[tr, 0], A[tr, j], g[tr])
+        np.testing.assert_array_equal(fast.oof_scores_, ref.oof_scores_)
+        np.testing.assert_array_equal(fast.cv_scores_, ref.cv_scores_)
+        assert (fast.C_, fast.gamma_, fast.draw_, fast.platt_) == (ref.C_, ref.gamma_, ref.draw_, ref.platt_)
+        np.testing.assert_array_equal(fast.predict_proba(X[~tr, 0]), ref.predict_proba(X[~tr, 0]))
