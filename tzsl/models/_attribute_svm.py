@@ -38,6 +38,7 @@ from sklearn.svm import _libsvm  # noqa: PLC2701 - see _svc_fit_decision
 from sklearn.utils import check_random_state
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
+from threadpoolctl import threadpool_limits
 from tqdm.auto import tqdm
 
 from tzsl.exceptions import ConfigError, SplitError
@@ -434,30 +435,31 @@ class AttributeSVM(ClassifierMixin, BaseEstimator):
                 )
         rng = check_random_state(self.random_state)
 
-        pre = clone(self.preprocessor) if self.preprocessor is not None else default_preprocessor()
-        Z = np.asarray(pre.fit_transform(X), dtype=np.float64)
-        D = euclidean_distances(Z, squared=True)
-        Cs = np.geomspace(*self.C_range, self.n_C)
-        gammas = np.geomspace(*self.gamma_range, self.n_gamma)
-        draws, draw_w = self._draws(yb, groups, rng)
-        fold_seed = int(rng.randint(np.iinfo(np.int32).max))
-        cw = None if self.undersampling == "none" else "balanced"
+        # many small dense problems: more BLAS threads than one only spin (and do not change results)
+        with threadpool_limits(limits=1):
+            pre = clone(self.preprocessor) if self.preprocessor is not None else default_preprocessor()
+            Z = np.asarray(pre.fit_transform(X), dtype=np.float64)
+            D = euclidean_distances(Z, squared=True)
+            Cs = np.geomspace(*self.C_range, self.n_C)
+            gammas = np.geomspace(*self.gamma_range, self.n_gamma)
+            draws, draw_w = self._draws(yb, groups, rng)
+            fold_seed = int(rng.randint(np.iinfo(np.int32).max))
+            cw = None if self.undersampling == "none" else "balanced"
 
-        oof = np.empty((len(draws), gammas.size, Cs.size, n))
-        self._grid_oof(D, yb, groups, draws, fold_seed, Cs, gammas, cw, oof)
-
-        w_cal = _balanced_weights(yb) if self.platt_weighting == "balanced" else np.ones(n)
-        if self.undersampling == "bagging":
-            oof = np.tensordot(draw_w, oof, axes=(0, 0))[None]
-        crit = np.empty(oof.shape[:3] + (2,))
-        for key in np.ndindex(*oof.shape[:3]):
-            crit[key] = self._criterion(oof[key], yb, w_cal)
-        flat = np.lexsort((crit[..., 1].ravel(), crit[..., 0].ravel()))[0]
-        di, gi, ci = np.unravel_index(flat, oof.shape[:3])
-        self.cv_scores_ = crit[..., 0]
-        self.C_, self.gamma_ = float(Cs[ci]), float(gammas[gi])
-        self.oof_scores_ = oof[di, gi, ci].copy()
-        self.platt_ = fit_platt(self.oof_scores_, yb, w_cal)
+            oof = np.empty((len(draws), gammas.size, Cs.size, n))
+            self._grid_oof(D, yb, groups, draws, fold_seed, Cs, gammas, cw, oof)
+            w_cal = _balanced_weights(yb) if self.platt_weighting == "balanced" else np.ones(n)
+            if self.undersampling == "bagging":
+                oof = np.tensordot(draw_w, oof, axes=(0, 0))[None]
+            crit = np.empty(oof.shape[:3] + (2,))
+            for key in np.ndindex(*oof.shape[:3]):
+                crit[key] = self._criterion(oof[key], yb, w_cal)
+            flat = np.lexsort((crit[..., 1].ravel(), crit[..., 0].ravel()))[0]
+            di, gi, ci = np.unravel_index(flat, oof.shape[:3])
+            self.cv_scores_ = crit[..., 0]
+            self.C_, self.gamma_ = float(Cs[ci]), float(gammas[gi])
+            self.oof_scores_ = oof[di, gi, ci].copy()
+            self.platt_ = fit_platt(self.oof_scores_, yb, w_cal)
         if self.undersampling == "bagging":
             chosen = range(len(draws))
             self.draw_ = -1
