@@ -8,7 +8,7 @@ from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.models import AttributeClassifierBank, AttributeSVM, AttributeTrainingError
-from tzsl.models._attribute_svm import fit_platt
+from tzsl.models._attribute_svm import GridEdgeWarning, fit_platt
 from tzsl.models._cache import spawn_seeds
 
 TINY = dict(n_C=2, n_gamma=2, n_draws=2, cv=3)
@@ -256,3 +256,18 @@ def test_fast_grid_equals_svc_reference_bitwise(params):
         np.testing.assert_array_equal(fast.cv_scores_, ref.cv_scores_)
         assert (fast.C_, fast.gamma_, fast.draw_, fast.platt_) == (ref.C_, ref.gamma_, ref.draw_, ref.platt_)
         np.testing.assert_array_equal(fast.predict_proba(X[~tr, 0]), ref.predict_proba(X[~tr, 0]))
+
+
+def test_grid_edge_choices_are_recorded_and_warned_once_per_batch():
+    X, A, g = make_problem()
+    # a one-point C grid never counts as an edge; gamma far too large must sit on the low edge
+    est = AttributeSVM(n_C=1, gamma_range=(30.0, 300.0), n_gamma=2, n_draws=1, cv=3)
+    with pytest.warns(GridEdgeWarning) as record:
+        bank = AttributeClassifierBank(est, attribute_names=["a", "b", "c"], memory=None, random_state=0).fit(X, A, g)
+    assert len([w for w in record if issubclass(w.category, GridEdgeWarning)]) == 1
+    hits = bank.grid_edge_hits_
+    assert {h["parameter"] for h in hits} == {"gamma"}
+    assert all(h["edge"] == "low" and h["value"] == 30.0 for h in hits)
+    assert len(hits) == 6  # every (attribute, sensor)
+    for h in hits:
+        assert ("gamma", 30.0, "low") in bank.estimators_[["a", "b", "c"].index(h["attribute"])][h["sensor"]].grid_edges_

@@ -23,6 +23,7 @@ refit: with ``m`` objects in a draw and a ``g x c`` grid that is ``g * c * (m + 
 
 from __future__ import annotations
 
+import warnings
 from numbers import Integral
 
 import numpy as np
@@ -48,11 +49,24 @@ from tzsl.models._cache import fit_clone, parallel_context, resolve_memory, spaw
 __all__ = [
     "AttributeClassifierBank",
     "AttributeSVM",
-    "AttributeTrainingError", "default_preprocessor", "fit_platt"]
+    "AttributeTrainingError", "GridEdgeWarning", "default_preprocessor", "fit_platt"]
 
 _UNDERSAMPLING = ("select", "bagging", "none")
 _SCORING = ("log_loss", "balanced_accuracy")
 _PLATT_WEIGHTING = ("balanced", "empirical")
+
+
+class GridEdgeWarning(UserWarning):
+    """A tuned hyper-parameter was chosen at the low or high end of its grid (the optimum may lie outside)."""
+
+
+def _grid_edges(chosen: dict[str, tuple[np.ndarray, int]]) -> list[tuple[str, float, str]]:
+    """``(name, value, "low" | "high")`` for each chosen grid index at an end of a grid of >= 2 points."""
+    edges = []
+    for name, (grid, i) in chosen.items():
+        if grid.size >= 2 and i in (0, grid.size - 1):
+            edges.append((name, float(grid[i]), "low" if i == 0 else "high"))
+    return edges
 
 
 class AttributeTrainingError(SplitError, ValueError):
@@ -234,6 +248,9 @@ class AttributeSVM(ClassifierMixin, BaseEstimator):
     cv_scores_ : ndarray of shape (n_draws_or_1, n_gamma, n_C)
         Grouped-CV criterion of every configuration (lower is better; balanced accuracy is
         stored negated).
+    grid_edges_ : list of (str, float, str)
+        ``(parameter, value, "low" | "high")`` for each chosen ``C`` / ``gamma`` at an end of its
+        grid (the grouped-CV optimum may lie outside the grid); empty when none is.
     """
 
     def __init__(
@@ -460,6 +477,7 @@ class AttributeSVM(ClassifierMixin, BaseEstimator):
             self.C_, self.gamma_ = float(Cs[ci]), float(gammas[gi])
             self.oof_scores_ = oof[di, gi, ci].copy()
             self.platt_ = fit_platt(self.oof_scores_, yb, w_cal)
+        self.grid_edges_ = _grid_edges({"C": (Cs, int(ci)), "gamma": (gammas, int(gi))})
         if self.undersampling == "bagging":
             chosen = range(len(draws))
             self.draw_ = -1
@@ -555,6 +573,10 @@ class AttributeClassifierBank(BaseEstimator):
     ----------
     estimators_ : list of list of fitted classifiers
         ``estimators_[m][s]`` is attribute ``m`` on sensor ``s``.
+    grid_edge_hits_ : list of dict
+        One ``{"attribute", "sensor", "parameter", "value", "edge"}`` per tuned hyper-parameter
+        chosen at an end of its grid (from each estimator's ``grid_edges_``); a
+        :class:`GridEdgeWarning` summarises them once per :meth:`fit`.
     n_sensors_, n_attributes_, n_features_in_ : int
     """
 
@@ -661,7 +683,29 @@ class AttributeClassifierBank(BaseEstimator):
         fitted = self._run_fits(tasks, "attribute fits")
         self.estimators_ = [fitted[j * s : (j + 1) * s] for j in range(A.shape[1])]
         self.n_sensors_, self.n_attributes_, self.n_features_in_ = s, A.shape[1], d
+        self._record_grid_edges(names)
         return self
+
+    def _record_grid_edges(self, names: list[str]) -> None:
+        """Fill ``grid_edge_hits_`` from the fitted estimators; one :class:`GridEdgeWarning` for the batch."""
+        self.grid_edge_hits_ = [
+            {"attribute": names[j], "sensor": k, "parameter": p, "value": v, "edge": e}
+            for j, per_sensor in enumerate(self.estimators_)
+            for k, est in enumerate(per_sensor)
+            for p, v, e in getattr(est, "grid_edges_", ())
+        ]
+        if self.grid_edge_hits_:
+            counts: dict[str, int] = {}
+            for hit in self.grid_edge_hits_:
+                key = f"{hit['parameter']} = {hit['value']:g} ({hit['edge']} edge)"
+                counts[key] = counts.get(key, 0) + 1
+            n_fits = sum(len(per) for per in self.estimators_)
+            detail = ", ".join(f"{key}: {c}" for key, c in sorted(counts.items()))
+            warnings.warn(
+                f"{len(self.grid_edge_hits_)} hyper-parameter choices of {n_fits} (attribute, sensor) fits sit on a "
+                f"grid edge ({detail}); the optimum may lie outside the grid (see grid_edge_hits_)",
+                GridEdgeWarning, stacklevel=3,
+            )
 
     def predict_proba(self, X) -> np.ndarray:
         """Attribute posteriors per sensor.
