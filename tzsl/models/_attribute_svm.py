@@ -49,7 +49,7 @@ from tzsl.models._cache import fit_clone, parallel_context, resolve_memory, spaw
 __all__ = [
     "AttributeClassifierBank",
     "AttributeSVM",
-    "AttributeTrainingError", "GridEdgeWarning", "default_preprocessor", "fit_platt"]
+    "AttributeTrainingError", "GridEdgeWarning", "balanced_object_draws", "default_preprocessor", "fit_platt"]
 
 _UNDERSAMPLING = ("select", "bagging", "none")
 _SCORING = ("log_loss", "balanced_accuracy")
@@ -190,6 +190,54 @@ def _balanced_weights(y: np.ndarray) -> np.ndarray:
     return w * y.size
 
 
+def balanced_object_draws(yb: np.ndarray, groups: np.ndarray, n_draws: int,
+                          rng: np.random.RandomState) -> tuple[list[np.ndarray], np.ndarray]:
+    """Class-balanced under-sampling draws that drop whole objects of the majority class.
+
+    Parameters
+    ----------
+    yb : ndarray of bool, shape (n_trials,)
+    groups : ndarray of shape (n_trials,)
+        Object of each trial.
+    n_draws : int
+        Random draws; 0 means no under-sampling (one draw keeping every trial).
+    rng : numpy.random.RandomState
+
+    Returns
+    -------
+    draws : list of ndarray of bool, shape (n_trials,)
+        Kept trials of each distinct draw (duplicates merged).
+    weights : ndarray of shape (n_distinct_draws,)
+        Fraction of the ``n_draws`` draws equal to each distinct draw.
+    """
+    n = yb.size
+    if n_draws == 0:
+        return [np.ones(n, dtype=bool)], np.ones(1)
+    minority = yb.sum() * 2 <= n  # True: positives are the minority
+    major = yb != minority
+    # groups holding only majority trials can be dropped whole
+    g_all, g_inv = np.unique(groups, return_inverse=True)
+    has_minor = np.bincount(g_inv, weights=(~major).astype(float), minlength=g_all.size) > 0
+    droppable = np.flatnonzero(~has_minor)
+    size = np.bincount(g_inv, minlength=g_all.size)
+    n_minor = int((~major).sum())
+    # majority trials inside mixed groups are always kept
+    kept_major_fixed = int(np.bincount(g_inv, weights=major.astype(float), minlength=g_all.size)[has_minor].sum())
+    need = n_minor - kept_major_fixed
+    draws = []
+    for _ in range(n_draws):
+        order = droppable[rng.permutation(droppable.size)]
+        csum = np.cumsum(size[order])
+        k = int(np.searchsorted(csum, need)) + 1 if need > 0 else 0
+        k = min(k, order.size)
+        keep_group = has_minor.copy()
+        keep_group[order[:k]] = True
+        draws.append(keep_group[g_inv])
+    uniq, inverse = np.unique(np.array(draws), axis=0, return_inverse=True)
+    weights = np.bincount(inverse.ravel(), minlength=len(uniq)).astype(float)
+    return list(uniq), weights / weights.sum()
+
+
 class AttributeSVM(ClassifierMixin, BaseEstimator):
     """Binary RBF-SVM for one attribute and one sensor, under-sampled, group-tuned, Platt-calibrated.
 
@@ -326,32 +374,7 @@ class AttributeSVM(ClassifierMixin, BaseEstimator):
         return masks
 
     def _draws(self, yb, groups, rng) -> tuple[list[np.ndarray], np.ndarray]:
-        n = yb.size
-        if self.undersampling == "none":
-            return [np.ones(n, dtype=bool)], np.ones(1)
-        minority = yb.sum() * 2 <= n  # True: positives are the minority
-        major = yb != minority
-        # groups holding only majority trials can be dropped whole
-        g_all, g_inv = np.unique(groups, return_inverse=True)
-        has_minor = np.bincount(g_inv, weights=(~major).astype(float), minlength=g_all.size) > 0
-        droppable = np.flatnonzero(~has_minor)
-        size = np.bincount(g_inv, minlength=g_all.size)
-        n_minor = int((~major).sum())
-        # majority trials inside mixed groups are always kept
-        kept_major_fixed = int(np.bincount(g_inv, weights=major.astype(float), minlength=g_all.size)[has_minor].sum())
-        need = n_minor - kept_major_fixed
-        draws = []
-        for _ in range(self.n_draws):
-            order = droppable[rng.permutation(droppable.size)]
-            csum = np.cumsum(size[order])
-            k = int(np.searchsorted(csum, need)) + 1 if need > 0 else 0
-            k = min(k, order.size)
-            keep_group = has_minor.copy()
-            keep_group[order[:k]] = True
-            draws.append(keep_group[g_inv])
-        uniq, inverse = np.unique(np.array(draws), axis=0, return_inverse=True)
-        weights = np.bincount(inverse.ravel(), minlength=len(uniq)).astype(float)
-        return list(uniq), weights / weights.sum()
+        return balanced_object_draws(yb, groups, self.n_draws if self.undersampling != "none" else 0, rng)
 
     def _criterion(self, oof: np.ndarray, yb: np.ndarray, w_cal: np.ndarray) -> tuple[float, float]:
         a, b = fit_platt(oof, yb, w_cal)
