@@ -52,6 +52,8 @@ __all__ = [
     "AttributeTrainingError", "GridEdgeWarning", "balanced_object_draws", "default_preprocessor", "fit_platt"]
 
 _UNDERSAMPLING = ("select", "bagging", "none")
+SOLVERS = ("exact", "approximate", "auto")
+AUTO_MAX_EXACT_TRIALS = 3000
 _SCORING = ("log_loss", "balanced_accuracy")
 _PLATT_WEIGHTING = ("balanced", "empirical")
 
@@ -591,6 +593,16 @@ class AttributeClassifierBank(BaseEstimator):
         Show a tqdm progress bar over the fits.
     random_state : int, RandomState or None, default=None
         Each (attribute, sensor) fit gets its own seed from ``np.random.SeedSequence``.
+    solver : {"exact", "approximate", "auto"}, default="auto"
+        ``"exact"``: ``estimator`` as given. ``"approximate"``: a
+        :class:`tzsl.models.ScalableAttributeClassifier` (Nystroem RBF features + logistic
+        regression, linear in trials) with ``estimator``'s preprocessor, under-sampling and Platt
+        weighting. ``"auto"``: exact up to ``max_exact_trials`` training trials, approximate above
+        (the exact model's time grows as trials^2). The choice and its reason are in
+        ``solver_choice_`` and printed when ``progress`` is on.
+    max_exact_trials : int, default=3000
+        Largest training set fitted exactly by ``solver="auto"`` (about 15 minutes per split of
+        30 attributes x 2 sensors on 2 cores at 4,000 trials, issue 15).
 
     Attributes
     ----------
@@ -601,6 +613,8 @@ class AttributeClassifierBank(BaseEstimator):
         chosen at an end of its grid (from each estimator's ``grid_edges_``); a
         :class:`GridEdgeWarning` summarises them once per :meth:`fit`.
     n_sensors_, n_attributes_, n_features_in_ : int
+    solver_choice_ : dict
+        ``{"solver": "exact" | "approximate", "reason": str, "n_trials": int}``.
     """
 
     def __init__(
@@ -612,6 +626,8 @@ class AttributeClassifierBank(BaseEstimator):
         memory=None,
         progress=False,
         random_state=None,
+        solver="auto",
+        max_exact_trials=AUTO_MAX_EXACT_TRIALS,
     ):
         self.estimator = estimator
         self.attribute_names = attribute_names
@@ -620,6 +636,8 @@ class AttributeClassifierBank(BaseEstimator):
         self.memory = memory
         self.progress = progress
         self.random_state = random_state
+        self.solver = solver
+        self.max_exact_trials = max_exact_trials
 
     def _names(self, m: int) -> list[str]:
         if self.attribute_names is None:
@@ -631,6 +649,32 @@ class AttributeClassifierBank(BaseEstimator):
 
     def _template(self):
         return AttributeSVM() if self.estimator is None else self.estimator
+
+    def _choose_template(self, n_trials: int):
+        """The estimator template for ``n_trials`` training trials; sets ``solver_choice_``."""
+        if self.solver not in SOLVERS:
+            raise ConfigError(f"solver must be one of {SOLVERS}, got {self.solver!r}")
+        exact = self._template()
+        if self.solver == "auto":
+            approximate = n_trials > self.max_exact_trials
+            relation = ">" if approximate else "<="
+            reason = f"solver='auto': {n_trials} training trials {relation} max_exact_trials={self.max_exact_trials}"
+        else:
+            approximate = self.solver == "approximate"
+            reason = f"solver={self.solver!r}"
+        self.solver_choice_ = {"solver": "approximate" if approximate else "exact", "reason": reason,
+                               "n_trials": int(n_trials)}
+        if self.progress:
+            tqdm.write(f"attribute models: {self.solver_choice_['solver']} ({reason})")
+        if not approximate:
+            return exact
+        from tzsl.models._scalable_attribute import ScalableAttributeClassifier  # noqa: PLC0415 (imports this module)
+
+        shared = {k: v for k, v in exact.get_params(deep=False).items()
+                  if k in ("preprocessor", "platt_weighting", "name", "random_state")}
+        undersampling = exact.get_params(deep=False).get("undersampling", "select")
+        shared["undersampling"] = "none" if undersampling == "none" else "select"
+        return ScalableAttributeClassifier(**shared)
 
     def _check_fit_input(self, X, A) -> tuple[np.ndarray, np.ndarray, list[str]]:
         """``(X, A, names)``: X (n_trials, n_sensors, n_features) float64, A (n_trials, n_attributes) 0/1."""
@@ -689,7 +733,7 @@ class AttributeClassifierBank(BaseEstimator):
                         f"attribute {nm!r}: {label} in only {k} training object(s); need at least 2 "
                         "(leave the attribute out of this split)"
                     )
-        template = self._template()
+        template = self._choose_template(n)
         seeds = spawn_seeds(self.random_state, A.shape[1] * s)
         memory = resolve_memory(self.memory)
         fit_one = memory.cache(fit_clone)
