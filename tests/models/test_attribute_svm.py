@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.models import AttributeClassifierBank, AttributeSVM, AttributeTrainingError
-from tzsl.models._attribute_svm import fit_platt
+from tzsl.models import GridEdgeWarning, fit_platt
 from tzsl.models._cache import spawn_seeds
 
 TINY = dict(n_C=2, n_gamma=2, n_draws=2, cv=3)
@@ -28,11 +27,6 @@ def make_problem(n_objects=14, trials=4, n_sensors=2, n_features=5, n_attributes
     groups = np.repeat(np.arange(n_objects), trials)
     X = obj_mean[groups] + 0.3 * rng.normal(size=(groups.size, n_sensors, n_features))
     return X, rows[groups], groups
-
-
-@parametrize_with_checks([AttributeSVM(**TINY, random_state=0)])
-def test_sklearn_contract(estimator, check):
-    check(estimator)
 
 
 def test_learns_and_gives_posteriors():
@@ -216,3 +210,58 @@ def test_dask_equals_loky():
             bank = AttributeClassifierBank(estimator=AttributeSVM(**TINY), backend="dask", memory=None, random_state=0)
             P_dask = bank.fit(X, A, g).predict_proba(X)
     np.testing.assert_array_equal(P_loky, P_dask)
+
+
+class ReferenceSVCGrid(AttributeSVM):
+    """The grid search as it was before libsvm was called directly: one ``SVC`` per fit (the reference)."""
+
+    def _grid_oof(self, D, yb, groups, draws, fold_seed, Cs, gammas, cw, oof) -> None:
+        from sklearn.svm import SVC
+
+        for di, keep in enumerate(draws):
+            idx = np.flatnonzero(keep)
+            folds = self._folds(yb[idx], groups[idx], fold_seed)
+            for gi, gamma in enumerate(gammas):
+                K = np.exp(-gamma * D[:, idx])
+                Kd = K[idx]
+                for ci, C in enumerate(Cs):
+                    svc = SVC(kernel="precomputed", C=C, class_weight=cw).fit(Kd, yb[idx])
+                    oof[di, gi, ci] = svc.decision_function(K)
+                for fold in folds:
+                    tr = ~fold
+                    Ktr, Kte = Kd[np.ix_(tr, tr)], Kd[np.ix_(fold, tr)]
+                    for ci, C in enumerate(Cs):
+                        svc = SVC(kernel="precomputed", C=C, class_weight=cw).fit(Ktr, yb[idx[tr]])
+                        oof[di, gi, ci, idx[fold]] = svc.decision_function(Kte)
+
+
+@pytest.mark.parametrize("params", [
+    dict(TINY, n_gamma=3, n_C=3), dict(TINY, cv=None), dict(TINY, undersampling="bagging"),
+    dict(TINY, undersampling="none"), dict(TINY, scoring="balanced_accuracy", n_draws=3),
+])
+def test_fast_grid_equals_svc_reference_bitwise(params):
+    """The shared-kernel libsvm grid gives exactly the numbers of one SVC per fit."""
+    X, A, g = make_problem(n_objects=18, seed=4)
+    tr = g < 14
+    for j in range(A.shape[1]):
+        fast = AttributeSVM(**params, random_state=j).fit(X[tr, 0], A[tr, j], g[tr])
+        ref = ReferenceSVCGrid(**params, random_state=j).fit(X[tr, 0], A[tr, j], g[tr])
+        np.testing.assert_array_equal(fast.oof_scores_, ref.oof_scores_)
+        np.testing.assert_array_equal(fast.cv_scores_, ref.cv_scores_)
+        assert (fast.C_, fast.gamma_, fast.draw_, fast.platt_) == (ref.C_, ref.gamma_, ref.draw_, ref.platt_)
+        np.testing.assert_array_equal(fast.predict_proba(X[~tr, 0]), ref.predict_proba(X[~tr, 0]))
+
+
+def test_grid_edge_choices_are_recorded_and_warned_once_per_batch():
+    X, A, g = make_problem()
+    # a one-point C grid never counts as an edge; gamma far too large must sit on the low edge
+    est = AttributeSVM(n_C=1, gamma_range=(30.0, 300.0), n_gamma=2, n_draws=1, cv=3)
+    with pytest.warns(GridEdgeWarning) as record:
+        bank = AttributeClassifierBank(estimator=est, attribute_names=["a", "b", "c"], memory=None, random_state=0).fit(X, A, g)
+    assert len([w for w in record if issubclass(w.category, GridEdgeWarning)]) == 1
+    hits = bank.grid_edge_hits_
+    assert {h["parameter"] for h in hits} == {"gamma"}
+    assert all(h["edge"] == "low" and h["value"] == 30.0 for h in hits)
+    assert len(hits) == 6  # every (attribute, sensor)
+    for h in hits:
+        assert ("gamma", 30.0, "low") in bank.estimators_[["a", "b", "c"].index(h["attribute"])][h["sensor"]].grid_edges_

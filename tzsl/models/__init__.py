@@ -4,7 +4,18 @@ One protocol (:class:`ZeroShotClassifier` = attribute model + decision rule), a 
 (:func:`build_method`, :func:`available_methods`) and :func:`all_estimators`.
 """
 
-from tzsl.models._attribute_svm import AttributeClassifierBank, AttributeSVM, AttributeTrainingError
+from tzsl.models._attribute_svm import AttributeSVM
+from tzsl.models._attribute_bank import AttributeClassifierBank
+from tzsl.models._attribute_training import (
+    AUTO_MAX_EXACT_TRIALS,
+    SOLVERS,
+    AttributeTrainingError,
+    GridEdgeWarning,
+    balanced_object_draws,
+    default_preprocessor,
+    fit_platt,
+)
+from tzsl.models._scalable_attribute import ScalableAttributeClassifier
 from tzsl.models._dap import (
     attribute_prior,
     break_ties,
@@ -83,6 +94,13 @@ __all__: list[str] = [
     "AttributeClassifierBank",
     "AttributeSVM",
     "AttributeTrainingError",
+    "AUTO_MAX_EXACT_TRIALS",
+    "SOLVERS",
+    "GridEdgeWarning",
+    "ScalableAttributeClassifier",
+    "balanced_object_draws",
+    "default_preprocessor",
+    "fit_platt",
     "MultiLabelAttributeClassifier",
     "attribute_prior",
     "check_attribute_posteriors",

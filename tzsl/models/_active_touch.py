@@ -68,7 +68,7 @@ from tzsl.models._active_policy import (
     sequential_log_posterior,
     stop_reasons,
 )
-from tzsl.models._attribute_svm import AttributeClassifierBank
+from tzsl.models._attribute_bank import AttributeClassifierBank
 from tzsl.models._dap import (
     attribute_prior,
     check_class_attributes,

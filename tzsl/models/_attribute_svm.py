@@ -23,109 +23,85 @@ refit: with ``m`` objects in a draw and a ``g x c`` grid that is ``g * c * (m + 
 
 from __future__ import annotations
 
-import os
 from numbers import Integral, Real
 
 import numpy as np
-from joblib import Parallel, delayed
-from scipy.optimize import minimize
 from scipy.special import expit, log_expit
 from sklearn import config_context
 from sklearn.base import BaseEstimator, ClassifierMixin, clone
 from sklearn.metrics.pairwise import euclidean_distances, rbf_kernel
 from sklearn.model_selection import LeaveOneGroupOut, StratifiedGroupKFold
 from sklearn.svm import SVC
+from sklearn.svm import _libsvm  # noqa: PLC2701 - see _svc_fit_decision
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
-from tqdm.auto import tqdm
+from threadpoolctl import threadpool_limits
 
-from tzsl.exceptions import ConfigError, SplitError
-from tzsl.features import VariancePCA
-from tzsl.models._cache import fit_clone, parallel_context, resolve_memory, spawn_seeds
+from tzsl.exceptions import ConfigError
+from tzsl.models._attribute_training import (
+    PLATT_WEIGHTING,
+    SCORING,
+    UNDERSAMPLING,
+    AttributeTrainingError,
+    balanced_object_draws,
+    balanced_sample_weights,
+    default_preprocessor,
+    fit_platt,
+    grid_edges,
+)
 from tzsl.models._validation import ParameterError, ValidatedParamsMixin
 
-__all__ = [
-    "AttributeClassifierBank",
-    "AttributeSVM",
-    "AttributeTrainingError", "default_preprocessor", "fit_platt"]
+__all__ = ["AttributeSVM"]
 
-_UNDERSAMPLING = ("select", "bagging", "none")
-_SCORING = ("log_loss", "balanced_accuracy")
-_PLATT_WEIGHTING = ("balanced", "empirical")
+_UNIT_WEIGHT = np.ones(2)
+_EMPTY = np.empty(0)
 
 
-class AttributeTrainingError(SplitError, ValueError):
-    """An attribute cannot be learned from the training objects of a split.
-
-    A :class:`tzsl.exceptions.SplitError` (and a ``ValueError``, as scikit-learn expects of
-    estimators given unusable targets).
-    """
+def _balanced_class_weight(y: np.ndarray) -> np.ndarray:
+    """``class_weight="balanced"`` of ``SVC`` for 0/1 labels: ``n / (2 * count)``; shape (2,)."""
+    counts = np.bincount(y.astype(np.intp), minlength=2)
+    return y.size / (2 * counts.astype(np.float64))
 
 
-def default_preprocessor() -> BaseEstimator:
-    """Z-score then PCA keeping 95% of the variance, capped at 25 components (DAP paper §4.3).
+def _svc_fit_decision(K_train: np.ndarray, y: np.ndarray, C: float, class_weight: np.ndarray,
+                      K_eval: np.ndarray) -> np.ndarray:
+    """Fit a precomputed-kernel C-SVC and return its decision values on ``K_eval``.
 
-    Returns
-    -------
-    tzsl.features.VariancePCA
-        ``VariancePCA(variance=0.95, max_components=25)``, unfitted.
-    """
-    return VariancePCA(variance=0.95, max_components=25)
-
-
-def fit_platt(
-    scores: np.ndarray, y: np.ndarray, sample_weight: np.ndarray | None = None
-) -> tuple[float, float]:
-    """Fit Platt's sigmoid ``p(y = 1 | s) = expit(a * s + b)``.
-
-    Uses Platt's (1999) smoothed targets ``(N+ + 1) / (N+ + 2)`` and ``1 / (N- + 2)``, which keep
-    the fit finite on separable scores. The slope is constrained to ``a >= 0``.
+    The same libsvm calls, with the same arguments, as ``SVC(kernel="precomputed", C=C,
+    class_weight=...).fit(K_train, y).decision_function(K_eval)``, so the numbers are identical
+    (``test_libsvm_path_equals_svc``), without ``SVC``'s per-call input validation, which took
+    about 70% of the time on the small (a few hundred trials) problems of the grid search.
 
     Parameters
     ----------
-    scores : ndarray of shape (n,)
-        Classifier scores (SVM decision values, unitless).
-    y : ndarray of shape (n,)
-        0/1 labels.
-    sample_weight : ndarray of shape (n,), optional
-        Non-negative weights.
+    K_train : ndarray of shape (n_train, n_train), C-contiguous
+        Kernel between training trials.
+    y : ndarray of shape (n_train,)
+        Labels as float64 0.0 / 1.0 (both present).
+    C : float
+    class_weight : ndarray of shape (2,)
+        Multipliers of ``C`` for class 0 and class 1.
+    K_eval : ndarray of shape (n_eval, n_train)
+        Kernel between evaluated and training trials.
 
     Returns
     -------
-    a, b : float
-        Slope and intercept of the logit.
+    ndarray of shape (n_eval,)
+        Decision values, positive towards class 1.
     """
-    s = np.asarray(scores, dtype=float)
-    y = np.asarray(y).astype(bool)
-    w = np.ones_like(s) if sample_weight is None else np.asarray(sample_weight, dtype=float)
-    n_pos, n_neg = int(y.sum()), int((~y).sum())
-    t = np.where(y, (n_pos + 1.0) / (n_pos + 2.0), 1.0 / (n_neg + 2.0))
-    scale = float(np.std(s)) or 1.0
-    u = s / scale  # conditioning only; undone below
-    w_pos, w_neg = w[y].sum(), w[~y].sum()
-    x0 = np.array([0.0, np.log((w_pos + 1.0) / (w_neg + 1.0))])
-
-    def loss(theta: np.ndarray) -> tuple[float, np.ndarray]:
-        z = theta[0] * u + theta[1]
-        nll = -(w * (t * log_expit(z) + (1.0 - t) * log_expit(-z))).sum()
-        r = w * (expit(z) - t)
-        return float(nll), np.array([(r * u).sum(), r.sum()])
-
-    # a >= 0: the map must increase with the score. Without it, leave-one-object-out scores of
-    # near-constant models (large gamma) are perfectly *anti*-correlated with the label (holding
-    # out a positive object shifts the intercept down), and a negative slope would "win" the CV.
-    res = minimize(loss, x0, jac=True, method="L-BFGS-B", bounds=[(0.0, None), (None, None)])
-    return float(res.x[0] / scale), float(res.x[1])
-
-
-def _balanced_weights(y: np.ndarray) -> np.ndarray:
-    y = y.astype(bool)
-    w = np.empty(y.shape, dtype=float)
-    w[y] = 0.5 / max(int(y.sum()), 1)
-    w[~y] = 0.5 / max(int((~y).sum()), 1)
-    return w * y.size
+    support, sv, n_sv, dual_coef, intercept, prob_a, prob_b, status, _ = _libsvm.fit(
+        K_train, y, svm_type=0, kernel="precomputed", C=float(C), class_weight=class_weight,
+        sample_weight=_EMPTY, cache_size=200.0, tol=1e-3, shrinking=True, max_iter=-1, random_seed=0,
+    )
+    if status != 0:
+        raise AttributeTrainingError("libsvm did not converge on a cross-validation fit")
+    dec = _libsvm.decision_function(
+        K_eval, support, sv, n_sv, dual_coef, intercept, prob_a, prob_b, svm_type=0, kernel="precomputed",
+        cache_size=200.0,
+    )
+    return -dec.ravel()
 
 
 class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
@@ -159,7 +135,13 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         (ties broken by log-loss). Ties keep the earliest draw, then the smallest ``gamma``, then the smallest ``C``.
     platt_weighting : {"balanced", "empirical"}, default="balanced"
         Weight the two classes equally when fitting the sigmoid (posterior for a 50% prior, as
-        for a classifier trained on balanced data) or by their training frequency.
+        for a classifier trained on balanced data) or by their training frequency (posterior
+        for the training prior). DAP divides each posterior by the attribute prior ``p(a_m)``:
+        ``"balanced"`` posteriors already carry a 50% prior, so they pair with DAP's ``"uni"``
+        prior (dividing by 0.5 changes nothing); with DAP's ``"train"`` prior the training prior
+        would be divided out twice, so that pairing needs ``"empirical"``. PHAC-2, 5 random
+        splits (seed 0), AVGDAP: balanced+uni 0.310, balanced+train 0.226 (double correction),
+        empirical+train 0.286, empirical+uni 0.290.
     name : str or None, default=None
         Attribute name used in error messages.
     random_state : int, RandomState or None, default=None
@@ -186,6 +168,9 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
     cv_scores_ : ndarray of shape (n_draws_or_1, n_gamma, n_C)
         Grouped-CV criterion of every configuration (lower is better; balanced accuracy is
         stored negated).
+    grid_edges_ : list of (str, float, str)
+        ``(parameter, value, "low" | "high")`` for each chosen ``C`` / ``gamma`` at an end of its
+        grid (the grouped-CV optimum may lie outside the grid); empty when none is.
     """
 
     _parameter_constraints: dict = {
@@ -195,10 +180,10 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         "n_C": [Interval(Integral, 1, None, closed="left")],
         "n_gamma": [Interval(Integral, 1, None, closed="left")],
         "cv": [None, Interval(Integral, 2, None, closed="left"), HasMethods(["split"])],
-        "undersampling": [StrOptions(set(_UNDERSAMPLING))],
+        "undersampling": [StrOptions(set(UNDERSAMPLING))],
         "n_draws": [Interval(Integral, 1, None, closed="left")],
-        "scoring": [StrOptions(set(_SCORING))],
-        "platt_weighting": [StrOptions(set(_PLATT_WEIGHTING))],
+        "scoring": [StrOptions(set(SCORING))],
+        "platt_weighting": [StrOptions(set(PLATT_WEIGHTING))],
         "name": [None, str],
         "random_state": ["random_state"],
     }
@@ -271,32 +256,7 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         return masks
 
     def _draws(self, yb, groups, rng) -> tuple[list[np.ndarray], np.ndarray]:
-        n = yb.size
-        if self.undersampling == "none":
-            return [np.ones(n, dtype=bool)], np.ones(1)
-        minority = yb.sum() * 2 <= n  # True: positives are the minority
-        major = yb != minority
-        # groups holding only majority trials can be dropped whole
-        g_all, g_inv = np.unique(groups, return_inverse=True)
-        has_minor = np.bincount(g_inv, weights=(~major).astype(float), minlength=g_all.size) > 0
-        droppable = np.flatnonzero(~has_minor)
-        size = np.bincount(g_inv, minlength=g_all.size)
-        n_minor = int((~major).sum())
-        # majority trials inside mixed groups are always kept
-        kept_major_fixed = int(np.bincount(g_inv, weights=major.astype(float), minlength=g_all.size)[has_minor].sum())
-        need = n_minor - kept_major_fixed
-        draws = []
-        for _ in range(self.n_draws):
-            order = droppable[rng.permutation(droppable.size)]
-            csum = np.cumsum(size[order])
-            k = int(np.searchsorted(csum, need)) + 1 if need > 0 else 0
-            k = min(k, order.size)
-            keep_group = has_minor.copy()
-            keep_group[order[:k]] = True
-            draws.append(keep_group[g_inv])
-        uniq, inverse = np.unique(np.array(draws), axis=0, return_inverse=True)
-        weights = np.bincount(inverse.ravel(), minlength=len(uniq)).astype(float)
-        return list(uniq), weights / weights.sum()
+        return balanced_object_draws(yb, groups, self.n_draws if self.undersampling != "none" else 0, rng)
 
     def _criterion(self, oof: np.ndarray, yb: np.ndarray, w_cal: np.ndarray) -> tuple[float, float]:
         a, b = fit_platt(oof, yb, w_cal)
@@ -308,36 +268,54 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         bacc = 0.5 * (pred[yb].mean() + (~pred[~yb]).mean())
         return -float(bacc), ll
 
-    def _grid_oof(self, D, yb, groups, draws, fold_seed, Cs, gammas, cw, oof, models) -> None:
-        """Fill ``oof[draw, gamma, C]`` with out-of-fold SVM scores and ``models`` with full-draw fits.
+    def _grid_oof(self, D, yb, groups, draws, fold_seed, Cs, gammas, cw, oof) -> None:
+        """Fill ``oof[draw, gamma, C]`` with out-of-fold SVM scores of every training trial.
 
         The grouped folds are made over the objects of each draw; a trial outside the draw is
-        scored by the draw's full model, which never saw it.
+        scored by the draw's full model, which never saw it. Per draw and ``gamma`` the kernel of
+        the draw is computed once (``np.exp`` in place on one buffer) and each fold's training
+        and held-out blocks are gathered once for all ``C``; the fits call libsvm directly
+        (:func:`_svc_fit_decision`), which gives the same numbers as ``SVC`` bitwise.
         """
+        _libsvm.set_verbosity_wrap(0)  # libsvm's global switch; SVC sets it before every fit
         for di, keep in enumerate(draws):
             idx = np.flatnonzero(keep)
+            out = np.flatnonzero(~keep)
             folds = self._folds(yb[idx], groups[idx], fold_seed)
+            y_draw = yb[idx].astype(np.float64)
             for fold in folds:
-                tr = idx[~fold]
-                if yb[tr].all() or not yb[tr].any():
+                if y_draw[~fold].all() or not y_draw[~fold].any():
                     raise AttributeTrainingError(
                         f"{self._label()}: a cross-validation fold leaves one class without training "
                         "objects; use fewer folds (cv)"
                     )
+            # gathered once per draw: squared distances of the draw (rows: draw, then outside trials)
+            D_draw = D[np.ix_(np.concatenate([idx, out]), idx)]
+            K = np.empty_like(D_draw)
+            Kd, K_out = K[: idx.size], K[idx.size :]
+            fold_index = [(np.flatnonzero(~f), np.flatnonzero(f)) for f in folds]
+            fold_w = [_balanced_class_weight(y_draw[tr]) if cw else _UNIT_WEIGHT for tr, _ in fold_index]
+            w_full = _balanced_class_weight(y_draw) if cw else _UNIT_WEIGHT
             for gi, gamma in enumerate(gammas):
-                K = np.exp(-gamma * D[:, idx])
-                Kd = K[idx]
+                np.multiply(D_draw, -gamma, out=K)
+                np.exp(K, out=K)
+                Kd_c = np.ascontiguousarray(Kd)
+                K_out_c = np.ascontiguousarray(K_out)
                 for ci, C in enumerate(Cs):
-                    svc = SVC(kernel="precomputed", C=C, class_weight=cw).fit(Kd, yb[idx])
-                    models[di, gi, ci] = svc
-                    oof[di, gi, ci] = svc.decision_function(K)
-                for fold in folds:
-                    tr = ~fold
+                    if out.size:
+                        oof[di, gi, ci, out] = _svc_fit_decision(Kd_c, y_draw, C, w_full, K_out_c)
+                for (tr, te), w in zip(fold_index, fold_w):
                     Ktr = Kd[np.ix_(tr, tr)]
-                    Kte = Kd[np.ix_(fold, tr)]
+                    Kte = Kd[np.ix_(te, tr)]
+                    y_tr = y_draw[tr]
                     for ci, C in enumerate(Cs):
-                        svc = SVC(kernel="precomputed", C=C, class_weight=cw).fit(Ktr, yb[idx[tr]])
-                        oof[di, gi, ci, idx[fold]] = svc.decision_function(Kte)
+                        oof[di, gi, ci, idx[te]] = _svc_fit_decision(Ktr, y_tr, C, w, Kte)
+
+    def _final_svc(self, D, keep, yb, C, gamma, cw) -> SVC:
+        """The ``SVC`` of one draw on all its trials for the chosen ``(C, gamma)`` (used at predict time)."""
+        idx = np.flatnonzero(keep)
+        K = np.exp(-gamma * D[np.ix_(idx, idx)])
+        return SVC(kernel="precomputed", C=C, class_weight=cw).fit(K, yb[idx])
 
     # ------------------------------------------------------------------ API
     def fit(self, X, y, groups=None):
@@ -379,33 +357,32 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
                 )
         rng = check_random_state(self.random_state)
 
-        pre = clone(self.preprocessor) if self.preprocessor is not None else default_preprocessor()
-        Z = np.asarray(pre.fit_transform(X), dtype=np.float64)
-        D = euclidean_distances(Z, squared=True)
-        Cs = np.geomspace(*self.C_range, self.n_C)
-        gammas = np.geomspace(*self.gamma_range, self.n_gamma)
-        draws, draw_w = self._draws(yb, groups, rng)
-        fold_seed = int(rng.randint(np.iinfo(np.int32).max))
-        cw = None if self.undersampling == "none" else "balanced"
+        # many small dense problems: more BLAS threads than one only spin (and do not change results)
+        with threadpool_limits(limits=1):
+            pre = clone(self.preprocessor) if self.preprocessor is not None else default_preprocessor()
+            Z = np.asarray(pre.fit_transform(X), dtype=np.float64)
+            D = euclidean_distances(Z, squared=True)
+            Cs = np.geomspace(*self.C_range, self.n_C)
+            gammas = np.geomspace(*self.gamma_range, self.n_gamma)
+            draws, draw_w = self._draws(yb, groups, rng)
+            fold_seed = int(rng.randint(np.iinfo(np.int32).max))
+            cw = None if self.undersampling == "none" else "balanced"
 
-        oof = np.empty((len(draws), gammas.size, Cs.size, n))
-        models: dict[tuple[int, int, int], SVC] = {}
-        with config_context(assume_finite=True, skip_parameter_validation=True):
-            self._grid_oof(D, yb, groups, draws, fold_seed, Cs, gammas, cw, oof, models)
-
-
-        w_cal = _balanced_weights(yb) if self.platt_weighting == "balanced" else np.ones(n)
-        if self.undersampling == "bagging":
-            oof = np.tensordot(draw_w, oof, axes=(0, 0))[None]
-        crit = np.empty(oof.shape[:3] + (2,))
-        for key in np.ndindex(*oof.shape[:3]):
-            crit[key] = self._criterion(oof[key], yb, w_cal)
-        flat = np.lexsort((crit[..., 1].ravel(), crit[..., 0].ravel()))[0]
-        di, gi, ci = np.unravel_index(flat, oof.shape[:3])
-        self.cv_scores_ = crit[..., 0]
-        self.C_, self.gamma_ = float(Cs[ci]), float(gammas[gi])
-        self.oof_scores_ = oof[di, gi, ci].copy()
-        self.platt_ = fit_platt(self.oof_scores_, yb, w_cal)
+            oof = np.empty((len(draws), gammas.size, Cs.size, n))
+            self._grid_oof(D, yb, groups, draws, fold_seed, Cs, gammas, cw, oof)
+            w_cal = balanced_sample_weights(yb) if self.platt_weighting == "balanced" else np.ones(n)
+            if self.undersampling == "bagging":
+                oof = np.tensordot(draw_w, oof, axes=(0, 0))[None]
+            crit = np.empty(oof.shape[:3] + (2,))
+            for key in np.ndindex(*oof.shape[:3]):
+                crit[key] = self._criterion(oof[key], yb, w_cal)
+            flat = np.lexsort((crit[..., 1].ravel(), crit[..., 0].ravel()))[0]
+            di, gi, ci = np.unravel_index(flat, oof.shape[:3])
+            self.cv_scores_ = crit[..., 0]
+            self.C_, self.gamma_ = float(Cs[ci]), float(gammas[gi])
+            self.oof_scores_ = oof[di, gi, ci].copy()
+            self.platt_ = fit_platt(self.oof_scores_, yb, w_cal)
+        self.grid_edges_ = grid_edges({"C": (Cs, int(ci)), "gamma": (gammas, int(gi))})
         if self.undersampling == "bagging":
             chosen = range(len(draws))
             self.draw_ = -1
@@ -414,7 +391,8 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
             chosen = [di]
             self.draw_ = int(di) if self.undersampling == "select" else -1
             self.estimator_weights_ = np.ones(1)
-        self.estimators_ = [models[d, gi, ci] for d in chosen]
+        with config_context(assume_finite=True, skip_parameter_validation=True):
+            self.estimators_ = [self._final_svc(D, draws[d], yb, self.C_, self.gamma_, cw) for d in chosen]
         self.train_features_ = [Z[draws[d]] for d in chosen]
         self.preprocessor_ = pre
         return self
@@ -454,200 +432,3 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         """Class with posterior >= 0.5, shape (n_trials,)."""
         check_is_fitted(self)
         return self.classes_[(self.decision_function(X) >= 0).astype(int)]
-
-
-def _check_attribute_matrix(A, n: int, names) -> np.ndarray:
-    A = np.asarray(A)
-    if A.ndim != 2 or A.shape[0] != n:
-        raise ConfigError(f"attribute targets must have shape ({n}, n_attributes), got {A.shape}")
-    Af = A.astype(float)
-    bad = ~np.isin(Af, (0.0, 1.0))  # NaN is not in the set either
-    if bad.any():
-        r, c = np.argwhere(bad)[0]
-        raise AttributeTrainingError(
-            f"attribute {names[c]!r}: trial row {r} has value {A[r, c].item()!r}; attribute targets must be 0/1"
-        )
-    return Af.astype(np.int64)
-
-
-class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
-    """Independent attribute classifiers: one per (attribute, sensor), fitted in parallel and cached.
-
-    This is the attribute layer of DAP (paper §3.3, §4.4): attributes are assumed independent,
-    and each sensor (BioTac) gets its own classifier.
-
-    Parameters
-    ----------
-    estimator : classifier or None, default=None
-        Template cloned for every (attribute, sensor); must accept ``fit(X, y, groups)`` and give
-        ``predict_proba``. ``None``: :class:`AttributeSVM` with default parameters.
-    attribute_names : sequence of str or None, default=None
-        Names used in error messages (default ``"0"``, ``"1"``, ...).
-    n_jobs : int or None, default=None
-        Parallel fits (joblib convention; ``-1`` = all cores).
-    backend : {"loky", "dask", "threading", "sequential"}, default="loky"
-        joblib backend. ``"dask"`` runs the fits on the current ``dask.distributed`` Client.
-        Results do not depend on the backend or ``n_jobs``.
-    memory : None, str, Path or joblib.Memory, default=None
-        Cache of fitted per-(attribute, sensor) models, keyed on the data and all parameters.
-        ``None``: ``$TZSL_CACHE_DIR`` if set, else no caching.
-    progress : bool, default=False
-        Show a tqdm progress bar over the fits.
-    random_state : int, RandomState or None, default=None
-        Each (attribute, sensor) fit gets its own seed from ``np.random.SeedSequence``.
-
-    Attributes
-    ----------
-    estimators_ : list of list of fitted classifiers
-        ``estimators_[m][s]`` is attribute ``m`` on sensor ``s``.
-    n_sensors_, n_attributes_, n_features_in_ : int
-    """
-
-    #: Attribute-model protocol: ``predict_proba`` gives ``p(a_m = 1 | x_s)`` (read by DAPRule).
-    score_kind = "probability"
-
-    _parameter_constraints: dict = {
-        "estimator": [None, HasMethods(["fit", "predict_proba"])],
-        "attribute_names": [None, "array-like"],
-        "n_jobs": [None, Integral],
-        "backend": [StrOptions({"loky", "dask", "threading", "sequential", "multiprocessing"})],
-        "memory": [None, str, os.PathLike, HasMethods(["cache"])],
-        "progress": ["boolean"],
-        "random_state": ["random_state"],
-    }
-
-    def __init__(
-        self,
-        *,
-        estimator=None,
-        attribute_names=None,
-        n_jobs=None,
-        backend="loky",
-        memory=None,
-        progress=False,
-        random_state=None,
-    ):
-        self.estimator = estimator
-        self.attribute_names = attribute_names
-        self.n_jobs = n_jobs
-        self.backend = backend
-        self.memory = memory
-        self.progress = progress
-        self.random_state = random_state
-
-    def _names(self, m: int) -> list[str]:
-        if self.attribute_names is None:
-            return [str(i) for i in range(m)]
-        names = [str(a) for a in self.attribute_names]
-        if len(names) != m:
-            raise ConfigError(f"attribute_names has {len(names)} names but the targets have {m} columns")
-        return names
-
-    def _template(self):
-        return AttributeSVM() if self.estimator is None else self.estimator
-
-    def _check_fit_input(self, X, A) -> tuple[np.ndarray, np.ndarray, list[str]]:
-        """``(X, A, names)``: X (n_trials, n_sensors, n_features) float64, A (n_trials, n_attributes) 0/1."""
-        X = _check_3d(X)
-        n = X.shape[0]
-        if np.ndim(A) != 2:
-            raise ConfigError(f"attribute targets must have shape ({n}, n_attributes), got {np.shape(A)}")
-        names = self._names(np.shape(A)[1])
-        return X, _check_attribute_matrix(A, n, names), names
-
-    def _run_fits(self, tasks: list, desc: str) -> list:
-        """Run joblib ``tasks`` on ``self.backend`` / ``self.n_jobs``; results in task order."""
-        with parallel_context(self.backend):
-            backend = None if self.backend == "dask" else self.backend
-            results = Parallel(n_jobs=self.n_jobs, backend=backend, return_as="generator")(tasks)
-            return list(tqdm(results, total=len(tasks), desc=desc, disable=not self.progress))
-
-    def _check_predict_input(self, X) -> np.ndarray:
-        """``X`` as float64 (n_trials, n_sensors_, n_features_in_), after the fitted check."""
-        check_is_fitted(self)
-        X = _check_3d(X)
-        if X.shape[1:] != (self.n_sensors_, self.n_features_in_):
-            raise ConfigError(
-                f"X has {X.shape[1]} sensors x {X.shape[2]} features; the model was fitted on "
-                f"{self.n_sensors_} x {self.n_features_in_}"
-            )
-        return X
-
-    def fit(self, X, A, groups=None):
-        """Fit one classifier per (attribute, sensor).
-
-        Parameters
-        ----------
-        X : array-like of shape (n_trials, n_sensors, n_features)
-            Per-sensor trial features.
-        A : array-like of shape (n_trials, n_attributes)
-            0/1 attribute targets of each trial (the attribute row of its object).
-        groups : array-like of shape (n_trials,), optional
-            Object of each trial, for object-grouped cross-validation.
-
-        Returns
-        -------
-        self
-        """
-        self._validate_params()
-        X, A, names = self._check_fit_input(X, A)
-        n, s, d = X.shape
-        groups = None if groups is None else np.asarray(groups)
-        if groups is not None and groups.shape != (n,):
-            raise ConfigError(f"groups must have shape ({n},), got {groups.shape}")
-        g = np.arange(n) if groups is None else groups
-        for j, nm in enumerate(names):  # fail fast, before any parallel work
-            for label, mask in (("present", A[:, j] == 1), ("absent", A[:, j] == 0)):
-                k = np.unique(g[mask]).size
-                if k < 2:
-                    raise AttributeTrainingError(
-                        f"attribute {nm!r}: {label} in only {k} training object(s); need at least 2 "
-                        "(leave the attribute out of this split)"
-                    )
-        template = self._template()
-        seeds = spawn_seeds(self.random_state, A.shape[1] * s)
-        memory = resolve_memory(self.memory)
-        fit_one = memory.cache(fit_clone)
-        tasks = []
-        for j, nm in enumerate(names):
-            for k in range(s):
-                est = clone(template)
-                params = est.get_params(deep=False)
-                if "random_state" in params:
-                    est.set_params(random_state=seeds[j * s + k])
-                if "name" in params:
-                    est.set_params(name=f"{nm} (sensor {k})")
-                tasks.append(delayed(fit_one)(est, X[:, k, :], A[:, j], groups))
-        fitted = self._run_fits(tasks, "attribute fits")
-        self.estimators_ = [fitted[j * s : (j + 1) * s] for j in range(A.shape[1])]
-        self.n_sensors_, self.n_attributes_, self.n_features_in_ = s, A.shape[1], d
-        return self
-
-    def predict_proba(self, X) -> np.ndarray:
-        """Attribute posteriors per sensor.
-
-        Parameters
-        ----------
-        X : array-like of shape (n_trials, n_sensors, n_features)
-
-        Returns
-        -------
-        ndarray of shape (n_trials, n_sensors, n_attributes)
-            ``p(a_m = 1 | x_s)``.
-        """
-        X = self._check_predict_input(X)
-        P = np.empty((X.shape[0], self.n_sensors_, self.n_attributes_))
-        for j, per_sensor in enumerate(self.estimators_):
-            for k, est in enumerate(per_sensor):
-                P[:, k, j] = est.predict_proba(X[:, k, :])[:, 1]
-        return P
-
-
-def _check_3d(X) -> np.ndarray:
-    X = np.asarray(X, dtype=np.float64)
-    if X.ndim != 3:
-        raise ConfigError(f"features must have shape (n_trials, n_sensors, n_features), got {X.shape}")
-    if not np.isfinite(X).all():
-        t, s, f = np.argwhere(~np.isfinite(X))[0]
-        raise ConfigError(f"features hold a non-finite value at trial row {t}, sensor {s}, feature {f}")
-    return X

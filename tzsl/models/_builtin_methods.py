@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from tzsl.models._attribute_svm import AttributeClassifierBank
+from tzsl.models._attribute_bank import AttributeClassifierBank
 from tzsl.models._compatibility import ALE, SJE, DeViSE
 from tzsl.models._decision import CompatibilityRule, DAPRule, NearestAttributeRule
 from tzsl.models._deep import DeepAttributeEmbedding

@@ -55,6 +55,8 @@ def check_instance(name: str, cls: type) -> BaseEstimator:
         return cls(early_stopping=False, max_iter=50, random_state=0)
     if name == "ESZSLCV":  # class-grouped CV needs >= 4 classes, the checks' data have 2-3:
         return cls(gammas=(0.5,), lams=(2.0,))  # one pair, fitted without CV (the CV has its own tests)
+    if name == "ScalableAttributeClassifier":
+        return cls(n_gamma=2, n_C=2, n_components=32, random_state=0)
     if name in ("ALE", "SJE", "DeViSE"):  # few SGD epochs: the checks test the contract, not convergence
         return cls(n_epochs=3, random_state=0)
     if name == "ZeroShotClassifier":

@@ -29,7 +29,8 @@ from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import StrOptions
 
 from tzsl.exceptions import ConfigError
-from tzsl.models._attribute_svm import AttributeClassifierBank, default_preprocessor
+from tzsl.models._attribute_bank import AttributeClassifierBank
+from tzsl.models._attribute_training import default_preprocessor
 from tzsl.models._cache import fit_clone, resolve_memory, spawn_seeds
 
 __all__ = ["MultiLabelAttributeClassifier"]
@@ -63,8 +64,9 @@ class MultiLabelAttributeClassifier(AttributeClassifierBank):
         ``estimators_[t][s]``: link ``t`` of the chain (attribute ``order_[t]``) on sensor ``s``.
     """
 
-    _parameter_constraints: dict = {
-        **AttributeClassifierBank._parameter_constraints,
+    _parameter_constraints: dict = {  # the chain always fits its template exactly: no solver choice
+        **{k: v for k, v in AttributeClassifierBank._parameter_constraints.items()
+           if k not in ("solver", "max_exact_trials")},
         "order": [None, StrOptions({"random"}), "array-like"],
     }
 

@@ -1,0 +1,77 @@
+"""ScalableAttributeClassifier (Nystroem + warm-started logistic path) and the bank's solver choice."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tzsl.models import AttributeClassifierBank, AttributeSVM
+from tzsl.models import ScalableAttributeClassifier
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_attribute_svm import make_problem  # noqa: E402
+
+SMALL = dict(n_gamma=2, n_C=2, n_components=32)
+
+def balanced_accuracy(p: np.ndarray, y: np.ndarray) -> float:
+    y = y.astype(bool)
+    return 0.5 * ((p[y] >= 0.5).mean() + (p[~y] < 0.5).mean())
+
+
+def test_learns_with_calibrated_posteriors_and_grouped_cv():
+    X, A, g = make_problem(n_objects=40, trials=10, seed=3)
+    tr = g < 28
+    m = ScalableAttributeClassifier(random_state=0).fit(X[tr, 0], A[tr, 2], g[tr])
+    p = m.predict_proba(X[~tr, 0])
+    np.testing.assert_allclose(p.sum(1), 1.0)
+    assert balanced_accuracy(p[:, 1], A[~tr, 2]) > 0.8  # chance is 0.5
+    assert m.cv_scores_.shape == (1, 4, 5) and m.platt_[0] >= 0
+    assert m.oof_scores_.shape == (int(tr.sum()),)
+    assert m.coef_.shape == (m.feature_map_.components_.shape[0],) and m.coef_.size <= 256
+
+
+def test_no_test_object_influences_the_fit():
+    X, A, g = make_problem(n_objects=20, trials=5, seed=1)
+    tr = g < 15
+    X2 = X.copy()
+    X2[~tr] = 100.0
+    a = ScalableAttributeClassifier(**SMALL, random_state=0).fit(X[tr, 0], A[tr, 0], g[tr])
+    b = ScalableAttributeClassifier(**SMALL, random_state=0).fit(X2[tr, 0], A[tr, 0], g[tr])
+    np.testing.assert_array_equal(a.oof_scores_, b.oof_scores_)
+    assert (a.C_, a.gamma_, a.platt_) == (b.C_, b.gamma_, b.platt_)
+
+
+def test_block_size_does_not_change_the_model():
+    X, A, g = make_problem(n_objects=20, trials=5, seed=2)
+    a = ScalableAttributeClassifier(**SMALL, block_size=7, random_state=0).fit(X[:, 0], A[:, 1], g)
+    b = ScalableAttributeClassifier(**SMALL, block_size=10_000, random_state=0).fit(X[:, 0], A[:, 1], g)
+    np.testing.assert_allclose(a.predict_proba(X[:, 0]), b.predict_proba(X[:, 0]), rtol=0, atol=1e-10)
+
+
+def test_bad_parameters_raise_sklearn_errors():
+    from sklearn.utils._param_validation import InvalidParameterError
+
+    X, A, g = make_problem()
+    with pytest.raises(InvalidParameterError, match="undersampling"):
+        ScalableAttributeClassifier(undersampling="bagging").fit(X[:, 0], A[:, 0], g)
+
+
+@pytest.mark.parametrize(("solver", "limit", "expected"), [
+    ("auto", 10_000, "exact"), ("auto", 10, "approximate"), ("exact", 10, "exact"), ("approximate", 10_000, "approximate"),
+])
+def test_bank_solver_choice_is_recorded(solver, limit, expected, capsys):
+    X, A, g = make_problem(n_attributes=1, n_sensors=1)
+    bank = AttributeClassifierBank(estimator=AttributeSVM(n_C=2, n_gamma=2, n_draws=1, cv=3), memory=None, random_state=0,
+                                   solver=solver, max_exact_trials=limit, progress=True)
+    bank.fit(X, A, g)
+    choice = bank.solver_choice_
+    assert choice["solver"] == expected and choice["n_trials"] == X.shape[0]
+    assert solver in choice["reason"]
+    model_type = AttributeSVM if expected == "exact" else ScalableAttributeClassifier
+    assert isinstance(bank.estimators_[0][0], model_type)
+    captured = capsys.readouterr()
+    assert f"attribute models: {expected}" in captured.out + captured.err
+    assert bank.predict_proba(X).shape == (X.shape[0], 1, 1)

@@ -1,0 +1,292 @@
+"""Independent attribute classifiers, one per (attribute, sensor): the attribute layer of DAP.
+
+:class:`AttributeClassifierBank` fits a clone of an attribute classifier (by default
+:class:`~tzsl.models.AttributeSVM`, or above ``max_exact_trials`` training trials the
+:class:`~tzsl.models.ScalableAttributeClassifier`) for every attribute and sensor, in parallel
+(joblib, locally or on Dask) and cached, and gives ``predict_proba(X) -> (n, s, m)``.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from numbers import Integral
+
+import numpy as np
+from sklearn.base import BaseEstimator, clone
+from joblib import Parallel, delayed
+from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
+from sklearn.utils.validation import check_is_fitted
+from tqdm.auto import tqdm
+
+from tzsl.exceptions import ConfigError
+from tzsl.models._attribute_svm import AttributeSVM
+from tzsl.models._attribute_training import AUTO_MAX_EXACT_TRIALS, SOLVERS, AttributeTrainingError, GridEdgeWarning
+from tzsl.models._scalable_attribute import ScalableAttributeClassifier
+from tzsl.models._cache import fit_clone, parallel_context, resolve_memory, spawn_seeds
+from tzsl.models._validation import ValidatedParamsMixin
+
+__all__ = ["AttributeClassifierBank"]
+
+
+def _check_attribute_matrix(A, n: int, names) -> np.ndarray:
+    A = np.asarray(A)
+    if A.ndim != 2 or A.shape[0] != n:
+        raise ConfigError(f"attribute targets must have shape ({n}, n_attributes), got {A.shape}")
+    Af = A.astype(float)
+    bad = ~np.isin(Af, (0.0, 1.0))  # NaN is not in the set either
+    if bad.any():
+        r, c = np.argwhere(bad)[0]
+        raise AttributeTrainingError(
+            f"attribute {names[c]!r}: trial row {r} has value {A[r, c].item()!r}; attribute targets must be 0/1"
+        )
+    return Af.astype(np.int64)
+
+
+class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
+    """Independent attribute classifiers: one per (attribute, sensor), fitted in parallel and cached.
+
+    This is the attribute layer of DAP (paper §3.3, §4.4): attributes are assumed independent,
+    and each sensor (BioTac) gets its own classifier.
+
+    Parameters
+    ----------
+    estimator : classifier or None, default=None
+        Template cloned for every (attribute, sensor); must accept ``fit(X, y, groups)`` and give
+        ``predict_proba``. ``None``: :class:`AttributeSVM` with default parameters.
+    attribute_names : sequence of str or None, default=None
+        Names used in error messages (default ``"0"``, ``"1"``, ...).
+    n_jobs : int or None, default=None
+        Parallel fits (joblib convention; ``-1`` = all cores).
+    backend : {"loky", "dask", "threading", "sequential"}, default="loky"
+        joblib backend. ``"dask"`` runs the fits on the current ``dask.distributed`` Client.
+        Results do not depend on the backend or ``n_jobs``.
+    memory : None, str, Path or joblib.Memory, default=None
+        Cache of fitted per-(attribute, sensor) models, keyed on the data and all parameters.
+        ``None``: ``$TZSL_CACHE_DIR`` if set, else no caching.
+    progress : bool, default=False
+        Show a tqdm progress bar over the fits.
+    random_state : int, RandomState or None, default=None
+        Each (attribute, sensor) fit gets its own seed from ``np.random.SeedSequence``.
+    solver : {"exact", "approximate", "auto"}, default="auto"
+        ``"exact"``: ``estimator`` as given. ``"approximate"``: a
+        :class:`tzsl.models.ScalableAttributeClassifier` (Nystroem RBF features + logistic
+        regression, linear in trials) with ``estimator``'s preprocessor, under-sampling and Platt
+        weighting. ``"auto"``: exact up to ``max_exact_trials`` training trials, approximate above
+        (the exact model's time grows as trials^2). The choice and its reason are in
+        ``solver_choice_`` and printed when ``progress`` is on.
+    max_exact_trials : int, default=3000
+        Largest training set fitted exactly by ``solver="auto"`` (about 15 minutes per split of
+        30 attributes x 2 sensors on 2 cores at 4,000 trials, issue 15).
+
+    Attributes
+    ----------
+    estimators_ : list of list of fitted classifiers
+        ``estimators_[m][s]`` is attribute ``m`` on sensor ``s``.
+    grid_edge_hits_ : list of dict
+        One ``{"attribute", "sensor", "parameter", "value", "edge"}`` per tuned hyper-parameter
+        chosen at an end of its grid (from each estimator's ``grid_edges_``); a
+        :class:`GridEdgeWarning` summarises them once per :meth:`fit`.
+    n_sensors_, n_attributes_, n_features_in_ : int
+    solver_choice_ : dict
+        ``{"solver": "exact" | "approximate", "reason": str, "n_trials": int}``.
+    """
+
+    #: Attribute-model protocol: ``predict_proba`` gives ``p(a_m = 1 | x_s)`` (read by DAPRule).
+    score_kind = "probability"
+
+    _parameter_constraints: dict = {
+        "estimator": [None, HasMethods(["fit", "predict_proba"])],
+        "attribute_names": [None, "array-like"],
+        "n_jobs": [None, Integral],
+        "backend": [StrOptions({"loky", "dask", "threading", "sequential", "multiprocessing"})],
+        "memory": [None, str, os.PathLike, HasMethods(["cache"])],
+        "progress": ["boolean"],
+        "random_state": ["random_state"],
+        "solver": [StrOptions(set(SOLVERS))],
+        "max_exact_trials": [Interval(Integral, 1, None, closed="left")],
+    }
+
+    def __init__(
+        self,
+        *,
+        estimator=None,
+        attribute_names=None,
+        n_jobs=None,
+        backend="loky",
+        memory=None,
+        progress=False,
+        random_state=None,
+        solver="auto",
+        max_exact_trials=AUTO_MAX_EXACT_TRIALS,
+    ):
+        self.estimator = estimator
+        self.attribute_names = attribute_names
+        self.n_jobs = n_jobs
+        self.backend = backend
+        self.memory = memory
+        self.progress = progress
+        self.random_state = random_state
+        self.solver = solver
+        self.max_exact_trials = max_exact_trials
+
+    def _names(self, m: int) -> list[str]:
+        if self.attribute_names is None:
+            return [str(i) for i in range(m)]
+        names = [str(a) for a in self.attribute_names]
+        if len(names) != m:
+            raise ConfigError(f"attribute_names has {len(names)} names but the targets have {m} columns")
+        return names
+
+    def _template(self):
+        return AttributeSVM() if self.estimator is None else self.estimator
+
+    def _choose_template(self, n_trials: int):
+        """The estimator template for ``n_trials`` training trials; sets ``solver_choice_``."""
+        exact = self._template()
+        if self.solver == "auto":
+            approximate = n_trials > self.max_exact_trials
+            relation = ">" if approximate else "<="
+            reason = f"solver='auto': {n_trials} training trials {relation} max_exact_trials={self.max_exact_trials}"
+        else:
+            approximate = self.solver == "approximate"
+            reason = f"solver={self.solver!r}"
+        self.solver_choice_ = {"solver": "approximate" if approximate else "exact", "reason": reason,
+                               "n_trials": int(n_trials)}
+        if self.progress:
+            tqdm.write(f"attribute models: {self.solver_choice_['solver']} ({reason})")
+        if not approximate:
+            return exact
+        shared = {k: v for k, v in exact.get_params(deep=False).items()
+                  if k in ("preprocessor", "platt_weighting", "name", "random_state")}
+        undersampling = exact.get_params(deep=False).get("undersampling", "select")
+        shared["undersampling"] = "none" if undersampling == "none" else "select"
+        return ScalableAttributeClassifier(**shared)
+
+    def _check_fit_input(self, X, A) -> tuple[np.ndarray, np.ndarray, list[str]]:
+        """``(X, A, names)``: X (n_trials, n_sensors, n_features) float64, A (n_trials, n_attributes) 0/1."""
+        X = _check_3d(X)
+        n = X.shape[0]
+        if np.ndim(A) != 2:
+            raise ConfigError(f"attribute targets must have shape ({n}, n_attributes), got {np.shape(A)}")
+        names = self._names(np.shape(A)[1])
+        return X, _check_attribute_matrix(A, n, names), names
+
+    def _run_fits(self, tasks: list, desc: str) -> list:
+        """Run joblib ``tasks`` on ``self.backend`` / ``self.n_jobs``; results in task order."""
+        with parallel_context(self.backend):
+            backend = None if self.backend == "dask" else self.backend
+            results = Parallel(n_jobs=self.n_jobs, backend=backend, return_as="generator")(tasks)
+            return list(tqdm(results, total=len(tasks), desc=desc, disable=not self.progress))
+
+    def _check_predict_input(self, X) -> np.ndarray:
+        """``X`` as float64 (n_trials, n_sensors_, n_features_in_), after the fitted check."""
+        check_is_fitted(self)
+        X = _check_3d(X)
+        if X.shape[1:] != (self.n_sensors_, self.n_features_in_):
+            raise ConfigError(
+                f"X has {X.shape[1]} sensors x {X.shape[2]} features; the model was fitted on "
+                f"{self.n_sensors_} x {self.n_features_in_}"
+            )
+        return X
+
+    def fit(self, X, A, groups=None):
+        """Fit one classifier per (attribute, sensor).
+
+        Parameters
+        ----------
+        X : array-like of shape (n_trials, n_sensors, n_features)
+            Per-sensor trial features.
+        A : array-like of shape (n_trials, n_attributes)
+            0/1 attribute targets of each trial (the attribute row of its object).
+        groups : array-like of shape (n_trials,), optional
+            Object of each trial, for object-grouped cross-validation.
+
+        Returns
+        -------
+        self
+        """
+        self._validate_params()
+        X, A, names = self._check_fit_input(X, A)
+        n, s, d = X.shape
+        groups = None if groups is None else np.asarray(groups)
+        if groups is not None and groups.shape != (n,):
+            raise ConfigError(f"groups must have shape ({n},), got {groups.shape}")
+        g = np.arange(n) if groups is None else groups
+        for j, nm in enumerate(names):  # fail fast, before any parallel work
+            for label, mask in (("present", A[:, j] == 1), ("absent", A[:, j] == 0)):
+                k = np.unique(g[mask]).size
+                if k < 2:
+                    raise AttributeTrainingError(
+                        f"attribute {nm!r}: {label} in only {k} training object(s); need at least 2 "
+                        "(leave the attribute out of this split)"
+                    )
+        template = self._choose_template(n)
+        seeds = spawn_seeds(self.random_state, A.shape[1] * s)
+        memory = resolve_memory(self.memory)
+        fit_one = memory.cache(fit_clone)
+        tasks = []
+        for j, nm in enumerate(names):
+            for k in range(s):
+                est = clone(template)
+                params = est.get_params(deep=False)
+                if "random_state" in params:
+                    est.set_params(random_state=seeds[j * s + k])
+                if "name" in params:
+                    est.set_params(name=f"{nm} (sensor {k})")
+                tasks.append(delayed(fit_one)(est, X[:, k, :], A[:, j], groups))
+        fitted = self._run_fits(tasks, "attribute fits")
+        self.estimators_ = [fitted[j * s : (j + 1) * s] for j in range(A.shape[1])]
+        self.n_sensors_, self.n_attributes_, self.n_features_in_ = s, A.shape[1], d
+        self._record_grid_edges(names)
+        return self
+
+    def _record_grid_edges(self, names: list[str]) -> None:
+        """Fill ``grid_edge_hits_`` from the fitted estimators; one :class:`GridEdgeWarning` for the batch."""
+        self.grid_edge_hits_ = [
+            {"attribute": names[j], "sensor": k, "parameter": p, "value": v, "edge": e}
+            for j, per_sensor in enumerate(self.estimators_)
+            for k, est in enumerate(per_sensor)
+            for p, v, e in getattr(est, "grid_edges_", ())
+        ]
+        if self.grid_edge_hits_:
+            counts: dict[str, int] = {}
+            for hit in self.grid_edge_hits_:
+                key = f"{hit['parameter']} = {hit['value']:g} ({hit['edge']} edge)"
+                counts[key] = counts.get(key, 0) + 1
+            n_fits = sum(len(per) for per in self.estimators_)
+            detail = ", ".join(f"{key}: {c}" for key, c in sorted(counts.items()))
+            warnings.warn(
+                f"{len(self.grid_edge_hits_)} hyper-parameter choices of {n_fits} (attribute, sensor) fits sit on a "
+                f"grid edge ({detail}); the optimum may lie outside the grid (see grid_edge_hits_)",
+                GridEdgeWarning, stacklevel=3,
+            )
+
+    def predict_proba(self, X) -> np.ndarray:
+        """Attribute posteriors per sensor.
+
+        Parameters
+        ----------
+        X : array-like of shape (n_trials, n_sensors, n_features)
+
+        Returns
+        -------
+        ndarray of shape (n_trials, n_sensors, n_attributes)
+            ``p(a_m = 1 | x_s)``.
+        """
+        X = self._check_predict_input(X)
+        P = np.empty((X.shape[0], self.n_sensors_, self.n_attributes_))
+        for j, per_sensor in enumerate(self.estimators_):
+            for k, est in enumerate(per_sensor):
+                P[:, k, j] = est.predict_proba(X[:, k, :])[:, 1]
+        return P
+
+
+def _check_3d(X) -> np.ndarray:
+    X = np.asarray(X, dtype=np.float64)
+    if X.ndim != 3:
+        raise ConfigError(f"features must have shape (n_trials, n_sensors, n_features), got {X.shape}")
+    if not np.isfinite(X).all():
+        t, s, f = np.argwhere(~np.isfinite(X))[0]
+        raise ConfigError(f"features hold a non-finite value at trial row {t}, sensor {s}, feature {f}")
+    return X

@@ -1,0 +1,288 @@
+"""One attribute, one sensor, many trials: Nystroem RBF features + logistic regression, linear in trials.
+
+The exact attribute model (:class:`tzsl.models.AttributeSVM`) solves libsvm problems on an
+``n x n`` kernel for every fold, grid point and draw, so time and memory grow as ``n^2``. This
+model keeps its protocol (class-balanced under-sampling of whole objects, object-grouped
+cross-validation on training trials only, Platt posteriors fitted on out-of-fold scores) and
+replaces the kernel machine by
+
+* a Nystroem approximation of the RBF kernel with ``n_components`` landmarks drawn from the
+  draw's trials (features of shape ``(n, n_components)``, computed in blocks of ``block_size``
+  trials, so no ``n x n`` array and no ``n x n_landmarks`` kernel beyond one block exists), and
+* an L2 logistic regression with ``class_weight="balanced"``, fitted along an increasing ``C``
+  path with warm starts (each fit starts from the previous ``C``'s solution), so the ``C`` grid
+  costs little more than its largest fit.
+
+Memory: ``O(n * n_components)`` for the features of one ``gamma`` plus ``O(block_size *
+n_components)`` scratch. Time: ``O(n * n_components * (d + n_components))`` per ``gamma`` for
+the features, plus the solver iterations (each ``O(n * n_components)``).
+"""
+
+from __future__ import annotations
+
+import warnings
+from numbers import Integral, Real
+
+import numpy as np
+from scipy.special import expit, log_expit
+from sklearn.base import BaseEstimator, ClassifierMixin, clone
+from sklearn.exceptions import ConvergenceWarning
+from sklearn.kernel_approximation import Nystroem
+from sklearn.linear_model import LogisticRegression
+from sklearn.model_selection import StratifiedGroupKFold
+from sklearn.utils import check_random_state
+from sklearn.utils._param_validation import Interval, StrOptions
+from sklearn.utils.multiclass import check_classification_targets
+from sklearn.utils.validation import check_is_fitted, validate_data
+from threadpoolctl import threadpool_limits
+
+from tzsl.exceptions import ConfigError
+from tzsl.models._attribute_training import (
+    AttributeTrainingError,
+    balanced_object_draws,
+    default_preprocessor,
+    fit_platt,
+)
+
+__all__ = ["ScalableAttributeClassifier"]
+
+
+def _range_pair(value) -> bool:
+    return (isinstance(value, tuple | list) and len(value) == 2
+            and all(isinstance(v, Real) for v in value) and 0 < value[0] <= value[1])
+
+
+class ScalableAttributeClassifier(ClassifierMixin, BaseEstimator):
+    """Binary attribute classifier for large trial counts: Nystroem-RBF + warm-started logistic path.
+
+    Parameters
+    ----------
+    preprocessor : transformer or None, default=None
+        Fitted on the training trials (no labels). ``None``: :func:`tzsl.models.default_preprocessor`.
+    n_components : int, default=256
+        Nystroem landmarks (columns of the approximate RBF feature map); capped at the draw size.
+    gamma_range : (float, float), default=(0.001, 1.0)
+        Ends of the log-spaced RBF ``gamma`` grid (squared preprocessed features^-1).
+    n_gamma : int, default=4
+    C_range : (float, float), default=(0.1, 1000.0)
+        Ends of the log-spaced grid of the logistic regression's inverse L2 strength.
+    n_C : int, default=5
+    cv : int, default=3
+        Object-grouped stratified folds (``StratifiedGroupKFold``), at most the number of objects
+        of the rarer class in the draw.
+    undersampling : {"select", "none"}, default="select"
+        ``"select"``: ``n_draws`` balanced draws of whole majority-class objects, keep the best by
+        grouped CV; ``"none"``: all trials, classes weighted ``"balanced"``.
+    n_draws : int, default=1
+    platt_weighting : {"balanced", "empirical"}, default="balanced"
+        As in :class:`tzsl.models.AttributeSVM`.
+    block_size : int, default=8192
+        Trials per block when computing the feature map (bounds the scratch memory).
+    max_iter : int, default=200
+        L-BFGS iterations per fit of the ``C`` path.
+    name : str or None, default=None
+        Attribute name used in error messages.
+    random_state : int, RandomState or None, default=None
+        Seeds the draws, the folds and the Nystroem landmarks.
+
+    Attributes
+    ----------
+    classes_ : ndarray of shape (2,)
+    n_features_in_ : int
+    preprocessor_ : fitted transformer
+    feature_map_ : fitted Nystroem
+    coef_ : ndarray of shape (n_components,)
+    intercept_ : float
+    n_iter_ : int
+        L-BFGS iterations of the kept fit (warm-started from the previous ``C`` of the path).
+    C_, gamma_ : float
+    draw_ : int
+    platt_ : (float, float)
+        Sigmoid ``p = expit(a * s + b)`` on the linear score ``s``.
+    oof_scores_ : ndarray of shape (n_train,)
+    cv_scores_ : ndarray of shape (n_draws, n_gamma, n_C)
+        Class-balanced log-loss of the Platt posteriors of the out-of-fold scores (lower is better).
+    grid_edges_ : list of (str, float, str)
+        Chosen hyper-parameters at an end of their grid, as in :class:`tzsl.models.AttributeSVM`.
+    """
+
+    _parameter_constraints: dict = {
+        "preprocessor": "no_validation",
+        "n_components": [Interval(Integral, 1, None, closed="left")],
+        "gamma_range": ["array-like"],
+        "n_gamma": [Interval(Integral, 1, None, closed="left")],
+        "C_range": ["array-like"],
+        "n_C": [Interval(Integral, 1, None, closed="left")],
+        "cv": [Interval(Integral, 2, None, closed="left")],
+        "undersampling": [StrOptions({"select", "none"})],
+        "n_draws": [Interval(Integral, 1, None, closed="left")],
+        "platt_weighting": [StrOptions({"balanced", "empirical"})],
+        "block_size": [Interval(Integral, 1, None, closed="left")],
+        "max_iter": [Interval(Integral, 1, None, closed="left")],
+        "name": [None, str],
+        "random_state": ["random_state"],
+    }
+
+    def __init__(self, *, preprocessor=None, n_components=256, gamma_range=(0.001, 1.0), n_gamma=4,
+                 C_range=(0.1, 1000.0), n_C=5, cv=3, undersampling="select", n_draws=1,
+                 platt_weighting="balanced", block_size=8192, max_iter=200, name=None, random_state=None):
+        self.preprocessor = preprocessor
+        self.n_components = n_components
+        self.gamma_range = gamma_range
+        self.n_gamma = n_gamma
+        self.C_range = C_range
+        self.n_C = n_C
+        self.cv = cv
+        self.undersampling = undersampling
+        self.n_draws = n_draws
+        self.platt_weighting = platt_weighting
+        self.block_size = block_size
+        self.max_iter = max_iter
+        self.name = name
+        self.random_state = random_state
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.classifier_tags.multi_class = False
+        return tags
+
+    def _label(self) -> str:
+        return f"attribute {self.name!r}" if self.name is not None else "attribute"
+
+    def _transform(self, feature_map: Nystroem, Z: np.ndarray) -> np.ndarray:
+        """Nystroem features of ``Z`` (n, d) in blocks of ``block_size`` rows; shape (n, n_components)."""
+        out = np.empty((Z.shape[0], feature_map.components_.shape[0]))
+        for start in range(0, Z.shape[0], self.block_size):
+            out[start : start + self.block_size] = feature_map.transform(Z[start : start + self.block_size])
+        return out
+
+    def _path(self, F_train, y_train, F_eval, Cs, out_scores) -> list[tuple[np.ndarray, float, int]]:
+        """Warm-started logistic fits along ``Cs``; ``out_scores[ci]`` = scores of ``F_eval``."""
+        model = LogisticRegression(warm_start=True, class_weight="balanced", max_iter=self.max_iter, tol=1e-4)
+        solutions = []
+        for ci, C in enumerate(Cs):
+            with warnings.catch_warnings():  # a capped path step is reported through n_iter_, not per fit
+                warnings.simplefilter("ignore", ConvergenceWarning)
+                model.set_params(C=float(C)).fit(F_train, y_train)
+            coef, intercept = model.coef_[0].copy(), float(model.intercept_[0])
+            solutions.append((coef, intercept, int(model.n_iter_[0])))
+            if F_eval.shape[0]:
+                out_scores[ci] = F_eval @ coef + intercept
+        return solutions
+
+    def fit(self, X, y, groups=None):
+        """Fit on the training trials of one attribute and one sensor.
+
+        Parameters
+        ----------
+        X : array-like of shape (n_trials, n_features)
+        y : array-like of shape (n_trials,)
+            Two classes; ``classes_[1]`` is "present".
+        groups : array-like of shape (n_trials,), optional
+            Object of each trial. ``None``: every trial is its own object.
+
+        Returns
+        -------
+        self
+        """
+        self._validate_params()
+        for nm in ("gamma_range", "C_range"):
+            if not _range_pair(getattr(self, nm)):
+                raise ConfigError(f"{nm} must be (low, high) with 0 < low <= high, got {getattr(self, nm)!r}")
+        X, y = validate_data(self, X, y, dtype=np.float64)
+        check_classification_targets(y)
+        self.classes_ = np.unique(y)
+        if self.classes_.size != 2:
+            raise AttributeTrainingError(
+                f"{self._label()}: training labels hold {self.classes_.size} class(es); need exactly 2 "
+                "(absent and present). Only binary classification is supported."
+            )
+        yb = y == self.classes_[1]
+        n = yb.size
+        groups = np.arange(n) if groups is None else np.asarray(groups)
+        if groups.shape != (n,):
+            raise ConfigError(f"groups must have shape ({n},), got {groups.shape}")
+        for cls, mask in ((self.classes_[1], yb), (self.classes_[0], ~yb)):
+            if np.unique(groups[mask]).size < 2:
+                raise AttributeTrainingError(
+                    f"{self._label()}: fewer than 2 training objects with label {cls!r}; need at least 2"
+                )
+        rng = check_random_state(self.random_state)
+        with threadpool_limits(limits=1):
+            self._fit(X, yb, groups, rng)
+        return self
+
+    def _fit(self, X, yb, groups, rng) -> None:
+        n = yb.size
+        pre = clone(self.preprocessor) if self.preprocessor is not None else default_preprocessor()
+        Z = np.asarray(pre.fit_transform(X), dtype=np.float64)
+        Cs = np.geomspace(*self.C_range, self.n_C)
+        gammas = np.geomspace(*self.gamma_range, self.n_gamma)
+        draws, _ = balanced_object_draws(yb, groups, self.n_draws if self.undersampling == "select" else 0, rng)
+        fold_seed = int(rng.randint(np.iinfo(np.int32).max))
+        map_seed = int(rng.randint(np.iinfo(np.int32).max))
+        w_cal = np.where(yb, 0.5 / yb.sum(), 0.5 / (~yb).sum()) * n if self.platt_weighting == "balanced" else np.ones(n)
+        oof = np.empty((len(draws), gammas.size, Cs.size, n))
+        full: dict[tuple[int, int], tuple[Nystroem, list]] = {}
+        for di, keep in enumerate(draws):
+            idx, out = np.flatnonzero(keep), np.flatnonzero(~keep)
+            y_draw = yb[idx]
+            n_min = min(np.unique(groups[idx][y_draw]).size, np.unique(groups[idx][~y_draw]).size)
+            splitter = StratifiedGroupKFold(n_splits=min(self.cv, n_min), shuffle=True, random_state=fold_seed)
+            folds = list(splitter.split(np.zeros((idx.size, 1)), y_draw, groups[idx]))
+            for gi, gamma in enumerate(gammas):
+                feature_map = Nystroem(gamma=float(gamma), n_components=min(self.n_components, idx.size),
+                                       random_state=map_seed).fit(Z[idx])
+                F = self._transform(feature_map, Z)
+                F_draw = F[idx]
+                for tr, te in folds:
+                    scores = np.empty((Cs.size, te.size))
+                    self._path(F_draw[tr], y_draw[tr], F_draw[te], Cs, scores)
+                    oof[di, gi, :, idx[te]] = scores.T
+                scores = np.empty((Cs.size, out.size))
+                solutions = self._path(F_draw, y_draw, F[out], Cs, scores)
+                if out.size:
+                    oof[di, gi, :, out] = scores.T
+                full[di, gi] = (feature_map, solutions)
+        crit = np.empty(oof.shape[:3])
+        for key in np.ndindex(*oof.shape[:3]):
+            a, b = fit_platt(oof[key], yb, w_cal)
+            z = a * oof[key] + b
+            crit[key] = -(w_cal * np.where(yb, log_expit(z), log_expit(-z))).sum() / w_cal.sum()
+        di, gi, ci = np.unravel_index(int(np.argmin(crit)), crit.shape)
+        feature_map, solutions = full[di, gi]
+        self.preprocessor_, self.feature_map_ = pre, feature_map
+        self.coef_, self.intercept_, self.n_iter_ = solutions[ci]
+        self.C_, self.gamma_ = float(Cs[ci]), float(gammas[gi])
+        self.draw_ = int(di) if self.undersampling == "select" else -1
+        self.cv_scores_ = crit
+        self.oof_scores_ = oof[di, gi, ci].copy()
+        self.platt_ = fit_platt(self.oof_scores_, yb, w_cal)
+        self.grid_edges_ = [
+            (nm, float(grid[i]), "low" if i == 0 else "high")
+            for nm, grid, i in (("C", Cs, ci), ("gamma", gammas, gi))
+            if grid.size >= 2 and i in (0, grid.size - 1)
+        ]
+
+    def svm_score(self, X) -> np.ndarray:
+        """Linear score on the approximate RBF features, shape (n_trials,); positive towards ``classes_[1]``."""
+        check_is_fitted(self)
+        X = validate_data(self, X, dtype=np.float64, reset=False)
+        Z = np.asarray(self.preprocessor_.transform(X), dtype=np.float64)
+        return self._transform(self.feature_map_, Z) @ self.coef_ + self.intercept_
+
+    def decision_function(self, X) -> np.ndarray:
+        """Logit of ``p(classes_[1] | x)`` (Platt-mapped score); shape (n_trials,)."""
+        check_is_fitted(self)
+        a, b = self.platt_
+        return a * self.svm_score(X) + b
+
+    def predict_proba(self, X) -> np.ndarray:
+        """Posteriors, shape (n_trials, 2), columns ordered as ``classes_``."""
+        p1 = expit(self.decision_function(X))
+        return np.column_stack([1.0 - p1, p1])
+
+    def predict(self, X) -> np.ndarray:
+        """Class with posterior >= 0.5, shape (n_trials,)."""
+        check_is_fitted(self)
+        return self.classes_[(self.decision_function(X) >= 0).astype(int)]
