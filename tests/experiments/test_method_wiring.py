@@ -196,3 +196,21 @@ def test_unknown_methods_and_parameters_are_refused_at_load_time(toy_method, tmp
     unregister_method("toy")
     with pytest.raises(ConfigError, match=r"compare\[0\].name: unknown method 'toy'"):
         load_experiment(path)
+
+
+def test_input_shape_and_seed_come_from_the_registry(toy_method):
+    from tzsl.experiments.study_methods import method_input, study_estimator, takes_seed
+    from tzsl.models import get_method
+
+    X = np.arange(24.0).reshape(4, 2, 3)
+    assert get_method("dap-avg").input_ndim == 3 and get_method("toy").input_ndim == 2
+    assert method_input({"name": "dap-avg"}, X).shape == (4, 2, 3)
+    assert method_input({"name": "dap-avg"}, X[:, 0]).shape == (4, 1, 3)  # one sensor
+    np.testing.assert_array_equal(method_input({"name": "toy"}, X), X.reshape(4, 6))
+    assert takes_seed({"name": "embedding"}) and not takes_seed({"name": "eszsl"})
+    assert not takes_seed({"name": "embedding", "random_state": 3})
+    assert study_estimator({"name": "embedding"}, 7).attribute_model.random_state == 7
+    assert study_estimator({"name": "embedding", "random_state": 3}, 7).attribute_model.random_state == 3
+    with pytest.raises(ConfigError, match="input_ndim"):
+        register_method("bad", family="embedding", paper="-", attribute_model=NearestMeanAttributes,
+                        decision_rule=NearestAttributeRule, input_ndim=4)
