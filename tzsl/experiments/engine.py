@@ -118,6 +118,7 @@ def fabric_arguments(exp: Experiment) -> dict:
         "gelsight_conditions": None if c.features.gelsight_conditions is None
         else tuple(c.features.gelsight_conditions),
         "seed": c.splits.seed, "max_iter": c.methods.max_iter, "n_jobs": c.compute.n_jobs,
+        "methods": tuple(dict(spec) for spec in c.methods.compare),
     }
 
 

@@ -73,6 +73,7 @@ image (or video) files and the descriptor parameters; a re-run only refits the m
 
 from __future__ import annotations
 
+import time
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -106,6 +107,7 @@ from tzsl.experiments.fabric_tables import (
     format_fabric_table,
     lambda_label,
 )
+from tzsl.experiments.study_methods import method_input, method_label, study_estimator, takes_seed
 from tzsl.features import TextureDescriptor
 from tzsl.models import attribute_rows, build_method
 
@@ -228,6 +230,16 @@ def zero_shot_run(
     )
 
 
+class _ShapedInput:
+    """A fitted registry method that reshapes the study's 2-D samples for its own input (``predict``)."""
+
+    def __init__(self, model, spec: dict) -> None:
+        self.model, self.spec = model, spec
+
+    def predict(self, X, class_attributes):
+        return self.model.predict(method_input(self.spec, X), class_attributes)
+
+
 def _run_job(
     samples_X: np.ndarray,
     groups: np.ndarray,
@@ -238,8 +250,12 @@ def _run_job(
     seed: int | None,
     alphas: tuple[float, ...],
     max_iter: int,
+    spec: dict | None = None,
 ) -> dict:
-    """One fit (method x seed) on one condition and split; returns a row of the runs table."""
+    """One fit (method x seed) on one condition and split; returns a row of the runs table.
+
+    ``spec``: a registry method entry (``methods.compare``) fitted instead of the built-in ones.
+    """
     info: dict = {}
 
     def fit_embedding(X_tr, y_tr, S_tr):
@@ -266,10 +282,16 @@ def _run_job(
         info.update(gamma=cv.best_gamma_, eszsl_lam=cv.best_lam_, cv_score=cv.best_score_)
         return model
 
+    def fit_registry(X_tr, y_tr, S_tr):
+        start = time.perf_counter()
+        model = study_estimator(spec, seed)
+        model.fit(method_input(spec, X_tr), attribute_rows(y_tr, S_tr), y_tr)
+        info.update(fit_seconds=time.perf_counter() - start)
+        return _ShapedInput(model, spec)
+
+    fit = fit_registry if spec is not None else fit_eszsl if method == ESZSL_METHOD else fit_embedding
     with threadpool_limits(limits=1):  # many small fits: one BLAS thread each, parallel over fits
-        run = zero_shot_run(
-            fit_eszsl if method == ESZSL_METHOD else fit_embedding, samples_X, groups, A, split
-        )
+        run = zero_shot_run(fit, samples_X, groups, A, split)
     pred = pd.Series(run.y_pred).value_counts().reindex(run.test_classes, fill_value=0)
     return {
         "method": method,
@@ -310,6 +332,7 @@ def run_fabric_study(
     max_iter: int = 500,
     n_jobs: int | None = 1,
     cache_dir=None,
+    methods: Sequence[dict] = (),
 ) -> dict[str, pd.DataFrame]:
     """Run the fabric study and write its table, runs, figure and manifest.
 
@@ -347,6 +370,10 @@ def run_fabric_study(
         joblib workers (descriptors and fits).
     cache_dir : str, path or None
         Descriptor cache (default :func:`tzsl.datasets.get_cache_dir`).
+    methods : sequence of dict
+        Registry methods run beside ESZSL (``{"name": ..., **parameters}``, the experiment's
+        ``methods.compare``); rows of the runs table named by
+        :func:`~tzsl.experiments.study_methods.method_label`, one per seed if the method is random.
 
     Returns
     -------
@@ -418,6 +445,11 @@ def run_fabric_study(
                     meta.append(row_meta)
             jobs.append(delayed(_run_job)(s.X, s.groups, A, split, ESZSL_METHOD, None, None, (), max_iter))
             meta.append(row_meta)
+            for spec in methods:  # registry methods: every seed if the method is random, else once
+                for sd in seed_list if takes_seed(spec) else [None]:
+                    jobs.append(delayed(_run_job)(s.X, s.groups, A, split, method_label(spec), None, sd, (),
+                                                  max_iter, spec))
+                    meta.append(row_meta)
 
     from tqdm.auto import tqdm
 
@@ -451,6 +483,7 @@ def run_fabric_study(
         "embedding": "EmbeddingZSL(hidden_units=None, early_stopping=False, duplicate_attributes='merge'), "
                      "alpha by class-grouped CV on training groups",
         "eszsl": "ESZSLCV(default grids 1e-3..1e3, class-grouped CV, duplicate_attributes='merge')",
+        "methods": [dict(spec) for spec in methods],
         "descriptor": descriptor_params(TextureDescriptor()),
         "key_frames": N_KEY_FRAMES,
         "gelsight_root": None if gelsight_root is None else str(gelsight_root),

@@ -1,4 +1,11 @@
-"""DAP vs ESZSL vs the fabric paper's embedding model on the same PHAC-2 splits (``phac2_methods.csv``)."""
+"""Registry methods vs DAP on the same PHAC-2 splits (``phac2_methods.csv``, ``method_comparison.csv``).
+
+Every method of ``[methods]`` (``eszsl``, ``embedding`` and ``compare``, see
+:meth:`~tzsl.experiments.config.Phac2Methods.method_specs`) is fitted on each random split's
+training objects with :func:`tzsl.experiments.study_methods.fit_predict` and scored on the
+split's test trials. The reference is the paper's method, AVGDAP with a uniform prior, read
+from the already fitted DAP posteriors (no refit).
+"""
 
 from __future__ import annotations
 
@@ -8,52 +15,111 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets import FeatureSet
-from tzsl.evaluation import Split, summarise_over_splits
+from tzsl.evaluation import Split, bootstrap_accuracy, paired_differences_table, summarise_over_splits
 from tzsl.experiments.phac2_tables import split_label
-from tzsl.models import attribute_rows, build_method
+from tzsl.experiments.study_methods import fit_predict, method_label
 
 if TYPE_CHECKING:
     from tzsl.experiments.phac2_dap import SplitPosteriors
 
-__all__ = ["method_comparison"]
+__all__ = ["DEFAULT_METHODS", "REFERENCE_METHOD", "method_comparison", "method_summary"]
+
+#: Methods compared when none are given: ESZSL and the embedding model at lambda 0.1 and 1.
+DEFAULT_METHODS: tuple[dict, ...] = ({"name": "eszsl"}, {"name": "embedding", "lam": 0.1},
+                                     {"name": "embedding", "lam": 1.0})
+#: Row label of the paper's method (AVGDAP, uniform prior) in ``method_comparison.csv``.
+REFERENCE_METHOD = "dap-avg"
 
 
-def _fit_predict_zsl(model, features: FeatureSet, split: Split) -> tuple[np.ndarray, np.ndarray]:
-    """Fit a feature->attribute ZSL model on the split's training objects; predicted/true test rows."""
+def _fit_predict_split(spec: dict, features: FeatureSet, split: Split, seed: int):
+    """Fit on the split's training objects; (fit, true test rows)."""
     from tzsl.experiments.phac2_dap import split_masks  # noqa: PLC0415 - phac2_dap re-exports this module
 
     attributes = list(split.kept_attributes)
     train, test = split_masks(features, split)
-    n, s, d = features.X.shape
-    X = features.X.reshape(n, s * d)
     objects = features.objects
-    train_objects = np.unique(objects[train])
-    class_rows = features.attributes.loc[train_objects, attributes].to_numpy(dtype=float)
-    model.fit(X[train], attribute_rows(objects[train], class_rows), objects[train])
+    class_rows = features.attributes.loc[np.unique(objects[train]), attributes].to_numpy(dtype=float)
     K = features.attributes.loc[list(split.test_objects), attributes].to_numpy(dtype=float)
+    fit = fit_predict(spec, features.X[train], objects[train], class_rows, features.X[test], K, seed)
     y = pd.Index(split.test_objects).get_indexer(objects[test])
-    return model.predict(X[test], K), y
+    return fit, y
+
+
+def _trials(method: str, split: str, objects: np.ndarray, correct: np.ndarray) -> pd.DataFrame:
+    return pd.DataFrame({"method": method, "split": split, "class": objects,
+                         "trial": np.arange(len(objects)), "correct": correct.astype(float)})
+
+
+def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], chance: float,
+                   reference: str = REFERENCE_METHOD) -> pd.DataFrame:
+    """One row per method: accuracy with its 95% interval, fit time, paired difference to ``reference``.
+
+    Parameters
+    ----------
+    trials : DataFrame
+        One row per (method, test trial): method, split, class, trial, correct (0/1).
+    fit_seconds : dict
+        Wall-clock seconds of every fit, per method.
+    chance : float
+        Mean over splits of 1 / test classes.
+
+    Returns
+    -------
+    DataFrame
+        Columns method, accuracy (mean over splits of the per-split trial accuracy), ci95_low,
+        ci95_high (two-level bootstrap over splits then test objects with their trials), chance,
+        fit_seconds (mean per split), difference (method minus ``reference`` on the same trials),
+        difference_ci95_low, difference_ci95_high, reference, n_splits, n_trials.
+    """
+    rows = []
+    for method, t in trials.groupby("method", sort=False):
+        iv = bootstrap_accuracy(t["correct"].to_numpy(), classes=t["class"].to_numpy(), splits=t["split"].to_numpy())
+        rows.append({"method": method, "accuracy": iv.mean, "ci95_low": iv.ci95_low, "ci95_high": iv.ci95_high,
+                     "chance": chance, "fit_seconds": float(np.mean(fit_seconds[method])),
+                     "n_splits": t["split"].nunique(), "n_trials": len(t)})
+    table = pd.DataFrame(rows)
+    diffs = paired_differences_table(trials, reference=reference).rename(
+        columns={"ci95_low": "difference_ci95_low", "ci95_high": "difference_ci95_high"})
+    table = table.merge(diffs[["method", "difference", "difference_ci95_low", "difference_ci95_high"]],
+                        on="method", how="left")
+    table["reference"] = reference
+    columns = ["method", "accuracy", "ci95_low", "ci95_high", "chance", "fit_seconds", "difference",
+               "difference_ci95_low", "difference_ci95_high", "reference", "n_splits", "n_trials"]
+    return table[columns]
 
 
 def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed: int = 0,
-                      embedding_lams: tuple = (0.1, 1.0), eszsl: bool = True) -> pd.DataFrame:
-    """DAP, ESZSL and the fabric paper's embedding model on the same PHAC-2 splits (trial accuracy).
+                      methods: tuple[dict, ...] | list[dict] = DEFAULT_METHODS) -> dict[str, pd.DataFrame]:
+    """Registry methods and AVGDAP on the same PHAC-2 splits (trial accuracy).
 
-    ESZSL's two ridges are tuned by class(object)-grouped CV on training objects; the embedding
-    model uses its documented defaults with class-grouped early stopping. Both see the two
-    BioTacs' features side by side (one vector per trial), objects sharing an attribute row are
-    merged into one training class. DAP numbers are AVGDAP / uni-prior from ``results``.
-    ``eszsl=False`` leaves ESZSL out; ``embedding_lams=()`` the embedding model.
+    Each method entry ``{"name": ..., **parameters}`` is built from the registry; a method
+    taking a seed gets ``seed + i`` on split ``i``. Objects sharing an attribute row are merged
+    into one training class by the methods that merge duplicates (ESZSL, the embedding model).
+
+    Returns
+    -------
+    dict of DataFrame
+        ``"phac2_methods"``: one row per split (dap_avg_uni and one column per method label,
+        e.g. ``eszsl``, ``embedding_lam_0.1``), then mean and std rows;
+        ``"method_comparison"``: :func:`method_summary` with ``dap-avg`` as the reference.
     """
-    rows = []
+    rows, trials = [], []
+    seconds: dict[str, list[float]] = {REFERENCE_METHOD: []}
     for i, r in enumerate(results):
-        row = {"split": split_label(r.split), "chance": r.split.chance, "dap_avg_uni": r.accuracy("avg", "uni")}
-        if eszsl:
-            pred, y = _fit_predict_zsl(build_method("eszsl"), features, r.split)
-            row["eszsl"] = float((pred == y).mean())
-        for lam in embedding_lams:
-            model = build_method("embedding", lam=lam, random_state=seed + i)
-            pred, y = _fit_predict_zsl(model, features, r.split)
-            row[f"embedding_lam_{lam:g}"] = float((pred == y).mean())
+        label = split_label(r.split)
+        objects = np.asarray(r.split.test_objects)[r.y]
+        row = {"split": label, "chance": r.split.chance, "dap_avg_uni": r.accuracy("avg", "uni")}
+        trials.append(_trials(REFERENCE_METHOD, label, objects, r.predict("avg", "uni") == r.y))
+        seconds[REFERENCE_METHOD].append(r.fit_seconds)
+        for spec in methods:
+            name = method_label(spec)
+            fit, y = _fit_predict_split(spec, features, r.split, seed + i)
+            correct = fit.predicted == y
+            row[name] = float(correct.mean())
+            trials.append(_trials(name, label, objects, correct))
+            seconds.setdefault(name, []).append(fit.fit_seconds)
         rows.append(row)
-    return summarise_over_splits(pd.DataFrame(rows)).reset_index()
+    per_split = summarise_over_splits(pd.DataFrame(rows)).reset_index()
+    chance = float(np.mean([r.split.chance for r in results]))
+    return {"phac2_methods": per_split,
+            "method_comparison": method_summary(pd.concat(trials, ignore_index=True), seconds, chance)}

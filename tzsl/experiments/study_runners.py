@@ -59,8 +59,8 @@ def phac2_outputs(config) -> list[str]:
             names.append("multilabel.csv")
         if methods.sweep:
             names += ["attribute_sweep.csv", "attribute_sweep.png"]
-        if methods.eszsl or methods.embedding:
-            names.append("phac2_methods.csv")
+        if methods.method_specs():
+            names += ["phac2_methods.csv", "method_comparison.csv"]
         if methods.gzsl:
             names.append("gzsl.csv")
     if "challenging" in kinds:
@@ -106,6 +106,7 @@ _TITLES = {
     "multilabel": "Independent vs multi-label attribute classifiers (AVGDAP, uni-prior)",
     "attribute_accuracy": "Per-attribute test accuracy (mean over random splits and sensors)",
     "phac2_methods": "DAP vs ESZSL vs embedding model on the same random splits (trial accuracy)",
+    "method_comparison": "Methods vs AVGDAP (uni-prior) on the same random splits, 95% intervals",
     "gzsl": "Generalised zero-shot: seen / unseen per-class accuracy, harmonic mean (H)",
 }
 
@@ -144,10 +145,9 @@ def run_phac2(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) 
         f"{features.attributes.shape[1]} attributes")
     kinds = tuple(c.splits.kinds)
     methods = c.methods
-    options = {"eszsl": methods.eszsl,
-               "embedding_lams": tuple(float(v) for v in methods.embedding_lambdas) if methods.embedding else ()}
+    options = {"methods": methods.method_specs()}
     tables = run_dap_study(features, results, config, kinds=kinds, splits=user_splits, sweep=methods.sweep,
-                           compare_methods=methods.eszsl or methods.embedding, method_options=options)
+                           compare_methods=bool(options["methods"]), method_options=options)
     gzsl_record = None
     if methods.gzsl:
         gzsl = gzsl_config(exp)
@@ -162,7 +162,7 @@ def run_phac2(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) 
     shown = {name: t.drop(columns=drop.get(f"{name}.csv", []), errors="ignore") for name, t in tables.items()}
     record = {"study_kind": "phac2-dap", "phac2_dap": record_config(config), "kinds": list(kinds),
               "splits_file": None if split_file is None else str(split_file),
-              "method_options": {k: list(v) if isinstance(v, tuple) else v for k, v in options.items()},
+              "method_options": options,
               "gzsl": gzsl_record, "dataset": features.dataset}
     return StudyRun(shown, record, features.info.get("data_files", []))
 

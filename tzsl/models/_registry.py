@@ -83,6 +83,9 @@ class Method:
         Parameters fixed for this method.
     description : str
         One line for ``tzsl methods``.
+    input_ndim : {2, 3}
+        Trial input the method fits on: 2 = ``(n_trials, n_features)`` (sensors side by side),
+        3 = ``(n_trials, n_sensors, n_features)`` (one model per sensor, fused by the rule).
     """
 
     name: str
@@ -93,6 +96,7 @@ class Method:
     estimator: type | None = None
     preset: Mapping[str, object] = field(default_factory=dict)
     description: str = ""
+    input_ndim: int = 2
 
     def components(self) -> list[type]:
         """Classes whose parameters the method exposes (estimator, or model then rule)."""
@@ -162,6 +166,7 @@ def register_method(
     preset: Mapping[str, object] | None = None,
     description: str = "",
     replace: bool = False,
+    input_ndim: int = 2,
 ):
     """Register a method; without a model class, return a class decorator that registers it.
 
@@ -182,6 +187,8 @@ def register_method(
     description : str
     replace : bool, default=False
         Allow replacing a method of the same name.
+    input_ndim : {2, 3}, default=2
+        3 for methods fitted on per-sensor input ``(n_trials, n_sensors, n_features)``.
 
     Returns
     -------
@@ -192,7 +199,7 @@ def register_method(
         def decorator(cls: type) -> type:
             kw = {"estimator": cls} if decision_rule is None else {"attribute_model": cls}
             register_method(name, family=family, paper=paper, decision_rule=decision_rule, preset=preset,
-                            description=description, replace=replace, **kw)
+                            description=description, replace=replace, input_ndim=input_ndim, **kw)
             return cls
 
         return decorator
@@ -200,11 +207,14 @@ def register_method(
         raise ConfigError(f"method {name!r}: family must be one of {FAMILIES}, got {family!r}")
     if (estimator is None) == (attribute_model is None) or (attribute_model is not None) != (decision_rule is not None):
         raise ConfigError(f"method {name!r}: give either attribute_model and decision_rule, or estimator")
+    if input_ndim not in (2, 3):
+        raise ConfigError(f"method {name!r}: input_ndim must be 2 or 3, got {input_ndim!r}")
     if name in _REGISTRY and not replace:
         raise ConfigError(f"method {name!r} is already registered")
     method = Method(name=name, family=family, paper=paper, attribute_model=attribute_model,
                     decision_rule=decision_rule, estimator=estimator,
-                    preset=MappingProxyType(dict(preset or {})), description=description)
+                    preset=MappingProxyType(dict(preset or {})), description=description,
+                    input_ndim=input_ndim)
     unknown = sorted(set(method.preset) - {k for c in method.components() for k in _init_defaults(c)})
     if unknown:
         raise ConfigError(f"method {name!r}: preset names unknown parameter(s) {unknown}")

@@ -7,11 +7,11 @@ errors, all reported at once as ``FILE: key.path: reason``). The study dataclass
 (:class:`~tzsl.experiments.phac2_dap.DapStudyConfig`, ...) and the command-line options read
 their defaults from here; where a default is an estimator's, it is read from the estimator.
 
-A later ``methods = [{name = "...", ...}]`` list of registry names fits as one more key of a
-study's ``[methods]`` table.
+``[methods] compare = ["eszsl", {name = "embedding", lam = 0.1}]`` lists registry methods
+(``tzsl methods``) with parameters, checked against the registry at load time.
 """
 
-from tzsl.experiments.config._common import SEED_LIMIT, Compute, DaskCompute, Output
+from tzsl.experiments.config._common import SEED_LIMIT, Compute, DaskCompute, Output, method_label
 from tzsl.experiments.config._load import (
     STUDIES,
     STUDY_MODELS,
@@ -48,5 +48,5 @@ __all__ = [
     "FabricStudy", "HandFeatures", "HandMethods", "HandSimulation", "HandStudy", "Output", "Phac2Dataset",
     "Phac2Features", "Phac2Gzsl", "Phac2Methods", "Phac2Splits", "Phac2Study", "Phac2Svm", "builtin_names",
     "builtin_text", "config_from_options", "defaults", "estimator_parameters", "load_experiment", "to_toml",
-    "validate",
+    "method_label", "validate",
 ]

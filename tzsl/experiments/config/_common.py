@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
@@ -77,3 +77,53 @@ def lambdas_ok(values: list) -> list:
         elif v < 0:
             raise ValueError(f"{v!r}: expected a number >= 0 or \"inf\"")
     return distinct(non_empty(values))
+
+
+# --------------------------------------------------------------------------- registry methods
+
+#: ``methods.compare`` entries: a registry name, or ``{name = "...", <parameter> = value, ...}``.
+MethodEntry = str | dict[str, Any]
+
+COMPARE_DESCRIPTION = ('registry methods (tzsl methods) run on the same splits: "eszsl" or '
+                       '{name = "embedding", lam = 0.1}')
+
+
+def method_label(spec: dict) -> str:
+    """Column/row label of a method entry: ``{"name": "embedding", "lam": 0.1}`` -> ``embedding_lam_0.1``."""
+    parts = [spec["name"]]
+    for key, value in spec.items():
+        if key != "name":
+            parts.append(f"{key}_{value:g}" if isinstance(value, float) else f"{key}_{value}")
+    return "_".join(parts)
+
+
+def methods_ok(values: list, taken: tuple[str, ...] = ()) -> list[dict]:
+    """``methods.compare`` checked against the method registry, each entry as ``{"name": ..., **params}``.
+
+    ``taken``: labels the study already runs (refused here, so no column is computed twice).
+    """
+    from tzsl.exceptions import ConfigError  # noqa: PLC0415
+    from tzsl.models import get_method  # noqa: PLC0415 (the registry; imported only when methods are listed)
+
+    specs, problems, labels = [], [], list(taken)
+    for i, entry in enumerate(values):
+        key = f"methods.compare[{i}]"
+        spec = {"name": entry} if isinstance(entry, str) else dict(entry)
+        name = spec.get("name")
+        if not isinstance(name, str):
+            problems.append(f"@{key}.name: missing (a registry method name)")
+            continue
+        try:
+            get_method(name).build(**{k: v for k, v in spec.items() if k != "name"})
+        except ConfigError as exc:
+            where = f"{key}.name" if str(exc).startswith("unknown method") else key
+            problems.append(f"@{where}: {exc}")
+            continue
+        label = method_label(spec)
+        if label in labels:
+            problems.append(f"@{key}: {label!r} is already run (listed twice, or by another [methods] key)")
+        labels.append(label)
+        specs.append(spec)
+    if problems:
+        raise ValueError("\n".join(problems))
+    return specs

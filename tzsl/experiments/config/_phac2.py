@@ -13,7 +13,19 @@ from typing import Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from tzsl.experiments.config._common import DaskCompute, Output, Section, Seed, distinct, lambdas_ok, non_empty
+from tzsl.experiments.config._common import (
+    COMPARE_DESCRIPTION,
+    DaskCompute,
+    MethodEntry,
+    Output,
+    Section,
+    Seed,
+    distinct,
+    lambdas_ok,
+    method_label,
+    methods_ok,
+    non_empty,
+)
 
 BUILTIN_DATASETS = ("phac2-penn", "phac2-h5", "phac2-hold-mat")
 
@@ -78,10 +90,31 @@ class Phac2Methods(Section):
     eszsl: bool = Field(False, description="ESZSL on the random splits (phac2_methods.csv)")
     embedding: bool = Field(False, description="the fabric paper's embedding model (phac2_methods.csv)")
     embedding_lambdas: list[float] = Field([0.1, 1.0], description="lambdas of the embedding model")
+    compare: list[MethodEntry] = Field([], description=COMPARE_DESCRIPTION)
     gzsl: bool = Field(False, description="generalised zero-shot evaluation (gzsl.csv, see [gzsl])")
 
     _lists = field_validator("fusions", "priors")(lambda v: distinct(non_empty(v)))
     _lams = field_validator("embedding_lambdas")(lambdas_ok)
+
+    def _from_switches(self) -> list[dict]:
+        """The methods ``eszsl`` and ``embedding`` (+ ``embedding_lambdas``) switch on."""
+        specs = [{"name": "eszsl"}] if self.eszsl else []
+        if self.embedding:
+            specs += [{"name": "embedding", "lam": float(lam)} for lam in self.embedding_lambdas]
+        return specs
+
+    @model_validator(mode="after")
+    def _registry(self):
+        if self.compare:
+            self.compare = methods_ok(self.compare, tuple(method_label(s) for s in self._from_switches()))
+        return self
+
+    def method_specs(self) -> list[dict]:
+        """Every method compared with DAP on the random splits: the switches' then ``compare``'s.
+
+        Each as ``{"name": registry name, **parameters}`` (see :func:`tzsl.models.build_method`).
+        """
+        return self._from_switches() + [dict(s) for s in self.compare]
 
 
 class Phac2Gzsl(Section):

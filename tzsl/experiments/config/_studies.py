@@ -11,7 +11,18 @@ from typing import Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from tzsl.experiments.config._common import Compute, Output, Section, Seed, distinct, lambdas_ok, non_empty
+from tzsl.experiments.config._common import (
+    COMPARE_DESCRIPTION,
+    Compute,
+    MethodEntry,
+    Output,
+    Section,
+    Seed,
+    distinct,
+    lambdas_ok,
+    methods_ok,
+    non_empty,
+)
 
 FABRIC_ATTRIBUTES = ("a8", "a4", "a12", "three_value_a8", "three_value_a8v2")
 FabricAttributes = Literal["a8", "a4", "a12", "three_value_a8", "three_value_a8v2"]
@@ -62,8 +73,10 @@ class FabricMethods(Section):
     embedding_lambdas: list[float | Literal["inf"]] = Field(PAPER_LAMBDAS, description="the paper's grid")
     alphas: list[float] = Field([1.0, 0.1, 0.01, 0.001], description="weight decay, chosen by class-grouped CV")
     max_iter: int = Field(500, ge=1, description="L-BFGS iterations per fit")
+    compare: list[MethodEntry] = Field([], description=COMPARE_DESCRIPTION + " (runs rows beside ESZSL)")
 
     _lams = field_validator("embedding_lambdas")(lambdas_ok)
+    _compare = field_validator("compare")(lambda v: methods_ok(v, ("ESZSL",)))
 
     @field_validator("alphas")
     @classmethod
