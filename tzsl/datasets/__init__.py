@@ -5,11 +5,13 @@ from tzsl.datasets._grasps import (
     JOINT_NAMES,
     Grasp,
     HandTable,
+    grasp_from_arrays,
     load_hand_table4,
     read_grasps,
     write_grasps,
 )
 from tzsl.datasets._hand_simulator import SimulatedGrasps, simulate_grasps
+from tzsl.datasets._feature_table import feature_table_paths, read_feature_table, write_feature_table
 from tzsl.datasets._home import get_cache_dir, get_data_home
 from tzsl.datasets._phac2_h5 import (
     iter_phac2_h5,
@@ -48,7 +50,14 @@ from tzsl.datasets._fabric import (
 )
 from tzsl.datasets._gelsight_press import PressRecord, load_gelsight_press
 from tzsl.datasets._video import avi_frame_count, read_video
-from tzsl.datasets._plain import PlainDataset, feature_set_to_plain, read_plain_dataset, write_plain_dataset
+from tzsl.datasets._plain import (
+    PLAIN_FORMAT_HELP,
+    PlainDataset,
+    feature_set_to_plain,
+    read_plain_dataset,
+    write_plain_dataset,
+)
+from tzsl.datasets._tables import SPLITS_FILE
 from tzsl.datasets._validate import Problem, read_signal_file, validate_dataset
 
 __all__ = [
@@ -56,6 +65,7 @@ __all__ = [
     "JOINT_NAMES",
     "Grasp",
     "HandTable",
+    "grasp_from_arrays",
     "load_hand_table4",
     "read_grasps",
     "write_grasps",
@@ -66,6 +76,9 @@ __all__ = [
     "BiotacSignals",
     "FeatureSet",
     "RawTrial",
+    "feature_table_paths",
+    "read_feature_table",
+    "write_feature_table",
     "get_data_home",
     "get_cache_dir",
     "fetch",
@@ -99,10 +112,12 @@ __all__ = [
     "load_gelsight_press",
     "avi_frame_count",
     "read_video",
+    "PLAIN_FORMAT_HELP",
     "PlainDataset",
     "feature_set_to_plain",
     "read_plain_dataset",
     "write_plain_dataset",
+    "SPLITS_FILE",
     "Problem",
     "read_signal_file",
     "validate_dataset",
