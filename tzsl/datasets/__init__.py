@@ -44,10 +44,10 @@ from tzsl.datasets._fabric import (
     FabricSplit,
     fabric_zsl_split,
     load_fabric,
-    load_gelsight_fabric_videos,
     read_depth_images,
     read_fabric_groups,
 )
+from tzsl.datasets._fabric_videos import load_gelsight_fabric_videos
 from tzsl.datasets._gelsight_press import PressRecord, load_gelsight_press
 from tzsl.datasets._video import avi_frame_count, read_video
 from tzsl.datasets._plain import (
