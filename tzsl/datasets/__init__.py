@@ -11,7 +11,6 @@ from tzsl.datasets._grasps import (
     write_grasps,
 )
 from tzsl.datasets._hand_simulator import SimulatedGrasps, simulate_grasps
-from tzsl.datasets._feature_table import feature_table_paths, read_feature_table, write_feature_table
 from tzsl.datasets._home import get_cache_dir, get_data_home
 from tzsl.datasets._phac2_h5 import (
     iter_phac2_h5,
@@ -36,6 +35,9 @@ from tzsl.datasets._phac2_penn import (
 from tzsl.datasets._registry import fetch, registered_files
 from tzsl.datasets._safe_pickle import safe_load_pickle
 from tzsl.datasets._types import PHAC2_EPS, TRIAL_COLUMNS, BiotacSignals, FeatureSet, RawTrial
+from tzsl.datasets._feature_table import feature_table_paths, read_feature_table, write_feature_table
+from tzsl.datasets._plain import PLAIN_FORMAT_HELP
+from tzsl.datasets._tables import SPLITS_FILE
 from tzsl.datasets._fabric import (
     FABRIC_ATTRIBUTE_SETS,
     FABRIC_ZSL_CONFIGS,
@@ -50,14 +52,7 @@ from tzsl.datasets._fabric import (
 from tzsl.datasets._fabric_videos import load_gelsight_fabric_videos
 from tzsl.datasets._gelsight_press import PressRecord, load_gelsight_press
 from tzsl.datasets._video import avi_frame_count, read_video
-from tzsl.datasets._plain import (
-    PLAIN_FORMAT_HELP,
-    PlainDataset,
-    feature_set_to_plain,
-    read_plain_dataset,
-    write_plain_dataset,
-)
-from tzsl.datasets._tables import SPLITS_FILE
+from tzsl.datasets._plain import PlainDataset, feature_set_to_plain, read_plain_dataset, write_plain_dataset
 from tzsl.datasets._validate import Problem, read_signal_file, validate_dataset
 
 __all__ = [
@@ -65,8 +60,8 @@ __all__ = [
     "JOINT_NAMES",
     "Grasp",
     "HandTable",
-    "grasp_from_arrays",
     "load_hand_table4",
+    "grasp_from_arrays",
     "read_grasps",
     "write_grasps",
     "SimulatedGrasps",
