@@ -1,12 +1,15 @@
 """Code-health rules of the package (issue 11, item 4), checked on the source with :mod:`ast`.
 
 (a) No module imports a private module (``_name``) of a package it does not belong to:
-    ``from tzsl.datasets._types import Trials`` is fine inside ``tzsl/datasets/`` and refused
+    ``from tzsl.datasets._types import RawTrial`` is fine inside ``tzsl/datasets/`` and refused
     anywhere else; outside the owning package, import the public name from its ``__init__``.
+    A private module is open to its package and that package's subpackages, so ``tzsl._io``
+    (the atomic writers) serves all of ``tzsl`` and ``tzsl.experiments._outputs`` serves
+    ``tzsl.experiments.config``. Imports inside functions (the command line's lazy ones) count.
 (b) No module imports a private name (``_helper``) of another tzsl module, nor reads one as an
     attribute of an imported tzsl module (``_mod._helper``), even inside one package: a name
     used by two modules is public. (Third-party private names, such as scikit-learn's
-    ``_fit_context`` and ``_param_validation`` that its developer guide has estimators use, are
+    ``_fit_context`` and ``_param_validation`` behind its parameter-validation protocol, are
     outside this rule.)
 (c) No ``.py`` file in ``tzsl/`` is over :data:`MAX_LINES` lines.
 
