@@ -26,7 +26,7 @@ from __future__ import annotations
 from numbers import Integral, Real
 
 import numpy as np
-from scipy.special import expit, log_expit
+from scipy.special import log_expit
 from sklearn import config_context
 from sklearn.base import BaseEstimator, ClassifierMixin, clone
 from sklearn.metrics.pairwise import euclidean_distances, rbf_kernel
@@ -51,6 +51,7 @@ from tzsl.models._attribute_training import (
     fit_platt,
     grid_edges,
 )
+from tzsl.models._platt_binary import PlattBinaryClassifierMixin
 from tzsl.models._validation import ParameterError, ValidatedParamsMixin
 
 __all__ = ["AttributeSVM"]
@@ -104,7 +105,7 @@ def _svc_fit_decision(K_train: np.ndarray, y: np.ndarray, C: float, class_weight
     return -dec.ravel()
 
 
-class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
+class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
     """Binary RBF-SVM for one attribute and one sensor, under-sampled, group-tuned, Platt-calibrated.
 
     Parameters
@@ -217,15 +218,7 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         self.name = name
         self.random_state = random_state
 
-    def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
-        tags.classifier_tags.multi_class = False
-        return tags
-
     # ------------------------------------------------------------------ helpers
-    def _label(self) -> str:
-        return f"attribute {self.name!r}" if self.name is not None else "attribute"
-
     def _check_param_values(self) -> None:
         for nm in ("C_range", "gamma_range"):
             rng = np.asarray(getattr(self, nm), dtype=object).ravel()
@@ -416,19 +409,3 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         for w, svc, Ztr in zip(self.estimator_weights_, self.estimators_, self.train_features_):
             out += w * svc.decision_function(rbf_kernel(Z, Ztr, gamma=self.gamma_))
         return out
-
-    def decision_function(self, X) -> np.ndarray:
-        """Logit of ``p(classes_[1] | x)`` (Platt-mapped SVM score); shape (n_trials,)."""
-        check_is_fitted(self)
-        a, b = self.platt_
-        return a * self.svm_score(X) + b
-
-    def predict_proba(self, X) -> np.ndarray:
-        """Posteriors, shape (n_trials, 2), columns ordered as ``classes_``."""
-        p1 = expit(self.decision_function(X))
-        return np.column_stack([1.0 - p1, p1])
-
-    def predict(self, X) -> np.ndarray:
-        """Class with posterior >= 0.5, shape (n_trials,)."""
-        check_is_fitted(self)
-        return self.classes_[(self.decision_function(X) >= 0).astype(int)]
