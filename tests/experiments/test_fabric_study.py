@@ -24,7 +24,7 @@ from tzsl.experiments.fabric import (
     zero_shot_run,
 )
 from tzsl.experiments.paper_numbers import FABRIC_TABLE1
-from tzsl.models import attribute_rows, build_method
+from tzsl.models import ZSLInputError, attribute_rows, build_method
 
 A8_LIKE = np.array(  # 8 groups x 4 attributes; groups 3, 4 and 5 share a row, like a8
     [[1, 0, 1, 0], [1, 0, 0, 1], [0, 1, 0, 0], [0, 1, 1, 1], [0, 1, 1, 1], [0, 1, 1, 1], [0, 0, 1, 0],
@@ -110,12 +110,12 @@ def test_select_embedding_alpha_uses_held_out_classes():
     S = A8_LIKE[[1, 2, 3, 4, 6]]
     alpha, scores = select_embedding_alpha(X[train], groups[train], S, lam=0.1, alphas=(1.0, 0.01), random_state=0)
     assert alpha in (1.0, 0.01)
-    assert scores.shape == (2, 2)  # 4 distinct rows (3 and 4 merged) -> GroupKFold(2)
+    assert scores.shape == (2, 2)  # 4 distinct rows (3 and 4 merged) -> 2 folds
     assert ((scores >= 0) & (scores <= 1)).all()
     assert alpha == (1.0, 0.01)[int(np.argmax(scores.mean(axis=1)))]
     assert select_embedding_alpha(X[train], groups[train], S, lam=0, alphas=(0.5,)) == (0.5, None)
     few = np.isin(groups, [1, 2, 3])
-    with pytest.raises(ConfigError, match="at least 4 distinct"):
+    with pytest.raises(ZSLInputError, match="at least 4 training classes"):
         select_embedding_alpha(X[few], groups[few], A8_LIKE[[1, 2, 3]], lam=0)
     with pytest.raises(ConfigError, match="alphas"):
         select_embedding_alpha(X[train], groups[train], S, lam=0, alphas=())
