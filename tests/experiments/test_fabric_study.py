@@ -296,3 +296,18 @@ def test_gelsight_groups_must_index_the_attribute_matrix(gelsight_root, data_dir
     with pytest.raises(DataFileError, match=r"groups \[9\] are outside 0..7"):
         run_fabric_study(ResultsDir(tmp_path / "out"), data_dir=data_dir, gelsight_root=root, conditions=(),
                          progress=False)
+
+
+def test_a_failing_fit_is_a_row_with_nan_and_its_error():
+    from tzsl.experiments.fabric import ESZSL_METHOD, _run_job  # noqa: PLC0415
+
+    X, groups = _synthetic()
+    split = fabric_zsl_split(1)
+    ok = _run_job(X, groups, A8_LIKE, split, ESZSL_METHOD, None, None, (), 50)
+    assert ok["error"] == "" and 0 <= ok["accuracy"] <= 1
+    X_bad = X.copy()
+    X_bad[0, 0] = np.nan  # ESZSL refuses non-finite features
+    row = _run_job(X_bad, groups, A8_LIKE, split, ESZSL_METHOD, None, None, (), 50)
+    assert np.isnan(row["accuracy"]) and np.isnan(row["per_class_mean_accuracy"])
+    assert row["error"].startswith("ZSLInputError: ") and "\n" not in row["error"]
+    assert row["n_test"] == ok["n_test"] and row["method"] == ESZSL_METHOD

@@ -21,6 +21,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from tzsl.exceptions import PartialRunError
 from tzsl.experiments._outputs import ResultsDir
 
 #: The manifest of ``reproduce-tables``: built-in studies, run in this order.
@@ -64,6 +65,7 @@ def reproduce_tables(
             results.check_free(phac2_outputs(exp.config))
     results.check_free(["manifest.json"])
     records, data_files, timings, tables = {}, [], {}, []
+    failures: list[str] = []
     for name, exp in zip(studies, experiments, strict=True):
         say(f"\n== {name} ({exp.source}) ==")
         start = time.perf_counter()
@@ -72,6 +74,10 @@ def reproduce_tables(
         records[name] = manifest_record(exp, done)
         data_files += list(done.data_files)
         tables += sorted(done.tables)
+        failures += [f"{name}: {line}" for line in done.failures]
     results.write_manifest({"studies": records}, data_files=data_files,
-                           extra={"timings_s": timings, "tables": tables, "reproduce_studies": list(studies)})
+                           extra={"timings_s": timings, "tables": tables, "reproduce_studies": list(studies),
+                                  "failures": failures})
+    if failures:
+        raise PartialRunError(results.root, failures)
     return results
