@@ -242,16 +242,21 @@ def execute_study(exp: Experiment, results: ResultsDir, echo: Callable[[str], No
 
 
 def results_folder(exp: Experiment, force: bool) -> ResultsDir:
-    """The results folder of ``exp`` (phac2-dap: leaving unselected fusion/prior columns out)."""
+    """The (staged) results folder of ``exp`` (phac2-dap: leaving unselected fusion/prior columns out).
+
+    Files are staged in the output folder's :data:`~tzsl.experiments._outputs.STAGING_FOLDER`
+    and moved into place by :meth:`ResultsDir.commit` when the run completes, so a crashed run
+    never blocks its rerun.
+    """
     from tzsl.experiments import study_runners  # noqa: PLC0415
 
     folder = Path(exp.config.output.folder)
     if exp.study == "phac2-dap":
-        results: ResultsDir = study_runners.SelectedColumns(folder, force,
-                                                             study_runners.dropped_columns(exp.config.methods))
+        results: ResultsDir = study_runners.SelectedColumns(
+            folder, force, study_runners.dropped_columns(exp.config.methods), staging=True)
         results.check_free(study_runners.phac2_outputs(exp.config))
     else:
-        results = ResultsDir(folder, force=force)
+        results = ResultsDir(folder, force=force, staging=True)
         results.check_free(["manifest.json"])
     return results
 
@@ -288,12 +293,13 @@ def run_experiment(
         exp = load_experiment(experiment, override_values(study, overrides))
     say = echo or (lambda _msg: None)
     results = results_folder(exp, force)
-    say(f"{exp.source}: study {exp.study} -> {results.root}")
+    say(f"{exp.source}: study {exp.study} -> {results.final_root}")
     run = execute_study(exp, results, echo)  # checks the experiment (check_experiment) before any fit
     results.write_manifest(manifest_record(exp, run), data_files=run.data_files,
                            extra={"experiment_sha256": hashlib.sha256(exp.text.encode()).hexdigest(),
                                   "experiment_toml": exp.text, "description": exp.config.description,
                                   "tables": sorted(run.tables), "failures": run.failures})
+    results.commit()
     if run.failures:
         error = PartialRunError(results.root, run.failures)
         error.results, error.run = results, run

@@ -58,7 +58,7 @@ def reproduce_tables(
 
     say = echo or (lambda _msg: None)
     experiments = reproduce_experiments(studies, **overrides)
-    results = ResultsDir(out, force=force)
+    results = ResultsDir(out, force=force, staging=True)
     for exp in experiments:
         check_experiment(exp)
         if exp.study == "phac2-dap":
@@ -78,6 +78,7 @@ def reproduce_tables(
     results.write_manifest({"studies": records}, data_files=data_files,
                            extra={"timings_s": timings, "tables": tables, "reproduce_studies": list(studies),
                                   "failures": failures})
+    results.commit()
     if failures:
         raise PartialRunError(results.root, failures)
     return results

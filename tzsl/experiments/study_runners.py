@@ -28,8 +28,8 @@ from tzsl.experiments.engine import (
 class SelectedColumns(ResultsDir):
     """A results folder that leaves unselected fusion / prior columns out of Tables 1 and 2."""
 
-    def __init__(self, root, force: bool, drop: Mapping[str, list[str]]) -> None:
-        super().__init__(root, force=force)
+    def __init__(self, root, force: bool, drop: Mapping[str, list[str]], staging: bool = False) -> None:
+        super().__init__(root, force=force, staging=staging)
         self.drop = dict(drop)
 
     def write_csv(self, name: str, table: pd.DataFrame, index: bool = False) -> Path:
