@@ -56,6 +56,7 @@ __all__ = [
     "attribute_accuracy_table",
     "attribute_bank",
     "attribute_estimator",
+    "check_cv_folds",
     "attribute_subsets",
     "attribute_sweep",
     "compute_context",
@@ -208,6 +209,18 @@ def make_splits(features: FeatureSet, kind: str, config: DapStudyConfig) -> tupl
 
 
 # --------------------------------------------------------------------------- fitting
+
+
+def check_cv_folds(cv, n_train_objects: int, where: str) -> None:
+    """Refuse more object-grouped CV folds (``svm.cv`` / ``--cv``) than training objects, before any fit.
+
+    ``cv``: an int (folds) or None / 0 (leave-one-object-out, always possible); ``where`` starts
+    the message (the experiment file or ``command line``).
+    """
+    if cv and int(cv) > n_train_objects:
+        raise ConfigError(f"{where}: svm.cv: {int(cv)} object-grouped folds, but a split has only "
+                          f"{n_train_objects} training objects; use at most {n_train_objects} (0 = "
+                          "leave-one-object-out)")
 
 
 def attribute_estimator(config: DapStudyConfig, seed: int) -> AttributeSVM:
@@ -440,6 +453,7 @@ def train_attribute_model(
         train = np.isin(objects, chosen.train_objects)
         attributes = list(chosen.kept_attributes)
         split_record = chosen.name
+    check_cv_folds(config.svm_params.get("cv", _SVM.cv), len(np.unique(objects[train])), "command line")
     sub = features.subset(train)
     sub.attributes = sub.attributes[attributes]
     A = sub.trial_attributes()

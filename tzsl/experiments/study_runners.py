@@ -11,7 +11,6 @@ from pathlib import Path
 
 import pandas as pd
 
-from tzsl.exceptions import ConfigError
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.config import Experiment
 from tzsl.experiments.engine import (
@@ -28,8 +27,8 @@ from tzsl.experiments.engine import (
 class SelectedColumns(ResultsDir):
     """A results folder that leaves unselected fusion / prior columns out of Tables 1 and 2."""
 
-    def __init__(self, root, force: bool, drop: Mapping[str, list[str]]) -> None:
-        super().__init__(root, force=force)
+    def __init__(self, root, force: bool, drop: Mapping[str, list[str]], staging: bool = False) -> None:
+        super().__init__(root, force=force, staging=staging)
         self.drop = dict(drop)
 
     def write_csv(self, name: str, table: pd.DataFrame, index: bool = False) -> Path:
@@ -88,11 +87,9 @@ def phac2_features(exp: Experiment):
 
 
 def _check_folds(exp: Experiment, n_train_objects: int) -> None:
-    cv = exp.config.svm.cv
-    if cv > n_train_objects:
-        raise ConfigError(f"{exp.source}: svm.cv: {cv} object-grouped folds, but a split has only "
-                          f"{n_train_objects} training objects; use at most {n_train_objects} (0 = "
-                          "leave-one-object-out)")
+    from tzsl.experiments.phac2_dap import check_cv_folds  # noqa: PLC0415
+
+    check_cv_folds(exp.config.svm.cv, n_train_objects, exp.source)
 
 
 def _format(table: pd.DataFrame) -> str:

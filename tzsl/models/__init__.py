@@ -63,7 +63,7 @@ from tzsl.models._active_policy import (
     sequential_log_posterior,
     stop_reasons,
 )
-from tzsl.models._zsl_input import ZSLInputError, attribute_rows, training_classes
+from tzsl.models._zsl_input import ZSLInputError, attribute_rows, class_grouped_folds, training_classes
 from tzsl.models._validation import ParameterError
 from tzsl.models._zero_shot import ZeroShotClassifier, score_kind
 from tzsl.models._registry import (
@@ -120,6 +120,7 @@ __all__: list[str] = [
     "ParameterError",
     "ZSLInputError",
     "attribute_rows",
+    "class_grouped_folds",
     "training_classes",
     "FAMILIES",
     "Method",
