@@ -39,11 +39,11 @@ def dropped_columns(methods) -> dict[str, list[str]]:
     """Columns of Tables 1 and 2 that ``[methods] fusions`` / ``priors`` leave out."""
     drop: dict[str, list[str]] = {"table1_fusion.csv": [], "table2_priors.csv": []}
     for fusion in sorted({"max", "avg"} - set(methods.fusions)):
-        drop["table1_fusion.csv"] += [f"{fusion}dap", f"paper_{fusion}dap"]
-        if fusion == "avg":
-            drop["table1_fusion.csv"].append("avgdap_per_class_mean")
+        for column in [f"{fusion}dap"] + (["avgdap_per_class_mean"] if fusion == "avg" else []):
+            drop["table1_fusion.csv"] += [column, f"{column}_ci95_low", f"{column}_ci95_high"]
+        drop["table1_fusion.csv"].append(f"paper_{fusion}dap")
     for prior in sorted({"uni", "test", "train"} - set(methods.priors)):
-        drop["table2_priors.csv"] += [prior, f"paper_{prior}"]
+        drop["table2_priors.csv"] += [prior, f"{prior}_ci95_low", f"{prior}_ci95_high", f"paper_{prior}"]
     return drop
 
 
