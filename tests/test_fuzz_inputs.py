@@ -7,6 +7,7 @@ must exit 0, or exit with tzsl's error code (2 = click usage, 3 = bad input; old
 for both) with exactly one line on stderr naming the offending path; never a traceback, and it
 must not create or change any file (these commands write nothing).
 
+Grasp folders are also given to ``tzsl predict`` with a trained hand bundle.
 Experiment files (TOML) are damaged the same way (bytes, truncation, a line dropped or doubled,
 a value replaced by a hostile one, an unknown key) and given to ``tzsl run FILE --check``, which
 reads the dataset and split file but fits nothing; besides the rules above, no file may appear
@@ -352,3 +353,35 @@ def test_run_broken_experiment_file_writes_only_under_out(data):
         assert len(lines) == 1 or lines[0].endswith("problem(s):"), result.stderr
         for line in lines:
             assert str(toml) in line or str(root) in line or any(v and v in line for v in values), line
+
+
+# ------------------------------------------------------------------ grasp folders through 'tzsl predict'
+@pytest.fixture(scope="module")
+def hand_model(tmp_path_factory):
+    from tzsl.datasets import load_hand_table4, simulate_grasps
+    from tzsl.experiments.predict import train_hand_bundle
+
+    root = tmp_path_factory.mktemp("fuzz_hand")
+    table = load_hand_table4()
+    simulate_grasps(table.K, 20, random_state=1, folder=root / "train")
+    train_hand_bundle(root / "train", table, root / "model.tzsl", seed=0)
+    table.K.loc[table.test_objects].rename_axis("object").to_csv(root / "classes.csv")
+    return root, table
+
+
+@settings(FUZZ, max_examples=min(FUZZ.max_examples, 10))  # each example loads the bundle
+@given(data=st.data())
+def test_predict_broken_grasp_folder(hand_model, data):
+    from tzsl.datasets import simulate_grasps
+
+    model_root, table = hand_model
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        folder = root / "grasps"
+        simulate_grasps(table.K.loc[list(table.test_objects)[:2]], 1, random_state=2, folder=folder)
+        files = sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file())
+        _damage(folder, files, data)
+        before = _tree(root)
+        result = CliRunner().invoke(cli, ["predict", "--model", str(model_root / "model.tzsl"), "--classes",
+                                          str(model_root / "classes.csv"), "--k", "1", str(folder)])
+        _check(result, folder, before, root)
