@@ -175,6 +175,17 @@ def test_run_check_draws_the_random_splits_and_names_the_file(toy):
     assert len(result.stderr.strip().splitlines()) == 1
 
 
+@pytest.mark.parametrize("command", ["evaluate", "train-attributes"])
+def test_binary_features_csv_is_one_clear_error(tmp_path, command):
+    binary = tmp_path / "features.csv"
+    binary.write_bytes(bytes(range(256)) * 16)
+    out = tmp_path / ("m.tzsl" if command == "train-attributes" else "o")
+    result = _run(command, "--features", binary, "--no-progress", "--out", out)
+    assert result.exit_code == EXIT_TZSL_ERROR and "Traceback" not in result.output
+    assert result.stderr.strip() == f"tzsl: error: {binary}: not a UTF-8 text file (a binary file given as CSV?)"
+    assert not out.exists()
+
+
 def test_binary_experiment_file_is_one_clear_error(tmp_path):
     path = tmp_path / "exp.toml"
     path.write_bytes(bytes(range(256)))
