@@ -7,8 +7,13 @@ must exit 0, or exit with tzsl's error code (2 = click usage, 3 = bad input; old
 for both) with exactly one line on stderr naming the offending path; never a traceback, and it
 must not create or change any file (these commands write nothing).
 
-Bounded: ``max_examples`` per property keeps the suite under a minute. Experiment files are
-fuzzed with the engine's tests (TODO there).
+Grasp folders are also given to ``tzsl predict`` with a trained hand bundle.
+Experiment files (TOML) are damaged the same way (bytes, truncation, a line dropped or doubled,
+a value replaced by a hostile one, an unknown key) and given to ``tzsl run FILE --check``, which
+reads the dataset and split file but fits nothing; besides the rules above, no file may appear
+anywhere (the check writes nothing, not even under ``--out``).
+
+Bounded: ``max_examples`` per property keeps the suite under a minute.
 """
 
 from __future__ import annotations
@@ -218,3 +223,165 @@ def test_predict_with_broken_bundle(phac2_model, data):
         result = CliRunner().invoke(cli, ["predict", "--model", str(bundle), "--classes",
                                           str(phac2_model / "classes.csv"), str(phac2_model / "table.npz")])
         _check(result, bundle, before, root)
+
+
+# ------------------------------------------------------------------ experiment files
+EXPERIMENT = """study = "phac2-dap"
+description = "fuzz base"
+[dataset]
+plain = "ds"
+min_objects = 1
+[methods]
+fusions = ["avg"]
+priors = ["uni"]
+[splits]
+kinds = ["file"]
+seed = 0
+[svm]
+cv = 2
+undersampling = "none"
+n_C = 1
+[compute]
+n_jobs = 1
+progress = false
+cache = false
+[output]
+folder = "elsewhere"
+"""
+TOML_VALUES = ['"../x"', '"/etc/passwd"', '"/"', '"ds/splits.csv"', "-1", "0", "1099511627776", "nan", "inf",
+               "true", "[]", "{}", '["file", "file"]', '"é"', '"a\\u0000b"', "1.5", '"', "[", "'''", '""']
+
+
+def _damage_toml(text: str, data: st.DataObject) -> tuple[bytes, list[str]]:
+    """The damaged file's bytes and the hostile values it holds (an error may name them instead of the file)."""
+    lines = text.splitlines()
+    kind = data.draw(st.sampled_from(["bytes", "truncate", "drop", "double", "value", "unknown", "value"]),
+                     label="damage")
+    values: list[str] = []
+    if kind == "bytes":
+        return data.draw(st.binary(max_size=120), label="bytes"), values
+    if kind == "truncate":
+        raw = text.encode()
+        return raw[: data.draw(st.integers(0, len(raw) - 1), label="cut")], values
+    row = data.draw(st.sampled_from([i for i, ln in enumerate(lines) if "=" in ln or ln.startswith("[")]),
+                    label="row")
+    if kind == "drop":
+        del lines[row]
+    elif kind == "double":
+        lines.insert(row, lines[row])
+    elif kind == "unknown":
+        lines.insert(row + 1, data.draw(st.sampled_from(["bogus = 1", "[bogus]", "n_jobs = 2", "study = 'hand'"]),
+                                        label="line"))
+    elif "=" in lines[row]:
+        value = data.draw(st.sampled_from(TOML_VALUES) | st.text(max_size=8), label="value")
+        lines[row] = lines[row].split("=")[0] + "= " + value
+        values.append(value.strip('"'))
+    return ("\n".join(lines) + "\n").encode("utf-8", "surrogatepass"), values
+
+
+@FUZZ
+@given(data=st.data())
+def test_run_check_broken_experiment_file(data):
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        _dataset(root, signals=False)
+        toml = root / "exp.toml"
+        raw, values = _damage_toml(EXPERIMENT, data)
+        toml.write_bytes(raw)
+        before = _tree(root)
+        cwd = os.getcwd()
+        os.chdir(root)  # a relative output folder or cache would land here, where it is seen
+        try:
+            result = CliRunner().invoke(cli, ["run", str(toml), "--check", "--out", str(root / "out")])
+        finally:
+            os.chdir(cwd)
+        assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
+        assert "Traceback" not in result.output + result.stderr
+        assert _tree(root) == before, "a file was created or changed"
+        if result.exit_code == 0:
+            return
+        assert result.exit_code in ERROR_CODES, result.output
+        lines = result.stderr.strip().splitlines()
+        assert lines and lines[0].startswith("tzsl: error: "), result.stderr
+        assert len(lines) == 1 or lines[0].endswith("problem(s):"), result.stderr  # several: one per line
+        for line in lines:
+            assert str(toml) in line or str(root) in line or any(v and v in line for v in values), line
+
+
+RUNNABLE = EXPERIMENT.replace('kinds = ["file"]', 'kinds = ["random"]\nn_splits = 1\nn_test = 3').replace(
+    "n_C = 1", "n_C = 1\nn_gamma = 1\nn_draws = 1")
+
+
+def _runnable_dataset(root: Path) -> Path:
+    """12 objects with distinct 4-bit attribute rows, 2 trials each, features that follow the attributes."""
+    rng = np.random.default_rng(0)
+    A = (np.arange(1, 13)[:, None] >> np.arange(4)) & 1
+    names = [f"k{i:02d}" for i in range(12)]
+    classes = pd.DataFrame(A, index=pd.Index(names, name="class"), columns=["a0", "a1", "a2", "a3"])
+    trials = pd.DataFrame({"trial_id": [f"t{i}" for i in range(24)], "class": np.repeat(names, 2),
+                           "object": np.repeat(names, 2)})
+    X = np.repeat(A, 2, axis=0)[:, None, :2] + 0.2 * rng.normal(size=(24, 1, 2))
+    return write_plain_dataset(root / "ds", classes, trials, sensors=("s",), X=X, feature_names=("f_a", "f_b"))
+
+
+@settings(FUZZ, max_examples=min(FUZZ.max_examples, 6))
+@given(data=st.data())
+def test_run_broken_experiment_file_writes_only_under_out(data):
+    """A real run (tiny SVM grid): exit 0 or 2/3 with the file named; files appear only under --out."""
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        _runnable_dataset(root)
+        toml = root / "exp.toml"
+        raw, values = _damage_toml(RUNNABLE, data)
+        toml.write_bytes(raw)
+        before = _tree(root)
+        cwd = os.getcwd()
+        os.chdir(root)
+        try:
+            result = CliRunner().invoke(cli, ["run", str(toml), "--out", str(root / "out")])
+        finally:
+            os.chdir(cwd)
+        assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
+        assert "Traceback" not in result.output + result.stderr
+        after = {k: v for k, v in _tree(root).items() if k != "out" and not k.startswith("out/")}
+        assert after == before, "a file outside --out was created or changed"
+        if result.exit_code == 0:
+            assert (root / "out" / "manifest.json").is_file()
+            return
+        assert result.exit_code in ERROR_CODES, result.output
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 or lines[0].endswith("problem(s):"), result.stderr
+        for line in lines:
+            assert str(toml) in line or str(root) in line or any(v and v in line for v in values), line
+
+
+# ------------------------------------------------------------------ grasp folders through 'tzsl predict'
+@pytest.fixture(scope="module")
+def hand_model(tmp_path_factory):
+    from tzsl.datasets import load_hand_table4, simulate_grasps
+    from tzsl.experiments.predict import train_hand_bundle
+
+    root = tmp_path_factory.mktemp("fuzz_hand")
+    table = load_hand_table4()
+    simulate_grasps(table.K, 20, random_state=1, folder=root / "train")
+    train_hand_bundle(root / "train", table, root / "model.tzsl", seed=0)
+    table.K.loc[table.test_objects].rename_axis("object").to_csv(root / "classes.csv")
+    return root, table
+
+
+@settings(FUZZ, max_examples=min(FUZZ.max_examples, 10))  # each example loads the bundle
+@given(data=st.data())
+def test_predict_broken_grasp_folder(hand_model, data):
+    from tzsl.datasets import simulate_grasps
+
+    model_root, table = hand_model
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        folder = root / "grasps"
+        simulate_grasps(table.K.loc[list(table.test_objects)[:2]], 1, random_state=2, folder=folder)
+        files = sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file())
+        _damage(folder, files, data)
+        before = _tree(root)
+        result = CliRunner().invoke(cli, ["predict", "--model", str(model_root / "model.tzsl"), "--classes",
+                                          str(model_root / "classes.csv"), "--k", "1", str(folder)])
+        _check(result, folder, before, root)

@@ -165,6 +165,27 @@ def test_too_many_folds_are_refused_before_any_fit_by_evaluate_and_train_attribu
     assert not model.exists()
 
 
+def test_run_check_draws_the_random_splits_and_names_the_file(toy):
+    path = toy / "draw.toml"
+    path.write_text("study = 'phac2-dap'\n[dataset]\nplain = 'toy'\n[splits]\nkinds = ['random']\nn_test = 22\n"
+                    "[svm]\ncv = 2\n")
+    result = _run("run", path, "--check")
+    assert result.exit_code == EXIT_TZSL_ERROR
+    assert result.stderr.strip().startswith(f"tzsl: error: {path}: splits: random split 1: no valid draw of 22 test")
+    assert len(result.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("command", ["evaluate", "train-attributes"])
+def test_binary_features_csv_is_one_clear_error(tmp_path, command):
+    binary = tmp_path / "features.csv"
+    binary.write_bytes(bytes(range(256)) * 16)
+    out = tmp_path / ("m.tzsl" if command == "train-attributes" else "o")
+    result = _run(command, "--features", binary, "--no-progress", "--out", out)
+    assert result.exit_code == EXIT_TZSL_ERROR and "Traceback" not in result.output
+    assert result.stderr.strip() == f"tzsl: error: {binary}: not a UTF-8 text file (a binary file given as CSV?)"
+    assert not out.exists()
+
+
 def test_binary_experiment_file_is_one_clear_error(tmp_path):
     path = tmp_path / "exp.toml"
     path.write_bytes(bytes(range(256)))

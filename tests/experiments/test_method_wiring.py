@@ -270,3 +270,14 @@ def test_a_failing_split_method_is_recorded_and_the_run_exits_1_at_the_end(toy_m
     assert np.isfinite(table.loc["flaky", "difference"])  # paired on the 2 splits it completed
     manifest = json.loads((tmp_path / "res" / "manifest.json").read_text())
     assert len(manifest["failures"]) == 1 and "flaky" in manifest["failures"][0]
+
+
+def test_python_run_returns_the_tables_of_a_partial_run_with_a_warning(toy_method, failing_method, tmp_path):
+    from tzsl.experiments.engine import run  # noqa: PLC0415
+
+    _plain_dataset(tmp_path / "toyset")
+    text = SMALL_PHAC2.format(dataset='plain = "toyset"', n_splits=2, n_test=4).replace(
+        'compare = ["toy", {name = "toy", temperature = 0.5}]', 'compare = ["flaky"]')
+    with pytest.warns(RuntimeWarning, match=r"1 fit\(s\) failed"):
+        table = run(_write(tmp_path, text), table="phac2_methods", out=tmp_path / "res")
+    assert table["flaky"].isna().sum() >= 1 and table.attrs["results_dir"] == str(tmp_path / "res")

@@ -262,6 +262,9 @@ class PlainDataset:
 
 
 def _problem_error(folder: Path, problems: list) -> DataFileError:
+    if len(problems) == 1:  # one line: the file (inside the folder), its line, the problem
+        only = problems[0]
+        return DataFileError(Path(folder) / only.file, only.message, line=only.line)
     shown = "\n  ".join(map(str, problems[:20]))
     more = f"\n  ... and {len(problems) - 20} more" if len(problems) > 20 else ""
     return DataFileError(folder, f"invalid dataset, {len(problems)} problem(s) (all: tzsl validate {folder}):\n  "

@@ -246,6 +246,8 @@ def read_splits_csv(
                 min_train_negatives=rule[1],
             )
         )
+    if len(problems) == 1:  # one line, as linters print it (each problem starts with the path)
+        raise SplitError(problems[0])
     if problems:
         raise SplitError(f"invalid split file {path} ({len(problems)} problem(s)):\n  " + "\n  ".join(problems))
     return splits

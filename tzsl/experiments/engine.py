@@ -201,6 +201,8 @@ def check_experiment(exp: Experiment) -> None:
     Dask scheduler must answer within ``compute.connect_timeout`` seconds.
     """
     problems = _path_problems(exp)
+    if len(problems) == 1:  # one line, as linters print it
+        raise ConfigError(problems[0])
     if problems:
         raise ConfigError(f"{exp.source}: {len(problems)} problem(s):\n" + "\n".join(problems))
     compute = exp.config.compute

@@ -111,10 +111,14 @@ _TITLES = {
 def prepare_phac2(exp: Experiment):
     """Load the dataset and the split file of a phac2-dap experiment and check the CV folds fit.
 
-    Everything a phac2-dap run reads before its first fit (``tzsl run --check`` calls it too).
-    Returns ``(features, user_splits or None, split_file or None)``.
+    Everything a phac2-dap run reads and draws before its first fit (``tzsl run --check`` calls
+    it too): the random splits are drawn here, so a split that cannot be drawn is reported with
+    the experiment file before any fit. Returns ``(features, splits or None, split_file or None)``:
+    the file's splits (``kinds = ["file"]``), the random splits, or None (challenging only).
     """
     from tzsl.evaluation import read_splits_csv  # noqa: PLC0415
+    from tzsl.exceptions import ConfigError, SplitError  # noqa: PLC0415
+    from tzsl.experiments.phac2_dap import make_splits  # noqa: PLC0415
 
     c = exp.config
     features = phac2_features(exp)
@@ -127,6 +131,11 @@ def prepare_phac2(exp: Experiment):
         _check_folds(exp, min(len(s.train_objects) for s in user_splits))
     else:
         _check_folds(exp, features.n_objects - (c.splits.n_test if "random" in c.splits.kinds else 0))
+        if "random" in c.splits.kinds:
+            try:
+                user_splits, _ = make_splits(features, "random", dap_config(exp))
+            except SplitError as exc:
+                raise ConfigError(f"{exp.source}: splits: {exc}") from None
     return features, user_splits, split_file
 
 
@@ -143,7 +152,8 @@ def run_phac2(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) 
     kinds = tuple(c.splits.kinds)
     methods = c.methods
     options = {"methods": methods.method_specs()}
-    tables = run_dap_study(features, results, config, kinds=kinds, splits=user_splits, sweep=methods.sweep,
+    file_splits = user_splits if split_file is not None else None  # random ones are redrawn identically
+    tables = run_dap_study(features, results, config, kinds=kinds, splits=file_splits, sweep=methods.sweep,
                            compare_methods=bool(options["methods"]), method_options=options)
     gzsl_record = None
     if methods.gzsl:

@@ -178,6 +178,8 @@ def validate(raw: dict, source: str, base: Path, text: str = "",
         config = STUDY_MODELS[study].model_validate(raw)
     except ValidationError as exc:
         problems += _problems(source, exc)
+    if len(problems) == 1:  # one line, as linters print it
+        raise ConfigError(problems[0])
     if problems:
         raise ConfigError(f"{source}: {len(problems)} problem(s):\n" + "\n".join(problems))
     return Experiment(source=source, base=base, config=config, text=text)
