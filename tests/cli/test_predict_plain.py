@@ -128,3 +128,14 @@ def test_feature_dataset_any_method_predicts_from_a_bare_feature_csv(tmp_path):
     assert f"grasp {len(trials)}/{len(trials)}" in text
     missing = _run("predict", "--model", model, "--classes", classes, "--candidates", "c9", tmp_path / "new.csv")
     assert missing.exit_code == 3 and "candidate class(es) ['c9'] not in the table" in missing.output
+
+
+def test_train_attributes_option_conflicts_are_one_line(signal_dataset, tmp_path):
+    out = tmp_path / "m.tzsl"
+    for args, message in [(("--method", "eszsl", "--fusion", "max"), "--fusion set(s) the default DAP model"),
+                          (("--method", "eszsl", "--per-ep"), "exclude each other"),
+                          (("--method", "nope"), "unknown method 'nope'"),
+                          (("--method", "ldap"), "self-contained estimator")]:
+        result = _run("train-attributes", "--plain", signal_dataset, "--out", out, *args)
+        assert result.exit_code == 3 and message in result.output, result.output
+    assert not out.exists()

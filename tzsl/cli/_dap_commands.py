@@ -146,6 +146,12 @@ def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep
         raise ConfigError(f"{out} already exists; use --force to overwrite")
     if per_ep and method is not None:
         raise ConfigError("--per-ep and --method exclude each other")
+    ctx = click.get_current_context()
+    given = [f"--{p}" for p in ("fusion", "prior")
+             if ctx.get_parameter_source(p) is not click.core.ParameterSource.DEFAULT]
+    if given and (per_ep or method is not None):
+        raise ConfigError(f"{', '.join(given)} set(s) the default DAP model; with --method or --per-ep the "
+                          "method's own decision rule is saved")
     if method is not None:
         from tzsl.models import get_method  # noqa: PLC0415
 
