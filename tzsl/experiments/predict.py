@@ -16,11 +16,11 @@ is never needed), and the rule ranks them. With several grasps the decision is f
   after each grasp is reported too.
 
 Class table (``classes.csv``): first column the class name (any header), then one 0/1 column per
-attribute, named exactly as the model's attributes (a missing attribute is an error; with
-``extra_ok`` other columns are ignored, so a plain dataset's own ``classes.csv`` works). Lines
-starting with ``#`` are comments, and columns named ``split`` or ``subset`` are descriptive and not
-used - so the shipped Table 4 file (``tzsl/datasets/hand_table4.csv``) works as is. A dataset
-folder stands for its ``classes.csv``.
+attribute, named exactly as the model's attributes (a missing or unknown attribute is an error).
+Lines starting with ``#`` are comments, and columns named ``split`` or ``subset`` are descriptive
+and not used - so the shipped Table 4 file (``tzsl/datasets/hand_table4.csv``) works as is. A
+plain dataset folder stands for its ``classes.csv`` (then attributes the model does not know are
+ignored); ``candidates`` picks some of its rows.
 """
 
 from __future__ import annotations

@@ -240,7 +240,7 @@ def _signal_features(path: Path, schema: dict) -> np.ndarray:
                                   f"the file has {list(channels)}")
     values = values[:, [list(channels).index(c) for c in want]]
     if not np.isfinite(values).all():
-        raise DataFileError(path, "NaN or infinite signal value", line=int(np.argwhere(~np.isfinite(values))[0, 0]) + 2)
+        raise DataFileError(path, f"NaN or infinite signal value in time step {int(np.argwhere(~np.isfinite(values))[0, 0])}")
     extractor = SignalStatistics(statistics=tuple(signals["statistics"]),
                                  baseline_rows=int(signals.get("baseline_rows", 0)) or None, channels=want)
     try:
