@@ -66,3 +66,29 @@ class SplitError(TzslError):
 
 class ModelBundleError(TzslError):
     """A saved model bundle is corrupt, tampered with or from another tzsl version."""
+
+
+class PartialRunError(Exception):
+    """A run completed and wrote its results, but some (split, method) fits failed.
+
+    Not a :class:`TzslError`: the command line lists :attr:`failures` (one line each) and exits
+    with code 1 at the end. The failed rows hold NaN scores and the reason in their ``error``
+    column; ``manifest.json`` lists them too.
+
+    Parameters
+    ----------
+    root : str or Path
+        The results folder (written).
+    failures : list of str
+        One line per failed fit: ``table: split=..., method=...: ErrorType: message``.
+    """
+
+    exit_code = 1
+
+    def __init__(self, root: str | Path, failures: list[str]) -> None:
+        self.root = str(root)
+        self.failures = list(failures)
+        super().__init__(
+            f"{len(self.failures)} fit(s) failed; the other results are in {self.root} "
+            "(NaN where a fit failed, the reason in the table's error column):\n" + "\n".join(self.failures)
+        )

@@ -152,6 +152,19 @@ def test_run_check_refuses_too_many_folds(toy):
     assert _run("run", path, "--check").exit_code == 0
 
 
+def test_too_many_folds_are_refused_before_any_fit_by_evaluate_and_train_attributes(toy, tmp_path):
+    result = _run("evaluate", "--plain", toy / "toy", "--cv", 50, "--n-test", 4, "--no-progress", "--out", tmp_path / "o")
+    assert result.exit_code == EXIT_TZSL_ERROR and "svm.cv: 50 object-grouped folds, but a split has only 20" \
+        in result.output
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").rglob("*.csv"))
+    model = tmp_path / "m.tzsl"
+    result = _run("train-attributes", "--plain", toy / "toy", "--cv", 50, "--no-progress", "--out", model)
+    assert result.exit_code == EXIT_TZSL_ERROR
+    assert result.output.strip() == ("tzsl: error: command line: svm.cv: 50 object-grouped folds, but a split has "
+                                     "only 24 training objects; use at most 24 (0 = leave-one-object-out)")
+    assert not model.exists()
+
+
 def test_binary_experiment_file_is_one_clear_error(tmp_path):
     path = tmp_path / "exp.toml"
     path.write_bytes(bytes(range(256)))

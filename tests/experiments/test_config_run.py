@@ -338,3 +338,19 @@ def test_too_many_cv_folds_are_refused_before_any_fit(tmp_path):
     with pytest.raises(ConfigError, match="svm.cv: 50 object-grouped folds, but a split has only 16 training"):
         run_experiment(path, out=tmp_path / "res")
     assert not (tmp_path / "res" / "table1_fusion.csv").exists()
+
+
+def test_grid_passes_through_and_reproduction_studies_pin_the_paper_grid(tmp_path):
+    from tzsl.models import AttributeSVM
+
+    assert AttributeSVM().grid == "extended"
+    for name in ("phac2-dap", "phac2-gzsl"):
+        exp = load_experiment(name)
+        assert exp.config.svm.grid == "paper"
+        assert dap_config(exp).svm_params["grid"] == "paper"
+    path = _write(tmp_path, "study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n")
+    assert load_experiment(path).config.svm.grid == "extended"
+    assert "grid" not in dap_config(load_experiment(path)).svm_params  # the estimator's default
+    bad = _write(tmp_path, "study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[svm]\ngrid = 'wide'\n", "bad.toml")
+    with pytest.raises(ConfigError, match="svm.grid"):
+        load_experiment(bad)

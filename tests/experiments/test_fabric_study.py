@@ -24,7 +24,7 @@ from tzsl.experiments.fabric import (
     zero_shot_run,
 )
 from tzsl.experiments.paper_numbers import FABRIC_TABLE1
-from tzsl.models import attribute_rows, build_method
+from tzsl.models import ZSLInputError, attribute_rows, build_method
 
 A8_LIKE = np.array(  # 8 groups x 4 attributes; groups 3, 4 and 5 share a row, like a8
     [[1, 0, 1, 0], [1, 0, 0, 1], [0, 1, 0, 0], [0, 1, 1, 1], [0, 1, 1, 1], [0, 1, 1, 1], [0, 0, 1, 0],
@@ -110,12 +110,12 @@ def test_select_embedding_alpha_uses_held_out_classes():
     S = A8_LIKE[[1, 2, 3, 4, 6]]
     alpha, scores = select_embedding_alpha(X[train], groups[train], S, lam=0.1, alphas=(1.0, 0.01), random_state=0)
     assert alpha in (1.0, 0.01)
-    assert scores.shape == (2, 2)  # 4 distinct rows (3 and 4 merged) -> GroupKFold(2)
+    assert scores.shape == (2, 2)  # 4 distinct rows (3 and 4 merged) -> 2 folds
     assert ((scores >= 0) & (scores <= 1)).all()
     assert alpha == (1.0, 0.01)[int(np.argmax(scores.mean(axis=1)))]
     assert select_embedding_alpha(X[train], groups[train], S, lam=0, alphas=(0.5,)) == (0.5, None)
     few = np.isin(groups, [1, 2, 3])
-    with pytest.raises(ConfigError, match="at least 4 distinct"):
+    with pytest.raises(ZSLInputError, match="at least 4 training classes"):
         select_embedding_alpha(X[few], groups[few], A8_LIKE[[1, 2, 3]], lam=0)
     with pytest.raises(ConfigError, match="alphas"):
         select_embedding_alpha(X[train], groups[train], S, lam=0, alphas=())
@@ -296,3 +296,18 @@ def test_gelsight_groups_must_index_the_attribute_matrix(gelsight_root, data_dir
     with pytest.raises(DataFileError, match=r"groups \[9\] are outside 0..7"):
         run_fabric_study(ResultsDir(tmp_path / "out"), data_dir=data_dir, gelsight_root=root, conditions=(),
                          progress=False)
+
+
+def test_a_failing_fit_is_a_row_with_nan_and_its_error():
+    from tzsl.experiments.fabric import ESZSL_METHOD, _run_job  # noqa: PLC0415
+
+    X, groups = _synthetic()
+    split = fabric_zsl_split(1)
+    ok = _run_job(X, groups, A8_LIKE, split, ESZSL_METHOD, None, None, (), 50)
+    assert ok["error"] == "" and 0 <= ok["accuracy"] <= 1
+    X_bad = X.copy()
+    X_bad[0, 0] = np.nan  # ESZSL refuses non-finite features
+    row = _run_job(X_bad, groups, A8_LIKE, split, ESZSL_METHOD, None, None, (), 50)
+    assert np.isnan(row["accuracy"]) and np.isnan(row["per_class_mean_accuracy"])
+    assert row["error"].startswith("ZSLInputError: ") and "\n" not in row["error"]
+    assert row["n_test"] == ok["n_test"] and row["method"] == ESZSL_METHOD

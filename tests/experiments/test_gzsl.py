@@ -181,3 +181,21 @@ def test_bad_settings_are_config_errors():
             run_gzsl(features, splits, config, bad)
     with pytest.raises(ConfigError, match="at least one split"):
         run_gzsl(features, [], config, GzslConfig())
+
+
+def test_a_failing_split_is_recorded_and_the_other_splits_complete():
+    from tzsl.experiments._failures import table_failures  # noqa: PLC0415
+
+    features = synthetic_features()
+    config = _config()
+    good = make_splits(features, "random", config)[0][0]
+    bad = _split(features, ["obj_012"])  # no unseen class: gzsl_problem raises SplitError
+    table = run_gzsl(features, [bad, good], config, GzslConfig(calibrated_stacking=False))
+    per_split = table[~table["split"].isin(["mean", "std"])]
+    failed = per_split[per_split["error"].fillna("") != ""]
+    assert set(failed["method"]) == {"dap_avg_uni", "eszsl"} and failed["harmonic"].isna().all()
+    assert failed["error"].str.startswith("SplitError: ").all() and failed["error"].str.contains("no unseen class").all()
+    done = per_split[per_split["error"].fillna("") == ""]
+    assert len(done) == 2 and done["harmonic"].between(0, 1).all()
+    lines = table_failures({"gzsl": table})
+    assert len(lines) == 2 and all(line.startswith("gzsl: split=") and "SplitError" in line for line in lines)

@@ -214,3 +214,59 @@ def test_input_shape_and_seed_come_from_the_registry(toy_method):
     with pytest.raises(ConfigError, match="input_ndim"):
         register_method("bad", family="embedding", paper="-", attribute_model=NearestMeanAttributes,
                         decision_rule=NearestAttributeRule, input_ndim=4)
+
+
+# --------------------------------------------------------------------------- a failing (split, method)
+
+
+class FailsOnSecondFit(NearestMeanAttributes):
+    """The toy method, raising on its second fit of the run (the second split)."""
+
+    fits = 0
+
+    def fit(self, X, Y, groups=None):
+        type(self).fits += 1
+        if type(self).fits == 2:
+            raise ValueError("simulated failure on the second split\nsecond line must not be shown")
+        return super().fit(X, Y, groups)
+
+
+@pytest.fixture
+def failing_method():
+    FailsOnSecondFit.fits = 0
+    register_method("flaky", family="embedding", paper="test only", attribute_model=FailsOnSecondFit,
+                    decision_rule=NearestAttributeRule)
+    yield "flaky"
+    unregister_method("flaky")
+
+
+def test_a_failing_split_method_is_recorded_and_the_run_exits_1_at_the_end(toy_method, failing_method, tmp_path):
+    from click.testing import CliRunner  # noqa: PLC0415
+
+    from tzsl.cli import cli  # noqa: PLC0415
+    from tzsl.cli._main import _register_commands  # noqa: PLC0415
+
+    _register_commands()
+    _plain_dataset(tmp_path / "toyset")
+    text = SMALL_PHAC2.format(dataset='plain = "toyset"', n_splits=3, n_test=4).replace(
+        'compare = ["toy", {name = "toy", temperature = 0.5}]', 'compare = ["toy", "flaky"]')
+    path = _write(tmp_path, text)
+    result = CliRunner().invoke(cli, ["run", str(path), "--out", str(tmp_path / "res")])
+    assert result.exit_code == 1, result.output
+    lines = result.stderr.strip().splitlines()
+    assert lines[0].startswith("tzsl: error: 1 fit(s) failed; the other results are in ")
+    assert len(lines) == 2 and "phac2_methods" in lines[1] and "flaky" in lines[1]
+    assert "ValueError: simulated failure on the second split" in lines[1] and "second line" not in result.stderr
+    assert "Traceback" not in result.output + result.stderr
+    per_split = pd.read_csv(tmp_path / "res" / "phac2_methods.csv").set_index("split")
+    splits = [s for s in per_split.index if s not in ("mean", "std")]
+    assert len(splits) == 3  # the rest completed
+    assert per_split.loc[splits, "flaky"].isna().tolist() == [False, True, False]
+    assert per_split.loc[splits, "toy"].notna().all()
+    assert per_split.loc[splits[1], "error"].startswith("flaky: ValueError: simulated failure")
+    assert per_split.loc[splits, "error"].isna().tolist() == [True, False, True]
+    table = pd.read_csv(tmp_path / "res" / "method_comparison.csv").set_index("method")
+    assert table.loc["flaky", "n_splits"] == 2 and table.loc["toy", "n_splits"] == 3
+    assert np.isfinite(table.loc["flaky", "difference"])  # paired on the 2 splits it completed
+    manifest = json.loads((tmp_path / "res" / "manifest.json").read_text())
+    assert len(manifest["failures"]) == 1 and "flaky" in manifest["failures"][0]

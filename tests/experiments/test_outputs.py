@@ -62,3 +62,65 @@ def test_csv_numbers_have_one_format_and_counts_stay_integer(tmp_path):
     assert back["accuracy"].tolist() == [0.42, 0.28, 0.35]
     assert str(csv_ready(table)["n_objects"].dtype) == "Int64"
     assert table["n_objects"].dtype == float  # the caller's table is not changed
+
+
+def test_staged_results_move_into_place_on_commit(tmp_path):
+    from tzsl.experiments._outputs import STAGING_FOLDER  # noqa: PLC0415
+
+    out = ResultsDir(tmp_path / "res", staging=True)
+    out.write_csv("a.csv", pd.DataFrame({"x": [1]}))
+    out.write_manifest({"k": 1})
+    assert not (tmp_path / "res" / "a.csv").exists() and (tmp_path / "res" / STAGING_FOLDER / "a.csv").exists()
+    out.commit()
+    assert sorted(p.name for p in (tmp_path / "res").iterdir()) == ["a.csv", "manifest.json"]
+    assert out.root == tmp_path / "res" and out.written == [tmp_path / "res" / "a.csv", tmp_path / "res" / "manifest.json"]
+    manifest = json.loads((tmp_path / "res" / "manifest.json").read_text())
+    assert manifest["outputs"]["a.csv"] == file_sha256(tmp_path / "res" / "a.csv")
+    again = ResultsDir(tmp_path / "res", staging=True)
+    with pytest.raises(ConfigError, match=r"res/a.csv already exists; use --force"):
+        again.write_csv("a.csv", pd.DataFrame({"x": [2]}))
+
+
+def test_a_crashed_run_does_not_block_the_rerun(tmp_path, monkeypatch):
+    """A run killed before it completes leaves only the staging folder; the rerun (no --force) succeeds."""
+    from tzsl.datasets import FeatureSet, feature_set_to_plain  # noqa: PLC0415
+    from tzsl.experiments._outputs import STAGING_FOLDER  # noqa: PLC0415
+    from tzsl.experiments.engine import run_experiment  # noqa: PLC0415
+
+    import numpy as np  # noqa: PLC0415
+
+    rng = np.random.default_rng(0)
+    n, trials, m = 12, 3, 4
+    A = ((np.arange(1, n + 1)[:, None] >> np.arange(m)) & 1).astype(int)
+    names = [f"o{i:02d}" for i in range(n)]
+    X = np.repeat(A[:, None, :].astype(float) @ rng.normal(size=(1, m, 3)), trials, axis=0)
+    X = X + 0.3 * rng.normal(size=X.shape)
+    table = pd.DataFrame({"trial_id": [f"{o}_{t}" for o in names for t in range(trials)],
+                          "object_id": np.repeat(np.arange(n), trials), "object_name": np.repeat(names, trials),
+                          "trial_index": np.tile(np.arange(1, trials + 1), n)})
+    attrs = pd.DataFrame(A, index=pd.Index(names, name="object_name"), columns=[f"a{j}" for j in range(m)])
+    feature_set_to_plain(FeatureSet(X=X, trials=table, sensors=("s",), feature_names=("f0", "f1", "f2"),
+                                    attributes=attrs, dataset="simulated"), tmp_path / "toyset")
+    exp = tmp_path / "exp.toml"
+    exp.write_text('study = "phac2-dap"\n[dataset]\nplain = "toyset"\n[methods]\nfusions = ["avg"]\n'
+                   'priors = ["uni"]\n[splits]\nkinds = ["random"]\nn_splits = 1\nn_test = 4\n'
+                   '[svm]\ncv = 3\nundersampling = "none"\nn_C = 1\nn_gamma = 1\nn_draws = 1\n'
+                   '[compute]\ncache = false\nprogress = false\n', encoding="utf-8")
+    out = tmp_path / "res"
+
+    def crash(self, *args, **kwargs):
+        raise KeyboardInterrupt  # the run dies after its tables, before the manifest
+
+    with monkeypatch.context() as patch:
+        patch.setattr(ResultsDir, "write_manifest", crash)
+        with pytest.raises(KeyboardInterrupt):
+            run_experiment(exp, out=out)
+    assert [p.name for p in out.iterdir()] == [STAGING_FOLDER]  # nothing in place, the tables staged
+    assert (out / STAGING_FOLDER / "table1_fusion.csv").exists()
+    results, _ = run_experiment(exp, out=out)  # no --force needed
+    names = sorted(p.name for p in out.iterdir())
+    assert STAGING_FOLDER not in names and "table1_fusion.csv" in names and "manifest.json" in names
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert set(manifest["outputs"]) == set(names) - {"manifest.json"}
+    with pytest.raises(ConfigError, match="already exists; use --force"):  # a completed run is protected
+        run_experiment(exp, out=out)

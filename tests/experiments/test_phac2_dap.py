@@ -55,15 +55,33 @@ def _config(**kw) -> DapStudyConfig:
 def test_study_writes_every_table_with_paper_columns(tmp_path):
     features = synthetic_features()
     out = ResultsDir(tmp_path)
-    tables = run_dap_study(features, out, _config(), kinds=("random",))
+    # 8 test objects: the control never draws the identity, which moves it off chance by < 1/8!
+    tables = run_dap_study(features, out, _config(n_test=8), kinds=("random",))
     for name in ("table1_fusion", "table2_priors", "attribute_accuracy", "attribute_sweep"):
         assert (tmp_path / f"{name}.csv").exists()
     assert (tmp_path / "attribute_accuracy.png").exists() and (tmp_path / "attribute_sweep.png").exists()
     t1 = tables["table1_fusion"]
-    assert list(t1["split"]) == ["1", "2", "mean", "std"]
-    assert {"maxdap", "avgdap", "paper_maxdap", "paper_avgdap", "chance"} <= set(t1.columns)
+    assert list(t1["split"]) == ["1", "2", "mean", "std", "control"]
+    assert {"maxdap", "avgdap", "paper_maxdap", "paper_avgdap", "chance", "avgdap_ci95_low",
+            "avgdap_ci95_high", "maxdap_ci95_low", "avgdap_per_class_mean_ci95_high"} <= set(t1.columns)
+    mean = t1[t1["split"] == "mean"].iloc[0]
+    assert mean["avgdap_ci95_low"] <= mean["avgdap"] <= mean["avgdap_ci95_high"]
+    # the negative control (rows shuffled among test objects) is at chance within its interval
+    control = t1[t1["split"] == "control"].iloc[0]
+    for column in ("maxdap", "avgdap", "avgdap_per_class_mean"):
+        assert control[f"{column}_ci95_low"] <= control["chance"] <= control[f"{column}_ci95_high"], column
+        assert control[column] < mean[column]
+    assert control["chance"] == pytest.approx(1 / 8)
+    assert "majority" not in t1.columns  # every test object has 4 trials: balanced, majority = chance
+    assert pd.isna(t1.loc[t1["split"] == "std", "avgdap_ci95_low"]).all()
+    att = tables["attribute_accuracy"]
+    assert list(att.columns[:4]) == ["attribute", "balanced_accuracy", "balanced_accuracy_ci95_low",
+                                     "balanced_accuracy_ci95_high"]
+    assert {"majority", "majority_balanced_accuracy", "accuracy_ci95_low"} <= set(att.columns)
+    assert (att["balanced_accuracy_ci95_low"] <= att["balanced_accuracy"] + 1e-12).all()
+    assert (att["balanced_accuracy"] <= att["balanced_accuracy_ci95_high"] + 1e-12).all()
     assert t1.loc[t1["split"] == "mean", "paper_avgdap"].item() == pytest.approx(0.39)
-    # the attributes are linearly encoded: recognition must be far above chance (0.2)
+    # the attributes are linearly encoded: recognition must be far above chance (1/8)
     assert t1.loc[t1["split"] == "mean", "avgdap"].item() > 0.5
     t2 = tables["table2_priors"]
     assert {"uni", "test", "train", "paper_uni", "paper_test", "paper_train"} <= set(t2.columns)

@@ -36,7 +36,7 @@ def test_learns_and_gives_posteriors():
     p = m.predict_proba(X[~tr, 0])
     assert p.shape == (int((~tr).sum()), 2)
     np.testing.assert_allclose(p.sum(1), 1.0)
-    assert 1.0 <= m.C_ <= 100.0 and 0.01 <= m.gamma_ <= 1.0
+    assert 1.0 <= m.C_ <= 100.0 and 1e-4 <= m.gamma_ <= 1.0
     assert m.platt_[0] >= 0
     # the model separates training objects out of fold better than chance
     oof_pred = m.oof_scores_ > 0
@@ -255,7 +255,7 @@ def test_fast_grid_equals_svc_reference_bitwise(params):
 def test_grid_edge_choices_are_recorded_and_warned_once_per_batch():
     X, A, g = make_problem()
     # a one-point C grid never counts as an edge; gamma far too large must sit on the low edge
-    est = AttributeSVM(n_C=1, gamma_range=(30.0, 300.0), n_gamma=2, n_draws=1, cv=3)
+    est = AttributeSVM(n_C=1, gamma_range=(30.0, 300.0), n_gamma=2, grid="paper", n_draws=1, cv=3)
     with pytest.warns(GridEdgeWarning) as record:
         bank = AttributeClassifierBank(estimator=est, attribute_names=["a", "b", "c"], memory=None, random_state=0).fit(X, A, g)
     assert len([w for w in record if issubclass(w.category, GridEdgeWarning)]) == 1
@@ -265,3 +265,37 @@ def test_grid_edge_choices_are_recorded_and_warned_once_per_batch():
     assert len(hits) == 6  # every (attribute, sensor)
     for h in hits:
         assert ("gamma", 30.0, "low") in bank.estimators_[["a", "b", "c"].index(h["attribute"])][h["sensor"]].grid_edges_
+
+
+def test_gamma_grids():
+    from tzsl.models import GRIDS, gamma_grid
+
+    assert GRIDS == ("paper", "extended")
+    np.testing.assert_allclose(gamma_grid((0.01, 1.0), 3, "paper"), [0.01, 0.1, 1.0])
+    np.testing.assert_allclose(gamma_grid((0.01, 1.0), 3, "extended"), [1e-4, 1e-3, 0.01, 0.1, 1.0])
+    X, A, g = make_problem()
+    paper = AttributeSVM(**TINY, grid="paper", random_state=0).fit(X[:, 0], A[:, 0], g)
+    extended = AttributeSVM(**TINY, grid="extended", random_state=0).fit(X[:, 0], A[:, 0], g)
+    assert paper.cv_scores_.shape[1] == 2 and extended.cv_scores_.shape[1] == 4
+    assert paper.gamma_ >= 0.01
+    # the paper's points are scored identically on both grids (same draws, folds and seeds)
+    np.testing.assert_array_equal(extended.cv_scores_[:, 2:], paper.cv_scores_)
+    with pytest.raises(ValueError, match="grid"):
+        AttributeSVM(grid="wide").fit(X[:, 0], A[:, 0], g)
+
+
+def test_extended_grid_leaves_the_low_edge_when_a_wide_kernel_fits_best():
+    """Attribute = sign of a linear function spread over many features: a near-linear kernel wins."""
+    rng = np.random.default_rng(1)
+    n_obj, trials, d = 24, 5, 20
+    w = rng.normal(size=d)
+    centres = rng.normal(size=(n_obj, d)) * 3.0
+    y_obj = (centres @ w > np.median(centres @ w)).astype(int)
+    groups = np.repeat(np.arange(n_obj), trials)
+    X = centres[groups] + rng.normal(size=(groups.size, d))
+    params = dict(n_C=2, n_draws=1, cv=4, preprocessor=None, random_state=0)
+    paper = AttributeSVM(grid="paper", **params).fit(X, y_obj[groups], groups)
+    extended = AttributeSVM(grid="extended", **params).fit(X, y_obj[groups], groups)
+    assert ("gamma", 0.01, "low") in paper.grid_edges_
+    assert extended.gamma_ < 0.01
+    assert extended.cv_scores_.min() <= paper.cv_scores_.min()

@@ -25,7 +25,7 @@ from tzsl.exceptions import ConfigError
 def extract(dataset: str, path: Path | None, out: Path | None, min_objects: int, data_dir: Path | None,
             force: bool) -> None:
     """Extract per-trial, per-sensor features and print a summary."""
-    from tzsl.datasets._feature_table import feature_table_paths, write_feature_table  # noqa: PLC0415
+    from tzsl.datasets import feature_table_paths, write_feature_table  # noqa: PLC0415
     from tzsl.experiments.extract import extract_features, format_summary, summarise  # noqa: PLC0415
 
     if out is not None:

@@ -15,7 +15,7 @@ CONVERTIBLE = ("phac2-penn", "phac2-hold-mat")
 
 
 def _statistics_help() -> str:
-    from tzsl.features._signal_stats import SIGNAL_STATISTICS  # noqa: PLC0415
+    from tzsl.features import SIGNAL_STATISTICS  # noqa: PLC0415
 
     width = max(map(len, SIGNAL_STATISTICS))
     rows = [f"    {name:<{width}}  {text}" for name, text in SIGNAL_STATISTICS.items()]
@@ -29,7 +29,7 @@ def format_text() -> str:
 
 
 def _plain_format_help() -> str:
-    from tzsl.datasets._plain import PLAIN_FORMAT_HELP  # noqa: PLC0415 - when needed: keeps "tzsl --help" fast
+    from tzsl.datasets import PLAIN_FORMAT_HELP  # noqa: PLC0415 - when needed: keeps "tzsl --help" fast
 
     return PLAIN_FORMAT_HELP
 
@@ -58,7 +58,7 @@ def formats() -> None:
 
 def _split_problems(folder: Path, attributes) -> list:
     """Problems ``tzsl.evaluation.read_splits_csv`` finds in ``splits.csv`` (its full checks)."""
-    from tzsl.datasets._validate import SPLITS_FILE, Problem  # noqa: PLC0415
+    from tzsl.datasets import SPLITS_FILE, Problem  # noqa: PLC0415
     from tzsl.evaluation import read_splits_csv  # noqa: PLC0415
     from tzsl.exceptions import SplitError  # noqa: PLC0415
 

@@ -1,7 +1,8 @@
 """Root command group, the shared options (one vocabulary) and error handling.
 
 Exit codes: 0 success; 1 a run that failed for a reason outside the input (interrupted, out of
-memory, a bug); 2 a usage error (an unknown option, a bad option value: one line
+memory, a bug) or that completed with failed (split, method) fits (listed one per line at the end,
+:class:`~tzsl.exceptions.PartialRunError`); 2 a usage error (an unknown option, a bad option value: one line
 ``tzsl: error: ...``); 3 bad input data or configuration (every
 :class:`~tzsl.exceptions.TzslError`, printed as its message, never a traceback).
 
@@ -20,7 +21,7 @@ from pathlib import Path
 import click
 
 from tzsl import __version__
-from tzsl.exceptions import TzslError
+from tzsl.exceptions import PartialRunError, TzslError
 
 #: Exit code of a usage error (click's own code).
 EXIT_USAGE = 2
@@ -39,6 +40,9 @@ class TzslGroup(click.Group):
         except TzslError as exc:
             click.echo(f"tzsl: error: {exc}", err=True)
             ctx.exit(EXIT_TZSL_ERROR)
+        except PartialRunError as exc:  # results written; some fits failed: list them, exit 1
+            click.echo(f"tzsl: error: {exc}", err=True)
+            ctx.exit(exc.exit_code)
         except click.UsageError as exc:
             if type(exc).__name__ == "NoArgsIsHelpError":
                 raise

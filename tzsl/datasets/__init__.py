@@ -35,6 +35,9 @@ from tzsl.datasets._phac2_penn import (
 from tzsl.datasets._registry import fetch, registered_files
 from tzsl.datasets._safe_pickle import safe_load_pickle
 from tzsl.datasets._types import PHAC2_EPS, TRIAL_COLUMNS, BiotacSignals, FeatureSet, RawTrial
+from tzsl.datasets._feature_table import feature_table_paths, read_feature_table, write_feature_table
+from tzsl.datasets._plain import PLAIN_FORMAT_HELP
+from tzsl.datasets._tables import SPLITS_FILE
 from tzsl.datasets._fabric import (
     FABRIC_ATTRIBUTE_SETS,
     FABRIC_ZSL_CONFIGS,
@@ -43,10 +46,10 @@ from tzsl.datasets._fabric import (
     FabricSplit,
     fabric_zsl_split,
     load_fabric,
-    load_gelsight_fabric_videos,
     read_depth_images,
     read_fabric_groups,
 )
+from tzsl.datasets._fabric_videos import load_gelsight_fabric_videos
 from tzsl.datasets._gelsight_press import PressRecord, load_gelsight_press
 from tzsl.datasets._video import avi_frame_count, read_video
 from tzsl.datasets._plain import PlainDataset, feature_set_to_plain, read_plain_dataset, write_plain_dataset
@@ -68,6 +71,9 @@ __all__ = [
     "BiotacSignals",
     "FeatureSet",
     "RawTrial",
+    "feature_table_paths",
+    "read_feature_table",
+    "write_feature_table",
     "get_data_home",
     "get_cache_dir",
     "fetch",
@@ -101,10 +107,12 @@ __all__ = [
     "load_gelsight_press",
     "avi_frame_count",
     "read_video",
+    "PLAIN_FORMAT_HELP",
     "PlainDataset",
     "feature_set_to_plain",
     "read_plain_dataset",
     "write_plain_dataset",
+    "SPLITS_FILE",
     "Problem",
     "read_signal_file",
     "validate_dataset",

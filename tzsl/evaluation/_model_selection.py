@@ -13,10 +13,9 @@ from collections.abc import Sequence
 
 import numpy as np
 from sklearn.exceptions import ConvergenceWarning
-from sklearn.model_selection import GroupKFold
 
 from tzsl.exceptions import ConfigError
-from tzsl.models import attribute_rows, build_method
+from tzsl.models import attribute_rows, build_method, class_grouped_folds
 
 __all__ = ["DEFAULT_ALPHAS", "select_embedding_alpha"]
 
@@ -36,8 +35,9 @@ def select_embedding_alpha(
 ) -> tuple[float, np.ndarray | None]:
     """Weight decay of :class:`EmbeddingZSL` by class-grouped CV on training classes only.
 
-    Classes with identical attribute rows are one CV group. ``GroupKFold`` with
-    ``min(5, n_groups // 2)`` folds holds out whole groups (at least 2 per fold); each fold
+    Classes with identical attribute rows are one CV group. :func:`tzsl.models.class_grouped_folds`
+    makes ``min(5, n_groups // 2)`` folds holding out whole groups (at least 2 per fold, at
+    least 2 trained on; a merged group never alone); each fold
     trains ``EmbeddingZSL(lam, alpha, early_stopping=False)`` on the rest and scores the
     accuracy of recognising the held-out samples among the held-out groups' attribute rows
     (the zero-shot situation). The alpha with the best mean score wins; ties go to the first
@@ -69,7 +69,9 @@ def select_embedding_alpha(
     Raises
     ------
     ConfigError
-        Empty grid, non-positive alpha, or fewer than 4 distinct training attribute rows.
+        Empty grid or non-positive alpha.
+    ZSLInputError
+        Fewer than 4 distinct training attribute rows.
     """
     alphas = [float(a) for a in alphas]
     if not alphas or any(not np.isfinite(a) or a < 0 for a in alphas):
@@ -82,13 +84,7 @@ def select_embedding_alpha(
     S_u, merged = np.unique(S, axis=0, return_inverse=True)
     merged = merged.ravel()
     grp = merged[np.searchsorted(classes, y)]
-    n_groups = S_u.shape[0]
-    if n_groups < 4:
-        raise ConfigError(
-            f"class-grouped selection of alpha needs at least 4 distinct training attribute rows "
-            f"(2 held out, 2 trained on); got {n_groups}. Pass a single alpha"
-        )
-    folds = list(GroupKFold(n_splits=min(5, n_groups // 2)).split(X, grp, groups=grp))
+    folds = class_grouped_folds(grp, 5, "class-grouped selection of alpha (pass a single alpha to skip it)")
     scores = np.empty((len(alphas), len(folds)))
     for f, (tr, va) in enumerate(folds):
         tr_classes = np.unique(y[tr])

@@ -3,6 +3,9 @@
 Every file a study writes goes through :class:`ResultsDir`: it is written to a temporary
 file in the same folder and moved into place with :func:`os.replace`, so a crash or Ctrl-C
 never leaves a half-written table. Existing results are only replaced when ``force=True``.
+A run of the engine stages its files in :data:`STAGING_FOLDER` inside the output folder and
+moves them into place when it completes (:meth:`ResultsDir.commit`): a crashed run leaves only
+that hidden folder, which the rerun reuses, so it never blocks the rerun with "already exists".
 
 Numbers in CSV tables are written in one format (:func:`csv_ready`): floats with
 :data:`CSV_FLOAT_FORMAT` (6 significant digits: ``0.42`` rather than
@@ -14,7 +17,9 @@ back or averaged as floats) as integers (``10``, not ``10.0``; missing values st
 from __future__ import annotations
 
 import json
+import os
 import platform
+import shutil
 import sys
 from collections.abc import Iterable
 from datetime import datetime, timezone
@@ -26,6 +31,9 @@ import pandas as pd
 
 from tzsl._io import atomic_write, file_sha256
 from tzsl.exceptions import ConfigError
+
+#: Hidden folder inside the output folder where a staged run writes until it completes.
+STAGING_FOLDER = ".tzsl-partial"
 
 #: printf-style format of every float written to a CSV table (6 significant digits).
 CSV_FLOAT_FORMAT = "%.6g"
@@ -77,22 +85,44 @@ class ResultsDir:
     force : bool
         Replace files that already exist. Without it, writing an existing file raises
         :class:`~tzsl.exceptions.ConfigError` naming the file and the ``--force`` option.
+    staging : bool
+        Write into ``root / STAGING_FOLDER`` (reused, overwritten freely: it is this run's own
+        partial folder) and move the files into ``root`` on :meth:`commit`. The overwrite check
+        is against ``root``. ``self.root`` is where files are being written (the staging folder
+        until the commit); ``self.final_root`` is ``root``.
     """
 
-    def __init__(self, root: str | Path, force: bool = False) -> None:
-        self.root = Path(root)
+    def __init__(self, root: str | Path, force: bool = False, staging: bool = False) -> None:
+        self.final_root = Path(root)
+        self.staging = staging
+        self.root = self.final_root / STAGING_FOLDER if staging else self.final_root
         self.force = force
         self.written: list[Path] = []
 
     def path(self, name: str) -> Path:
-        """Destination of ``name``, checked against overwriting."""
-        target = self.root / name
-        if target.exists() and not self.force and target not in self.written:
+        """Where to write ``name`` (in the staging folder when staging), checked against overwriting."""
+        final, target = self.final_root / name, self.root / name
+        if final.exists() and not self.force and final not in self.written and target not in self.written:
             raise ConfigError(
-                f"{target} already exists; use --force to overwrite existing results "
+                f"{final} already exists; use --force to overwrite existing results "
                 "or choose another --out folder"
             )
         return target
+
+    def commit(self) -> None:
+        """Move the staged files into the output folder, then remove the staging folder (no-op unstaged)."""
+        if not self.staging:
+            return
+        moved = []
+        for path in self.written:
+            if not path.exists():
+                continue
+            dest = self.final_root / path.relative_to(self.root)
+            dest.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(path, dest)
+            moved.append(dest)
+        shutil.rmtree(self.root, ignore_errors=True)
+        self.root, self.staging, self.written = self.final_root, False, moved
 
     def check_free(self, names: Iterable[str]) -> None:
         """Fail early, before any computation, if one of ``names`` would be overwritten."""

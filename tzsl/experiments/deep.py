@@ -10,7 +10,7 @@ Two sources of frame sequences:
   maximum difference) presumes a press video that starts without contact; separate depth
   captures have no such reference frame, so the rule has nothing to measure here. One sequence
   per fabric: 119 sequences.
-* **User GelSight videos** (``--gelsight-root``, layout in :mod:`tzsl.datasets._fabric`): the
+* **User GelSight videos** (``--gelsight-root``, layout in :mod:`tzsl.datasets._fabric_videos`): the
   paper's 5 key frames of every press video (:class:`tzsl.features.KeyFrameSelector`, default
   settings). One sequence per video.
 

@@ -21,7 +21,8 @@ from urllib.parse import urlparse
 
 import pandas as pd
 
-from tzsl.exceptions import ConfigError
+from tzsl.exceptions import ConfigError, PartialRunError
+from tzsl.experiments._failures import table_failures
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.config import Experiment, load_experiment, to_toml
 
@@ -76,7 +77,7 @@ def _svm_params(svm) -> dict:
 
     defaults = AttributeSVM().get_params()
     params: dict[str, Any] = {"cv": None if svm.cv == 0 else svm.cv}
-    for key in ("C_range", "gamma_range", "n_C", "n_gamma", "n_draws", "scoring", "platt_weighting"):
+    for key in ("C_range", "gamma_range", "n_C", "n_gamma", "grid", "n_draws", "scoring", "platt_weighting"):
         value = getattr(svm, key)
         params[key] = tuple(float(v) for v in value) if key.endswith("_range") else value
     return {k: v for k, v in params.items() if v != defaults[k]}
@@ -223,6 +224,11 @@ class StudyRun:
     record: dict[str, Any]
     data_files: list = field(default_factory=list)
 
+    @property
+    def failures(self) -> list[str]:
+        """One line per failed (split, method) fit, read from the tables' ``error`` columns."""
+        return table_failures(self.tables)
+
 
 def execute_study(exp: Experiment, results: ResultsDir, echo: Callable[[str], None] | None = None) -> StudyRun:
     """Run the study of ``exp`` into ``results`` (no manifest.json; see :func:`run_experiment`)."""
@@ -236,16 +242,21 @@ def execute_study(exp: Experiment, results: ResultsDir, echo: Callable[[str], No
 
 
 def results_folder(exp: Experiment, force: bool) -> ResultsDir:
-    """The results folder of ``exp`` (phac2-dap: leaving unselected fusion/prior columns out)."""
+    """The (staged) results folder of ``exp`` (phac2-dap: leaving unselected fusion/prior columns out).
+
+    Files are staged in the output folder's :data:`~tzsl.experiments._outputs.STAGING_FOLDER`
+    and moved into place by :meth:`ResultsDir.commit` when the run completes, so a crashed run
+    never blocks its rerun.
+    """
     from tzsl.experiments import study_runners  # noqa: PLC0415
 
     folder = Path(exp.config.output.folder)
     if exp.study == "phac2-dap":
-        results: ResultsDir = study_runners.SelectedColumns(folder, force,
-                                                             study_runners.dropped_columns(exp.config.methods))
+        results: ResultsDir = study_runners.SelectedColumns(
+            folder, force, study_runners.dropped_columns(exp.config.methods), staging=True)
         results.check_free(study_runners.phac2_outputs(exp.config))
     else:
-        results = ResultsDir(folder, force=force)
+        results = ResultsDir(folder, force=force, staging=True)
         results.check_free(["manifest.json"])
     return results
 
@@ -266,7 +277,12 @@ def run_experiment(
 
     ``overrides``: ``out``, ``n_jobs``, ``seed``, ``backend``, ``scheduler``, ``progress``,
     ``data_dir`` (see :data:`OVERRIDES`; None = as in the file). Writes the study's tables and
-    ``manifest.json`` (resolved settings, the file's text and checksum, data checksums).
+    ``manifest.json`` (resolved settings, the file's text and checksum, data checksums, failures).
+
+    Raises
+    ------
+    PartialRunError
+        After everything is written, when some (split, method) fits failed (exit code 1).
     """
     if isinstance(experiment, Experiment):
         if any(v is not None for v in overrides.values()):
@@ -277,12 +293,17 @@ def run_experiment(
         exp = load_experiment(experiment, override_values(study, overrides))
     say = echo or (lambda _msg: None)
     results = results_folder(exp, force)
-    say(f"{exp.source}: study {exp.study} -> {results.root}")
+    say(f"{exp.source}: study {exp.study} -> {results.final_root}")
     run = execute_study(exp, results, echo)  # checks the experiment (check_experiment) before any fit
     results.write_manifest(manifest_record(exp, run), data_files=run.data_files,
                            extra={"experiment_sha256": hashlib.sha256(exp.text.encode()).hexdigest(),
                                   "experiment_toml": exp.text, "description": exp.config.description,
-                                  "tables": sorted(run.tables)})
+                                  "tables": sorted(run.tables), "failures": run.failures})
+    results.commit()
+    if run.failures:
+        error = PartialRunError(results.root, run.failures)
+        error.results, error.run = results, run
+        raise error
     return results, run
 
 
@@ -317,7 +338,13 @@ def run(config_or_path: str | os.PathLike | Experiment, *, table: str | None = N
         The table, exactly as written to its CSV; ``.attrs["results_dir"]`` is the results folder
         and ``.attrs["tables"]`` the names of every table written.
     """
-    results, done = run_experiment(config_or_path, force=force, echo=echo, **overrides)
+    try:
+        results, done = run_experiment(config_or_path, force=force, echo=echo, **overrides)
+    except PartialRunError as exc:  # the tables hold NaN and the reasons: return them, loudly
+        import warnings  # noqa: PLC0415
+
+        warnings.warn(str(exc), RuntimeWarning, stacklevel=2)
+        results, done = exc.results, exc.run
     name = table or MAIN_TABLE[done.record["study_kind"]]
     if name not in done.tables:
         raise ConfigError(f"no table {name!r}; this run wrote {sorted(done.tables)}")

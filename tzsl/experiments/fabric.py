@@ -87,6 +87,7 @@ from threadpoolctl import threadpool_limits
 from tzsl.datasets import FABRIC_ATTRIBUTE_SETS, FabricSplit, fabric_zsl_split, load_fabric
 from tzsl.evaluation import DEFAULT_ALPHAS, per_class_mean_accuracy, select_embedding_alpha, trial_accuracy
 from tzsl.exceptions import ConfigError
+from tzsl.experiments._failures import ERROR_COLUMN, attempt
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.fabric_samples import (
     N_KEY_FRAMES,
@@ -291,7 +292,11 @@ def _run_job(
 
     fit = fit_registry if spec is not None else fit_eszsl if method == ESZSL_METHOD else fit_embedding
     with threadpool_limits(limits=1):  # many small fits: one BLAS thread each, parallel over fits
-        run = zero_shot_run(fit, samples_X, groups, A, split)
+        run, error = attempt(zero_shot_run, fit, samples_X, groups, A, split)
+    if run is None:  # recorded in the runs table (NaN scores), reported at the end of the run
+        return {"method": method, "seed": seed, "accuracy": np.nan, "per_class_mean_accuracy": np.nan,
+                "n_train": int(split.is_train(groups).sum()), "n_test": int(split.is_test(groups).sum()),
+                "train_classes": "", "predicted_counts": "", **info, ERROR_COLUMN: error}
     pred = pd.Series(run.y_pred).value_counts().reindex(run.test_classes, fill_value=0)
     return {
         "method": method,
@@ -303,6 +308,7 @@ def _run_job(
         "train_classes": " ".join(map(str, run.train_classes)),
         "predicted_counts": " ".join(f"{g}:{c}" for g, c in pred.items()),
         **info,
+        ERROR_COLUMN: "",
     }
 
 

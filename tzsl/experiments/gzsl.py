@@ -55,6 +55,7 @@ from tzsl.evaluation import (
     summarise_over_splits,
 )
 from tzsl.exceptions import ConfigError, SplitError
+from tzsl.experiments._failures import ERROR_COLUMN, attempt
 from tzsl.experiments.config import Phac2Gzsl
 from tzsl.experiments.phac2_dap import DapStudyConfig, attribute_bank, compute_context
 from tzsl.experiments.phac2_tables import split_label
@@ -344,7 +345,8 @@ def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: DapStudyConf
     -------
     DataFrame
         :func:`gzsl_table`: columns ``split, method, calibrated, seen, unseen, harmonic, zsl,
-        stacking_constant`` and counts (classes, trials, attributes).
+        stacking_constant`` and counts (classes, trials, attributes); ``error``: why a split
+        failed (its rows NaN; the other splits still run), empty otherwise.
     """
     config = config or DapStudyConfig()
     gzsl = gzsl or GzslConfig()
@@ -354,7 +356,15 @@ def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: DapStudyConf
     rows: list[dict] = []
     with compute_context(config):
         for i, split in enumerate(splits):
-            part = gzsl_split(features, split, config, gzsl, i)
+            part, error = attempt(gzsl_split, features, split, config, gzsl, i)
+            if part is None:  # NaN rows for this split, reported at the end of the run
+                rows += [{"split": split_label(split), "method": _method_name(m, gzsl), "calibrated": False,
+                          "seen": np.nan, "unseen": np.nan, "harmonic": np.nan, "zsl": np.nan,
+                          "stacking_constant": np.nan, ERROR_COLUMN: error} for m in gzsl.methods]
+                if echo is not None:
+                    echo(f"GZSL {split.name}: failed: {error}")
+                continue
+            part = [{**r, ERROR_COLUMN: ""} for r in part]
             rows += part
             if echo is not None:
                 text = ", ".join(f"{r['method']}{'+cs' if r['calibrated'] else ''} H={r['harmonic']:.3f}"

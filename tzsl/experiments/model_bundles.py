@@ -165,7 +165,7 @@ def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | 
         draw and positive training objects; other methods: one row per attribute with its
         positive training objects.
     """
-    from tzsl.experiments.phac2_dap import attribute_bank, compute_context  # noqa: PLC0415
+    from tzsl.experiments.phac2_dap import attribute_bank, check_cv_folds, compute_context  # noqa: PLC0415
     from tzsl.experiments.study_methods import method_input, study_estimator  # noqa: PLC0415
     from tzsl.models import attribute_rows  # noqa: PLC0415
 
@@ -174,6 +174,7 @@ def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | 
     A = sub.trial_attributes()
     provenance = {"training_objects": sorted(set(sub.objects)), "split": split_record, "seed": config.seed}
     if method is None:
+        check_cv_folds(config.svm_params.get("cv"), len(set(sub.objects)), "command line")
         clf = ZeroShotClassifier(attribute_model=attribute_bank(config, attributes, config.seed),
                                  decision_rule=DAPRule(fusion=fusion, prior=prior), random_state=config.seed)
         with compute_context(config):

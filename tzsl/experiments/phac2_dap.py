@@ -56,6 +56,7 @@ __all__ = [
     "attribute_accuracy_table",
     "attribute_bank",
     "attribute_estimator",
+    "check_cv_folds",
     "attribute_subsets",
     "attribute_sweep",
     "compute_context",
@@ -169,11 +170,20 @@ class SplitPosteriors:
 
     def predict(self, fusion: str = "avg", prior: str = "uni", multilabel: bool = False) -> np.ndarray:
         """Predicted test-object row of every test trial, shape (n_test_trials,)."""
+        return self.scores(fusion, prior, multilabel).argmax(axis=1)
+
+    def scores(self, fusion: str = "avg", prior: str = "uni", multilabel: bool = False,
+               K: np.ndarray | None = None) -> np.ndarray:
+        """DAP log scores (n_test_trials, n_test_objects) against ``K`` (default the true rows).
+
+        The prior is always the one of the true rows (a permuted ``K``, as in the negative
+        control, has the same attribute frequencies).
+        """
         P = self.P_multilabel if multilabel else self.P
         if P is None:
             raise ConfigError("no multi-label posteriors were computed for this split")
         present, absent = fuse_attribute_posteriors(P, fusion)
-        return dap_log_scores(present, self.K, self._prior(prior), P_absent=absent).argmax(axis=1)
+        return dap_log_scores(present, self.K if K is None else K, self._prior(prior), P_absent=absent)
 
     def _prior(self, prior: str) -> np.ndarray:
         if prior == "train":
@@ -207,6 +217,18 @@ def make_splits(features: FeatureSet, kind: str, config: DapStudyConfig) -> tupl
 
 
 # --------------------------------------------------------------------------- fitting
+
+
+def check_cv_folds(cv, n_train_objects: int, where: str) -> None:
+    """Refuse more object-grouped CV folds (``svm.cv`` / ``--cv``) than training objects, before any fit.
+
+    ``cv``: an int (folds) or None / 0 (leave-one-object-out, always possible); ``where`` starts
+    the message (the experiment file or ``command line``).
+    """
+    if cv and int(cv) > n_train_objects:
+        raise ConfigError(f"{where}: svm.cv: {int(cv)} object-grouped folds, but a split has only "
+                          f"{n_train_objects} training objects; use at most {n_train_objects} (0 = "
+                          "leave-one-object-out)")
 
 
 def attribute_estimator(config: DapStudyConfig, seed: int) -> AttributeSVM:
@@ -378,7 +400,7 @@ def run_dap_study(
                 tables["multilabel"] = multilabel_table(random_results)
             per_split = attribute_accuracy_table(random_results, features.sensors)
             tables["attribute_accuracy_per_split"] = per_split
-            tables["attribute_accuracy"] = attribute_accuracy_summary(per_split)
+            tables["attribute_accuracy"] = attribute_accuracy_summary(per_split, random_results)
             out.write_figure("attribute_accuracy.png", attribute_accuracy_figure(tables["attribute_accuracy"]))
             if sweep:
                 tables["attribute_sweep"] = attribute_sweep(

@@ -16,6 +16,7 @@ import pandas as pd
 
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, bootstrap_accuracy, paired_differences_table, summarise_over_splits
+from tzsl.experiments._failures import ERROR_COLUMN, attempt
 from tzsl.experiments.phac2_tables import split_label
 from tzsl.experiments.study_methods import fit_predict, method_label
 
@@ -78,7 +79,7 @@ def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], ch
                      "chance": chance, "fit_seconds": float(np.mean(fit_seconds[method])),
                      "n_splits": t["split"].nunique(), "n_trials": len(t)})
     table = pd.DataFrame(rows)
-    diffs = paired_differences_table(trials, reference=reference).rename(
+    diffs = _paired_differences(trials, reference).rename(
         columns={"ci95_low": "difference_ci95_low", "ci95_high": "difference_ci95_high"})
     table = table.merge(diffs[["method", "difference", "difference_ci95_low", "difference_ci95_high"]],
                         on="method", how="left")
@@ -86,6 +87,17 @@ def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], ch
     columns = ["method", "accuracy", "ci95_low", "ci95_high", "chance", "fit_seconds", "difference",
                "difference_ci95_low", "difference_ci95_high", "reference", "n_splits", "n_trials"]
     return table[columns]
+
+
+def _paired_differences(trials: pd.DataFrame, reference: str) -> pd.DataFrame:
+    """Each method minus ``reference`` on the splits that method completed (a failed fit drops a split)."""
+    parts = []
+    for method in [m for m in trials["method"].unique() if m != reference]:
+        splits = trials.loc[trials["method"] == method, "split"].unique()
+        pair = trials[trials["method"].isin([method, reference]) & trials["split"].isin(splits)]
+        parts.append(paired_differences_table(pair, reference=reference))
+    columns = ["method", "difference", "ci95_low", "ci95_high"]
+    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=columns)
 
 
 def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed: int = 0,
@@ -100,7 +112,8 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
     -------
     dict of DataFrame
         ``"phac2_methods"``: one row per split (dap_avg_uni and one column per method label,
-        e.g. ``eszsl``, ``embedding_lam_0.1``), then mean and std rows;
+        e.g. ``eszsl``, ``embedding_lam_0.1``; NaN where that fit failed, the reason in the
+        ``error`` column), then mean and std rows;
         ``"method_comparison"``: :func:`method_summary` with ``dap-avg`` as the reference.
     """
     rows, trials = [], []
@@ -111,14 +124,20 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
         row = {"split": label, "chance": r.split.chance, "dap_avg_uni": r.accuracy("avg", "uni")}
         trials.append(_trials(REFERENCE_METHOD, label, objects, r.predict("avg", "uni") == r.y))
         seconds[REFERENCE_METHOD].append(r.fit_seconds)
+        errors = []
         for spec in methods:
             name = method_label(spec)
-            fit, y = _fit_predict_split(spec, features, r.split, seed + i)
+            done, error = attempt(_fit_predict_split, spec, features, r.split, seed + i)
+            if done is None:  # NaN for this (split, method), reported at the end of the run
+                row[name] = np.nan
+                errors.append(f"{name}: {error}")
+                continue
+            fit, y = done
             correct = fit.predicted == y
             row[name] = float(correct.mean())
             trials.append(_trials(name, label, objects, correct))
             seconds.setdefault(name, []).append(fit.fit_seconds)
-        rows.append(row)
+        rows.append({**row, ERROR_COLUMN: "; ".join(errors)})
     per_split = summarise_over_splits(pd.DataFrame(rows)).reset_index()
     chance = float(np.mean([r.split.chance for r in results]))
     return {"phac2_methods": per_split,

@@ -16,16 +16,20 @@ import pandas as pd
 
 from tzsl.evaluation import (
     Split,
+    bootstrap_accuracy,
     per_attribute_balanced_accuracy,
     per_class_mean_accuracy,
+    shuffled_rows_control,
     summarise_over_splits,
 )
+from tzsl.experiments._trust import Outcomes, add_trust_columns
 from tzsl.models import dap_accuracy_over_subsets
 
 if TYPE_CHECKING:
     from tzsl.experiments.phac2_dap import SplitPosteriors
 
 __all__ = [
+    "CONTROL_ROW",
     "FUSIONS",
     "PRIORS",
     "attribute_accuracy_summary",
@@ -33,6 +37,7 @@ __all__ = [
     "attribute_subsets",
     "attribute_sweep",
     "multilabel_table",
+    "negative_control",
     "split_label",
     "table1_fusion",
     "table2_priors",
@@ -43,6 +48,66 @@ __all__ = [
 FUSIONS = ("max", "avg")
 #: Attribute priors of Table 2, in its column order.
 PRIORS = ("uni", "test", "train")
+#: Label of the negative-control row (test attribute rows shuffled among the test classes).
+CONTROL_ROW = "control"
+#: Shuffled tables drawn per split for the negative control.
+CONTROL_PERMUTATIONS = 100
+
+#: An accuracy column: (fusion, prior, multilabel, metric).
+Scored = tuple[str, str, bool, str]
+
+
+def _outcomes(results: list[SplitPosteriors], columns: dict[str, Scored], control: bool = True,
+              seed: int = 0) -> tuple[Outcomes, dict | None]:
+    """Per-trial outcomes of every column on every split, and the negative-control row.
+
+    The control row (``split = "control"``): for each column, the test classes' attribute
+    rows are shuffled among the test classes (:func:`tzsl.evaluation.shuffled_rows_control`,
+    :data:`CONTROL_PERMUTATIONS` tables per split) and the same posteriors rescored; its value
+    is the mean over splits of the share of trials recognised, which must be chance within
+    its interval (two-level bootstrap over the splits it pools).
+    """
+    outcomes = Outcomes()
+    for r in results:
+        for column, (fusion, prior, multilabel, metric) in columns.items():
+            outcomes.add(split_label(r.split), column, r.y, r.predict(fusion, prior, multilabel) == r.y, metric=metric)
+    if not control:
+        return outcomes, None
+    row: dict = {"split": CONTROL_ROW}
+    for column, scored in columns.items():
+        correct, classes, splits = negative_control(results, scored, seed=seed)
+        outcomes.add(CONTROL_ROW, column, classes, correct, metric=scored[3], inner_splits=splits)
+        row[column] = bootstrap_accuracy(correct, classes=classes, splits=splits, metric=scored[3], n_boot=1).mean
+    return outcomes, row
+
+
+def negative_control(results: list[SplitPosteriors], scored: Scored, seed: int = 0,
+                     n_permutations: int = CONTROL_PERMUTATIONS) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Shuffled-rows control of one DAP variant over all splits.
+
+    Returns
+    -------
+    correct : ndarray of float, shape (n_trials,)
+        Share of the shuffled tables under which each test trial was recognised.
+    classes, splits : ndarray of shape (n_trials,)
+        Test object (row of ``K``) and split label of each trial.
+    """
+    fusion, prior, multilabel, _ = scored
+    correct, classes, splits = [], [], []
+    for i, r in enumerate(results):
+        table = pd.DataFrame(r.K, index=pd.RangeIndex(len(r.K)))
+        correct.append(shuffled_rows_control(lambda K, r=r: r.scores(fusion, prior, multilabel, K.to_numpy()),
+                                             table, r.y, n_permutations=n_permutations, random_state=seed + i))
+        classes.append(r.y)
+        splits.append(np.full(len(r.y), split_label(r.split), dtype=object))
+    return np.concatenate(correct), np.concatenate(classes), np.concatenate(splits)
+
+
+def _with_trust(table: pd.DataFrame, outcomes: Outcomes, control_row: dict | None) -> pd.DataFrame:
+    """Append the control row (after mean/std) and add the interval and baseline columns."""
+    if control_row is not None:
+        table = pd.concat([table, pd.DataFrame([control_row])], ignore_index=True)
+    return add_trust_columns(table, outcomes)
 
 
 def split_label(split: Split) -> str:
@@ -58,7 +123,11 @@ def _paper(table: dict, split: str, i: int):
 
 
 def table1_fusion(results: list[SplitPosteriors]) -> pd.DataFrame:
-    """Table 1: MAXDAP vs AVGDAP, uni-prior, per random split + mean/std, paper beside."""
+    """Table 1: MAXDAP vs AVGDAP, uni-prior, per random split + mean/std + control, paper beside.
+
+    Every accuracy column has its interval columns and the table ``chance`` (and ``majority``
+    where test objects have unequal trial counts): :func:`tzsl.experiments._trust.add_trust_columns`.
+    """
     from tzsl.experiments.paper_numbers import DAP_TABLE1  # noqa: PLC0415
 
     rows = [{
@@ -67,25 +136,33 @@ def table1_fusion(results: list[SplitPosteriors]) -> pd.DataFrame:
         "avgdap_per_class_mean": per_class_mean_accuracy(r.y, r.predict("avg", "uni")),
         "n_attributes": len(r.attributes),
     } for r in results]
-    table = summarise_over_splits(pd.DataFrame(rows)).reset_index()
+    outcomes, control = _outcomes(results, {"maxdap": ("max", "uni", False, "trial"),
+                                            "avgdap": ("avg", "uni", False, "trial"),
+                                            "avgdap_per_class_mean": ("avg", "uni", False, "class_mean")})
+    table = _with_trust(summarise_over_splits(pd.DataFrame(rows)).reset_index(), outcomes, control)
     table["paper_maxdap"] = [_paper(DAP_TABLE1, s, 0) for s in table["split"]]
     table["paper_avgdap"] = [_paper(DAP_TABLE1, s, 1) for s in table["split"]]
     return table
 
 
 def table2_priors(results: list[SplitPosteriors]) -> pd.DataFrame:
-    """Table 2: AVGDAP with uni / test / train attribute priors, paper beside."""
+    """Table 2: AVGDAP with uni / test / train attribute priors, intervals, chance, control, paper beside."""
     from tzsl.experiments.paper_numbers import DAP_TABLE2  # noqa: PLC0415
 
     rows = [{"split": split_label(r.split), **{p: r.accuracy("avg", p) for p in PRIORS}} for r in results]
-    table = summarise_over_splits(pd.DataFrame(rows)).reset_index()
+    outcomes, control = _outcomes(results, {p: ("avg", p, False, "trial") for p in PRIORS})
+    table = _with_trust(summarise_over_splits(pd.DataFrame(rows)).reset_index(), outcomes, control)
     for i, p in enumerate(PRIORS):
         table[f"paper_{p}"] = [_paper(DAP_TABLE2, s, i) for s in table["split"]]
     return table
 
 
 def table3_challenging(results: list[SplitPosteriors], map_coords: pd.DataFrame | None = None) -> pd.DataFrame:
-    """Table 3: challenging splits (AVGDAP, uni-prior), sizes and chance, paper beside."""
+    """Table 3: challenging splits, MAXDAP and AVGDAP (uni-prior), sizes, intervals, chance, control.
+
+    The paper reports AVGDAP only, and only its mean (``paper_avgdap`` on the ``mean`` row):
+    partition numbering is arbitrary, so only the means compare.
+    """
     from tzsl.experiments.paper_numbers import DAP_TABLE3  # noqa: PLC0415
 
     rows = []
@@ -97,14 +174,16 @@ def table3_challenging(results: list[SplitPosteriors], map_coords: pd.DataFrame 
             part = labels.iloc[0] if len(labels) else ""
         rows.append({
             "split": label, "partition": part, "n_objects": r.split.n_test, "chance": r.split.chance,
-            "avgdap": r.accuracy("avg", "uni"),
+            "maxdap": r.accuracy("max", "uni"), "avgdap": r.accuracy("avg", "uni"),
             "avgdap_per_class_mean": per_class_mean_accuracy(r.y, r.predict("avg", "uni")),
             "excluded_attributes": ";".join(a for a, _ in r.split.excluded_attributes),
             "dropped_duplicate_objects": ";".join(o for o, _ in r.split.dropped_objects),
         })
-    table = summarise_over_splits(pd.DataFrame(rows)).reset_index()
-    for i, name in enumerate(("paper_n_objects", "paper_chance", "paper_avgdap")):
-        table[name] = [_paper(DAP_TABLE3, s, i) for s in table["split"]]
+    outcomes, control = _outcomes(results, {"maxdap": ("max", "uni", False, "trial"),
+                                            "avgdap": ("avg", "uni", False, "trial"),
+                                            "avgdap_per_class_mean": ("avg", "uni", False, "class_mean")})
+    table = _with_trust(summarise_over_splits(pd.DataFrame(rows)).reset_index(), outcomes, control)
+    table["paper_avgdap"] = np.where(table["split"] == "mean", DAP_TABLE3["average"][2], np.nan)
     return table
 
 
@@ -114,7 +193,10 @@ def multilabel_table(results: list[SplitPosteriors]) -> pd.DataFrame:
 
     rows = [{"split": split_label(r.split), "independent": r.accuracy("avg", "uni"),
              "multilabel": r.accuracy("avg", "uni", multilabel=True)} for r in results if r.P_multilabel is not None]
-    table = summarise_over_splits(pd.DataFrame(rows)).reset_index()
+    outcomes, _ = _outcomes([r for r in results if r.P_multilabel is not None],
+                            {"independent": ("avg", "uni", False, "trial"),
+                             "multilabel": ("avg", "uni", True, "trial")}, control=False)
+    table = add_trust_columns(summarise_over_splits(pd.DataFrame(rows)).reset_index(), outcomes)
     mean = table["split"] == "mean"
     table["paper_independent"] = np.where(mean, DAP_INDEPENDENT_ACCURACY, np.nan)
     table["paper_multilabel"] = np.where(mean, DAP_MULTILABEL_ACCURACY, np.nan)
@@ -122,11 +204,14 @@ def multilabel_table(results: list[SplitPosteriors]) -> pd.DataFrame:
 
 
 def attribute_accuracy_table(results: list[SplitPosteriors], sensors: tuple[str, ...]) -> pd.DataFrame:
-    """Per-attribute accuracy and balanced accuracy on test trials (threshold 0.5), per split and sensor.
+    """Per-attribute balanced accuracy, accuracy (threshold 0.5) and majority baseline, per split and sensor.
 
     Rows: one per (split, attribute, sensor), plus ``sensor="mean"`` rows averaging the
-    sensors as the paper's Fig. 2a does. Balanced accuracy is NaN where an attribute takes a
-    single value on the split's test objects.
+    sensors as the paper's Fig. 2a does. Balanced accuracy (the headline: its chance is 0.5
+    whatever the attribute's frequency) is NaN where an attribute takes a single value on the
+    split's test objects. ``majority``: plain accuracy of always answering the attribute's
+    more frequent value among the split's training objects (the baseline plain accuracy must
+    beat; its balanced accuracy is 0.5).
     """
     rows = []
     for r in results:
@@ -134,28 +219,61 @@ def attribute_accuracy_table(results: list[SplitPosteriors], sensors: tuple[str,
         pred = r.P >= 0.5  # (n, s, m)
         correct = pred == truth[:, None, :]
         acc = correct.mean(axis=0)  # (s, m)
+        majority = (truth == (r.train_prior >= 0.5)).mean(axis=0)  # (m,)
         bal = np.stack([per_attribute_balanced_accuracy(truth, pred[:, s, :]) for s in range(pred.shape[1])])
         for j, attr in enumerate(r.attributes):
             for s, sensor in enumerate(sensors):
                 rows.append({"split": split_label(r.split), "attribute": attr, "sensor": sensor,
-                             "accuracy": acc[s, j], "balanced_accuracy": bal[s, j]})
+                             "balanced_accuracy": bal[s, j], "accuracy": acc[s, j], "majority": majority[j]})
             rows.append({"split": split_label(r.split), "attribute": attr, "sensor": "mean",
-                         "accuracy": acc[:, j].mean(), "balanced_accuracy": np.nanmean(bal[:, j])
-                         if np.isfinite(bal[:, j]).any() else np.nan})
+                         "balanced_accuracy": np.nanmean(bal[:, j]) if np.isfinite(bal[:, j]).any() else np.nan,
+                         "accuracy": acc[:, j].mean(), "majority": majority[j]})
     return pd.DataFrame(rows)
 
 
-def attribute_accuracy_summary(per_split: pd.DataFrame) -> pd.DataFrame:
-    """Mean over splits of the sensor-averaged per-attribute accuracy, with the paper's quoted values."""
+def attribute_accuracy_summary(per_split: pd.DataFrame, results: list[SplitPosteriors] | None = None,
+                               paper: bool = True) -> pd.DataFrame:
+    """Mean over splits of the sensor-averaged per-attribute scores, intervals, baselines, paper beside.
+
+    Columns: attribute, balanced_accuracy (headline) and accuracy, each with
+    ``_ci95_low``/``_ci95_high`` (two-level bootstrap over splits and test objects,
+    :func:`tzsl.experiments._trust.attribute_intervals`; needs ``results``), ``majority`` (the
+    per-attribute majority baseline of ``accuracy``), ``majority_balanced_accuracy`` (0.5), and
+    ``paper_accuracy`` (the paper's quoted values; only with ``paper``). Last row ``mean``:
+    the mean over attributes.
+    """
+    from tzsl.experiments._trust import attribute_intervals  # noqa: PLC0415
     from tzsl.experiments.paper_numbers import DAP_ATTRIBUTE_ACCURACY_QUOTED, DAP_MEAN_ATTRIBUTE_ACCURACY  # noqa: PLC0415
 
     mean_rows = per_split[per_split["sensor"] == "mean"]
-    summary = mean_rows.groupby("attribute", sort=False)[["accuracy", "balanced_accuracy"]].mean().reset_index()
-    summary["paper_accuracy"] = summary["attribute"].map(DAP_ATTRIBUTE_ACCURACY_QUOTED)
-    overall = pd.DataFrame([{"attribute": "mean", "accuracy": summary["accuracy"].mean(),
-                             "balanced_accuracy": summary["balanced_accuracy"].mean(),
-                             "paper_accuracy": DAP_MEAN_ATTRIBUTE_ACCURACY}])
-    return pd.concat([summary, overall], ignore_index=True)
+    scores = ["balanced_accuracy", "accuracy", "majority"]
+    summary = mean_rows.groupby("attribute", sort=False)[scores].mean().reset_index()
+    overall = pd.DataFrame([{"attribute": "mean", **{c: summary[c].mean() for c in scores}}])
+    summary = pd.concat([summary, overall], ignore_index=True)
+    if results:
+        attributes = list(summary["attribute"].iloc[:-1])
+        correct, truth, classes, splits = [], [], [], []
+        for r in results:
+            cols = [r.attributes.index(a) if a in r.attributes else -1 for a in attributes]
+            t = r.K[r.y].astype(float)
+            c = ((r.P >= 0.5) == t[:, None, :].astype(bool)).mean(axis=1)
+            missing = np.array(cols) < 0
+            take = np.where(missing, 0, cols)
+            correct.append(np.where(missing, np.nan, c[:, take]))
+            truth.append(np.where(missing, np.nan, t[:, take]))
+            classes.append(r.y)
+            splits.append(np.full(len(r.y), split_label(r.split), dtype=object))
+        iv = attribute_intervals(np.concatenate(correct), np.concatenate(truth), np.concatenate(classes),
+                                 np.concatenate(splits))
+        for name, key in (("balanced_accuracy", "balanced"), ("accuracy", "accuracy")):
+            at = summary.columns.get_loc(name) + 1
+            summary.insert(at, f"{name}_ci95_low", iv[f"{key}_low"])
+            summary.insert(at + 1, f"{name}_ci95_high", iv[f"{key}_high"])
+    summary["majority_balanced_accuracy"] = 0.5
+    if paper:
+        summary["paper_accuracy"] = summary["attribute"].map(DAP_ATTRIBUTE_ACCURACY_QUOTED)
+        summary.loc[summary["attribute"] == "mean", "paper_accuracy"] = DAP_MEAN_ATTRIBUTE_ACCURACY
+    return summary
 
 
 def attribute_subsets(m: int, j: int, max_subsets: int, rng: np.random.Generator) -> np.ndarray:

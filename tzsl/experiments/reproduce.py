@@ -21,6 +21,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from tzsl.exceptions import PartialRunError
 from tzsl.experiments._outputs import ResultsDir
 
 #: The manifest of ``reproduce-tables``: built-in studies, run in this order.
@@ -57,13 +58,14 @@ def reproduce_tables(
 
     say = echo or (lambda _msg: None)
     experiments = reproduce_experiments(studies, **overrides)
-    results = ResultsDir(out, force=force)
+    results = ResultsDir(out, force=force, staging=True)
     for exp in experiments:
         check_experiment(exp)
         if exp.study == "phac2-dap":
             results.check_free(phac2_outputs(exp.config))
     results.check_free(["manifest.json"])
     records, data_files, timings, tables = {}, [], {}, []
+    failures: list[str] = []
     for name, exp in zip(studies, experiments, strict=True):
         say(f"\n== {name} ({exp.source}) ==")
         start = time.perf_counter()
@@ -72,6 +74,11 @@ def reproduce_tables(
         records[name] = manifest_record(exp, done)
         data_files += list(done.data_files)
         tables += sorted(done.tables)
+        failures += [f"{name}: {line}" for line in done.failures]
     results.write_manifest({"studies": records}, data_files=data_files,
-                           extra={"timings_s": timings, "tables": tables, "reproduce_studies": list(studies)})
+                           extra={"timings_s": timings, "tables": tables, "reproduce_studies": list(studies),
+                                  "failures": failures})
+    results.commit()
+    if failures:
+        raise PartialRunError(results.root, failures)
     return results

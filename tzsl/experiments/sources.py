@@ -32,7 +32,7 @@ def load_study_features(
     if features_file is not None and plain_dir is not None:
         raise ConfigError("give either --features or --plain, not both")
     if features_file is not None:
-        from tzsl.datasets._feature_table import read_feature_table  # noqa: PLC0415
+        from tzsl.datasets import read_feature_table  # noqa: PLC0415
 
         return read_feature_table(Path(features_file))
     if plain_dir is not None:

@@ -11,7 +11,6 @@ from pathlib import Path
 
 import pandas as pd
 
-from tzsl.exceptions import ConfigError
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.config import Experiment
 from tzsl.experiments.engine import (
@@ -28,8 +27,8 @@ from tzsl.experiments.engine import (
 class SelectedColumns(ResultsDir):
     """A results folder that leaves unselected fusion / prior columns out of Tables 1 and 2."""
 
-    def __init__(self, root, force: bool, drop: Mapping[str, list[str]]) -> None:
-        super().__init__(root, force=force)
+    def __init__(self, root, force: bool, drop: Mapping[str, list[str]], staging: bool = False) -> None:
+        super().__init__(root, force=force, staging=staging)
         self.drop = dict(drop)
 
     def write_csv(self, name: str, table: pd.DataFrame, index: bool = False) -> Path:
@@ -40,11 +39,11 @@ def dropped_columns(methods) -> dict[str, list[str]]:
     """Columns of Tables 1 and 2 that ``[methods] fusions`` / ``priors`` leave out."""
     drop: dict[str, list[str]] = {"table1_fusion.csv": [], "table2_priors.csv": []}
     for fusion in sorted({"max", "avg"} - set(methods.fusions)):
-        drop["table1_fusion.csv"] += [f"{fusion}dap", f"paper_{fusion}dap"]
-        if fusion == "avg":
-            drop["table1_fusion.csv"].append("avgdap_per_class_mean")
+        for column in [f"{fusion}dap"] + (["avgdap_per_class_mean"] if fusion == "avg" else []):
+            drop["table1_fusion.csv"] += [column, f"{column}_ci95_low", f"{column}_ci95_high"]
+        drop["table1_fusion.csv"].append(f"paper_{fusion}dap")
     for prior in sorted({"uni", "test", "train"} - set(methods.priors)):
-        drop["table2_priors.csv"] += [prior, f"paper_{prior}"]
+        drop["table2_priors.csv"] += [prior, f"{prior}_ci95_low", f"{prior}_ci95_high", f"paper_{prior}"]
     return drop
 
 
@@ -88,11 +87,9 @@ def phac2_features(exp: Experiment):
 
 
 def _check_folds(exp: Experiment, n_train_objects: int) -> None:
-    cv = exp.config.svm.cv
-    if cv > n_train_objects:
-        raise ConfigError(f"{exp.source}: svm.cv: {cv} object-grouped folds, but a split has only "
-                          f"{n_train_objects} training objects; use at most {n_train_objects} (0 = "
-                          "leave-one-object-out)")
+    from tzsl.experiments.phac2_dap import check_cv_folds  # noqa: PLC0415
+
+    check_cv_folds(exp.config.svm.cv, n_train_objects, exp.source)
 
 
 def _format(table: pd.DataFrame) -> str:

@@ -26,7 +26,7 @@ from collections.abc import Sequence
 import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
-from tzsl.datasets._types import PHAC2_EPS, BiotacSignals, RawTrial
+from tzsl.datasets import PHAC2_EPS, BiotacSignals, RawTrial
 from tzsl.exceptions import ConfigError, DataFileError
 
 #: BioTac signal name -> trailing shape of one row.
@@ -39,7 +39,8 @@ BIOTAC_SIGNAL_SHAPES: dict[str, tuple[int, ...]] = {
 }
 
 
-def _fail(trial: RawTrial, problem: str) -> DataFileError:
+def trial_error(trial: RawTrial, problem: str) -> DataFileError:
+    """The error for a bad trial: ``problem`` with the trial's source file and id."""
     return DataFileError(getattr(trial, "source", None), problem, trial=getattr(trial, "trial_id", None))
 
 
@@ -67,32 +68,32 @@ def check_raw_trial(trial: RawTrial, n_fingers: int | None = None) -> None:
         raise DataFileError(None, f"expected a RawTrial, got {type(trial).__name__}")
     n = np.shape(trial.gripper_aperture)[0] if np.ndim(trial.gripper_aperture) == 1 else None
     if n is None:
-        raise _fail(trial, f"gripper_aperture has shape {np.shape(trial.gripper_aperture)}; expected (n,)")
+        raise trial_error(trial, f"gripper_aperture has shape {np.shape(trial.gripper_aperture)}; expected (n,)")
     if not trial.fingers:
-        raise _fail(trial, "trial has no BioTac (fingers is empty)")
+        raise trial_error(trial, "trial has no BioTac (fingers is empty)")
     if n_fingers is not None and len(trial.fingers) != n_fingers:
-        raise _fail(trial, f"trial has {len(trial.fingers)} BioTacs; expected {n_fingers}")
+        raise trial_error(trial, f"trial has {len(trial.fingers)} BioTacs; expected {n_fingers}")
     arrays: list[tuple[str, object, tuple[int, ...]]] = [("gripper_aperture", trial.gripper_aperture, ())]
     if trial.tool_z is not None:
         arrays.append(("tool_z", trial.tool_z, ()))
     for f, finger in enumerate(trial.fingers):
         if not isinstance(finger, BiotacSignals):
-            raise _fail(trial, f"finger_{f} is a {type(finger).__name__}, not BiotacSignals")
+            raise trial_error(trial, f"finger_{f} is a {type(finger).__name__}, not BiotacSignals")
         for name, tail in BIOTAC_SIGNAL_SHAPES.items():
             arrays.append((f"finger_{f}/{name}", getattr(finger, name), tail))
     for name, value, tail in arrays:
         arr = np.asarray(value)
         if arr.shape != (n, *tail):
-            raise _fail(trial, f"{name} has shape {arr.shape}; expected {(n, *tail)}")
+            raise trial_error(trial, f"{name} has shape {arr.shape}; expected {(n, *tail)}")
         if arr.dtype.kind not in "iuf":
-            raise _fail(trial, f"{name} is not real numeric (dtype {arr.dtype})")
+            raise trial_error(trial, f"{name} is not real numeric (dtype {arr.dtype})")
         if arr.dtype.kind == "f":
             bad = ~np.isfinite(arr)
             if bad.any():
                 row = int(np.argwhere(bad)[0][0])
-                raise _fail(trial, f"{name} holds NaN/inf (first at row {row})")
+                raise trial_error(trial, f"{name} holds NaN/inf (first at row {row})")
     if np.shape(trial.phase) != (n,):
-        raise _fail(trial, f"phase has shape {np.shape(trial.phase)}; expected ({n},)")
+        raise trial_error(trial, f"phase has shape {np.shape(trial.phase)}; expected ({n},)")
 
 
 #: The four PHAC-2 exploratory procedures in the paper's order.
@@ -144,7 +145,7 @@ def ep_masks(trial: RawTrial, eps: Sequence[str]) -> np.ndarray:
             f"{eps[e]!r} (controller_detail_state {str(states[e])!r})"
             for e in np.flatnonzero(counts == 0)
         )
-        raise _fail(
+        raise trial_error(
             trial, f"exploratory procedure {absent} is absent: no row of the trial carries that state"
         )
     return masks
@@ -209,13 +210,13 @@ def remove_baseline(trial: RawTrial, baseline_rows: int = 100) -> RawTrial:
     """
     baseline_rows = check_baseline_rows(baseline_rows)
     check_raw_trial(trial)
-    return _remove_baseline(trial, baseline_rows)
+    return remove_baseline_unchecked(trial, baseline_rows)
 
 
-def _remove_baseline(trial: RawTrial, baseline_rows: int) -> RawTrial:
+def remove_baseline_unchecked(trial: RawTrial, baseline_rows: int) -> RawTrial:
     """:func:`remove_baseline` of an already checked trial."""
     if trial.n_rows < baseline_rows:
-        raise _fail(
+        raise trial_error(
             trial,
             f"recording has {trial.n_rows} rows; baseline removal needs at least "
             f"{baseline_rows} (the mean of the first {baseline_rows} readings)",

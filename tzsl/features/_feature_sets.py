@@ -21,11 +21,11 @@ from typing import TYPE_CHECKING
 
 import pandas as pd
 
-from tzsl.datasets._types import TRIAL_COLUMNS, FeatureSet, RawTrial
+from tzsl.datasets import TRIAL_COLUMNS, FeatureSet, RawTrial
 from tzsl.exceptions import DataFileError
 from tzsl.features._attribute_filter import check_attribute_table, filter_attributes
-from tzsl.features._baseline import PHAC2_EP_NAMES, _fail, check_eps
-from tzsl.features._penn_columns import PENN_DROPPED_COLUMNS, _short_ep_names, select_penn_columns
+from tzsl.features._baseline import PHAC2_EP_NAMES, check_eps, trial_error
+from tzsl.features._penn_columns import PENN_DROPPED_COLUMNS, select_penn_columns, short_ep_names
 from tzsl.features._raw_features import RawTrialFeatures
 
 if TYPE_CHECKING:  # the loader's structure; only its fields are used here
@@ -80,7 +80,7 @@ def penn_feature_set(data: "PennStaticData", min_objects: int = 3) -> FeatureSet
         dataset="phac2-penn",
         info={
             "dropped_attributes": dropped,
-            "eps": list(_short_ep_names(data.eps)),
+            "eps": list(short_ep_names(data.eps)),
             "min_objects": int(min_objects),
             "penn_dropped_columns": list(PENN_DROPPED_COLUMNS),
         },
@@ -139,7 +139,7 @@ def raw_feature_set(
         if not isinstance(trial, RawTrial):
             raise DataFileError(None, f"expected RawTrial objects, got {type(trial).__name__}")
         if trial.trial_id in seen:
-            raise _fail(trial, "trial id occurs twice in the trial list")
+            raise trial_error(trial, "trial id occurs twice in the trial list")
         seen.add(trial.trial_id)
     _check_labelled_trials(trials, labels)
     extractor = RawTrialFeatures(eps=eps, baseline_rows=baseline_rows, travel=travel)
@@ -202,7 +202,7 @@ def _check_labelled_trials(trials: Sequence[RawTrial], labels: pd.DataFrame) -> 
         raise DataFileError(None, f"labels must be a DataFrame, got {type(labels).__name__}")
     for trial in trials:
         if trial.object_name not in labels.index:
-            raise _fail(
+            raise trial_error(
                 trial,
                 f"object {trial.object_name!r} has no row in the attribute table "
                 f"({len(labels)} objects, e.g. {list(labels.index[:3])})",

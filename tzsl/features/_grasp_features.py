@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tzsl.datasets._grasps import FINGER_NAMES, JOINT_NAMES, Grasp
+from tzsl.datasets import FINGER_NAMES, JOINT_NAMES, Grasp
 from tzsl.exceptions import ConfigError, DataFileError
 
 __all__ = [

@@ -50,7 +50,7 @@ from pathlib import Path
 import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
-from tzsl.datasets._video import read_video
+from tzsl.datasets import read_video
 from tzsl.exceptions import ConfigError, DataFileError
 
 __all__ = ["KeyFrames", "KeyFrameSelector", "frame_differences", "key_frame_indices"]

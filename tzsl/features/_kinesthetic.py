@@ -42,9 +42,9 @@ import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 from sklearn.utils.validation import check_is_fitted
 
-from tzsl.datasets._types import RawTrial
+from tzsl.datasets import RawTrial
 from tzsl.exceptions import ConfigError, DataFileError
-from tzsl.features._baseline import PHAC2_EP_NAMES, _fail, check_eps, check_raw_trial, ep_masks
+from tzsl.features._baseline import PHAC2_EP_NAMES, check_eps, check_raw_trial, ep_masks, trial_error
 from tzsl.features._time_average import ep_feature_names
 
 #: Feature name of the travelled distance for each ``travel`` source.
@@ -77,7 +77,7 @@ def resolve_travel(travel: str, trials: Sequence[RawTrial]) -> str:
     if not any(has):
         return "aperture"
     missing = trials[has.index(False)]
-    raise _fail(
+    raise trial_error(
         missing,
         "trial has no tool_z while other trials have one; the travelled distance would "
         "mix two quantities (pass travel='aperture' to use the gripper path for all)",
@@ -115,10 +115,12 @@ def kinesthetic_ep_features(
     if travel not in TRAVEL_FEATURE:
         raise ConfigError(f"travel must be 'tool_z' or 'aperture' here, got {travel!r}")
     check_raw_trial(trial)
-    return _kinesthetic(trial, eps, travel)
+    return kinesthetic_unchecked(trial, eps, travel)
 
 
-def _kinesthetic(trial: RawTrial, eps: tuple[str, ...], travel: str) -> np.ndarray:
+def kinesthetic_unchecked(trial: RawTrial, eps: tuple[str, ...], travel: str) -> np.ndarray:
+    """:func:`kinesthetic_ep_features` of an already checked trial: (n_eps, 3) minimum
+    aperture, mean aperture and travelled distance per EP (units of the recording)."""
     masks = ep_masks(trial, eps)  # (n_eps, n)
     aperture = np.asarray(trial.gripper_aperture, dtype=np.float64)
     out = np.empty((len(eps), 3))
@@ -126,7 +128,7 @@ def _kinesthetic(trial: RawTrial, eps: tuple[str, ...], travel: str) -> np.ndarr
     out[:, 1] = masks @ aperture / masks.sum(axis=1)
     if travel == "tool_z":
         if trial.tool_z is None:
-            raise _fail(trial, "trial has no tool_z; the tool travel (tool_z_drop) needs it")
+            raise trial_error(trial, "trial has no tool_z; the tool travel (tool_z_drop) needs it")
         z = np.asarray(trial.tool_z, dtype=np.float64)
         first = z[np.argmax(masks, axis=1)]
         out[:, 2] = first - np.where(masks, z[None, :], np.inf).min(axis=1)
@@ -194,7 +196,7 @@ class KinestheticFeatures(TransformerMixin, BaseEstimator):
         out = np.empty((len(X), 3 * len(eps)))
         for i, trial in enumerate(X):
             check_raw_trial(trial)
-            out[i] = _kinesthetic(trial, eps, self.travel_).ravel()
+            out[i] = kinesthetic_unchecked(trial, eps, self.travel_).ravel()
         return out
 
     def get_feature_names_out(self, input_features: object = None) -> np.ndarray:

@@ -39,7 +39,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 from sklearn.utils.validation import check_is_fitted
 
-from tzsl.datasets._types import PHAC2_EPS
+from tzsl.datasets import PHAC2_EPS
 from tzsl.exceptions import DataFileError
 from tzsl.features._baseline import PHAC2_EP_NAMES, check_eps
 
@@ -91,7 +91,7 @@ def penn_column_index(n_fingers: int = 2) -> np.ndarray:
     )
 
 
-def _short_ep_names(eps: Sequence[str]) -> tuple[str, ...]:
+def short_ep_names(eps: Sequence[str]) -> tuple[str, ...]:
     """Map ``controller_detail_state`` strings to short EP names; keep other names."""
     return tuple(_STATE_TO_EP.get(str(ep), str(ep)) for ep in eps)
 
@@ -122,7 +122,7 @@ def select_penn_columns(
     DataFileError
         Wrong shape, or NaN/inf entries (names the first bad trial row).
     """
-    eps = _short_ep_names(check_eps(eps))
+    eps = short_ep_names(check_eps(eps))
     X = np.asarray(X)
     if X.ndim != 3 or X.shape[1] != len(eps) or X.shape[2] != PENN_N_COLUMNS:
         raise DataFileError(

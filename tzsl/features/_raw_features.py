@@ -22,18 +22,18 @@ import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 from sklearn.utils.validation import check_is_fitted
 
-from tzsl.datasets._types import RawTrial
+from tzsl.datasets import RawTrial
 from tzsl.exceptions import DataFileError
 from tzsl.features._baseline import (
     PHAC2_EP_NAMES,
-    _fail,
-    _remove_baseline,
     check_baseline_rows,
     check_eps,
     check_raw_trial,
+    remove_baseline_unchecked,
+    trial_error,
 )
-from tzsl.features._kinesthetic import _kinesthetic, kinesthetic_feature_names, resolve_travel
-from tzsl.features._time_average import BIOTAC_CHANNELS, _ep_means, ep_feature_names
+from tzsl.features._kinesthetic import kinesthetic_feature_names, kinesthetic_unchecked, resolve_travel
+from tzsl.features._time_average import BIOTAC_CHANNELS, biotac_ep_means_unchecked, ep_feature_names
 
 
 class RawTrialFeatures(TransformerMixin, BaseEstimator):
@@ -127,11 +127,11 @@ class RawTrialFeatures(TransformerMixin, BaseEstimator):
         out = np.empty((len(X), self.n_fingers_, 26 * n_eps))
         for i, trial in enumerate(X):
             check_raw_trial(trial, self.n_fingers_)
-            clean = _remove_baseline(trial, self.baseline_rows)
-            out[i, :, : 23 * n_eps] = _ep_means(clean, eps).reshape(self.n_fingers_, -1)
-            out[i, :, 23 * n_eps :] = _kinesthetic(trial, eps, self.travel_).ravel()[None, :]
+            clean = remove_baseline_unchecked(trial, self.baseline_rows)
+            out[i, :, : 23 * n_eps] = biotac_ep_means_unchecked(clean, eps).reshape(self.n_fingers_, -1)
+            out[i, :, 23 * n_eps :] = kinesthetic_unchecked(trial, eps, self.travel_).ravel()[None, :]
             if not np.isfinite(out[i]).all():
-                raise _fail(trial, "features are not finite (overflow in the signals?)")
+                raise trial_error(trial, "features are not finite (overflow in the signals?)")
         return out
 
     def get_feature_names_out(self, input_features: object = None) -> np.ndarray:

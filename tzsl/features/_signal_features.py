@@ -15,8 +15,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from tzsl.datasets._plain import PlainDataset, read_plain_dataset
-from tzsl.datasets._types import FeatureSet, RawTrial
+from tzsl.datasets import FeatureSet, PlainDataset, RawTrial, read_plain_dataset
 from tzsl.exceptions import ConfigError
 from tzsl.features._attribute_filter import filter_attributes
 from tzsl.features._baseline import check_raw_trial

@@ -19,7 +19,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 from sklearn.utils.validation import check_is_fitted
 
-from tzsl.datasets._types import RawTrial
+from tzsl.datasets import RawTrial
 from tzsl.exceptions import DataFileError
 from tzsl.features._baseline import PHAC2_EP_NAMES, check_eps, check_raw_trial, ep_masks
 
@@ -83,10 +83,10 @@ def biotac_ep_means(trial: RawTrial, eps: Sequence[str] = PHAC2_EP_NAMES) -> np.
     """
     eps = check_eps(eps)
     check_raw_trial(trial)
-    return _ep_means(trial, eps)
+    return biotac_ep_means_unchecked(trial, eps)
 
 
-def _ep_means(trial: RawTrial, eps: tuple[str, ...]) -> np.ndarray:
+def biotac_ep_means_unchecked(trial: RawTrial, eps: tuple[str, ...]) -> np.ndarray:
     """:func:`biotac_ep_means` of an already checked trial."""
     masks = ep_masks(trial, eps).astype(np.float64)  # (n_eps, n)
     channels = biotac_channel_matrix(trial)  # (n_fingers, n, 23)
@@ -149,7 +149,7 @@ class BiotacTimeAverage(TransformerMixin, BaseEstimator):
         out = np.empty((len(X), self.n_fingers_, 23 * len(eps)))
         for i, trial in enumerate(X):
             check_raw_trial(trial, self.n_fingers_)
-            out[i] = _ep_means(trial, eps).reshape(self.n_fingers_, -1)
+            out[i] = biotac_ep_means_unchecked(trial, eps).reshape(self.n_fingers_, -1)
         return out
 
     def get_feature_names_out(self, input_features: object = None) -> np.ndarray:

@@ -8,12 +8,14 @@ from tzsl.models._attribute_svm import AttributeSVM
 from tzsl.models._attribute_bank import AttributeClassifierBank
 from tzsl.models._attribute_training import (
     AUTO_MAX_EXACT_TRIALS,
+    GRIDS,
     SOLVERS,
     AttributeTrainingError,
     GridEdgeWarning,
     balanced_object_draws,
     default_preprocessor,
     fit_platt,
+    gamma_grid,
 )
 from tzsl.models._scalable_attribute import ScalableAttributeClassifier
 from tzsl.models._dap import (
@@ -63,7 +65,7 @@ from tzsl.models._active_policy import (
     sequential_log_posterior,
     stop_reasons,
 )
-from tzsl.models._zsl_input import ZSLInputError, attribute_rows, training_classes
+from tzsl.models._zsl_input import ZSLInputError, attribute_rows, class_grouped_folds, training_classes
 from tzsl.models._validation import ParameterError
 from tzsl.models._zero_shot import ZeroShotClassifier, score_kind
 from tzsl.models._registry import (
@@ -96,11 +98,13 @@ __all__: list[str] = [
     "AttributeTrainingError",
     "AUTO_MAX_EXACT_TRIALS",
     "SOLVERS",
+    "GRIDS",
     "GridEdgeWarning",
     "ScalableAttributeClassifier",
     "balanced_object_draws",
     "default_preprocessor",
     "fit_platt",
+    "gamma_grid",
     "MultiLabelAttributeClassifier",
     "attribute_prior",
     "check_attribute_posteriors",
@@ -120,6 +124,7 @@ __all__: list[str] = [
     "ParameterError",
     "ZSLInputError",
     "attribute_rows",
+    "class_grouped_folds",
     "training_classes",
     "FAMILIES",
     "Method",

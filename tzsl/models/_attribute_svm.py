@@ -26,7 +26,7 @@ from __future__ import annotations
 from numbers import Integral, Real
 
 import numpy as np
-from scipy.special import expit, log_expit
+from scipy.special import log_expit
 from sklearn import config_context
 from sklearn.base import BaseEstimator, ClassifierMixin, clone
 from sklearn.metrics.pairwise import euclidean_distances, rbf_kernel
@@ -44,13 +44,16 @@ from tzsl.models._attribute_training import (
     PLATT_WEIGHTING,
     SCORING,
     UNDERSAMPLING,
+    GRIDS,
     AttributeTrainingError,
     balanced_object_draws,
     balanced_sample_weights,
     default_preprocessor,
     fit_platt,
+    gamma_grid,
     grid_edges,
 )
+from tzsl.models._platt_binary import PlattBinaryClassifierMixin
 from tzsl.models._validation import ParameterError, ValidatedParamsMixin
 
 __all__ = ["AttributeSVM"]
@@ -104,7 +107,7 @@ def _svc_fit_decision(K_train: np.ndarray, y: np.ndarray, C: float, class_weight
     return -dec.ravel()
 
 
-class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
+class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
     """Binary RBF-SVM for one attribute and one sensor, under-sampled, group-tuned, Platt-calibrated.
 
     Parameters
@@ -118,6 +121,12 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         Ends of the log-spaced grid of RBF ``gamma`` (in units of squared preprocessed features^-1).
     n_C, n_gamma : int, default=3
         Grid sizes (3 gives the decades 1, 10, 100 and 0.01, 0.1, 1).
+    grid : {"paper", "extended"}, default="extended"
+        ``"paper"``: ``gamma`` from ``gamma_range`` and ``n_gamma`` as the DAP paper tuned it.
+        ``"extended"``: that grid plus two decades below its low end (0.001, 0.0001 for the
+        paper's range; :func:`tzsl.models.gamma_grid`), because on PHAC-2 167 of 188
+        (attribute, sensor) fits chose the paper grid's low edge 0.01. The paper-reproduction
+        studies pin ``"paper"``.
     cv : None, int or splitter, default=None
         Object-grouped cross-validation on the training trials. ``None``: leave-one-object-out
         (``LeaveOneGroupOut``); int: ``StratifiedGroupKFold(min(cv, n), shuffle=True)`` with ``n``
@@ -165,7 +174,7 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         Sigmoid ``p = expit(a * s + b)`` on the SVM score ``s``.
     oof_scores_ : ndarray of shape (n_train,)
         Out-of-fold SVM scores of the training trials for the chosen configuration.
-    cv_scores_ : ndarray of shape (n_draws_or_1, n_gamma, n_C)
+    cv_scores_ : ndarray of shape (n_draws_or_1, n_gammas, n_C)
         Grouped-CV criterion of every configuration (lower is better; balanced accuracy is
         stored negated).
     grid_edges_ : list of (str, float, str)
@@ -179,6 +188,7 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         "gamma_range": ["array-like"],
         "n_C": [Interval(Integral, 1, None, closed="left")],
         "n_gamma": [Interval(Integral, 1, None, closed="left")],
+        "grid": [StrOptions(set(GRIDS))],
         "cv": [None, Interval(Integral, 2, None, closed="left"), HasMethods(["split"])],
         "undersampling": [StrOptions(set(UNDERSAMPLING))],
         "n_draws": [Interval(Integral, 1, None, closed="left")],
@@ -196,6 +206,7 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         gamma_range=(0.01, 1.0),
         n_C=3,
         n_gamma=3,
+        grid="extended",
         cv=None,
         undersampling="select",
         n_draws=3,
@@ -209,6 +220,7 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         self.gamma_range = gamma_range
         self.n_C = n_C
         self.n_gamma = n_gamma
+        self.grid = grid
         self.cv = cv
         self.undersampling = undersampling
         self.n_draws = n_draws
@@ -217,15 +229,7 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         self.name = name
         self.random_state = random_state
 
-    def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
-        tags.classifier_tags.multi_class = False
-        return tags
-
     # ------------------------------------------------------------------ helpers
-    def _label(self) -> str:
-        return f"attribute {self.name!r}" if self.name is not None else "attribute"
-
     def _check_param_values(self) -> None:
         for nm in ("C_range", "gamma_range"):
             rng = np.asarray(getattr(self, nm), dtype=object).ravel()
@@ -363,7 +367,7 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
             Z = np.asarray(pre.fit_transform(X), dtype=np.float64)
             D = euclidean_distances(Z, squared=True)
             Cs = np.geomspace(*self.C_range, self.n_C)
-            gammas = np.geomspace(*self.gamma_range, self.n_gamma)
+            gammas = gamma_grid(self.gamma_range, self.n_gamma, self.grid)
             draws, draw_w = self._draws(yb, groups, rng)
             fold_seed = int(rng.randint(np.iinfo(np.int32).max))
             cw = None if self.undersampling == "none" else "balanced"
@@ -416,19 +420,3 @@ class AttributeSVM(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         for w, svc, Ztr in zip(self.estimator_weights_, self.estimators_, self.train_features_):
             out += w * svc.decision_function(rbf_kernel(Z, Ztr, gamma=self.gamma_))
         return out
-
-    def decision_function(self, X) -> np.ndarray:
-        """Logit of ``p(classes_[1] | x)`` (Platt-mapped SVM score); shape (n_trials,)."""
-        check_is_fitted(self)
-        a, b = self.platt_
-        return a * self.svm_score(X) + b
-
-    def predict_proba(self, X) -> np.ndarray:
-        """Posteriors, shape (n_trials, 2), columns ordered as ``classes_``."""
-        p1 = expit(self.decision_function(X))
-        return np.column_stack([1.0 - p1, p1])
-
-    def predict(self, X) -> np.ndarray:
-        """Class with posterior >= 0.5, shape (n_trials,)."""
-        check_is_fitted(self)
-        return self.classes_[(self.decision_function(X) >= 0).astype(int)]

@@ -34,7 +34,6 @@ from numbers import Integral, Real
 
 import numpy as np
 from sklearn.base import BaseEstimator
-from sklearn.model_selection import GroupKFold
 from sklearn.preprocessing import StandardScaler
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
@@ -43,6 +42,7 @@ from tzsl.models._validation import ParameterError, ValidatedParamsMixin
 from tzsl.models._zsl_input import (
     ZSLInputError,
     attribute_rows,
+    class_grouped_folds,
     training_classes,
     validate_features,
     validate_features_and_rows,
@@ -226,9 +226,10 @@ class ESZSLCV(_ESZSLBase):
         Grids of the feature-side and attribute-side ridges. A single pair is fitted without
         cross-validation (``best_score_`` is then NaN and ``cv_scores_`` has no folds).
     cv : None, int >= 2 or splitter, default=None
-        ``None``: :class:`~sklearn.model_selection.GroupKFold` with ``min(5, n_classes // 2)``
-        splits (each validation fold needs >= 2 classes). An int: ``GroupKFold(cv)``. Otherwise
-        any object with ``split(X, y, groups)``; it receives ``groups`` = class (row of
+        ``None``: :func:`~tzsl.models.class_grouped_folds` with ``min(5, n_classes // 2)``
+        folds, each validating on >= 2 and training on >= 2 classes (classes sharing an attribute
+        row are one class, never alone in a fold). An int: that many such folds (an error if
+        more than ``n_classes // 2``). Otherwise any object with ``split(X, y, groups)``; it receives ``groups`` = class (row of
         ``class_attributes_``), and every fold must hold out whole classes, at least 2 of them,
         and train on at least 2.
     scoring : {"accuracy", "balanced_accuracy"}, default="accuracy"
@@ -284,19 +285,16 @@ class ESZSLCV(_ESZSLBase):
                     f"finite numbers > 0. Got {getattr(self, name)!r} instead."
                 )
 
-    def _splitter(self, n_groups: int):
+    def _folds(self, X: np.ndarray, y_u: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        """CV folds over the training classes ``y_u`` (n,): the shared builder unless ``cv`` is a splitter."""
         name = type(self).__name__
-        if self.cv is None:
-            if n_groups < 4:
-                raise ZSLInputError(
-                    f"{name}: class-grouped cross-validation needs at least 4 training classes "
-                    f"(2 held out, 2 trained on); got {n_groups}. Use ESZSL with fixed "
-                    "gamma and lam instead"
-                )
-            return GroupKFold(n_splits=min(5, n_groups // 2))
-        if isinstance(self.cv, Integral):
-            return GroupKFold(n_splits=int(self.cv))
-        return self.cv
+        if self.cv is None or isinstance(self.cv, Integral):
+            strict = self.cv is not None
+            return class_grouped_folds(y_u, 5 if self.cv is None else int(self.cv), name, strict=strict)
+        try:
+            return list(self.cv.split(X, y_u, groups=y_u))
+        except ValueError as exc:
+            raise ZSLInputError(f"{name}: cannot split the training classes: {exc}") from exc
 
     def fit(self, X, Y, groups=None):
         """Choose ``(gamma, lam)`` by class-grouped CV, then refit on all training samples.
@@ -325,11 +323,7 @@ class ESZSLCV(_ESZSLBase):
             self.best_gamma_, self.best_lam_, self.best_score_ = float(gammas[0]), float(lams[0]), float("nan")
             self.cv_val_classes_ = []
             return self._finish_fit(X, S_u, y_u, self.best_gamma_, self.best_lam_)
-        splitter = self._splitter(S_u.shape[0])
-        try:
-            folds = list(splitter.split(X, y_u, groups=y_u))
-        except ValueError as exc:
-            raise ZSLInputError(f"{name}: cannot split the training classes: {exc}") from exc
+        folds = self._folds(X, y_u)
 
         scores, val_classes = [], []
         for i, (tr, va) in enumerate(folds):

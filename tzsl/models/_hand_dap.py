@@ -49,7 +49,7 @@ from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
 from tzsl.exceptions import ConfigError, SplitError, TzslError
-from tzsl.features._grasp_features import unpack_grasp_features
+from tzsl.features import unpack_grasp_features
 from tzsl.models._dap import dap_log_scores
 from tzsl.models._validation import ParameterError, ValidatedParamsMixin
 

@@ -33,13 +33,12 @@ from numbers import Integral, Real
 
 import numpy as np
 from sklearn.base import _fit_context
-from sklearn.model_selection import GroupKFold
 from sklearn.preprocessing import StandardScaler
 from sklearn.utils._param_validation import Interval, InvalidParameterError
 
 from tzsl.models._attribute_model_base import EmbeddingAttributeModel
 from tzsl.models._decision import cosine_similarities
-from tzsl.models._zsl_input import training_classes, validate_features_and_rows
+from tzsl.models._zsl_input import class_grouped_folds, training_classes, validate_features_and_rows
 
 __all__ = ["DEFAULT_LAMS", "SAE", "SAECV", "sylvester_solution"]
 
@@ -158,7 +157,8 @@ class SAECV(EmbeddingAttributeModel):
     """SAE with ``lam`` chosen by class-held-out cross-validation on the training data.
 
     The training classes (distinct rows of ``A``) are split by
-    :class:`~sklearn.model_selection.GroupKFold`; for every fold and every ``lam`` the encoder is
+    :func:`~tzsl.models.class_grouped_folds` (each fold validates on >= 2 and trains on >= 2
+    classes; classes sharing a row are one class, never alone in a fold); for every fold and every ``lam`` the encoder is
     fitted on the other classes (one pair of eigendecompositions per fold serves the whole grid)
     and scored by zero-shot accuracy among the fold's held-out classes (cosine to their rows), the
     situation of the test. Holding out classes holds out whole objects; test objects are never
@@ -235,9 +235,12 @@ class SAECV(EmbeddingAttributeModel):
         X, A = validate_features_and_rows(self, X, y)
         rows, cls = training_classes(A, "SAECV")
         n_classes = rows.shape[0]
-        n_folds = min(self.n_splits, n_classes // 2) if n_classes >= 4 else n_classes
+        if n_classes >= 4:
+            folds = class_grouped_folds(cls, self.n_splits, "SAECV")
+        else:  # leave one class out, scored among all rows (Notes)
+            folds = [(np.flatnonzero(cls != c), np.flatnonzero(cls == c)) for c in range(n_classes)]
         scores = []
-        for train, held_out in GroupKFold(n_splits=n_folds).split(X, cls, cls):
+        for train, held_out in folds:
             held_rows = np.unique(cls[held_out])
             candidates = held_rows if held_rows.size >= 2 else np.arange(n_classes)
             X_tr, X_va = X[train], X[held_out]

@@ -24,7 +24,7 @@ import warnings
 from numbers import Integral, Real
 
 import numpy as np
-from scipy.special import expit, log_expit
+from scipy.special import log_expit
 from sklearn.base import BaseEstimator, ClassifierMixin, clone
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.kernel_approximation import Nystroem
@@ -43,6 +43,7 @@ from tzsl.models._attribute_training import (
     default_preprocessor,
     fit_platt,
 )
+from tzsl.models._platt_binary import PlattBinaryClassifierMixin
 
 __all__ = ["ScalableAttributeClassifier"]
 
@@ -52,7 +53,7 @@ def _range_pair(value) -> bool:
             and all(isinstance(v, Real) for v in value) and 0 < value[0] <= value[1])
 
 
-class ScalableAttributeClassifier(ClassifierMixin, BaseEstimator):
+class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, BaseEstimator):
     """Binary attribute classifier for large trial counts: Nystroem-RBF + warm-started logistic path.
 
     Parameters
@@ -140,14 +141,6 @@ class ScalableAttributeClassifier(ClassifierMixin, BaseEstimator):
         self.max_iter = max_iter
         self.name = name
         self.random_state = random_state
-
-    def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
-        tags.classifier_tags.multi_class = False
-        return tags
-
-    def _label(self) -> str:
-        return f"attribute {self.name!r}" if self.name is not None else "attribute"
 
     def _transform(self, feature_map: Nystroem, Z: np.ndarray) -> np.ndarray:
         """Nystroem features of ``Z`` (n, d) in blocks of ``block_size`` rows; shape (n, n_components)."""
@@ -270,19 +263,3 @@ class ScalableAttributeClassifier(ClassifierMixin, BaseEstimator):
         X = validate_data(self, X, dtype=np.float64, reset=False)
         Z = np.asarray(self.preprocessor_.transform(X), dtype=np.float64)
         return self._transform(self.feature_map_, Z) @ self.coef_ + self.intercept_
-
-    def decision_function(self, X) -> np.ndarray:
-        """Logit of ``p(classes_[1] | x)`` (Platt-mapped score); shape (n_trials,)."""
-        check_is_fitted(self)
-        a, b = self.platt_
-        return a * self.svm_score(X) + b
-
-    def predict_proba(self, X) -> np.ndarray:
-        """Posteriors, shape (n_trials, 2), columns ordered as ``classes_``."""
-        p1 = expit(self.decision_function(X))
-        return np.column_stack([1.0 - p1, p1])
-
-    def predict(self, X) -> np.ndarray:
-        """Class with posterior >= 0.5, shape (n_trials,)."""
-        check_is_fitted(self)
-        return self.classes_[(self.decision_function(X) >= 0).astype(int)]

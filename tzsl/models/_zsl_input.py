@@ -21,6 +21,7 @@ __all__ = [
     "check_int",
     "check_no_duplicate_rows",
     "check_positive",
+    "class_grouped_folds",
     "encode_training_classes",
     "training_classes",
     "validate_class_table",
@@ -109,6 +110,70 @@ def training_classes(Y: np.ndarray, est_name: str, groups=None) -> tuple[np.ndar
             rank[order] = np.arange(order.size)
             return S[order], rank[y]
     return S, y
+
+
+def class_grouped_folds(
+    groups, n_splits: int, who: str, *, strict: bool = False
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Class-grouped CV folds that can always be fitted: each validates on >= 2 and trains on >= 2 groups.
+
+    The one fold builder of zero-shot tuning (:class:`ESZSLCV`, :class:`SAECV`,
+    :func:`tzsl.evaluation.select_embedding_alpha`). A group is one training class, i.e. one
+    distinct attribute row: classes that share a row are one group, so they are always held out
+    together and, like any group, never fill a fold alone. Unlike ``GroupKFold`` (which balances
+    *samples* and so leaves a large merged group alone in its fold), groups are dealt so that the
+    folds' group counts differ by at most one; sample counts are balanced second (the group with
+    most samples goes first, to the fold with fewest groups, then fewest samples). Deterministic.
+
+    Parameters
+    ----------
+    groups : array-like of shape (n_samples,)
+        Group (training class) of each sample.
+    n_splits : int >= 2
+        Requested folds; capped at ``n_groups // 2`` so that each fold validates on >= 2 groups.
+    who : str
+        Caller's name, for the error message.
+    strict : bool, default=False
+        If True, ``n_splits > n_groups // 2`` is an error (the user asked for that many folds)
+        instead of being capped.
+
+    Returns
+    -------
+    list of (train_indices, validation_indices)
+        ``min(n_splits, n_groups // 2)`` folds; indices into the samples, sorted.
+
+    Raises
+    ------
+    ZSLInputError
+        Fewer than 4 groups (no fold can hold out 2 and train on 2), or ``strict`` and too many
+        folds requested. The message says why.
+    """
+    groups = np.asarray(groups).ravel()
+    labels, g, counts = np.unique(groups, return_inverse=True, return_counts=True)
+    g = g.ravel()
+    n_groups = labels.size
+    if n_groups < 4:
+        raise ZSLInputError(
+            f"{who}: class-grouped cross-validation needs at least 4 training classes (distinct "
+            f"attribute rows; classes sharing a row count once): 2 held out, 2 trained on; got {n_groups}"
+        )
+    if strict and n_splits > n_groups // 2:
+        raise ZSLInputError(
+            f"{who}: {n_splits} folds of {n_groups} training classes would validate some fold on "
+            f"fewer than 2 classes; each fold needs at least 2 held out: use at most {n_groups // 2} folds"
+        )
+    k = min(int(n_splits), n_groups // 2)
+    fold_groups, fold_samples = np.zeros(k, dtype=int), np.zeros(k, dtype=int)
+    fold_of_group = np.empty(n_groups, dtype=int)
+    for u in np.argsort(-counts, kind="stable"):  # largest group first
+        f = int(np.lexsort((np.arange(k), fold_samples, fold_groups))[0])
+        fold_of_group[u] = f
+        fold_groups[f] += 1
+        fold_samples[f] += counts[u]
+    fold_of_sample = fold_of_group[g]
+    return [
+        (np.flatnonzero(fold_of_sample != f), np.flatnonzero(fold_of_sample == f)) for f in range(k)
+    ]
 
 
 def attribute_rows(y, class_attributes) -> np.ndarray:

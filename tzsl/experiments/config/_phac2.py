@@ -163,6 +163,9 @@ class Phac2Svm(Section):
     gamma_range: list[float] = Field(default_factory=lambda: _svm_default("gamma_range"))
     n_C: int = Field(default_factory=lambda: _svm_default("n_C"), ge=1)
     n_gamma: int = Field(default_factory=lambda: _svm_default("n_gamma"), ge=1)
+    grid: Literal["paper", "extended"] = Field(
+        default_factory=lambda: _svm_default("grid"),
+        description="gamma grid: 'paper' (gamma_range, n_gamma) or 'extended' (two decades below it added)")
     n_draws: int = Field(default_factory=lambda: _svm_default("n_draws"), ge=1)
     scoring: Literal["log_loss", "balanced_accuracy"] = Field(default_factory=lambda: _svm_default("scoring"))
     platt_weighting: Literal["balanced", "empirical"] = Field(
