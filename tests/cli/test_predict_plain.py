@@ -139,3 +139,29 @@ def test_train_attributes_option_conflicts_are_one_line(signal_dataset, tmp_path
         result = _run("train-attributes", "--plain", signal_dataset, "--out", out, *args)
         assert result.exit_code == 3 and message in result.output, result.output
     assert not out.exists()
+
+
+@pytest.mark.parametrize("rows, message", [
+    ("trial_id,f0,f1,f2,f3\nt,1,2,3,4\n", "no 'sensor' column"),
+    ("sensor,f0,f1,f2,f3\nleft,1,2,3,4\nright,1,2,3,4\n", "no 'trial_id' column"),
+    ("trial_id,sensor,f0,f1,f2,f3\nt,left,1,2,3,4\nt,right,1,x,3,4\n", "holds text that is not a number"),
+    ("trial_id,sensor,f0,f1,f2,f3\nt,left,1,2,3,4\nt,right,1,,3,4\n", "NaN or infinite feature value"),
+    ("trial_id,sensor,f0,f1,f2,f3\nt,left,1,2,3,4\nt,left,1,2,3,4\nt,right,1,2,3,4\n", "duplicate row for trial 't'"),
+    ("trial_id,sensor,f0,f1,f2,f3\nt,left,1,2,3,4\nt,right,1,2,3,4\nu,left,1,2,3,4\n", "exactly one row per sensor"),
+    ("trial_id,sensor,f0,f1,f3\nt,left,1,2,4\nt,right,1,2,4\n", "feature column(s) the model needs are missing"),
+    ("trial_id,sensor,f0,f1,f2,f3\nt,left,1,2,3,4\nt,middle,1,2,3,4\n", "sensor(s) ['right'] missing"),
+])
+def test_bad_feature_rows_are_one_line(tmp_path, rows, message):
+    rng = np.random.default_rng(2)
+    trials = _trials()
+    X = CLASSES.loc[trials["class"]].to_numpy(dtype=float)[:, None, :] @ rng.normal(0, 1, (3, 4)) + np.zeros((1, 2, 1))
+    folder = write_plain_dataset(tmp_path / "feat", CLASSES, trials, sensors=("left", "right"),
+                                 X=X + rng.normal(0, 0.3, X.shape), feature_names=[f"f{i}" for i in range(4)])
+    model = tmp_path / "m.tzsl"
+    _ok("train-attributes", "--plain", folder, "--method", "eszsl", "--out", model)
+    bad = tmp_path / "bad.csv"
+    bad.write_text(rows)
+    result = _run("predict", "--model", model, "--classes", folder, bad)
+    assert result.exit_code == 3, result.output
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0] and str(bad) in lines[0], result.output
