@@ -159,8 +159,8 @@ def test_read_broken_grasp_folder(data):
 def phac2_model(tmp_path_factory):
     from tzsl.datasets import FeatureSet
     from tzsl.datasets._feature_table import write_feature_table
-    from tzsl.experiments.predict import save_phac2_bundle
-    from tzsl.models import AttributeClassifierBank, AttributeSVM
+    from tzsl.experiments.model_bundles import save_zero_shot_bundle
+    from tzsl.models import AttributeClassifierBank, AttributeSVM, DAPRule, ZeroShotClassifier
 
     root = tmp_path_factory.mktemp("fuzz_model")
     rng = np.random.default_rng(0)
@@ -175,8 +175,9 @@ def phac2_model(tmp_path_factory):
     fs = FeatureSet(X=X, trials=trials, sensors=("s0", "s1"), feature_names=("f0", "f1", "f2"), attributes=A)
     svm = AttributeSVM(n_C=1, n_gamma=1, n_draws=1, cv=2, undersampling="none", random_state=0)
     bank = AttributeClassifierBank(estimator=svm, attribute_names=["hard", "soft"], n_jobs=1, random_state=0)
-    bank.fit(fs.X, fs.trial_attributes(), fs.trials["object_name"])
-    model = save_phac2_bundle(root / "model.tzsl", bank, fs, fusion="avg", prior="uni")
+    clf = ZeroShotClassifier(attribute_model=bank, decision_rule=DAPRule(prior="uni"))
+    clf.fit(fs.X, fs.trial_attributes(), fs.trials["object_name"])
+    save_zero_shot_bundle(root / "model.tzsl", clf, fs, method="dap-avg", ndim=3)
     write_feature_table(fs, root / "table.npz")
     (root / "classes.csv").write_text("class,hard,soft\na,1,0\nb,0,1\n")
     return root

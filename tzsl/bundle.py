@@ -8,7 +8,7 @@ A bundle (by convention ``*.tzsl``) is written by :func:`save_bundle` and read b
     <payload bytes>               # the model: a skops file, or an .npz of arrays
 
 The header records the bundle format and its version, the tzsl version that wrote it, the model
-``kind`` (``"hand-dap"``, ``"phac2-dap"``, ``"deep"``, ...), the creation time, the user's
+``kind`` (``"zero-shot"``, ``"per-ep"``, ``"deep"``, ...), the creation time, the user's
 ``metadata`` (a JSON object: attribute names, feature layout, fusion, ...), ``payload_format``,
 ``payload_sha256`` (sha256 of the payload bytes), ``header_sha256`` (sha256 of the canonical JSON of
 every other header field, so metadata edits are caught too) and, when the key is set,
@@ -188,7 +188,7 @@ def save_bundle(
         A fitted estimator (stored with skops; pandas tables inside it are supported), or a
         dict (possibly nested) of numpy arrays (stored as ``.npz``, e.g. network weights).
     kind : str
-        Model kind, lower-case words joined by ``-`` (``"hand-dap"``, ``"phac2-dap"``, ``"deep"``).
+        Model kind, lower-case words joined by ``-`` (``"zero-shot"``, ``"per-ep"``, ``"deep"``).
         :func:`load_bundle` can insist on it.
     metadata : dict, optional
         JSON-serialisable description needed to use the model (numpy arrays and scalars, paths,

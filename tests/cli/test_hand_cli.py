@@ -55,7 +55,7 @@ def test_simulate_writes_a_readable_folder_and_refuses_overwrite(trained):
 def test_train_hand_reports_training_objects(trained):
     _, _, output, _ = trained
     assert "fitted on 120 grasps of training objects" in output and "200 grasps of other objects ignored" in output
-    assert "kind hand-dap" in output
+    assert "method hand-dap" in output
 
 
 def test_predict_several_grasps_decides(trained):

@@ -10,7 +10,7 @@ from tzsl.bundle import read_bundle_header
 from tzsl.cli import cli
 from tzsl.cli._main import _register_commands
 from tzsl.datasets._feature_table import read_feature_table, write_feature_table
-from tzsl.experiments.predict import load_adapter
+from tzsl.experiments.predict import load_predictor
 
 _register_commands()
 
@@ -28,7 +28,7 @@ def test_train_on_split_then_predict_unseen_object(data_dir, tmp_path):
                "--data-dir", data_dir])
     assert "wrote" in out
     header = read_bundle_header(model)
-    assert header.kind == "phac2-dap"
+    assert header.kind == "zero-shot" and header.metadata["method"] == "dap-avg"
     meta = header.metadata
     table = pd.read_csv(splits)
     test_objects = table.loc[table["role"] == "test", "object"].tolist()
@@ -46,8 +46,8 @@ def test_train_on_split_then_predict_unseen_object(data_dir, tmp_path):
     out = _ok(["predict", "--model", model, "--classes", classes, "--multi-grasp", "df", one])
     assert "DF-MDAP: decided" in out
     # the bundle predicts exactly what the saved attribute model gives
-    adapter = load_adapter(model)
-    P = adapter.model.predict_proba(fs.subset(fs.objects == obj).X)
+    predictor = load_predictor(model)
+    P = predictor.model.attribute_scores(fs.subset(fs.objects == obj).X)
     assert P.shape == (10, 2, len(meta["attribute_names"]))
     assert np.all((P >= 0) & (P <= 1))
 

@@ -12,20 +12,14 @@ from tzsl.datasets import FeatureSet, load_hand_table4, read_grasps, simulate_gr
 from tzsl.datasets._feature_table import write_feature_table
 from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
 from tzsl.experiments.hand import HandStudyConfig, feature_params
-from tzsl.experiments.predict import (
-    HAND_KIND,
-    PHAC2_KIND,
-    format_prediction,
-    load_adapter,
-    predict_grasps,
-    read_class_table,
-    save_phac2_bundle,
-    train_hand_bundle,
-)
+from tzsl.experiments.model_bundles import ZERO_SHOT_KIND, save_model_bundle, save_zero_shot_bundle, train_hand_bundle
+from tzsl.experiments.predict import format_prediction, load_predictor, predict_grasps, read_class_table
 from tzsl.features import grasp_features
 from tzsl.models import (
     AttributeClassifierBank,
     AttributeSVM,
+    DAPRule,
+    ZeroShotClassifier,
     attribute_prior,
     dap_log_scores,
     df_mdap_log_scores,
@@ -89,20 +83,21 @@ def _direct(model, files, K):
 
 def test_bundle_metadata(hand):
     root, model, meta, _ = hand
-    loaded, got = load_bundle(root / "model.tzsl", expected_kind=HAND_KIND)
+    loaded, got = load_bundle(root / "model.tzsl", expected_kind=ZERO_SHOT_KIND)
     assert got["attribute_names"] == list(model.K_.columns)
     assert got["training_objects"] == TABLE.train_objects
     assert got["n_training_grasps"] == 6 * 20 and got["n_ignored_grasps"] == 10 * 20
-    assert got["feature_params"]["contact_threshold"] == 20.0
+    assert got["input"]["format"] == "hand-grasps" and got["input"]["feature_params"]["contact_threshold"] == 20.0
+    assert got["method"] == "hand-dap" and isinstance(loaded["decision_rule"], DAPRule)
 
 
 @pytest.mark.parametrize("k", [1, 2, 3])
 def test_sc_mdap_decision_matches_sc_mdap_directly(hand, k):
     root, model, _, classes = hand
     files = [root / "grasps" / f"measuring_cup_{i:03d}.npz" for i in range(8)]
-    adapter = load_adapter(root / "model.tzsl")
-    K = read_class_table(classes, adapter.attribute_names)
-    pred = predict_grasps(adapter, K, files, mode="sc", k=k)
+    predictor = load_predictor(root / "model.tzsl")
+    K = read_class_table(classes, predictor.attribute_names)
+    pred = predict_grasps(predictor, K, files, mode="sc", k=k)
     _, scores = _direct(model, files, K)
     decisions = scores.argmax(axis=1)
     d, used, ok = sc_mdap(decisions[None], k)
@@ -116,8 +111,8 @@ def test_sc_mdap_decision_matches_sc_mdap_directly(hand, k):
 def test_sc_mdap_says_when_not_decided(hand):
     root, _, _, classes = hand
     files = [root / "grasps" / f"jar_{i:03d}.npz" for i in range(2)]
-    adapter = load_adapter(root / "model.tzsl")
-    pred = predict_grasps(adapter, read_class_table(classes, adapter.attribute_names), files, k=5)
+    predictor = load_predictor(root / "model.tzsl")
+    pred = predict_grasps(predictor, read_class_table(classes, predictor.attribute_names), files, k=5)
     assert not pred.decided and pred.n_used == 2
     assert "SC-MDAP (k=5): NOT decided after 2 grasps" in format_prediction(pred)
 
@@ -125,9 +120,9 @@ def test_sc_mdap_says_when_not_decided(hand):
 def test_df_mdap_matches_eqs_11_12(hand):
     root, model, _, classes = hand
     files = [root / "grasps" / f"salter_{i:03d}.npz" for i in range(5)]
-    adapter = load_adapter(root / "model.tzsl")
-    K = read_class_table(classes, adapter.attribute_names)
-    pred = predict_grasps(adapter, K, files, mode="df")
+    predictor = load_predictor(root / "model.tzsl")
+    K = read_class_table(classes, predictor.attribute_names)
+    pred = predict_grasps(predictor, K, files, mode="df")
     P, _ = _direct(model, files, K)
     for t in range(1, 6):
         expected = df_mdap_log_scores(P[None, :t], K.to_numpy()).argmax(axis=1)[0]
@@ -144,13 +139,13 @@ def test_grasp_folder_input_and_no_contact_grasp_skipped(hand, tmp_path):
     for i in range(5):  # nothing touched: flat static pressure
         arrays[f"f{i}_pdc"] = np.full_like(arrays[f"f{i}_pdc"], 2000.0)
     np.savez(tmp_path / "air.npz", **arrays)
-    adapter = load_adapter(root / "model.tzsl")
-    K = read_class_table(classes, adapter.attribute_names)
-    pred = predict_grasps(adapter, K, [tmp_path / "air.npz", root / "grasps" / "ball_001.npz"], k=1)
+    predictor = load_predictor(root / "model.tzsl")
+    K = read_class_table(classes, predictor.attribute_names)
+    pred = predict_grasps(predictor, K, [tmp_path / "air.npz", root / "grasps" / "ball_001.npz"], k=1)
     assert pred.grasp_ids == ["ball_001"]
     assert "skipped grasp air" in format_prediction(pred)
     with pytest.raises(DataFileError, match="no grasp with a touching BioTac"):
-        predict_grasps(adapter, K, [tmp_path / "air.npz"])
+        predict_grasps(predictor, K, [tmp_path / "air.npz"])
 
 
 @pytest.mark.parametrize("name, content, message", [
@@ -160,29 +155,29 @@ def test_grasp_folder_input_and_no_contact_grasp_skipped(hand, tmp_path):
 def test_bad_grasp_files(hand, tmp_path, name, content, message):
     root, _, _, classes = hand
     (tmp_path / name).write_bytes(content)
-    adapter = load_adapter(root / "model.tzsl")
+    predictor = load_predictor(root / "model.tzsl")
     with pytest.raises(DataFileError, match=message):
-        predict_grasps(adapter, read_class_table(classes, adapter.attribute_names), [tmp_path / name])
+        predict_grasps(predictor, read_class_table(classes, predictor.attribute_names), [tmp_path / name])
 
 
 def test_bad_mode_and_k(hand):
     root, _, _, classes = hand
-    adapter = load_adapter(root / "model.tzsl")
-    K = read_class_table(classes, adapter.attribute_names)
+    predictor = load_predictor(root / "model.tzsl")
+    K = read_class_table(classes, predictor.attribute_names)
     with pytest.raises(ConfigError, match="'sc'"):
-        predict_grasps(adapter, K, [], mode="vote")
+        predict_grasps(predictor, K, [], mode="vote")
     with pytest.raises(ConfigError, match="k must"):
-        predict_grasps(adapter, K, [], k=0)
+        predict_grasps(predictor, K, [], k=0)
 
 
 def test_unknown_kind_and_wrong_payload(tmp_path):
     save_bundle(tmp_path / "x.tzsl", {"w": 1}, kind="mystery")
     with pytest.raises(ModelBundleError, match="no predictor for bundles of kind 'mystery'"):
-        load_adapter(tmp_path / "x.tzsl")
-    save_bundle(tmp_path / "y.tzsl", {"w": 1}, kind=HAND_KIND,
-                metadata={"attribute_names": [], "material_attributes": [], "feature_params": {}})
-    with pytest.raises(ModelBundleError, match="fitted HandDAPClassifier"):
-        load_adapter(tmp_path / "y.tzsl")
+        load_predictor(tmp_path / "x.tzsl")
+    save_bundle(tmp_path / "y.tzsl", {"w": 1}, kind=ZERO_SHOT_KIND,
+                metadata={"attribute_names": [], "input": {"format": "hand-grasps", "feature_params": {}}})
+    with pytest.raises(ModelBundleError, match="holds"):
+        load_predictor(tmp_path / "y.tzsl")
 
 
 # ---------------------------------------------------------------------------- PHAC-2 bundles
@@ -211,11 +206,14 @@ def phac2(tmp_path_factory):
     A_train = np.array([[1, 0, 1], [1, 0, 0], [0, 1, 1], [0, 1, 0], [1, 1, 1], [0, 0, 0]])
     train = _phac2_features(0, train_objects, A_train)
     svm = AttributeSVM(n_C=1, n_gamma=1, n_draws=1, cv=2, undersampling="none", random_state=0)
-    bank = AttributeClassifierBank(estimator=svm, attribute_names=["hard", "soft", "rough"], n_jobs=1,
-                                   random_state=0).fit(train.X, train.trial_attributes(), train.trials["object_name"])
+    bank = AttributeClassifierBank(estimator=svm, attribute_names=["hard", "soft", "rough"], n_jobs=1, random_state=0)
+    clf = ZeroShotClassifier(attribute_model=bank, decision_rule=DAPRule(fusion="avg", prior="train"))
+    clf.fit(train.X, train.trial_attributes(), train.trials["object_name"])
     prior = attribute_prior("train", train_attributes=train.trial_attributes(), groups=train.objects)
-    path = save_phac2_bundle(root / "phac2.tzsl", bank, train, fusion="avg", prior=prior,
-                             training_objects=train_objects)
+    np.testing.assert_allclose(clf.decision_rule_.train_prior_, prior)
+    path = save_zero_shot_bundle(root / "phac2.tzsl", clf, train, method="dap-avg", ndim=3,
+                                 training_objects=train_objects)
+    bank = clf.attribute_model_
     test = _phac2_features(1, ["te0", "te1"], np.array([[1, 0, 1], [0, 1, 0]]), n_trials=3)
     write_feature_table(test, root / "test.npz")
     write_feature_table(test, root / "test.csv")
@@ -227,10 +225,12 @@ def phac2(tmp_path_factory):
 
 def test_phac2_bundle_predicts_like_the_bank(phac2):
     root, bank, prior, test, path, classes = phac2
-    adapter = load_adapter(path)
-    assert adapter.kind == PHAC2_KIND and adapter.attribute_names == ["hard", "soft", "rough"]
-    K = read_class_table(classes, adapter.attribute_names)
-    pred = predict_grasps(adapter, K, [root / "test.npz"], mode="sc", k=2)
+    predictor = load_predictor(path)
+    assert predictor.kind == ZERO_SHOT_KIND and predictor.attribute_names == ["hard", "soft", "rough"]
+    assert predictor.metadata["input"] == {"format": "features", "sensors": ["finger_0", "finger_1"],
+                                           "feature_names": [f"f{i}" for i in range(5)], "ndim": 3}
+    K = read_class_table(classes, predictor.attribute_names)
+    pred = predict_grasps(predictor, K, [root / "test.npz"], mode="sc", k=2)
     present, absent = fuse_attribute_posteriors(bank.predict_proba(test.X), "avg")
     scores = dap_log_scores(present, K.to_numpy(dtype=float), prior, P_absent=absent)
     np.testing.assert_allclose(pred.grasp_posteriors, softmax(scores, axis=1))
@@ -238,9 +238,9 @@ def test_phac2_bundle_predicts_like_the_bank(phac2):
     d, used, ok = sc_mdap(scores.argmax(axis=1)[None], 2)
     assert (pred.final, pred.n_used, pred.decided) == (int(d[0]), int(used[0]), bool(ok[0]))
     # the CSV form of the same table, and DF-MDAP over all six trials
-    same = predict_grasps(adapter, K, [root / "test.csv"], mode="sc", k=2)
+    same = predict_grasps(predictor, K, [root / "test.csv"], mode="sc", k=2)
     np.testing.assert_allclose(same.grasp_posteriors, pred.grasp_posteriors)
-    df = predict_grasps(adapter, K, [root / "test.npz"], mode="df")
+    df = predict_grasps(predictor, K, [root / "test.npz"], mode="df")
     expected = dap_log_scores(present.mean(0, keepdims=True), K.to_numpy(dtype=float), prior,
                               P_absent=absent.mean(0, keepdims=True)).argmax()
     assert df.final == expected
@@ -248,30 +248,39 @@ def test_phac2_bundle_predicts_like_the_bank(phac2):
 
 def test_phac2_sensor_order_and_missing_features(phac2, tmp_path):
     root, bank, prior, test, path, classes = phac2
-    adapter = load_adapter(path)
-    K = read_class_table(classes, adapter.attribute_names)
+    predictor = load_predictor(path)
+    K = read_class_table(classes, predictor.attribute_names)
     swapped = FeatureSet(X=test.X[:, ::-1, ::-1], trials=test.trials, sensors=test.sensors[::-1],
                          feature_names=test.feature_names[::-1], attributes=test.attributes)
     write_feature_table(swapped, tmp_path / "swapped.npz")
-    a = predict_grasps(adapter, K, [root / "test.npz"])
-    b = predict_grasps(adapter, K, [tmp_path / "swapped.npz"])
+    a = predict_grasps(predictor, K, [root / "test.npz"])
+    b = predict_grasps(predictor, K, [tmp_path / "swapped.npz"])
     np.testing.assert_allclose(a.grasp_posteriors, b.grasp_posteriors)
     fewer = FeatureSet(X=test.X[:, :, :4], trials=test.trials, sensors=test.sensors,
                        feature_names=test.feature_names[:4], attributes=test.attributes)
     write_feature_table(fewer, tmp_path / "fewer.npz")
     with pytest.raises(DataFileError, match=r"feature column\(s\) the model needs are missing, e.g. \['f4'\]"):
-        predict_grasps(adapter, K, [tmp_path / "fewer.npz"])
+        predict_grasps(predictor, K, [tmp_path / "fewer.npz"])
 
 
-def test_phac2_metadata_is_checked(phac2, tmp_path):
-    _, bank, _, test, _, _ = phac2
-    with pytest.raises(ConfigError, match="fusion"):
-        save_phac2_bundle(tmp_path / "a.tzsl", bank, test, fusion="sum", prior="uni")
-    with pytest.raises(ConfigError, match="3 attributes"):
-        save_phac2_bundle(tmp_path / "b.tzsl", bank, test, fusion="max", prior=[0.5, 0.5])
-    save_bundle(tmp_path / "c.tzsl", bank, kind=PHAC2_KIND, metadata={"attribute_names": ["hard"]})
+def test_bundle_contents_are_checked(phac2, tmp_path):
+    _, bank, _, test, path, _ = phac2
+    payload, meta = load_bundle(path)
+    meta.pop("bundle")
+    rule = payload["decision_rule"]
+    with pytest.raises(ConfigError, match="2 attribute names for a rule over 3"):
+        save_model_bundle(tmp_path / "a.tzsl", payload["model"], rule, method="x", attribute_names=["a", "b"],
+                          input_schema=meta["input"])
+    with pytest.raises(ConfigError, match="no attribute_scores"):
+        save_model_bundle(tmp_path / "b.tzsl", bank, rule, method="x", attribute_names=["a", "b", "c"],
+                          input_schema=meta["input"])
+    save_bundle(tmp_path / "c.tzsl", {"model": payload["model"], "decision_rule": rule}, kind=ZERO_SHOT_KIND,
+                metadata={"attribute_names": ["hard"]})
     with pytest.raises(ModelBundleError, match="lacks"):
-        load_adapter(tmp_path / "c.tzsl")
+        load_predictor(tmp_path / "c.tzsl")
+    save_bundle(tmp_path / "d.tzsl", bank, kind=ZERO_SHOT_KIND, metadata=meta)
+    with pytest.raises(ModelBundleError, match="holds"):
+        load_predictor(tmp_path / "d.tzsl")
 
 
 # ---------------------------------------------------------------------------- bad inputs through the CLI
@@ -332,7 +341,7 @@ def test_predict_cli_old_pickle_bundle_needs_trust_pickle(phac2, tmp_path):
     raw = model.read_bytes()
     header = json.loads(raw.split(b"\n")[1])
     buf = io.BytesIO()
-    joblib.dump(bank, buf)
+    joblib.dump(load_bundle(model)[0], buf)  # the same model + decision rule, pickled
     payload = buf.getvalue()
     header = {k: v for k, v in header.items() if k not in ("header_sha256", "hmac_sha256", "payload_format")}
     header.update(format_version=1, tzsl_version=tzsl.__version__, payload_bytes=len(payload),

@@ -9,7 +9,7 @@ from click.testing import CliRunner
 
 from tzsl.cli import cli
 from tzsl.cli._main import _register_commands
-from tzsl.experiments.predict import load_adapter, predict_grasps, read_class_table
+from tzsl.experiments.predict import load_predictor, predict_grasps, read_class_table
 
 torch = pytest.importorskip("torch", reason="PyTorch is not installed (the optional deep extra)")
 
@@ -45,10 +45,10 @@ def test_deep_bundle_scores_equal_the_model(deep_bundle, tmp_path):
         f = tmp_path / f"press_{i}.npz"
         np.savez(f, frames=X[i])
         files.append(f)
-    adapter = load_adapter(path)
+    predictor = load_predictor(path)
     classes = pd.DataFrame(A.astype(int), index=pd.Index(["a", "b", "c"], name="class"),
-                           columns=adapter.attribute_names)
-    pred = predict_grasps(adapter, classes, files, mode="df")
+                           columns=predictor.attribute_names)
+    pred = predict_grasps(predictor, classes, files, mode="df")
     expected = model.predict_proba(X[[0, 7, 13]], A)
     np.testing.assert_allclose(pred.grasp_posteriors, expected, rtol=1e-6)
     # DF-MDAP: nearest class to the mean attribute estimate of the three presses

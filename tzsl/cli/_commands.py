@@ -8,3 +8,4 @@ from tzsl.cli import _hand_commands  # noqa: F401
 from tzsl.cli import _fabric_commands  # noqa: F401
 from tzsl.cli import _run_commands  # noqa: F401
 from tzsl.cli import _methods_commands  # noqa: F401
+from tzsl.cli import _predict_commands  # noqa: F401

@@ -122,32 +122,67 @@ def splits(kind, n_splits, n_test, out, dataset, features_file, plain_dir, path,
               help="Attribute prior stored in the bundle.")
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="Model bundle to write (e.g. model.tzsl).")
+@click.option("--method", default=None,
+              help="A registered attribute model + decision rule method ('tzsl methods'), fitted with its defaults "
+                   "[default: the DAP study's tuned per-(attribute, sensor) SVMs with --fusion and --prior].")
+@click.option("--per-ep", is_flag=True,
+              help="Fit one attribute model per exploratory procedure (PHAC-2 features '<ep>:<name>') and the EPs' "
+                   "confusion, for 'tzsl predict --eps-done ... --suggest-next' (active touch).")
 @_source_options
 @_study_options
 @data_dir_option
 @force_option
-def train_attributes(splits_file, split_name, fusion, prior, out, dataset, features_file, plain_dir, path,
-                     undersampling, cv, no_progress, no_cache, seed, n_jobs, backend, scheduler, data_dir, force):
-    """Fit the per-attribute, per-sensor SVMs and save them as a model bundle.
+def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep, dataset, features_file, plain_dir,
+                     path, undersampling, cv, no_progress, no_cache, seed, n_jobs, backend, scheduler, data_dir, force):
+    """Fit a zero-shot model and save it as a model bundle for 'tzsl predict'.
 
-    Without --splits every object trains the classifiers (a model for recognising new objects);
+    Without --splits every object trains the model (a model for recognising new objects);
     with --splits only that split's training objects do.
     """
     from tzsl.experiments.engine import check_experiment, dap_config  # noqa: PLC0415
-    from tzsl.experiments.phac2_dap import train_attribute_model  # noqa: PLC0415
     from tzsl.experiments.study_runners import phac2_features  # noqa: PLC0415
 
     if out.exists() and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite")
+    if per_ep and method is not None:
+        raise ConfigError("--per-ep and --method exclude each other")
+    ctx = click.get_current_context()
+    given = [f"--{p}" for p in ("fusion", "prior")
+             if ctx.get_parameter_source(p) is not click.core.ParameterSource.DEFAULT]
+    if given and (per_ep or method is not None):
+        raise ConfigError(f"{', '.join(given)} set(s) the default DAP model; with --method or --per-ep the "
+                          "method's own decision rule is saved")
+    if method is not None:
+        from tzsl.models import get_method  # noqa: PLC0415
+
+        get_method(method)  # an unknown name fails before any data is read
     exp = _experiment({**_dataset_values(dataset, features_file, plain_dir, path, data_dir),
                        **_study_values(seed, n_jobs, backend, scheduler, undersampling, cv, no_progress, no_cache)})
     check_experiment(exp)  # paths and the Dask scheduler, before any data is read
     features = phac2_features(exp)
     start = time.perf_counter()
-    summary = train_attribute_model(features, dap_config(exp), out, splits_file=splits_file, split_name=split_name,
-                                    fusion=fusion, prior=prior, force=force)
+    if per_ep:
+        _train_per_ep(features, out, splits_file, split_name, exp, force)
+        click.echo(f"fitted in {time.perf_counter() - start:.1f} s; wrote {out}")
+        return
+    from tzsl.experiments.model_bundles import train_attribute_bundle  # noqa: PLC0415
+
+    summary = train_attribute_bundle(features, dap_config(exp), out, method=method, splits_file=splits_file,
+                                     split_name=split_name, fusion=fusion, prior=prior, force=force)
     click.echo(summary.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
-    click.echo(f"fitted {len(summary)} attribute classifiers in {time.perf_counter() - start:.1f} s; wrote {out}")
+    click.echo(f"fitted {method or 'the attribute classifiers'} in {time.perf_counter() - start:.1f} s; wrote {out}")
+
+
+def _train_per_ep(features, out, splits_file, split_name, exp, force) -> None:
+    from tzsl.experiments.engine import dap_config  # noqa: PLC0415
+    from tzsl.experiments.model_bundles import training_subset  # noqa: PLC0415
+    from tzsl.experiments.predict_active import train_per_ep_bundle  # noqa: PLC0415
+
+    config = dap_config(exp)
+    sub, split = training_subset(features, splits_file, split_name, config.random_min_train_positives)
+    meta = train_per_ep_bundle(sub, out, seed=config.seed, force=force, split=split)
+    click.echo(f"per-EP model: EPs {', '.join(meta['eps'])} ({', '.join(f'{s:g} s' for s in meta['ep_seconds'])}), "
+               f"{len(meta['attribute_names'])} attributes, {len(meta['training_objects'])} training objects")
 
 
 def evaluate_values(kind, splits_file, n_splits, n_test, multilabel, sweep, out, dataset, features_file, plain_dir,

@@ -1,4 +1,4 @@
-"""Hand commands: ``simulate-grasps``, ``evaluate-hand``, ``train-hand`` and ``predict``."""
+"""Hand commands: ``simulate-grasps``, ``evaluate-hand`` and ``train-hand``."""
 
 from __future__ import annotations
 
@@ -139,50 +139,10 @@ def evaluate_hand(force: bool, **options) -> None:
 @force_option
 def train_hand(grasps: Path, table: Path | None, out: Path, fusion: str, seed: int, force: bool) -> None:
     """Fit the hand attribute classifiers on the training objects and save a model bundle."""
-    from tzsl.experiments.predict import train_hand_bundle  # noqa: PLC0415
+    from tzsl.experiments.model_bundles import train_hand_bundle  # noqa: PLC0415
 
     start = time.perf_counter()
     model, meta = train_hand_bundle(grasps, _table(table), out, fusion=fusion, seed=seed, force=force)
     click.echo(f"fitted on {meta['n_training_grasps']} grasps of training objects {meta['training_objects']} "
                f"({meta['n_ignored_grasps']} grasps of other objects ignored) in {time.perf_counter() - start:.1f} s")
-    click.echo(f"saved {out} (kind hand-dap, {len(meta['attribute_names'])} attributes, fusion {fusion})")
-
-
-@cli.command("predict", short_help="Classify new grasps with a saved model; fuse several (SC-/DF-MDAP).")
-@click.option("--model", "model_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
-              help="Model bundle written by a train command with --save (loading it runs no code).")
-@click.option("--classes", type=click.Path(dir_okay=False, path_type=Path), required=True,
-              help="Candidate classes: CSV with the class name first, then one 0/1 column per model attribute.")
-@click.option("--multi-grasp", "mode", type=click.Choice(["sc", "df"]), default="sc", show_default=True,
-              help="Multi-grasp fusion: sc = SC-MDAP (stop at k equal decisions), df = DF-MDAP (average grasps).")
-@click.option("--k", type=int, default=3, show_default=True, help="Equal classifications SC-MDAP needs.")
-@click.option("--top", type=int, default=5, show_default=True, help="Classes listed per grasp (0 = all).")
-@click.option("--trust-pickle", is_flag=True,
-              help="Also load an old (format 1) bundle holding a pickle, which runs code from the file: "
-                   "only for a file whose author you trust. Better: re-run the train command with --save.")
-@click.argument("grasp", nargs=-1, required=True, type=click.Path(path_type=Path))
-def predict(model_path: Path, classes: Path, mode: str, k: int, top: int, trust_pickle: bool,
-            grasp: tuple[Path, ...]) -> None:
-    """Classify GRASP... (in arrival order) with a saved model and fuse the grasps.
-
-    GRASP: for hand models, grasp .npz files (or grasp folders); for PHAC-2 models, feature
-    tables written by 'tzsl extract --out' (one trial = one grasp); for deep (CNN + LSTM) models,
-    press videos (.avi) or .npz files with a 'frames' array (5, H, W[, C]). An .npz input whose
-    arrays declare more than 2 GiB is refused before loading; raise the limit (in bytes) with the
-    environment variable TZSL_MAX_NPZ_BYTES.
-    """
-    from tzsl.experiments.predict import (  # noqa: PLC0415
-        format_prediction,
-        load_adapter,
-        predict_grasps,
-        read_class_table,
-    )
-
-    if k < 1:
-        raise ConfigError(f"--k must be >= 1, got {k}")
-    adapter = load_adapter(model_path, trust_pickle=trust_pickle)
-    table = read_class_table(classes, adapter.attribute_names)
-    result = predict_grasps(adapter, table, list(grasp), mode=mode, k=k)
-    click.echo(f"model: {adapter.describe()}")
-    click.echo(f"classes: {len(table)} from {classes}")
-    click.echo(format_prediction(result, top=top))
+    click.echo(f"saved {out} (method hand-dap, {len(meta['attribute_names'])} attributes, fusion {fusion})")

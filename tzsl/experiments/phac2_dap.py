@@ -71,7 +71,6 @@ __all__ = [
     "table1_fusion",
     "table2_priors",
     "table3_challenging",
-    "train_attribute_model",
 ]
 
 @dataclass
@@ -430,53 +429,3 @@ def run_dap_study(
         if name in titles:
             _print(echo, titles[name], table)
     return tables
-
-
-def train_attribute_model(
-    features: FeatureSet,
-    config: DapStudyConfig,
-    save,
-    splits_file=None,
-    split_name: str | None = None,
-    fusion: str = "avg",
-    prior: str = "uni",
-    force: bool = False,
-) -> pd.DataFrame:
-    """Fit the attribute classifiers (all objects, or one split's training objects) and save a bundle.
-
-    Returns a table with one row per (attribute, sensor): the chosen ``C``, ``gamma``, the
-    under-sampling draw and the training objects' positive count.
-    """
-    from tzsl.evaluation import read_splits_csv  # noqa: PLC0415
-    from tzsl.experiments.predict import save_phac2_bundle  # noqa: PLC0415
-
-    objects = features.objects
-    attributes = list(features.attributes.columns)
-    train = np.ones(len(objects), dtype=bool)
-    split_record = None
-    if splits_file is not None:
-        splits = read_splits_csv(splits_file, features.attributes, min_train_positives=config.random_min_train_positives)
-        chosen = splits[0] if split_name is None else next((s for s in splits if s.name == split_name), None)
-        if chosen is None:
-            raise ConfigError(f"{splits_file}: no split named {split_name!r}; have {[s.name for s in splits]}")
-        train = np.isin(objects, chosen.train_objects)
-        attributes = list(chosen.kept_attributes)
-        split_record = chosen.name
-    check_cv_folds(config.svm_params.get("cv", _SVM.cv), len(np.unique(objects[train])), "command line")
-    sub = features.subset(train)
-    sub.attributes = sub.attributes[attributes]
-    A = sub.trial_attributes()
-    with compute_context(config):
-        bank = attribute_bank(config, attributes, config.seed).fit(sub.X, A, sub.objects)
-    prior_value = attribute_prior("train", train_attributes=A, groups=sub.objects) if prior == "train" else prior
-    save_phac2_bundle(save, bank, sub, fusion=fusion, prior=prior_value, force=force,
-                      training_objects=sorted(set(sub.objects)), split=split_record, seed=config.seed,
-                      undersampling=config.undersampling)
-    rows = []
-    for j, name in enumerate(attributes):
-        for s, sensor in enumerate(sub.sensors):
-            est = bank.estimators_[j][s]
-            rows.append({"attribute": name, "sensor": sensor, "C": getattr(est, "C_", np.nan),
-                         "gamma": getattr(est, "gamma_", np.nan), "draw": getattr(est, "draw_", -1),
-                         "positive_objects": int(sub.attributes[name].sum())})
-    return pd.DataFrame(rows)

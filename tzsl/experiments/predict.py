@@ -1,52 +1,31 @@
 """Classify new grasps with a saved model bundle, grasp by grasp, with multi-grasp fusion.
 
-This is the engine of ``tzsl predict``. A model bundle (:mod:`tzsl.bundle`) holds a fitted
-attribute model; a *class table* (``classes.csv``) lists the candidate classes by their
-attributes; every input file holds one or more *grasps*. Each grasp is classified by DAP
-(eq. 3) over the classes, and with several grasps the decision is fused:
+This is the engine of ``tzsl predict``. Every model is predicted the same way, whatever the
+method: a bundle (:mod:`tzsl.experiments.model_bundles`) holds a fitted model whose
+``attribute_scores(X)`` gives attribute scores, a fitted decision rule
+(:class:`tzsl.models.DecisionRule`), the attribute names and a feature schema. The input files
+are read into the model's input by that schema (:mod:`tzsl.experiments.predict_inputs`), the
+candidate classes arrive as a *class table* (their attribute rows; the grasped object's own row
+is never needed), and the rule ranks them. With several grasps the decision is fused:
 
 * **SC-MDAP** (default, ``mode="sc"``): classify grasp by grasp, in the order given, and stop at
   the first class decided ``k`` times (DAP paper section 5.7.3). If no class reaches ``k`` the
   result says it has *not* decided (and names the most frequent class).
-* **DF-MDAP** (``mode="df"``): average the grasps' attribute posteriors into one "super grasp"
-  (eqs. 11-12) and classify it; the running decision after each grasp is reported too.
-
-Model kinds plug in through a small adapter (:class:`ModelAdapter`) that turns input files into
-per-grasp attribute posteriors; :data:`ADAPTERS` maps a bundle kind to its adapter and
-:func:`register_adapter` adds one (e.g. a deep model). Two are built in:
-
-``hand-dap`` (:class:`HandAdapter`)
-    A :class:`tzsl.models.HandDAPClassifier` fitted by ``tzsl train-hand``. Inputs are grasp
-    ``.npz`` files in the grasp format (``data/README.md``) or grasp folders. Single grasps use the
-    model's fusion (MAXDAP / AVGDAP / LDAP); DF-MDAP averages LDAP posteriors (eqs. 11-12).
-    Grasps in which no BioTac touched are skipped with a note (the paper drops them).
-    Metadata: see :func:`hand_bundle_metadata`.
-``phac2-dap`` (:class:`Phac2Adapter`)
-    An attribute model with ``predict_proba(X (n, s, d)) -> (n, s, m)``, e.g. a fitted
-    :class:`tzsl.models.AttributeClassifierBank`, saved by ``tzsl train-attributes --save``.
-    Inputs are feature tables written by ``tzsl extract --out`` (``.csv`` or ``.npz``); every trial
-    row is one grasp of the 2-finger gripper, sensors = the BioTacs. Posteriors are fused over
-    sensors with MAXDAP (eq. 5) or AVGDAP (eq. 6); DF-MDAP averages the fused posteriors over
-    trials (PHAC-2 trials explore the whole object, so there is no local-view ``max(0.5, p)``).
-    Metadata (:data:`PHAC2_METADATA_KEYS`, built by :func:`phac2_bundle_metadata`):
-
-    ``attribute_names``: list of m str, the model's attribute axis, in order;
-    ``sensors``: list of s str, the feature table's sensors, in the model's order;
-    ``feature_names``: list of d str, the feature columns, in the model's order;
-    ``fusion``: ``"avg"`` or ``"max"``;
-    ``prior``: ``"uni"``, ``"test"`` (mean of the class table's rows) or a list of m floats
-    ``p(a_m = 1)`` (e.g. the training prior).
+* **DF-MDAP** (``mode="df"``): average the grasps' attribute scores into one "super grasp"
+  (eqs. 11-12; per sensor, before the rule fuses sensors) and classify it; the running decision
+  after each grasp is reported too.
 
 Class table (``classes.csv``): first column the class name (any header), then one 0/1 column per
 attribute, named exactly as the model's attributes (a missing or unknown attribute is an error).
 Lines starting with ``#`` are comments, and columns named ``split`` or ``subset`` are descriptive
-and not used - so the shipped Table 4 file (``tzsl/datasets/hand_table4.csv``) works as is.
+and not used - so the shipped Table 4 file (``tzsl/datasets/hand_table4.csv``) works as is. A
+plain dataset folder stands for its ``classes.csv`` (then attributes the model does not know are
+ignored); ``candidates`` picks some of its rows.
 """
 
 from __future__ import annotations
 
-from abc import ABC, abstractmethod
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from io import StringIO
 from pathlib import Path
@@ -56,63 +35,148 @@ import numpy as np
 import pandas as pd
 from scipy.special import softmax
 
-from tzsl._io import read_npz
-from tzsl.bundle import load_bundle, save_bundle
-from tzsl.datasets import HandTable, read_grasps
-from tzsl.datasets._feature_table import read_feature_table
-from tzsl.datasets._grasps import grasp_from_arrays
+from tzsl.bundle import load_bundle, read_bundle_header
 from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
-from tzsl.experiments.hand import HandStudyConfig, feature_params, fit_hand_model, hand_features
-from tzsl.features import GraspFeatures, grasp_features
-from tzsl.models import (
-    HandDAPClassifier,
-    attribute_prior,
-    dap_log_scores,
-    fuse_attribute_posteriors,
-    fuse_grasp_posteriors,
-    sc_mdap,
-)
+from tzsl.experiments.model_bundles import DEEP_KIND, ZERO_SHOT_KIND
+from tzsl.experiments.predict_inputs import INPUT_FORMATS, describe_inputs, read_inputs
+from tzsl.models import DecisionRule, NearestAttributeRule, sc_mdap
 
 __all__ = [
-    "ADAPTERS",
-    "HAND_KIND",
-    "PHAC2_KIND",
-    "PHAC2_METADATA_KEYS",
-    "GraspPosteriors",
-    "HandAdapter",
-    "ModelAdapter",
-    "Phac2Adapter",
+    "PREDICT_KINDS",
     "Prediction",
+    "Predictor",
     "format_prediction",
-    "hand_bundle_metadata",
-    "load_adapter",
-    "phac2_bundle_metadata",
+    "load_predictor",
     "predict_grasps",
     "read_class_table",
-    "register_adapter",
-    "save_phac2_bundle",
     "top_ties",
-    "train_hand_bundle",
 ]
 
-HAND_KIND = "hand-dap"
-PHAC2_KIND = "phac2-dap"
-PHAC2_METADATA_KEYS: tuple[str, ...] = ("attribute_names", "sensors", "feature_names", "fusion", "prior")
-HAND_METADATA_KEYS: tuple[str, ...] = ("attribute_names", "material_attributes", "feature_params")
+#: Bundle kinds ``tzsl predict`` reads as a model + decision rule.
+PREDICT_KINDS: tuple[str, ...] = (ZERO_SHOT_KIND, DEEP_KIND)
 _DESCRIPTIVE = ("split", "subset")
 
 
+# ---------------------------------------------------------------------------- the saved model
+@dataclass
+class Predictor:
+    """A loaded bundle: model + decision rule + attribute names + feature schema.
+
+    Attributes
+    ----------
+    model : fitted estimator with ``attribute_scores(X)``
+    rule : fitted DecisionRule
+    attribute_names : list of str, length m
+    input : dict
+        Feature schema (:mod:`tzsl.experiments.predict_inputs`).
+    metadata : dict
+        The bundle's metadata (with ``bundle``: kind, path, ...).
+    """
+
+    model: Any
+    rule: DecisionRule
+    attribute_names: list[str]
+    input: dict
+    metadata: dict
+
+    @property
+    def kind(self) -> str:
+        return str(self.metadata.get("bundle", {}).get("kind", ""))
+
+    @property
+    def inputs(self) -> str:
+        """What the model takes as input files."""
+        return describe_inputs(self.input)
+
+    def describe(self) -> str:
+        """One line naming the model."""
+        inner = getattr(self.model, "attribute_model_", self.model)
+        return (f"{self.metadata.get('method', self.kind)} ({type(inner).__name__} + {type(self.rule).__name__}), "
+                f"{len(self.attribute_names)} attributes; input: {self.inputs}")
+
+    def class_scores(self, scores: np.ndarray, K: np.ndarray) -> np.ndarray:
+        """Class scores (n, c) of attribute scores ``scores`` (n, ...) against the classes ``K`` (c, m)."""
+        return self.rule.decision_function(scores, K)
+
+
+def _where(metadata: dict) -> str:
+    return metadata.get("bundle", {}).get("path", "model bundle")
+
+
+def _checked(payload: Any, metadata: dict) -> Predictor:
+    where = _where(metadata)
+    if not (isinstance(payload, dict) and set(payload) == {"model", "decision_rule"}):
+        raise ModelBundleError(f"{where}: a zero-shot bundle holds {{'model', 'decision_rule'}}, found "
+                               f"{sorted(payload) if isinstance(payload, dict) else type(payload).__name__}")
+    model, rule = payload["model"], payload["decision_rule"]
+    if not callable(getattr(model, "attribute_scores", None)):
+        raise ModelBundleError(f"{where}: the model ({type(model).__name__}) has no attribute_scores(X)")
+    if not isinstance(rule, DecisionRule) or not hasattr(rule, "n_attributes_"):
+        raise ModelBundleError(f"{where}: the decision rule is not a fitted DecisionRule ({type(rule).__name__})")
+    missing = [k for k in ("attribute_names", "input") if k not in metadata]
+    if missing:
+        raise ModelBundleError(f"{where}: zero-shot bundle metadata lacks {missing}")
+    names, schema = metadata["attribute_names"], metadata["input"]
+    if not isinstance(names, list) or len(names) != rule.n_attributes_:
+        raise ModelBundleError(f"{where}: metadata attribute_names do not match the rule's "
+                               f"{rule.n_attributes_} attributes")
+    if not isinstance(schema, dict) or schema.get("format") not in INPUT_FORMATS:
+        raise ModelBundleError(f"{where}: metadata input is not a feature schema of format {list(INPUT_FORMATS)}")
+    if schema["format"] == "features":
+        ok = all(isinstance(schema.get(k), list) for k in ("sensors", "feature_names")) and schema.get("ndim") in (2, 3)
+        if not ok:
+            raise ModelBundleError(f"{where}: the feature schema needs sensors, feature_names and ndim 2 or 3")
+    if schema["format"] == "hand-grasps" and not isinstance(schema.get("feature_params"), dict):
+        raise ModelBundleError(f"{where}: the hand-grasps schema needs feature_params")
+    return Predictor(model, rule, [str(a) for a in names], schema, metadata)
+
+
+def load_predictor(path: str | Path, *, trust_pickle: bool = False) -> Predictor:
+    """Load a bundle (see :func:`tzsl.bundle.load_bundle`; no code is run) as a :class:`Predictor`.
+
+    ``trust_pickle=True`` also loads old (format version 1) pickle bundles, which can run code:
+    only for files whose author you trust.
+
+    Raises
+    ------
+    ModelBundleError
+        Unreadable / corrupt / foreign bundle, a kind ``tzsl predict`` does not read, or a
+        payload that is not a model + decision rule.
+    """
+    kind = read_bundle_header(path).kind  # verified, nothing deserialised yet
+    if kind == DEEP_KIND:
+        from tzsl.models import load_deep_bundle  # noqa: PLC0415 - needs the deep extra
+
+        model = load_deep_bundle(path, trust_pickle=trust_pickle)
+        metadata = dict(read_bundle_header(path).metadata)
+        metadata["bundle"] = {"kind": kind, "path": str(path)}
+        names = metadata.get("attribute_names") or [f"attr_{j}" for j in range(int(model.n_attributes_))]
+        rule = NearestAttributeRule().fit(np.asarray(model.class_attributes_, dtype=float))
+        return _checked({"model": model, "decision_rule": rule},
+                        {**metadata, "method": "cnn-lstm", "attribute_names": list(names), "input": {"format": "frames"}})
+    if kind not in PREDICT_KINDS:
+        hint = " (a per-EP model: give --eps-done)" if kind == "per-ep" else ""
+        raise ModelBundleError(f"{path}: no predictor for bundles of kind {kind!r}{hint} (known: {list(PREDICT_KINDS)}); "
+                               "re-save models of older tzsl versions with this one")
+    payload, metadata = load_bundle(path, expected_kind=kind, trust_pickle=trust_pickle)
+    return _checked(payload, metadata)
+
+
 # ---------------------------------------------------------------------------- class table
-def read_class_table(path: str | Path, attribute_names: Sequence[str]) -> pd.DataFrame:
+def read_class_table(path: str | Path, attribute_names: Sequence[str], *,
+                     candidates: Sequence[str] | None = None) -> pd.DataFrame:
     """Read candidate classes and check their attributes against the model's.
 
     Parameters
     ----------
     path : str or Path
         CSV file: class name in the first column, then 0/1 attribute columns (format in the
-        module docstring).
+        module docstring); or a dataset folder, standing for its ``classes.csv`` (whose
+        attributes the model does not know, e.g. dropped for a split, are then ignored).
     attribute_names : sequence of str
         The model's attributes, in the model's order.
+    candidates : sequence of str, optional
+        Keep only these classes, in this order (e.g. the unseen ones of a dataset's table).
 
     Returns
     -------
@@ -126,6 +190,9 @@ def read_class_table(path: str | Path, attribute_names: Sequence[str]) -> pd.Dat
         class names (naming the file, the class and the attribute).
     """
     path = Path(path)
+    extra_ok = path.is_dir()
+    if extra_ok:
+        path = path / "classes.csv"
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
@@ -149,7 +216,7 @@ def read_class_table(path: str | Path, attribute_names: Sequence[str]) -> pd.Dat
     wanted = [str(a) for a in attribute_names]
     missing = [a for a in wanted if a not in given]
     unknown = [a for a in given if a not in wanted]
-    if missing or unknown:
+    if missing or (unknown and not extra_ok):
         parts = []
         if missing:
             parts.append(f"missing attribute column(s) {missing}")
@@ -163,312 +230,13 @@ def read_class_table(path: str | Path, attribute_names: Sequence[str]) -> pd.Dat
         raise DataFileError(
             path, f"class {names.iloc[r]!r}, attribute {wanted[c]!r}: value {values.iat[r, c]!r} is not 0 or 1"
         )
-    return pd.DataFrame(values.to_numpy(dtype=int), index=pd.Index(names, name="class"), columns=wanted)
-
-
-# ---------------------------------------------------------------------------- adapters
-@dataclass
-class GraspPosteriors:
-    """Attribute posteriors of the grasps read from the input files.
-
-    Attributes
-    ----------
-    grasp_ids, sources, info : list of str, length n
-        Id, file and a short description of every grasp kept.
-    present, absent : ndarray of shape (n, m)
-        ``p(a_m = 1 | x)`` and ``p(a_m = 0 | x)`` of every grasp, for single-grasp DAP and SC-MDAP.
-    df_present, df_absent : ndarray of shape (n, m)
-        The per-grasp posteriors DF-MDAP averages over grasps.
-    notes : list of str
-        Grasps skipped and why.
-    """
-
-    grasp_ids: list[str]
-    sources: list[str]
-    info: list[str]
-    present: np.ndarray
-    absent: np.ndarray
-    df_present: np.ndarray
-    df_absent: np.ndarray
-    notes: list[str] = field(default_factory=list)
-
-
-class ModelAdapter(ABC):
-    """Turns input files into per-grasp attribute posteriors for one kind of saved model.
-
-    Parameters
-    ----------
-    model : object
-        The unpickled model.
-    metadata : dict
-        The bundle's metadata.
-    """
-
-    kind: str = ""
-    inputs: str = "input files"
-
-    def __init__(self, model: Any, metadata: dict) -> None:
-        self.model = model
-        self.metadata = metadata
-
-    def _require(self, keys: Sequence[str]) -> None:
-        missing = [k for k in keys if k not in self.metadata]
-        if missing:
-            raise ModelBundleError(f"{self._where()}: {self.kind} bundle metadata lacks {missing}")
-
-    def _where(self) -> str:
-        return self.metadata.get("bundle", {}).get("path", "model bundle")
-
-    @property
-    @abstractmethod
-    def attribute_names(self) -> list[str]:
-        """The model's attributes, in the order of the posterior columns."""
-
-    @abstractmethod
-    def posteriors(self, inputs: Sequence[str | Path]) -> GraspPosteriors:
-        """Posteriors of every grasp in ``inputs``, in file order."""
-
-    @abstractmethod
-    def prior(self, K: np.ndarray) -> np.ndarray:
-        """Attribute prior ``p(a_m = 1)``, shape (m,), given the candidate classes ``K`` (c, m)."""
-
-    def describe(self) -> str:
-        """One line naming the model."""
-        return f"{self.kind} model, {len(self.attribute_names)} attributes"
-
-    def class_scores(self, present: np.ndarray, absent: np.ndarray, K: np.ndarray) -> np.ndarray:
-        """Log-scores (n, c) of the candidate classes ``K`` (c, m); DAP (eq. 3) unless overridden.
-
-        ``present`` / ``absent`` are per-grasp ``p(a_m = 1 | x)`` / ``p(a_m = 0 | x)``, shape (n, m),
-        or their running means over grasps for DF-MDAP.
-        """
-        return dap_log_scores(present, K, self.prior(K), P_absent=absent)
-
-
-def _read_grasp_inputs(inputs: Sequence[str | Path]) -> list:
-    grasps = []
-    for item in inputs:
-        path = Path(item)
-        if path.is_dir():
-            grasps += read_grasps(path)
-            continue
-        if path.suffix != ".npz":
-            raise DataFileError(path, "a hand-model input must be a grasp .npz file or a grasp folder")
-        if not path.is_file():
-            raise DataFileError(path, "grasp file not found")
-        arrays = read_npz(path)
-        grasps.append(grasp_from_arrays(arrays, path.stem, "", str(path)))
-    return grasps
-
-
-class HandAdapter(ModelAdapter):
-    """``hand-dap`` bundles: :class:`~tzsl.models.HandDAPClassifier` on grasp ``.npz`` files."""
-
-    kind = HAND_KIND
-    inputs = "grasp .npz files or grasp folders"
-
-    def __init__(self, model: Any, metadata: dict) -> None:
-        super().__init__(model, metadata)
-        self._require(HAND_METADATA_KEYS)
-        if not isinstance(model, HandDAPClassifier) or not hasattr(model, "K_"):
-            raise ModelBundleError(f"{self._where()}: a hand-dap bundle must hold a fitted HandDAPClassifier, "
-                                   f"found {type(model).__name__}")
-        if list(model.K_.columns) != list(metadata["attribute_names"]):
-            raise ModelBundleError(f"{self._where()}: metadata attribute_names differ from the model's")
-
-    @property
-    def attribute_names(self) -> list[str]:
-        return list(self.model.K_.columns)
-
-    def describe(self) -> str:
-        return (f"hand-dap model (HandDAPClassifier, fusion {self.model.fusion.upper()}), "
-                f"{len(self.attribute_names)} attributes, trained on {list(self.model.classes_)}")
-
-    def posteriors(self, inputs: Sequence[str | Path]) -> GraspPosteriors:
-        grasps = _read_grasp_inputs(inputs)
-        if not grasps:
-            raise DataFileError(None, "no grasps given")
-        feats: GraspFeatures = grasp_features(grasps, **self.metadata["feature_params"])
-        touched = feats.contact.any(axis=1)
-        notes = [f"skipped grasp {g} ({s}): no BioTac touched the object"
-                 for g, s, t in zip(feats.grasp_ids, [g.source for g in grasps], touched, strict=True) if not t]
-        if not touched.any():
-            raise DataFileError(None, "no grasp with a touching BioTac: nothing to classify")
-        kept = feats.subset(touched)
-        P_mat, contact, P_sh = self.model.attribute_posteriors(kept.to_array())
-        present = fuse_grasp_posteriors(P_mat, contact, P_sh, self.model.fusion)
-        ldap = fuse_grasp_posteriors(P_mat, contact, P_sh, "ldap")
-        sources = [g.source for g, t in zip(grasps, touched, strict=True) if t]
-        info = [f"{int(b)} BioTac(s) touching" for b in kept.n_contacts]
-        return GraspPosteriors(list(kept.grasp_ids), sources, info, present, 1.0 - present, ldap, 1.0 - ldap, notes)
-
-    def prior(self, K: np.ndarray) -> np.ndarray:
-        return np.full(K.shape[1], float(self.model.prior))
-
-
-class Phac2Adapter(ModelAdapter):
-    """``phac2-dap`` bundles: a per-sensor attribute model on ``tzsl extract`` feature tables."""
-
-    kind = PHAC2_KIND
-    inputs = "feature tables (.csv / .npz) written by 'tzsl extract --out'"
-
-    def __init__(self, model: Any, metadata: dict) -> None:
-        super().__init__(model, metadata)
-        self._require(PHAC2_METADATA_KEYS)
-        if not hasattr(model, "predict_proba"):
-            raise ModelBundleError(f"{self._where()}: a phac2-dap bundle must hold an attribute model with "
-                                   f"predict_proba, found {type(model).__name__}")
-        if metadata["fusion"] not in ("avg", "max"):
-            raise ModelBundleError(f"{self._where()}: fusion must be 'avg' or 'max', found {metadata['fusion']!r}")
-        prior = metadata["prior"]
-        m = len(metadata["attribute_names"])
-        if not (prior in ("uni", "test") or (isinstance(prior, list) and len(prior) == m)):
-            raise ModelBundleError(f"{self._where()}: prior must be 'uni', 'test' or a list of {m} probabilities")
-
-    @property
-    def attribute_names(self) -> list[str]:
-        return [str(a) for a in self.metadata["attribute_names"]]
-
-    def describe(self) -> str:
-        prior = self.metadata["prior"]
-        prior = prior if isinstance(prior, str) else "as saved (e.g. training)"
-        return (f"phac2-dap model ({type(self.model).__name__}, {self.metadata['fusion'].upper()}DAP over "
-                f"{len(self.metadata['sensors'])} sensors, prior {prior}), {len(self.attribute_names)} attributes")
-
-    def _features(self, path: Path) -> tuple[np.ndarray, list[str]]:
-        table = read_feature_table(path)
-        sensors, names = list(self.metadata["sensors"]), list(self.metadata["feature_names"])
-        missing_s = [s for s in sensors if s not in table.sensors]
-        if missing_s:
-            raise DataFileError(path, f"sensor(s) {missing_s} missing; the model needs sensors {sensors}, "
-                                      f"the table has {list(table.sensors)}")
-        missing_f = [f for f in names if f not in table.feature_names]
-        if missing_f:
-            raise DataFileError(path, f"{len(missing_f)} feature column(s) the model needs are missing, e.g. "
-                                      f"{missing_f[:5]}; extract the features with the settings used for training")
-        s_idx = [list(table.sensors).index(s) for s in sensors]
-        f_idx = [list(table.feature_names).index(f) for f in names]
-        X = table.X[:, s_idx][:, :, f_idx]
-        return X, [str(t) for t in table.trials["trial_id"]]
-
-    def posteriors(self, inputs: Sequence[str | Path]) -> GraspPosteriors:
-        Xs, ids, sources = [], [], []
-        for item in inputs:
-            X, trial_ids = self._features(Path(item))
-            Xs.append(X)
-            ids += trial_ids
-            sources += [str(item)] * len(trial_ids)
-        if not Xs:
-            raise DataFileError(None, "no feature table given")
-        X = np.concatenate(Xs)
-        P = np.asarray(self.model.predict_proba(X), dtype=float)
-        m = len(self.attribute_names)
-        if P.shape != (X.shape[0], X.shape[1], m):
-            raise ModelBundleError(f"{self._where()}: the model returned posteriors of shape {P.shape}, "
-                                   f"expected {(X.shape[0], X.shape[1], m)} (trials, sensors, attributes)")
-        present, absent = fuse_attribute_posteriors(P, self.metadata["fusion"])
-        info = [f"{X.shape[1]} sensors"] * X.shape[0]
-        return GraspPosteriors(ids, sources, info, present, absent, present, absent)
-
-    def prior(self, K: np.ndarray) -> np.ndarray:
-        prior = self.metadata["prior"]
-        if prior == "uni":
-            return np.full(K.shape[1], 0.5)
-        if prior == "test":
-            return attribute_prior("test", class_attributes=K)
-        return attribute_prior(np.asarray(prior, dtype=float))
-
-
-class DeepAdapter(ModelAdapter):
-    """``deep`` bundles: the CNN + LSTM attribute embedding on press videos or key-frame arrays.
-
-    An input is a video file (``.avi`` etc.; 5 key frames are selected with
-    :class:`tzsl.features.KeyFrameSelector`) or an ``.npz`` holding ``frames`` of shape
-    (5, H, W[, C]). The model's "posteriors" are its attribute estimates ``f(x)`` in (0, 1);
-    classes are scored by ``-||f - a_c||^2`` (nearest attribute vector, fabric paper section 4.2),
-    and DF-MDAP averages ``f`` over grasps before scoring.
-    """
-
-    kind = "deep"
-    inputs = "press videos (.avi) or .npz files with a 'frames' array (5, H, W[, C])"
-
-    @property
-    def attribute_names(self) -> list[str]:
-        names = self.metadata.get("attribute_names")
-        if names is None:
-            names = [f"attr_{j}" for j in range(int(self.model.n_attributes_))]
-        return [str(a) for a in names]
-
-    def _frames(self, path: Path) -> np.ndarray:
-        if not path.is_file():
-            raise DataFileError(path, "input file not found")
-        if path.suffix == ".npz":
-            arrays = read_npz(path)
-            if "frames" not in arrays:
-                raise DataFileError(path, f"no 'frames' array (found {list(arrays)})")
-            return np.asarray(arrays["frames"])
-        from tzsl.features import KeyFrameSelector  # noqa: PLC0415
-
-        return KeyFrameSelector().transform([str(path)])[0]
-
-    def posteriors(self, inputs: Sequence[str | Path]) -> GraspPosteriors:
-        if not inputs:
-            raise DataFileError(None, "no input given")
-        paths = [Path(p) for p in inputs]
-        frames = [self._frames(p) for p in paths]
-        shapes = {f.shape for f in frames}
-        if len(shapes) != 1:
-            raise DataFileError(None, f"inputs have different frame shapes {sorted(shapes)}")
-        F = np.asarray(self.model.transform(np.stack(frames)), dtype=float)
-        info = [f"{f.shape[0]} key frames" for f in frames]
-        return GraspPosteriors([p.stem for p in paths], [str(p) for p in paths], info, F, 1.0 - F, F, 1.0 - F)
-
-    def prior(self, K: np.ndarray) -> np.ndarray:  # not used by the nearest-attribute rule
-        return np.full(K.shape[1], 0.5)
-
-    def class_scores(self, present: np.ndarray, absent: np.ndarray, K: np.ndarray) -> np.ndarray:
-        return -((present[:, None, :] - K[None, :, :]) ** 2).sum(axis=2)
-
-
-def _deep_adapter(model: Any, metadata: dict) -> DeepAdapter:
-    return DeepAdapter(model, metadata)
-
-
-#: Bundle kind -> adapter class (or any callable ``(model, metadata) -> ModelAdapter``).
-ADAPTERS: dict[str, Callable[[Any, dict], ModelAdapter]] = {
-    HAND_KIND: HandAdapter, PHAC2_KIND: Phac2Adapter, "deep": _deep_adapter,
-}
-
-
-def register_adapter(kind: str, factory: Callable[[Any, dict], ModelAdapter]) -> None:
-    """Make ``tzsl predict`` understand bundles of ``kind`` (e.g. ``"deep"``)."""
-    ADAPTERS[kind] = factory
-
-
-def load_adapter(path: str | Path, *, trust_pickle: bool = False) -> ModelAdapter:
-    """Load a bundle (see :func:`tzsl.bundle.load_bundle`; no code is run) and wrap it.
-
-    ``trust_pickle=True`` also loads old (format version 1) pickle bundles, which can run code:
-    only for files whose author you trust.
-
-    Raises
-    ------
-    ModelBundleError
-        Unreadable / corrupt / foreign bundle, or a kind no adapter handles.
-    """
-    from tzsl.bundle import read_bundle_header  # noqa: PLC0415
-
-    kind = read_bundle_header(path).kind  # verified, nothing deserialised yet
-    if kind not in ADAPTERS:
-        raise ModelBundleError(f"{path}: no predictor for bundles of kind {kind!r} (known: {sorted(ADAPTERS)})")
-    if kind == "deep":
-        from tzsl.models._deep import load_deep_bundle  # noqa: PLC0415 - needs the deep extra
-
-        model = load_deep_bundle(path, trust_pickle=trust_pickle)
-        metadata = dict(read_bundle_header(path).metadata)
-        return ADAPTERS[kind](model, metadata)
-    model, metadata = load_bundle(path, expected_kind=kind, trust_pickle=trust_pickle)
-    return ADAPTERS[kind](model, metadata)
+    table = pd.DataFrame(values.to_numpy(dtype=int), index=pd.Index(names, name="class"), columns=wanted)
+    if candidates is None:
+        return table
+    absent = [c for c in candidates if c not in table.index]
+    if absent or not candidates:
+        raise DataFileError(path, f"candidate class(es) {absent} not in the table; it has {list(table.index)}")
+    return table.loc[list(candidates)]
 
 
 # ---------------------------------------------------------------------------- prediction
@@ -517,17 +285,18 @@ class Prediction:
 
 
 def predict_grasps(
-    adapter: ModelAdapter, classes: pd.DataFrame, inputs: Sequence[str | Path], *, mode: str = "sc", k: int = 3
+    predictor: Predictor, classes: pd.DataFrame, inputs: Sequence[str | Path], *, mode: str = "sc", k: int = 3
 ) -> Prediction:
     """Classify the grasps in ``inputs`` among ``classes`` and fuse them (SC-MDAP or DF-MDAP).
 
     Parameters
     ----------
-    adapter : ModelAdapter
+    predictor : Predictor
+        From :func:`load_predictor`.
     classes : DataFrame of shape (c, m)
-        From :func:`read_class_table` (columns in the adapter's attribute order).
+        From :func:`read_class_table` (columns in the model's attribute order).
     inputs : sequence of paths
-        In arrival order.
+        In arrival order, read by the predictor's feature schema.
     mode : {"sc", "df"}
     k : int
         Equal classifications SC-MDAP needs.
@@ -536,31 +305,32 @@ def predict_grasps(
         raise ConfigError(f"fusion mode must be 'sc' (SC-MDAP) or 'df' (DF-MDAP), got {mode!r}")
     if not isinstance(k, int | np.integer) or k < 1:
         raise ConfigError(f"k must be a positive integer, got {k!r}")
-    if list(classes.columns) != adapter.attribute_names:
+    if list(classes.columns) != predictor.attribute_names:
         raise ConfigError("class table columns are not in the model's attribute order; read it with read_class_table")
     K = classes.to_numpy(dtype=float)
-    post = adapter.posteriors(inputs)
-    scores = adapter.class_scores(post.present, post.absent, K)
-    grasp_p = softmax(scores, axis=1)
+    grasps = read_inputs(predictor.input, inputs)
+    S = np.asarray(predictor.model.attribute_scores(grasps.X), dtype=float)
+    n = grasps.X.shape[0]
+    if S.shape[0] != n or S.shape[-1] != len(predictor.attribute_names):
+        raise ModelBundleError(f"{_where(predictor.metadata)}: the model returned attribute scores of shape "
+                               f"{S.shape} for {n} grasps and {len(predictor.attribute_names)} attributes")
+    scores = predictor.class_scores(S, K)
     decisions = scores.argmax(axis=1)
-    n = len(decisions)
     final_p = running = None
     if mode == "sc":
         d, used, ok = sc_mdap(decisions[None, :], int(k))
         final, n_used, decided = int(d[0]), int(used[0]), bool(ok[0])
     else:
-        steps = np.arange(1, n + 1)[:, None]
-        cum_p = np.cumsum(post.df_present, axis=0) / steps  # (n, m): super grasp of the first t grasps
-        cum_a = np.cumsum(post.df_absent, axis=0) / steps
-        run_scores = adapter.class_scores(cum_p, cum_a, K)
+        steps = np.arange(1, n + 1).reshape((n,) + (1,) * (S.ndim - 1))
+        run_scores = predictor.class_scores(np.cumsum(S, axis=0) / steps, K)  # super grasp of the first t grasps
         running = run_scores.argmax(axis=1)
         final_p = softmax(run_scores[-1])
         final, n_used, decided = int(running[-1]), n, True
     return Prediction(
-        classes=[str(c) for c in classes.index], grasp_ids=list(post.grasp_ids), sources=list(post.sources),
-        info=list(post.info), grasp_posteriors=grasp_p, decisions=decisions, mode=mode, k=int(k),
+        classes=[str(c) for c in classes.index], grasp_ids=list(grasps.grasp_ids), sources=list(grasps.sources),
+        info=list(grasps.info), grasp_posteriors=softmax(scores, axis=1), decisions=decisions, mode=mode, k=int(k),
         decided=decided, n_used=n_used, final=final, final_posteriors=final_p, running=running,
-        notes=list(post.notes),
+        notes=list(grasps.notes),
     )
 
 
@@ -604,102 +374,3 @@ def format_prediction(pred: Prediction, top: int = 5) -> str:
         lines.append(f"DF-MDAP: decided {name(pred.final)} from all {n} grasp{'s' if n > 1 else ''} (eqs. 11-12):")
         lines += _ranking(pred.final_posteriors, pred.classes, top)
     return "\n".join(lines)
-
-
-# ---------------------------------------------------------------------------- saving
-def hand_bundle_metadata(model: HandDAPClassifier, table: HandTable, features_kw: dict, **extra) -> dict:
-    """Metadata of a ``hand-dap`` bundle: attributes, feature settings and provenance."""
-    return {
-        "attribute_names": list(model.K_.columns),
-        "material_attributes": list(model.material_attributes_),
-        "shape_attributes": list(model.shape_attributes_),
-        "feature_params": dict(features_kw),
-        "training_objects": [str(c) for c in model.classes_],
-        "fusion": model.fusion,
-        "prior": float(model.prior),
-        "class_table": table.source,
-        **extra,
-    }
-
-
-def train_hand_bundle(
-    grasps_dir: str | Path,
-    table: HandTable,
-    save: str | Path,
-    *,
-    fusion: str = "ldap",
-    seed: int = 0,
-    config: HandStudyConfig | None = None,
-    force: bool = False,
-) -> tuple[HandDAPClassifier, dict]:
-    """Fit the hand model on the training objects' grasps of a grasp folder and save a bundle.
-
-    Returns
-    -------
-    model : HandDAPClassifier
-    metadata : dict
-        As saved, plus ``n_training_grasps`` and ``n_ignored_grasps`` (grasps of other objects).
-    """
-    config = HandStudyConfig() if config is None else config
-    save = Path(save)
-    if save.exists() and not force:
-        raise ConfigError(f"{save} already exists; use --force to overwrite it")
-    grasps = read_grasps(grasps_dir)
-    features = hand_features(grasps, table, config)
-    model = fit_hand_model(features, table, config, seed, fusion=fusion)
-    n_train = int(np.isin(features.objects, table.train_objects).sum())
-    metadata = hand_bundle_metadata(
-        model, table, feature_params(config), grasps=str(grasps_dir), seed=int(seed),
-        n_training_grasps=n_train, n_ignored_grasps=len(features) - n_train,
-    )
-    save_bundle(save, model, kind=HAND_KIND, metadata=metadata, force=force)
-    return model, metadata
-
-
-def phac2_bundle_metadata(
-    features, *, fusion: str, prior: str | Sequence[float] | np.ndarray, **extra
-) -> dict:
-    """Metadata of a ``phac2-dap`` bundle for a model fitted on ``features`` (a FeatureSet).
-
-    Parameters
-    ----------
-    features : FeatureSet
-        The training features (their sensors, feature names and attribute columns define the
-        layout the model expects).
-    fusion : {"avg", "max"}
-    prior : "uni", "test" or array-like of shape (m,)
-        E.g. ``attribute_prior("train", train_attributes=..., groups=...)``.
-    **extra
-        Further JSON-serialisable provenance (training objects, split, seed, ...).
-    """
-    if fusion not in ("avg", "max"):
-        raise ConfigError(f"fusion must be 'avg' or 'max', got {fusion!r}")
-    m = features.attributes.shape[1]
-    if isinstance(prior, str):
-        if prior not in ("uni", "test"):
-            raise ConfigError("prior must be 'uni', 'test' or the prior vector itself (e.g. the training prior)")
-        prior_value: Any = prior
-    else:
-        prior_value = [float(p) for p in attribute_prior(np.asarray(prior, dtype=float))]
-        if len(prior_value) != m:
-            raise ConfigError(f"prior has {len(prior_value)} entries for {m} attributes")
-    return {
-        "attribute_names": [str(a) for a in features.attributes.columns],
-        "sensors": [str(s) for s in features.sensors],
-        "feature_names": [str(f) for f in features.feature_names],
-        "fusion": fusion,
-        "prior": prior_value,
-        "dataset": features.dataset,
-        **extra,
-    }
-
-
-def save_phac2_bundle(path: str | Path, model: Any, features, *, fusion: str, prior, force: bool = False,
-                      **extra) -> Path:
-    """Save a fitted PHAC-2 attribute model (e.g. AttributeClassifierBank) as a ``phac2-dap`` bundle.
-
-    ``model.predict_proba(X)`` must map ``(n, s, d)`` features laid out as ``features`` to
-    ``(n, s, m)`` posteriors of ``features.attributes.columns``.
-    """
-    metadata = phac2_bundle_metadata(features, fusion=fusion, prior=prior, **extra)
-    return save_bundle(path, model, kind=PHAC2_KIND, metadata=metadata, force=force)

@@ -633,6 +633,11 @@ class DeepAttributeEmbedding(ValidatedParamsMixin, BaseEstimator):
                 F = torch.cat(parts)
         return F.cpu().numpy().astype(np.float64)
 
+    def attribute_scores(self, X) -> np.ndarray:
+        """The zero-shot protocol's attribute scores: :meth:`transform`, shape (n_samples, n_attributes),
+        read by a :class:`tzsl.models.NearestAttributeRule` (as in a saved bundle)."""
+        return self.transform(X)
+
     def decision_function(self, X, class_attributes) -> np.ndarray:
         """``-||f - a_c||^2`` of each sequence to each candidate class.
 

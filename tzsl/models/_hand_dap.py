@@ -373,6 +373,11 @@ class HandDAPClassifier(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         P_mat, contact, P_sh = self.attribute_posteriors(X)
         return fuse_grasp_posteriors(P_mat, contact, P_sh, self.fusion if fusion is None else fusion)
 
+    def attribute_scores(self, X) -> np.ndarray:
+        """The zero-shot protocol's attribute scores: :meth:`predict_attribute_proba` with the
+        estimator's fusion, shape (n, m), read by a :class:`tzsl.models.DAPRule` (as in a saved bundle)."""
+        return self.predict_attribute_proba(X)
+
     def _class_matrix(self, K: pd.DataFrame | None) -> pd.DataFrame:
         check_is_fitted(self, "material_models_")
         if K is None:

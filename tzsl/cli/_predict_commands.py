@@ -1,0 +1,108 @@
+"""``tzsl predict``: rank candidate classes for new grasps with a saved model (any method, one path).
+
+Per-EP (active touch) bundles take ``--eps-done`` and report the ranking, the decision of the
+stopping rule and, with ``--suggest-next``, the next EP; ``--json`` prints one JSON object.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from tzsl.cli._main import cli
+from tzsl.exceptions import ConfigError
+
+
+def _names(text: str | None) -> list[str] | None:
+    if text is None:
+        return None
+    names = [t.strip() for t in text.split(",") if t.strip()]
+    if not names:
+        raise ConfigError(f"expected a comma-separated list of names, got {text!r}")
+    return names
+
+
+@cli.command("predict", short_help="Rank candidate classes for new grasps with a saved model (SC-/DF-MDAP, active).")
+@click.option("--model", "model_path", type=click.Path(dir_okay=False, path_type=Path), required=True,
+              help="Model bundle written by train-attributes, train-hand or train-deep (loading it runs no code).")
+@click.option("--classes", type=click.Path(path_type=Path), required=True,
+              help="Candidate classes: CSV with the class name first, then one 0/1 column per model attribute; "
+                   "or a plain dataset folder (its classes.csv).")
+@click.option("--candidates", default=None,
+              help="Comma-separated classes of --classes to rank (default: every row), e.g. the unseen ones.")
+@click.option("--multi-grasp", "mode", type=click.Choice(["sc", "df"]), default="sc", show_default=True,
+              help="Multi-grasp fusion: sc = SC-MDAP (stop at k equal decisions), df = DF-MDAP (average grasps).")
+@click.option("--k", type=click.IntRange(min=1), default=3, show_default=True,
+              help="Equal classifications SC-MDAP needs.")
+@click.option("--top", type=click.IntRange(min=0), default=5, show_default=True,
+              help="Classes listed per grasp (0 = all).")
+@click.option("--eps-done", default=None,
+              help="Per-EP bundles: EPs done so far on the object, comma-separated (e.g. squeeze,hold); GRASP is "
+                   "one trial's feature file holding at least their columns.")
+@click.option("--suggest-next", is_flag=True, help="Per-EP bundles: also suggest the next EP (largest expected "
+                                                   "entropy reduction).")
+@click.option("--threshold", type=click.FloatRange(0, 1), default=None,
+              help="Per-EP bundles: decided when the top class posterior reaches this [default: that of "
+                   "tzsl.models.suggest_next_ep, printed in the output].")
+@click.option("--max-eps", type=click.IntRange(min=1), default=None, help="Per-EP bundles: EP budget.")
+@click.option("--max-seconds", type=click.FloatRange(min=0), default=None, help="Per-EP bundles: budget in seconds.")
+@click.option("--json", "as_json", is_flag=True, help="Per-EP bundles: print the report as one JSON object.")
+@click.option("--trust-pickle", is_flag=True,
+              help="Also load an old (format 1) bundle holding a pickle, which runs code from the file: "
+                   "only for a file whose author you trust. Better: re-run the train command.")
+@click.argument("grasp", nargs=-1, required=True, type=click.Path(path_type=Path))
+def predict(model_path: Path, classes: Path, candidates: str | None, mode: str, k: int, top: int,
+            eps_done: str | None, suggest_next: bool, threshold: float | None, max_eps: int | None,
+            max_seconds: float | None, as_json: bool, trust_pickle: bool, grasp: tuple[Path, ...]) -> None:
+    """Classify GRASP... (in arrival order) among the candidate classes and fuse the grasps.
+
+    GRASP, as the model's feature schema says: feature files (.csv / .npz: a plain dataset's
+    trials.csv, a 'tzsl extract --out' table; no attribute row is read) or, for models trained on
+    signal files, signal files (one per grasp for one-sensor models) or a CSV with a signal_file
+    column; for hand models, grasp .npz files or grasp folders; for deep (CNN + LSTM) models,
+    press videos (.avi) or .npz files with a 'frames' array (5, H, W[, C]). An .npz input whose
+    arrays declare more than 2 GiB is refused before loading; raise the limit (in bytes) with the
+    environment variable TZSL_MAX_NPZ_BYTES.
+    """
+    from tzsl.bundle import read_bundle_header  # noqa: PLC0415
+
+    active = read_bundle_header(model_path).kind == "per-ep"
+    if not active and (eps_done or suggest_next or as_json or threshold is not None or max_eps or max_seconds):
+        raise ConfigError(f"{model_path}: --eps-done, --suggest-next, --threshold, --max-eps, --max-seconds and "
+                          "--json need a per-EP bundle (tzsl train-attributes --per-ep)")
+    if active:
+        _predict_active(model_path, classes, _names(candidates), grasp, _names(eps_done), suggest_next,
+                        threshold, max_eps, max_seconds, as_json, top, trust_pickle)
+        return
+    from tzsl.experiments.predict import format_prediction, load_predictor, predict_grasps, read_class_table  # noqa: PLC0415
+
+    predictor = load_predictor(model_path, trust_pickle=trust_pickle)
+    table = read_class_table(classes, predictor.attribute_names, candidates=_names(candidates))
+    result = predict_grasps(predictor, table, list(grasp), mode=mode, k=k)
+    click.echo(f"model: {predictor.describe()}")
+    click.echo(f"classes: {len(table)} from {classes}")
+    click.echo(format_prediction(result, top=top))
+
+
+def _predict_active(model_path, classes, candidates, grasp, eps_done, suggest_next, threshold, max_eps,
+                    max_seconds, as_json, top, trust_pickle) -> None:
+    from tzsl.experiments.predict import read_class_table  # noqa: PLC0415
+    from tzsl.experiments.predict_active import active_report, format_active_report, load_per_ep_model  # noqa: PLC0415
+
+    if not eps_done:
+        raise ConfigError(f"{model_path}: a per-EP bundle needs --eps-done (the EPs done so far, e.g. squeeze,hold)")
+    if len(grasp) != 1:
+        raise ConfigError(f"a per-EP bundle reads one feature file (one trial), got {len(grasp)} files")
+    model, metadata = load_per_ep_model(model_path, trust_pickle=trust_pickle)
+    table = read_class_table(classes, metadata["attribute_names"], candidates=candidates)
+    report = active_report(model, metadata, table, grasp[0], eps_done, threshold=threshold, max_eps=max_eps,
+                           max_seconds=max_seconds)
+    if as_json:
+        click.echo(json.dumps(report, sort_keys=False))
+        return
+    click.echo(f"model: per-EP attribute model, EPs {', '.join(metadata['eps'])}, "
+               f"{len(metadata['attribute_names'])} attributes")
+    click.echo(f"classes: {len(table)} from {classes}")
+    click.echo(format_active_report(report, top=top, suggest=suggest_next))
