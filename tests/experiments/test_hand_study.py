@@ -154,6 +154,12 @@ def test_simulated_when_no_grasps_and_refuses_overwrite(tmp_path):
     assert "SIMULATED" in format_hand_summary(result)
     for csv in tmp_path.glob("*.csv"):
         assert (pd.read_csv(csv)["data"] == "simulated").all(), csv.name
+    from tzsl.experiments.report import write_report  # noqa: PLC0415
+
+    page = write_report(tmp_path).read_text()
+    hand = page[page.index('<section id="hand-table5">'):]
+    hand = hand[:hand.index("</section>")]
+    assert "SIMULATED DATA" in hand
     manifest = json.loads((tmp_path / "hand_manifest.json").read_text())
     assert manifest["config"]["simulated"] is True
     assert manifest["simulation"]["3"]["random_state"] == 3
