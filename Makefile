@@ -11,7 +11,7 @@ endif
 RESULTS ?= results
 N_JOBS ?= 2
 
-.PHONY: install browser test reproduce-tables bench clean
+.PHONY: install browser test reproduce-tables readme-results bench clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -34,6 +34,10 @@ test: install browser
 
 reproduce-tables: install
 	$(BIN)/tzsl reproduce-tables --out $(RESULTS) --n-jobs $(N_JOBS) --force
+
+# The README's Results block, from the CSVs of reproduce-tables (never typed by hand).
+readme-results: install
+	$(BIN)/python -m tzsl.experiments.readme_results $(RESULTS) README.md
 
 bench: install
 	$(BIN)/tzsl bench

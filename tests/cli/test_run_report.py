@@ -100,7 +100,7 @@ def test_plain_folder_from_convert_gives_the_builtin_accuracies(tmp_path, data_d
                             cache=False)
     builtin = run_dap_study(extract_features("phac2-penn", data_dir=data_dir), ResultsDir(tmp_path / "builtin"),
                             config, kinds=("random",), sweep=False)["table1_fusion"]
-    assert list(ours["split"].astype(str)) == ["1", "2", "mean", "std"]
+    assert list(ours["split"].astype(str)) == ["1", "2", "mean", "std", "control"]
     for column in ("maxdap", "avgdap", "avgdap_per_class_mean", "n_attributes", "n_test_objects"):
         # CSV numbers carry 6 significant digits (tzsl.experiments._outputs.CSV_FLOAT_FORMAT)
         np.testing.assert_allclose(ours[column].to_numpy(float), builtin[column].to_numpy(float), rtol=0,

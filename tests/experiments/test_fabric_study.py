@@ -11,6 +11,7 @@ import pandas as pd
 import pytest
 
 from tzsl.datasets import fabric_zsl_split, load_fabric
+from tzsl.evaluation import seen_test_classes
 from tzsl.exceptions import ConfigError, DataFileError
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.fabric import (
@@ -23,6 +24,7 @@ from tzsl.experiments.fabric import (
     select_embedding_alpha,
     zero_shot_run,
 )
+from tzsl.experiments.fabric_tables import fabric_protocols
 from tzsl.experiments.paper_numbers import FABRIC_TABLE1
 from tzsl.models import ZSLInputError, attribute_rows, build_method
 
@@ -50,6 +52,20 @@ def test_paper_table1_average_row_is_the_mean_of_its_rows():
         mean = np.mean([FABRIC_TABLE1[r][col] for r in ("Flat", "Fold", "Rand")])
         assert abs(mean - FABRIC_TABLE1["Average"][col]) < 2e-4, col
     assert FABRIC_TABLE1["Fold"]["0"] == 0.8941
+
+
+def test_protocols_keep_the_paper_split_and_headline_a_zero_shot_variant():
+    protocols = fabric_protocols((1, 2), pd.DataFrame(A8_LIKE))
+    assert [(p.split.config, p.name, p.zero_shot) for p in protocols] == [
+        (1, "paper", False), (1, "zero-shot-drop", True), (2, "paper", False), (2, "zero-shot-drop", True)]
+    assert protocols[0].split.test_groups == (0, 5, 7) and "NOT zero-shot" in protocols[0].note
+    assert protocols[1].split.test_groups == (0, 7) and protocols[1].split.train_groups == (1, 2, 3, 4, 6)
+    for p in protocols:
+        seen = seen_test_classes(pd.DataFrame(A8_LIKE), list(p.split.train_groups), list(p.split.test_groups))
+        assert bool(seen) != p.zero_shot
+    distinct = A8_LIKE.copy()
+    distinct[5] = [1, 1, 1, 1]
+    assert [p.name for p in fabric_protocols((1,), pd.DataFrame(distinct))] == ["paper"]
 
 
 def test_lambda_labels():
@@ -145,36 +161,61 @@ def test_real_study_table_layout(real_study):
     }
     on_disk = pd.read_csv(out / "fabric_table1.csv")
     assert on_disk.shape == table.shape
-    assert table[["condition", "config"]].values.tolist() == [
-        ["depth-sequence", 1], ["depth-sequence", 2], ["depth-image", 1], ["depth-image", 2]
+    assert table[["condition", "config", "protocol"]].values.tolist() == [
+        [c, cfg, p] for c in ("depth-sequence", "depth-image") for cfg in (1, 2) for p in ("paper", "zero-shot-drop")
     ]
     methods = ["lam_0", "lam_inf", "ESZSL"]
     for m in methods:
-        for col in (m, f"{m}_std", f"{m}_pcma", f"{m}_pcma_std", f"paper_{m}"):
+        for col in (m, f"{m}_std", f"{m}_pcma", f"{m}_pcma_std", f"paper_{m}", f"{m}_ci95_low", f"{m}_ci95_high",
+                    f"{m}_pcma_ci95_low", f"{m}_pcma_ci95_high"):
             assert col in table.columns, col
         assert table[m].between(0, 1).all() and table[f"{m}_pcma"].between(0, 1).all()
+        assert (table[f"{m}_ci95_low"] <= table[m] + 1e-9).all() and (table[m] <= table[f"{m}_ci95_high"] + 1e-9).all()
     assert "lam_1" not in table.columns  # only the lambdas asked for
-    # the paper's Average row beside config-1 depth rows, nothing beside config 2
-    cfg1 = table["config"] == 1
+    # unequal test classes: the majority baseline is there and above chance somewhere
+    assert (table["majority"] >= table["chance"] - 1e-12).all() and (table["majority"] > table["chance"]).any()
+    # the paper's Average row beside the paper-protocol config-1 depth rows only
+    cfg1 = (table["config"] == 1) & (table["protocol"] == "paper")
     assert (table.loc[cfg1, "paper_lam_0"] == FABRIC_TABLE1["Average"]["0"]).all()
     assert (table.loc[cfg1, "paper_ESZSL"] == FABRIC_TABLE1["Average"]["ESZSL"]).all()
     assert table.loc[~cfg1, ["paper_lam_0", "paper_lam_inf", "paper_ESZSL"]].isna().all().all()
     assert (table.loc[cfg1, "paper_row"] == "Average").all()
     assert table["note"].str.contains("not the paper's GelSight videos").all()
     assert table["note"].str.contains("regression term R only").all()
-    assert table.loc[~cfg1, "note"].str.contains("config 1 only").all()
-    # sample counts: 27 / 30 test fabrics; 282 / 312 test images (groups 0 + 5 + 7, 0 + 4 + 7)
-    assert table["n_test"].tolist() == [27, 30, 282, 312]
+    assert table.loc[table["config"] == 2, "note"].str.contains("config 1 only").all()
+    assert table.loc[table["protocol"] == "paper", "note"].str.contains("NOT zero-shot").all()
+    # sample counts: 27 / 30 test fabrics; 282 / 312 test images (groups 0 + 5 + 7, 0 + 4 + 7); variants 0 + 7
+    n_test = table.set_index(["condition", "config", "protocol"])["n_test"]
+    assert [n_test[(c, cfg, "paper")] for c in ("depth-sequence", "depth-image") for cfg in (1, 2)] == [27, 30, 282, 312]
+    assert (table.loc[table["protocol"] == "zero-shot-drop", "test_groups"] == "0 7").all()
     assert table["n_seeds"].eq(1).all() and table["lam_0_std"].isna().all() and table["ESZSL_std"].eq(0).all()
-    assert len(runs) == 4 * 3
+    assert len(runs) == 8 * 3
     text = format_fabric_table(table)
     assert "depth-sequence" in text and "[75.45]" in text  # paper Average, lambda = 0
 
 
 @pytest.mark.slow
+def test_real_headline_rows_have_no_test_group_seen_in_training(real_study, data_dir):
+    _, result = real_study
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        attributes = load_fabric(data_dir, images=False).attributes.reset_index(drop=True)
+    table = result["table1"]
+    headline = table[table["zero_shot"]]
+    assert len(headline) == 4
+    for _, row in headline.iterrows():
+        train = [int(g) for g in row["train_groups"].split()]
+        test = [int(g) for g in row["test_groups"].split()]
+        assert seen_test_classes(attributes, train, test) == {}, row["protocol"]
+    paper = table[table["protocol"] == "paper"].iloc[0]
+    assert seen_test_classes(attributes, [int(g) for g in paper["train_groups"].split()],
+                             [int(g) for g in paper["test_groups"].split()]) == {5: (3, 4)}
+
+
+@pytest.mark.slow
 def test_real_study_never_fits_on_test_groups(real_study):
     _, result = real_study
-    runs = result["runs"]
+    runs = result["runs"][result["runs"]["protocol"] == "paper"]
     for config, train in ((1, "1 2 3 4 6"), (2, "1 2 3 5 6")):
         sub = runs[runs["config"] == config]
         assert (sub["train_classes"] == train).all()
@@ -272,7 +313,8 @@ def test_gelsight_layout_runs_through_the_study(gelsight_root, data_dir, tmp_pat
         ResultsDir(tmp_path), data_dir=data_dir, configs=(1,), gelsight_root=gelsight_root,
         conditions=(), seeds=1, lams=(0,), alphas=(0.1,), progress=False,
     )
-    table = result["table1"]
+    assert result["table1"]["protocol"].tolist() == ["paper", "zero-shot-drop"] * 2
+    table = result["table1"][result["table1"]["protocol"] == "paper"].reset_index(drop=True)
     assert table["condition"].tolist() == ["gelsight-Flat", "gelsight-Mine"]
     assert table["n_test"].tolist() == [6, 6] and table["n_train"].tolist() == [10, 10]
     flat, mine = table.iloc[0], table.iloc[1]

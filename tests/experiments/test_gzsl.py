@@ -153,6 +153,13 @@ def test_run_gzsl_table_layout_and_scores():
     np.testing.assert_allclose(mean["harmonic"].sort_index(), expected.sort_index())
     # a learnable synthetic problem: DAP recognises seen classes far above chance
     assert per_split.loc[per_split["method"] == "dap_avg_uni", "seen"].mean() > 0.3
+    # intervals beside every accuracy, on per-split and mean rows; the chances of the two protocols
+    with_iv = table[table["split"] != "std"]
+    for col in ("seen", "unseen", "zsl"):
+        assert (with_iv[f"{col}_ci95_low"] <= with_iv[col] + 1e-9).all()
+        assert (with_iv[col] <= with_iv[f"{col}_ci95_high"] + 1e-9).all()
+    np.testing.assert_allclose(per_split["chance"], 1 / per_split["n_classes"])
+    np.testing.assert_allclose(per_split["zsl_chance"], 1 / per_split["n_unseen_classes"])
 
 
 def test_stacking_constant_never_depends_on_test_objects():

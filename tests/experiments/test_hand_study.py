@@ -48,16 +48,23 @@ def test_every_file_is_written_with_its_columns(study, folder):
         assert col in t5.columns, col
     assert list(t5["method"][:3]) == ["MAXDAP", "AVGDAP", "LDAP"]
     assert list(t5["seed"].astype(str)) == ["0"] * 3 + ["1"] * 3 + ["mean"] * 3 + ["std"] * 3
+    assert (t5["data"] == "supplied").all()  # grasps read from a folder, not simulated by the study
+    for col in ("all_ci95_low", "all_ci95_high", "all_per_class_mean_ci95_low", "homogeneous_ci95_high", "chance"):
+        assert col in t5.columns, col
+    rows = t5[t5["seed"].astype(str) != "std"]
+    assert (rows["all_ci95_low"] <= rows["all"] + 1e-9).all() and (rows["all"] <= rows["all_ci95_high"] + 1e-9).all()
+    assert rows["chance"].round(6).eq(round(1 / len(TABLE.test_objects), 6)).all()
     T = pd.read_csv(out / "hand_multigrasp_T.csv")
-    assert {"seed", "T", "accuracy", "objects_all_correct", "paper_T1_ldap"} <= set(T.columns)
+    assert {"seed", "T", "accuracy", "objects_all_correct", "paper_T1_ldap", "ci95_low", "ci95_high"} <= set(T.columns)
     assert sorted(T["T"].unique()) == [1, 2, 3, 4]
     k = pd.read_csv(out / "hand_multigrasp_k.csv")
     assert {"seed", "k", "accuracy", "mean_grasps_used", "decided_fraction", "objects_all_correct"} <= set(k.columns)
     att = pd.read_csv(out / "hand_attribute_accuracy.csv")
-    assert {"seed", "attribute", "kind", "accuracy", "balanced_accuracy", "paper_accuracy"} <= set(att.columns)
+    assert {"seed", "attribute", "kind", "accuracy", "balanced_accuracy", "paper_accuracy", "ci95_low"} <= set(att.columns)
+    assert "chance" not in att.columns  # attribute accuracy: no test-class chance
     assert set(att["attribute"]) == set(TABLE.K.columns) | {"mean"}
     S = pd.read_csv(out / "hand_attribute_distance.csv")
-    assert list(S.columns) == ["seed", "object", *TABLE.material_attributes, *TABLE.shape_attributes]
+    assert list(S.columns) == ["data", "seed", "object", *TABLE.material_attributes, *TABLE.shape_attributes]
     conf = pd.read_csv(out / "hand_confusion.csv")
     assert set(conf["method"]) == {"LDAP", "DF-MDAP (T=3)", "SC-MDAP (k=2)"}
     for png in out.glob("*.png"):
@@ -112,7 +119,7 @@ def test_multigrasp_curves_are_consistent(study):
 def test_distance_matrix_and_attributes(study):
     result, _ = study
     S = result.attribute_distance
-    mean = S[S["seed"] == "mean"].set_index("object").drop(columns="seed")
+    mean = S[S["seed"] == "mean"].set_index("object").drop(columns=["seed", "data"])
     assert list(mean.index) == TABLE.test_objects
     assert ((mean >= 0) & (mean <= 1)).all().all()
     att = result.attribute_accuracy
@@ -145,6 +152,14 @@ def test_simulated_when_no_grasps_and_refuses_overwrite(tmp_path):
     result = run_hand_study(None, TABLE, tmp_path, seeds=[3], config=cfg)
     assert result.simulated
     assert "SIMULATED" in format_hand_summary(result)
+    for csv in tmp_path.glob("*.csv"):
+        assert (pd.read_csv(csv)["data"] == "simulated").all(), csv.name
+    from tzsl.experiments.report import write_report  # noqa: PLC0415
+
+    page = write_report(tmp_path).read_text()
+    hand = page[page.index('<section id="hand-table5">'):]
+    hand = hand[:hand.index("</section>")]
+    assert "SIMULATED DATA" in hand
     manifest = json.loads((tmp_path / "hand_manifest.json").read_text())
     assert manifest["config"]["simulated"] is True
     assert manifest["simulation"]["3"]["random_state"] == 3

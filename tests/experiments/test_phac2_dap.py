@@ -74,6 +74,19 @@ def test_study_writes_every_table_with_paper_columns(tmp_path):
     assert control["chance"] == pytest.approx(1 / 8)
     assert "majority" not in t1.columns  # every test object has 4 trials: balanced, majority = chance
     assert pd.isna(t1.loc[t1["split"] == "std", "avgdap_ci95_low"]).all()
+    # every split scored is written in the --splits format and reads back equal; the manifest lists its classes
+    from tzsl.evaluation import read_splits_csv  # noqa: PLC0415
+
+    back = read_splits_csv(tmp_path / "splits.csv", features.attributes)
+    assert [(b.name, b.train_objects, b.test_objects, b.kept_attributes) for b in back] == [
+        (n, tuple(v["train"]), tuple(v["test"]), tuple(v["attributes"])) for n, v in out.splits.items()]
+    assert len(back) == 2 and all(len(b.test_objects) == 8 for b in back)
+    import json  # noqa: PLC0415
+
+    manifest = json.loads(out.write_manifest({}, data_files=[tmp_path / "table1_fusion.csv"]).read_text())
+    assert manifest["splits"]["random-1"]["test"] == list(back[0].test_objects)
+    assert len(manifest["data_files"][str(tmp_path / "table1_fusion.csv")]) == 64
+    assert "splits.csv" in manifest["outputs"]
     att = tables["attribute_accuracy"]
     assert list(att.columns[:4]) == ["attribute", "balanced_accuracy", "balanced_accuracy_ci95_low",
                                      "balanced_accuracy_ci95_high"]

@@ -76,3 +76,14 @@ def test_table3_has_both_fusions_intervals_control_and_paper_mean_only():
     assert not {"paper_n_objects", "paper_chance", "paper_maxdap"} & set(t3.columns)
     assert t3["paper_avgdap"].notna().tolist() == [False, False, True, False, False]
     assert t3.loc[t3["split"] == "mean", "paper_avgdap"].item() == pytest.approx(0.24)
+
+
+def test_a_single_object_split_is_left_out_of_the_control():
+    one = _posteriors("challenging-3")
+    one = SplitPosteriors(split=Split(name="challenging-3", train_objects=("x",), test_objects=("a",),
+                                      attributes=("h", "s")), attributes=("h", "s"), P=one.P[:2],
+                          K=one.K[:1], y=np.zeros(2, dtype=int), train_prior=one.train_prior)
+    t3 = table3_challenging([_posteriors("challenging-1"), one])
+    assert t3.loc[t3["split"] == "3", "chance"].item() == 1.0
+    assert t3.loc[t3["split"] == "control", "chance"].item() == pytest.approx(1 / 3)  # split 1 only
+    assert list(table3_challenging([one])["split"]) == ["3", "mean", "std"]

@@ -98,6 +98,8 @@ class ResultsDir:
         self.root = self.final_root / STAGING_FOLDER if staging else self.final_root
         self.force = force
         self.written: list[Path] = []
+        self.splits: dict[str, dict[str, Any]] = {}  # every split written, for the manifest
+        self.data_files: dict[str, str] = {}  # every data file a manifest recorded: path -> sha256
 
     def path(self, name: str) -> Path:
         """Where to write ``name`` (in the staging folder when staging), checked against overwriting."""
@@ -147,6 +149,22 @@ class ResultsDir:
         text = json.dumps(payload, indent=2, sort_keys=True, default=str)
         return self._record(atomic_write(target, lambda p: p.write_text(text + "\n")))
 
+    def write_splits(self, name: str, splits: Iterable[Any]) -> Path:
+        """Write object splits in the format ``--splits`` reads back (:func:`tzsl.evaluation.write_splits_csv`).
+
+        Each split's train/test (and dropped) objects are also recorded for the manifest.
+        """
+        from tzsl.evaluation import write_splits_csv  # noqa: PLC0415
+
+        splits = list(splits)
+        target = self.path(name)
+        write_splits_csv(splits, target)
+        for s in splits:
+            self.splits[s.name] = {"kind": s.kind, "seed": s.seed, "train": list(s.train_objects),
+                                   "test": list(s.test_objects), "dropped": [o for o, _ in s.dropped_objects],
+                                   "attributes": list(s.kept_attributes), "file": name}
+        return self._record(target)
+
     def write_figure(self, name: str, figure: Any, dpi: int = 120) -> Path:
         """Save a matplotlib figure as PNG and close it."""
         import matplotlib.pyplot as plt
@@ -166,10 +184,14 @@ class ResultsDir:
         name: str = "manifest.json",
         extra: dict[str, Any] | None = None,
     ) -> Path:
-        """Record configuration, seeds, data checksums and package versions.
+        """Record configuration, seeds, data checksums, splits and package versions.
 
-        The manifest lists every file written so far by this object with its sha256 too.
+        The manifest lists every file written so far by this object with its sha256, every
+        data file read (``data_files``, and those of earlier manifests of this folder object)
+        with its sha256, and every split written by :meth:`write_splits` with its train and
+        test classes (``splits``).
         """
+        self.data_files.update({str(p): file_sha256(Path(p)) for p in data_files if str(p) not in self.data_files})
         manifest = {
             "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
             "command": " ".join(sys.argv),
@@ -177,7 +199,8 @@ class ResultsDir:
             "platform": platform.platform(),
             "packages": package_versions(),
             "config": config,
-            "data_files": {str(p): file_sha256(Path(p)) for p in data_files},
+            "data_files": dict(sorted(self.data_files.items())),
+            "splits": self.splits,
             "outputs": {
                 str(p.relative_to(self.root)): file_sha256(p) for p in self.written if p.exists()
             },

@@ -122,7 +122,7 @@ def _row_mask(table: pd.DataFrame, split_column: str, by: Sequence[str], label, 
 
 
 def add_trust_columns(table: pd.DataFrame, outcomes: Outcomes, *, n_boot: int = 2000,
-                      random_state: int = 0, baselines: bool = True) -> pd.DataFrame:
+                      random_state: int = 0, baselines: bool = True, per_split_rows: bool = True) -> pd.DataFrame:
     """``table`` with interval columns per recorded accuracy column, and ``chance`` / ``majority``.
 
     See the module docstring for what each column means. Interval columns follow their
@@ -139,6 +139,8 @@ def add_trust_columns(table: pd.DataFrame, outcomes: Outcomes, *, n_boot: int = 
         Bootstrap replicates and seed (:func:`tzsl.evaluation.bootstrap_accuracy`).
     baselines : bool
         Add ``chance`` / ``majority`` (False for tables whose classes are not the test classes).
+    per_split_rows : bool
+        False for tables holding only the ``mean`` rows (no per-split intervals are computed).
 
     Returns
     -------
@@ -158,7 +160,7 @@ def add_trust_columns(table: pd.DataFrame, outcomes: Outcomes, *, n_boot: int = 
         recs = [r for r in outcomes.records if r.column == column]
         for keys in dict.fromkeys(r.keys for r in recs):
             group = [r for r in recs if r.keys == keys]
-            for r in group:
+            for r in group if per_split_rows else [r for r in group if r.inner is not None]:
                 iv = bootstrap_accuracy(r.correct, classes=r.classes, splits=r.inner, metric=r.metric,
                                         n_boot=n_boot, random_state=random_state)
                 mask = _row_mask(out, sc, by, r.label, keys)

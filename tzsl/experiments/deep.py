@@ -31,10 +31,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from tzsl.datasets import FabricData, fabric_zsl_split, load_fabric, load_gelsight_fabric_videos
+from tzsl.datasets import FabricData, FabricSplit, fabric_zsl_split, load_fabric, load_gelsight_fabric_videos
 from tzsl.evaluation import per_class_mean_accuracy, summarise_over_splits, trial_accuracy
 from tzsl.exceptions import ConfigError, DataFileError
-from tzsl.experiments.fabric_tables import PAPER_LAMBDAS, lambda_label
+from tzsl.experiments._trust import Outcomes, add_trust_columns
+from tzsl.experiments.fabric_tables import PAPER_LAMBDAS, fabric_protocols, lambda_label
 from tzsl.models import DeepAttributeEmbedding
 
 __all__ = [
@@ -193,6 +194,7 @@ def run_deep_fabric(
     *,
     config: int = 1,
     model: DeepAttributeEmbedding | None = None,
+    split: FabricSplit | None = None,
 ) -> DeepRunResult:
     """Train the deep model on the training groups and score train and test groups.
 
@@ -206,13 +208,16 @@ def run_deep_fabric(
     model : DeepAttributeEmbedding or None
         Unfitted estimator (default: ``DeepAttributeEmbedding(random_state=0)``); its
         ``duplicate_attributes`` is set to ``"merge"``.
+    split : FabricSplit or None
+        A split to use instead of ``config``'s (e.g. its zero-shot variant,
+        :func:`tzsl.experiments.fabric_tables.fabric_protocols`).
 
     Returns
     -------
     DeepRunResult
     """
     A = np.asarray(attributes, dtype=np.float64)
-    split = fabric_zsl_split(config, A)
+    split = fabric_zsl_split(config, A) if split is None else split
     groups = sequences.groups
     is_train, is_test = split.is_train(groups), split.is_test(groups)
     for name, mask, wanted in (("training", is_train, split.train_groups), ("test", is_test, split.test_groups)):
@@ -376,28 +381,40 @@ def run_deep_fabric_study(
             sources.append((f"gelsight-{cond}", gelsight_video_sequences(gelsight_root, [cond])))
 
     rows = []
+    keys = ["condition", "config", "protocol", "method"]
+    outcomes = Outcomes(split_column="seed", by=keys)
     for condition, seqs in sources:
-        for config in configs:
+        for proto in fabric_protocols(configs, fabric.attributes):  # the paper's split and its zero-shot variant
+            config = proto.split.config
             for lam, label in zip(lams, labels, strict=True):
                 for sd in range(int(seed), int(seed) + int(seeds)):
                     model = DeepAttributeEmbedding(**{**params, "lam": lam, "random_state": sd,
                                                       "cache_dir": params.get("cache_dir", cache)})
-                    r = run_deep_fabric(seqs, fabric.attributes, config=config, model=model)
+                    r = run_deep_fabric(seqs, fabric.attributes, config=config, model=model, split=proto.split)
+                    test = (r.predictions["split"] == "test").to_numpy()
+                    y_true, y_pred = seqs.groups[test], r.predictions["predicted_group"].to_numpy()[test]
+                    key = {"condition": condition, "config": config, "protocol": proto.name, "method": f"lam_{label}"}
+                    outcomes.add(sd, "accuracy", y_true, y_true == y_pred, **key)
+                    outcomes.add(sd, "per_class_mean_accuracy", y_true, y_true == y_pred, metric="class_mean", **key)
                     rows.append({
-                        "condition": condition, "config": config, "method": f"lam_{label}", "seed": sd,
+                        **key, "zero_shot": proto.zero_shot, "test_groups": " ".join(map(str, proto.split.test_groups)),
+                        "seed": sd,
                         "accuracy": r.test_accuracy, "per_class_mean_accuracy": r.test_class_mean_accuracy,
                         "train_accuracy": r.train_accuracy, "n_train": r.n_train, "n_test": r.n_test,
                         "epochs": r.model.n_epochs_, "final_loss": r.model.loss_curve_[-1],
                         "seconds_per_epoch": r.seconds_per_epoch, "feature_seconds": r.feature_seconds,
                     })
     runs = pd.DataFrame(rows)
-    keys = ["condition", "config", "method"]
     stats = ["accuracy", "per_class_mean_accuracy", "train_accuracy", "seconds_per_epoch"]
     summary = summarise_over_splits(runs[["seed", *keys, *stats]], split_column="seed", by=keys, ddof=0)
     mean = summary[summary["seed"] == "mean"].drop(columns="seed").reset_index(drop=True)
     std = summary.loc[summary["seed"] == "std", stats].fillna(0.0).reset_index(drop=True)
     table = pd.concat([mean, std.add_suffix("_std")], axis=1)
-    table.insert(3, "n_seeds", runs.groupby(keys, sort=False).size().to_numpy())
+    table.insert(4, "n_seeds", runs.groupby(keys, sort=False).size().to_numpy())
+    firsts = runs.groupby(keys, sort=False)[["zero_shot", "test_groups"]].first().reset_index(drop=True)
+    table.insert(4, "zero_shot", firsts["zero_shot"].to_numpy())
+    table.insert(5, "test_groups", firsts["test_groups"].to_numpy())
+    table = add_trust_columns(table.assign(seed="mean"), outcomes, per_split_rows=False).drop(columns="seed")
     out.write_csv(DEEP_RUNS_FILE, runs)
     out.write_csv(DEEP_TABLE_FILE, table)
     data_files = sorted({Path(p) for _, seqs in sources if "path" in seqs.table for p in seqs.table["path"]})
@@ -415,7 +432,7 @@ def run_deep_fabric_study(
 
 def format_deep_table(table: pd.DataFrame) -> str:
     """The deep study's table as aligned text (accuracies in %)."""
-    show = table[["condition", "config", "method", "n_seeds"]].copy()
+    show = table[[c for c in ("condition", "config", "protocol", "method", "n_seeds") if c in table.columns]].copy()
     for col in ("accuracy", "per_class_mean_accuracy", "train_accuracy"):
         show[col] = [f"{100 * m:.2f} +- {100 * s:.2f}" for m, s in zip(table[col], table[f"{col}_std"], strict=True)]
     show["s/epoch"] = table["seconds_per_epoch"].map(lambda v: f"{v:.3f}")

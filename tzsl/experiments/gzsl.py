@@ -56,6 +56,7 @@ from tzsl.evaluation import (
 )
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.experiments._failures import ERROR_COLUMN, attempt
+from tzsl.experiments._trust import Outcomes, add_trust_columns
 from tzsl.experiments.config import Phac2Gzsl
 from tzsl.experiments.phac2_dap import DapStudyConfig, attribute_bank, compute_context
 from tzsl.experiments.phac2_tables import split_label
@@ -313,17 +314,40 @@ def gzsl_split(features: FeatureSet, split: Split, config: DapStudyConfig, gzsl:
         for calibrated, gamma in gammas:
             pred = stacked_predict(scores, problem.seen, gamma)
             result = gzsl_scores(y, pred, seen_classes, unseen_classes)
+            seen_trials = ~is_unseen
             rows.append({**base, "method": _method_name(method, gzsl), "calibrated": calibrated,
-                         "stacking_constant": gamma, **result, "zsl": zsl})
+                         "stacking_constant": gamma, **result, "zsl": zsl,
+                         "_outcomes": [("seen", y[seen_trials], pred[seen_trials] == y[seen_trials]),
+                                       ("unseen", y[is_unseen], pred[is_unseen] == y[is_unseen]),
+                                       ("zsl", y[is_unseen], zsl_pred == y[is_unseen])]})
     return rows
 
 
 def gzsl_table(rows: list[dict]) -> pd.DataFrame:
-    """Per-split rows followed by ``mean`` and ``std`` rows (over splits) per method and calibration."""
+    """Per-split rows followed by ``mean`` and ``std`` rows (over splits) per method and calibration.
+
+    ``seen``, ``unseen`` and ``zsl`` (per-class mean accuracies) get ``_ci95_low``/``_ci95_high``
+    columns (:func:`tzsl.experiments._trust.add_trust_columns`: within a split over its classes,
+    on ``mean`` rows over splits and classes; the harmonic mean has none). Baselines: ``chance``
+    = 1 / (seen + unseen classes), the chance of ``seen`` and ``unseen``; ``zsl_chance`` = 1 /
+    unseen classes.
+    """
+    outcomes = Outcomes(split_column="split", by=("method", "calibrated"))
+    for row in rows:
+        for column, classes, correct in row.pop("_outcomes", []):
+            outcomes.add(row["split"], column, classes, correct, metric="class_mean",
+                         method=row["method"], calibrated=row["calibrated"])
     table = pd.DataFrame(rows)
-    front = ["split", "method", "calibrated", "seen", "unseen", "harmonic", "zsl", "stacking_constant"]
+    for count in ("n_classes", "n_unseen_classes"):  # absent when every split failed
+        if count not in table.columns:
+            table[count] = np.nan
+    table["chance"] = 1.0 / table["n_classes"]
+    table["zsl_chance"] = 1.0 / table["n_unseen_classes"]
+    front = ["split", "method", "calibrated", "seen", "unseen", "harmonic", "zsl", "chance", "zsl_chance",
+             "stacking_constant"]
     table = table[front + [c for c in table.columns if c not in front]]
-    return summarise_over_splits(table, split_column="split", by=["method", "calibrated"])
+    table = summarise_over_splits(table, split_column="split", by=["method", "calibrated"])
+    return add_trust_columns(table, outcomes, baselines=False)
 
 
 def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: DapStudyConfig | None = None,

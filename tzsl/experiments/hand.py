@@ -48,7 +48,14 @@ from tzsl.experiments.hand_figures import (
     multigrasp_k_figure,
     multigrasp_T_figure,
 )
-from tzsl.experiments.hand_tables import SUBSETS, attribute_table, distance_table, format_hand_summary, table5
+from tzsl.experiments.hand_tables import (
+    SUBSETS,
+    attribute_table,
+    distance_table,
+    format_hand_summary,
+    table5,
+    with_intervals,
+)
 from tzsl.features import GraspFeatures, grasp_features
 from tzsl.models import (
     HAND_FUSIONS,
@@ -286,10 +293,14 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandStudyC
         {s for s in subset_of if s and s not in SUBSETS}
     )
 
-    out: dict[str, list] = {k: [] for k in ("table5", "T", "k", "attr", "S", "confusion")}
+    out: dict[str, list] = {k: [] for k in ("table5", "T", "k", "attr", "S", "confusion", "trust")}
     for f in HAND_FUSIONS:
         ok = pred[f] == y
         row: dict = {"seed": seed, "method": f.upper()}
+        out["trust"] += [("table5", seed, "all", y, ok, "trial", {"method": f.upper()}),
+                         ("table5", seed, "all_per_class_mean", y, ok, "class_mean", {"method": f.upper()})]
+        out["trust"] += [("table5", seed, s, y[subset_of == s], ok[subset_of == s], "trial", {"method": f.upper()})
+                         for s in subsets]
         for s in subsets:
             row[s] = float(ok[subset_of == s].mean())
         row["all"] = float(ok.mean())
@@ -309,6 +320,7 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandStudyC
     for T in range(1, min(config.max_T, L) + 1):
         p = names[break_ties(dap_log_scores(df_mdap(P_ldap[idx[:, :T]]), K, prior), ties)]
         all_ok, most_ok = _object_counts(p, own, names)
+        out["trust"].append(("T", seed, "accuracy", own, p == own, "trial", {"T": T}))
         out["T"].append({"seed": seed, "T": T, "accuracy": float((p == own).mean()),
                          "objects_all_correct": all_ok, "objects_majority_correct": most_ok,
                          "n_sequences": int(len(own))})
@@ -319,6 +331,7 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandStudyC
         d, used, decided = sc_mdap(decisions[idx], k)
         p = names[d]
         all_ok, most_ok = _object_counts(p, own, names)
+        out["trust"].append(("k", seed, "accuracy", own, p == own, "trial", {"k": k}))
         out["k"].append({"seed": seed, "k": k, "accuracy": float((p == own).mean()),
                          "mean_grasps_used": float(used.mean()), "decided_fraction": float(decided.mean()),
                          "objects_all_correct": all_ok, "objects_majority_correct": most_ok,
@@ -334,11 +347,12 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandStudyC
             hits = (P_mat[:, :, j] > 0.5) == (A[:, j][:, None] == 1)
             lab = np.broadcast_to(A[:, j][:, None], contact.shape)[contact]
             hit = hits[contact]
-            kind = "material"
+            kind, objects = "material", np.broadcast_to(y[:, None], contact.shape)[contact]
         else:
             hit = (P_sh[:, j - n_mat] > 0.5) == (A[:, j] == 1)
             lab = A[:, j]
-            kind = "shape"
+            kind, objects = "shape", y
+        out["trust"].append(("attr", seed, "accuracy", objects, hit, "trial", {"attribute": name, "kind": kind}))
         both = (lab == 1).any() and (lab == 0).any()
         out["attr"].append({
             "seed": seed, "attribute": name, "kind": kind, "accuracy": float(hit.mean()),
@@ -411,7 +425,7 @@ def run_hand_study(
                   if simulated else f"grasps: {source}")
 
     notes: list[str] = []
-    parts: dict[str, list] = {k: [] for k in ("table5", "T", "k", "attr", "S", "confusion")}
+    parts: dict[str, list] = {k: [] for k in ("table5", "T", "k", "attr", "S", "confusion", "trust")}
     simulation: dict[str, dict] = {}
     for seed in seeds:
         if simulated:
@@ -431,16 +445,22 @@ def run_hand_study(
         log(f"seed {seed}: LDAP single-grasp accuracy {ldap:.3f}")
 
     names = list(table.test_objects)
+    trust = parts["trust"]
     result = HandStudyResult(
-        table5=table5(parts["table5"]),
-        multigrasp_T=summarise_over_splits(pd.DataFrame(parts["T"]), split_column="seed", by=["T"]),
-        multigrasp_k=summarise_over_splits(pd.DataFrame(parts["k"]), split_column="seed", by=["k"]),
-        attribute_accuracy=attribute_table(parts["attr"]),
+        table5=with_intervals(table5(parts["table5"]), trust, "table5", ("method",)),
+        multigrasp_T=with_intervals(summarise_over_splits(pd.DataFrame(parts["T"]), split_column="seed", by=["T"]),
+                                    trust, "T", ("T",)),
+        multigrasp_k=with_intervals(summarise_over_splits(pd.DataFrame(parts["k"]), split_column="seed", by=["k"]),
+                                    trust, "k", ("k",)),
+        attribute_accuracy=with_intervals(attribute_table(parts["attr"]), trust, "attr", ("attribute", "kind"),
+                                          baselines=False),
         attribute_distance=distance_table(parts["S"]),
         confusion=pd.DataFrame(parts["confusion"]),
         simulated=simulated,
         notes=notes,
     )
+    for name in ("table5", "multigrasp_T", "multigrasp_k", "attribute_accuracy", "attribute_distance", "confusion"):
+        getattr(result, name).insert(0, "data", "simulated" if simulated else "supplied")
     result.multigrasp_T["paper_T1_ldap"] = paper.DAP_HAND_SINGLE_GRASP_BEST
     results.write_csv("hand_table5.csv", result.table5)
     results.write_csv("hand_multigrasp_T.csv", result.multigrasp_T)

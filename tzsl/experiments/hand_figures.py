@@ -105,7 +105,7 @@ def confusion_figure(conf: pd.DataFrame, names: list[str], data_label: str):
 
 def attribute_distance_figure(S: pd.DataFrame, data_label: str):
     plt = _plt()
-    mean = S[S["seed"] == "mean"].set_index("object").drop(columns="seed")
+    mean = S[S["seed"] == "mean"].set_index("object").drop(columns=["seed", "data"], errors="ignore")
     fig, ax = plt.subplots(figsize=(8, 5))
     im = ax.imshow(mean.to_numpy(dtype=float), vmin=0, vmax=1, cmap="viridis")
     for (i, j), v in np.ndenumerate(mean.to_numpy(dtype=float)):

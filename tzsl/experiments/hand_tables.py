@@ -13,14 +13,31 @@ import pandas as pd
 
 from tzsl.evaluation import summarise_over_splits
 from tzsl.experiments import paper_numbers as paper
+from tzsl.experiments._trust import Outcomes, add_trust_columns
 
 if TYPE_CHECKING:
     from tzsl.experiments.hand import HandStudyResult
 
-__all__ = ["SUBSETS", "attribute_table", "distance_table", "format_hand_summary", "table5"]
+__all__ = ["SUBSETS", "attribute_table", "distance_table", "format_hand_summary", "table5", "with_intervals"]
 
 #: Table 5 columns: the paper's object subsets (section 5.8), then all test objects.
 SUBSETS: tuple[str, ...] = ("homogeneous", "heterogeneous_shape", "heterogeneous_material")
+
+
+def with_intervals(table: pd.DataFrame, records: list[tuple], kind: str, by: tuple[str, ...],
+                   baselines: bool = True) -> pd.DataFrame:
+    """``table`` with interval (and chance / majority) columns from the study's per-grasp records.
+
+    ``records``: ``(kind, seed, column, classes, correct, metric, keys)`` tuples collected by the
+    study; those of ``kind`` go into an :class:`~tzsl.experiments._trust.Outcomes` with
+    ``split_column="seed"`` (intervals: within a seed over test objects, and on the ``mean``
+    rows over seeds and test objects; :func:`~tzsl.experiments._trust.add_trust_columns`).
+    """
+    outcomes = Outcomes(split_column="seed", by=by)
+    for k, seed, column, classes, correct, metric, keys in records:
+        if k == kind:
+            outcomes.add(seed, column, classes, correct, metric=metric, **keys)
+    return add_trust_columns(table, outcomes, baselines=baselines)
 
 
 def table5(rows: list[dict]) -> pd.DataFrame:

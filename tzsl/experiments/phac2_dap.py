@@ -46,9 +46,13 @@ from tzsl.models import (
 
 _SPLITS, _SVM, _METHODS, _COMPUTE = Phac2Splits(), Phac2Svm(), Phac2Methods(), DaskCompute()
 
+#: Every split a study scored, in the format ``tzsl evaluate --splits`` reads back.
+SPLITS_FILE = "splits.csv"
+
 
 __all__ = [
     "FUSIONS",
+    "SPLITS_FILE",
     "PRIORS",
     "DapStudyConfig",
     "SplitPosteriors",
@@ -409,8 +413,10 @@ def run_dap_study(
             if compare_methods:
                 tables.update(method_comparison(features, random_results, seed=config.seed,
                                                 **(method_options or {})))
+        used = [r.split for r in random_results]
         if splits is None and "challenging" in kinds:
             challenging, map_coords = make_splits(features, "challenging", config)
+            used += challenging
             results = fit_splits(features, challenging, config, offset=100)
             tables["table3_challenging"] = table3_challenging(results, map_coords)
             tables["object_map"] = map_coords
@@ -424,6 +430,8 @@ def run_dap_study(
         "phac2_methods": "DAP vs ESZSL vs embedding model on the same random splits (trial accuracy)",
         "method_comparison": "Methods vs AVGDAP (uni-prior) on the same random splits, 95% intervals",
     }
+    if used:  # every split scored, readable by --splits; its classes go into the manifest too
+        out.write_splits(SPLITS_FILE, used)
     for name, table in tables.items():
         out.write_csv(f"{name}.csv", table)
         if name in titles:

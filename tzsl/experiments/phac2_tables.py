@@ -65,7 +65,8 @@ def _outcomes(results: list[SplitPosteriors], columns: dict[str, Scored], contro
     rows are shuffled among the test classes (:func:`tzsl.evaluation.shuffled_rows_control`,
     :data:`CONTROL_PERMUTATIONS` tables per split) and the same posteriors rescored; its value
     is the mean over splits of the share of trials recognised, which must be chance within
-    its interval (two-level bootstrap over the splits it pools).
+    its interval (two-level bootstrap over the splits it pools). Splits whose test objects
+    share one attribute row (a single test object) cannot be shuffled and are left out of it.
     """
     outcomes = Outcomes()
     for r in results:
@@ -73,9 +74,12 @@ def _outcomes(results: list[SplitPosteriors], columns: dict[str, Scored], contro
             outcomes.add(split_label(r.split), column, r.y, r.predict(fusion, prior, multilabel) == r.y, metric=metric)
     if not control:
         return outcomes, None
+    shuffleable = [r for r in results if len(np.unique(r.K, axis=0)) >= 2]  # a 1-class split has no control
+    if not shuffleable:
+        return outcomes, None
     row: dict = {"split": CONTROL_ROW}
     for column, scored in columns.items():
-        correct, classes, splits = negative_control(results, scored, seed=seed)
+        correct, classes, splits = negative_control(shuffleable, scored, seed=seed)
         outcomes.add(CONTROL_ROW, column, classes, correct, metric=scored[3], inner_splits=splits)
         row[column] = bootstrap_accuracy(correct, classes=classes, splits=splits, metric=scored[3], n_boot=1).mean
     return outcomes, row

@@ -50,7 +50,7 @@ def dropped_columns(methods) -> dict[str, list[str]]:
 def phac2_outputs(config) -> list[str]:
     """Files a phac2-dap run writes (checked free before any computation)."""
     kinds, methods = config.splits.kinds, config.methods
-    names = ["manifest.json"]
+    names = ["manifest.json", "splits.csv"]
     if "random" in kinds or "file" in kinds:
         names += ["table1_fusion.csv", "table2_priors.csv", "attribute_accuracy.csv",
                   "attribute_accuracy_per_split.csv", "attribute_accuracy.png"]
@@ -78,12 +78,16 @@ def phac2_features(exp: Experiment):
     if ds.plain is not None:
         from tzsl.features import load_plain_dataset  # noqa: PLC0415
 
-        return load_plain_dataset(exp.resolve(ds.plain), statistics=feat.statistics,
-                                  baseline_rows=feat.baseline_rows, channels=feat.channels,
-                                  min_objects=ds.min_objects)
+        folder = exp.resolve(ds.plain)
+        features = load_plain_dataset(folder, statistics=feat.statistics, baseline_rows=feat.baseline_rows,
+                                      channels=feat.channels, min_objects=ds.min_objects)
+        features.info.setdefault("data_files", sorted(str(p) for p in Path(folder).rglob("*") if p.is_file()))
+        return features
     from tzsl.experiments.sources import load_study_features  # noqa: PLC0415
 
-    return load_study_features(None, features_file=exp.resolve(ds.features))
+    features = load_study_features(None, features_file=exp.resolve(ds.features))
+    features.info.setdefault("data_files", [str(exp.resolve(ds.features))])
+    return features
 
 
 def _check_folds(exp: Experiment, n_train_objects: int) -> None:
@@ -171,7 +175,8 @@ def run_phac2(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) 
               "splits_file": None if split_file is None else str(split_file),
               "method_options": options,
               "gzsl": gzsl_record, "dataset": features.dataset}
-    return StudyRun(shown, record, features.info.get("data_files", []))
+    data_files = list(features.info.get("data_files", [])) + ([] if split_file is None else [split_file])
+    return StudyRun(shown, record, data_files)
 
 
 def run_fabric(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
