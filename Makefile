@@ -11,7 +11,7 @@ endif
 RESULTS ?= results
 N_JOBS ?= 2
 
-.PHONY: install browser test reproduce-tables readme-results bench clean
+.PHONY: install browser test reproduce-tables readme-results bench bench-scale clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -42,5 +42,10 @@ readme-results: install
 bench: install
 	$(BIN)/tzsl bench
 
+# Cost against trials on SIMULATED data (issue 15); e.g. make bench-scale SCALE_SIZES=1000,4000 for a quick run.
+SCALE_SIZES ?= 1000,4000,16000,64000,100000
+bench-scale: install
+	$(BIN)/python -m tzsl.experiments.bench_scale --sizes $(SCALE_SIZES) --n-jobs $(N_JOBS) --work bench_scale
+
 clean:
-	rm -rf $(VENV) .pytest_cache .hypothesis $(RESULTS) .tzsl_cache
+	rm -rf $(VENV) .pytest_cache .hypothesis $(RESULTS) .tzsl_cache bench_scale

@@ -308,6 +308,9 @@ def test_run_writes_selected_tables_and_manifest(tmp_path):
     assert manifest["experiment_toml"] == RUN_TOML
     assert manifest["config"]["phac2_dap"]["svm_params"] == {"cv": 3, "n_C": 1, "n_gamma": 1, "n_draws": 1}
     assert manifest["config"]["gzsl"]["holdout_fraction"] == 0.25
+    solvers = manifest["config"]["attribute_solver"]  # 2 random splits of 80 trials: exact, and why
+    assert [c["solver"] for c in solvers] == ["exact", "exact"] and "max_exact_trials" in solvers[0]["reason"]
+    assert any(line.startswith("attribute models: exact (solver='auto'") for line in lines)
     assert tomllib.loads(manifest["config"]["resolved_toml"])["splits"]["n_test"] == 4
     assert any("Generalised zero-shot" in line for line in lines)
     assert not any("maxdap" in line for line in lines)

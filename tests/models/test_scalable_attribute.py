@@ -75,3 +75,18 @@ def test_bank_solver_choice_is_recorded(solver, limit, expected, capsys):
     captured = capsys.readouterr()
     assert f"attribute models: {expected}" in captured.out + captured.err
     assert bank.predict_proba(X).shape == (X.shape[0], 1, 1)
+
+
+def test_search_on_a_subset_then_refit_on_all_trials():
+    X, A, g = make_problem(n_objects=40, trials=10, seed=3)
+    tr = g < 28
+    full = ScalableAttributeClassifier(**SMALL, random_state=0).fit(X[tr, 0], A[tr, 2], g[tr])
+    same = ScalableAttributeClassifier(**SMALL, max_tune_trials=int(tr.sum()), random_state=0).fit(
+        X[tr, 0], A[tr, 2], g[tr])
+    np.testing.assert_array_equal(full.coef_, same.coef_)  # no subset below the cap: unchanged
+    m = ScalableAttributeClassifier(**SMALL, max_tune_trials=100, random_state=0).fit(X[tr, 0], A[tr, 2], g[tr])
+    tune = m.tune_index_
+    assert 80 <= tune.size <= 100 and m.oof_scores_.shape == tune.shape  # floor(share) per object
+    assert set(g[tr][tune]) == set(g[tr])  # every object keeps trials in the search
+    assert m.coef_.shape == (m.feature_map_.components_.shape[0],)  # the search's feature map, refitted
+    assert balanced_accuracy(m.predict_proba(X[~tr, 0])[:, 1], A[~tr, 2]) > 0.8  # chance is 0.5

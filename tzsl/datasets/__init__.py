@@ -53,6 +53,7 @@ from tzsl.datasets._fabric_videos import load_gelsight_fabric_videos
 from tzsl.datasets._gelsight_press import PressRecord, load_gelsight_press
 from tzsl.datasets._video import avi_frame_count, read_video
 from tzsl.datasets._plain import PlainDataset, feature_set_to_plain, read_plain_dataset, write_plain_dataset
+from tzsl.datasets._synthetic import synthetic_dataset_arrays, write_synthetic_dataset
 from tzsl.datasets._validate import Problem, read_signal_file, validate_dataset
 
 __all__ = [
@@ -66,6 +67,8 @@ __all__ = [
     "write_grasps",
     "SimulatedGrasps",
     "simulate_grasps",
+    "synthetic_dataset_arrays",
+    "write_synthetic_dataset",
     "PHAC2_EPS",
     "TRIAL_COLUMNS",
     "BiotacSignals",

@@ -97,6 +97,7 @@ def write_plain_dataset(
     attribute_groups: Mapping[str, str] | None = None,
     settings: Mapping | None = None,
     signal_format: str = "npz",
+    table_format: str = "csv",
     force: bool = False,
 ) -> Path:
     """Write a plain-file dataset folder, atomically.
@@ -125,6 +126,8 @@ def write_plain_dataset(
     settings : mapping, optional
         ``dataset.toml`` content (see :data:`PLAIN_FORMAT_HELP`).
     signal_format : {"npz", "csv"}, default "npz"
+    table_format : {"csv", "parquet"}, default "csv"
+        The trials table as ``trials.csv`` or ``trials.parquet`` (needs pyarrow).
     force : bool, default False
         Replace an existing dataset folder.
 
@@ -141,6 +144,8 @@ def write_plain_dataset(
         raise ConfigError("give exactly one of X (feature columns) and signals")
     if signal_format not in ("npz", "csv"):
         raise ConfigError(f"signal_format must be 'npz' or 'csv', got {signal_format!r}")
+    if table_format not in ("csv", "parquet"):
+        raise ConfigError(f"table_format must be 'csv' or 'parquet', got {table_format!r}")
     if folder.exists() and folder.is_dir() and any(folder.iterdir()) and not force:
         raise ConfigError(f"{folder} already exists; use --force to overwrite")
     missing = [c for c in ("trial_id", "class") if c not in trials.columns]
@@ -171,7 +176,7 @@ def write_plain_dataset(
                 raise ConfigError(f"feature name(s) {clash} are reserved trials.csv columns")
             values = pd.DataFrame(np.asarray(X, dtype=np.float64).reshape(n_trials * n_sensors, -1),
                                   columns=list(feature_names))
-            pd.concat([long, values], axis=1).to_csv(tmp / TRIALS_FILE, index=False)
+            _write_trials(tmp, pd.concat([long, values], axis=1), table_format)
         else:
             if channels is None:
                 raise ConfigError("signals need channel names (channels=...)")
@@ -189,7 +194,7 @@ def write_plain_dataset(
                     _write_signal(tmp / rel, np.asarray(signals[i][s], dtype=np.float64), channels)
                     names.append(rel)
             long["signal_file"] = names
-            long.to_csv(tmp / TRIALS_FILE, index=False)
+            _write_trials(tmp, long, table_format)
         if attribute_groups is not None:
             pd.DataFrame({"attribute": list(attribute_groups), "group": list(attribute_groups.values())}).to_csv(
                 tmp / GROUPS_FILE, index=False)
@@ -200,6 +205,13 @@ def write_plain_dataset(
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
     return folder
+
+
+def _write_trials(tmp: Path, table: pd.DataFrame, table_format: str) -> None:
+    if table_format == "parquet":
+        table.to_parquet(tmp / TRIALS_PARQUET, index=False)
+    else:
+        table.to_csv(tmp / TRIALS_FILE, index=False)
 
 
 def _write_signal(path: Path, values: np.ndarray, channels: Sequence[str]) -> None:

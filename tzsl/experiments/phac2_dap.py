@@ -351,6 +351,7 @@ def run_dap_study(
     compare_methods: bool = False,
     echo=None,
     method_options: dict | None = None,
+    record: dict | None = None,
 ) -> dict[str, pd.DataFrame]:
     """Run the PHAC-2 DAP study and write its tables and figures into ``out``.
 
@@ -376,6 +377,9 @@ def run_dap_study(
     method_options : dict or None
         Keyword arguments of :func:`method_comparison` (``methods``: registry entries) when
         ``compare_methods``; default: ESZSL and embedding lambdas 0.1 and 1.
+    record : dict or None
+        Filled with ``"attribute_solver"``: one :attr:`AttributeClassifierBank.solver_choice_`
+        per fitted split (exact or approximate attribute models, and why), for the manifest.
 
     Returns
     -------
@@ -421,6 +425,7 @@ def run_dap_study(
             tables["table3_challenging"] = table3_challenging(results, map_coords)
             tables["object_map"] = map_coords
             out.write_figure("object_map.png", object_map_figure(map_coords))
+    _record_solvers(random_results + (results if splits is None and "challenging" in kinds else []), echo, record)
     titles = {
         "table1_fusion": "Table 1: MAXDAP vs AVGDAP (uni-prior), random splits - ours beside the paper",
         "table2_priors": "Table 2: AVGDAP by attribute prior, random splits - ours beside the paper",
@@ -437,3 +442,15 @@ def run_dap_study(
         if name in titles:
             _print(echo, titles[name], table)
     return tables
+
+
+def _record_solvers(results: list[SplitPosteriors], echo, record: dict | None) -> None:
+    """Echo each distinct attribute-solver choice once; store every split's in ``record``."""
+    choices = [{"split": r.split.name, **r.model.solver_choice_} for r in results
+               if r.model is not None and hasattr(r.model, "solver_choice_")]
+    if record is not None:
+        record["attribute_solver"] = choices
+    if echo is not None:
+        for text in dict.fromkeys(f"attribute models: {c['solver']} ({c['reason']})" for c in choices):
+            echo(text)
+

@@ -157,8 +157,13 @@ def run_phac2(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) 
     methods = c.methods
     options = {"methods": methods.method_specs()}
     file_splits = user_splits if split_file is not None else None  # random ones are redrawn identically
+    solver_record: dict = {}
     tables = run_dap_study(features, results, config, kinds=kinds, splits=file_splits, sweep=methods.sweep,
-                           compare_methods=bool(options["methods"]), method_options=options)
+                           compare_methods=bool(options["methods"]), method_options=options,
+                           record=solver_record)
+    for text in dict.fromkeys(f"attribute models: {c['solver']} ({c['reason']})"
+                              for c in solver_record["attribute_solver"]):
+        say(text)
     gzsl_record = None
     if methods.gzsl:
         gzsl = gzsl_config(exp)
@@ -174,7 +179,7 @@ def run_phac2(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) 
     record = {"study_kind": "phac2-dap", "phac2_dap": record_config(config), "kinds": list(kinds),
               "splits_file": None if split_file is None else str(split_file),
               "method_options": options,
-              "gzsl": gzsl_record, "dataset": features.dataset}
+              "gzsl": gzsl_record, "dataset": features.dataset, **solver_record}
     data_files = list(features.info.get("data_files", [])) + ([] if split_file is None else [split_file])
     return StudyRun(shown, record, data_files)
 

@@ -13,6 +13,12 @@ replaces the kernel machine by
   path with warm starts (each fit starts from the previous ``C``'s solution), so the ``C`` grid
   costs little more than its largest fit.
 
+Above ``max_tune_trials`` training trials the search (draw, ``gamma``, ``C`` and the Platt
+sigmoid) runs on a random subset of that many trials, taken from every object in proportion to
+its trials, and only the chosen model is refitted on all trials of the chosen draw (``C`` scaled
+by subset / full draw size, so the L2 penalty per trial stays the same), so the search costs a
+constant and the whole fit grows linearly in trials.
+
 Memory: ``O(n * n_components)`` for the features of one ``gamma`` plus ``O(block_size *
 n_components)`` scratch. Time: ``O(n * n_components * (d + n_components))`` per ``gamma`` for
 the features, plus the solver iterations (each ``O(n * n_components)``).
@@ -81,6 +87,9 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
         Trials per block when computing the feature map (bounds the scratch memory).
     max_iter : int, default=200
         L-BFGS iterations per fit of the ``C`` path.
+    max_tune_trials : int or None, default=8000
+        Largest number of training trials the hyper-parameter search uses (see above); ``None``:
+        all of them.
     name : str or None, default=None
         Attribute name used in error messages.
     random_state : int, RandomState or None, default=None
@@ -100,7 +109,10 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
     draw_ : int
     platt_ : (float, float)
         Sigmoid ``p = expit(a * s + b)`` on the linear score ``s``.
-    oof_scores_ : ndarray of shape (n_train,)
+    oof_scores_ : ndarray of shape (n_tune,)
+        Out-of-fold scores of the chosen setting on the search trials (``tune_index_``).
+    tune_index_ : ndarray of shape (n_tune,)
+        Training trials the search used (all of them up to ``max_tune_trials``).
     cv_scores_ : ndarray of shape (n_draws, n_gamma, n_C)
         Class-balanced log-loss of the Platt posteriors of the out-of-fold scores (lower is better).
     grid_edges_ : list of (str, float, str)
@@ -120,13 +132,15 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
         "platt_weighting": [StrOptions({"balanced", "empirical"})],
         "block_size": [Interval(Integral, 1, None, closed="left")],
         "max_iter": [Interval(Integral, 1, None, closed="left")],
+        "max_tune_trials": [None, Interval(Integral, 2, None, closed="left")],
         "name": [None, str],
         "random_state": ["random_state"],
     }
 
     def __init__(self, *, preprocessor=None, n_components=256, gamma_range=(0.001, 1.0), n_gamma=4,
                  C_range=(0.1, 1000.0), n_C=5, cv=3, undersampling="select", n_draws=1,
-                 platt_weighting="balanced", block_size=8192, max_iter=200, name=None, random_state=None):
+                 platt_weighting="balanced", block_size=8192, max_iter=200, max_tune_trials=8000, name=None,
+                 random_state=None):
         self.preprocessor = preprocessor
         self.n_components = n_components
         self.gamma_range = gamma_range
@@ -139,6 +153,7 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
         self.platt_weighting = platt_weighting
         self.block_size = block_size
         self.max_iter = max_iter
+        self.max_tune_trials = max_tune_trials
         self.name = name
         self.random_state = random_state
 
@@ -149,9 +164,14 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
             out[start : start + self.block_size] = feature_map.transform(Z[start : start + self.block_size])
         return out
 
-    def _path(self, F_train, y_train, F_eval, Cs, out_scores) -> list[tuple[np.ndarray, float, int]]:
-        """Warm-started logistic fits along ``Cs``; ``out_scores[ci]`` = scores of ``F_eval``."""
+    def _path(self, F_train, y_train, F_eval, Cs, out_scores, start=None) -> list[tuple[np.ndarray, float, int]]:
+        """Warm-started logistic fits along ``Cs``; ``out_scores[ci]`` = scores of ``F_eval``.
+
+        ``start``: ``(coef, intercept)`` the first fit starts from (default: zeros).
+        """
         model = LogisticRegression(warm_start=True, class_weight="balanced", max_iter=self.max_iter, tol=1e-4)
+        if start is not None:
+            model.coef_, model.intercept_ = start[0][None, :].copy(), np.array([start[1]])
         solutions = []
         for ci, C in enumerate(Cs):
             with warnings.catch_warnings():  # a capped path step is reported through n_iter_, not per fit
@@ -205,15 +225,22 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
             self._fit(X, yb, groups, rng)
         return self
 
-    def _fit(self, X, yb, groups, rng) -> None:
+    def _tune_subset(self, groups: np.ndarray, rng) -> np.ndarray:
+        """Sorted indices of the search trials: all, or about ``max_tune_trials`` from every object in proportion."""
+        n = groups.size
+        if self.max_tune_trials is None or n <= self.max_tune_trials:
+            return np.arange(n)
+        _, codes, counts = np.unique(groups, return_inverse=True, return_counts=True)
+        perm = rng.permutation(n)
+        order = perm[np.argsort(codes[perm], kind="stable")]  # trials by object, random within
+        rank = np.empty(n, dtype=np.int64)
+        rank[order] = np.arange(n) - np.concatenate([[0], np.cumsum(counts)[:-1]])[codes[order]]
+        quota = np.maximum(1, np.floor(counts * self.max_tune_trials / n)).astype(np.int64)
+        return np.flatnonzero(rank < quota[codes])
+
+    def _search(self, Z, yb, groups, draws, Cs, gammas, fold_seed: int, map_seed: int):
+        """Grouped-CV search over draws x gammas x Cs on ``Z`` (n, d); the chosen setting and its parts."""
         n = yb.size
-        pre = clone(self.preprocessor) if self.preprocessor is not None else default_preprocessor()
-        Z = np.asarray(pre.fit_transform(X), dtype=np.float64)
-        Cs = np.geomspace(*self.C_range, self.n_C)
-        gammas = np.geomspace(*self.gamma_range, self.n_gamma)
-        draws, _ = balanced_object_draws(yb, groups, self.n_draws if self.undersampling == "select" else 0, rng)
-        fold_seed = int(rng.randint(np.iinfo(np.int32).max))
-        map_seed = int(rng.randint(np.iinfo(np.int32).max))
         w_cal = np.where(yb, 0.5 / yb.sum(), 0.5 / (~yb).sum()) * n if self.platt_weighting == "balanced" else np.ones(n)
         oof = np.empty((len(draws), gammas.size, Cs.size, n))
         full: dict[tuple[int, int], tuple[Nystroem, list]] = {}
@@ -243,14 +270,36 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
             z = a * oof[key] + b
             crit[key] = -(w_cal * np.where(yb, log_expit(z), log_expit(-z))).sum() / w_cal.sum()
         di, gi, ci = np.unravel_index(int(np.argmin(crit)), crit.shape)
-        feature_map, solutions = full[di, gi]
+        return int(di), int(gi), int(ci), crit, oof[di, gi, ci].copy(), w_cal, full[di, gi]
+
+    def _fit(self, X, yb, groups, rng) -> None:
+        n = yb.size
+        pre = clone(self.preprocessor) if self.preprocessor is not None else default_preprocessor()
+        Z = np.asarray(pre.fit_transform(X), dtype=np.float64)
+        Cs = np.geomspace(*self.C_range, self.n_C)
+        gammas = np.geomspace(*self.gamma_range, self.n_gamma)
+        draws, _ = balanced_object_draws(yb, groups, self.n_draws if self.undersampling == "select" else 0, rng)
+        fold_seed = int(rng.randint(np.iinfo(np.int32).max))
+        map_seed = int(rng.randint(np.iinfo(np.int32).max))
+        tune = self._tune_subset(groups, rng)
+        sub = tune.size < n
+        di, gi, ci, crit, oof, w_cal, (feature_map, solutions) = self._search(
+            Z[tune] if sub else Z, yb[tune], groups[tune], [d[tune] for d in draws], Cs, gammas, fold_seed, map_seed)
+        coef, intercept, n_iter = solutions[ci]
+        if sub:  # refit the chosen setting on the whole draw, from the search's solution
+            idx = np.flatnonzero(draws[di])
+            F = self._transform(feature_map, Z[idx])
+            scale = draws[di][tune].sum() / idx.size  # same L2 penalty per trial as in the search
+            ((coef, intercept, n_iter),) = self._path(F, yb[idx], F[:0], Cs[ci : ci + 1] * scale,
+                                                      np.empty((1, 0)), start=(coef, intercept))
         self.preprocessor_, self.feature_map_ = pre, feature_map
-        self.coef_, self.intercept_, self.n_iter_ = solutions[ci]
+        self.coef_, self.intercept_, self.n_iter_ = coef, intercept, n_iter
         self.C_, self.gamma_ = float(Cs[ci]), float(gammas[gi])
         self.draw_ = int(di) if self.undersampling == "select" else -1
         self.cv_scores_ = crit
-        self.oof_scores_ = oof[di, gi, ci].copy()
-        self.platt_ = fit_platt(self.oof_scores_, yb, w_cal)
+        self.tune_index_ = tune
+        self.oof_scores_ = oof
+        self.platt_ = fit_platt(oof, yb[tune], w_cal)
         self.grid_edges_ = [
             (nm, float(grid[i]), "low" if i == 0 else "high")
             for nm, grid, i in (("C", Cs, ci), ("gamma", gammas, gi))
