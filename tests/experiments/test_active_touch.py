@@ -41,10 +41,10 @@ def test_study_writes_table_and_figure(tmp_path, monkeypatch):
     fs = _feature_set()
     config = ActiveTouchConfig(kinds=("random",), n_splits=2, thresholds=(0.5, 0.9), cv=3, n_samples=32, n_boot=200)
     tables = run_active_touch_study(fs, ResultsDir(tmp_path), config)
-    assert {"active_touch.csv", "active_touch_summary.csv", "active_touch_stop.csv", "active_touch.png"} == {
+    assert {"active_touch.csv", "active_touch_curves.csv", "active_touch_stop.csv", "active_touch.png"} == {
         p.name for p in tmp_path.iterdir()}
-    table = tables["active_touch"]
-    written = pd.read_csv(tmp_path / "active_touch.csv")
+    table = tables["active_touch_curves"]
+    written = pd.read_csv(tmp_path / "active_touch_curves.csv")
     assert len(written) == len(table) and (written["data"] == "real").all()
     eps_rows = table[table["x_kind"] == "eps"]
     strategies = set(eps_rows["strategy"])
@@ -73,9 +73,13 @@ def test_study_writes_table_and_figure(tmp_path, monkeypatch):
     np.testing.assert_allclose(stop["difference"], stop["accuracy"] - stop["all_eps_accuracy"], atol=1e-12)
     for _, g in stop.groupby("strategy"):  # a higher threshold never stops earlier
         assert g.sort_values("threshold")["mean_eps"].is_monotonic_increasing
-    summary = tables["active_touch_summary"]
+    summary = tables["active_touch"]
     assert list(summary["strategy"][:3]) == ["active", "active_per_second", "best_fixed_train"]
-    assert {"acc_1ep_ci95_low", "acc_4ep_ci95_high", "acc_mean_over_seconds"} <= set(summary.columns)
+    assert list(summary.columns[:7]) == ["split_kind", "strategy", "acc_1ep", "acc_1ep_ci95_low", "acc_1ep_ci95_high",
+                                         "acc_2ep", "acc_2ep_ci95_low"]
+    assert summary.columns[-3:].tolist() == ["acc_mean_over_seconds", "acc_mean_over_seconds_ci95_low",
+                                             "acc_mean_over_seconds_ci95_high"]
+    assert summary.loc[summary["strategy"] == "chance", "acc_1ep"].iloc[0] == pytest.approx(table["chance"].iloc[0])
     with pytest.raises(ConfigError, match="already exists"):
         run_active_touch_study(fs, ResultsDir(tmp_path), config)
 

@@ -53,7 +53,7 @@ from tzsl.models import PerEPAttributeModel, ep_column_blocks, run_policy
 __all__ = ["ACTIVE_TOUCH_OUTPUTS", "ActiveTouchConfig", "evaluate_split", "run_active_touch_study", "summarise"]
 
 #: Files :func:`run_active_touch_study` writes.
-ACTIVE_TOUCH_OUTPUTS: tuple[str, ...] = ("active_touch.csv", "active_touch_summary.csv", "active_touch_stop.csv",
+ACTIVE_TOUCH_OUTPUTS: tuple[str, ...] = ("active_touch.csv", "active_touch_curves.csv", "active_touch_stop.csv",
                                          "active_touch.png")
 _ACTIVE = ("active", "active_per_second")
 _SHORT = {"squeeze": "sq", "hold": "ho", "slow_slide": "ss", "fast_slide": "fs"}
@@ -257,9 +257,14 @@ def summarise(results: list[dict], kind: str, *, thresholds, n_boot: int, seed: 
 
 
 def summary_table(table: pd.DataFrame) -> pd.DataFrame:
-    """One row per (split kind, strategy): accuracy after 1..n EPs and mean over the seconds budgets, with intervals."""
+    """One row per (split kind, strategy): accuracy after 1..n EPs and mean over the seconds budgets, with intervals.
+
+    A ``chance`` row per split kind gives ``1 / n_classes`` (mean over splits) in every accuracy column.
+    """
     rows = []
     for kind, sub in table.groupby("split_kind", sort=False):
+        n_eps = int(sub.loc[sub["x_kind"] == "eps", "x"].max())
+        chance = float(sub["chance"].iloc[0])
         names = [s for pattern in _SUMMARY for s in dict.fromkeys(sub["strategy"])
                  if s == pattern or (pattern.endswith("*") and s.startswith(pattern[:-1]))]
         for s in names:
@@ -270,9 +275,10 @@ def summary_table(table: pd.DataFrame) -> pd.DataFrame:
                 row.update({col: r["accuracy"], f"{col}_ci95_low": r["ci95_low"], f"{col}_ci95_high": r["ci95_high"]})
             m = g[g["x_kind"] == "seconds_mean"].iloc[0]
             row.update({"acc_mean_over_seconds": m["accuracy"], "acc_mean_over_seconds_ci95_low": m["ci95_low"],
-                        "acc_mean_over_seconds_ci95_high": m["ci95_high"], "chance": g["chance"].iloc[0],
-                        "n_splits": g["n_splits"].iloc[0], "data": g["data"].iloc[0]})
+                        "acc_mean_over_seconds_ci95_high": m["ci95_high"]})
             rows.append(row)
+        rows.append({"split_kind": kind, "strategy": "chance",
+                     **{f"acc_{k}ep": chance for k in range(1, n_eps + 1)}, "acc_mean_over_seconds": chance})
     return pd.DataFrame(rows)
 
 
@@ -340,10 +346,10 @@ def run_active_touch_study(features: FeatureSet, results_dir: ResultsDir, config
     Returns
     -------
     dict of DataFrame
-        ``active_touch`` (columns ``split_kind, data, strategy, x_kind ("eps" | "seconds" |
+        ``active_touch`` (one row per kind and strategy, see :func:`summary_table`),
+        ``active_touch_curves`` (columns ``split_kind, data, strategy, x_kind ("eps" | "seconds" |
         "seconds_mean"), x, accuracy, ci95_low, ci95_high, n_splits, n_trials, chance`` and, where
-        relevant, ``chosen_order``, ``first_<ep>``), ``active_touch_summary`` (one row per kind and
-        strategy, see :func:`summary_table`) and ``active_touch_stop`` (stopping rule per threshold:
+        relevant, ``chosen_order``, ``first_<ep>``) and ``active_touch_stop`` (stopping rule per threshold:
         accuracy, all-EPs accuracy, paired difference, mean EPs / seconds used and saved); each
         with its interval columns. ``.attrs["chosen"]`` holds the orders chosen per split.
     """
@@ -363,11 +369,12 @@ def run_active_touch_study(features: FeatureSet, results_dir: ResultsDir, config
         table, stop = summarise(results, kind, thresholds=config.thresholds, n_boot=config.n_boot, seed=config.seed)
         tables.append(table)
         stops.append(stop)
-    out = {"active_touch": pd.concat(tables, ignore_index=True), "active_touch_stop": pd.concat(stops, ignore_index=True)}
-    out["active_touch_summary"] = summary_table(out["active_touch"])
-    for name in ("active_touch", "active_touch_summary", "active_touch_stop"):
-        results_dir.write_csv(f"{name}.csv", out[name])
-    results_dir.write_figure("active_touch.png", _figure(out["active_touch"]))
+    curves = pd.concat(tables, ignore_index=True)
+    out = {"active_touch": summary_table(curves), "active_touch_curves": curves,
+           "active_touch_stop": pd.concat(stops, ignore_index=True)}
+    for name, table in out.items():
+        results_dir.write_csv(f"{name}.csv", table)
+    results_dir.write_figure("active_touch.png", _figure(curves))
     for t in out.values():
         t.attrs["chosen"] = chosen
     return out

@@ -34,7 +34,7 @@ OVERRIDES: dict[str, str] = {
 
 #: The table :func:`tzsl.run` returns for each study kind.
 MAIN_TABLE: dict[str, str] = {"phac2-dap": "table1_fusion", "fabric": "table1", "fabric-deep": "table",
-                              "hand": "table5", "active-touch": "active_touch_summary"}
+                              "hand": "table5", "active-touch": "active_touch"}
 
 
 def _has_key(study: str, key: str) -> bool:

@@ -10,7 +10,7 @@ Not a second code path: each study is the built-in experiment file of the same n
 * ``fabric``: ``fabric_table1.csv``, ``fabric_runs.csv``, ``fabric_lambda.png`` (+ its own manifest);
 * ``hand-simulated``: ``hand_table5.csv`` and its curves, on **simulated** grasps (the
   Shadow-hand data of the paper are not public);
-* ``active-touch``: ``active_touch.csv``, ``active_touch_summary.csv``, ``active_touch_stop.csv``
+* ``active-touch``: ``active_touch.csv``, ``active_touch_curves.csv``, ``active_touch_stop.csv``
   and ``active_touch.png`` (choosing the next EP on PHAC-2 vs every fixed and a random order).
 
 The other built-in studies (``phac2-gzsl``, ``fabric-deep``) run with ``tzsl run NAME``.

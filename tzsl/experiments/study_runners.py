@@ -221,12 +221,12 @@ def run_active_touch(exp: Experiment, results: ResultsDir, say: Callable[[str], 
     features = extract_features(ds.builtin, data_dir=exp.resolve(ds.data_dir))
     tables = run_active_touch_study(features, results, config, log=say if exp.config.compute.progress else None)
     stop = tables["active_touch_stop"]
-    say("\nActive touch: accuracy after 1..4 EPs (95% intervals in active_touch_summary.csv)\n"
-        + _format(tables["active_touch_summary"][["split_kind", "strategy", "acc_1ep", "acc_2ep", "acc_3ep",
-                                                  "acc_4ep", "acc_mean_over_seconds"]]))
+    say("\nActive touch: accuracy after 1..4 EPs (95% intervals in active_touch.csv)\n"
+        + _format(tables["active_touch"][["split_kind", "strategy", "acc_1ep", "acc_2ep", "acc_3ep", "acc_4ep",
+                                          "acc_mean_over_seconds"]]))
     say("\nStopping rule vs all four EPs\n" + _format(stop[["split_kind", "strategy", "threshold", "accuracy",
                                                              "all_eps_accuracy", "difference", "mean_eps",
                                                              "mean_seconds"]]))
     record = {"study_kind": "active-touch", "active_touch": record_config(config), "dataset": features.dataset,
-              "orders_chosen_on_training_objects": tables["active_touch"].attrs["chosen"]}
+              "orders_chosen_on_training_objects": tables["active_touch_curves"].attrs["chosen"]}
     return StudyRun(tables, record, features.info.get("data_files", []))
