@@ -230,6 +230,11 @@ def test_active_touch_section_table_with_intervals_and_figure_beside(tmp_path):
     page = render_report(root)
     section = page[page.index('id="active-touch"'):]
     assert "Other results" not in page and 'class="simulated"' not in page
+    pd.DataFrame({"data": ["simulated"], "strategy": ["active"], "grasps": [1], "accuracy": [0.5]}).to_csv(
+        root / "active_touch_hand.csv", index=False)
+    hand = render_report(root)
+    assert hand.count('class="simulated"') == 1 and hand.index('id="active-touch-hand"') < hand.index(
+        'class="simulated"')
     assert "<td>0.290 (0.250\u20130.330)</td>" in section and "<td>-0.010 (-0.020\u20130.000)</td>" in section
     # the figure sits in the block of active_touch.csv, beside it (not stacked below)
     block = section[section.index('<div class="pair'):section.index("active_touch_stop.csv")]

@@ -101,6 +101,12 @@ SECTIONS: tuple[Section, ...] = (
             "stopping table gives accuracy when the top posterior reaches a threshold, the paired difference to "
             "running all four EPs, and the EPs and seconds saved.",
             tables=("active_touch", "active_touch_stop", "active_touch_curves"), figures=("active_touch",)),
+    Section("active-touch-hand", "Active touch on the hand: choosing the next grasp type",
+            "The same policy on simulated Shadow-hand grasps: after each grasp the DF-MDAP posterior (sum of LDAP "
+            "log-scores) is updated and the next grasp type (pinch: 1-2 touching BioTacs, tripod: 3, power: 4-5) "
+            "is the one with the largest expected entropy reduction; against always one type, a random type and "
+            "a random grasp (the paper's sequences), and the stopping rule.",
+            tables=("active_touch_hand", "active_touch_hand_stop"), figures=("active_touch_hand",), simulated=True),
     Section("fabric-table1", "Fabric paper, Table 1: accuracy per lambda and ESZSL",
             "Fabric groups as classes, depth-image features; the embedding model for each lambda and ESZSL.",
             tables=("fabric_table1", "fabric_runs"), figures=("fabric_lambda",)),

@@ -275,6 +275,23 @@ class ActiveSplits(Section):
     _kinds = field_validator("kinds")(lambda v: distinct(non_empty(v)))
 
 
+class ActiveHand(Section):
+    """``[hand]``: the same policy choosing the next grasp type on SIMULATED Shadow-hand grasps (Table 4)."""
+
+    simulated: bool = Field(True, description="run the simulated-hand part (grasp types pinch / tripod / power)")
+    seeds: list[int] = Field([0, 1, 2], description="one simulated data set and model fit per seed")
+    n_sequences: int = Field(20, ge=1, description="grasp sequences per test object and seed")
+    max_grasps: int = Field(6, ge=1, description="grasps per sequence")
+    cv: int = Field(3, ge=2, description="folds over training grasps for the grasp-type confusion model")
+
+    @field_validator("seeds")
+    @classmethod
+    def _seeds(cls, v):
+        if any(not 0 <= s < 2**32 for s in v):
+            raise ValueError("seeds must be in 0 .. 2**32 - 1")
+        return distinct(non_empty(v))
+
+
 class ActiveTouchStudy(Section):
     """``study = "active-touch"``: choosing the next EP on PHAC-2 vs every fixed and a random order."""
 
@@ -283,5 +300,6 @@ class ActiveTouchStudy(Section):
     dataset: ActiveDataset = Field(default_factory=ActiveDataset)
     methods: ActiveMethods = Field(default_factory=ActiveMethods)
     splits: ActiveSplits = Field(default_factory=ActiveSplits)
+    hand: ActiveHand = Field(default_factory=ActiveHand)
     compute: Compute = Field(default_factory=Compute)
     output: Output = Field(default_factory=Output)
