@@ -10,6 +10,7 @@ import tzsl.evaluation._intervals as intervals_module
 from tzsl.evaluation import (
     add_interval_columns,
     bootstrap_accuracy,
+    bootstrap_accuracy_columns,
     paired_difference_interval,
     paired_differences_table,
     per_class_mean_accuracy,
@@ -81,6 +82,17 @@ def test_interval_narrows_with_more_splits():
     w = [iv.ci95_high - iv.ci95_low for iv in (
         bootstrap_accuracy(d["correct"], classes=d["class"], splits=d["split"], n_boot=500) for d in (small, large))]
     assert w[1] < w[0] / 2
+
+
+def test_columns_agree_with_one_column_at_a_time():
+    df = _simulate(np.random.default_rng(5))
+    other = np.clip(df["correct"].to_numpy() + 0.5 * (df["trial"].to_numpy() % 2), 0, 1)
+    args = dict(classes=df["class"], splits=df["split"], n_boot=500, random_state=7)
+    mean, low, high = bootstrap_accuracy_columns(np.column_stack([df["correct"], other]), **args)
+    for j, col in enumerate((df["correct"].to_numpy(), other)):
+        one = bootstrap_accuracy(col, **args)  # same seed, same replicates: the same interval
+        assert (mean[j], low[j], high[j]) == pytest.approx(tuple(one))
+    assert mean[1] > mean[0] and (low <= mean).all() and (mean <= high).all()
 
 
 def test_paired_difference_keeps_the_pairing():

@@ -1,4 +1,4 @@
-"""Active-touch study: bootstrap intervals, the written table and figure, and a real PHAC-2 split."""
+"""Active-touch study: the written tables and figure, and a real PHAC-2 split."""
 
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ import pytest
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import random_object_splits
 from tzsl.exceptions import ConfigError
-from tzsl.experiments.active_touch import bootstrap_accuracy, evaluate_split, run_active_touch_study
+from tzsl.experiments._outputs import ResultsDir
+from tzsl.experiments.active_touch import ActiveTouchConfig, evaluate_split, run_active_touch_study
 
 EPS = ("squeeze", "hold", "slow_slide", "fast_slide")
 
@@ -35,32 +36,29 @@ def _feature_set(n_objects=24, n_trials=3, n_attributes=6, seed=0) -> FeatureSet
                       attributes=attributes, dataset="synthetic")
 
 
-def test_bootstrap_accuracy_interval():
-    correct = np.array([[3, 0], [3, 1], [2, 2], [3, 3]], dtype=float)
-    trials = np.full(4, 3.0)
-    split = np.array([0, 0, 1, 1])
-    acc, low, high = bootstrap_accuracy(correct, trials, split, n_boot=500, random_state=0)
-    np.testing.assert_allclose(acc, [11 / 12, 6 / 12])
-    assert (low <= acc).all() and (acc <= high).all()
-    assert high[1] - low[1] > high[0] - low[0] > 0  # more spread, wider interval
-    acc, low, high = bootstrap_accuracy(np.full((4, 1), 3.0), trials, split, n_boot=50)
-    assert acc[0] == low[0] == high[0] == 1.0
-
-
 def test_study_writes_table_and_figure(tmp_path, monkeypatch):
     monkeypatch.delenv("TZSL_CACHE_DIR", raising=False)
     fs = _feature_set()
-    table = run_active_touch_study(fs, tmp_path, n_splits=2, seed=0, threshold=0.9, cv=3, n_samples=32,
-                                   n_boot=200, kinds=("random",))
-    assert {"active_touch.csv", "active_touch.png", "manifest.json"} <= {p.name for p in tmp_path.iterdir()}
-    written = pd.read_csv(tmp_path / "active_touch.csv")
-    assert len(written) == len(table)
+    config = ActiveTouchConfig(kinds=("random",), n_splits=2, thresholds=(0.5, 0.9), cv=3, n_samples=32, n_boot=200)
+    tables = run_active_touch_study(fs, ResultsDir(tmp_path), config)
+    assert {"active_touch.csv", "active_touch_curves.csv", "active_touch_stop.csv", "active_touch.png"} == {
+        p.name for p in tmp_path.iterdir()}
+    table = tables["active_touch_curves"]
+    written = pd.read_csv(tmp_path / "active_touch_curves.csv")
+    assert len(written) == len(table) and (written["data"] == "real").all()
     eps_rows = table[table["x_kind"] == "eps"]
     strategies = set(eps_rows["strategy"])
-    assert {"active", "active_per_second", "random", "paper", "best_fixed_train", "best_fixed_test"} <= strategies
+    assert {"active", "active_per_second", "random", "paper", "best_fixed_train",
+            "best_fixed_test_optimistic"} <= strategies
+    assert {f"first:{ep}" for ep in EPS} <= strategies
     assert sum(s.startswith("order:") for s in strategies) == 24
     assert (eps_rows.groupby("strategy").size() == 4).all()
-    assert ((table["ci_low"] <= table["accuracy"] + 1e-12) & (table["accuracy"] <= table["ci_high"] + 1e-12)).all()
+    ok = (table["ci95_low"] <= table["accuracy"] + 1e-12) & (table["accuracy"] <= table["ci95_high"] + 1e-12)
+    assert ok.all()
+    # each first:<ep> order starts with its EP
+    chosen = table.attrs["chosen"]
+    assert all(chosen[split][f"first:{ep}"].startswith(f"order:{short}")
+               for split in chosen for ep, short in zip(EPS, ("sq", "ho", "ss", "fs")))
     # the hold block is the informative one: the active policy explores it first and beats chance
     first = eps_rows[(eps_rows["strategy"] == "active") & (eps_rows["x"] == 1)]
     assert first["first_hold"].iloc[0] == 1.0
@@ -68,11 +66,22 @@ def test_study_writes_table_and_figure(tmp_path, monkeypatch):
     # random order is the mean of the 24 fixed orders
     orders = eps_rows[eps_rows["strategy"].str.startswith("order:")].groupby("x")["accuracy"].mean()
     np.testing.assert_allclose(eps_rows[eps_rows["strategy"] == "random"].set_index("x")["accuracy"], orders)
-    stop = table[table["x_kind"] == "stop"]
-    assert set(stop["strategy"]) == {"active+stop", "paper+stop"}
+    stop = tables["active_touch_stop"]
+    assert set(stop["strategy"]) == {"active", "active_per_second", "best_fixed_train", "paper", "random"}
     assert ((stop["mean_eps"] >= 1) & (stop["mean_eps"] <= 4)).all()
+    np.testing.assert_allclose(stop["eps_saved"], 4 - stop["mean_eps"])
+    np.testing.assert_allclose(stop["difference"], stop["accuracy"] - stop["all_eps_accuracy"], atol=1e-12)
+    for _, g in stop.groupby("strategy"):  # a higher threshold never stops earlier
+        assert g.sort_values("threshold")["mean_eps"].is_monotonic_increasing
+    summary = tables["active_touch"]
+    assert list(summary["strategy"][:3]) == ["active", "active_per_second", "best_fixed_train"]
+    assert list(summary.columns[:7]) == ["split_kind", "strategy", "acc_1ep", "acc_1ep_ci95_low", "acc_1ep_ci95_high",
+                                         "acc_2ep", "acc_2ep_ci95_low"]
+    assert summary.columns[-3:].tolist() == ["acc_mean_over_seconds", "acc_mean_over_seconds_ci95_low",
+                                             "acc_mean_over_seconds_ci95_high"]
+    assert summary.loc[summary["strategy"] == "chance", "acc_1ep"].iloc[0] == pytest.approx(table["chance"].iloc[0])
     with pytest.raises(ConfigError, match="already exists"):
-        run_active_touch_study(fs, tmp_path, n_splits=1, kinds=("random",))
+        run_active_touch_study(fs, ResultsDir(tmp_path), config)
 
 
 @pytest.mark.slow
@@ -83,13 +92,13 @@ def test_one_real_phac2_split(data_dir, monkeypatch):
     monkeypatch.delenv("TZSL_CACHE_DIR", raising=False)
     fs = extract_features("phac2-penn", data_dir=data_dir)
     split = random_object_splits(fs.attributes, n_test=10, n_splits=1, random_state=0)[0]
-    res = evaluate_split(fs, split, seed=0, cv=3, n_samples=32)
+    res = evaluate_split(fs, split, seed=0, update="dap", cv=3, n_samples=32)
     assert res["eps"] == EPS
     n = len(res["objects"])
     assert n == 100 and set(res["objects"]) == set(split.test_objects)
     for s in ("active", "random", "paper", "best_fixed_train"):
         assert res["correct"][s].shape == (n, 4)
     # after all four EPs every order sees the same evidence, so the accuracies agree
-    finals = {s: res["correct"][s][:, -1].mean() for s in res["correct"] if s.startswith("order:")}
+    finals = {s: res["correct"][s][:, -1].mean() for s in res["orders"]}
     assert max(finals.values()) - min(finals.values()) < 0.05
     assert res["correct"]["active"][:, -1].mean() > 1.5 / res["n_classes"]  # above chance with all EPs

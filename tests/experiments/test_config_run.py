@@ -14,8 +14,8 @@ import pytest
 from tzsl.datasets import FeatureSet, feature_set_to_plain
 from tzsl.exceptions import ConfigError
 from tzsl.experiments.config import STUDIES, builtin_names, load_experiment, to_toml, validate
-from tzsl.experiments.engine import check_experiment, dap_config, fabric_arguments, gzsl_config, hand_config, \
-    run_experiment
+from tzsl.experiments.engine import active_config, check_experiment, dap_config, fabric_arguments, gzsl_config, \
+    hand_config, run_experiment
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -30,7 +30,7 @@ def _write(tmp_path: Path, text: str, name: str = "exp.toml") -> Path:
 
 
 def test_builtin_studies_ship_inside_the_package_only():
-    assert builtin_names() == ["fabric", "fabric-deep", "hand-simulated", "phac2-dap", "phac2-gzsl"]
+    assert builtin_names() == ["active-touch", "fabric", "fabric-deep", "hand-simulated", "phac2-dap", "phac2-gzsl"]
     for name in builtin_names():
         assert load_experiment(name).study in STUDIES
     # one copy: the top-level folder holds the README and the user template, no study file
@@ -39,7 +39,8 @@ def test_builtin_studies_ship_inside_the_package_only():
 
 
 def test_study_dataclasses_read_the_schema_defaults():
-    """DapStudyConfig, HandStudyConfig and GzslConfig take their defaults from the schema."""
+    """DapStudyConfig, HandStudyConfig, GzslConfig and ActiveTouchConfig take their defaults from the schema."""
+    from tzsl.experiments.active_touch import ActiveTouchConfig
     from tzsl.experiments.gzsl import GzslConfig
     from tzsl.experiments.hand import HandStudyConfig
     from tzsl.experiments.phac2_dap import DapStudyConfig
@@ -49,6 +50,7 @@ def test_study_dataclasses_read_the_schema_defaults():
     assert gzsl_config(minimal) == GzslConfig()
     hand = validate({"study": "hand", "dataset": {"builtin": "hand-simulated"}}, "t", Path("."))
     assert hand_config(hand) == HandStudyConfig()
+    assert active_config(validate({"study": "active-touch"}, "t", Path("."))) == ActiveTouchConfig()
 
 
 def test_svm_defaults_are_read_from_the_estimator():
@@ -181,7 +183,7 @@ def test_binary_and_missing_files(tmp_path):
         load_experiment(binary)
     with pytest.raises(ConfigError, match="experiment file not found"):
         load_experiment(tmp_path / "nope.toml")
-    with pytest.raises(ConfigError, match="no such experiment file or built-in study .built-in: fabric"):
+    with pytest.raises(ConfigError, match="no such experiment file or built-in study .built-in: active-touch, fabric"):
         load_experiment("phac2-dapp")
 
 

@@ -213,3 +213,29 @@ def test_counts_text_and_transposed_wide_short_tables():
     view = table_view(wide)
     assert view["transposed"] and view["header"] == ["column", "seq / 1", "img / 2"]
     assert view["rows"][0] == ["m0", "0.000", "0.200"] and view["n_rows"] == TRANSPOSE_COLUMNS
+
+
+def test_active_touch_section_table_with_intervals_and_figure_beside(tmp_path):
+    root = tmp_path / "res"
+    root.mkdir()
+    summary = pd.DataFrame({"split_kind": ["random", "random"], "strategy": ["active", "chance"],
+                            "acc_1ep": [0.29, 0.1], "acc_1ep_ci95_low": [0.25, None], "acc_1ep_ci95_high": [0.33, None],
+                            "acc_mean_over_seconds": [0.27, 0.1]})
+    summary.to_csv(root / "active_touch.csv", index=False)
+    pd.DataFrame({"strategy": ["active"], "threshold": [0.9], "accuracy": [0.36], "accuracy_ci95_low": [0.3],
+                  "accuracy_ci95_high": [0.4], "difference": [-0.01], "difference_ci95_low": [-0.02],
+                  "difference_ci95_high": [0.0], "eps_saved": [1.3]}).to_csv(root / "active_touch_stop.csv",
+                                                                            index=False)
+    _figure(root / "active_touch.png", 1.0)
+    page = render_report(root)
+    section = page[page.index('id="active-touch"'):]
+    assert "Other results" not in page and 'class="simulated"' not in page
+    pd.DataFrame({"data": ["simulated"], "strategy": ["active"], "grasps": [1], "accuracy": [0.5]}).to_csv(
+        root / "active_touch_hand.csv", index=False)
+    hand = render_report(root)
+    assert hand.count('class="simulated"') == 1 and hand.index('id="active-touch-hand"') < hand.index(
+        'class="simulated"')
+    assert "<td>0.290 (0.250\u20130.330)</td>" in section and "<td>-0.010 (-0.020\u20130.000)</td>" in section
+    # the figure sits in the block of active_touch.csv, beside it (not stacked below)
+    block = section[section.index('<div class="pair'):section.index("active_touch_stop.csv")]
+    assert "active_touch.png" in block and 'class="pair stacked"' not in block

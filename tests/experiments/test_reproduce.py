@@ -15,7 +15,7 @@ from tzsl.experiments.reproduce import REPRODUCE_STUDIES, reproduce_experiments,
 
 
 def test_reproduce_runs_the_builtin_files_unchanged():
-    assert REPRODUCE_STUDIES == ("phac2-dap", "fabric", "hand-simulated")
+    assert REPRODUCE_STUDIES == ("phac2-dap", "fabric", "hand-simulated", "active-touch")
     for name, exp in zip(REPRODUCE_STUDIES, reproduce_experiments(), strict=True):
         assert exp.config == load_experiment(name).config, name
 

@@ -85,7 +85,7 @@ def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, dat
 def reproduce_tables(out, n_jobs, backend, scheduler, no_progress, data_dir, force):
     """Every table (CSV) and figure (PNG) of both papers from the real data, paper numbers beside ours.
 
-    Runs the built-in studies phac2-dap, fabric and hand-simulated, in this order, exactly as
+    Runs the built-in studies phac2-dap, fabric, hand-simulated and active-touch, in this order, exactly as
     'tzsl run NAME' does, into one folder with one manifest.json. The hand study runs on
     SIMULATED grasps (the paper's Shadow-hand data are not public).
     """

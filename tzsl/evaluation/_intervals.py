@@ -46,6 +46,7 @@ __all__ = [
     "Interval",
     "add_interval_columns",
     "bootstrap_accuracy",
+    "bootstrap_accuracy_columns",
     "paired_difference_interval",
     "paired_differences_table",
     "splits_for_paired_interval",
@@ -192,6 +193,34 @@ def bootstrap_accuracy(
     c = _check_correct(correct, 1)
     point, reps = _replicates(c, classes, splits, metric, n_boot, random_state)
     return _interval(point[0], reps[:, 0])
+
+
+def bootstrap_accuracy_columns(
+    correct,
+    *,
+    classes,
+    splits=None,
+    metric: Metric = "trial",
+    n_boot: int = DEFAULT_N_BOOT,
+    random_state: int | np.random.Generator | None = 0,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`bootstrap_accuracy` for many columns at once, every column on the same replicates.
+
+    Parameters
+    ----------
+    correct : array-like of shape (n_trials, n_columns)
+        Per-trial correctness (fractions in [0, 1] allowed) of each column (method, step, budget).
+    classes, splits, metric, n_boot, random_state
+        As in :func:`bootstrap_accuracy`.
+
+    Returns
+    -------
+    mean, ci95_low, ci95_high : ndarray of shape (n_columns,)
+    """
+    c = _check_correct(correct)
+    point, reps = _replicates(c, classes, splits, metric, n_boot, random_state)
+    low, high = np.quantile(reps, [0.025, 0.975], axis=0)
+    return point, low, high
 
 
 def paired_difference_interval(

@@ -3,7 +3,8 @@
 ``tzsl run FILE|NAME``, ``tzsl reproduce-tables``, ``tzsl evaluate``, ``evaluate-fabric``,
 ``evaluate-hand`` and :func:`tzsl.run` all end in :func:`execute_study`: one function per study
 kind turns the resolved settings into the study's own call (:func:`run_dap_study`,
-:func:`run_fabric_study`, :func:`run_deep_fabric_study`, :func:`run_hand_study`).
+:func:`run_fabric_study`, :func:`run_deep_fabric_study`, :func:`run_hand_study`,
+:func:`run_active_touch_study`).
 :func:`check_experiment` finds what a run would fail on (missing paths, a missing split
 file, an unreachable Dask scheduler, too many CV folds) before any fit.
 """
@@ -34,7 +35,7 @@ OVERRIDES: dict[str, str] = {
 
 #: The table :func:`tzsl.run` returns for each study kind.
 MAIN_TABLE: dict[str, str] = {"phac2-dap": "table1_fusion", "fabric": "table1", "fabric-deep": "table",
-                              "hand": "table5"}
+                              "hand": "table5", "active-touch": "active_touch"}
 
 
 def _has_key(study: str, key: str) -> bool:
@@ -147,6 +148,17 @@ def hand_config(exp: Experiment):
     return HandStudyConfig(**values)
 
 
+def active_config(exp: Experiment):
+    """The :class:`~tzsl.experiments.active_touch.ActiveTouchConfig` of an active-touch experiment."""
+    from tzsl.experiments.active_touch import ActiveTouchConfig  # noqa: PLC0415
+
+    c = exp.config
+    return ActiveTouchConfig(kinds=tuple(c.splits.kinds), n_splits=c.splits.n_splits, n_test=c.splits.n_test,
+                             seed=c.splits.seed, thresholds=tuple(float(t) for t in c.methods.thresholds),
+                             update=c.methods.update, cv=c.methods.cv, n_samples=c.methods.n_samples,
+                             n_boot=c.methods.n_boot, n_jobs=c.compute.n_jobs)
+
+
 # --------------------------------------------------------------------------- checks before any fit
 
 
@@ -239,7 +251,8 @@ def execute_study(exp: Experiment, results: ResultsDir, echo: Callable[[str], No
     check_experiment(exp)
     say = echo or (lambda _msg: None)
     runner = {"phac2-dap": study_runners.run_phac2, "fabric": study_runners.run_fabric,
-              "fabric-deep": study_runners.run_fabric_deep, "hand": study_runners.run_hand}[exp.study]
+              "fabric-deep": study_runners.run_fabric_deep, "hand": study_runners.run_hand,
+              "active-touch": study_runners.run_active_touch}[exp.study]
     return runner(exp, results, say)
 
 

@@ -96,6 +96,21 @@ SECTIONS: tuple[Section, ...] = (
             "Seen and unseen classes compete; seen-class test trials are held-out trials of training "
             "objects. Per-class mean accuracy on seen and unseen classes and their harmonic mean.",
             tables=("gzsl",)),
+    Section("active-touch", "Active touch: choosing the next EP on PHAC-2",
+            "Per-EP attribute models and a sequential zero-shot posterior updated after each EP; the active "
+            "policy picks the EP with the largest expected class-entropy reduction (confusion from grouped CV on "
+            "training objects), against each of the 24 fixed EP orders (first:<ep> = the best order starting "
+            "with that EP on training objects), the paper's recording order and a random order. "
+            "best_fixed_test_optimistic is chosen on the test trials (an upper bound, not a method). The "
+            "stopping table gives accuracy when the top posterior reaches a threshold, the paired difference to "
+            "running all four EPs, and the EPs and seconds saved.",
+            tables=("active_touch", "active_touch_stop", "active_touch_curves"), figures=("active_touch",)),
+    Section("active-touch-hand", "Active touch on the hand: choosing the next grasp type",
+            "The same policy on simulated Shadow-hand grasps: after each grasp the DF-MDAP posterior (sum of LDAP "
+            "log-scores) is updated and the next grasp type (pinch: 1-2 touching BioTacs, tripod: 3, power: 4-5) "
+            "is the one with the largest expected entropy reduction; against always one type, a random type and "
+            "a random grasp (the paper's sequences), and the stopping rule.",
+            tables=("active_touch_hand", "active_touch_hand_stop"), figures=("active_touch_hand",), simulated=True),
     Section("fabric-table1", "Fabric paper, Table 1: accuracy per lambda and ESZSL",
             "Fabric groups as classes, depth-image features; the embedding model for each lambda and ESZSL. "
             "In the a8 attribute matrix groups 3, 4 and 5 share one row, so the paper's split "

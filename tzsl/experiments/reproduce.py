@@ -9,7 +9,9 @@ Not a second code path: each study is the built-in experiment file of the same n
   and the figures ``attribute_accuracy.png``, ``object_map.png``, ``attribute_sweep.png``;
 * ``fabric``: ``fabric_table1.csv``, ``fabric_runs.csv``, ``fabric_lambda.png`` (+ its own manifest);
 * ``hand-simulated``: ``hand_table5.csv`` and its curves, on **simulated** grasps (the
-  Shadow-hand data of the paper are not public).
+  Shadow-hand data of the paper are not public);
+* ``active-touch``: ``active_touch.csv``, ``active_touch_curves.csv``, ``active_touch_stop.csv``
+  and ``active_touch.png`` (choosing the next EP on PHAC-2 vs every fixed and a random order).
 
 The other built-in studies (``phac2-gzsl``, ``fabric-deep``) run with ``tzsl run NAME``.
 """
@@ -25,7 +27,7 @@ from tzsl.exceptions import PartialRunError
 from tzsl.experiments._outputs import ResultsDir
 
 #: The manifest of ``reproduce-tables``: built-in studies, run in this order.
-REPRODUCE_STUDIES: tuple[str, ...] = ("phac2-dap", "fabric", "hand-simulated")
+REPRODUCE_STUDIES: tuple[str, ...] = ("phac2-dap", "fabric", "hand-simulated", "active-touch")
 
 
 def reproduce_experiments(studies=REPRODUCE_STUDIES, **overrides: Any) -> list:
@@ -54,6 +56,7 @@ def reproduce_tables(
     (each applied to the studies that have the key).
     """
     from tzsl.experiments.engine import check_experiment, execute_study, manifest_record  # noqa: PLC0415
+    from tzsl.experiments.active_touch import ACTIVE_TOUCH_OUTPUTS  # noqa: PLC0415
     from tzsl.experiments.study_runners import phac2_outputs  # noqa: PLC0415
 
     say = echo or (lambda _msg: None)
@@ -63,6 +66,8 @@ def reproduce_tables(
         check_experiment(exp)
         if exp.study == "phac2-dap":
             results.check_free(phac2_outputs(exp.config))
+        elif exp.study == "active-touch":
+            results.check_free(ACTIVE_TOUCH_OUTPUTS)
     results.check_free(["manifest.json"])
     records, data_files, timings, tables = {}, [], {}, []
     failures: list[str] = []

@@ -15,6 +15,7 @@ from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.config import Experiment
 from tzsl.experiments.engine import (
     StudyRun,
+    active_config,
     dap_config,
     deep_arguments,
     fabric_arguments,
@@ -225,3 +226,40 @@ def run_hand(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -
     record = {"study_kind": "hand", "hand": record_config(config), "seeds": list(seeds),
               "grasps": None if grasps is None else str(grasps), "table": ds.table}
     return StudyRun(tables, record, [] if grasps is None else [grasps / "grasps.csv"])
+
+
+def run_active_touch(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
+    from tzsl.experiments.active_touch import ACTIVE_TOUCH_OUTPUTS, run_active_touch_study  # noqa: PLC0415
+    from tzsl.experiments.extract import extract_features  # noqa: PLC0415
+
+    from tzsl.experiments.active_touch_hand import HAND_OUTPUTS, HandActiveConfig, run_active_hand  # noqa: PLC0415
+
+    hand = exp.config.hand
+    results.check_free(ACTIVE_TOUCH_OUTPUTS + (HAND_OUTPUTS if hand.simulated else ()))
+    config = active_config(exp)
+    ds = exp.config.dataset
+    features = extract_features(ds.builtin, data_dir=exp.resolve(ds.data_dir))
+    tables = run_active_touch_study(features, results, config, log=say if exp.config.compute.progress else None)
+    stop = tables["active_touch_stop"]
+    say("\nActive touch: accuracy after 1..4 EPs (95% intervals in active_touch.csv)\n"
+        + _format(tables["active_touch"][["split_kind", "strategy", "acc_1ep", "acc_2ep", "acc_3ep", "acc_4ep",
+                                          "acc_mean_over_seconds"]]))
+    say("\nStopping rule vs all four EPs\n" + _format(stop[["split_kind", "strategy", "threshold", "accuracy",
+                                                             "all_eps_accuracy", "difference", "mean_eps",
+                                                             "mean_seconds"]]))
+    record = {"study_kind": "active-touch", "active_touch": record_config(config), "dataset": features.dataset,
+              "orders_chosen_on_training_objects": tables["active_touch_curves"].attrs["chosen"]}
+    if hand.simulated:
+        from tzsl.datasets import load_hand_table4  # noqa: PLC0415
+
+        hand_config = HandActiveConfig(seeds=tuple(hand.seeds), n_sequences=hand.n_sequences,
+                                       max_grasps=hand.max_grasps, cv=hand.cv, n_samples=config.n_samples,
+                                       thresholds=config.thresholds, n_boot=config.n_boot, n_jobs=config.n_jobs)
+        hand_tables = run_active_hand(load_hand_table4(), results, hand_config,
+                                      log=say if exp.config.compute.progress else None)
+        say("\nActive touch on SIMULATED hand grasps: accuracy vs grasps, stopping rule\n"
+            + _format(hand_tables["active_touch_hand_stop"].drop(columns=["data"])))
+        tables.update(hand_tables)
+        record["hand"] = {**record_config(hand_config), "hand_data": "simulated",
+                          "grasp_type_share": hand_tables["active_touch_hand"].attrs["type_share"]}
+    return StudyRun(tables, record, features.info.get("data_files", []))

@@ -55,6 +55,7 @@ from tzsl.models._active_touch import (
     PHAC2_EP_SECONDS,
     LogisticAttribute,
     PerEPAttributeModel,
+    binned_confusion,
     ep_column_blocks,
     suggest_next_ep,
 )
@@ -135,6 +136,7 @@ __all__: list[str] = [
     "register_method",
     "unregister_method",
     "ESZSL", "ESZSLCV", "EmbeddingZSL", "loss_weights", "IAP", "SAE", "SAECV", "ALE", "SJE", "DeViSE",
-    "PHAC2_EP_SECONDS", "LogisticAttribute", "PerEPAttributeModel", "ep_column_blocks", "suggest_next_ep",
+    "PHAC2_EP_SECONDS", "LogisticAttribute", "PerEPAttributeModel", "binned_confusion", "ep_column_blocks",
+    "suggest_next_ep",
     "expected_information_gain", "outcome_log_likelihoods", "run_policy", "sequential_log_posterior",
     "stop_reasons"]

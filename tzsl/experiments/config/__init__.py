@@ -1,7 +1,8 @@
 """The experiment schema: one typed model per study kind, every default written once.
 
 ``study = "phac2-dap"`` (:class:`Phac2Study`), ``"fabric"`` (:class:`FabricStudy`),
-``"fabric-deep"`` (:class:`FabricDeepStudy`) and ``"hand"`` (:class:`HandStudy`). Each table of
+``"fabric-deep"`` (:class:`FabricDeepStudy`), ``"hand"`` (:class:`HandStudy`) and
+``"active-touch"`` (:class:`ActiveTouchStudy`). Each table of
 an experiment file is a strict pydantic model (unknown keys, wrong types and bad ranges are
 errors, all reported at once as ``FILE: key.path: reason``). The study dataclasses
 (:class:`~tzsl.experiments.phac2_dap.DapStudyConfig`, ...) and the command-line options read
@@ -34,6 +35,9 @@ from tzsl.experiments.config._phac2 import (
     Phac2Svm,
 )
 from tzsl.experiments.config._studies import (
+    ActiveMethods,
+    ActiveSplits,
+    ActiveTouchStudy,
     FabricDeepStudy,
     FabricStudy,
     HandFeatures,
@@ -44,7 +48,8 @@ from tzsl.experiments.config._studies import (
 )
 
 __all__ = [
-    "SEED_LIMIT", "STUDIES", "STUDY_MODELS", "Compute", "DaskCompute", "Experiment", "FabricDeepStudy",
+    "SEED_LIMIT", "STUDIES", "STUDY_MODELS", "ActiveMethods", "ActiveSplits", "ActiveTouchStudy", "Compute",
+    "DaskCompute", "Experiment", "FabricDeepStudy",
     "FabricStudy", "HandFeatures", "HandMethods", "HandSimulation", "HandStudy", "Output", "Phac2Dataset",
     "Phac2Features", "Phac2Gzsl", "Phac2Methods", "Phac2Splits", "Phac2Study", "Phac2Svm", "builtin_names",
     "builtin_text", "config_from_options", "defaults", "estimator_parameters", "load_experiment", "to_toml",

@@ -1,4 +1,4 @@
-"""Schemas of ``study = "fabric"``, ``"fabric-deep"`` and ``"hand"``.
+"""Schemas of ``study = "fabric"``, ``"fabric-deep"``, ``"hand"`` and ``"active-touch"``.
 
 Estimator parameters (``[methods.model]``) are checked against the estimator's own
 ``get_params`` names; their defaults stay the estimator's.
@@ -235,4 +235,71 @@ class HandStudy(Section):
     methods: HandMethods = Field(default_factory=HandMethods)
     splits: HandSplits = Field(default_factory=HandSplits)
     compute: HandCompute = Field(default_factory=HandCompute)
+    output: Output = Field(default_factory=Output)
+
+
+# --------------------------------------------------------------------------- active-touch
+
+
+class ActiveDataset(Section):
+    builtin: Literal["phac2-penn"] = Field("phac2-penn", description="EP-prefixed per-trial features "
+                                           "(Penn static features: squeeze, hold, slow and fast slide)")
+    data_dir: str | None = Field(None, description="data home (default: $TZSL_DATA_DIR or the user data folder)")
+
+
+class ActiveMethods(Section):
+    """Per-EP attribute models, the active policy and the stopping rule (tzsl.models.PerEPAttributeModel)."""
+
+    update: Literal["dap", "confusion"] = Field("dap", description="per-EP class scores: DAP log-scores, or the "
+                                                "log-likelihood under the grouped-CV confusion model")
+    cv: int = Field(5, ge=2, description="object-grouped folds of the confusion estimate (training objects only)")
+    n_samples: int = Field(128, ge=1, description="Monte-Carlo outcomes per class for the expected gain")
+    thresholds: list[float] = Field([0.7, 0.9, 0.99], description="stopping rule: stop once the top class "
+                                    "posterior is >= a threshold (one row per threshold)")
+    n_boot: int = Field(2000, ge=1, description="bootstrap replicates of the 95% intervals")
+
+    @field_validator("thresholds")
+    @classmethod
+    def _thresholds(cls, v):
+        if any(not 0 < t <= 1 for t in v):
+            raise ValueError("thresholds must be in (0, 1]")
+        return distinct(non_empty(v))
+
+
+class ActiveSplits(Section):
+    kinds: list[Literal["random", "challenging"]] = Field(["random", "challenging"])
+    n_splits: int = Field(10, ge=1, description="random splits (the challenging splits are always 5)")
+    n_test: int = Field(10, ge=2, description="test objects per random split")
+    seed: int = Seed
+
+    _kinds = field_validator("kinds")(lambda v: distinct(non_empty(v)))
+
+
+class ActiveHand(Section):
+    """``[hand]``: the same policy choosing the next grasp type on SIMULATED Shadow-hand grasps (Table 4)."""
+
+    simulated: bool = Field(True, description="run the simulated-hand part (grasp types pinch / tripod / power)")
+    seeds: list[int] = Field([0, 1, 2], description="one simulated data set and model fit per seed")
+    n_sequences: int = Field(20, ge=1, description="grasp sequences per test object and seed")
+    max_grasps: int = Field(6, ge=1, description="grasps per sequence")
+    cv: int = Field(3, ge=2, description="folds over training grasps for the grasp-type confusion model")
+
+    @field_validator("seeds")
+    @classmethod
+    def _seeds(cls, v):
+        if any(not 0 <= s < 2**32 for s in v):
+            raise ValueError("seeds must be in 0 .. 2**32 - 1")
+        return distinct(non_empty(v))
+
+
+class ActiveTouchStudy(Section):
+    """``study = "active-touch"``: choosing the next EP on PHAC-2 vs every fixed and a random order."""
+
+    study: Literal["active-touch"] = "active-touch"
+    description: str = ""
+    dataset: ActiveDataset = Field(default_factory=ActiveDataset)
+    methods: ActiveMethods = Field(default_factory=ActiveMethods)
+    splits: ActiveSplits = Field(default_factory=ActiveSplits)
+    hand: ActiveHand = Field(default_factory=ActiveHand)
+    compute: Compute = Field(default_factory=Compute)
     output: Output = Field(default_factory=Output)
