@@ -55,11 +55,11 @@ def test_run_print_config_prints_resolved_settings():
 
 def test_run_reports_file_and_key_path_of_problems(tmp_path):
     path = tmp_path / "bad.toml"
-    path.write_text("study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[svm]\nn_C = 2.5\ngrid = 3\n")
+    path.write_text("study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[svm]\nn_C = 2.5\ngrids = 3\n")
     result = _run("run", path)
     assert result.exit_code == EXIT_TZSL_ERROR
     assert f"{path}: svm.n_C: 2.5: expected a valid integer" in result.output
-    assert f"{path}: svm.grid: unknown key" in result.output
+    assert f"{path}: svm.grids: unknown key" in result.output
     assert "Traceback" not in result.output
 
 

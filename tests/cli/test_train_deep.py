@@ -161,5 +161,6 @@ def test_evaluate_fabric_model_deep_calls_the_deep_study(torch, tmp_path, monkey
                   "--config", "1", "--no-progress", "--data-dir", str(tmp_path / "data"))
     assert result.exit_code == 0, result.output
     assert seen["seeds"] == 2 and seen["configs"] == (1,) and seen["progress"] is False
-    assert seen["out"] == tmp_path / "res"
+    assert seen["out"].parent == tmp_path / "res"  # the run's staging folder, moved into place on completion
+    assert (tmp_path / "res" / "manifest.json").is_file()
     assert "50.00 +- 0.00" in result.output and "manifest.json" in result.output
