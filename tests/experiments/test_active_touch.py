@@ -102,3 +102,42 @@ def test_one_real_phac2_split(data_dir, monkeypatch):
     finals = {s: res["correct"][s][:, -1].mean() for s in res["orders"]}
     assert max(finals.values()) - min(finals.values()) < 0.05
     assert res["correct"]["active"][:, -1].mean() > 1.5 / res["n_classes"]  # above chance with all EPs
+
+
+TINY_ACTIVE = """
+study = "active-touch"
+[dataset]
+data_dir = "{data_dir}"
+[methods]
+cv = 2
+n_samples = 8
+thresholds = [0.9]
+n_boot = 50
+[splits]
+kinds = ["random"]
+n_splits = 1
+[hand]
+seeds = [0]
+n_sequences = 2
+max_grasps = 2
+cv = 2
+[compute]
+progress = false
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.realdata
+def test_tzsl_run_active_touch_writes_every_table(tmp_path, data_dir, monkeypatch):
+    from tzsl.experiments.engine import run_experiment
+
+    monkeypatch.delenv("TZSL_CACHE_DIR", raising=False)
+    path = tmp_path / "active.toml"
+    path.write_text(TINY_ACTIVE.format(data_dir=data_dir))
+    results, run = run_experiment(path, out=tmp_path / "out")
+    written = {p.name for p in (tmp_path / "out").iterdir()}
+    assert written == {"active_touch.csv", "active_touch_curves.csv", "active_touch_stop.csv", "active_touch.png",
+                       "active_touch_hand.csv", "active_touch_hand_stop.csv", "active_touch_hand.png", "manifest.json"}
+    assert set(run.tables) == {n.removesuffix(".csv") for n in written if n.endswith(".csv")}
+    assert run.record["hand"]["hand_data"] == "simulated"
+    assert (pd.read_csv(tmp_path / "out" / "active_touch_hand.csv")["data"] == "simulated").all()

@@ -9,7 +9,7 @@ import pytest
 from sklearn.utils._param_validation import InvalidParameterError
 
 from tzsl.exceptions import ConfigError
-from tzsl.models import dap_log_scores, fuse_attribute_posteriors
+from tzsl.models import binned_confusion, dap_log_scores, fuse_attribute_posteriors
 from tzsl.models._active_touch import (
     LogisticAttribute,
     PerEPAttributeModel,
@@ -220,3 +220,15 @@ def test_suggest_next_ep_is_json_and_follows_the_rule(fitted):
     assert [c["ep"] for c in out["candidates"]] == ["noise_a"]
     with pytest.raises(ConfigError, match="unknown EP"):
         suggest_next_ep(model, K, {"tap": block})
+
+
+def test_binned_confusion_counts_held_out_posteriors_per_action():
+    P = np.array([[[0.95, np.nan], [0.05, 0.5], [0.96, 0.5]],
+                  [[np.nan, np.nan], [np.nan, np.nan], [np.nan, np.nan]]])  # (2 actions, 3 samples, 2 attributes)
+    A = np.array([[1, 0], [0, 1], [1, 1]])
+    C = binned_confusion(P, A, n_bins=2, smoothing=1.0)
+    assert C.shape == (2, 2, 2, 2)
+    np.testing.assert_allclose(C.sum(axis=3), 1.0)
+    np.testing.assert_allclose(C[0, 0, 1], [1 / 4, 3 / 4])  # two present samples, both in the high bin
+    np.testing.assert_allclose(C[0, 0, 0], [2 / 3, 1 / 3])  # one absent sample in the low bin
+    np.testing.assert_allclose(C[1], 0.5)  # an action never observed: the uniform prior counts only
