@@ -148,7 +148,7 @@ def test_evaluate_fabric_model_deep_calls_the_deep_study(torch, tmp_path, monkey
     seen = {}
 
     def fake_study(out, **kwargs):
-        seen.update(kwargs, out=out.root)
+        seen.update(kwargs, out=out.final_root)  # out.root is the staging folder while running
         table = pd.DataFrame({"condition": ["depth-sequence"], "config": [1], "method": ["lam_0.1"], "n_seeds": [2],
                               **{c: [0.5] for c in ("accuracy", "per_class_mean_accuracy", "train_accuracy")},
                               **{f"{c}_std": [0.0] for c in ("accuracy", "per_class_mean_accuracy", "train_accuracy")},

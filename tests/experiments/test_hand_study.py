@@ -179,3 +179,28 @@ def test_bad_config(tmp_path, bad):
     cfg = HandStudyConfig(**bad)
     with pytest.raises(ConfigError):
         run_hand_study(None, TABLE, tmp_path, seeds=[0], config=cfg)
+
+
+def test_a_failing_seed_is_recorded_and_the_others_complete(folder, tmp_path, monkeypatch):
+    import tzsl.experiments.hand as hand  # noqa: PLC0415
+    from tzsl.exceptions import SplitError  # noqa: PLC0415
+    from tzsl.experiments._failures import table_failures  # noqa: PLC0415
+
+    real = hand._evaluate_seed
+
+    def fails_on_seed_1(features, table, config, seed, notes):
+        if seed == 1:
+            raise SplitError("simulated: too few grasps for this seed")
+        return real(features, table, config, seed, notes)
+
+    monkeypatch.setattr(hand, "_evaluate_seed", fails_on_seed_1)
+    result = run_hand_study(folder, TABLE, tmp_path / "res", seeds=[0, 1], config=CONFIG)
+    t5 = result.table5
+    failed = t5[t5["seed"].astype(str) == "1"]
+    assert len(failed) == 3 and failed["all"].isna().all()
+    assert (failed["error"] == "SplitError: simulated: too few grasps for this seed").all()
+    done = t5[t5["seed"].astype(str) == "0"]
+    assert done["all"].between(0, 1).all() and (done["error"] == "").all()
+    assert len(table_failures({"table5": t5})) == 3
+    with pytest.raises(SplitError, match="simulated"):  # every seed failed: the error ends the run
+        run_hand_study(folder, TABLE, tmp_path / "res2", seeds=[1], config=CONFIG)

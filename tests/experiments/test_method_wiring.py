@@ -282,3 +282,33 @@ def test_python_run_returns_the_tables_of_a_partial_run_with_a_warning(toy_metho
     with pytest.warns(RuntimeWarning, match=r"1 fit\(s\) failed"):
         table = run(_write(tmp_path, text), table="phac2_methods", out=tmp_path / "res")
     assert table["flaky"].isna().sum() >= 1 and table.attrs["results_dir"] == str(tmp_path / "res")
+
+
+def test_a_failing_dap_split_is_recorded_and_the_run_exits_1(tmp_path, monkeypatch):
+    import tzsl.experiments.phac2_dap as dap  # noqa: PLC0415
+    from tzsl.exceptions import PartialRunError  # noqa: PLC0415
+
+    real = dap.fit_split
+
+    def fails_on_split_1(features, split, config, index, multilabel=False):
+        if index == 1:
+            raise RuntimeError("simulated solver failure\nmore")
+        return real(features, split, config, index, multilabel=multilabel)
+
+    monkeypatch.setattr(dap, "fit_split", fails_on_split_1)
+    _plain_dataset(tmp_path / "toyset")
+    text = SMALL_PHAC2.format(dataset='plain = "toyset"', n_splits=3, n_test=4).replace(
+        'compare = ["toy", {name = "toy", temperature = 0.5}]', "")
+    with pytest.raises(PartialRunError) as info:
+        run_experiment(_write(tmp_path, text), out=tmp_path / "res")
+    assert info.value.failures == ["failed_splits: split=2, method=dap: RuntimeError: simulated solver failure"]
+    failed = pd.read_csv(tmp_path / "res" / "failed_splits.csv")
+    assert failed.to_dict("records") == [{"split": 2, "method": "dap", "error": "RuntimeError: simulated solver failure"}]
+    table1 = pd.read_csv(tmp_path / "res" / "table1_fusion.csv")
+    assert table1["split"].astype(str).tolist() == ["1", "3", "mean", "std"]  # the other splits completed
+    def always_fails(*args, **kwargs):
+        raise RuntimeError("simulated")
+
+    monkeypatch.setattr(dap, "fit_split", always_fails)
+    with pytest.raises(RuntimeError, match="simulated"):  # every split failing ends the run with the error
+        run_experiment(_write(tmp_path, text.replace("n_splits = 3", "n_splits = 1")), out=tmp_path / "res2")

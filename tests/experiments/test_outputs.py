@@ -124,3 +124,38 @@ def test_a_crashed_run_does_not_block_the_rerun(tmp_path, monkeypatch):
     assert set(manifest["outputs"]) == set(names) - {"manifest.json"}
     with pytest.raises(ConfigError, match="already exists; use --force"):  # a completed run is protected
         run_experiment(exp, out=out)
+
+
+def test_staging_lock_refuses_a_live_writer_and_takes_over_a_dead_one(tmp_path):
+    import subprocess  # noqa: PLC0415
+    import sys  # noqa: PLC0415
+
+    from tzsl.experiments._outputs import STAGING_FOLDER, STAGING_LOCK  # noqa: PLC0415
+
+    staging = tmp_path / "res" / STAGING_FOLDER
+    staging.mkdir(parents=True)
+    live = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    try:
+        (staging / STAGING_LOCK).write_text(str(live.pid))
+        with pytest.raises(ConfigError, match=rf"another tzsl run \(process {live.pid}\) is writing"):
+            ResultsDir(tmp_path / "res", staging=True).write_csv("a.csv", pd.DataFrame({"x": [1]}))
+    finally:
+        live.kill()
+        live.wait()
+    (staging / STAGING_LOCK).write_text(str(live.pid))  # now a dead process: a crashed run's lock
+    out = ResultsDir(tmp_path / "res", staging=True)
+    out.write_csv("a.csv", pd.DataFrame({"x": [1]}))
+    out.commit()
+    assert sorted(p.name for p in (tmp_path / "res").iterdir()) == ["a.csv"]
+
+
+def test_commit_refuses_a_file_that_appeared_meanwhile(tmp_path):
+    from tzsl.experiments._outputs import STAGING_FOLDER  # noqa: PLC0415
+
+    out = ResultsDir(tmp_path / "res", staging=True)
+    out.write_csv("a.csv", pd.DataFrame({"x": [1]}))
+    (tmp_path / "res" / "a.csv").write_text("another run's table\n")
+    with pytest.raises(ConfigError, match="a.csv appeared while this run was writing"):
+        out.commit()
+    assert (tmp_path / "res" / "a.csv").read_text() == "another run's table\n"
+    assert (tmp_path / "res" / STAGING_FOLDER / "a.csv").exists()

@@ -29,11 +29,14 @@ from typing import Any
 
 import pandas as pd
 
-from tzsl._io import atomic_write, file_sha256
+from tzsl._io import atomic_write, ensure_folder, file_sha256
 from tzsl.exceptions import ConfigError
 
 #: Hidden folder inside the output folder where a staged run writes until it completes.
 STAGING_FOLDER = ".tzsl-partial"
+
+#: Lock file inside the staging folder: the process id of the run writing there.
+STAGING_LOCK = ".lock"
 
 #: printf-style format of every float written to a CSV table (6 significant digits).
 CSV_FLOAT_FORMAT = "%.6g"
@@ -75,6 +78,17 @@ def csv_ready(table: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` exists (on this machine)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # e.g. another user's process
+        return True
+    return True
+
+
 class ResultsDir:
     """A results folder that refuses to overwrite earlier results unless forced.
 
@@ -88,8 +102,10 @@ class ResultsDir:
     staging : bool
         Write into ``root / STAGING_FOLDER`` (reused, overwritten freely: it is this run's own
         partial folder) and move the files into ``root`` on :meth:`commit`. The overwrite check
-        is against ``root``. ``self.root`` is where files are being written (the staging folder
-        until the commit); ``self.final_root`` is ``root``.
+        is against ``root``, again at the commit. ``self.root`` is where files are being written
+        (the staging folder until the commit); ``self.final_root`` is ``root``. The first write
+        takes the staging folder's lock file (the process id): a second run into the same folder
+        while this one is alive is refused; the lock of a crashed run is taken over.
     """
 
     def __init__(self, root: str | Path, force: bool = False, staging: bool = False) -> None:
@@ -100,6 +116,7 @@ class ResultsDir:
         self.written: list[Path] = []
         self.splits: dict[str, dict[str, Any]] = {}  # every split written, for the manifest
         self.data_files: dict[str, str] = {}  # every data file a manifest recorded: path -> sha256
+        self._locked = False
 
     def path(self, name: str) -> Path:
         """Where to write ``name`` (in the staging folder when staging), checked against overwriting."""
@@ -111,20 +128,55 @@ class ResultsDir:
             )
         return target
 
+    def _target(self, name: str) -> Path:
+        """:meth:`path` for a write: takes the staging lock first (see ``staging``)."""
+        if self.staging and not self._locked:
+            self._lock()
+        return self.path(name)
+
+    def _lock(self) -> None:
+        lock = self.root / STAGING_LOCK
+        ensure_folder(self.root)
+        for _ in range(2):
+            try:
+                fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            except FileExistsError:
+                try:
+                    pid = int(lock.read_text().strip() or 0)
+                except (OSError, ValueError):
+                    pid = 0
+                if pid and pid != os.getpid() and _alive(pid):
+                    raise ConfigError(f"{self.final_root}: another tzsl run (process {pid}) is writing into this "
+                                      "folder; wait for it or choose another --out folder") from None
+                lock.unlink(missing_ok=True)  # a crashed run's lock: take its partial folder over
+                continue
+            with os.fdopen(fd, "w") as fh:
+                fh.write(str(os.getpid()))
+            self._locked = True
+            return
+        raise ConfigError(f"{lock}: cannot take the staging lock")
+
     def commit(self) -> None:
-        """Move the staged files into the output folder, then remove the staging folder (no-op unstaged)."""
+        """Move the staged files into the output folder, then remove the staging folder (no-op unstaged).
+
+        Raises
+        ------
+        ConfigError
+            A file appeared in the output folder meanwhile (another run) and ``force`` is off;
+            nothing is moved and this run's files stay in the staging folder.
+        """
         if not self.staging:
             return
-        moved = []
-        for path in self.written:
-            if not path.exists():
-                continue
-            dest = self.final_root / path.relative_to(self.root)
+        pairs = [(p, self.final_root / p.relative_to(self.root)) for p in self.written if p.exists()]
+        clash = [dest for _, dest in pairs if dest.exists()] if not self.force else []
+        if clash:
+            raise ConfigError(f"{clash[0]} appeared while this run was writing (another run into the same folder?); "
+                              f"this run's results stay in {self.root}; use --force or another --out folder")
+        for path, dest in pairs:
             dest.parent.mkdir(parents=True, exist_ok=True)
             os.replace(path, dest)
-            moved.append(dest)
         shutil.rmtree(self.root, ignore_errors=True)
-        self.root, self.staging, self.written = self.final_root, False, moved
+        self.root, self.staging, self.written = self.final_root, False, [dest for _, dest in pairs]
 
     def check_free(self, names: Iterable[str]) -> None:
         """Fail early, before any computation, if one of ``names`` would be overwritten."""
@@ -137,7 +189,7 @@ class ResultsDir:
 
     def write_csv(self, name: str, table: pd.DataFrame, index: bool = False) -> Path:
         """Write ``table`` as CSV, numbers formatted by :func:`csv_ready` and :data:`CSV_FLOAT_FORMAT`."""
-        target = self.path(name)
+        target = self._target(name)
         ready = csv_ready(table)
         return self._record(
             atomic_write(target, lambda p: ready.to_csv(p, index=index, float_format=CSV_FLOAT_FORMAT))
@@ -145,7 +197,7 @@ class ResultsDir:
 
     def write_json(self, name: str, payload: Any) -> Path:
         """Write ``payload`` as indented JSON."""
-        target = self.path(name)
+        target = self._target(name)
         text = json.dumps(payload, indent=2, sort_keys=True, default=str)
         return self._record(atomic_write(target, lambda p: p.write_text(text + "\n")))
 
@@ -169,7 +221,7 @@ class ResultsDir:
         """Save a matplotlib figure as PNG and close it."""
         import matplotlib.pyplot as plt
 
-        target = self.path(name)
+        target = self._target(name)
         try:
             return self._record(
                 atomic_write(target, lambda p: figure.savefig(p, format="png", dpi=dpi, bbox_inches="tight"))

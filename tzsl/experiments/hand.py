@@ -39,6 +39,7 @@ from tzsl.datasets import Grasp, HandTable, read_grasps, simulate_grasps
 from tzsl.evaluation import summarise_over_splits
 from tzsl.exceptions import ConfigError, DataFileError, SplitError
 from tzsl.experiments import paper_numbers as paper
+from tzsl.experiments._failures import ERROR_COLUMN, attempt
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.config import Compute, HandFeatures, HandMethods, HandSimulation
 from tzsl.experiments.hand_figures import (
@@ -427,6 +428,7 @@ def run_hand_study(
     notes: list[str] = []
     parts: dict[str, list] = {k: [] for k in ("table5", "T", "k", "attr", "S", "confusion", "trust")}
     simulation: dict[str, dict] = {}
+    failed: list[tuple[int, str]] = []
     for seed in seeds:
         if simulated:
             sim = simulate_grasps(
@@ -438,11 +440,21 @@ def run_hand_study(
             log(f"seed {seed}: simulated {len(sim.grasps)} grasps of {len(table.K)} objects")
         else:
             features = fixed
-        res = _evaluate_seed(features, table, config, seed, notes)
+        res, error = attempt(_evaluate_seed, features, table, config, seed, notes)
+        if res is None:  # NaN rows in Table 5 with the reason; reported at the end of the run
+            failed.append((seed, error))
+            parts["table5"] += [{"seed": seed, "method": f.upper(), "all": np.nan, ERROR_COLUMN: error}
+                                for f in HAND_FUSIONS]
+            log(f"seed {seed}: failed: {error}")
+            continue
+        for row in res["table5"]:
+            row[ERROR_COLUMN] = ""
         for key, rows in res.items():
             parts[key] += rows
         ldap = [r for r in res["table5"] if r["method"] == "LDAP"][0]["all"]
         log(f"seed {seed}: LDAP single-grasp accuracy {ldap:.3f}")
+    if len(failed) == len(seeds):  # nothing to tabulate: the last seed again, its error ends the run
+        _evaluate_seed(features, table, config, seeds[-1], [])
 
     names = list(table.test_objects)
     trust = parts["trust"]

@@ -21,6 +21,7 @@ import pandas as pd
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, challenging_splits, random_object_splits
 from tzsl.exceptions import ConfigError, SplitError
+from tzsl.experiments._failures import ERROR_COLUMN, attempt
 from tzsl.experiments.config import DaskCompute, Phac2Methods, Phac2Splits, Phac2Svm
 from tzsl.experiments.phac2_methods import method_comparison
 from tzsl.experiments.phac2_tables import (
@@ -31,6 +32,7 @@ from tzsl.experiments.phac2_tables import (
     attribute_subsets,
     attribute_sweep,
     multilabel_table,
+    split_label,
     table1_fusion,
     table2_priors,
     table3_challenging,
@@ -43,6 +45,9 @@ from tzsl.models import (
     dap_log_scores,
     fuse_attribute_posteriors,
 )
+
+#: Table (``failed_splits.csv``) of the splits whose DAP fit failed; written only when one did.
+FAILED_SPLITS = "failed_splits"
 
 _SPLITS, _SVM, _METHODS, _COMPUTE = Phac2Splits(), Phac2Svm(), Phac2Methods(), DaskCompute()
 
@@ -319,10 +324,27 @@ def compute_context(config: DapStudyConfig):
 
 
 def fit_splits(features: FeatureSet, splits: list[Split], config: DapStudyConfig,
-               multilabel: bool = False, offset: int = 0) -> list[SplitPosteriors]:
-    """:func:`fit_split` for every split (index ``offset + i`` seeds split ``i``)."""
+               multilabel: bool = False, offset: int = 0, failures: list[dict] | None = None) -> list[SplitPosteriors]:
+    """:func:`fit_split` for every split (index ``offset + i`` seeds split ``i``).
+
+    ``failures``: if a list, a split whose fit fails is left out and recorded there as
+    ``{"split", "method": "dap", "error"}`` (the run goes on); if every split fails, the last
+    split's error is raised. Without it, the first failure is raised.
+    """
+    if failures is None:
+        with compute_context(config):
+            return [fit_split(features, s, config, offset + i, multilabel=multilabel) for i, s in enumerate(splits)]
+    results = []
     with compute_context(config):
-        return [fit_split(features, s, config, offset + i, multilabel=multilabel) for i, s in enumerate(splits)]
+        for i, s in enumerate(splits):
+            done, error = attempt(fit_split, features, s, config, offset + i, multilabel=multilabel)
+            if done is None:
+                failures.append({"split": split_label(s), "method": "dap", ERROR_COLUMN: error})
+            else:
+                results.append(done)
+        if splits and not results:  # nothing to tabulate: the error ends the run
+            fit_split(features, splits[-1], config, offset + len(splits) - 1, multilabel=multilabel)
+    return results
 
 
 # --------------------------------------------------------------------------- the study
@@ -396,11 +418,13 @@ def run_dap_study(
     tables: dict[str, pd.DataFrame] = {}
     with compute_context(config):  # one Dask cluster for all the study's fits
         random_results: list[SplitPosteriors] = []
+        failed: list[dict] = []  # splits whose DAP fit failed: failed_splits.csv, reported at the end
         if splits is not None:
-            random_results = fit_splits(features, splits, config, multilabel=config.multilabel)
+            random_results = fit_splits(features, splits, config, multilabel=config.multilabel, failures=failed)
         elif "random" in kinds:
             random_splits, _ = make_splits(features, "random", config)
-            random_results = fit_splits(features, random_splits, config, multilabel=config.multilabel)
+            random_results = fit_splits(features, random_splits, config, multilabel=config.multilabel,
+                                        failures=failed)
         if random_results:
             tables["table1_fusion"] = table1_fusion(random_results)
             tables["table2_priors"] = table2_priors(random_results)
@@ -420,11 +444,13 @@ def run_dap_study(
         used = [r.split for r in random_results]
         if splits is None and "challenging" in kinds:
             challenging, map_coords = make_splits(features, "challenging", config)
-            used += challenging
-            results = fit_splits(features, challenging, config, offset=100)
+            results = fit_splits(features, challenging, config, offset=100, failures=failed)
+            used += [r.split for r in results]
             tables["table3_challenging"] = table3_challenging(results, map_coords)
             tables["object_map"] = map_coords
             out.write_figure("object_map.png", object_map_figure(map_coords))
+        if failed:
+            tables[FAILED_SPLITS] = pd.DataFrame(failed)
     _record_solvers(random_results + (results if splits is None and "challenging" in kinds else []), echo, record)
     titles = {
         "table1_fusion": "Table 1: MAXDAP vs AVGDAP (uni-prior), random splits - ours beside the paper",

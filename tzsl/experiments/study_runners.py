@@ -51,7 +51,7 @@ def dropped_columns(methods) -> dict[str, list[str]]:
 def phac2_outputs(config) -> list[str]:
     """Files a phac2-dap run writes (checked free before any computation)."""
     kinds, methods = config.splits.kinds, config.methods
-    names = ["manifest.json", "splits.csv"]
+    names = ["manifest.json", "splits.csv", "failed_splits.csv"]
     if "random" in kinds or "file" in kinds:
         names += ["table1_fusion.csv", "table2_priors.csv", "attribute_accuracy.csv",
                   "attribute_accuracy_per_split.csv", "attribute_accuracy.png"]
