@@ -120,17 +120,11 @@ def test_deep_fabric_study_table(torch, data_dir, tmp_path):
                   model_params=params, cache_dir=tmp_path / "cache")
     result = run_deep_fabric_study(ResultsDir(tmp_path / "out"), **kwargs)
     runs, table = result["runs"], result["table"]
-    assert len(runs) == 8 and set(runs["method"]) == {"lam_0.1", "lam_inf"}
-    paper = runs["protocol"] == "paper"  # the paper's split (not zero-shot) and the zero-shot-drop variant
-    assert (runs["n_train"] == 92).all() and (runs.loc[paper, "n_test"] == 27).all()
-    assert (runs.loc[~paper, "test_groups"] == "0 7").all() and (runs.loc[~paper, "n_test"] < 27).all()
-    assert table["n_seeds"].tolist() == [2, 2, 2, 2]
-    assert table["zero_shot"].tolist() == [False, False, True, True]
-    mean = runs.groupby(["protocol", "method"], sort=False)["accuracy"].mean().to_numpy()
+    assert len(runs) == 4 and set(runs["method"]) == {"lam_0.1", "lam_inf"}
+    assert (runs["n_train"] == 92).all() and (runs["n_test"] == 27).all()
+    assert table["n_seeds"].tolist() == [2, 2]
+    mean = runs.groupby("method", sort=False)["accuracy"].mean().to_numpy()
     np.testing.assert_allclose(table["accuracy"].to_numpy(), mean)
-    assert ((table["accuracy_ci95_low"] <= table["accuracy"] + 1e-9)
-            & (table["accuracy"] <= table["accuracy_ci95_high"] + 1e-9)).all()
-    assert {"per_class_mean_accuracy_ci95_low", "chance", "majority"} <= set(table.columns)
     for name in ("fabric_deep_table.csv", "fabric_deep_runs.csv", "fabric_deep_manifest.json"):
         assert (tmp_path / "out" / name).is_file()
     assert "lam_inf" in format_deep_table(table)
@@ -161,6 +155,5 @@ def test_evaluate_fabric_model_deep_calls_the_deep_study(torch, tmp_path, monkey
                   "--config", "1", "--no-progress", "--data-dir", str(tmp_path / "data"))
     assert result.exit_code == 0, result.output
     assert seen["seeds"] == 2 and seen["configs"] == (1,) and seen["progress"] is False
-    assert seen["out"].parent == tmp_path / "res"  # the run's staging folder, moved into place on completion
-    assert (tmp_path / "res" / "manifest.json").is_file()
+    assert seen["out"] == tmp_path / "res"
     assert "50.00 +- 0.00" in result.output and "manifest.json" in result.output

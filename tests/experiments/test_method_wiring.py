@@ -305,7 +305,7 @@ def test_a_failing_dap_split_is_recorded_and_the_run_exits_1(tmp_path, monkeypat
     failed = pd.read_csv(tmp_path / "res" / "failed_splits.csv")
     assert failed.to_dict("records") == [{"split": 2, "method": "dap", "error": "RuntimeError: simulated solver failure"}]
     table1 = pd.read_csv(tmp_path / "res" / "table1_fusion.csv")
-    assert table1["split"].astype(str).tolist() == ["1", "3", "mean", "std"]  # the other splits completed
+    assert table1["split"].astype(str).tolist() == ["1", "3", "mean", "std", "control"]  # the other splits completed
     def always_fails(*args, **kwargs):
         raise RuntimeError("simulated")
 
