@@ -62,6 +62,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from tzsl.exceptions import ConfigError
 from tzsl.models._active_policy import (
+    binned_confusion,
     expected_information_gain,
     outcome_log_likelihoods,
     run_policy,
@@ -118,35 +119,6 @@ def ep_column_blocks(feature_names: Sequence[str], eps: Sequence[str] | None = N
     if empty:
         raise ConfigError(f"no feature columns for EP(s) {empty}; the features have EPs {sorted(set(prefixes))}")
     return blocks
-
-
-def binned_confusion(posteriors, A, *, n_bins: int, smoothing: float) -> np.ndarray:
-    """``p(bin | a_m = v)`` of held-out attribute posteriors, per action (EP or grasp type).
-
-    Parameters
-    ----------
-    posteriors : array-like of shape (n_actions, n_samples, n_attributes)
-        Held-out ``p(a_m = 1 | x)`` of each sample under each action; NaN where a sample has no
-        posterior for that action (not observed with it, or the attribute could not be trained).
-    A : array-like of shape (n_samples, n_attributes)
-        True 0/1 attribute values of each sample's object.
-    n_bins : int
-        Equal-width bins on [0, 1].
-    smoothing : float
-        Pseudo-count added to every bin.
-
-    Returns
-    -------
-    ndarray of shape (n_actions, n_attributes, 2, n_bins)
-        Sums to 1 over bins.
-    """
-    P = np.asarray(posteriors, dtype=np.float64)
-    A = np.asarray(A, dtype=int)
-    counts = np.full((P.shape[0], P.shape[2], 2, n_bins), float(smoothing))
-    e, t, j = np.nonzero(~np.isnan(P))
-    bins = np.minimum((P[e, t, j] * n_bins).astype(int), n_bins - 1)
-    np.add.at(counts, (e, j, A[t, j], bins), 1.0)
-    return counts / counts.sum(axis=3, keepdims=True)
 
 
 class LogisticAttribute(ClassifierMixin, BaseEstimator):
