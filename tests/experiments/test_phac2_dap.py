@@ -172,6 +172,9 @@ def test_sweep_full_set_equals_split_accuracy():
     full = sweep[(sweep["split"] == "1") & (sweep["n_attributes"] == 2)]
     assert full["accuracy_mean"].item() == pytest.approx(r.accuracy("avg", "uni"))
     assert set(sweep["split"]) == {"1", "mean"}
+    assert (sweep["ci95_low"] <= sweep["accuracy_mean"] + 1e-9).all()
+    assert (sweep["accuracy_mean"] <= sweep["ci95_high"] + 1e-9).all()
+    assert sweep["chance"].eq(1 / 3).all()
 
 
 def test_dask_cluster_gives_the_local_results():

@@ -298,15 +298,20 @@ def attribute_sweep(results: list[SplitPosteriors], min_attributes: int = 7, max
 
     For each split and each j from ``min_attributes`` to the split's attribute count, up to
     ``max_subsets`` random j-subsets are scored in one vectorised pass. Rows: (split, j) with
-    the mean and std over subsets, and ``split="mean"`` rows averaging the splits.
+    the mean and std over subsets, and ``split="mean"`` rows averaging the splits. Intervals
+    (``ci95_low``/``ci95_high``) of ``accuracy_mean`` bootstrap test objects (and splits on the
+    mean rows) with each trial's share of subsets that recognised it.
     """
     rng = np.random.default_rng(seed)
     rows = []
+    outcomes = Outcomes(by=("n_attributes",))
     for r in results:
         m = len(r.attributes)
         for j in range(min_attributes, m + 1):
             subsets = attribute_subsets(m, j, max_subsets, rng)
-            acc = dap_accuracy_over_subsets(r.P, r.K, r.y, subsets, fusion=fusion, prior=prior)
+            hits = dap_accuracy_over_subsets(r.P, r.K, r.y, subsets, fusion=fusion, prior=prior, per_trial=True)
+            acc = hits.mean(axis=1)
+            outcomes.add(split_label(r.split), "accuracy_mean", r.y, hits.mean(axis=0), n_attributes=j)
             rows.append({"split": split_label(r.split), "n_attributes": j, "n_subsets": len(subsets),
                          "accuracy_mean": acc.mean(), "accuracy_std": acc.std(), "chance": r.split.chance})
     table = pd.DataFrame(rows)
@@ -314,4 +319,4 @@ def attribute_sweep(results: list[SplitPosteriors], min_attributes: int = 7, max
         n_subsets=("n_subsets", "sum"), accuracy_mean=("accuracy_mean", "mean"),
         accuracy_std=("accuracy_mean", "std"), chance=("chance", "mean"))
     mean.insert(0, "split", "mean")
-    return pd.concat([table, mean], ignore_index=True)
+    return add_trust_columns(pd.concat([table, mean], ignore_index=True), outcomes)

@@ -46,7 +46,7 @@ FOLD_ROWS = 40
 WIDE_COLUMNS = 7
 
 #: Columns a generic ``ci95_low``/``ci95_high`` pair belongs to (first one present).
-INTERVAL_TARGETS = ("accuracy", "mean", "value", "difference", "balanced_accuracy", "harmonic")
+INTERVAL_TARGETS = ("accuracy", "accuracy_mean", "mean", "value", "difference", "balanced_accuracy", "harmonic")
 
 
 @dataclass(frozen=True)
