@@ -215,8 +215,11 @@ def attribute_accuracy_table(results: list[SplitPosteriors], sensors: tuple[str,
     whatever the attribute's frequency) is NaN where an attribute takes a single value on the
     split's test objects. ``majority``: plain accuracy of always answering the attribute's
     more frequent value among the split's training objects (the baseline plain accuracy must
-    beat; its balanced accuracy is 0.5).
+    beat; its balanced accuracy is 0.5). ``*_ci95_low``/``*_ci95_high``: bootstrap over the
+    split's test objects (:func:`tzsl.experiments._trust.attribute_intervals`).
     """
+    from tzsl.experiments._trust import attribute_intervals  # noqa: PLC0415
+
     rows = []
     for r in results:
         truth = r.K[r.y].astype(bool)  # (n, m)
@@ -225,13 +228,22 @@ def attribute_accuracy_table(results: list[SplitPosteriors], sensors: tuple[str,
         acc = correct.mean(axis=0)  # (s, m)
         majority = (truth == (r.train_prior >= 0.5)).mean(axis=0)  # (m,)
         bal = np.stack([per_attribute_balanced_accuracy(truth, pred[:, s, :]) for s in range(pred.shape[1])])
+        # intervals within the split, over its test objects: per sensor, and for the sensor mean
+        ivs = [attribute_intervals(c, truth, r.y, np.zeros(len(r.y)))
+               for c in [*np.moveaxis(correct, 1, 0), correct.mean(axis=1)]]
         for j, attr in enumerate(r.attributes):
-            for s, sensor in enumerate(sensors):
+            for s, sensor in enumerate([*sensors, "mean"]):
+                if sensor == "mean":
+                    b = np.nanmean(bal[:, j]) if np.isfinite(bal[:, j]).any() else np.nan
+                    a = acc[:, j].mean()
+                else:
+                    b, a = bal[s, j], acc[s, j]
+                iv = ivs[s]
                 rows.append({"split": split_label(r.split), "attribute": attr, "sensor": sensor,
-                             "balanced_accuracy": bal[s, j], "accuracy": acc[s, j], "majority": majority[j]})
-            rows.append({"split": split_label(r.split), "attribute": attr, "sensor": "mean",
-                         "balanced_accuracy": np.nanmean(bal[:, j]) if np.isfinite(bal[:, j]).any() else np.nan,
-                         "accuracy": acc[:, j].mean(), "majority": majority[j]})
+                             "balanced_accuracy": b, "balanced_accuracy_ci95_low": iv["balanced_low"][j],
+                             "balanced_accuracy_ci95_high": iv["balanced_high"][j], "accuracy": a,
+                             "accuracy_ci95_low": iv["accuracy_low"][j], "accuracy_ci95_high": iv["accuracy_high"][j],
+                             "majority": majority[j]})
     return pd.DataFrame(rows)
 
 
