@@ -27,11 +27,15 @@ def test_evaluate_fabric_prints_table_and_refuses_overwrite(data_dir, tmp_path):
     header = next(line for line in lines if line.startswith("condition"))
     for col in ("lam=0", "lam=0.1", "lam=1", "lam=10", "lam=inf", "ESZSL"):
         assert col in header
+    assert "protocol" in header
     rows = [line for line in lines if line.startswith("depth-")]
-    assert [r.split()[0] for r in rows] == ["depth-sequence", "depth-image"]
-    assert all("[75.45]" in r and "[68.21]" in r for r in rows)  # the paper's Average row beside ours
+    assert [r.split()[:3] for r in rows] == [[c, "1", p] for c in ("depth-sequence", "depth-image")
+                                             for p in ("paper", "zero-shot-drop")]
+    paper = [r for r in rows if " paper " in r]
+    assert all("[75.45]" in r and "[68.21]" in r for r in paper)  # the paper's Average row beside its split only
+    assert not any("[" in r for r in rows if "zero-shot-drop" in r)
     table = pd.read_csv(out / "fabric_table1.csv")
-    assert table["config"].tolist() == [1, 1]
+    assert table["config"].tolist() == [1, 1, 1, 1]
     assert table[["lam_0", "lam_0.1", "lam_1", "lam_10", "lam_inf", "ESZSL"]].stack().between(0, 1).all()
 
     before = (out / "fabric_table1.csv").read_bytes()

@@ -190,6 +190,8 @@ def test_real_study_table_layout(real_study):
     assert (table.loc[table["protocol"] == "zero-shot-drop", "test_groups"] == "0 7").all()
     assert table["n_seeds"].eq(1).all() and table["lam_0_std"].isna().all() and table["ESZSL_std"].eq(0).all()
     assert len(runs) == 8 * 3
+    assert {"accuracy_ci95_low", "accuracy_ci95_high", "per_class_mean_accuracy_ci95_low", "chance"} <= set(runs.columns)
+    assert ((runs["accuracy_ci95_low"] <= runs["accuracy"] + 1e-9) & (runs["accuracy"] <= runs["accuracy_ci95_high"] + 1e-9)).all()
     text = format_fabric_table(table)
     assert "depth-sequence" in text and "[75.45]" in text  # paper Average, lambda = 0
 

@@ -93,6 +93,10 @@ def test_study_writes_every_table_with_paper_columns(tmp_path):
     assert {"majority", "majority_balanced_accuracy", "accuracy_ci95_low"} <= set(att.columns)
     assert (att["balanced_accuracy_ci95_low"] <= att["balanced_accuracy"] + 1e-12).all()
     assert (att["balanced_accuracy"] <= att["balanced_accuracy_ci95_high"] + 1e-12).all()
+    per = tables["attribute_accuracy_per_split"]
+    defined = per["balanced_accuracy"].notna()
+    assert (per.loc[defined, "balanced_accuracy_ci95_low"] <= per.loc[defined, "balanced_accuracy"] + 1e-12).all()
+    assert (per["accuracy_ci95_low"] <= per["accuracy"] + 1e-12).all() and "majority" in per.columns
     assert t1.loc[t1["split"] == "mean", "paper_avgdap"].item() == pytest.approx(0.39)
     # the attributes are linearly encoded: recognition must be far above chance (1/8)
     assert t1.loc[t1["split"] == "mean", "avgdap"].item() > 0.5
@@ -172,6 +176,9 @@ def test_sweep_full_set_equals_split_accuracy():
     full = sweep[(sweep["split"] == "1") & (sweep["n_attributes"] == 2)]
     assert full["accuracy_mean"].item() == pytest.approx(r.accuracy("avg", "uni"))
     assert set(sweep["split"]) == {"1", "mean"}
+    assert (sweep["ci95_low"] <= sweep["accuracy_mean"] + 1e-9).all()
+    assert (sweep["accuracy_mean"] <= sweep["ci95_high"] + 1e-9).all()
+    assert sweep["chance"].eq(1 / 3).all()
 
 
 def test_dask_cluster_gives_the_local_results():

@@ -87,3 +87,27 @@ def test_a_single_object_split_is_left_out_of_the_control():
     assert t3.loc[t3["split"] == "3", "chance"].item() == 1.0
     assert t3.loc[t3["split"] == "control", "chance"].item() == pytest.approx(1 / 3)  # split 1 only
     assert list(table3_challenging([one])["split"]) == ["3", "mean", "std"]
+
+
+def test_splits_written_to_a_results_folder_read_back_exactly_with_their_rule(tmp_path):
+    import json
+
+    from tzsl.evaluation import read_splits_csv
+    from tzsl.experiments._outputs import ResultsDir
+    from tzsl.experiments.phac2_dap import DapStudyConfig, make_splits
+
+    from tests.experiments.test_phac2_dap import synthetic_features
+
+    features = synthetic_features(n_objects=40, n_attributes=6, trials=2)
+    config = DapStudyConfig(n_splits=2, n_test=5, progress=False)
+    splits = make_splits(features, "random", config)[0] + make_splits(features, "challenging", config)[0]
+    out = ResultsDir(tmp_path)
+    out.write_splits("splits.csv", splits)
+    back = read_splits_csv(tmp_path / "splits.csv", features.attributes)  # reader default: the random rule
+    assert [(s.name, s.train_objects, s.test_objects, s.kept_attributes, s.min_train_positives) for s in back] == [
+        (s.name, s.train_objects, s.test_objects, s.kept_attributes, s.min_train_positives) for s in splits]
+    assert {s.min_train_positives for s in back if s.kind == "challenging"} == {3}
+    manifest = json.loads(out.write_manifest({}).read_text())
+    assert set(manifest["splits"]) == {s.name for s in splits}
+    assert manifest["splits"][splits[-1].name]["test"] == list(splits[-1].test_objects)
+    assert "splits.csv" in manifest["outputs"]

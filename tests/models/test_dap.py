@@ -139,6 +139,9 @@ def test_subset_sweep_equals_loop(fusion, prior_kind):
     for r, sub in enumerate(subsets):
         masks[r, sub] = True
     fast = dap_accuracy_over_subsets(P, K, y, masks, fusion=fusion, prior=prior, chunk=7)
+    per_trial = dap_accuracy_over_subsets(P, K, y, masks, fusion=fusion, prior=prior, chunk=7, per_trial=True)
+    assert per_trial.shape == (len(masks), len(y)) and set(np.unique(per_trial)) <= {0.0, 1.0}
+    np.testing.assert_allclose(per_trial.mean(axis=1), fast)
     loop = np.array([_loop_accuracy(P, K, y, sub, fusion, full_prior) for sub in subsets])
     np.testing.assert_allclose(fast, loop)
     idx = np.array([sub for sub in subsets if sub.size == 5])

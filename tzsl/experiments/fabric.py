@@ -101,12 +101,13 @@ from tzsl.experiments.fabric_samples import (
     files_digest,
     gelsight_samples,
 )
-from tzsl.experiments._trust import Outcomes
+from tzsl.experiments._trust import add_trust_columns
 from tzsl.experiments.fabric_tables import (
     ESZSL_METHOD,
     PAPER_LAMBDAS,
     fabric_lambda_figure,
     fabric_note,
+    fabric_outcomes,
     fabric_protocols,
     fabric_table,
     format_fabric_table,
@@ -467,16 +468,11 @@ def run_fabric_study(
         {**m, **r}
         for m, r in zip(meta, tqdm(results, total=len(jobs), desc="fabric fits", disable=not progress))
     ]
-    outcomes = Outcomes(split_column="seed", by=("condition", "config", "protocol"))
-    for row in rows:
-        if "_y" not in row:  # a failed fit: recorded in the runs table, no outcomes
-            continue
-        y_true, y_pred = row.pop("_y")
-        keys = {k: row[k] for k in ("condition", "config", "protocol")}
-        for column, metric in ((row["method"], "trial"), (f"{row['method']}_pcma", "class_mean")):
-            outcomes.add(row["seed"], column, y_true, y_true == y_pred, metric=metric, **keys)
+    outcomes, per_run = fabric_outcomes(rows)  # per-sample outcomes -> intervals in the table and the runs
     runs = pd.DataFrame(rows)
-    runs["seed"] = runs["seed"].astype("Int64")
+    seeds_ = runs["seed"].astype("Int64")
+    runs = add_trust_columns(runs.assign(seed=seeds_.astype(object).where(seeds_.notna(), "None")), per_run)
+    runs["seed"] = seeds_
     for col in ("alpha", "gamma", "eszsl_lam", "cv_score", "n_iter", "converged"):
         if col not in runs.columns:
             runs[col] = np.nan

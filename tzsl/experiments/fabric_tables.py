@@ -31,6 +31,7 @@ __all__ = [
     "PAPER_LAMBDAS",
     "fabric_lambda_figure",
     "fabric_note",
+    "fabric_outcomes",
     "fabric_table",
     "format_fabric_table",
     "lambda_label",
@@ -135,6 +136,27 @@ def fabric_note(samples: FabricSamples, config: int, duplicates: list[tuple[int,
         dup = "; ".join(",".join(map(str, d)) for d in duplicates)
         parts.append(f"{attributes}: groups {dup} share one attribute vector (merged in training)")
     return "; ".join(parts)
+
+
+def fabric_outcomes(rows: list[dict]) -> tuple[Outcomes, Outcomes]:
+    """Per-sample outcomes of every fit, for the table (methods as columns) and the runs (one row per fit).
+
+    Pops the ``"_y"`` entry (``(y_true, y_pred)``) from each run row of
+    :func:`tzsl.experiments.fabric.run_fabric_study`; the seed is the split level of the bootstrap.
+    """
+    table = Outcomes(split_column="seed", by=("condition", "config", "protocol"))
+    runs = Outcomes(split_column="seed", by=("condition", "config", "protocol", "method"))
+    for row in rows:
+        if "_y" not in row:  # a failed fit: recorded in the runs table (error column), no outcomes
+            continue
+        y_true, y_pred = row.pop("_y")
+        keys = {k: row[k] for k in ("condition", "config", "protocol")}
+        seed = "None" if row["seed"] is None else row["seed"]
+        for column, metric in ((row["method"], "trial"), (f"{row['method']}_pcma", "class_mean")):
+            table.add(seed, column, y_true, y_true == y_pred, metric=metric, **keys)
+        for column, metric in (("accuracy", "trial"), ("per_class_mean_accuracy", "class_mean")):
+            runs.add(seed, column, y_true, y_true == y_pred, metric=metric, method=row["method"], **keys)
+    return table, runs
 
 
 def fabric_table(runs: pd.DataFrame, lams: Sequence = PAPER_LAMBDAS, outcomes: Outcomes | None = None) -> pd.DataFrame:

@@ -215,8 +215,11 @@ def attribute_accuracy_table(results: list[SplitPosteriors], sensors: tuple[str,
     whatever the attribute's frequency) is NaN where an attribute takes a single value on the
     split's test objects. ``majority``: plain accuracy of always answering the attribute's
     more frequent value among the split's training objects (the baseline plain accuracy must
-    beat; its balanced accuracy is 0.5).
+    beat; its balanced accuracy is 0.5). ``*_ci95_low``/``*_ci95_high``: bootstrap over the
+    split's test objects (:func:`tzsl.experiments._trust.attribute_intervals`).
     """
+    from tzsl.experiments._trust import attribute_intervals  # noqa: PLC0415
+
     rows = []
     for r in results:
         truth = r.K[r.y].astype(bool)  # (n, m)
@@ -225,13 +228,22 @@ def attribute_accuracy_table(results: list[SplitPosteriors], sensors: tuple[str,
         acc = correct.mean(axis=0)  # (s, m)
         majority = (truth == (r.train_prior >= 0.5)).mean(axis=0)  # (m,)
         bal = np.stack([per_attribute_balanced_accuracy(truth, pred[:, s, :]) for s in range(pred.shape[1])])
+        # intervals within the split, over its test objects: per sensor, and for the sensor mean
+        ivs = [attribute_intervals(c, truth, r.y, np.zeros(len(r.y)))
+               for c in [*np.moveaxis(correct, 1, 0), correct.mean(axis=1)]]
         for j, attr in enumerate(r.attributes):
-            for s, sensor in enumerate(sensors):
+            for s, sensor in enumerate([*sensors, "mean"]):
+                if sensor == "mean":
+                    b = np.nanmean(bal[:, j]) if np.isfinite(bal[:, j]).any() else np.nan
+                    a = acc[:, j].mean()
+                else:
+                    b, a = bal[s, j], acc[s, j]
+                iv = ivs[s]
                 rows.append({"split": split_label(r.split), "attribute": attr, "sensor": sensor,
-                             "balanced_accuracy": bal[s, j], "accuracy": acc[s, j], "majority": majority[j]})
-            rows.append({"split": split_label(r.split), "attribute": attr, "sensor": "mean",
-                         "balanced_accuracy": np.nanmean(bal[:, j]) if np.isfinite(bal[:, j]).any() else np.nan,
-                         "accuracy": acc[:, j].mean(), "majority": majority[j]})
+                             "balanced_accuracy": b, "balanced_accuracy_ci95_low": iv["balanced_low"][j],
+                             "balanced_accuracy_ci95_high": iv["balanced_high"][j], "accuracy": a,
+                             "accuracy_ci95_low": iv["accuracy_low"][j], "accuracy_ci95_high": iv["accuracy_high"][j],
+                             "majority": majority[j]})
     return pd.DataFrame(rows)
 
 
@@ -298,15 +310,20 @@ def attribute_sweep(results: list[SplitPosteriors], min_attributes: int = 7, max
 
     For each split and each j from ``min_attributes`` to the split's attribute count, up to
     ``max_subsets`` random j-subsets are scored in one vectorised pass. Rows: (split, j) with
-    the mean and std over subsets, and ``split="mean"`` rows averaging the splits.
+    the mean and std over subsets, and ``split="mean"`` rows averaging the splits. Intervals
+    (``ci95_low``/``ci95_high``) of ``accuracy_mean`` bootstrap test objects (and splits on the
+    mean rows) with each trial's share of subsets that recognised it.
     """
     rng = np.random.default_rng(seed)
     rows = []
+    outcomes = Outcomes(by=("n_attributes",))
     for r in results:
         m = len(r.attributes)
         for j in range(min_attributes, m + 1):
             subsets = attribute_subsets(m, j, max_subsets, rng)
-            acc = dap_accuracy_over_subsets(r.P, r.K, r.y, subsets, fusion=fusion, prior=prior)
+            hits = dap_accuracy_over_subsets(r.P, r.K, r.y, subsets, fusion=fusion, prior=prior, per_trial=True)
+            acc = hits.mean(axis=1)
+            outcomes.add(split_label(r.split), "accuracy_mean", r.y, hits.mean(axis=0), n_attributes=j)
             rows.append({"split": split_label(r.split), "n_attributes": j, "n_subsets": len(subsets),
                          "accuracy_mean": acc.mean(), "accuracy_std": acc.std(), "chance": r.split.chance})
     table = pd.DataFrame(rows)
@@ -314,4 +331,4 @@ def attribute_sweep(results: list[SplitPosteriors], min_attributes: int = 7, max
         n_subsets=("n_subsets", "sum"), accuracy_mean=("accuracy_mean", "mean"),
         accuracy_std=("accuracy_mean", "std"), chance=("chance", "mean"))
     mean.insert(0, "split", "mean")
-    return pd.concat([table, mean], ignore_index=True)
+    return add_trust_columns(pd.concat([table, mean], ignore_index=True), outcomes)

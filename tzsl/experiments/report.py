@@ -33,6 +33,7 @@ import pandas as pd
 
 from tzsl._io import atomic_write
 from tzsl.exceptions import ConfigError, DataFileError
+from tzsl.experiments._trust import INTERVAL_DOC
 
 __all__ = ["REPORT_FILE", "SECTIONS", "Section", "collect_results", "render_report", "write_report"]
 
@@ -46,7 +47,7 @@ FOLD_ROWS = 40
 WIDE_COLUMNS = 7
 
 #: Columns a generic ``ci95_low``/``ci95_high`` pair belongs to (first one present).
-INTERVAL_TARGETS = ("accuracy", "mean", "value", "difference", "balanced_accuracy", "harmonic")
+INTERVAL_TARGETS = ("accuracy", "accuracy_mean", "mean", "value", "difference", "balanced_accuracy", "harmonic")
 
 
 @dataclass(frozen=True)
@@ -459,6 +460,7 @@ def render_report(folder: str | os.PathLike, title: str | None = None, exclude: 
         folder=str(root.resolve()),
         n_tables=len(found["csv"]), n_figures=len(found["png"]),
         sections=sections,
+        interval_doc=INTERVAL_DOC,
         deviations=deviations(manifests),
         provenance=provenance,
     )

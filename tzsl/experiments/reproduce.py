@@ -6,7 +6,8 @@ Not a second code path: each study is the built-in experiment file of the same n
 
 * ``phac2-dap``: ``table1_fusion.csv``, ``table2_priors.csv``, ``table3_challenging.csv``,
   ``multilabel.csv``, ``attribute_accuracy.csv``, ``attribute_sweep.csv``, ``phac2_methods.csv``
-  and the figures ``attribute_accuracy.png``, ``object_map.png``, ``attribute_sweep.png``;
+  and the figures ``attribute_accuracy.png``, ``object_map.png``, ``attribute_sweep.png``; every split
+  scored in ``splits.csv`` (readable by ``--splits``);
 * ``fabric``: ``fabric_table1.csv``, ``fabric_runs.csv``, ``fabric_lambda.png`` (+ its own manifest);
 * ``hand-simulated``: ``hand_table5.csv`` and its curves, on **simulated** grasps (the
   Shadow-hand data of the paper are not public);

@@ -258,7 +258,8 @@ def break_ties(scores, random_state=None) -> np.ndarray:
 
 
 def dap_accuracy_over_subsets(
-    P, K, y, subsets, *, fusion: str = "avg", prior="uni", eps: float = DEFAULT_EPS, chunk: int = 256
+    P, K, y, subsets, *, fusion: str = "avg", prior="uni", eps: float = DEFAULT_EPS, chunk: int = 256,
+    per_trial: bool = False,
 ) -> np.ndarray:
     """DAP trial accuracy for many attribute subsets at once (paper §4.7, Fig. 4).
 
@@ -278,11 +279,14 @@ def dap_accuracy_over_subsets(
     eps : float
     chunk : int
         Subsets scored per numpy pass (bounds memory at ``chunk * n_trials * n_classes`` floats).
+    per_trial : bool, default False
+        Return every trial's outcome instead of the accuracy (for bootstrap intervals).
 
     Returns
     -------
-    ndarray of shape (n_subsets,)
-        Fraction of trials whose argmax class equals ``y``.
+    ndarray of shape (n_subsets,), or (n_subsets, n_trials) with ``per_trial``
+        Fraction of trials whose argmax class equals ``y`` (with ``per_trial``: 1.0 where the
+        trial's argmax class equals ``y``, else 0.0).
     """
     present, absent = fuse_attribute_posteriors(P, fusion)
     m = present.shape[1]
@@ -304,8 +308,9 @@ def dap_accuracy_over_subsets(
         mask = np.zeros((subsets.shape[0], m))
         np.put_along_axis(mask, subsets.astype(np.intp), 1.0, axis=1)
     T = _per_attribute_terms(present, absent, K, pr, eps)  # (n, k, m)
-    out = np.empty(mask.shape[0])
+    out = np.empty((mask.shape[0], len(y)) if per_trial else mask.shape[0])
     for start in range(0, mask.shape[0], chunk):
         S = np.einsum("nkm,rm->rnk", T, mask[start : start + chunk], optimize=True)
-        out[start : start + chunk] = (S.argmax(axis=2) == y[None, :]).mean(axis=1)
+        hits = S.argmax(axis=2) == y[None, :]
+        out[start : start + chunk] = hits if per_trial else hits.mean(axis=1)
     return out
