@@ -78,6 +78,7 @@ from tzsl.models._registry import (
     register_method,
     unregister_method,
 )
+from tzsl.models._score_ensemble import ScoreEnsembleZSL, zscore_rows
 from tzsl.models import _builtin_methods  # noqa: F401,E402  (registers the shipped methods)
 
 __all__: list[str] = [
@@ -136,4 +137,4 @@ __all__: list[str] = [
     "ESZSL", "ESZSLCV", "EmbeddingZSL", "loss_weights", "IAP", "SAE", "SAECV", "ALE", "SJE", "DeViSE",
     "PHAC2_EP_SECONDS", "LogisticAttribute", "PerEPAttributeModel", "ep_column_blocks", "suggest_next_ep",
     "expected_information_gain", "outcome_log_likelihoods", "run_policy", "sequential_log_posterior",
-    "stop_reasons"]
+    "stop_reasons", "ScoreEnsembleZSL", "zscore_rows"]
