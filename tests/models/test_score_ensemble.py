@@ -69,7 +69,9 @@ def test_default_members_with_dap_on_per_sensor_input():
 def test_registered_and_bad_parameters():
     method = get_method("ensemble")
     assert method.family == "ensemble" and method.input_ndim == 3
-    assert method.parameters()["methods"] == ("dap-avg", "eszsl", "sae")
+    default = method.parameters()["methods"]
+    assert [m if isinstance(m, str) else m["name"] for m in default] == ["dap-avg", "eszsl", "sae"]
+    assert default[0]["estimator"].get_params()["grid"] == "paper" and default[0]["estimator"].cv == 5
     X, rows, objects = make_zsl()
     with pytest.raises(ConfigError, match="weights"):
         ScoreEnsembleZSL(methods=FAST_EMBEDDINGS, weights=(1.0,)).fit(X, rows[objects], objects)

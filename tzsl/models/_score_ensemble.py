@@ -26,14 +26,16 @@ from sklearn.base import BaseEstimator, clone
 from sklearn.utils.validation import check_array, check_is_fitted
 
 from tzsl.exceptions import ConfigError
+from tzsl.models._attribute_svm import AttributeSVM
 from tzsl.models._dap import break_ties
 from tzsl.models._registry import get_method
 from tzsl.models._validation import ValidatedParamsMixin
 
 __all__ = ["ScoreEnsembleZSL", "zscore_rows"]
 
-#: Members of the shipped ensemble (registry entries).
-DEFAULT_MEMBERS: tuple = ("dap-avg", "eszsl", "sae")
+#: Members of the shipped ensemble (registry entries): AVGDAP with the PHAC-2 study's attribute SVMs
+#: (5 object-grouped folds, the paper's gamma grid: the configuration measured), ESZSL and SAE.
+DEFAULT_MEMBERS: tuple = ({"name": "dap-avg", "estimator": AttributeSVM(cv=5, grid="paper")}, "eszsl", "sae")
 
 
 def zscore_rows(S: np.ndarray) -> np.ndarray:
@@ -66,8 +68,9 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
 
     Parameters
     ----------
-    methods : sequence of str or dict, default=("dap-avg", "eszsl", "sae")
+    methods : sequence of str or dict, default=DEFAULT_MEMBERS
         Registry methods (``tzsl methods``), each a name or ``{"name": ..., **parameters}``.
+        Default: ``dap-avg`` with ``AttributeSVM(cv=5, grid="paper")``, ``eszsl``, ``sae``.
         Per-sensor methods (``input_ndim = 3``, e.g. DAP) get ``(n, n_sensors, n_features)``,
         the others the sensors side by side.
     weights : sequence of float or None, default=None
