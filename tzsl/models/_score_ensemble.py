@@ -33,9 +33,11 @@ from tzsl.models._validation import ValidatedParamsMixin
 
 __all__ = ["ScoreEnsembleZSL", "zscore_rows"]
 
-#: Members of the shipped ensemble (registry entries): AVGDAP with the PHAC-2 study's attribute SVMs
-#: (5 object-grouped folds, the paper's gamma grid: the configuration measured), ESZSL and SAE.
-DEFAULT_MEMBERS: tuple = ({"name": "dap-avg", "estimator": AttributeSVM(cv=5, grid="paper")}, "eszsl", "sae")
+#: Members of the shipped ensemble (registry entries): AVGDAP with the uniform prior and the PHAC-2
+#: study's attribute SVMs (5 object-grouped folds, the paper's gamma grid: the configuration
+#: measured; balanced Platt posteriors pair with the uniform prior, see AttributeSVM), ESZSL and SAE.
+DEFAULT_MEMBERS: tuple = ({"name": "dap-avg", "estimator": AttributeSVM(cv=5, grid="paper"), "prior": "uni"},
+                          "eszsl", "sae")
 
 
 def zscore_rows(S: np.ndarray) -> np.ndarray:
@@ -70,7 +72,8 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
     ----------
     methods : sequence of str or dict, default=DEFAULT_MEMBERS
         Registry methods (``tzsl methods``), each a name or ``{"name": ..., **parameters}``.
-        Default: ``dap-avg`` with ``AttributeSVM(cv=5, grid="paper")``, ``eszsl``, ``sae``.
+        Default: ``dap-avg`` with ``AttributeSVM(cv=5, grid="paper")`` and ``prior="uni"``,
+        ``eszsl``, ``sae``.
         Per-sensor methods (``input_ndim = 3``, e.g. DAP) get ``(n, n_sensors, n_features)``,
         the others the sensors side by side.
     weights : sequence of float or None, default=None
