@@ -79,6 +79,7 @@ from tzsl.models._registry import (
     register_method,
     unregister_method,
 )
+from tzsl.models._score_ensemble import ScoreEnsembleZSL, zscore_rows
 from tzsl.models import _builtin_methods  # noqa: F401,E402  (registers the shipped methods)
 
 __all__: list[str] = [
@@ -139,4 +140,4 @@ __all__: list[str] = [
     "PHAC2_EP_SECONDS", "LogisticAttribute", "PerEPAttributeModel", "binned_confusion", "ep_column_blocks",
     "suggest_next_ep",
     "expected_information_gain", "outcome_log_likelihoods", "run_policy", "sequential_log_posterior",
-    "stop_reasons"]
+    "stop_reasons", "ScoreEnsembleZSL", "zscore_rows"]

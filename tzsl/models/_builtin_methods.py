@@ -13,11 +13,13 @@ from tzsl.models._iap import IAP
 from tzsl.models._multilabel import MultiLabelAttributeClassifier
 from tzsl.models._registry import DAP_PAPER, ESZSL_PAPER, FABRIC_PAPER, register_method
 from tzsl.models._sae import SAECV
+from tzsl.models._score_ensemble import ScoreEnsembleZSL
 
 IAP_PAPER = "Lampert, Nickisch, Harmeling (2009): Learning to detect unseen object classes by between-class attribute transfer. CVPR"
 SAE_PAPER = "Kodirov, Xiang, Gong (2017): Semantic autoencoder for zero-shot learning. CVPR"
 ALE_PAPER = "Akata, Perronnin, Harchaoui, Schmid (2016): Label-embedding for image classification. TPAMI 38(7)"
 SJE_PAPER = "Akata, Reed, Walter, Lee, Schiele (2015): Evaluation of output embeddings for fine-grained image classification. CVPR"
+ENSEMBLE_PAPER = "tzsl (issue 14): equal-weight mean of trial-wise z-scored class scores of DAP (Abderrahmane et al. 2018), ESZSL (Romera-Paredes, Torr 2015) and SAE (Kodirov et al. 2017)"
 DEVISE_PAPER = "Frome, Corrado, Shlens, Bengio, Dean, Ranzato, Mikolov (2013): DeViSE: a deep visual-semantic embedding model. NIPS"
 
 _PROB = "attribute-classifier"
@@ -34,3 +36,4 @@ register_method("sae", family="embedding", paper=SAE_PAPER, attribute_model=SAEC
 register_method("ale", family="compatibility", paper=ALE_PAPER, attribute_model=ALE, decision_rule=CompatibilityRule, description="bilinear compatibility, weighted approximate ranking loss (SGD)")
 register_method("sje", family="compatibility", paper=SJE_PAPER, attribute_model=SJE, decision_rule=CompatibilityRule, description="bilinear compatibility, structured max-margin loss (SGD)")
 register_method("devise", family="compatibility", paper=DEVISE_PAPER, attribute_model=DeViSE, decision_rule=CompatibilityRule, description="bilinear compatibility, hinge rank loss over violating classes (SGD)")
+register_method("ensemble", family="ensemble", paper=ENSEMBLE_PAPER, estimator=ScoreEnsembleZSL, description="DAP-AVG + ESZSL + SAE, class scores z-scored per trial and averaged (each member tuned on training objects only)", input_ndim=3)

@@ -59,6 +59,9 @@ def check_instance(name: str, cls: type) -> BaseEstimator:
         return cls(n_gamma=2, n_C=2, n_components=32, random_state=0)
     if name in ("ALE", "SJE", "DeViSE"):  # few SGD epochs: the checks test the contract, not convergence
         return cls(n_epochs=3, random_state=0)
+    if name == "ScoreEnsembleZSL":  # DAP needs 0/1 attributes and ESZSLCV/SAECV >= 4 classes: fixed ridges
+        return cls(methods=({"name": "eszsl", "gammas": (0.5,), "lams": (2.0,)}, {"name": "embedding", "lam": 1.0,
+                   "early_stopping": False, "max_iter": 50}), random_state=0)
     if name == "ZeroShotClassifier":
         return cls(attribute_model=ESZSL(), decision_rule=CompatibilityRule(), random_state=0)
     return cls()

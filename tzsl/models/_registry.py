@@ -41,7 +41,7 @@ __all__ = [
 ]
 
 #: Method families shown by ``tzsl methods``.
-FAMILIES = ("attribute-classifier", "embedding", "compatibility")
+FAMILIES = ("attribute-classifier", "embedding", "compatibility", "ensemble")
 
 DAP_PAPER = (
     "Abderrahmane, Ganesh, Crosnier, Cherubini (2018): Haptic zero-shot learning: recognition of "
