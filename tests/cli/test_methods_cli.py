@@ -26,6 +26,6 @@ def test_methods_json():
     assert result.exit_code == 0, result.output
     records = {r["name"]: r for r in json.loads(result.output)}
     assert sorted(records) == available_methods()
-    assert records["dap-max"]["preset"] == {"fusion": "max"}
+    assert records["dap-max"]["preset"] == {"fusion": "max", "prior": "uni"}
     assert records["eszsl"]["parameters"]["gammas"] == list(get_method("eszsl").parameters()["gammas"])
     assert records["embedding"]["family"] == "embedding" and records["embedding"]["parameters"]["lam"] == 1.0

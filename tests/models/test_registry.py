@@ -77,12 +77,16 @@ def test_builtin_methods_and_their_parameters():
         assert name in names
     dap_max = get_method("dap-max")
     params = dap_max.parameters()
-    assert "fusion" not in params and params["prior"] == "train" and params["backend"] == "loky"
+    # the SVMs' balanced Platt posteriors pair with the uniform prior (a train prior would correct twice)
+    assert "fusion" not in params and "prior" not in params and params["backend"] == "loky"
     # defaults are read from the signatures, not written twice
-    assert params["prior"] == inspect.signature(DAPRule.__init__).parameters["prior"].default
-    clf = build_method("dap-max", prior="uni", n_jobs=1, random_state=3)
+    iap_params = get_method("iap").parameters()
+    assert iap_params["prior"] == inspect.signature(DAPRule.__init__).parameters["prior"].default
+    clf = build_method("dap-max", n_jobs=1, random_state=3)
     assert isinstance(clf.attribute_model, AttributeClassifierBank) and clf.attribute_model.random_state == 3
     assert clf.decision_rule.get_params() == {"fusion": "max", "prior": "uni", "eps": 1e-6}
+    with pytest.raises(ConfigError, match="fixed"):
+        build_method("dap-avg", prior="train")
     eszsl = build_method("eszsl", cv=3)
     assert isinstance(eszsl.attribute_model, ESZSLCV) and eszsl.attribute_model.cv == 3
     assert build_method("ldap").fusion == "ldap"

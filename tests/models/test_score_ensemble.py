@@ -57,7 +57,7 @@ def test_recognises_unseen_classes_and_is_the_mean_of_its_members():
 def test_default_members_with_dap_on_per_sensor_input():
     X, rows, objects = make_zsl(n_objects=14, seed=2)
     X_tr, A_tr, g_tr, X_te, K, y = split(X, rows, objects)
-    small_dap = {"name": "dap-avg", "estimator": AttributeSVM(n_C=2, n_gamma=2, n_draws=1, cv=3), "prior": "uni"}
+    small_dap = {"name": "dap-avg", "estimator": AttributeSVM(n_C=2, n_gamma=2, n_draws=1, cv=3)}
     ens = ScoreEnsembleZSL(methods=(small_dap, "eszsl", "sae"), random_state=0).fit(X_tr, A_tr, g_tr)
     assert ens.n_sensors_ == 2 and ens.n_features_in_ == 6
     assert ens.estimators_[0].attribute_model_.n_sensors_ == 2  # DAP kept the sensors apart
@@ -72,7 +72,8 @@ def test_registered_and_bad_parameters():
     default = method.parameters()["methods"]
     assert [m if isinstance(m, str) else m["name"] for m in default] == ["dap-avg", "eszsl", "sae"]
     assert default[0]["estimator"].get_params()["grid"] == "paper" and default[0]["estimator"].cv == 5
-    assert default[0]["prior"] == "uni"  # balanced Platt posteriors: the train prior would correct twice
+    # balanced Platt posteriors: the train prior would correct twice, so dap-avg fixes the uniform one
+    assert get_method("dap-avg").preset["prior"] == "uni"
     X, rows, objects = make_zsl()
     with pytest.raises(ConfigError, match="weights"):
         ScoreEnsembleZSL(methods=FAST_EMBEDDINGS, weights=(1.0,)).fit(X, rows[objects], objects)

@@ -23,9 +23,9 @@ ENSEMBLE_PAPER = "tzsl (issue 14): equal-weight mean of trial-wise z-scored clas
 DEVISE_PAPER = "Frome, Corrado, Shlens, Bengio, Dean, Ranzato, Mikolov (2013): DeViSE: a deep visual-semantic embedding model. NIPS"
 
 _PROB = "attribute-classifier"
-register_method("dap-avg", family=_PROB, paper=DAP_PAPER, attribute_model=AttributeClassifierBank, decision_rule=DAPRule, preset={"fusion": "avg"}, description="per-(attribute, sensor) RBF-SVMs, AVGDAP over sensors (eq. 6)", input_ndim=3)
-register_method("dap-max", family=_PROB, paper=DAP_PAPER, attribute_model=AttributeClassifierBank, decision_rule=DAPRule, preset={"fusion": "max"}, description="per-(attribute, sensor) RBF-SVMs, MAXDAP over sensors (eq. 5)", input_ndim=3)
-register_method("multilabel-dap", family=_PROB, paper=DAP_PAPER, attribute_model=MultiLabelAttributeClassifier, decision_rule=DAPRule, description="classifier chain of RBF-SVMs (joint attributes), DAP (§4.4)", input_ndim=3)
+register_method("dap-avg", family=_PROB, paper=DAP_PAPER, attribute_model=AttributeClassifierBank, decision_rule=DAPRule, preset={"fusion": "avg", "prior": "uni"}, description="per-(attribute, sensor) RBF-SVMs, AVGDAP over sensors (eq. 6), uniform prior (balanced Platt posteriors: a train prior would correct twice)", input_ndim=3)
+register_method("dap-max", family=_PROB, paper=DAP_PAPER, attribute_model=AttributeClassifierBank, decision_rule=DAPRule, preset={"fusion": "max", "prior": "uni"}, description="per-(attribute, sensor) RBF-SVMs, MAXDAP over sensors (eq. 5), uniform prior", input_ndim=3)
+register_method("multilabel-dap", family=_PROB, paper=DAP_PAPER, attribute_model=MultiLabelAttributeClassifier, decision_rule=DAPRule, preset={"prior": "uni"}, description="classifier chain of RBF-SVMs (joint attributes), DAP (§4.4)", input_ndim=3)
 register_method("ldap", family=_PROB, paper=DAP_PAPER, estimator=HandDAPClassifier, preset={"fusion": "ldap"}, description="5-BioTac hand, one grasp, LDAP over touching fingers (eqs. 9-10)")
 register_method("hand-dap", family=_PROB, paper=DAP_PAPER, estimator=HandDAPClassifier, description="5-BioTac hand, one grasp, MAXDAP/AVGDAP/LDAP (section 5)")
 register_method("eszsl", family="compatibility", paper=ESZSL_PAPER, attribute_model=ESZSLCV, decision_rule=CompatibilityRule, description="closed-form bilinear compatibility, ridges by class-grouped CV")

@@ -51,7 +51,7 @@ __all__ = ["ScoreEnsembleZSL", "zscore_rows"]
 #: Members of the shipped ensemble (registry entries): AVGDAP with the uniform prior and the PHAC-2
 #: study's attribute SVMs (5 object-grouped folds, the paper's gamma grid: the configuration
 #: measured; balanced Platt posteriors pair with the uniform prior, see AttributeSVM), ESZSL and SAE.
-DEFAULT_MEMBERS: tuple = ({"name": "dap-avg", "estimator": AttributeSVM(cv=5, grid="paper"), "prior": "uni"},
+DEFAULT_MEMBERS: tuple = ({"name": "dap-avg", "estimator": AttributeSVM(cv=5, grid="paper")},
                           "eszsl", "sae")
 
 
