@@ -361,10 +361,11 @@ def _scan_signal_files(folder: Path, settings: dict, problems: list[Problem], sc
     reference: str | None = None
     baseline = int(settings.get("signals", {}).get("baseline_rows", 0) or 0)
     n_rows = np.zeros(present.shape, dtype=np.int64)
+    root = os.path.realpath(folder)
     for i, s in np.argwhere(present):
         line, text = int(lines[i, s]), files[i, s]
         tid = meta[i]
-        path, reason = resolve_signal_path(folder, text)
+        path, reason = resolve_signal_path(folder, text, root)
         if path is None:
             problems.append(Problem(tname, line, f"trial {tid!r}: {reason}"))
             continue
