@@ -212,6 +212,8 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         groups = None if groups is None else np.asarray(groups)
         if groups is not None and groups.shape != (n,):
             raise ConfigError(f"groups must have shape ({n},), got {groups.shape}")
+        if groups is not None:  # object names -> codes in sorted order: the same folds and draws, but each
+            groups = np.unique(groups, return_inverse=True)[1].reshape(n)  # grouping is integer work
         g = np.arange(n) if groups is None else groups
         for j, nm in enumerate(names):  # fail fast, before any parallel work
             for label, mask in (("present", A[:, j] == 1), ("absent", A[:, j] == 0)):
