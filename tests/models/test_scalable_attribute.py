@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from sklearn.base import clone
 
 from tzsl.models import AttributeClassifierBank, AttributeSVM
 from tzsl.models import ScalableAttributeClassifier
@@ -90,3 +91,14 @@ def test_search_on_a_subset_then_refit_on_all_trials():
     assert set(g[tr][tune]) == set(g[tr])  # every object keeps trials in the search
     assert m.coef_.shape == (m.feature_map_.components_.shape[0],)  # the search's feature map, refitted
     assert balanced_accuracy(m.predict_proba(X[~tr, 0])[:, 1], A[~tr, 2]) > 0.8  # chance is 0.5
+
+
+@pytest.mark.parametrize("solver", ["exact", "approximate"])
+def test_bank_codes_object_names_without_changing_a_fit(solver):
+    X, A, g = make_problem(n_attributes=1, n_sensors=1)
+    names = np.array([f"object-{v:03d}" for v in g], dtype=object)  # sorted like the integers
+    bank = AttributeClassifierBank(estimator=AttributeSVM(n_C=2, n_gamma=2, n_draws=2, cv=3), memory=None,
+                                   random_state=0, solver=solver).fit(X, A, names)
+    fitted = bank.estimators_[0][0]
+    direct = clone(fitted).fit(X[:, 0], A[:, 0], names)  # same seed, the names themselves
+    np.testing.assert_array_equal(fitted.predict_proba(X[:, 0]), direct.predict_proba(X[:, 0]))

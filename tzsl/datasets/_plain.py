@@ -164,11 +164,15 @@ class PlainDataset:
             Unreadable file, channels missing, fewer than ``min_rows`` rows, NaN/inf
             (names the file, the trial and, for CSV files, the line).
         """
+        return self._read_signal(trial, sensor, min_rows, None)
+
+    def _read_signal(self, trial: int, sensor: int, min_rows: int, root: str | None) -> np.ndarray:
+        """:meth:`read_signal`; ``root`` = ``os.path.realpath(self.folder)`` when reading many."""
         if self.signal_files is None or self.channels is None:
             raise DataFileError(self.folder, "dataset has feature columns, not signal files")
         rel = str(self.signal_files[trial, sensor])
         tid = str(self.trials["trial_id"].iat[trial])
-        path, reason = resolve_signal_path(self.folder, rel)
+        path, reason = resolve_signal_path(self.folder, rel, root)
         if path is None:
             raise DataFileError(self.folder / TRIALS_FILE, reason, trial=tid)
         channels, values = read_signal_file(path)
@@ -203,10 +207,11 @@ class PlainDataset:
         """
         trials = list(trials)
         n_threads = min(8, (os.cpu_count() or 1) + 4) if n_threads is None else int(n_threads)
+        root = os.path.realpath(self.folder)
         if n_threads <= 1 or len(trials) < 2:
-            return [self.read_signal(i, sensor, min_rows) for i in trials]
+            return [self._read_signal(i, sensor, min_rows, root) for i in trials]
         with ThreadPoolExecutor(max_workers=n_threads) as pool:
-            return list(pool.map(lambda i: self.read_signal(i, sensor, min_rows), trials))
+            return list(pool.map(lambda i: self._read_signal(i, sensor, min_rows, root), trials))
 
     def to_feature_set(
         self,

@@ -129,9 +129,12 @@ def check_signal_values(
     return problems
 
 
-def resolve_signal_path(folder: Path, text: str) -> tuple[Path | None, str | None]:
-    """``signal_file`` cell -> resolved absolute path inside ``folder``, or None and why it is refused."""
+def resolve_signal_path(folder: Path, text: str, root: str | None = None) -> tuple[Path | None, str | None]:
+    """``signal_file`` cell -> resolved absolute path inside ``folder``, or None and why it is refused.
+
+    ``root``: ``os.path.realpath(folder)``, when resolving many cells of one folder.
+    """
     pure = PurePosixPath(text.replace("\\", "/"))
     if text and pure.suffix.lower() not in SIGNAL_SUFFIXES:
         return None, f"signal_file {text!r}: unsupported type {pure.suffix!r}; use {' or '.join(SIGNAL_SUFFIXES)}"
-    return resolve_inside(folder, text, "signal_file")
+    return resolve_inside(folder, text, "signal_file", root)

@@ -51,6 +51,8 @@ from tzsl.datasets._tables import (  # noqa: F401 - the format's vocabulary, re-
     read_settings,
     trials_file_name,
 )
+from tzsl.datasets._fast_trials import read_clean_trials
+from tzsl.datasets._paths import check_inside
 from tzsl.exceptions import DataFileError
 
 @dataclass
@@ -210,6 +212,16 @@ def _int_cell(text: str) -> int | None:
 def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: ScannedDataset,
                  check_signals: bool) -> None:
     tname = trials_file_name(folder)
+    clean = None if check_inside(folder, tname) is not None or scan.classes is None else (
+        read_clean_trials(folder / tname, set(scan.classes.index)))
+    if clean is not None:  # a clean table read column-wise; otherwise the row-by-row checks below
+        scan.kind, scan.trials, scan.signal_lines = clean.kind, clean.trials, clean.lines
+        scan.sensors = clean.sensors or (DEFAULT_SENSOR,)
+        scan.X, scan.feature_names = clean.X, clean.feature_names
+        if clean.kind == "signals":
+            present = np.ones(clean.signal_files.shape, dtype=bool)
+            _scan_signal_files(folder, settings, problems, scan, clean.signal_files, present, check_signals, tname)
+        return
     parsed = read_rows(folder, tname, problems)
     if parsed is None:
         return
@@ -334,19 +346,26 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
         scan.feature_names = tuple(features)
         return
 
-    # signals
     files = np.array([kept_rows[k][1][col["signal_file"]] if k >= 0 else "" for k in where.reshape(-1)],
                      dtype=object).reshape(where.shape)
+    _scan_signal_files(folder, settings, problems, scan, files, where >= 0, check_signals, tname)
+
+
+def _scan_signal_files(folder: Path, settings: dict, problems: list[Problem], scan: ScannedDataset,
+                       files: np.ndarray, present: np.ndarray, check_signals: bool, tname: str) -> None:
+    """Check the signal files (n_trials, n_sensors) of the trials table where ``present``; fills ``scan``."""
     scan.signal_files = files
+    lines, meta = scan.signal_lines, scan.trials["trial_id"].to_numpy()
     configured = settings.get("signals", {}).get("channels")
     scan.channels = tuple(configured) if configured else None
     reference: str | None = None
     baseline = int(settings.get("signals", {}).get("baseline_rows", 0) or 0)
-    n_rows = np.zeros(where.shape, dtype=np.int64)
-    for i, s in np.argwhere(where >= 0):
+    n_rows = np.zeros(present.shape, dtype=np.int64)
+    root = os.path.realpath(folder)
+    for i, s in np.argwhere(present):
         line, text = int(lines[i, s]), files[i, s]
-        tid = meta[i]["trial_id"]
-        path, reason = resolve_signal_path(folder, text)
+        tid = meta[i]
+        path, reason = resolve_signal_path(folder, text, root)
         if path is None:
             problems.append(Problem(tname, line, f"trial {tid!r}: {reason}"))
             continue

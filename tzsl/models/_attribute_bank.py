@@ -212,6 +212,8 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         groups = None if groups is None else np.asarray(groups)
         if groups is not None and groups.shape != (n,):
             raise ConfigError(f"groups must have shape ({n},), got {groups.shape}")
+        if groups is not None:  # object names -> codes in sorted order: the same folds and draws, but each
+            groups = np.unique(groups, return_inverse=True)[1].reshape(n)  # grouping is integer work
         g = np.arange(n) if groups is None else groups
         for j, nm in enumerate(names):  # fail fast, before any parallel work
             for label, mask in (("present", A[:, j] == 1), ("absent", A[:, j] == 0)):
@@ -225,6 +227,8 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         seeds = spawn_seeds(self.random_state, A.shape[1] * s)
         memory = resolve_memory(self.memory)
         fit_one = memory.cache(fit_clone)
+        # one array per sensor, shared by every attribute's task: the Dask backend scatters each once
+        per_sensor = [np.ascontiguousarray(X[:, k, :]) for k in range(s)]
         tasks = []
         for j, nm in enumerate(names):
             for k in range(s):
@@ -234,7 +238,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
                     est.set_params(random_state=seeds[j * s + k])
                 if "name" in params:
                     est.set_params(name=f"{nm} (sensor {k})")
-                tasks.append(delayed(fit_one)(est, X[:, k, :], A[:, j], groups))
+                tasks.append(delayed(fit_one)(est, per_sensor[k], A[:, j], groups))
         fitted = self._run_fits(tasks, "attribute fits")
         self.estimators_ = [fitted[j * s : (j + 1) * s] for j in range(A.shape[1])]
         self.n_sensors_, self.n_attributes_, self.n_features_in_ = s, A.shape[1], d
