@@ -68,6 +68,7 @@ from tzsl.models._validation import ParameterError
 from tzsl.models._zero_shot import ZeroShotClassifier, score_kind
 from tzsl.models._registry import (
     FAMILIES,
+    INPUT_KINDS,
     Method,
     all_estimators,
     available_methods,
@@ -122,6 +123,7 @@ __all__: list[str] = [
     "attribute_rows",
     "training_classes",
     "FAMILIES",
+    "INPUT_KINDS",
     "Method",
     "all_estimators",
     "available_methods",

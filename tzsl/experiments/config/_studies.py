@@ -202,6 +202,10 @@ class HandMethods(Section):
     confusion_k: int = Field(default_factory=lambda: _paper("DAP_HAND_CONFUSION_K"), ge=1)
     model: dict[str, Any] = Field(default_factory=dict, description="HandDAPClassifier parameters; "
                                                                     "unset: its defaults")
+    compare: list[MethodEntry] = Field([], description=COMPARE_DESCRIPTION + " (on the packed grasp "
+                                       "features, beside MAXDAP/AVGDAP/LDAP)")
+
+    _compare = field_validator("compare")(lambda v: methods_ok(v))
 
     @field_validator("model")
     @classmethod
