@@ -246,7 +246,7 @@ progress = false
     assert list(table.index) == ["hand-dap_fusion_maxdap", "hand-dap_fusion_avgdap", "ldap", "toy", "eszsl"]
     assert (table["data"] == "simulated").all() and table["note"].str.startswith("SIMULATED").all()
     assert (table["reference"] == "ldap").all() and np.isnan(table.loc["ldap", "difference"])
-    assert table.loc["ldap", "paper"] == pytest.approx(0.5963)
+    assert table.loc["ldap", "paper_accuracy"] == pytest.approx(0.5963)
     assert table["n_trials"].nunique() == 1  # every method on the same test grasps
     table5 = pd.read_csv(tmp_path / "res" / "hand_table5.csv")
     ldap = table5[(table5["seed"] == "0") & (table5["method"] == "LDAP")]["all"].iloc[0]

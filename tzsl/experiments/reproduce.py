@@ -9,7 +9,10 @@ Not a second code path: each study is the built-in experiment file of the same n
   and the figures ``attribute_accuracy.png``, ``object_map.png``, ``attribute_sweep.png``;
 * ``fabric``: ``fabric_table1.csv``, ``fabric_runs.csv``, ``fabric_lambda.png`` (+ its own manifest);
 * ``hand-simulated``: ``hand_table5.csv`` and its curves, on **simulated** grasps (the
-  Shadow-hand data of the paper are not public).
+  Shadow-hand data of the paper are not public);
+* ``method_comparison.csv``: the studies' ``*_method_comparison.csv`` stacked (every registered
+  method x study: accuracy with its interval, the paper's number, fit time, paired difference to
+  the study's paper method), with a row saying why for each method a study does not run.
 
 The other built-in studies (``phac2-gzsl``, ``fabric-deep``) run with ``tzsl run NAME``.
 """
@@ -62,8 +65,8 @@ def reproduce_tables(
         check_experiment(exp)
         if exp.study == "phac2-dap":
             results.check_free(phac2_outputs(exp.config))
-    results.check_free(["manifest.json"])
-    records, data_files, timings, tables = {}, [], {}, []
+    results.check_free(["manifest.json", "method_comparison.csv"])
+    records, data_files, timings, tables, done_tables = {}, [], {}, [], []
     for name, exp in zip(studies, experiments, strict=True):
         say(f"\n== {name} ({exp.source}) ==")
         start = time.perf_counter()
@@ -72,6 +75,13 @@ def reproduce_tables(
         records[name] = manifest_record(exp, done)
         data_files += list(done.data_files)
         tables += sorted(done.tables)
+        done_tables += [t for key, t in done.tables.items() if key.endswith("method_comparison")]
+    if done_tables:
+        from tzsl.experiments.study_methods import COMPARISON_FILE, FEW_CLASSES, combine_comparisons  # noqa: PLC0415
+
+        dap = {name: FEW_CLASSES for name in ("dap-avg", "dap-max", "multilabel-dap")}
+        results.write_csv(COMPARISON_FILE, combine_comparisons(done_tables, {"fabric": dap, "hand": dap}))
+        tables.append(COMPARISON_FILE[: -len(".csv")])
     results.write_manifest({"studies": records}, data_files=data_files,
                            extra={"timings_s": timings, "tables": tables, "reproduce_studies": list(studies)})
     return results

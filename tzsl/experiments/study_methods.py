@@ -37,6 +37,7 @@ from tzsl.models import attribute_rows, available_methods, get_method
 __all__ = [
     "COMPARISON_COLUMNS",
     "COMPARISON_FILE",
+    "FEW_CLASSES",
     "MethodFit",
     "combine_comparisons",
     "comparison_file",
@@ -55,7 +56,7 @@ COMPARISON_FILE = "method_comparison.csv"
 
 #: Columns of every study's method comparison (and of :data:`COMPARISON_FILE`).
 COMPARISON_COLUMNS = [
-    "study", "data", "method", "accuracy", "ci95_low", "ci95_high", "paper", "chance", "fit_seconds",
+    "study", "data", "method", "accuracy", "ci95_low", "ci95_high", "paper_accuracy", "chance", "fit_seconds",
     "difference", "difference_ci95_low", "difference_ci95_high", "reference", "n_splits", "n_trials", "note",
 ]
 
@@ -193,7 +194,7 @@ def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], ch
         iv = bootstrap_accuracy(t["correct"].to_numpy(), classes=t["class"].to_numpy(), splits=t["split"].to_numpy())
         seconds = [s for s in fit_seconds.get(method, []) if s is not None]
         rows.append({"study": study, "data": data, "method": method, "accuracy": iv.mean,
-                     "ci95_low": iv.ci95_low, "ci95_high": iv.ci95_high, "paper": paper.get(method, np.nan),
+                     "ci95_low": iv.ci95_low, "ci95_high": iv.ci95_high, "paper_accuracy": paper.get(method, np.nan),
                      "chance": chance, "fit_seconds": float(np.mean(seconds)) if seconds else np.nan,
                      "n_splits": t["split"].nunique(), "n_trials": len(t), "note": notes.get(method, "")})
     table = pd.DataFrame(rows)
@@ -213,13 +214,20 @@ _WHY = {"grasps": "needs hand grasps (5 BioTacs + joint angles)",
         "features": "needs feature vectors"}
 
 
-def combine_comparisons(tables: list[pd.DataFrame]) -> pd.DataFrame:
+#: Why the per-attribute SVM methods are not run on the fabric and hand training sets.
+FEW_CLASSES = ("not run: its per-attribute classifiers are tuned by class-grouped CV and need >= 2 training "
+               "classes with and without every attribute; here some attributes belong to one training class")
+
+
+def combine_comparisons(tables: list[pd.DataFrame], reasons: dict[str, dict[str, str]] | None = None) -> pd.DataFrame:
     """Stack study comparisons into one table of every method x study.
 
-    A registered method missing from a study gets a row without accuracy whose note says why
-    (its input kind, or "not run in this study"). Studies keep their order; within a study the
-    rows run, then the rows not run.
+    A registered method missing from a study gets a row without accuracy whose note says why:
+    its input kind, ``reasons[study prefix][method]`` (e.g. ``{"fabric": {"dap-avg": ...}}``),
+    or "not run in this study". Studies keep their order; within a study the rows run, then
+    the rows not run.
     """
+    reasons = reasons or {}
     parts = []
     for table in tables:
         parts.append(table)
@@ -232,7 +240,8 @@ def combine_comparisons(tables: list[pd.DataFrame]) -> pd.DataFrame:
                     continue
                 own = get_method(name).input_kind
                 usable = own == kind or (kind == "grasps" and own == "features")
-                note = "not run in this study" if usable else f"not applicable: {_WHY[own]}"
+                note = (reasons.get(str(study).split("-")[0], {}).get(name, "not run in this study") if usable
+                        else f"not applicable: {_WHY[own]}")
                 missing.append({"study": study, "data": sub["data"].iloc[0], "method": name, "note": note,
                                 "reference": sub["reference"].iloc[0]})
             if missing:
