@@ -13,10 +13,8 @@ from collections.abc import Sequence
 
 import numpy as np
 from sklearn.exceptions import ConvergenceWarning
-from sklearn.model_selection import GroupKFold
-
 from tzsl.exceptions import ConfigError
-from tzsl.models import attribute_rows, build_method
+from tzsl.models import attribute_rows, build_method, class_grouped_folds
 
 __all__ = ["DEFAULT_ALPHAS", "select_embedding_alpha"]
 
@@ -88,7 +86,7 @@ def select_embedding_alpha(
             f"class-grouped selection of alpha needs at least 4 distinct training attribute rows "
             f"(2 held out, 2 trained on); got {n_groups}. Pass a single alpha"
         )
-    folds = list(GroupKFold(n_splits=min(5, n_groups // 2)).split(X, grp, groups=grp))
+    folds = class_grouped_folds(grp)
     scores = np.empty((len(alphas), len(folds)))
     for f, (tr, va) in enumerate(folds):
         tr_classes = np.unique(y[tr])

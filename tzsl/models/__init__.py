@@ -35,6 +35,7 @@ from tzsl.models._decision import (
 )
 from tzsl.models._embedding import EmbeddingZSL, loss_weights
 from tzsl.models._deep import DeepAttributeEmbedding, load_deep_bundle, save_deep_bundle
+from tzsl.models._deep_training import class_grouped_folds
 from tzsl.models._hand_dap import FUSIONS as HAND_FUSIONS
 from tzsl.models._hand_dap import HandDAPClassifier, NoContactError, fuse_grasp_posteriors
 from tzsl.models._multigrasp import (
@@ -121,6 +122,7 @@ __all__: list[str] = [
     "ParameterError",
     "ZSLInputError",
     "attribute_rows",
+    "class_grouped_folds",
     "training_classes",
     "FAMILIES",
     "INPUT_KINDS",
