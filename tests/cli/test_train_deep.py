@@ -111,7 +111,8 @@ model = "file/m.tzsl-deep"
     for name in ("fabric_deep_runs.csv", "fabric_deep_table.csv"):
         cli = pd.read_csv(tmp_path / "cli" / name)
         file = pd.read_csv(tmp_path / "file" / name)
-        pd.testing.assert_frame_equal(cli.drop(columns=TIMES, errors="ignore"), file.drop(columns=TIMES, errors="ignore"))
+        pd.testing.assert_frame_equal(cli.drop(columns=TIMES, errors="ignore"),
+                                      file.drop(columns=TIMES, errors="ignore"))
     runs = _runs(tmp_path / "cli")
     assert runs["early_stopping"].all() and 1 <= runs["epochs"].iloc[0] <= 3
     assert (tmp_path / "file" / "m.tzsl-deep").is_file()

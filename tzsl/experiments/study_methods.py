@@ -46,7 +46,6 @@ __all__ = [
     "method_input",
     "method_label",
     "method_summary",
-    "registry_methods",
     "study_estimator",
     "takes_seed",
 ]
@@ -64,20 +63,6 @@ COMPARISON_COLUMNS = [
 def comparison_file(study: str) -> str:
     """File of one study's comparison: ``<study>_method_comparison.csv``."""
     return f"{study}_{COMPARISON_FILE}"
-
-
-def registry_methods(input_kind: str = "features", exclude: tuple[str, ...] = ()) -> list[dict]:
-    """Every registered method taking ``input_kind`` input, as entries ``{"name": ...}`` with defaults.
-
-    Parameters
-    ----------
-    input_kind : {"features", "grasps", "frames"}
-        See :attr:`tzsl.models.Method.input_kind`.
-    exclude : tuple of str
-        Names the study computes itself (its paper's methods).
-    """
-    return [{"name": n} for n in available_methods()
-            if get_method(n).input_kind == input_kind and n not in exclude]
 
 
 def takes_seed(spec: dict) -> bool:
