@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import re
-
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -28,10 +26,14 @@ def _run(*args: str):
     return CliRunner().invoke(cli, list(args), catch_exceptions=False)
 
 
-def _accuracies(output: str) -> tuple[float, float]:
-    train = float(re.search(r"train accuracy: ([\d.]+) %", output).group(1))
-    test = float(re.search(r"test accuracy: +([\d.]+) %", output).group(1))
-    return train, test
+#: Columns of the deep study's tables that hold wall-clock times.
+TIMES = ["seconds_per_epoch", "feature_seconds", "seconds_per_epoch_std"]
+
+
+def _runs(folder):
+    import pandas as pd
+
+    return pd.read_csv(folder / "fabric_deep_runs.csv")
 
 
 def test_option_errors_are_one_line(tmp_path):
@@ -57,20 +59,63 @@ def test_train_deep_on_fabric_depth_images(torch, data_dir, tmp_path):
 
     out = tmp_path / "m.tzsl-deep"
     ckpt = tmp_path / "ckpt"
-    result = _run("train-deep", "--out", str(out), "--data-dir", str(data_dir), "--checkpoint-dir", str(ckpt),
-                  *FAST)
+    common = ["--out", str(out), "--data-dir", str(data_dir), "--checkpoint-dir", str(ckpt), *FAST]
+    result = _run("train-deep", "--results", str(tmp_path / "a"), *common)
     assert result.exit_code == 0, result.output
-    assert "sequences: 92 train, 27 test" in result.output  # config 1: one sequence per fabric
-    train, test = _accuracies(result.output)
-    assert 0 <= train <= 100 and 0 <= test <= 100
+    runs = _runs(tmp_path / "a")
+    assert runs[["n_train", "n_test"]].values.tolist() == [[92, 27]]  # config 1: one sequence per fabric
+    assert runs["accuracy"].between(0, 1).all() and runs["train_accuracy"].between(0, 1).all()
     model = load_deep_bundle(out)
     assert model.sequence_shape_ == (5, 224, 224, 1) and model.n_epochs_ == 3
     assert sorted(model.classes_.tolist()) == [1, 2, 3, 4, 6]
     # resume from the last epoch: nothing left to train for the same --epochs, same model
-    again = _run("train-deep", "--out", str(out), "--data-dir", str(data_dir), "--checkpoint-dir", str(ckpt),
-                 "--resume", "--force", *FAST)
+    again = _run("train-deep", "--results", str(tmp_path / "b"), "--resume", "--force", *common)
     assert again.exit_code == 0, again.output
-    assert _accuracies(again.output) == (train, test)
+    cols = ["accuracy", "train_accuracy", "final_loss"]
+    assert _runs(tmp_path / "b")[cols].values.tolist() == runs[cols].values.tolist()
+
+
+@pytest.mark.slow
+def test_train_deep_and_the_matching_experiment_file_write_the_same_tables(torch, data_dir, tmp_path):
+    """train-deep is a front-end of the fabric-deep study: its config and tables are those of the file."""
+    import pandas as pd
+
+    from tzsl.experiments.engine import run_experiment
+
+    result = _run("train-deep", "--out", str(tmp_path / "cli" / "m.tzsl-deep"), "--data-dir", str(data_dir),
+                  "--config", "2", "--lam", "inf", "--seed", "3", "--early-stopping", *FAST)
+    assert result.exit_code == 0, result.output
+    toml = tmp_path / "deep.toml"
+    toml.write_text(f"""
+study = "fabric-deep"
+[dataset]
+data_dir = "{data_dir}"
+[methods]
+embedding_lambdas = ["inf"]
+[methods.model]
+backbone = "small-cnn"
+image_size = 16
+hidden_size = 8
+epochs = 3
+n_threads = 1
+early_stopping = true
+[splits]
+configs = [2]
+seed = 3
+[compute]
+progress = false
+[output]
+model = "file/m.tzsl-deep"
+""")
+    run_experiment(toml, out=tmp_path / "file")
+    for name in ("fabric_deep_runs.csv", "fabric_deep_table.csv"):
+        cli = pd.read_csv(tmp_path / "cli" / name)
+        file = pd.read_csv(tmp_path / "file" / name)
+        pd.testing.assert_frame_equal(cli.drop(columns=TIMES, errors="ignore"),
+                                      file.drop(columns=TIMES, errors="ignore"))
+    runs = _runs(tmp_path / "cli")
+    assert runs["early_stopping"].all() and 1 <= runs["epochs"].iloc[0] <= 3
+    assert (tmp_path / "file" / "m.tzsl-deep").is_file()
 
 
 def _write_press(path, group: int, rng):
@@ -103,8 +148,8 @@ def test_train_deep_on_user_gelsight_videos(torch, data_dir, tmp_path):
     result = _run("train-deep", "--out", str(out), "--data-dir", str(data_dir), "--gelsight-root", str(root),
                   "--condition", "Flat", *FAST)
     assert result.exit_code == 0, result.output
-    assert "GelSight videos" in result.output
-    assert "sequences: 10 train, 6 test" in result.output
+    runs = _runs(tmp_path)
+    assert runs[["condition", "n_train", "n_test"]].values.tolist() == [["gelsight-Flat", 10, 6]]
     assert load_deep_bundle(out).sequence_shape_ == (5, 32, 32, 3)
 
 

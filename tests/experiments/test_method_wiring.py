@@ -88,8 +88,9 @@ def _check_comparison(folder: Path, n_splits: int) -> pd.DataFrame:
     per_split = pd.read_csv(folder / "phac2_methods.csv")
     assert {"dap_avg_uni", "toy", "toy_temperature_0.5"} <= set(per_split.columns)
     assert not {"eszsl", "embedding_lam_0.1"} & set(per_split.columns)  # not switched on
-    table = pd.read_csv(folder / "method_comparison.csv")
-    assert table["method"].tolist() == ["dap-avg", "toy", "toy_temperature_0.5"]
+    table = pd.read_csv(folder / "phac2_method_comparison.csv")
+    assert table["method"].tolist() == ["dap-avg", "dap-max", "toy", "toy_temperature_0.5"]
+    assert (table["study"] == "phac2").all() and (table["data"] == "real").all()
     assert (table["n_splits"] == n_splits).all() and table["n_trials"].nunique() == 1
     assert (table["ci95_low"] <= table["accuracy"]).all() and (table["accuracy"] <= table["ci95_high"]).all()
     assert table["accuracy"].between(0, 1).all() and (table["fit_seconds"] >= 0).all()
@@ -183,6 +184,11 @@ progress = false
     assert len(toy) == runs["protocol"].nunique() and toy["seed"].isna().all()
     assert 0 <= toy["accuracy"].iloc[0] <= 1 and toy["fit_seconds"].iloc[0] >= 0
     assert set(runs["method"]) == {"lam_0", "ESZSL", "toy"}
+    comparison = pd.read_csv(tmp_path / "res" / "fabric_method_comparison.csv")
+    assert comparison["method"].tolist() == ["embedding_lam_0", "eszsl", "toy"]
+    assert (comparison["study"] == "fabric-gelsight-Flat").all()
+    assert (comparison["reference"] == "embedding_lam_0").all()  # 0.1 not run: the first lambda
+    assert comparison.set_index("method").loc["toy", "accuracy"] == pytest.approx(toy["accuracy"].iloc[0], abs=1e-5)
     manifest = json.loads((tmp_path / "res" / "fabric_manifest.json").read_text())
     assert manifest["config"]["methods"] == [{"name": "toy"}]
 
@@ -312,3 +318,42 @@ def test_a_failing_dap_split_is_recorded_and_the_run_exits_1(tmp_path, monkeypat
     monkeypatch.setattr(dap, "fit_split", always_fails)
     with pytest.raises(RuntimeError, match="simulated"):  # every split failing ends the run with the error
         run_experiment(_write(tmp_path, text.replace("n_splits = 3", "n_splits = 1")), out=tmp_path / "res2")
+
+
+@pytest.mark.slow  # about 15 s: one simulated data set, one hand model
+def test_toy_method_runs_in_the_simulated_hand_study(toy_method, tmp_path):
+    path = _write(tmp_path, """
+study = "hand"
+[dataset]
+builtin = "hand-simulated"
+[simulation]
+n_grasps_per_object = 12
+[methods]
+max_T = 2
+max_k = 2
+sequence_length = 4
+n_sequences = 4
+compare = ["toy", "eszsl"]
+[splits]
+seeds = [0]
+[compute]
+progress = false
+""")
+    run_experiment(path, out=tmp_path / "res")
+    table = pd.read_csv(tmp_path / "res" / "hand_method_comparison.csv").set_index("method")
+    assert list(table.index) == ["hand-dap_fusion_maxdap", "hand-dap_fusion_avgdap", "ldap", "toy", "eszsl"]
+    assert (table["data"] == "simulated").all() and table["note"].str.startswith("SIMULATED").all()
+    assert (table["reference"] == "ldap").all() and np.isnan(table.loc["ldap", "difference"])
+    assert table.loc["ldap", "paper_accuracy"] == pytest.approx(0.5963)
+    assert table["n_trials"].nunique() == 1  # every method on the same test grasps
+    table5 = pd.read_csv(tmp_path / "res" / "hand_table5.csv")
+    ldap = table5[(table5["seed"] == "0") & (table5["method"] == "LDAP")]["all"].iloc[0]
+    assert table.loc["ldap", "accuracy"] == pytest.approx(float(ldap), abs=1e-5)
+
+
+def test_methods_of_other_inputs_are_refused_in_feature_studies(tmp_path):
+    path = _write(tmp_path, 'study = "fabric"\n[methods]\ncompare = ["ldap", "cnn-lstm"]\n')
+    with pytest.raises(ConfigError) as info:
+        load_experiment(path)
+    text = str(info.value)
+    assert "method 'ldap' takes grasps" in text and "method 'cnn-lstm' takes frames" in text

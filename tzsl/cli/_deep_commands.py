@@ -82,6 +82,9 @@ def deep_model_options(func):
         _model_option("--weight-decay", name="weight_decay", type=float, help="L2 penalty on weights."),
         _model_option("--optimizer", name="optimizer", type=click.Choice(["adam", "sgd"]),
                      help="sgd = the paper's (momentum 0.9)."),
+        _model_option("--early-stopping/--no-early-stopping", name="early_stopping",
+                     help="Choose the number of epochs (up to --epochs) by class-grouped validation on the "
+                          "training groups only."),
         click.option("--checkpoint-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
                      help="Write a checkpoint after every epoch (and cache the frozen CNN features) here."),
         click.option("--resume", is_flag=True,
@@ -94,26 +97,50 @@ def deep_model_options(func):
     return func
 
 
-def build_deep_model(*, epochs, lam, backbone, weights_path, finetune, image_size, hidden_size, batch_size,
-                     lr, weight_decay, optimizer, checkpoint_dir, resume, seed, n_threads=None, verbose=True):
-    """A :class:`~tzsl.models.DeepAttributeEmbedding` from parsed command-line options."""
+def deep_model_params(*, epochs, lam, backbone, weights_path, finetune, image_size, hidden_size, batch_size, lr,
+                      weight_decay, optimizer, early_stopping, checkpoint_dir, resume, n_threads=None) -> dict:
+    """``[methods.model]`` of a fabric-deep experiment from parsed command-line options (``lam`` aside).
+
+    Checked by building the estimator, so bad options fail before any data is read.
+    """
     from tzsl.models import DeepAttributeEmbedding  # noqa: PLC0415
 
     if resume and checkpoint_dir is None:
         raise ConfigError("--resume needs --checkpoint-dir")
-    model = DeepAttributeEmbedding(
-        backbone=backbone, weights_path=weights_path, finetune=parse_finetune(str(finetune)),
-        image_size=image_size, hidden_size=hidden_size, lam=parse_lam(str(lam)), epochs=epochs,
-        batch_size=batch_size, lr=lr, weight_decay=weight_decay, optimizer=optimizer,
-        checkpoint_dir=checkpoint_dir, resume=resume, verbose=verbose, n_threads=n_threads, random_state=seed,
-    )
-    model._check_params()  # fail on bad options before any data is read
-    return model
+    params = {"backbone": backbone, "weights_path": None if weights_path is None else str(weights_path),
+              "finetune": parse_finetune(str(finetune)), "image_size": image_size, "hidden_size": hidden_size,
+              "epochs": epochs, "batch_size": batch_size, "lr": lr, "weight_decay": weight_decay,
+              "optimizer": optimizer, "early_stopping": early_stopping,
+              "checkpoint_dir": None if checkpoint_dir is None else str(checkpoint_dir), "resume": resume,
+              "n_threads": n_threads}
+    params = {k: v for k, v in params.items() if v is not None}
+    DeepAttributeEmbedding(lam=parse_lam(str(lam)), **params)._check_params()
+    return params
+
+
+def train_deep_values(out: Path, results: Path | None, config: str, attributes: str, gelsight_root: Path | None,
+                      conditions: tuple[str, ...], data_dir: Path | None, seed: int, no_progress: bool,
+                      lam, **model_options) -> dict:
+    """``tzsl train-deep``'s options as the keys of a ``study = "fabric-deep"`` experiment."""
+    if conditions and gelsight_root is None:
+        raise ConfigError("--condition needs --gelsight-root")
+    return {
+        "output.folder": str(results if results is not None else (out.parent if str(out.parent) else Path("."))),
+        "output.model": str(out), "splits.configs": [int(config)], "splits.n_seeds": 1, "splits.seed": seed,
+        "methods.embedding_lambdas": [parse_lam(str(lam))], "dataset.attributes": attributes,
+        "dataset.gelsight_root": None if gelsight_root is None else str(gelsight_root),
+        "features.gelsight_conditions": list(conditions) or None,
+        "dataset.data_dir": None if data_dir is None else str(data_dir), "compute.progress": not no_progress,
+        "methods.model": deep_model_params(lam=lam, **model_options),
+    }
 
 
 @cli.command("train-deep")
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="Write the trained model bundle here (e.g. model.tzsl-deep).")
+@click.option("--results", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Folder of the run's tables (fabric_deep_runs.csv, fabric_deep_table.csv, manifest) "
+                   "[default: the bundle's folder].")
 @click.option("--config", "config", type=click.Choice(["1", "2"]), default="1", show_default=True,
               help="Fabric zero-shot split: 1 = the paper's (test groups 0, 5, 7), 2 = test groups 0, 4, 7.")
 @click.option("--attributes", type=click.Choice(["a8", "a4", "a12", "three_value_a8", "three_value_a8v2"]),
@@ -122,33 +149,29 @@ def build_deep_model(*, epochs, lam, backbone, weights_path, finetune, image_siz
               help="Train on your GelSight press videos (<root>/fabric_groups.csv, "
                    "<root>/<condition>/<fabric_name>/<press>.avi) instead of the fabric depth images.")
 @click.option("--condition", "conditions", multiple=True,
-              help="With --gelsight-root: condition folder(s) to use (repeatable; default all).")
+              help="With --gelsight-root: the condition folder to use (required when there are several).")
 @deep_model_options
 @data_dir_option
 @seed_option(study=None)
 @force_option
 @no_progress_option
-def train_deep(out: Path, config: str, attributes: str, gelsight_root: Path | None, conditions: tuple[str, ...],
-               data_dir: Path | None, seed: int, force: bool, no_progress: bool, **model_options) -> None:
-    """Train the CNN + LSTM attribute model (fabric paper) and print train/test accuracy.
+def train_deep(out: Path, results: Path | None, config: str, attributes: str, gelsight_root: Path | None,
+               conditions: tuple[str, ...], data_dir: Path | None, seed: int, force: bool, no_progress: bool,
+               **model_options) -> None:
+    """Train the CNN + LSTM attribute model (fabric paper), save it, and write its train/test accuracy.
 
-    Sequences: each fabric's depth images in capture order (5 evenly spaced), or the 5 key
-    frames of every press video under --gelsight-root. The trained model is saved as a bundle.
+    A front-end of the fabric-deep study: the same as 'tzsl run' of a study = "fabric-deep" file with
+    one config, one lambda, one seed and [output] model = OUT. Sequences: each fabric's depth images
+    in capture order (5 evenly spaced), or the 5 key frames of every press video under
+    --gelsight-root.
     """
-    from tzsl.experiments.deep import format_deep_result, load_deep_sequences, run_deep_fabric  # noqa: PLC0415
-    from tzsl.models import save_deep_bundle  # noqa: PLC0415
+    from tzsl.experiments.config import config_from_options  # noqa: PLC0415
+    from tzsl.experiments.engine import run_experiment  # noqa: PLC0415
 
     if out.exists() and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite it")
-    if conditions and gelsight_root is None:
-        raise ConfigError("--condition needs --gelsight-root")
+    values = train_deep_values(out, results, config, attributes, gelsight_root, conditions, data_dir, seed,
+                               no_progress, **model_options)
     require_torch()
-    model = build_deep_model(seed=seed, verbose=not no_progress, **model_options)
-    sequences, table = load_deep_sequences(
-        data_dir=data_dir, gelsight_root=gelsight_root, conditions=list(conditions) or None, attributes=attributes
-    )
-    source = f"GelSight videos under {gelsight_root}" if gelsight_root else "fabric depth images"
-    result = run_deep_fabric(sequences, table, config=int(config), model=model)
-    click.echo(format_deep_result(result, source))
-    save_deep_bundle(result.model, out, force=force)
-    click.echo(f"wrote {out}")
+    folder, _ = run_experiment(config_from_options("fabric-deep", values), force=force, echo=click.echo)
+    click.echo(f"wrote {out} and {', '.join(p.name for p in folder.written)} to {folder.root}")

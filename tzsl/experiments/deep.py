@@ -316,6 +316,7 @@ def run_deep_fabric_study(
     seed: int = 0,
     model_params: dict | None = None,
     cache_dir=None,
+    save_model=None,
 ) -> dict[str, pd.DataFrame]:
     """The deep model over the paper's lambda grid: fabric depth sequences (and user videos).
 
@@ -343,6 +344,9 @@ def run_deep_fabric_study(
         Further :class:`~tzsl.models.DeepAttributeEmbedding` parameters (backbone, epochs, ...).
     cache_dir : str, path or None
         Frozen-feature cache (default ``<tzsl cache dir>/deep-features``).
+    save_model : str, path or None
+        Save the trained network as a model bundle here (one fit only: one condition, config,
+        lambda and seed); refused when it exists unless ``out.force``.
 
     Returns
     -------
@@ -367,6 +371,8 @@ def run_deep_fabric_study(
     params.setdefault("verbose", progress)
     DeepAttributeEmbedding(**params)._check_params()  # bad settings fail before any work
     out.check_free([DEEP_TABLE_FILE, DEEP_RUNS_FILE, DEEP_MANIFEST_FILE])
+    if save_model is not None and Path(save_model).exists() and not out.force:
+        raise ConfigError(f"{save_model} already exists; use --force to overwrite it")
     cache = Path(cache_dir) if cache_dir is not None else Path(get_cache_dir()) / "deep-features"
 
     with warnings.catch_warnings():
@@ -380,6 +386,8 @@ def run_deep_fabric_study(
         for cond in videos["condition"].unique():
             sources.append((f"gelsight-{cond}", gelsight_video_sequences(gelsight_root, [cond])))
 
+    if save_model is not None and len(sources) * len(configs) * len(labels) * int(seeds) != 1:
+        raise ConfigError("saving a model needs exactly one fit (one condition, config, lambda and seed)")
     rows = []
     keys = ["condition", "config", "protocol", "method"]
     outcomes = Outcomes(split_column="seed", by=keys)
@@ -401,9 +409,14 @@ def run_deep_fabric_study(
                         "seed": sd,
                         "accuracy": r.test_accuracy, "per_class_mean_accuracy": r.test_class_mean_accuracy,
                         "train_accuracy": r.train_accuracy, "n_train": r.n_train, "n_test": r.n_test,
-                        "epochs": r.model.n_epochs_, "final_loss": r.model.loss_curve_[-1],
+                        "epochs": r.model.n_epochs_, "early_stopping": bool(r.model.early_stopping),
+                        "final_loss": r.model.loss_curve_[-1],
                         "seconds_per_epoch": r.seconds_per_epoch, "feature_seconds": r.feature_seconds,
                     })
+                    if save_model is not None:
+                        from tzsl.models import save_deep_bundle  # noqa: PLC0415
+
+                        save_deep_bundle(r.model, save_model, force=out.force)
     runs = pd.DataFrame(rows)
     stats = ["accuracy", "per_class_mean_accuracy", "train_accuracy", "seconds_per_epoch"]
     summary = summarise_over_splits(runs[["seed", *keys, *stats]], split_column="seed", by=keys, ddof=0)

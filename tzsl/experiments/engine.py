@@ -134,6 +134,7 @@ def deep_arguments(exp: Experiment) -> dict:
         "gelsight_conditions": None if c.features.gelsight_conditions is None
         else tuple(c.features.gelsight_conditions),
         "seed": c.splits.seed, "model_params": dict(c.methods.model) or None,
+        "save_model": exp.resolve(c.output.model),
     }
 
 

@@ -64,8 +64,10 @@ Methods and model selection (training groups only)
 Outputs (through :class:`~tzsl.experiments._outputs.ResultsDir`)
 ----------------------------------------------------------------
 ``fabric_table1.csv`` (:func:`fabric_table`), ``fabric_runs.csv`` (one row per fit),
-``fabric_lambda.png`` (accuracy vs lambda, ours and the paper's: Fig. 6) and
-``fabric_manifest.json``.
+``fabric_lambda.png`` (accuracy vs lambda, ours and the paper's: Fig. 6),
+``fabric_method_comparison.csv`` (every method on the same test samples, intervals and paired
+differences to the embedding model at the paper's lambda 0.1:
+:func:`tzsl.experiments.fabric_methods.fabric_comparison`) and ``fabric_manifest.json``.
 
 Caching: the texture descriptors (about 20-40 s for the 1300 images on 2 cores) are cached with
 :class:`joblib.Memory` under :func:`tzsl.datasets.get_cache_dir`, keyed on the sha256 of the
@@ -74,22 +76,17 @@ image (or video) files and the descriptor parameters; a re-run only refits the m
 
 from __future__ import annotations
 
-import time
 import warnings
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from joblib import Parallel, delayed
-from sklearn.exceptions import ConvergenceWarning
-from threadpoolctl import threadpool_limits
 
-from tzsl.datasets import FABRIC_ATTRIBUTE_SETS, FabricSplit, load_fabric
-from tzsl.evaluation import DEFAULT_ALPHAS, per_class_mean_accuracy, select_embedding_alpha, trial_accuracy
+from tzsl.datasets import FABRIC_ATTRIBUTE_SETS, load_fabric
+from tzsl.evaluation import DEFAULT_ALPHAS, select_embedding_alpha
 from tzsl.exceptions import ConfigError
-from tzsl.experiments._failures import ERROR_COLUMN, attempt
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.fabric_samples import (
     N_KEY_FRAMES,
@@ -113,9 +110,15 @@ from tzsl.experiments.fabric_tables import (
     format_fabric_table,
     lambda_label,
 )
-from tzsl.experiments.study_methods import method_input, method_label, study_estimator, takes_seed
+from tzsl.experiments.fabric_methods import (
+    COMPARISON_TABLE,
+    ZeroShotRun,
+    fabric_comparison,
+    run_job,
+    zero_shot_run,
+)
+from tzsl.experiments.study_methods import method_label, takes_seed
 from tzsl.features import TextureDescriptor
-from tzsl.models import attribute_rows, build_method
 
 __all__ = [
     "DEFAULT_ALPHAS",
@@ -143,179 +146,6 @@ TABLE_FILE = "fabric_table1.csv"
 RUNS_FILE = "fabric_runs.csv"
 FIGURE_FILE = "fabric_lambda.png"
 MANIFEST_FILE = "fabric_manifest.json"
-
-
-# ---------------------------------------------------------------------------------------------
-# fitting
-# ---------------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class ZeroShotRun:
-    """One zero-shot fit and its predictions.
-
-    Attributes
-    ----------
-    model : object
-        The fitted model (``predict(X, class_attributes)`` -> row indices).
-    train_classes : ndarray (k_train,)
-        Groups whose samples and attribute rows were given to ``fit`` (sorted).
-    test_classes : ndarray (k_test,)
-        Candidate groups at prediction time (the split's test groups).
-    y_true, y_pred : ndarray (n_test,)
-        True and predicted group of every test sample.
-    """
-
-    model: object
-    train_classes: np.ndarray
-    test_classes: np.ndarray
-    y_true: np.ndarray
-    y_pred: np.ndarray
-
-    @property
-    def accuracy(self) -> float:
-        """Fraction of test samples recognised."""
-        return trial_accuracy(self.y_true, self.y_pred)
-
-    @property
-    def per_class_mean_accuracy(self) -> float:
-        """Mean over test groups of each group's accuracy."""
-        return per_class_mean_accuracy(self.y_true, self.y_pred)
-
-
-def zero_shot_run(
-    fit_model: Callable[[np.ndarray, np.ndarray, np.ndarray], object],
-    X: np.ndarray,
-    groups: np.ndarray,
-    attribute_matrix: np.ndarray,
-    split: FabricSplit,
-) -> ZeroShotRun:
-    """Fit on the training groups of ``split`` only; recognise test samples among the test groups.
-
-    Parameters
-    ----------
-    fit_model : callable
-        ``fit_model(X_train, y_train, S_train) -> fitted model``: ``X_train`` (n_train, d) and
-        ``y_train`` (n_train,) are the training-group samples, ``S_train`` (k_train, m) the
-        attribute rows of ``np.unique(y_train)``. Test samples and test attribute rows are never
-        passed to it.
-    X : ndarray of shape (n_samples, d)
-    groups : ndarray of shape (n_samples,), int
-        Group of every sample.
-    attribute_matrix : ndarray of shape (n_groups, m)
-        Group x attribute matrix (row g = group g).
-    split : FabricSplit
-
-    Returns
-    -------
-    ZeroShotRun
-
-    Raises
-    ------
-    ConfigError
-        No training or no test sample.
-    """
-    X = np.asarray(X)
-    groups = np.asarray(groups)
-    A = np.asarray(attribute_matrix, dtype=np.float64)
-    train, test = split.is_train(groups), split.is_test(groups)
-    if not train.any() or not test.any():
-        raise ConfigError(
-            f"fabric config {split.config}: {int(train.sum())} training and {int(test.sum())} test "
-            f"samples (train groups {list(split.train_groups)}, test groups {list(split.test_groups)}); "
-            "both must be non-empty"
-        )
-    train_classes = np.unique(groups[train])
-    model = fit_model(X[train], groups[train], A[train_classes])
-    test_classes = np.asarray(split.test_groups)
-    rows = model.predict(X[test], A[test_classes])
-    return ZeroShotRun(
-        model=model,
-        train_classes=train_classes,
-        test_classes=test_classes,
-        y_true=groups[test],
-        y_pred=test_classes[np.asarray(rows)],
-    )
-
-
-class _ShapedInput:
-    """A fitted registry method that reshapes the study's 2-D samples for its own input (``predict``)."""
-
-    def __init__(self, model, spec: dict) -> None:
-        self.model, self.spec = model, spec
-
-    def predict(self, X, class_attributes):
-        return self.model.predict(method_input(self.spec, X), class_attributes)
-
-
-def _run_job(
-    samples_X: np.ndarray,
-    groups: np.ndarray,
-    A: np.ndarray,
-    split: FabricSplit,
-    method: str,
-    lam,
-    seed: int | None,
-    alphas: tuple[float, ...],
-    max_iter: int,
-    spec: dict | None = None,
-) -> dict:
-    """One fit (method x seed) on one condition and split; returns a row of the runs table.
-
-    ``spec``: a registry method entry (``methods.compare``) fitted instead of the built-in ones.
-    """
-    info: dict = {}
-
-    def fit_embedding(X_tr, y_tr, S_tr):
-        alpha, scores = select_embedding_alpha(
-            X_tr, y_tr, S_tr, lam=lam, alphas=alphas, random_state=seed, max_iter=max_iter
-        )
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", ConvergenceWarning)
-            model = build_method(
-                "embedding", lam=lam, alpha=alpha, early_stopping=False, max_iter=max_iter,
-                random_state=seed,
-            ).fit(X_tr, attribute_rows(y_tr, S_tr), y_tr)
-        info.update(
-            alpha=alpha,
-            cv_score=np.nan if scores is None else float(scores.mean(axis=1).max()),
-            n_iter=model.attribute_model_.n_iter_,
-            converged=not any(issubclass(w.category, ConvergenceWarning) for w in caught),
-        )
-        return model
-
-    def fit_eszsl(X_tr, y_tr, S_tr):
-        model = build_method("eszsl").fit(X_tr, attribute_rows(y_tr, S_tr), y_tr)
-        cv = model.attribute_model_
-        info.update(gamma=cv.best_gamma_, eszsl_lam=cv.best_lam_, cv_score=cv.best_score_)
-        return model
-
-    def fit_registry(X_tr, y_tr, S_tr):
-        start = time.perf_counter()
-        model = study_estimator(spec, seed)
-        model.fit(method_input(spec, X_tr), attribute_rows(y_tr, S_tr), y_tr)
-        info.update(fit_seconds=time.perf_counter() - start)
-        return _ShapedInput(model, spec)
-
-    fit = fit_registry if spec is not None else fit_eszsl if method == ESZSL_METHOD else fit_embedding
-    with threadpool_limits(limits=1):  # many small fits: one BLAS thread each, parallel over fits
-        run, error = attempt(zero_shot_run, fit, samples_X, groups, A, split)
-    if run is None:  # recorded in the runs table (NaN scores), reported at the end of the run
-        return {"method": method, "seed": seed, "accuracy": np.nan, "per_class_mean_accuracy": np.nan,
-                "n_train": int(split.is_train(groups).sum()), "n_test": int(split.is_test(groups).sum()),
-                "train_classes": "", "predicted_counts": "", **info, ERROR_COLUMN: error}
-    pred = pd.Series(run.y_pred).value_counts().reindex(run.test_classes, fill_value=0)
-    return {
-        "method": method,
-        "seed": seed,
-        "accuracy": run.accuracy,
-        "per_class_mean_accuracy": run.per_class_mean_accuracy,
-        "n_train": int(split.is_train(groups).sum()),
-        "n_test": int(run.y_true.size),
-        "train_classes": " ".join(map(str, run.train_classes)),
-        "predicted_counts": " ".join(f"{g}:{c}" for g, c in pred.items()),
-        **info,
-        ERROR_COLUMN: "",
-        "_y": (run.y_true, run.y_pred),  # per-sample outcomes for the intervals (not a runs column)
-    }
 
 
 # ---------------------------------------------------------------------------------------------
@@ -410,7 +240,7 @@ def run_fabric_study(
         raise ConfigError(f"unknown depth condition(s) {unknown}; choose from {list(DEPTH_CONDITIONS)}")
     if not conditions and gelsight_root is None:
         raise ConfigError("nothing to run: no depth condition and no --gelsight-root")
-    out.check_free([TABLE_FILE, RUNS_FILE, FIGURE_FILE, MANIFEST_FILE])
+    out.check_free([TABLE_FILE, RUNS_FILE, FIGURE_FILE, f"{COMPARISON_TABLE}.csv", MANIFEST_FILE])
 
     with warnings.catch_warnings():
         # duplicate attribute vectors are expected (a8: groups 3, 4, 5); recorded in the note
@@ -450,14 +280,14 @@ def run_fabric_study(
             }
             for lam, label in zip(lams, labels):
                 for sd in seed_list:
-                    jobs.append(delayed(_run_job)(s.X, s.groups, A, split, f"lam_{label}", lam, sd,
+                    jobs.append(delayed(run_job)(s.X, s.groups, A, split, f"lam_{label}", lam, sd,
                                                   tuple(alphas), max_iter))
                     meta.append(row_meta)
-            jobs.append(delayed(_run_job)(s.X, s.groups, A, split, ESZSL_METHOD, None, None, (), max_iter))
+            jobs.append(delayed(run_job)(s.X, s.groups, A, split, ESZSL_METHOD, None, None, (), max_iter))
             meta.append(row_meta)
             for spec in methods:  # registry methods: every seed if the method is random, else once
                 for sd in seed_list if takes_seed(spec) else [None]:
-                    jobs.append(delayed(_run_job)(s.X, s.groups, A, split, method_label(spec), None, sd, (),
+                    jobs.append(delayed(run_job)(s.X, s.groups, A, split, method_label(spec), None, sd, (),
                                                   max_iter, spec))
                     meta.append(row_meta)
 
@@ -469,6 +299,7 @@ def run_fabric_study(
         for m, r in zip(meta, tqdm(results, total=len(jobs), desc="fabric fits", disable=not progress))
     ]
     outcomes, per_run = fabric_outcomes(rows)  # per-sample outcomes -> intervals in the table and the runs
+    correct = [row.pop("correct", None) for row in rows]  # per test sample: the comparison's trials
     runs = pd.DataFrame(rows)
     seeds_ = runs["seed"].astype("Int64")
     runs = add_trust_columns(runs.assign(seed=seeds_.astype(object).where(seeds_.notna(), "None")), per_run)
@@ -480,6 +311,13 @@ def run_fabric_study(
 
     out.write_csv(TABLE_FILE, table)
     out.write_csv(RUNS_FILE, runs)
+    # the comparison runs on each config's zero-shot protocol (the headline), fits that completed
+    headline = {p.split.config: p for p in protocols if p.zero_shot}
+    keep = np.flatnonzero([c is not None and r["protocol"] == headline[int(r["config"])].name
+                           for c, (_, r) in zip(correct, runs.iterrows())])
+    comparison = fabric_comparison(runs.iloc[keep].reset_index(drop=True), [correct[i] for i in keep], samples,
+                                   {c: p.split for c, p in headline.items()}, seed_list, labels)
+    out.write_csv(f"{COMPARISON_TABLE}.csv", comparison)
     out.write_figure(FIGURE_FILE, fabric_lambda_figure(table, lams))
     config = {
         "study": "fabric zero-shot (F18)",
@@ -508,4 +346,4 @@ def run_fabric_study(
     data_files += [Path(p) for p in (fabric.images["path"] if conditions else [])]
     data_files += [Path(p) for s in gel for p in s.samples["path"]]
     out.write_manifest(config, [p for p in data_files if p.is_file()], name=MANIFEST_FILE, extra=digests)
-    return {"table1": table, "runs": runs}
+    return {"table1": table, "runs": runs, COMPARISON_TABLE: comparison}

@@ -42,6 +42,14 @@ from tzsl.experiments import paper_numbers as paper
 from tzsl.experiments._failures import ERROR_COLUMN, attempt
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.config import Compute, HandFeatures, HandMethods, HandSimulation
+from tzsl.experiments.hand_methods import (
+    COMPARISON_TABLE,
+    fusion_label,
+    hand_comparison,
+    hand_fusion_trials,
+    registry_trials,
+    timed,
+)
 from tzsl.experiments.hand_figures import (
     attribute_accuracy_figure,
     attribute_distance_figure,
@@ -94,6 +102,7 @@ HAND_OUTPUTS: tuple[str, ...] = (
     "hand_attribute_accuracy.png",
     "hand_attribute_distance.csv",
     "hand_attribute_distance.png",
+    f"{COMPARISON_TABLE}.csv",
     "hand_manifest.json",
 )
 
@@ -125,6 +134,8 @@ class HandStudyConfig:
         Random grasp orders per test object and seed.
     confusion_T, confusion_k : int
         DF-MDAP T and SC-MDAP k of the confusion matrices (paper's Fig. 12: 5 and 4).
+    compare : list of dict
+        Registry methods scored on the same test grasps (``hand_method_comparison.csv``).
     n_jobs : int or None
         Parallel attribute-classifier fits (joblib).
     """
@@ -145,6 +156,7 @@ class HandStudyConfig:
     n_sequences: int = _METH.n_sequences
     confusion_T: int = _METH.confusion_T
     confusion_k: int = _METH.confusion_k
+    compare: list = field(default_factory=list)
     n_jobs: int | None = Compute().n_jobs
 
     def check(self) -> None:
@@ -165,6 +177,8 @@ class HandStudyResult:
     Attributes
     ----------
     table5, multigrasp_T, multigrasp_k, attribute_accuracy, attribute_distance, confusion : DataFrame
+    method_comparison : DataFrame
+        Every method on the same test grasps, LDAP the reference (``hand_method_comparison.csv``).
     simulated : bool
         Whether the grasps came from the simulator.
     notes : list of str
@@ -178,6 +192,7 @@ class HandStudyResult:
     attribute_accuracy: pd.DataFrame
     attribute_distance: pd.DataFrame
     confusion: pd.DataFrame
+    method_comparison: pd.DataFrame
     simulated: bool
     notes: list[str] = field(default_factory=list)
     written: list[Path] = field(default_factory=list)
@@ -266,7 +281,7 @@ def _confusion_rows(label: str, seed: int, true: np.ndarray, pred: np.ndarray, n
 
 def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandStudyConfig, seed: int,
                    notes: list[str]) -> dict[str, list]:
-    model = fit_hand_model(features, table, config, seed)
+    model, fit_seconds = timed(fit_hand_model, features, table, config, seed)
     columns = list(model.K_.columns)
     test_objects = table.test_objects
     Kc = table.K.loc[test_objects, columns].astype(int)
@@ -295,6 +310,13 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandStudyC
     )
 
     out: dict[str, list] = {k: [] for k in ("table5", "T", "k", "attr", "S", "confusion", "trust")}
+    out["trials"] = hand_fusion_trials(pred, y, seed)
+    out["seconds"] = [{fusion_label(fusion): fit_seconds for fusion in pred}]
+    train = np.isin(features.objects, table.train_objects)
+    trials, seconds = registry_trials(config.compare, features.subset(train).to_array(), features.objects[train],
+                                      table.K[columns], te.to_array(), y, names, seed)
+    out["trials"] += trials
+    out["seconds"].append({k: v[0] for k, v in seconds.items()})
     for f in HAND_FUSIONS:
         ok = pred[f] == y
         row: dict = {"seed": seed, "method": f.upper()}
@@ -426,7 +448,7 @@ def run_hand_study(
                   if simulated else f"grasps: {source}")
 
     notes: list[str] = []
-    parts: dict[str, list] = {k: [] for k in ("table5", "T", "k", "attr", "S", "confusion", "trust")}
+    parts: dict[str, list] = {k: [] for k in ("table5", "T", "k", "attr", "S", "confusion", "trust", "trials", "seconds")}
     simulation: dict[str, dict] = {}
     failed: list[tuple[int, str]] = []
     for seed in seeds:
@@ -468,6 +490,8 @@ def run_hand_study(
                                           baselines=False),
         attribute_distance=distance_table(parts["S"]),
         confusion=pd.DataFrame(parts["confusion"]),
+        method_comparison=hand_comparison(parts["trials"], parts["seconds"], 1.0 / len(table.test_objects),
+                                          simulated),
         simulated=simulated,
         notes=notes,
     )
@@ -483,6 +507,7 @@ def run_hand_study(
     results.write_figure("hand_confusion.png", confusion_figure(result.confusion, names, data_label))
     results.write_csv("hand_attribute_accuracy.csv", result.attribute_accuracy)
     results.write_figure("hand_attribute_accuracy.png", attribute_accuracy_figure(result.attribute_accuracy, data_label))
+    results.write_csv(f"{COMPARISON_TABLE}.csv", result.method_comparison)
     results.write_csv("hand_attribute_distance.csv", result.attribute_distance)
     results.write_figure("hand_attribute_distance.png", attribute_distance_figure(result.attribute_distance, data_label))
     results.write_manifest(

@@ -393,7 +393,7 @@ def run_dap_study(
         Run the attribute-count sweep on the random splits.
     compare_methods : bool
         Also fit registry methods on the random splits (``phac2_methods.csv``,
-        ``method_comparison.csv``).
+        ``phac2_method_comparison.csv``).
     echo : callable or None
         Receives human-readable tables (the CLI passes ``click.echo``).
     method_options : dict or None
@@ -459,7 +459,7 @@ def run_dap_study(
         "multilabel": "Independent vs multi-label attribute classifiers (AVGDAP, uni-prior)",
         "attribute_accuracy": "Per-attribute test accuracy (mean over random splits and BioTacs)",
         "phac2_methods": "DAP vs ESZSL vs embedding model on the same random splits (trial accuracy)",
-        "method_comparison": "Methods vs AVGDAP (uni-prior) on the same random splits, 95% intervals",
+        "phac2_method_comparison": "Methods vs AVGDAP (uni-prior) on the same random splits, 95% intervals",
     }
     if used:  # every split scored, readable by --splits; its classes go into the manifest too
         out.write_splits(SPLITS_FILE, used)

@@ -89,10 +89,14 @@ SECTIONS: tuple[Section, ...] = (
     Section("dap-multilabel", "DAP paper, section 4.4: independent vs multi-label attribute classifiers",
             "AVGDAP, uniform prior, with attribute classifiers fitted one by one or jointly.",
             tables=("multilabel",)),
-    Section("methods", "Methods compared on the same splits",
-            "DAP, ESZSL and the embedding model on the same random splits; paired differences to "
-            "DAP-AVG (uniform prior) with their intervals.",
-            tables=("phac2_methods", "method_comparison")),
+    Section("methods", "Every method x study, on the same splits",
+            "Every registered method on each study's own splits and test trials: accuracy with its 95% "
+            "interval [the paper's number where it has one], chance, seconds per fit, and the paired "
+            "difference to the paper's method of the study (PHAC-2: DAP-AVG, uniform prior; fabric: the "
+            "embedding at lambda 0.1; hand: LDAP, on SIMULATED grasps). Methods a study cannot run are "
+            "listed with the reason.",
+            tables=("method_comparison", "phac2_method_comparison", "phac2_methods", "fabric_method_comparison",
+                    "hand_method_comparison")),
     Section("gzsl", "Generalised zero-shot recognition",
             "Seen and unseen classes compete; seen-class test trials are held-out trials of training "
             "objects. Per-class mean accuracy on seen and unseen classes and their harmonic mean.",

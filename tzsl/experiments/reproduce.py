@@ -13,6 +13,9 @@ Not a second code path: each study is the built-in experiment file of the same n
   Shadow-hand data of the paper are not public);
 * ``active-touch``: ``active_touch.csv``, ``active_touch_curves.csv``, ``active_touch_stop.csv``
   and ``active_touch.png`` (choosing the next EP on PHAC-2 vs every fixed and a random order).
+* ``method_comparison.csv``: the studies' ``*_method_comparison.csv`` stacked (every registered
+  method x study: accuracy with its interval, the paper's number, fit time, paired difference to
+  the study's paper method), with a row saying why for each method a study does not run.
 
 The other built-in studies (``phac2-gzsl``, ``fabric-deep``) run with ``tzsl run NAME``.
 """
@@ -69,8 +72,8 @@ def reproduce_tables(
             results.check_free(phac2_outputs(exp.config))
         elif exp.study == "active-touch":
             results.check_free(ACTIVE_TOUCH_OUTPUTS)
-    results.check_free(["manifest.json"])
-    records, data_files, timings, tables = {}, [], {}, []
+    results.check_free(["manifest.json", "method_comparison.csv"])
+    records, data_files, timings, tables, done_tables = {}, [], {}, [], []
     failures: list[str] = []
     for name, exp in zip(studies, experiments, strict=True):
         say(f"\n== {name} ({exp.source}) ==")
@@ -81,6 +84,13 @@ def reproduce_tables(
         data_files += list(done.data_files)
         tables += sorted(done.tables)
         failures += [f"{name}: {line}" for line in done.failures]
+        done_tables += [t for key, t in done.tables.items() if key.endswith("method_comparison")]
+    if done_tables:
+        from tzsl.experiments.study_methods import COMPARISON_FILE, FEW_CLASSES, combine_comparisons  # noqa: PLC0415
+
+        dap = {name: FEW_CLASSES for name in ("dap-avg", "dap-max", "multilabel-dap")}
+        results.write_csv(COMPARISON_FILE, combine_comparisons(done_tables, {"fabric": dap, "hand": dap}))
+        tables.append(COMPARISON_FILE[: -len(".csv")])
     results.write_manifest({"studies": records}, data_files=data_files,
                            extra={"timings_s": timings, "tables": tables, "reproduce_studies": list(studies),
                                   "failures": failures})

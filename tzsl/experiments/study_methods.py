@@ -11,6 +11,14 @@ A study lists methods as ``{"name": registry name, **parameters}`` (the experime
   unless the entry sets ``random_state`` itself; deterministic methods get none;
 * fit on the training trials with their attribute rows (:func:`tzsl.models.attribute_rows`),
   predict the test trials among the test classes' attribute rows (zero-shot).
+
+Every study then scores its methods the same way (:func:`method_summary`): one row per method of
+``<study>_method_comparison.csv`` with the trial accuracy, its two-level bootstrap 95% interval
+(splits, then test classes with their trials), the paper's number where the paper has one, chance,
+the fit time, and the paired difference to the paper's method of that study on the same trials.
+``tzsl reproduce-tables`` stacks the studies' tables into ``method_comparison.csv``
+(:func:`combine_comparisons`), with a row saying why for every registered method a study cannot
+run (its input differs: grasps, frame sequences).
 """
 
 from __future__ import annotations
@@ -20,11 +28,41 @@ import time
 from typing import NamedTuple
 
 import numpy as np
+import pandas as pd
 
+from tzsl.evaluation import bootstrap_accuracy, paired_differences_table
 from tzsl.experiments.config import method_label
-from tzsl.models import attribute_rows, get_method
+from tzsl.models import attribute_rows, available_methods, get_method
 
-__all__ = ["MethodFit", "fit_predict", "method_input", "method_label", "study_estimator", "takes_seed"]
+__all__ = [
+    "COMPARISON_COLUMNS",
+    "COMPARISON_FILE",
+    "FEW_CLASSES",
+    "MethodFit",
+    "combine_comparisons",
+    "comparison_file",
+    "comparison_trials",
+    "fit_predict",
+    "method_input",
+    "method_label",
+    "method_summary",
+    "study_estimator",
+    "takes_seed",
+]
+
+#: ``tzsl reproduce-tables``' table of every method x study.
+COMPARISON_FILE = "method_comparison.csv"
+
+#: Columns of every study's method comparison (and of :data:`COMPARISON_FILE`).
+COMPARISON_COLUMNS = [
+    "study", "data", "method", "accuracy", "ci95_low", "ci95_high", "paper_accuracy", "chance", "fit_seconds",
+    "difference", "difference_ci95_low", "difference_ci95_high", "reference", "n_splits", "n_trials", "note",
+]
+
+
+def comparison_file(study: str) -> str:
+    """File of one study's comparison: ``<study>_method_comparison.csv``."""
+    return f"{study}_{COMPARISON_FILE}"
 
 
 def takes_seed(spec: dict) -> bool:
@@ -86,3 +124,123 @@ def fit_predict(spec: dict, X_train: np.ndarray, classes_train: np.ndarray, clas
     model.fit(method_input(spec, X_train), attribute_rows(classes_train, class_rows), classes_train)
     seconds = time.perf_counter() - start
     return MethodFit(model, np.asarray(model.predict(method_input(spec, X_test), test_rows)), seconds)
+
+
+# --------------------------------------------------------------------------- scoring, shared by every study
+
+
+def comparison_trials(method: str, split, classes: np.ndarray, correct: np.ndarray) -> pd.DataFrame:
+    """One row per test trial of one method on one split: method, split, class, trial, correct (0/1).
+
+    ``classes`` (n_trials,): the true class (object, fabric, grasped object) of each trial, the
+    bootstrap's cluster; ``trial`` is the position within the split (the pairing key).
+    """
+    classes = np.asarray(classes)
+    return pd.DataFrame({"method": method, "split": str(split), "class": classes,
+                         "trial": np.arange(len(classes)), "correct": np.asarray(correct, dtype=float)})
+
+
+def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], chance: float, reference: str,
+                   *, study: str, data: str = "real", paper: dict[str, float] | None = None,
+                   notes: dict[str, str] | None = None) -> pd.DataFrame:
+    """One row per method: accuracy with its 95% interval, fit time, paired difference to ``reference``.
+
+    Parameters
+    ----------
+    trials : DataFrame
+        :func:`comparison_trials` rows of every method; every method scored on the reference's
+        trials (same splits, same trial positions).
+    fit_seconds : dict
+        Wall-clock seconds of every fit, per method (NaN: not timed).
+    chance : float
+        Mean over splits of 1 / number of test classes.
+    reference : str
+        The paper's method of the study (subtracted in ``difference``).
+    study : str
+        Study label (``phac2-random``, ``fabric-depth-sequence``, ``hand``, ...).
+    data : str
+        ``"real"`` or ``"simulated"``.
+    paper : dict, optional
+        The paper's accuracy per method, where it reports one.
+    notes : dict, optional
+        A note per method (e.g. where the paper's number comes from).
+
+    Returns
+    -------
+    DataFrame
+        :data:`COMPARISON_COLUMNS`: accuracy is the mean over splits of the per-split trial
+        accuracy; ci95_low/high its two-level bootstrap interval (splits, then classes with
+        their trials); difference = method minus ``reference`` on the same trials, with its
+        paired interval; fit_seconds the mean per fit.
+    """
+    paper, notes = paper or {}, notes or {}
+    rows = []
+    for method, t in trials.groupby("method", sort=False):
+        iv = bootstrap_accuracy(t["correct"].to_numpy(), classes=t["class"].to_numpy(), splits=t["split"].to_numpy())
+        seconds = [s for s in fit_seconds.get(method, []) if s is not None]
+        rows.append({"study": study, "data": data, "method": method, "accuracy": iv.mean,
+                     "ci95_low": iv.ci95_low, "ci95_high": iv.ci95_high, "paper_accuracy": paper.get(method, np.nan),
+                     "chance": chance, "fit_seconds": float(np.mean(seconds)) if seconds else np.nan,
+                     "n_splits": t["split"].nunique(), "n_trials": len(t), "note": notes.get(method, "")})
+    table = pd.DataFrame(rows)
+    diffs = _paired_differences(trials, reference).rename(
+        columns={"ci95_low": "difference_ci95_low", "ci95_high": "difference_ci95_high"})
+    table = table.merge(diffs[["method", "difference", "difference_ci95_low", "difference_ci95_high"]],
+                        on="method", how="left")
+    table["reference"] = reference
+    return table[COMPARISON_COLUMNS]
+
+
+#: Studies by the input their methods take; a registered method of another input kind is listed
+#: as not run, with the reason.
+_STUDY_INPUT = {"phac2": "features", "fabric": "features", "hand": "grasps"}
+_WHY = {"grasps": "needs hand grasps (5 BioTacs + joint angles)",
+        "frames": "needs frame sequences (the fabric-deep study: tzsl run fabric-deep)",
+        "features": "needs feature vectors"}
+
+
+#: Why the per-attribute SVM methods are not run on the fabric and hand training sets.
+FEW_CLASSES = ("not run: its per-attribute classifiers are tuned by class-grouped CV and need >= 2 training "
+               "classes with and without every attribute; here some attributes belong to one training class")
+
+
+def combine_comparisons(tables: list[pd.DataFrame], reasons: dict[str, dict[str, str]] | None = None) -> pd.DataFrame:
+    """Stack study comparisons into one table of every method x study.
+
+    A registered method missing from a study gets a row without accuracy whose note says why:
+    its input kind, ``reasons[study prefix][method]`` (e.g. ``{"fabric": {"dap-avg": ...}}``),
+    or "not run in this study". Studies keep their order; within a study the rows run, then
+    the rows not run.
+    """
+    reasons = reasons or {}
+    parts = []
+    for table in tables:
+        parts.append(table)
+        for study, sub in table.groupby("study", sort=False):
+            kind = _STUDY_INPUT.get(str(study).split("-")[0], "features")
+            ran = {str(m).split("_")[0] for m in sub["method"]}
+            missing = []
+            for name in available_methods():
+                if name in ran:
+                    continue
+                own = get_method(name).input_kind
+                usable = own == kind or (kind == "grasps" and own == "features")
+                note = (reasons.get(str(study).split("-")[0], {}).get(name, "not run in this study") if usable
+                        else f"not applicable: {_WHY[own]}")
+                missing.append({"study": study, "data": sub["data"].iloc[0], "method": name, "note": note,
+                                "reference": sub["reference"].iloc[0]})
+            if missing:
+                parts.append(pd.DataFrame(missing))
+    return pd.concat(parts, ignore_index=True)[COMPARISON_COLUMNS] if parts else pd.DataFrame(
+        columns=COMPARISON_COLUMNS)
+
+
+def _paired_differences(trials: pd.DataFrame, reference: str) -> pd.DataFrame:
+    """Each method minus ``reference`` on the splits that method completed (a failed fit drops a split)."""
+    parts = []
+    for method in [m for m in trials["method"].unique() if m != reference]:
+        splits = trials.loc[trials["method"] == method, "split"].unique()
+        pair = trials[trials["method"].isin([method, reference]) & trials["split"].isin(splits)]
+        parts.append(paired_differences_table(pair, reference=reference))
+    columns = ["method", "difference", "ci95_low", "ci95_high"]
+    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=columns)

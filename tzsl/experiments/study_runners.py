@@ -60,7 +60,7 @@ def phac2_outputs(config) -> list[str]:
         if methods.sweep:
             names += ["attribute_sweep.csv", "attribute_sweep.png"]
         if methods.method_specs():
-            names += ["phac2_methods.csv", "method_comparison.csv"]
+            names += ["phac2_methods.csv", "phac2_method_comparison.csv"]
         if methods.gzsl:
             names.append("gzsl.csv")
     if "challenging" in kinds:
@@ -108,7 +108,7 @@ _TITLES = {
     "multilabel": "Independent vs multi-label attribute classifiers (AVGDAP, uni-prior)",
     "attribute_accuracy": "Per-attribute test accuracy (mean over random splits and sensors)",
     "phac2_methods": "DAP vs ESZSL vs embedding model on the same random splits (trial accuracy)",
-    "method_comparison": "Methods vs AVGDAP (uni-prior) on the same random splits, 95% intervals",
+    "phac2_method_comparison": "Methods vs AVGDAP (uni-prior) on the same random splits, 95% intervals",
     "gzsl": "Generalised zero-shot: seen / unseen per-class accuracy, harmonic mean (H)",
 }
 
@@ -223,6 +223,7 @@ def run_hand(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -
     say(format_hand_summary(result))
     tables = {name: getattr(result, name) for name in ("table5", "multigrasp_T", "multigrasp_k",
                                                        "attribute_accuracy", "attribute_distance", "confusion")}
+    tables["hand_method_comparison"] = result.method_comparison
     record = {"study_kind": "hand", "hand": record_config(config), "seeds": list(seeds),
               "grasps": None if grasps is None else str(grasps), "table": ds.table}
     return StudyRun(tables, record, [] if grasps is None else [grasps / "grasps.csv"])

@@ -71,6 +71,7 @@ from tzsl.models._validation import ParameterError
 from tzsl.models._zero_shot import ZeroShotClassifier, score_kind
 from tzsl.models._registry import (
     FAMILIES,
+    INPUT_KINDS,
     Method,
     all_estimators,
     available_methods,
@@ -129,6 +130,7 @@ __all__: list[str] = [
     "class_grouped_folds",
     "training_classes",
     "FAMILIES",
+    "INPUT_KINDS",
     "Method",
     "all_estimators",
     "available_methods",

@@ -31,6 +31,7 @@ from tzsl.exceptions import ConfigError
 
 __all__ = [
     "FAMILIES",
+    "INPUT_KINDS",
     "Method",
     "all_estimators",
     "available_methods",
@@ -42,6 +43,10 @@ __all__ = [
 
 #: Method families shown by ``tzsl methods``.
 FAMILIES = ("attribute-classifier", "embedding", "compatibility", "ensemble")
+#: What a method fits on: feature vectors (per trial, optionally per sensor), hand grasps (packed
+#: per-finger features + contacts + joint angles, :func:`tzsl.features.grasp_features`), or
+#: frame sequences (n, T, H, W[, C]). A study runs the methods of its input kind.
+INPUT_KINDS = ("features", "grasps", "frames")
 
 DAP_PAPER = (
     "Abderrahmane, Ganesh, Crosnier, Cherubini (2018): Haptic zero-shot learning: recognition of "
@@ -86,6 +91,8 @@ class Method:
     input_ndim : {2, 3}
         Trial input the method fits on: 2 = ``(n_trials, n_features)`` (sensors side by side),
         3 = ``(n_trials, n_sensors, n_features)`` (one model per sensor, fused by the rule).
+    input_kind : {"features", "grasps", "frames"}
+        See :data:`INPUT_KINDS`.
     """
 
     name: str
@@ -97,6 +104,7 @@ class Method:
     preset: Mapping[str, object] = field(default_factory=dict)
     description: str = ""
     input_ndim: int = 2
+    input_kind: str = "features"
 
     def components(self) -> list[type]:
         """Classes whose parameters the method exposes (estimator, or model then rule)."""
@@ -167,6 +175,7 @@ def register_method(
     description: str = "",
     replace: bool = False,
     input_ndim: int = 2,
+    input_kind: str = "features",
 ):
     """Register a method; without a model class, return a class decorator that registers it.
 
@@ -189,6 +198,8 @@ def register_method(
         Allow replacing a method of the same name.
     input_ndim : {2, 3}, default=2
         3 for methods fitted on per-sensor input ``(n_trials, n_sensors, n_features)``.
+    input_kind : {"features", "grasps", "frames"}, default="features"
+        What the method fits on (:data:`INPUT_KINDS`).
 
     Returns
     -------
@@ -199,7 +210,8 @@ def register_method(
         def decorator(cls: type) -> type:
             kw = {"estimator": cls} if decision_rule is None else {"attribute_model": cls}
             register_method(name, family=family, paper=paper, decision_rule=decision_rule, preset=preset,
-                            description=description, replace=replace, input_ndim=input_ndim, **kw)
+                            description=description, replace=replace, input_ndim=input_ndim,
+                            input_kind=input_kind, **kw)
             return cls
 
         return decorator
@@ -209,12 +221,14 @@ def register_method(
         raise ConfigError(f"method {name!r}: give either attribute_model and decision_rule, or estimator")
     if input_ndim not in (2, 3):
         raise ConfigError(f"method {name!r}: input_ndim must be 2 or 3, got {input_ndim!r}")
+    if input_kind not in INPUT_KINDS:
+        raise ConfigError(f"method {name!r}: input_kind must be one of {INPUT_KINDS}, got {input_kind!r}")
     if name in _REGISTRY and not replace:
         raise ConfigError(f"method {name!r} is already registered")
     method = Method(name=name, family=family, paper=paper, attribute_model=attribute_model,
                     decision_rule=decision_rule, estimator=estimator,
                     preset=MappingProxyType(dict(preset or {})), description=description,
-                    input_ndim=input_ndim)
+                    input_ndim=input_ndim, input_kind=input_kind)
     unknown = sorted(set(method.preset) - {k for c in method.components() for k in _init_defaults(c)})
     if unknown:
         raise ConfigError(f"method {name!r}: preset names unknown parameter(s) {unknown}")

@@ -114,10 +114,15 @@ def methods_ok(values: list, taken: tuple[str, ...] = ()) -> list[dict]:
             problems.append(f"@{key}.name: missing (a registry method name)")
             continue
         try:
-            get_method(name).build(**{k: v for k, v in spec.items() if k != "name"})
+            method = get_method(name)
+            method.build(**{k: v for k, v in spec.items() if k != "name"})
         except ConfigError as exc:
             where = f"{key}.name" if str(exc).startswith("unknown method") else key
             problems.append(f"@{where}: {exc}")
+            continue
+        if method.input_kind != "features":
+            problems.append(f"@{key}.name: method {name!r} takes {method.input_kind}, not feature vectors "
+                            "(its own study runs it)")
             continue
         label = method_label(spec)
         if label in labels:

@@ -142,8 +142,18 @@ class DeepCompute(Section):
     progress: bool = Field(True, description="progress bars (features, epochs)")
 
 
+class DeepOutput(Output):
+    model: str | None = Field(None, description="also save the trained network as a model bundle (tzsl "
+                                                "predict); needs exactly one fit: one config, lambda, seed "
+                                                "and condition")
+
+
 class FabricDeepStudy(Section):
-    """``study = "fabric-deep"``: the CNN + LSTM over the lambda grid (needs tzsl[deep])."""
+    """``study = "fabric-deep"``: the CNN + LSTM over the lambda grid (needs tzsl[deep]).
+
+    ``tzsl train-deep`` builds this config from its options (one config, lambda and seed, and
+    ``output.model``), so the command and the matching file give the same tables.
+    """
 
     study: Literal["fabric-deep"] = "fabric-deep"
     description: str = ""
@@ -152,7 +162,21 @@ class FabricDeepStudy(Section):
     methods: DeepMethods = Field(default_factory=DeepMethods)
     splits: DeepSplits = Field(default_factory=DeepSplits)
     compute: DeepCompute = Field(default_factory=DeepCompute)
-    output: Output = Field(default_factory=Output)
+    output: DeepOutput = Field(default_factory=DeepOutput)
+
+    @model_validator(mode="after")
+    def _one_fit_for_a_model(self):
+        if self.output.model is None:
+            return self
+        many = [f"{key} has {n}" for key, n in (("splits.configs", len(self.splits.configs)),
+                                                  ("methods.embedding_lambdas", len(self.methods.embedding_lambdas)),
+                                                  ("splits.n_seeds", self.splits.n_seeds)) if n != 1]
+        conditions = self.features.gelsight_conditions
+        if self.dataset.gelsight_root is not None and (conditions is None or len(conditions) != 1):
+            many.append("features.gelsight_conditions must name one condition")
+        if many:
+            raise ValueError("@output.model: saving a model needs exactly one fit; " + "; ".join(many))
+        return self
 
 
 # --------------------------------------------------------------------------- hand
@@ -202,6 +226,10 @@ class HandMethods(Section):
     confusion_k: int = Field(default_factory=lambda: _paper("DAP_HAND_CONFUSION_K"), ge=1)
     model: dict[str, Any] = Field(default_factory=dict, description="HandDAPClassifier parameters; "
                                                                     "unset: its defaults")
+    compare: list[MethodEntry] = Field([], description=COMPARE_DESCRIPTION + " (on the packed grasp "
+                                       "features, beside MAXDAP/AVGDAP/LDAP)")
+
+    _compare = field_validator("compare")(lambda v: methods_ok(v))
 
     @field_validator("model")
     @classmethod
