@@ -343,7 +343,8 @@ def test_gelsight_groups_must_index_the_attribute_matrix(gelsight_root, data_dir
 
 
 def test_a_failing_fit_is_a_row_with_nan_and_its_error():
-    from tzsl.experiments.fabric import ESZSL_METHOD, _run_job  # noqa: PLC0415
+    from tzsl.experiments.fabric import ESZSL_METHOD  # noqa: PLC0415
+    from tzsl.experiments.fabric_methods import run_job as _run_job  # noqa: PLC0415
 
     X, groups = _synthetic()
     split = fabric_zsl_split(1)

@@ -188,7 +188,9 @@ progress = false
     assert comparison["method"].tolist() == ["embedding_lam_0", "eszsl", "toy"]
     assert (comparison["study"] == "fabric-gelsight-Flat").all()
     assert (comparison["reference"] == "embedding_lam_0").all()  # 0.1 not run: the first lambda
-    assert comparison.set_index("method").loc["toy", "accuracy"] == pytest.approx(toy["accuracy"].iloc[0], abs=1e-5)
+    # the comparison runs on the zero-shot protocol of the split (the headline)
+    headline = toy[toy["zero_shot"].astype(bool)]
+    assert comparison.set_index("method").loc["toy", "accuracy"] == pytest.approx(headline["accuracy"].iloc[0], abs=1e-5)
     manifest = json.loads((tmp_path / "res" / "fabric_manifest.json").read_text())
     assert manifest["config"]["methods"] == [{"name": "toy"}]
 
@@ -272,7 +274,7 @@ def test_a_failing_split_method_is_recorded_and_the_run_exits_1_at_the_end(toy_m
     assert per_split.loc[splits, "toy"].notna().all()
     assert per_split.loc[splits[1], "error"].startswith("flaky: ValueError: simulated failure")
     assert per_split.loc[splits, "error"].isna().tolist() == [True, False, True]
-    table = pd.read_csv(tmp_path / "res" / "method_comparison.csv").set_index("method")
+    table = pd.read_csv(tmp_path / "res" / "phac2_method_comparison.csv").set_index("method")
     assert table.loc["flaky", "n_splits"] == 2 and table.loc["toy", "n_splits"] == 3
     assert np.isfinite(table.loc["flaky", "difference"])  # paired on the 2 splits it completed
     manifest = json.loads((tmp_path / "res" / "manifest.json").read_text())

@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tzsl.exceptions import ConfigError
-from tzsl.models import DeepAttributeEmbedding, class_grouped_folds
+from tzsl.models import DeepAttributeEmbedding, ZSLInputError, class_grouped_folds
 from tzsl.models._deep_training import best_epoch
 
 # 6 classes with distinct attribute rows: folds of 2 held-out rows
@@ -53,7 +52,7 @@ def test_class_grouped_folds_hold_out_whole_classes():
     assert all(len(h) == 2 for h in held) and set().union(*held) == set(range(6))
     for tr, va in folds:
         assert not set(groups[tr]) & set(groups[va])
-    with pytest.raises(ConfigError, match="at least 4 distinct"):
+    with pytest.raises(ZSLInputError, match="at least 4 training classes"):
         class_grouped_folds(np.repeat(np.arange(3), 2), 5, "test")
 
 
@@ -74,5 +73,5 @@ def test_early_stopping_trains_the_chosen_epochs_on_all_training_classes(torch):
 def test_early_stopping_needs_four_training_rows(torch):
     X, y = sequences()
     keep = y < 3
-    with pytest.raises(ConfigError, match="at least 4 distinct"):
+    with pytest.raises(ZSLInputError, match="at least 4 training classes"):
         tiny(early_stopping=True).fit(X[keep], y[keep], A6[:3])

@@ -346,7 +346,8 @@ def run_deep_fabric_study(
         Frozen-feature cache (default ``<tzsl cache dir>/deep-features``).
     save_model : str, path or None
         Save the trained network as a model bundle here (one fit only: one condition, config,
-        lambda and seed); refused when it exists unless ``out.force``.
+        lambda and seed; only the config's zero-shot protocol is then run); refused when it
+        exists unless ``out.force``.
 
     Returns
     -------
@@ -391,8 +392,11 @@ def run_deep_fabric_study(
     rows = []
     keys = ["condition", "config", "protocol", "method"]
     outcomes = Outcomes(split_column="seed", by=keys)
+    protocols = fabric_protocols(configs, fabric.attributes)  # the paper's split and its zero-shot variant
+    if save_model is not None:  # the saved model is the zero-shot (headline) protocol's fit
+        protocols = [p for p in protocols if p.zero_shot]
     for condition, seqs in sources:
-        for proto in fabric_protocols(configs, fabric.attributes):  # the paper's split and its zero-shot variant
+        for proto in protocols:
             config = proto.split.config
             for lam, label in zip(lams, labels, strict=True):
                 for sd in range(int(seed), int(seed) + int(seeds)):

@@ -56,9 +56,9 @@ from sklearn.utils.validation import check_is_fitted
 
 from tzsl.exceptions import ConfigError, ModelBundleError
 from tzsl.models._deep_input import (
-    _FEATURE_CHUNK,
-    _nets,
-    _sha256_arrays,
+    FEATURE_CHUNK,
+    deep_nets,
+    sha256_arrays,
     _threads,
     _validate_frames,
     require_torch,
@@ -269,7 +269,7 @@ class DeepAttributeEmbedding(DeepTrainingMixin, ValidatedParamsMixin, BaseEstima
 
     # ------------------------------------------------------------------ network
     def _build_net(self, n_attributes: int, n_channels: int, *, load_weights: bool = True):
-        nets = _nets()
+        nets = deep_nets()
         backbone = nets.build_backbone(self.backbone, self.weights_path, load_weights=load_weights)
         size = self.image_size if self.image_size is not None else backbone.native_size
         return nets.DeepZSLNet(backbone, n_attributes, int(self.hidden_size), n_channels, size)
@@ -363,7 +363,7 @@ class DeepAttributeEmbedding(DeepTrainingMixin, ValidatedParamsMixin, BaseEstima
         seed = int(check_random_state(self.random_state).randint(np.iinfo(np.int32).max))
         fingerprint = hashlib.sha256(
             json.dumps(self._fingerprint_params(), sort_keys=True, default=str).encode()
-            + _sha256_arrays(X, y_u, S_u).encode()
+            + sha256_arrays(X, y_u, S_u).encode()
         ).hexdigest()
         with torch.random.fork_rng(devices=[]), _threads(torch, self.n_threads):
             torch.manual_seed(seed)
@@ -400,8 +400,8 @@ class DeepAttributeEmbedding(DeepTrainingMixin, ValidatedParamsMixin, BaseEstima
                 F = net.embed(self._frozen_features(net, X, disk=True).to(self.device))
             else:
                 parts = []
-                for lo in range(0, X.shape[0], _FEATURE_CHUNK):
-                    seq = torch.from_numpy(np.ascontiguousarray(X[lo : lo + _FEATURE_CHUNK], dtype=np.float32))
+                for lo in range(0, X.shape[0], FEATURE_CHUNK):
+                    seq = torch.from_numpy(np.ascontiguousarray(X[lo : lo + FEATURE_CHUNK], dtype=np.float32))
                     parts.append(net(seq.to(self.device)))
                 F = torch.cat(parts)
         return F.cpu().numpy().astype(np.float64)

@@ -13,7 +13,7 @@ from tzsl.models._eszsl import ZSLInputError
 
 _INSTALL_HINT = 'install the deep extra: pip install "tzsl[deep]"'
 # Sequences per chunk when extracting frozen features (bounds memory to chunk x T frames).
-_FEATURE_CHUNK = 16
+FEATURE_CHUNK = 16
 
 
 def require_torch():
@@ -24,7 +24,7 @@ def require_torch():
         raise TzslError(f"the deep model needs PyTorch, which is not installed; {_INSTALL_HINT}") from None
 
 
-def _nets():
+def deep_nets():
     """The torch-based module :mod:`tzsl.models._deep_backbones` (imports torch)."""
     require_torch()
     from tzsl.models import _deep_backbones  # noqa: PLC0415 - lazy: torch is optional
@@ -32,7 +32,7 @@ def _nets():
     return _deep_backbones
 
 
-def _sha256_arrays(*arrays) -> str:
+def sha256_arrays(*arrays) -> str:
     digest = hashlib.sha256()
     for a in arrays:
         a = np.ascontiguousarray(a)
@@ -88,7 +88,7 @@ def _threads(torch, n_threads):
         torch.set_num_threads(before)
 
 
-def _pixel_stats(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def pixel_stats(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per-channel mean and std (C,) of all pixels of ``X`` (n, T, H, W, C), chunked."""
     c = X.shape[-1]
     flat = X.reshape(-1, c)

@@ -33,7 +33,7 @@ import numpy as np
 from tzsl._io import atomic_write
 from tzsl.exceptions import ConfigError
 from tzsl.models._zsl_input import class_grouped_folds
-from tzsl.models._deep_input import _FEATURE_CHUNK, _nets, _pixel_stats, _sha256_arrays, require_torch
+from tzsl.models._deep_input import FEATURE_CHUNK, deep_nets, pixel_stats, sha256_arrays, require_torch
 
 __all__ = ["DeepTrainingMixin", "best_epoch"]
 
@@ -59,7 +59,7 @@ class DeepTrainingMixin:
         from tqdm.auto import tqdm  # noqa: PLC0415
 
         net = self._build_net(S_u.shape[1], X.shape[-1]).to(self.device)
-        mean, std = _pixel_stats(X)
+        mean, std = pixel_stats(X)
         net.pixel_mean.copy_(torch.as_tensor(mean, dtype=torch.float32).reshape(1, -1, 1, 1))
         net.pixel_std.copy_(torch.as_tensor(std, dtype=torch.float32).reshape(1, -1, 1, 1))
         start = time.perf_counter()
@@ -114,7 +114,7 @@ class DeepTrainingMixin:
     def _epoch(self, torch, net, opt, gen, X, feats, rows, y_t, L, weights) -> float:
         """One pass over the sequences ``rows`` (tensor of indices) in a random order; mean loss."""
         w_c, w_r = weights
-        nets = _nets()
+        nets = deep_nets()
         self._train_mode(net)
         order = rows[torch.randperm(rows.shape[0], generator=gen)]
         bs, total = int(self.batch_size), 0.0
@@ -158,8 +158,8 @@ class DeepTrainingMixin:
                 self._epoch(torch, net, opt, gen, X, feats, rows_tr, y_t, L, weights)
                 net.eval()
                 with torch.no_grad():
-                    F = torch.cat([self._embed(torch, net, X, feats, rows_va[lo : lo + _FEATURE_CHUNK])
-                                   for lo in range(0, rows_va.shape[0], _FEATURE_CHUNK)]).cpu()
+                    F = torch.cat([self._embed(torch, net, X, feats, rows_va[lo : lo + FEATURE_CHUNK])
+                                   for lo in range(0, rows_va.shape[0], FEATURE_CHUNK)]).cpu()
                     scores = -((F[:, None, :] - S_va.cpu()[None]) ** 2).sum(dim=2)
                     acc[f, e] = float((scores.argmax(dim=1) == y_va_t).float().mean())
                     logp = torch.log_softmax(scores, dim=1)
@@ -169,14 +169,14 @@ class DeepTrainingMixin:
     # ------------------------------------------------------------------ frozen features
     def _feature_key(self, net, X: np.ndarray) -> str:
         parts = [
-            _sha256_arrays(X),
+            sha256_arrays(X),
             self.backbone,
             str(net.backbone.weights_sha256),
             str(net.image_size),
-            _sha256_arrays(net.pixel_mean.cpu().numpy(), net.pixel_std.cpu().numpy()),
+            sha256_arrays(net.pixel_mean.cpu().numpy(), net.pixel_std.cpu().numpy()),
         ]
         if self.backbone == "small-cnn":  # random weights: key them too
-            parts.append(_sha256_arrays(*[t.cpu().numpy() for t in net.backbone.state_dict().values()]))
+            parts.append(sha256_arrays(*[t.cpu().numpy() for t in net.backbone.state_dict().values()]))
         return hashlib.sha256("|".join(parts).encode()).hexdigest()
 
     def _frozen_features(self, net, X: np.ndarray, *, disk: bool = False):
@@ -216,10 +216,10 @@ class DeepTrainingMixin:
         n, t = X.shape[:2]
         out = torch.empty(n, t, net.backbone.out_features)
         net.eval()
-        starts = range(0, n, _FEATURE_CHUNK)
+        starts = range(0, n, FEATURE_CHUNK)
         with torch.no_grad():
             for lo in tqdm(starts, desc="CNN features", unit="chunk", disable=not self.verbose, leave=False):
-                chunk = torch.from_numpy(np.ascontiguousarray(X[lo : lo + _FEATURE_CHUNK], dtype=np.float32))
+                chunk = torch.from_numpy(np.ascontiguousarray(X[lo : lo + FEATURE_CHUNK], dtype=np.float32))
                 b = chunk.shape[0]
                 feats = net.frame_features(chunk.reshape(b * t, *chunk.shape[2:]).to(self.device))
                 out[lo : lo + b] = feats.reshape(b, t, -1).cpu()
