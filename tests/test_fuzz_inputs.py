@@ -360,7 +360,7 @@ def test_run_broken_experiment_file_writes_only_under_out(data):
 @pytest.fixture(scope="module")
 def hand_model(tmp_path_factory):
     from tzsl.datasets import load_hand_table4, simulate_grasps
-    from tzsl.experiments.predict import train_hand_bundle
+    from tzsl.experiments.model_bundles import train_hand_bundle
 
     root = tmp_path_factory.mktemp("fuzz_hand")
     table = load_hand_table4()

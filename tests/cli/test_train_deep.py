@@ -63,7 +63,8 @@ def test_train_deep_on_fabric_depth_images(torch, data_dir, tmp_path):
     result = _run("train-deep", "--results", str(tmp_path / "a"), *common)
     assert result.exit_code == 0, result.output
     runs = _runs(tmp_path / "a")
-    assert runs[["n_train", "n_test"]].values.tolist() == [[92, 27]]  # config 1: one sequence per fabric
+    # config 1, its zero-shot protocol (the saved model's fit): group 5 (a training row) left out of the test
+    assert runs[["n_train", "n_test"]].values.tolist() == [[92, 21]]
     assert runs["accuracy"].between(0, 1).all() and runs["train_accuracy"].between(0, 1).all()
     model = load_deep_bundle(out)
     assert model.sequence_shape_ == (5, 224, 224, 1) and model.n_epochs_ == 3
@@ -166,11 +167,15 @@ def test_deep_fabric_study_table(torch, data_dir, tmp_path):
                   model_params=params, cache_dir=tmp_path / "cache")
     result = run_deep_fabric_study(ResultsDir(tmp_path / "out"), **kwargs)
     runs, table = result["runs"], result["table"]
-    assert len(runs) == 4 and set(runs["method"]) == {"lam_0.1", "lam_inf"}
-    assert (runs["n_train"] == 92).all() and (runs["n_test"] == 27).all()
-    assert table["n_seeds"].tolist() == [2, 2]
-    mean = runs.groupby("method", sort=False)["accuracy"].mean().to_numpy()
-    np.testing.assert_allclose(table["accuracy"].to_numpy(), mean)
+    # the paper's split (not zero-shot for config 1) and its zero-shot variant, 2 lambdas x 2 seeds each
+    assert len(runs) == 8 and set(runs["method"]) == {"lam_0.1", "lam_inf"}
+    assert set(runs["protocol"]) == {"paper", "zero-shot-drop"}
+    assert (runs["n_train"] == 92).all()
+    assert runs.groupby("protocol")["n_test"].first().to_dict() == {"paper": 27, "zero-shot-drop": 21}
+    assert table["n_seeds"].tolist() == [2, 2, 2, 2]
+    mean = runs.groupby(["protocol", "method"], sort=False)["accuracy"].mean()
+    got = table.set_index(["protocol", "method"])["accuracy"]
+    np.testing.assert_allclose(got.loc[mean.index].to_numpy(), mean.to_numpy())
     for name in ("fabric_deep_table.csv", "fabric_deep_runs.csv", "fabric_deep_manifest.json"):
         assert (tmp_path / "out" / name).is_file()
     assert "lam_inf" in format_deep_table(table)
