@@ -76,3 +76,22 @@ def test_repository_readme_has_the_block():
 
     text = (Path(__file__).resolve().parents[2] / "README.md").read_text()
     assert text.count(BEGIN) == 1 and text.count(END) == 1
+
+
+def test_block_tabulates_every_method_by_study_from_the_comparison(tmp_path):
+    root = _results(tmp_path / "results")
+    pd.DataFrame({
+        "study": ["phac2-random", "phac2-random", "phac2-random", "hand"],
+        "data": ["real", "real", "real", "simulated"],
+        "method": ["dap-avg", "sae", "ldap", "sae"],
+        "accuracy": [0.31, 0.35, None, 0.3], "ci95_low": [0.19, 0.24, None, 0.2], "ci95_high": [0.44, 0.46, None, 0.4],
+        "paper_accuracy": [0.39, None, None, None],
+        "difference": [None, 0.04, None, -0.1], "difference_ci95_low": [None, -0.07, None, -0.2],
+        "difference_ci95_high": [None, 0.16, None, 0.0], "reference": ["dap-avg"] * 3 + ["ldap"],
+        "note": ["", "", "not applicable: takes grasps", ""],
+    }).to_csv(root / "method_comparison.csv", index=False)
+    block = results_block(root)
+    assert "| method | phac2-random, ref. dap-avg | hand (SIMULATED), ref. ldap |" in block
+    assert "| `dap-avg` | 0.31 (0.19-0.44) [0.39] |  |" in block
+    assert "| `sae` | 0.35 (0.24-0.46), Δ +0.04 (-0.07, +0.16) | 0.30 (0.20-0.40), Δ -0.10 (-0.20, +0.00) |" in block
+    assert "| `ldap` | n/a |  |" in block
