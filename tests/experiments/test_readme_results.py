@@ -85,13 +85,13 @@ def test_block_tabulates_every_method_by_study_from_the_comparison(tmp_path):
         "data": ["real", "real", "real", "simulated"],
         "method": ["dap-avg", "sae", "ldap", "sae"],
         "accuracy": [0.31, 0.35, None, 0.3], "ci95_low": [0.19, 0.24, None, 0.2], "ci95_high": [0.44, 0.46, None, 0.4],
-        "paper_accuracy": [0.39, None, None, None],
+        "paper_accuracy": [0.39, None, None, None], "chance": [0.1, 0.1, None, 0.1],
         "difference": [None, 0.04, None, -0.1], "difference_ci95_low": [None, -0.07, None, -0.2],
         "difference_ci95_high": [None, 0.16, None, 0.0], "reference": ["dap-avg"] * 3 + ["ldap"],
         "note": ["", "", "not applicable: takes grasps", ""],
     }).to_csv(root / "method_comparison.csv", index=False)
     block = results_block(root)
-    assert "| method | phac2-random, ref. dap-avg | hand (SIMULATED), ref. ldap |" in block
+    assert "| method | phac2-random, ref. dap-avg, chance 0.10 | hand (SIMULATED), ref. ldap, chance 0.10 |" in block
     assert "| `dap-avg` | 0.31 (0.19-0.44) [0.39] |  |" in block
     assert "| `sae` | 0.35 (0.24-0.46), Δ +0.04 (-0.07, +0.16) | 0.30 (0.20-0.40), Δ -0.10 (-0.20, +0.00) |" in block
     assert "| `ldap` | n/a |  |" in block

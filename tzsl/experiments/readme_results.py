@@ -144,7 +144,9 @@ def comparison_lines(root: Path) -> list[str]:
     heads = []
     for study in studies:
         sub = table[table["study"] == study]
-        label = f"{study}{' (SIMULATED)' if (sub['data'] == 'simulated').any() else ''}, ref. {sub['reference'].iloc[0]}"
+        chance = sub["chance"].dropna() if "chance" in sub.columns else pd.Series(dtype=float)
+        label = (f"{study}{' (SIMULATED)' if (sub['data'] == 'simulated').any() else ''}, ref. {sub['reference'].iloc[0]}"
+                 + (f", chance {_num(chance.iloc[0], 2)}" if len(chance) else ""))
         heads.append(label)
     cells = {(r["method"], r["study"]): _cell(r) for _, r in table.iterrows()}
     lines = ["", "Every method x study (`method_comparison.csv`): accuracy (95% interval) [paper], "
