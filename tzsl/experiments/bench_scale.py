@@ -5,11 +5,13 @@ For each size N it writes a synthetic plain-file dataset with
 SIMULATED, see that module), then runs ``tzsl run`` on it in a child process - study phac2-dap,
 one random split of 10 unseen classes, every other setting the schema's default - and prints
 
-* wall time of the run (loading + fits + tables) and, from the manifest, the attribute solver chosen,
+* wall time of the run (loading + fits + tables), its CPU time summed over the run's processes
+  (``getrusage`` of the reaped children: robust to other load on the machine; on an otherwise idle
+  machine wall is about CPU / n_jobs) and, from the manifest, the attribute solver chosen,
 * peak memory: the largest sum of resident memory over the run's process tree (sampled every
   0.2 s with psutil) and the peak RSS of its largest single process (``getrusage``),
 * AVGDAP zero-shot accuracy (uni-prior) on the split's test trials, with chance,
-* the growth exponent: the least-squares slope of log(wall) and log(peak memory) against log(N)
+* the growth exponent: the least-squares slope of log(wall), log(CPU) and log(peak memory) against log(N)
   over the sizes >= 4,000.
 
 This is a benchmark, not a test: the numbers depend on the machine and its load (printed). Run::
@@ -87,7 +89,8 @@ def run_one(n: int, work: Path, *, n_jobs: int, backend: str, table_format: str,
     toml = work / f"bench_{n}.toml"
     toml.write_text(_TOML.format(n=n, plain=plain, seed=seed, n_jobs=n_jobs, backend=backend, out=out))
     cmd = [sys.executable, "-c", "from tzsl.cli import main; main()", "run", str(toml), "--force", *extra_args]
-    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    before, cpu_before = usage.ru_maxrss, usage.ru_utime + usage.ru_stime
     start = time.perf_counter()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     ps, peak = psutil.Process(proc.pid), 0
@@ -98,12 +101,14 @@ def run_one(n: int, work: Path, *, n_jobs: int, backend: str, table_format: str,
     log = proc.stdout.read()
     if proc.returncode != 0:
         raise RuntimeError(f"tzsl run failed for N={n} (exit {proc.returncode}):\n{log[-3000:]}")
-    single = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss  # KiB, max over reaped descendants
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    single = usage.ru_maxrss  # KiB, max over reaped descendants
+    cpu = usage.ru_utime + usage.ru_stime - cpu_before  # the run and its workers, all cores
     t1 = pd.read_csv(out / "table1_fusion.csv")
     row = t1[t1["split"].astype(str) == "1"].iloc[0]
     manifest = json.loads((out / "manifest.json").read_text())
     solver = manifest["config"].get("attribute_solver", [{}])[0].get("solver", "?")
-    return {"trials": n, "wall_s": wall, "peak_tree_gb": peak / 1e9,
+    return {"trials": n, "wall_s": wall, "cpu_s": cpu, "peak_tree_gb": peak / 1e9,
             "peak_process_gb": (single * 1024 / 1e9) if single > before else float("nan"),
             "avgdap": float(row["avgdap"]), "chance": float(row["chance"]), "solver": solver}
 
@@ -138,13 +143,13 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         rows.append(run_one(n, args.work.resolve(), n_jobs=args.n_jobs, backend=args.backend,
                             table_format=args.table_format, seed=args.seed))
         r = rows[-1]
-        print(f"  wall {r['wall_s']:.1f} s, peak {r['peak_tree_gb']:.2f} GB (tree) / "
+        print(f"  wall {r['wall_s']:.1f} s, CPU {r['cpu_s']:.1f} s, peak {r['peak_tree_gb']:.2f} GB (tree) / "
               f"{r['peak_process_gb']:.2f} GB (one process), AVGDAP {r['avgdap']:.3f} (chance {r['chance']:.3f}), "
               f"solver {r['solver']}; load average {os.getloadavg()[0]:.2f}", flush=True)
     table = pd.DataFrame(rows)
     print("\n" + table.to_string(index=False, float_format=lambda v: f"{v:.3f}"))
-    print(f"growth exponent above 4k trials: time {growth_exponent(table.trials, table.wall_s):.2f}, "
-          f"memory {growth_exponent(table.trials, table.peak_tree_gb):.2f}")
+    print(f"growth exponent above 4k trials: wall {growth_exponent(table.trials, table.wall_s):.2f}, "
+          f"CPU {growth_exponent(table.trials, table.cpu_s):.2f}, memory {growth_exponent(table.trials, table.peak_tree_gb):.2f}")
     if args.out is not None:
         table.to_csv(args.out, index=False)
     return table
