@@ -127,7 +127,7 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
         paper's range; :func:`tzsl.models.gamma_grid`), because on PHAC-2 167 of 188
         (attribute, sensor) fits chose the paper grid's low edge 0.01. The paper-reproduction
         studies pin ``"paper"``. PHAC-2, 20 random + 5 challenging splits, cv=5
-        (``benchmarks/phac2_accuracy.py``): the extended grid lowers the chosen fits' grouped-CV
+        (``experiments/benchmarks/phac2_accuracy.py``): the extended grid lowers the chosen fits' grouped-CV
         log-loss (0.472 -> 0.449) but not AVGDAP's test accuracy (random 0.307 -> 0.308, paired
         +0.001 [-0.031, 0.030]; challenging 0.194 -> 0.213, +0.019 [-0.044, 0.085]); 31% of
         fits then choose its own low edge 1e-4 (near-linear).

@@ -13,7 +13,7 @@ posteriors, ESZSL: compatibilities, SAE: cosines). The trial-wise z-score puts s
 different kinds and scales on one footing without any fitted parameter, so no choice of the
 ensemble sees a test object (each member tunes itself on training objects or classes only).
 
-Measured on PHAC-2 (Penn static features, both BioTacs; ``benchmarks/phac2_accuracy.py``, trial
+Measured on PHAC-2 (Penn static features, both BioTacs; ``experiments/benchmarks/phac2_accuracy.py``, trial
 accuracy, two-level bootstrap 95% intervals, paired differences on the same trials):
 
 ===================  ===========================  ==================================

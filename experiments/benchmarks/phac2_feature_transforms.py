@@ -1,4 +1,4 @@
-"""PHAC-2 benchmark, feature transforms for ESZSL/SAE (negative result, see benchmarks/README.md).
+"""PHAC-2 benchmark, feature transforms for ESZSL/SAE (negative result, see experiments/benchmarks/README.md).
 
 Signed log ``sign(x) log(1 + |x|)`` and a rank-Gauss ``QuantileTransformer`` (fitted on each split's
 training trials) before ESZSL and SAE, alone and in the DAP + ESZSL + SAE ensemble ("mean3"; "mean5"

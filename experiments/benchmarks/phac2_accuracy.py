@@ -18,7 +18,7 @@ Every choice is made on training objects only. Output: one row per method and sp
 the mean accuracy, the two-level bootstrap 95% interval (splits, then test objects) and the
 paired difference to AVGDAP[paper] with its interval::
 
-    nice -n 5 python benchmarks/phac2_accuracy.py --cache /tmp/tzsl_accuracy --out accuracy.csv
+    nice -n 5 python experiments/benchmarks/phac2_accuracy.py --cache /tmp/tzsl_accuracy --out accuracy.csv
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ from tzsl.experiments.extract import extract_features
 from tzsl.experiments.phac2_dap import split_masks
 from tzsl.models import attribute_rows, build_method
 
-from phac2_posteriors import study_splits  # noqa: E402  (run from benchmarks/ or with it on sys.path)
+from phac2_posteriors import study_splits  # noqa: E402  (run from experiments/benchmarks/ or with it on sys.path)
 
 EPS = 1e-6
 WEIGHTS = np.linspace(0.0, 1.0, 11)

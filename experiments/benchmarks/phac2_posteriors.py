@@ -13,7 +13,7 @@ the PHAC-2 study (:func:`tzsl.experiments.phac2_dap.fit_split`, 5 object-grouped
 
 Expensive (about 10 s CPU per split and grid, more on a loaded machine); run once::
 
-    nice -n 5 python benchmarks/phac2_posteriors.py --out /tmp/tzsl_accuracy --n-random 20
+    nice -n 5 python experiments/benchmarks/phac2_posteriors.py --out /tmp/tzsl_accuracy --n-random 20
 
 Stage 2 (:mod:`benchmarks.phac2_accuracy`) reads these files. Nothing here is in the repository's
 results; the output folder is a cache.
