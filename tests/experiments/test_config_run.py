@@ -33,8 +33,10 @@ def test_builtin_studies_ship_inside_the_package_only():
     assert builtin_names() == ["active-touch", "fabric", "fabric-deep", "hand-simulated", "phac2-dap", "phac2-gzsl"]
     for name in builtin_names():
         assert load_experiment(name).study in STUDIES
-    # one copy: the top-level folder holds the README and the user template, no study file
-    assert sorted(p.name for p in (REPO / "experiments").iterdir()) == ["README.md", "my_dataset_template.toml"]
+    # one copy: the top-level folder holds the README, the user template and the benchmark scripts, no study file
+    assert sorted(p.name for p in (REPO / "experiments").iterdir()) == ["README.md", "benchmarks",
+                                                                         "my_dataset_template.toml"]
+    assert not list((REPO / "experiments" / "benchmarks").glob("*.toml"))
     assert load_experiment(REPO / "experiments" / "my_dataset_template.toml").study == "phac2-dap"
 
 

@@ -35,7 +35,7 @@ from tzsl.datasets._phac2_penn import (
 from tzsl.datasets._registry import fetch, registered_files
 from tzsl.datasets._safe_pickle import safe_load_pickle
 from tzsl.datasets._types import PHAC2_EPS, TRIAL_COLUMNS, BiotacSignals, FeatureSet, RawTrial
-from tzsl.datasets._feature_table import feature_table_paths, read_feature_table, write_feature_table
+from tzsl.datasets._feature_table import feature_table_paths, read_csv_table, read_feature_table, write_feature_table
 from tzsl.datasets._plain import PLAIN_FORMAT_HELP
 from tzsl.datasets._tables import SPLITS_FILE
 from tzsl.datasets._fabric import (
@@ -75,6 +75,7 @@ __all__ = [
     "FeatureSet",
     "RawTrial",
     "feature_table_paths",
+    "read_csv_table",
     "read_feature_table",
     "write_feature_table",
     "get_data_home",

@@ -79,7 +79,7 @@ def write_feature_table(features: FeatureSet, path: str | Path) -> list[Path]:
     return feature_table_paths(path)
 
 
-def _read_csv(path: Path) -> pd.DataFrame:
+def read_csv_table(path: Path) -> pd.DataFrame:
     """A CSV table, or one line naming the file and what is wrong with it."""
     try:
         if looks_binary(path):
@@ -121,7 +121,7 @@ def read_feature_table(path: str | Path, dataset: str = "") -> FeatureSet:
         sensors = tuple(str(s) for s in data["sensors"])
         names = tuple(str(s) for s in data["feature_names"])
     elif path.suffix == ".csv":
-        frame = _read_csv(path)
+        frame = read_csv_table(path)
         missing = [c for c in (*TRIAL_COLUMNS, "sensor") if c not in frame.columns]
         if missing:
             raise DataFileError(path, f"missing columns {missing}")
@@ -144,7 +144,7 @@ def read_feature_table(path: str | Path, dataset: str = "") -> FeatureSet:
         sidecar = _attributes_sidecar(path)
         if not sidecar.is_file():
             raise DataFileError(sidecar, "attribute table missing (written beside the feature CSV)")
-        attributes = _read_csv(sidecar)
+        attributes = read_csv_table(sidecar)
         if "object_name" not in attributes.columns:
             raise DataFileError(sidecar, "header lacks the column 'object_name'", line=1)
         attributes = attributes.set_index("object_name")

@@ -36,8 +36,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from tzsl._io import looks_binary, read_npz
-from tzsl.datasets import read_grasps, read_signal_file
+from tzsl._io import read_npz
+from tzsl.datasets import read_csv_table, read_grasps, read_signal_file
 from tzsl.exceptions import DataFileError, ModelBundleError
 
 __all__ = ["INPUT_FORMATS", "Grasps", "describe_inputs", "read_feature_rows", "read_inputs"]
@@ -127,26 +127,12 @@ def read_feature_rows(path: Path, schema: dict) -> tuple[np.ndarray, list[str]]:
         return _one_signal(path, schema)
     if suffix != ".csv":
         raise DataFileError(path, f"unsupported input type {path.suffix!r}; use .csv or .npz")
-    frame = _read_csv(path)
+    frame = read_csv_table(path)
     if "signal_file" in frame.columns:
         return _signal_manifest(path, frame, schema)
     if schema.get("signals") and not set(schema["feature_names"]) & set(frame.columns):
         return _one_signal(path, schema)
     return _csv_rows(path, frame, schema)
-
-
-def _read_csv(path: Path) -> pd.DataFrame:
-    try:
-        if looks_binary(path):
-            raise UnicodeDecodeError("utf-8", b"", 0, 1, "binary")
-        return pd.read_csv(path)
-    except UnicodeDecodeError:
-        raise DataFileError(path, "not a UTF-8 text file (a binary file given as CSV?)") from None
-    except pd.errors.EmptyDataError:
-        raise DataFileError(path, "file is empty; expected a header line", line=1) from None
-    except (pd.errors.ParserError, OSError, ValueError) as exc:
-        text = str(exc).strip().splitlines()
-        raise DataFileError(path, f"not a readable CSV table ({text[0] if text else type(exc).__name__})") from None
 
 
 def _check_layout(path: Path, sensors: Sequence[str], names: Sequence[str], schema: dict) -> tuple[list, list]:
