@@ -72,9 +72,11 @@ def test_evaluate_builds_the_same_config_as_the_toml(toy):
     path.write_text(EVALUATE_TOML.format(kind="challenging") + '[output]\nfolder = "o"\n')
     values = evaluate_values(kind="challenging", splits_file=None, n_splits=1, n_test=4, multilabel=False,
                              sweep=False, out="o", dataset=None, features_file=None, plain_dir=toy / "toy", path=None,
-                             undersampling="none", cv=2, no_progress=True, no_cache=True, seed=3, n_jobs=1,
-                             backend="loky", scheduler=None, data_dir=None)
+                             undersampling="none", cv=2, grid=None, no_progress=True, no_cache=True, seed=3,
+                             n_jobs=1, backend="loky", scheduler=None, data_dir=None)
     from_cli, from_file = config_from_options("phac2-dap", values), load_experiment(path)
+    assert from_cli.config.svm.grid == "extended"  # left out: the schema's default, as in the file
+    assert config_from_options("phac2-dap", {**values, "svm.grid": "paper"}).config.svm.grid == "paper"
     assert from_cli.resolve(from_cli.config.dataset.plain) == from_file.resolve(from_file.config.dataset.plain)
     assert from_cli.config.model_dump(exclude={"dataset": {"plain"}}) == \
         from_file.config.model_dump(exclude={"dataset": {"plain"}})
