@@ -43,7 +43,7 @@ CSV_FLOAT_FORMAT = "%.6g"
 
 #: Packages whose versions every manifest records.
 RECORDED_PACKAGES: tuple[str, ...] = (
-    "tzsl", "numpy", "scipy", "scikit-learn", "pandas", "joblib", "imbalanced-learn",
+    "tzsl", "numpy", "scipy", "scikit-learn", "pandas", "joblib", "pydantic", "skops",
     "h5py", "matplotlib", "scikit-image", "imageio", "jinja2", "dask", "distributed", "torch",
 )
 
