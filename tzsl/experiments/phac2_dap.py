@@ -76,6 +76,7 @@ __all__ = [
     "multilabel_table",
     "object_map_features",
     "run_dap_study",
+    "solver_lines",
     "split_masks",
     "table1_fusion",
     "table2_priors",
@@ -470,6 +471,11 @@ def run_dap_study(
     return tables
 
 
+def solver_lines(choices: list[dict]) -> list[str]:
+    """One line per distinct attribute-solver choice (``record["attribute_solver"]`` entries)."""
+    return list(dict.fromkeys(f"attribute models: {c['solver']} ({c['reason']})" for c in choices))
+
+
 def _record_solvers(results: list[SplitPosteriors], echo, record: dict | None) -> None:
     """Echo each distinct attribute-solver choice once; store every split's in ``record``."""
     choices = [{"split": r.split.name, **r.model.solver_choice_} for r in results
@@ -477,6 +483,6 @@ def _record_solvers(results: list[SplitPosteriors], echo, record: dict | None) -
     if record is not None:
         record["attribute_solver"] = choices
     if echo is not None:
-        for text in dict.fromkeys(f"attribute models: {c['solver']} ({c['reason']})" for c in choices):
+        for text in solver_lines(choices):
             echo(text)
 

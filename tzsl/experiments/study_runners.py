@@ -146,7 +146,7 @@ def prepare_phac2(exp: Experiment):
 
 def run_phac2(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
     from tzsl.experiments.gzsl import GZSL_FILE, gzsl_config_record, run_gzsl  # noqa: PLC0415
-    from tzsl.experiments.phac2_dap import make_splits, run_dap_study  # noqa: PLC0415
+    from tzsl.experiments.phac2_dap import make_splits, run_dap_study, solver_lines  # noqa: PLC0415
 
     c = exp.config
     config = dap_config(exp)
@@ -162,8 +162,7 @@ def run_phac2(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) 
     tables = run_dap_study(features, results, config, kinds=kinds, splits=file_splits, sweep=methods.sweep,
                            compare_methods=bool(options["methods"]), method_options=options,
                            record=solver_record)
-    for text in dict.fromkeys(f"attribute models: {c['solver']} ({c['reason']})"
-                              for c in solver_record["attribute_solver"]):
+    for text in solver_lines(solver_record["attribute_solver"]):
         say(text)
     gzsl_record = None
     if methods.gzsl:
