@@ -209,7 +209,7 @@ class ResultsDir:
         from tzsl.evaluation import write_splits_csv  # noqa: PLC0415
 
         splits = list(splits)
-        target = self.path(name)
+        target = self._target(name)
         write_splits_csv(splits, target)
         for s in splits:
             self.splits[s.name] = {"kind": s.kind, "seed": s.seed, "train": list(s.train_objects),
