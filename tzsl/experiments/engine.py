@@ -311,13 +311,14 @@ def run_experiment(
     results = results_folder(exp, force)
     say(f"{exp.source}: study {exp.study} -> {results.final_root}")
     run = execute_study(exp, results, echo)  # checks the experiment (check_experiment) before any fit
+    failures = run.failures  # one scan of the tables' error columns
     results.write_manifest(manifest_record(exp, run), data_files=run.data_files,
                            extra={"experiment_sha256": hashlib.sha256(exp.text.encode()).hexdigest(),
                                   "experiment_toml": exp.text, "description": exp.config.description,
-                                  "tables": sorted(run.tables), "failures": run.failures})
+                                  "tables": sorted(run.tables), "failures": failures})
     results.commit()
-    if run.failures:
-        error = PartialRunError(results.root, run.failures)
+    if failures:
+        error = PartialRunError(results.root, failures)
         error.results, error.run = results, run
         raise error
     return results, run
