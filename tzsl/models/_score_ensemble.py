@@ -37,7 +37,7 @@ from numbers import Real
 
 import numpy as np
 from scipy.special import softmax
-from sklearn.base import BaseEstimator, clone
+from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_array, check_is_fitted
 
 from tzsl.exceptions import ConfigError
@@ -100,6 +100,9 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
     ----------
     estimators_ : list of fitted estimators
         One per member, in ``methods`` order.
+    member_input_ndims_ : list of int
+        Input dimensionality of each member (3: per sensor; 2: sensors concatenated), read from
+        the registry at fit time so prediction does not depend on it.
     weights_ : ndarray of shape (n_members,)
         Weights normalised to sum to 1.
     class_attributes_ : ndarray of shape (n_train_classes, n_attributes)
@@ -137,8 +140,8 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
                                   f"with a positive sum, got {self.weights!r}")
 
     @staticmethod
-    def _member_input(method, X: np.ndarray) -> np.ndarray:
-        return X if method.input_ndim == 3 else X.reshape(X.shape[0], -1)
+    def _member_input(input_ndim: int, X: np.ndarray) -> np.ndarray:
+        return X if input_ndim == 3 else X.reshape(X.shape[0], -1)
 
     def _as_3d(self, X) -> np.ndarray:
         """``X`` as finite float64 (n_trials, n_sensors, n_features); 2-D input is one sensor."""
@@ -172,15 +175,16 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
         A = A.reshape(-1, 1) if A.ndim == 1 else A
         if A.shape[0] != X.shape[0]:
             raise ValueError(f"X has {X.shape[0]} trials but Y has {A.shape[0]} rows")
-        self.estimators_ = []
+        self.estimators_, self.member_input_ndims_ = [], []
         for i, entry in enumerate(self.methods):
             spec = _spec(entry)
             method = get_method(spec["name"])
             params = {k: v for k, v in spec.items() if k != "name"}
             if self.random_state is not None and "random_state" in method.parameters() and "random_state" not in params:
                 params["random_state"] = int(np.random.SeedSequence([int(self.random_state), i]).generate_state(1)[0] >> 1)
-            est = method.build(**params)
-            self.estimators_.append(clone(est).fit(self._member_input(method, X), A, groups))
+            self.member_input_ndims_.append(method.input_ndim)
+            est = method.build(**params)  # a new instance
+            self.estimators_.append(est.fit(self._member_input(method.input_ndim, X), A, groups))
         w = np.ones(len(self.methods)) if self.weights is None else np.asarray(self.weights, dtype=np.float64)
         self.weights_ = w / w.sum()
         self.class_attributes_ = np.unique(A, axis=0)
@@ -210,8 +214,8 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
             raise ValueError(f"X has {X.shape[1]} sensors; {type(self).__name__} was fitted on {self.n_sensors_}")
         K = self.class_attributes_ if class_attributes is None else np.asarray(class_attributes, dtype=np.float64)
         total = 0.0
-        for entry, est, w in zip(self.methods, self.estimators_, self.weights_):
-            Xm = self._member_input(get_method(_spec(entry)["name"]), X)
+        for ndim, est, w in zip(self.member_input_ndims_, self.estimators_, self.weights_):
+            Xm = self._member_input(ndim, X)
             total = total + w * zscore_rows(est.decision_function(Xm, K))
         return np.asarray(total)
 
