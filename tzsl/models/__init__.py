@@ -36,7 +36,8 @@ from tzsl.models._decision import (
     squared_distances,
 )
 from tzsl.models._embedding import EmbeddingZSL, loss_weights
-from tzsl.models._deep import DeepAttributeEmbedding, load_deep_bundle, save_deep_bundle
+from tzsl.models._deep import DeepAttributeEmbedding
+from tzsl.models._deep_bundle import load_deep_bundle, save_deep_bundle
 from tzsl.models._hand_dap import FUSIONS as HAND_FUSIONS
 from tzsl.models._hand_dap import HandDAPClassifier, NoContactError, fuse_grasp_posteriors
 from tzsl.models._multigrasp import (

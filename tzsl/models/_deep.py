@@ -59,28 +59,25 @@ from tzsl.models._deep_input import (
     FEATURE_CHUNK,
     deep_nets,
     sha256_arrays,
-    _threads,
-    _validate_frames,
+    torch_threads,
+    validate_frames,
     require_torch,
 )
 from tzsl.models._deep_training import DeepTrainingMixin
 from tzsl.models._embedding import loss_weights
-from tzsl.models._eszsl import (
+from tzsl.models._zsl_input import (
     ZSLInputError,
-    _check_int,
-    _check_no_duplicate_rows,
-    _check_positive,
-    _encode_training_classes,
-    _validate_attributes,
+    check_int,
+    check_no_duplicate_rows,
+    check_positive,
+    encode_training_classes,
+    validate_class_table,
 )
 from tzsl.models._validation import ValidatedParamsMixin
 
 __all__ = [
-    "BUNDLE_KIND",
     "DeepAttributeEmbedding",
-    "load_deep_bundle",
     "require_torch",
-    "save_deep_bundle",
 ]
 
 _OPTIMIZERS = ("adam", "sgd")
@@ -246,16 +243,16 @@ class DeepAttributeEmbedding(DeepTrainingMixin, ValidatedParamsMixin, BaseEstima
         if self.backbone not in backbones:
             raise ConfigError(f"{name}: backbone must be one of {backbones}, got {self.backbone!r}")
         if self.finetune != "all":
-            _check_int(self.finetune, 'finetune (or "all")', 0, name)
+            check_int(self.finetune, 'finetune (or "all")', 0, name)
         if self.image_size is not None:
-            _check_int(self.image_size, "image_size", 8, name)
-        _check_int(self.hidden_size, "hidden_size", 1, name)
+            check_int(self.image_size, "image_size", 8, name)
+        check_int(self.hidden_size, "hidden_size", 1, name)
         if self.n_threads is not None:
-            _check_int(self.n_threads, "n_threads", 1, name)
-        _check_int(self.epochs, "epochs", 1, name)
-        _check_int(self.batch_size, "batch_size", 1, name)
-        _check_positive(self.lr, "lr", name)
-        _check_positive(self.weight_decay, "weight_decay", name, allow_zero=True)
+            check_int(self.n_threads, "n_threads", 1, name)
+        check_int(self.epochs, "epochs", 1, name)
+        check_int(self.batch_size, "batch_size", 1, name)
+        check_positive(self.lr, "lr", name)
+        check_positive(self.weight_decay, "weight_decay", name, allow_zero=True)
         if self.optimizer not in _OPTIMIZERS:
             raise ConfigError(f"{name}: optimizer must be one of {_OPTIMIZERS}, got {self.optimizer!r}")
         if self.resume and self.checkpoint_dir is None:
@@ -348,7 +345,7 @@ class DeepAttributeEmbedding(DeepTrainingMixin, ValidatedParamsMixin, BaseEstima
         torch = require_torch()
         weights = self._check_params()
         name = type(self).__name__
-        X = _validate_frames(X, name)
+        X = validate_frames(X, name)
         if y is None:
             raise ZSLInputError(f"{name} requires y to be passed, but the target y is None")
         y = np.asarray(y)
@@ -359,13 +356,13 @@ class DeepAttributeEmbedding(DeepTrainingMixin, ValidatedParamsMixin, BaseEstima
             check_classification_targets(y)
         except ValueError as exc:
             raise ZSLInputError(f"{name}: y: {exc}") from None
-        classes, S, S_u, y_u = _encode_training_classes(y, class_attributes, self.duplicate_attributes, name)
+        classes, S, S_u, y_u = encode_training_classes(y, class_attributes, self.duplicate_attributes, name)
         seed = int(check_random_state(self.random_state).randint(np.iinfo(np.int32).max))
         fingerprint = hashlib.sha256(
             json.dumps(self._fingerprint_params(), sort_keys=True, default=str).encode()
             + sha256_arrays(X, y_u, S_u).encode()
         ).hexdigest()
-        with torch.random.fork_rng(devices=[]), _threads(torch, self.n_threads):
+        with torch.random.fork_rng(devices=[]), torch_threads(torch, self.n_threads):
             torch.manual_seed(seed)
             self._fit_torch(torch, X, y_u, S_u, weights, seed, fingerprint)
         self.classes_ = classes
@@ -377,7 +374,7 @@ class DeepAttributeEmbedding(DeepTrainingMixin, ValidatedParamsMixin, BaseEstima
     # ------------------------------------------------------------------ inference
     def _check_fitted_X(self, X) -> np.ndarray:
         check_is_fitted(self)
-        return _validate_frames(X, type(self).__name__, self.sequence_shape_)
+        return validate_frames(X, type(self).__name__, self.sequence_shape_)
 
     def transform(self, X) -> np.ndarray:
         """Estimated attribute vectors ``f``.
@@ -395,7 +392,7 @@ class DeepAttributeEmbedding(DeepTrainingMixin, ValidatedParamsMixin, BaseEstima
         X = self._check_fitted_X(X)
         net = self.net_
         net.eval()
-        with torch.no_grad(), _threads(torch, self.n_threads):
+        with torch.no_grad(), torch_threads(torch, self.n_threads):
             if self._n_trainable(net) == 0:
                 F = net.embed(self._frozen_features(net, X, disk=True).to(self.device))
             else:
@@ -426,7 +423,7 @@ class DeepAttributeEmbedding(DeepTrainingMixin, ValidatedParamsMixin, BaseEstima
             Larger means nearer.
         """
         check_is_fitted(self)
-        S = _validate_attributes(class_attributes, n_attributes=self.n_attributes_)
+        S = validate_class_table(class_attributes, n_attributes=self.n_attributes_)
         F = self.transform(X)
         return -(((F[:, None, :] - S[None, :, :]) ** 2).sum(axis=2))
 
@@ -439,8 +436,8 @@ class DeepAttributeEmbedding(DeepTrainingMixin, ValidatedParamsMixin, BaseEstima
             Indices into the rows of ``class_attributes`` (rows must be pairwise different).
         """
         check_is_fitted(self)
-        S = _validate_attributes(class_attributes, n_attributes=self.n_attributes_)
-        _check_no_duplicate_rows(S)
+        S = validate_class_table(class_attributes, n_attributes=self.n_attributes_)
+        check_no_duplicate_rows(S)
         return np.argmax(self.decision_function(X, S), axis=1)
 
     def predict_proba(self, X, class_attributes) -> np.ndarray:
@@ -451,7 +448,3 @@ class DeepAttributeEmbedding(DeepTrainingMixin, ValidatedParamsMixin, BaseEstima
         state = self.__dict__.copy()
         state.pop("_feature_cache", None)
         return state
-
-
-# the bundle functions live in _deep_bundle (imported here last: they build this class lazily)
-from tzsl.models._deep_bundle import BUNDLE_KIND, load_deep_bundle, save_deep_bundle  # noqa: E402

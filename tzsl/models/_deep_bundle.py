@@ -8,6 +8,7 @@ import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
 from tzsl.exceptions import ModelBundleError, TzslError
+from tzsl.models._deep import DeepAttributeEmbedding
 from tzsl.models._deep_input import require_torch
 
 __all__ = ["BUNDLE_KIND", "load_deep_bundle", "save_deep_bundle"]
@@ -95,7 +96,6 @@ def load_deep_bundle(path, *, weights_path=None, trust_pickle: bool = False):
         or backbone weights that differ from the ones it was trained with.
     """
     from tzsl.bundle import load_bundle  # noqa: PLC0415
-    from tzsl.models._deep import DeepAttributeEmbedding  # noqa: PLC0415 - _deep re-exports this module
 
     torch = require_torch()
     path = Path(path)

@@ -41,7 +41,7 @@ def sha256_arrays(*arrays) -> str:
     return digest.hexdigest()
 
 
-def _validate_frames(X, name: str, expected: tuple | None = None) -> np.ndarray:
+def validate_frames(X, name: str, expected: tuple | None = None) -> np.ndarray:
     """Frame sequences as an ndarray (n, T, H, W, C) of a numeric dtype, finite.
 
     ``expected`` is ``(T, H, W, C)`` from fit: a mismatch is an error.
@@ -75,7 +75,7 @@ def _validate_frames(X, name: str, expected: tuple | None = None) -> np.ndarray:
 
 
 @contextlib.contextmanager
-def _threads(torch, n_threads):
+def torch_threads(torch, n_threads):
     """Run a block with ``n_threads`` torch CPU threads (None: unchanged), then restore."""
     if n_threads is None:
         yield
