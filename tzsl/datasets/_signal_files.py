@@ -42,23 +42,29 @@ def read_signal_file(path: str | os.PathLike) -> tuple[tuple[str, ...], np.ndarr
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".npz":
-        arrays = read_npz(path)
-        if not arrays:
-            raise DataFileError(path, "archive holds no channel arrays")
-        lengths = {}
-        for name, arr in arrays.items():
-            if arr.ndim != 1 or arr.dtype.kind not in "iufb":
-                raise DataFileError(path, f"channel {name!r} has shape {arr.shape} and dtype {arr.dtype}; "
-                                    "expected a 1-D numeric array per channel")
-            lengths[name] = arr.shape[0]
-        if len(set(lengths.values())) > 1:
-            raise DataFileError(path, f"channels have different lengths: {lengths}")
-        channels = tuple(arrays)
-        values = np.column_stack([arrays[c].astype(np.float64) for c in channels])
-        return channels, values
+        return signal_from_arrays(path, read_npz(path))
     if suffix == ".csv":
         return _read_signal_csv(path)
     raise DataFileError(path, f"unsupported signal file type {path.suffix!r}; use {' or '.join(SIGNAL_SUFFIXES)}")
+
+
+def signal_from_arrays(path: str | os.PathLike, arrays: dict[str, np.ndarray]) -> tuple[tuple[str, ...], np.ndarray]:
+    """Channels and values of a signal ``.npz`` already read into ``arrays`` (see :func:`read_signal_file`).
+
+    ``path`` names the file in errors. One 1-D numeric array per channel, all of one length.
+    """
+    if not arrays:
+        raise DataFileError(path, "archive holds no channel arrays")
+    lengths = {}
+    for name, arr in arrays.items():
+        if arr.ndim != 1 or arr.dtype.kind not in "iufb":
+            raise DataFileError(path, f"channel {name!r} has shape {arr.shape} and dtype {arr.dtype}; "
+                                "expected a 1-D numeric array per channel")
+        lengths[name] = arr.shape[0]
+    if len(set(lengths.values())) > 1:
+        raise DataFileError(path, f"channels have different lengths: {lengths}")
+    channels = tuple(arrays)
+    return channels, np.column_stack([arrays[c].astype(np.float64) for c in channels])
 
 
 def _first_line(exc: Exception) -> str:

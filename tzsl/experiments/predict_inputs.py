@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 
 from tzsl._io import read_npz
-from tzsl.datasets import read_csv_table, read_grasps, read_signal_file
+from tzsl.datasets import read_csv_table, read_grasps, read_signal_file, signal_from_arrays
 from tzsl.exceptions import DataFileError, ModelBundleError
 
 __all__ = ["INPUT_FORMATS", "Grasps", "describe_inputs", "read_feature_rows", "read_inputs"]
@@ -124,7 +124,7 @@ def read_feature_rows(path: Path, schema: dict) -> tuple[np.ndarray, list[str]]:
         arrays = read_npz(path)
         if "X" in arrays:
             return _npz_rows(path, arrays, schema)
-        return _one_signal(path, schema)
+        return _one_signal(path, schema, arrays)
     if suffix != ".csv":
         raise DataFileError(path, f"unsupported input type {path.suffix!r}; use .csv or .npz")
     frame = read_csv_table(path)
@@ -210,15 +210,18 @@ def _csv_rows(path: Path, frame: pd.DataFrame, schema: dict) -> tuple[np.ndarray
 
 
 # ---------------------------------------------------------------------------- signals
-def _signal_features(path: Path, schema: dict) -> np.ndarray:
-    """The schema's per-channel statistics of one signal file, shape (n_features,)."""
+def _signal_features(path: Path, schema: dict, arrays: dict | None = None) -> np.ndarray:
+    """The schema's per-channel statistics of one signal file, shape (n_features,).
+
+    ``arrays``: the file's arrays when the caller has read the ``.npz`` already (not read twice).
+    """
     from tzsl.features import SignalStatistics  # noqa: PLC0415 - only for signal inputs
 
     signals = schema.get("signals")
     if not signals:
         raise DataFileError(path, "holds no feature table (no 'X' array / feature columns), and the model was not "
                                   "trained on signal files")
-    channels, values = read_signal_file(path)
+    channels, values = read_signal_file(path) if arrays is None else signal_from_arrays(path, arrays)
     want = list(signals["channels"])
     missing = [c for c in want if c not in channels]
     if missing:
@@ -235,12 +238,12 @@ def _signal_features(path: Path, schema: dict) -> np.ndarray:
         raise DataFileError(path, f"cannot summarise the signal: {str(exc).splitlines()[0]}") from None
 
 
-def _one_signal(path: Path, schema: dict) -> tuple[np.ndarray, list[str]]:
+def _one_signal(path: Path, schema: dict, arrays: dict | None = None) -> tuple[np.ndarray, list[str]]:
     sensors = list(schema["sensors"])
     if len(sensors) > 1 and schema.get("signals"):
         raise DataFileError(path, f"one signal file is one sensor's recording; the model needs sensors {sensors}: "
                                   "give a CSV with trial_id, sensor and signal_file columns")
-    return _finite(path, _signal_features(path, schema)[None, None, :], [path.stem])
+    return _finite(path, _signal_features(path, schema, arrays)[None, None, :], [path.stem])
 
 
 def _signal_manifest(path: Path, frame: pd.DataFrame, schema: dict) -> tuple[np.ndarray, list[str]]:
