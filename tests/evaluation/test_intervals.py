@@ -8,7 +8,6 @@ import pytest
 
 import tzsl.evaluation._intervals as intervals_module
 from tzsl.evaluation import (
-    add_interval_columns,
     bootstrap_accuracy,
     bootstrap_accuracy_columns,
     paired_difference_interval,
@@ -119,21 +118,6 @@ def test_splits_needed_for_a_005_interval():
     assert splits_for_paired_interval([0.1, 0.1, 0.1]) == 2
     with pytest.raises(TzslError, match="at least 2"):
         splits_for_paired_interval([0.1])
-
-
-def test_add_interval_columns_per_method():
-    rng = np.random.default_rng(8)
-    a, b = _simulate(rng, p=0.3), _simulate(rng, p=0.7)
-    trials = pd.concat([a.assign(method="A"), b.assign(method="B")])
-    summary = pd.DataFrame({"method": ["B", "A", "C"], "accuracy": [0.7, 0.3, np.nan]})
-    out = add_interval_columns(summary, trials, by=["method"], n_boot=300)
-    assert list(out.columns) == ["method", "accuracy", "ci95_low", "ci95_high"]
-    assert out["method"].tolist() == ["B", "A", "C"]
-    assert out.loc[0, "ci95_low"] > 0.5 > out.loc[1, "ci95_high"]
-    assert out.loc[2, ["ci95_low", "ci95_high"]].isna().all()
-    assert "ci95_low" not in summary.columns
-    with pytest.raises(TzslError, match="lacks column"):
-        add_interval_columns(summary, trials.drop(columns="split"), by=["method"])
 
 
 def test_paired_differences_table():

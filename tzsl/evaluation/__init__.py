@@ -47,7 +47,6 @@ __all__: list[str] = [
 # Intervals: two-level bootstrap over splits and test classes, paired differences.
 from tzsl.evaluation._intervals import (  # noqa: E402
     Interval,
-    add_interval_columns,
     bootstrap_accuracy,
     bootstrap_accuracy_columns,
     paired_difference_interval,
@@ -57,7 +56,6 @@ from tzsl.evaluation._intervals import (  # noqa: E402
 
 __all__ += [
     "Interval",
-    "add_interval_columns",
     "bootstrap_accuracy",
     "bootstrap_accuracy_columns",
     "paired_difference_interval",

@@ -44,7 +44,6 @@ from tzsl.exceptions import TzslError
 
 __all__ = [
     "Interval",
-    "add_interval_columns",
     "bootstrap_accuracy",
     "bootstrap_accuracy_columns",
     "paired_difference_interval",
@@ -283,68 +282,6 @@ def splits_for_paired_interval(per_split_differences, half_width: float = 0.05, 
         raise TzslError(f"half_width must be positive, got {half_width!r}")
     sd = float(np.std(d, ddof=1))
     return max(2, math.ceil((z * sd / half_width) ** 2))
-
-
-def _group_frames(trials: pd.DataFrame, by: Sequence[str]):
-    if not by:
-        yield (), trials
-        return
-    for key, frame in trials.groupby(list(by), sort=False):
-        yield (key if isinstance(key, tuple) else (key,)), frame
-
-
-def add_interval_columns(
-    summary: pd.DataFrame,
-    trials: pd.DataFrame,
-    *,
-    by: Sequence[str] = (),
-    correct: str = "correct",
-    class_column: str = "class",
-    split_column: str = "split",
-    metric: Metric = "trial",
-    n_boot: int = DEFAULT_N_BOOT,
-    random_state: int | None = 0,
-) -> pd.DataFrame:
-    """``summary`` with ``ci95_low`` and ``ci95_high`` columns from a per-trial results table.
-
-    Parameters
-    ----------
-    summary : DataFrame
-        One row per group (e.g. per method); must have the ``by`` columns (or one row when
-        ``by`` is empty).
-    trials : DataFrame
-        One row per test trial with columns ``by``, ``correct``, ``class_column`` and
-        ``split_column``.
-    by : sequence of str
-        Columns identifying a group in both tables (e.g. ``["method"]``).
-    correct, class_column, split_column : str
-        Column names in ``trials``.
-    metric, n_boot, random_state
-        As in :func:`bootstrap_accuracy`; every group uses the same seed.
-
-    Returns
-    -------
-    DataFrame
-        A copy of ``summary`` with the two columns added (NaN for a group without trials).
-    """
-    missing = [c for c in (*by, correct, class_column, split_column) if c not in trials.columns]
-    if missing:
-        raise TzslError(f"trials table lacks column(s) {missing}")
-    if [c for c in by if c not in summary.columns]:
-        raise TzslError(f"summary table lacks column(s) {[c for c in by if c not in summary.columns]}")
-    if not by and len(summary) != 1:
-        raise TzslError("without 'by' the summary must have exactly one row")
-    rows = []
-    for key, frame in _group_frames(trials, by):
-        iv = bootstrap_accuracy(frame[correct].to_numpy(), classes=frame[class_column].to_numpy(),
-                                splits=frame[split_column].to_numpy(), metric=metric, n_boot=n_boot,
-                                random_state=random_state)
-        rows.append((*key, iv.ci95_low, iv.ci95_high))
-    out = summary.drop(columns=["ci95_low", "ci95_high"], errors="ignore")
-    found = pd.DataFrame(rows, columns=[*by, "ci95_low", "ci95_high"])
-    if not by:
-        return out.assign(ci95_low=found["ci95_low"].iloc[0], ci95_high=found["ci95_high"].iloc[0])
-    return out.merge(found, on=list(by), how="left")
 
 
 def paired_differences_table(
