@@ -6,6 +6,7 @@ catches these and prints their message (never a traceback) with a non-zero exit 
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 
@@ -92,3 +93,40 @@ class PartialRunError(Exception):
             f"{len(self.failures)} fit(s) failed; the other results are in {self.root} "
             "(NaN where a fit failed, the reason in the table's error column):\n" + "\n".join(self.failures)
         )
+
+
+def problems_error(
+    problems: Sequence[str | TzslError],
+    source: str | Path,
+    *,
+    error: Callable[[str], TzslError] = ConfigError,
+    hint: str = "",
+    limit: int = 20,
+) -> TzslError | None:
+    """The one error for a list of problems found in ``source`` (None when there is none).
+
+    One problem: that problem alone, on one line, as linters print it (an error given as a
+    :class:`TzslError` is returned as it is). Several: ``SOURCE: N problem(s)HINT:`` and one
+    indented line per problem, at most ``limit`` of them, then how many more.
+
+    Parameters
+    ----------
+    problems : sequence of str or TzslError
+        Each names its file (and line or key) itself.
+    source : str or Path
+        What was checked (a file, a folder), named on the heading line.
+    error : callable
+        Builds the error from the message (default :class:`ConfigError`).
+    hint : str
+        Added after the count, e.g. ``" (all: tzsl validate DIR)"``.
+    limit : int
+        Most problems listed.
+    """
+    if not problems:
+        return None
+    if len(problems) == 1:
+        only = problems[0]
+        return only if isinstance(only, TzslError) else error(str(only))
+    shown = "\n  ".join(str(p) for p in problems[:limit])
+    more = f"\n  ... and {len(problems) - limit} more" if len(problems) > limit else ""
+    return error(f"{source}: {len(problems)} problem(s){hint}:\n  {shown}{more}")

@@ -91,7 +91,7 @@ def test_empty_test_set_and_other_problems_listed_together(tmp_path):
     with pytest.raises(SplitError) as err:
         read_splits_csv(path, TABLE, min_train_positives=0)
     msg = str(err.value)
-    assert "(4 problem(s))" in msg
+    assert "4 problem(s)" in msg
     assert "split 'x': empty test set" in msg
     assert ":5: split 'y': role 'validation'" in msg
     assert ":7: split 'y': object 'o3' listed twice (also line 6)" in msg

@@ -33,7 +33,7 @@ from tzsl.datasets._validate import (
     resolve_signal_path,
     scan_dataset,
 )
-from tzsl.exceptions import ConfigError, DataFileError
+from tzsl.exceptions import ConfigError, DataFileError, TzslError, problems_error
 
 PLAIN_FORMAT_HELP = """\
 A dataset is one folder. Paths inside it are relative to the folder; text files are UTF-8
@@ -266,14 +266,11 @@ class PlainDataset:
         )
 
 
-def _problem_error(folder: Path, problems: list) -> DataFileError:
-    if len(problems) == 1:  # one line: the file (inside the folder), its line, the problem
-        only = problems[0]
-        return DataFileError(Path(folder) / only.file, only.message, line=only.line)
-    shown = "\n  ".join(map(str, problems[:20]))
-    more = f"\n  ... and {len(problems) - 20} more" if len(problems) > 20 else ""
-    return DataFileError(folder, f"invalid dataset, {len(problems)} problem(s) (all: tzsl validate {folder}):\n  "
-                         f"{shown}{more}")
+def _problem_error(folder: Path, problems: list) -> TzslError:
+    """The error of a dataset's problems: each names its file inside ``folder`` and its line."""
+    errors = [DataFileError(Path(folder) / p.file, p.message, line=p.line) for p in problems]
+    return problems_error(errors, folder, error=lambda message: DataFileError(None, message),
+                          hint=f" (all: tzsl validate {folder})")
 
 
 def read_plain_dataset(folder: str | os.PathLike) -> PlainDataset:

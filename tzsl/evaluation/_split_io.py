@@ -46,7 +46,7 @@ from tzsl.evaluation._splits import (
     check_attribute_table,
     duplicate_attribute_groups,
 )
-from tzsl.exceptions import DataFileError, SplitError
+from tzsl.exceptions import DataFileError, SplitError, problems_error
 
 __all__ = ["read_splits_csv", "write_splits_csv"]
 
@@ -246,10 +246,9 @@ def read_splits_csv(
                 min_train_negatives=rule[1],
             )
         )
-    if len(problems) == 1:  # one line, as linters print it (each problem starts with the path)
-        raise SplitError(problems[0])
-    if problems:
-        raise SplitError(f"invalid split file {path} ({len(problems)} problem(s)):\n  " + "\n  ".join(problems))
+    error = problems_error(problems, path, error=SplitError)
+    if error is not None:
+        raise error
     return splits
 
 

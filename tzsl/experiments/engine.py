@@ -22,7 +22,7 @@ from urllib.parse import urlparse
 
 import pandas as pd
 
-from tzsl.exceptions import ConfigError, PartialRunError
+from tzsl.exceptions import ConfigError, PartialRunError, problems_error
 from tzsl.experiments._failures import table_failures
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.config import Experiment, load_experiment, to_toml
@@ -214,10 +214,9 @@ def check_experiment(exp: Experiment) -> None:
     Dask scheduler must answer within ``compute.connect_timeout`` seconds.
     """
     problems = _path_problems(exp)
-    if len(problems) == 1:  # one line, as linters print it
-        raise ConfigError(problems[0])
-    if problems:
-        raise ConfigError(f"{exp.source}: {len(problems)} problem(s):\n" + "\n".join(problems))
+    error = problems_error(problems, exp.source)
+    if error is not None:
+        raise error
     compute = exp.config.compute
     if getattr(compute, "backend", None) == "dask" and compute.scheduler is not None:
         _check_scheduler(compute.scheduler, compute.connect_timeout, exp.source)

@@ -17,7 +17,7 @@ from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
-from tzsl.exceptions import ConfigError
+from tzsl.exceptions import ConfigError, problems_error
 from tzsl.experiments.config._phac2 import Phac2Study
 from tzsl.experiments.config._studies import ActiveTouchStudy, FabricDeepStudy, FabricStudy, HandStudy
 
@@ -179,10 +179,9 @@ def validate(raw: dict, source: str, base: Path, text: str = "",
         config = STUDY_MODELS[study].model_validate(raw)
     except ValidationError as exc:
         problems += _problems(source, exc)
-    if len(problems) == 1:  # one line, as linters print it
-        raise ConfigError(problems[0])
-    if problems:
-        raise ConfigError(f"{source}: {len(problems)} problem(s):\n" + "\n".join(problems))
+    error = problems_error(problems, source)
+    if error is not None:
+        raise error
     return Experiment(source=source, base=base, config=config, text=text)
 
 
