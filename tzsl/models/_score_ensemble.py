@@ -13,22 +13,10 @@ posteriors, ESZSL: compatibilities, SAE: cosines). The trial-wise z-score puts s
 different kinds and scales on one footing without any fitted parameter, so no choice of the
 ensemble sees a test object (each member tunes itself on training objects or classes only).
 
-Measured on PHAC-2 (Penn static features, both BioTacs; ``experiments/benchmarks/phac2_accuracy.py``, trial
-accuracy, two-level bootstrap 95% intervals, paired differences on the same trials):
-
-===================  ===========================  ==================================
-splits               ensemble (DAP+ESZSL+SAE)     minus AVGDAP (uniform prior)
-===================  ===========================  ==================================
-20 random (seed 0)   0.392 [0.337, 0.448]         +0.084 [+0.034, +0.132] (16 of 20 won)
-5 challenging        0.216 [0.116, 0.327]         +0.022 [-0.061, +0.098]
-===================  ===========================  ==================================
-
-AVGDAP itself: 0.307 random (chance 0.10), 0.194 challenging. Against its members the ensemble is
-level on random splits (ESZSL +0.018 [-0.019, 0.054], SAE +0.021 [-0.015, 0.058]) and below SAE
-on the challenging ones (-0.052 [-0.102, -0.008]). Weighting the members by pseudo zero-shot
-folds of the training objects did worse than equal weights (0.373 random): with about 50
-training objects that choice is mostly noise. Fit cost: the DAP member (about 6 s CPU per
-PHAC-2 split) plus ESZSL (3 s) and SAE (1 s).
+How it compares with AVGDAP and with its members on PHAC-2 (accuracy, intervals, paired
+differences on the same trials) is measured by ``experiments/benchmarks/phac2_accuracy.py`` and
+by the method comparison of ``tzsl run phac2-dap`` (``phac2_method_comparison.csv``); no number
+is kept here, so none can describe code that is no longer shipped.
 """
 
 from __future__ import annotations
