@@ -37,7 +37,7 @@ def test_builtin_studies_ship_inside_the_package_only():
     assert sorted(p.name for p in (REPO / "experiments").iterdir()) == ["README.md", "benchmarks",
                                                                          "my_dataset_template.toml"]
     assert not list((REPO / "experiments" / "benchmarks").glob("*.toml"))
-    assert load_experiment(REPO / "experiments" / "my_dataset_template.toml").study == "phac2-dap"
+    assert load_experiment(REPO / "experiments" / "my_dataset_template.toml").study == "zero-shot"  # the generic study, no paper preset
 
 
 def test_study_dataclasses_read_the_schema_defaults():
@@ -165,7 +165,7 @@ x = 1
     ("study = 'fabric'\n[splits]\nconfigs = [3]\n", "splits.configs[0]: 3: expected 1 or 2"),
     ("study = 'fabric'\n[methods]\nembedding_lambdas = [0, 'x']\n", "embedding_lambdas[1]: 'x'"),
     ("study = 'fabric-deep'\n[methods.model]\nlam = 1\n", "are set by the study"),
-    ("study = 'clustering'\n", "study: 'clustering': expected one of phac2-dap, fabric, fabric-deep, hand"),
+    ("study = 'clustering'\n", "study: 'clustering': expected one of zero-shot, phac2-dap, fabric, fabric-deep, hand"),
     ("[dataset]\nbuiltin = 'phac2-penn'\n", "study: missing"),
     ("study = 'phac2-dap'\ndataset = 3\n", "dataset: 3: expected a table"),
     ("study = 'phac2-dap\n", "not valid TOML"),
@@ -297,14 +297,18 @@ def test_run_writes_selected_tables_and_manifest(tmp_path):
     lines: list[str] = []
     results, _ = run_experiment(path, out=tmp_path / "res", echo=lines.append)
     names = {p.name for p in results.written}
-    assert {"table1_fusion.csv", "table2_priors.csv", "phac2_methods.csv", "gzsl.csv", "manifest.json",
-            "attribute_accuracy.png"} <= names
+    assert {"table1_fusion.csv", "table2_priors.csv", "methods_per_split.csv", "method_comparison.csv", "gzsl.csv",
+            "manifest.json", "attribute_accuracy.png"} <= names
     assert not {"multilabel.csv", "attribute_sweep.csv", "table3_challenging.csv"} & names
     t1 = pd.read_csv(tmp_path / "res" / "table1_fusion.csv")
     assert "avgdap" in t1.columns and "maxdap" not in t1.columns and "paper_maxdap" not in t1.columns
     t2 = pd.read_csv(tmp_path / "res" / "table2_priors.csv")
-    assert {"uni", "train", "paper_uni"} <= set(t2.columns) and "test" not in t2.columns
-    methods = pd.read_csv(tmp_path / "res" / "phac2_methods.csv")
+    assert {"uni", "train"} <= set(t2.columns) and "test" not in t2.columns
+    assert not [c for c in t2.columns if c.startswith("paper")]  # a user's dataset: no paper numbers (issue 20)
+    comparison = pd.read_csv(tmp_path / "res" / "method_comparison.csv")
+    assert set(comparison["study"]) == {"zero-shot"} and "paper_accuracy" not in comparison.columns
+    assert set(comparison["data"]) == {"toy"} and not comparison["note"].fillna("").str.contains("paper").any()
+    methods = pd.read_csv(tmp_path / "res" / "methods_per_split.csv")
     assert "eszsl" in methods.columns and not any(c.startswith("embedding") for c in methods.columns)
     gzsl = pd.read_csv(tmp_path / "res" / "gzsl.csv")
     assert set(gzsl["method"]) == {"eszsl"} and not gzsl["calibrated"].any()
@@ -339,12 +343,15 @@ def test_run_uses_the_plain_folder_splits_csv(tmp_path):
     assert list(t1["split"][:1]) == ["1"] and t1["n_test_objects"].iloc[0] == 4
 
 
-def test_too_many_cv_folds_are_refused_before_any_fit(tmp_path):
+def test_too_many_cv_folds_are_relaxed_and_recorded(tmp_path):
+    """Issue 20: the folds are lowered to the fewest training objects; the manifest records it."""
     _plain_dataset(tmp_path / "toy")
     path = _write(tmp_path, RUN_TOML.replace("cv = 3", "cv = 50"))
-    with pytest.raises(ConfigError, match="svm.cv: 50 object-grouped folds, but a split has only 16 training"):
-        run_experiment(path, out=tmp_path / "res")
-    assert not (tmp_path / "res" / "table1_fusion.csv").exists()
+    results, run = run_experiment(path, out=tmp_path / "res")
+    assert (tmp_path / "res" / "table1_fusion.csv").exists()
+    relaxed = json.loads((tmp_path / "res" / "manifest.json").read_text())["config"]["relaxations"]
+    assert relaxed == run.record["relaxations"]
+    assert relaxed == [{"setting": "svm.cv", "asked": 50, "used": 16, "why": "a split has only 16 training objects"}]
 
 
 def test_grid_passes_through_and_reproduction_studies_pin_the_paper_grid(tmp_path):

@@ -84,13 +84,15 @@ progress = false
 """
 
 
-def _check_comparison(folder: Path, n_splits: int) -> pd.DataFrame:
-    per_split = pd.read_csv(folder / "phac2_methods.csv")
+def _check_comparison(folder: Path, n_splits: int, data: str) -> pd.DataFrame:
+    """Neither run is the paper's protocol: generic file names, no paper column (issue 20)."""
+    per_split = pd.read_csv(folder / "methods_per_split.csv")
     assert {"dap_avg_uni", "toy", "toy_temperature_0.5"} <= set(per_split.columns)
     assert not {"eszsl", "embedding_lam_0.1"} & set(per_split.columns)  # not switched on
-    table = pd.read_csv(folder / "phac2_method_comparison.csv")
+    table = pd.read_csv(folder / "method_comparison.csv")
     assert table["method"].tolist() == ["dap-avg", "dap-max", "toy", "toy_temperature_0.5"]
-    assert (table["study"] == "phac2").all() and (table["data"] == "real").all()
+    assert (table["study"] == "zero-shot").all() and (table["data"] == data).all()
+    assert "paper_accuracy" not in table.columns
     assert (table["n_splits"] == n_splits).all() and table["n_trials"].nunique() == 1
     assert (table["ci95_low"] <= table["accuracy"]).all() and (table["accuracy"] <= table["ci95_high"]).all()
     assert table["accuracy"].between(0, 1).all() and (table["fit_seconds"] >= 0).all()
@@ -108,7 +110,7 @@ def test_toy_method_runs_in_a_phac2_study(toy_method, data_dir, tmp_path):
     path = _write(tmp_path, SMALL_PHAC2.format(dataset='builtin = "phac2-penn"\nmin_objects = 15  # 7 attributes: a quick run',
                                                  n_splits=1, n_test=10))
     run_experiment(path, out=tmp_path / "res", data_dir=str(data_dir))
-    table = _check_comparison(tmp_path / "res", n_splits=1)
+    table = _check_comparison(tmp_path / "res", n_splits=1, data="real")  # min_objects = 15: not the paper's
     assert table["n_trials"].iloc[0] == 100  # 10 test objects x 10 trials
 
 
@@ -134,7 +136,7 @@ def test_toy_method_runs_in_a_plain_dataset_study(toy_method, tmp_path):
     _plain_dataset(tmp_path / "toyset")
     path = _write(tmp_path, SMALL_PHAC2.format(dataset='plain = "toyset"', n_splits=2, n_test=4))
     run_experiment(path, out=tmp_path / "res")
-    table = _check_comparison(tmp_path / "res", n_splits=2)
+    table = _check_comparison(tmp_path / "res", n_splits=2, data="toy")
     assert table["n_trials"].iloc[0] == 2 * 4 * 3
     # the features follow the attributes closely: the toy method is far above chance (1/4)
     assert table.set_index("method").loc["toy", "accuracy"] > 0.5
@@ -201,7 +203,7 @@ def test_unknown_methods_and_parameters_are_refused_at_load_time(toy_method, tmp
         load_experiment(path)
     lines = str(info.value).splitlines()
     assert f"{path}: methods.compare[1].name: unknown method 'nope'; known: " in "\n".join(lines)
-    assert any(line.startswith(f"{path}: methods.compare[2]: ") and "'depth'" in line for line in lines)
+    assert any(line.strip().startswith(f"{path}: methods.compare[2]: ") and "'depth'" in line for line in lines)
     unregister_method("toy")
     with pytest.raises(ConfigError, match=r"compare\[0\].name: unknown method 'toy'"):
         load_experiment(path)
@@ -264,17 +266,17 @@ def test_a_failing_split_method_is_recorded_and_the_run_exits_1_at_the_end(toy_m
     assert result.exit_code == 1, result.output
     lines = result.stderr.strip().splitlines()
     assert lines[0].startswith("tzsl: error: 1 fit(s) failed; the other results are in ")
-    assert len(lines) == 2 and "phac2_methods" in lines[1] and "flaky" in lines[1]
+    assert len(lines) == 2 and "methods_per_split" in lines[1] and "flaky" in lines[1]
     assert "ValueError: simulated failure on the second split" in lines[1] and "second line" not in result.stderr
     assert "Traceback" not in result.output + result.stderr
-    per_split = pd.read_csv(tmp_path / "res" / "phac2_methods.csv").set_index("split")
+    per_split = pd.read_csv(tmp_path / "res" / "methods_per_split.csv").set_index("split")
     splits = [s for s in per_split.index if s not in ("mean", "std")]
     assert len(splits) == 3  # the rest completed
     assert per_split.loc[splits, "flaky"].isna().tolist() == [False, True, False]
     assert per_split.loc[splits, "toy"].notna().all()
     assert per_split.loc[splits[1], "error"].startswith("flaky: ValueError: simulated failure")
     assert per_split.loc[splits, "error"].isna().tolist() == [True, False, True]
-    table = pd.read_csv(tmp_path / "res" / "phac2_method_comparison.csv").set_index("method")
+    table = pd.read_csv(tmp_path / "res" / "method_comparison.csv").set_index("method")
     assert table.loc["flaky", "n_splits"] == 2 and table.loc["toy", "n_splits"] == 3
     assert np.isfinite(table.loc["flaky", "difference"])  # paired on the 2 splits it completed
     manifest = json.loads((tmp_path / "res" / "manifest.json").read_text())
@@ -288,7 +290,7 @@ def test_python_run_returns_the_tables_of_a_partial_run_with_a_warning(toy_metho
     text = SMALL_PHAC2.format(dataset='plain = "toyset"', n_splits=2, n_test=4).replace(
         'compare = ["toy", {name = "toy", temperature = 0.5}]', 'compare = ["flaky"]')
     with pytest.warns(RuntimeWarning, match=r"1 fit\(s\) failed"):
-        table = run(_write(tmp_path, text), table="phac2_methods", out=tmp_path / "res")
+        table = run(_write(tmp_path, text), table="methods_per_split", out=tmp_path / "res")
     assert table["flaky"].isna().sum() >= 1 and table.attrs["results_dir"] == str(tmp_path / "res")
 
 

@@ -9,6 +9,7 @@ import pytest
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split
 from tzsl.experiments._outputs import ResultsDir
+from tzsl.experiments.study_labels import StudyLabels
 from tzsl.experiments.phac2_dap import (
     DapStudyConfig,
     SplitPosteriors,
@@ -52,11 +53,19 @@ def _config(**kw) -> DapStudyConfig:
     return DapStudyConfig(**base)
 
 
+def test_paper_columns_only_on_the_papers_dataset_and_protocol(tmp_path):
+    """A run labelled generic (any dataset but the paper's) carries no paper_* column (issue 20)."""
+    tables = run_dap_study(synthetic_features(), ResultsDir(tmp_path), _config(n_test=8), kinds=("random",))
+    for name in ("table1_fusion", "table2_priors", "attribute_accuracy"):
+        assert not [c for c in tables[name].columns if c.startswith("paper")], name
+
+
 def test_study_writes_every_table_with_paper_columns(tmp_path):
     features = synthetic_features()
     out = ResultsDir(tmp_path)
     # 8 test objects: the control never draws the identity, which moves it off chance by < 1/8!
-    tables = run_dap_study(features, out, _config(n_test=8), kinds=("random",))
+    tables = run_dap_study(features, out, _config(n_test=8), kinds=("random",),
+                           labels=StudyLabels(study="phac2", paper=True))
     for name in ("table1_fusion", "table2_priors", "attribute_accuracy", "attribute_sweep"):
         assert (tmp_path / f"{name}.csv").exists()
     assert (tmp_path / "attribute_accuracy.png").exists() and (tmp_path / "attribute_sweep.png").exists()

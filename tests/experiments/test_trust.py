@@ -70,7 +70,7 @@ def _posteriors(name: str) -> SplitPosteriors:
 
 
 def test_table3_has_both_fusions_intervals_control_and_paper_mean_only():
-    t3 = table3_challenging([_posteriors("challenging-1"), _posteriors("challenging-2")])
+    t3 = table3_challenging([_posteriors("challenging-1"), _posteriors("challenging-2")], paper=True)
     assert list(t3["split"]) == ["1", "2", "mean", "std", "control"]
     assert {"maxdap", "avgdap", "maxdap_ci95_low", "avgdap_ci95_high", "chance"} <= set(t3.columns)
     assert not {"paper_n_objects", "paper_chance", "paper_maxdap"} & set(t3.columns)

@@ -58,7 +58,7 @@ class TzslGroup(click.Group):
 def _study_defaults(study: str):
     from tzsl.experiments.config import defaults  # noqa: PLC0415
 
-    required = {"phac2-dap": {"dataset": {"builtin": "phac2-penn"}},
+    required = {"phac2-dap": {"dataset": {"builtin": "phac2-penn"}}, "zero-shot": {"dataset": {"builtin": "phac2-penn"}},
                 "hand": {"dataset": {"builtin": "hand-simulated"}}}.get(study, {})
     return defaults(study, **required)
 

@@ -52,6 +52,7 @@ def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, dat
     """
     from tzsl.experiments.config import load_experiment, to_toml  # noqa: PLC0415
     from tzsl.experiments.engine import check_experiment, override_values, run_experiment  # noqa: PLC0415
+    from tzsl.experiments.study_labels import ZERO_SHOT_STUDIES  # noqa: PLC0415
 
     overrides = _overrides(out, n_jobs, seed, backend, scheduler, no_progress, data_dir)
     exp = load_experiment(experiment)
@@ -62,10 +63,11 @@ def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, dat
         return
     if check:
         check_experiment(exp)
-        if exp.study == "phac2-dap":
+        if exp.study in ZERO_SHOT_STUDIES:
             from tzsl.experiments.study_runners import prepare_phac2  # noqa: PLC0415
 
-            prepare_phac2(exp)  # reads the dataset and split file, checks the folds; no fit
+            for relaxed in prepare_phac2(exp)[-1]:  # reads the dataset and split file; no fit
+                click.echo(f"note: relaxed {relaxed.line()}")
         click.echo(f"{exp.source}: valid ({exp.study}); 'tzsl run {experiment} --print-config' shows every value")
         return
     start = time.perf_counter()

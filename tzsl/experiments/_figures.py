@@ -21,13 +21,14 @@ def attribute_accuracy_figure(summary: pd.DataFrame):
     fig, ax = plt.subplots(figsize=(10, 4))
     ax.bar(x - 0.2, rows["accuracy"], width=0.4, label="accuracy (ours)")
     ax.bar(x + 0.2, rows["balanced_accuracy"], width=0.4, label="balanced accuracy (ours)")
-    quoted = rows["paper_accuracy"].notna()
-    ax.scatter(x[quoted.to_numpy()], rows.loc[quoted, "paper_accuracy"], color="k", marker="_", s=300,
-               zorder=3, label="paper (quoted in text)")
+    if "paper_accuracy" in rows.columns:  # only beside the paper's dataset and protocol
+        quoted = rows["paper_accuracy"].notna()
+        ax.scatter(x[quoted.to_numpy()], rows.loc[quoted, "paper_accuracy"], color="k", marker="_", s=300,
+                   zorder=3, label="paper (quoted in text)")
     ax.axhline(0.5, color="grey", lw=0.8, ls=":")
     ax.set_xticks(x, rows["attribute"], rotation=60, ha="right")
     ax.set_ylim(0, 1)
-    ax.set_ylabel("test accuracy (mean over splits and BioTacs)")
+    ax.set_ylabel("test accuracy (mean over splits and sensors)")
     ax.set_title("Attribute classification on unseen objects")
     ax.legend(loc="lower right", fontsize=8)
     fig.tight_layout()

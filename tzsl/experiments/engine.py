@@ -26,6 +26,7 @@ from tzsl.exceptions import ConfigError, PartialRunError, problems_error
 from tzsl.experiments._failures import table_failures
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.config import Experiment, load_experiment, to_toml
+from tzsl.experiments.study_labels import ZERO_SHOT_STUDIES
 
 #: The option names every front-end shares -> the key of the experiment they override.
 OVERRIDES: dict[str, str] = {
@@ -34,7 +35,7 @@ OVERRIDES: dict[str, str] = {
 }
 
 #: The table :func:`tzsl.run` returns for each study kind.
-MAIN_TABLE: dict[str, str] = {"phac2-dap": "table1_fusion", "fabric": "table1", "fabric-deep": "table",
+MAIN_TABLE: dict[str, str] = {"zero-shot": "table1_fusion", "phac2-dap": "table1_fusion", "fabric": "table1", "fabric-deep": "table",
                               "hand": "table5", "active-touch": "active_touch"}
 
 
@@ -93,6 +94,7 @@ def dap_config(exp: Experiment):
         n_splits=c.splits.n_splits, n_test=c.splits.n_test, seed=c.splits.seed,
         random_min_train_positives=c.splits.random_min_train_positives,
         challenging_min_train_positives=c.splits.challenging_min_train_positives,
+        min_train_negatives=c.splits.min_train_negatives,
         undersampling=c.svm.undersampling, svm_params=_svm_params(c.svm), multilabel=c.methods.multilabel,
         sweep_min_attributes=c.methods.sweep_min_attributes, sweep_max_subsets=c.methods.sweep_max_subsets,
         n_jobs=c.compute.n_jobs, backend=c.compute.backend, scheduler=c.compute.scheduler,
@@ -193,7 +195,7 @@ def _path_problems(exp: Experiment) -> list[str]:
     for key in ("plain", "features", "path", "data_dir", "grasps", "table", "gelsight_root"):
         value = getattr(ds, key, None)
         wanted.append((f"dataset.{key}", value, "file" if key in ("features", "path", "table") else "folder"))
-    if exp.study == "phac2-dap" and c.splits.kinds == ["file"]:
+    if exp.study in ZERO_SHOT_STUDIES and c.splits.kinds == ["file"]:
         split_file = c.splits.file if c.splits.file is not None else os.path.join(ds.plain, "splits.csv")
         wanted.append(("splits.file" if c.splits.file else "splits.kinds", split_file, "file"))
     problems = []
@@ -250,14 +252,15 @@ def execute_study(exp: Experiment, results: ResultsDir, echo: Callable[[str], No
 
     check_experiment(exp)
     say = echo or (lambda _msg: None)
-    runner = {"phac2-dap": study_runners.run_phac2, "fabric": study_runners.run_fabric,
+    runner = {"zero-shot": study_runners.run_zero_shot, "phac2-dap": study_runners.run_zero_shot,
+              "fabric": study_runners.run_fabric,
               "fabric-deep": study_runners.run_fabric_deep, "hand": study_runners.run_hand,
               "active-touch": study_runners.run_active_touch}[exp.study]
     return runner(exp, results, say)
 
 
 def results_folder(exp: Experiment, force: bool) -> ResultsDir:
-    """The (staged) results folder of ``exp`` (phac2-dap: leaving unselected fusion/prior columns out).
+    """The (staged) results folder of ``exp`` (zero-shot studies: leaving unselected fusion/prior columns out).
 
     Files are staged in the output folder's :data:`~tzsl.experiments._outputs.STAGING_FOLDER`
     and moved into place by :meth:`ResultsDir.commit` when the run completes, so a crashed run
@@ -266,7 +269,7 @@ def results_folder(exp: Experiment, force: bool) -> ResultsDir:
     from tzsl.experiments import study_runners  # noqa: PLC0415
 
     folder = Path(exp.config.output.folder)
-    if exp.study == "phac2-dap":
+    if exp.study in ZERO_SHOT_STUDIES:
         results: ResultsDir = study_runners.SelectedColumns(
             folder, force, study_runners.dropped_columns(exp.config.methods), staging=True)
         results.check_free(study_runners.phac2_outputs(exp.config))

@@ -62,6 +62,9 @@ from tzsl.experiments.phac2_dap import DapStudyConfig, attribute_bank, compute_c
 from tzsl.experiments.phac2_tables import split_label
 from tzsl.models import attribute_prior, attribute_rows, build_method, dap_log_scores, fuse_attribute_posteriors
 
+#: Column of gzsl.csv saying what a split relaxed to calibrate stacking (present only when one did).
+RELAXED_COLUMN = "relaxed"
+
 __all__ = [
     "GZSL_FILE",
     "GZSL_METHODS",
@@ -170,6 +173,18 @@ class GzslProblem:
 # --------------------------------------------------------------------------- set-up
 
 
+def has_unseen_class(features: FeatureSet, split: Split) -> bool:
+    """Whether some test object's attribute row (kept attributes) is no training object's row.
+
+    With merged attribute rows a split may have none: GZSL then has nothing to evaluate on it.
+    """
+    A = features.attributes[list(split.kept_attributes)]
+    if not set(split.train_objects) | set(split.test_objects) <= set(A.index):
+        return True  # unknown objects: gzsl_problem reports them
+    train = {tuple(r) for r in A.loc[list(split.train_objects)].to_numpy(dtype=int)}
+    return any(tuple(r) not in train for r in A.loc[list(split.test_objects)].to_numpy(dtype=int))
+
+
 def gzsl_problem(features: FeatureSet, split: Split, fraction: float, rng: np.random.Generator) -> GzslProblem:
     """Classes (unique attribute rows), seen mask and trial masks of one split."""
     attributes = split.kept_attributes
@@ -198,28 +213,49 @@ def gzsl_problem(features: FeatureSet, split: Split, fraction: float, rng: np.ra
                        trial_class=trial_class, fit=train & ~heldout, heldout=heldout, test=test, info=info)
 
 
+def _pseudo_draw(A: np.ndarray, inverse: np.ndarray, n_rows: int, n_unseen: int, min_train_positives: int,
+                 min_train_negatives: int, max_draws: int, rng: np.random.Generator) -> np.ndarray | None:
+    """Training objects kept as pseudo-seen (mask), or None when no draw of ``n_unseen`` rows works."""
+    if n_rows - n_unseen < 2:
+        return None
+    for _ in range(max_draws):
+        pseudo = rng.choice(n_rows, size=n_unseen, replace=False)
+        keep = ~np.isin(inverse, pseudo)
+        positives = A[keep].sum(axis=0)
+        if (positives >= min_train_positives).all() and (keep.sum() - positives >= min_train_negatives).all():
+            return keep
+    return None
+
+
 def _pseudo_problem(features: FeatureSet, problem: GzslProblem, min_train_positives: int, max_draws: int,
-                    rng: np.random.Generator) -> GzslProblem:
-    """A GZSL problem inside the training objects: some seen classes play unseen (calibration)."""
+                    rng: np.random.Generator) -> tuple[GzslProblem | None, str]:
+    """A GZSL problem inside the training objects: some seen classes play unseen (calibration).
+
+    Asks for as many pseudo-unseen classes as the split has unseen ones, each attribute keeping
+    ``min_train_positives`` positive (and one negative) training objects. Where no draw allows
+    that, the number of pseudo-unseen classes goes down to 1, each draw keeping two negative
+    training objects per attribute (:mod:`tzsl.experiments.relaxations`, step 5). Returns the problem (None when even that
+    fails: the split is scored uncalibrated only) and a note of what was relaxed ("" if nothing).
+    """
     split = problem.split
     train_objects = np.array(split.train_objects)
     A = features.attributes.loc[list(train_objects), list(problem.attributes)].to_numpy(dtype=int)
     rows, inverse = np.unique(A, axis=0, return_inverse=True)
     inverse = inverse.ravel()
-    n_unseen = int((~problem.seen).sum())
-    if len(rows) - n_unseen < 2:
-        raise SplitError(f"split {split.name}: too few training classes ({len(rows)}) to calibrate stacking "
-                         f"with {n_unseen} pseudo-unseen classes; set calibrated_stacking = false")
-    for _ in range(max_draws):
-        pseudo = rng.choice(len(rows), size=n_unseen, replace=False)
-        keep = ~np.isin(inverse, pseudo)
-        positives = A[keep].sum(axis=0)
-        if (positives >= min_train_positives).all() and (positives < keep.sum()).all():
+    asked = int((~problem.seen).sum())
+    keep, note = None, ""
+    for n_unseen in range(asked, 0, -1):
+        # the asked draw as ever; fewer pseudo-unseen classes also keep 2 negatives (the SVMs' CV needs them)
+        keep = _pseudo_draw(A, inverse, len(rows), n_unseen, min_train_positives, 1 if n_unseen == asked else 2,
+                            max_draws, rng)
+        if keep is not None:
             break
     else:
-        raise SplitError(f"split {split.name}: no draw of {n_unseen} pseudo-unseen training classes in "
-                         f"{max_draws} leaves every attribute with >= {min_train_positives} positive and one "
-                         "negative training object; set calibrated_stacking = false")
+        return None, (f"split {split.name}: calibrated stacking skipped: no draw of pseudo-unseen training "
+                      f"classes (from {asked} down to 1) leaves every attribute {min_train_positives} positive and "
+                      "2 negative training objects; uncalibrated rows only")
+    if n_unseen != asked:
+        note = f"split {split.name}: calibrated stacking on {n_unseen} pseudo-unseen classes (asked {asked})"
     objects = features.objects
     pseudo_train = train_objects[keep]
     pseudo_test = train_objects[~keep]
@@ -231,7 +267,7 @@ def _pseudo_problem(features: FeatureSet, problem: GzslProblem, min_train_positi
                 test_objects=tuple(pseudo_test), attributes=problem.attributes, kind="calibration")
     return GzslProblem(split=sub, attributes=problem.attributes, class_rows=rows, seen=seen,
                        trial_class=trial_class, fit=in_train & problem.fit, heldout=in_train & problem.heldout,
-                       test=np.isin(objects, pseudo_test), info={})
+                       test=np.isin(objects, pseudo_test), info={}), note
 
 
 # --------------------------------------------------------------------------- scores
@@ -287,10 +323,10 @@ def gzsl_split(features: FeatureSet, split: Split, config: DapStudyConfig, gzsl:
     seed = int(np.random.SeedSequence([config.seed, index]).generate_state(1)[0])
     problem = gzsl_problem(features, split, gzsl.holdout_fraction,
                            np.random.default_rng(np.random.SeedSequence([config.seed, index, 1])))
-    pseudo = None
+    pseudo, relaxed = None, ""
     if gzsl.calibrated_stacking:
-        pseudo = _pseudo_problem(features, problem, config.random_min_train_positives, gzsl.max_draws,
-                                 np.random.default_rng(np.random.SeedSequence([config.seed, index, 2])))
+        pseudo, relaxed = _pseudo_problem(features, problem, config.random_min_train_positives, gzsl.max_draws,
+                                          np.random.default_rng(np.random.SeedSequence([config.seed, index, 2])))
     y = problem.trial_class[problem.evaluate]
     seen_classes = np.flatnonzero(problem.seen)
     unseen_classes = np.flatnonzero(~problem.seen)
@@ -299,7 +335,7 @@ def gzsl_split(features: FeatureSet, split: Split, config: DapStudyConfig, gzsl:
         "split": split_label(split), "n_classes": len(problem.seen), "n_seen_classes": len(seen_classes),
         "n_unseen_classes": len(unseen_classes), "n_fit_trials": int(problem.fit.sum()),
         "n_seen_trials": int((~is_unseen).sum()), "n_unseen_trials": int(is_unseen.sum()),
-        "n_attributes": len(problem.attributes), **problem.info,
+        "n_attributes": len(problem.attributes), **problem.info, RELAXED_COLUMN: relaxed,
     }
     rows = []
     for method in gzsl.methods:
@@ -308,9 +344,13 @@ def gzsl_split(features: FeatureSet, split: Split, config: DapStudyConfig, gzsl:
         zsl = per_class_mean_accuracy(y[is_unseen], zsl_pred)
         gammas = [(False, 0.0)]
         if pseudo is not None:
-            val_scores = _scores(method, features, pseudo, config, gzsl, seed)
-            gammas.append((True, choose_stacking_constant(val_scores, pseudo.trial_class[pseudo.evaluate],
-                                                          pseudo.seen)))
+            val_scores, error = attempt(_scores, method, features, pseudo, config, gzsl, seed)
+            if val_scores is None:  # the uncalibrated row stands; the calibrated one is left out, said why
+                base[RELAXED_COLUMN] = "; ".join(filter(None, [base[RELAXED_COLUMN], (
+                    f"split {split.name}: calibrated stacking of {_method_name(method, gzsl)} skipped: {error}")]))
+            else:
+                gammas.append((True, choose_stacking_constant(val_scores, pseudo.trial_class[pseudo.evaluate],
+                                                              pseudo.seen)))
         for calibrated, gamma in gammas:
             pred = stacked_predict(scores, problem.seen, gamma)
             result = gzsl_scores(y, pred, seen_classes, unseen_classes)
@@ -338,6 +378,8 @@ def gzsl_table(rows: list[dict]) -> pd.DataFrame:
             outcomes.add(row["split"], column, classes, correct, metric="class_mean",
                          method=row["method"], calibrated=row["calibrated"])
     table = pd.DataFrame(rows)
+    if RELAXED_COLUMN in table.columns and not table[RELAXED_COLUMN].fillna("").astype(bool).any():
+        table = table.drop(columns=RELAXED_COLUMN)
     for count in ("n_classes", "n_unseen_classes"):  # absent when every split failed
         if count not in table.columns:
             table[count] = np.nan
@@ -380,6 +422,12 @@ def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: DapStudyConf
     rows: list[dict] = []
     with compute_context(config):
         for i, split in enumerate(splits):
+            if not has_unseen_class(features, split):  # nothing to evaluate: left out, said why (no failure)
+                rows += [{"split": split_label(split), "method": _method_name(m, gzsl), "calibrated": False,
+                          RELAXED_COLUMN: f"split {split.name}: every test object shares its attribute row with a "
+                                          "training object (no unseen class); split left out",
+                          ERROR_COLUMN: ""} for m in gzsl.methods]
+                continue
             part, error = attempt(gzsl_split, features, split, config, gzsl, i)
             if part is None:  # NaN rows for this split, reported at the end of the run
                 rows += [{"split": split_label(split), "method": _method_name(m, gzsl), "calibrated": False,

@@ -83,3 +83,10 @@ DAP_HAND_MEAN_ATTRIBUTE_ACCURACY: float = 0.89
 DAP_HAND_ATTRIBUTE_ACCURACY_QUOTED: dict[str, float] = {"plastic": 0.45}
 #: Section 5.5: test objects were grasped "up to 15 times" (the longest grasp sequence).
 DAP_HAND_MAX_TEST_GRASPS: int = 15
+
+#: The DAP paper's PHAC-2 protocol (section 4.1-4.2): the built-in datasets that are its data (the
+#: Penn features and the raw release), 10 test objects per random split, attributes kept when
+#: present in >= 3 objects. Its numbers are shown only beside runs on this dataset and protocol.
+DAP_PAPER_DATASETS: tuple[str, ...] = ("phac2-penn", "phac2-h5")
+DAP_N_TEST: int = 10
+DAP_MIN_OBJECTS: int = 3

@@ -24,6 +24,8 @@ from tzsl.exceptions import ConfigError, SplitError
 from tzsl.experiments._failures import ERROR_COLUMN, attempt
 from tzsl.experiments.config import DaskCompute, Phac2Methods, Phac2Splits, Phac2Svm
 from tzsl.experiments.phac2_methods import method_comparison
+from tzsl.experiments.study_labels import StudyLabels
+from tzsl.experiments.study_methods import split_masks
 from tzsl.experiments.phac2_tables import (
     FUSIONS,
     PRIORS,
@@ -98,6 +100,8 @@ class DapStudyConfig:
         least object-grouped cross-validation can work with; the paper states no rule.
     challenging_min_train_positives : int
         The paper's rule for challenging splits: each attribute trained on >= 3 objects.
+    min_train_negatives : int
+        Both split kinds leave out an attribute with fewer negative training objects.
     undersampling : {"select", "bagging", "none"}
         Class-0 under-sampling of the attribute SVMs (see :class:`tzsl.models.AttributeSVM`).
     svm_params : dict
@@ -127,6 +131,7 @@ class DapStudyConfig:
     seed: int = _SPLITS.seed
     random_min_train_positives: int = _SPLITS.random_min_train_positives
     challenging_min_train_positives: int = _SPLITS.challenging_min_train_positives
+    min_train_negatives: int = _SPLITS.min_train_negatives
     undersampling: str = _SVM.undersampling
     svm_params: dict = field(default_factory=lambda: {"cv": _SVM.cv})
     multilabel: bool = _METHODS.multilabel
@@ -215,13 +220,13 @@ def make_splits(features: FeatureSet, kind: str, config: DapStudyConfig) -> tupl
     if kind == "random":
         splits = random_object_splits(
             features.attributes, n_test=config.n_test, n_splits=config.n_splits, random_state=config.seed,
-            min_train_positives=config.random_min_train_positives,
+            min_train_positives=config.random_min_train_positives, min_train_negatives=config.min_train_negatives,
         )
         return splits, None
     if kind == "challenging":
         return challenging_splits(
             object_map_features(features), features.attributes,
-            min_train_positives=config.challenging_min_train_positives,
+            min_train_positives=config.challenging_min_train_positives, min_train_negatives=config.min_train_negatives,
         )
     raise ConfigError(f"unknown split kind {kind!r}; choose random or challenging")
 
@@ -258,15 +263,6 @@ def attribute_bank(config: DapStudyConfig, attributes, seed: int) -> AttributeCl
         estimator=attribute_estimator(config, seed), attribute_names=list(attributes), n_jobs=config.n_jobs,
         backend=config.backend, memory=_memory(config), progress=config.progress, random_state=seed,
     )
-
-
-def split_masks(features: FeatureSet, split: Split) -> tuple[np.ndarray, np.ndarray]:
-    """Boolean masks (n_trials,) of the split's training and test trials; unknown objects raise SplitError."""
-    objects = features.objects
-    unknown = (set(split.train_objects) | set(split.test_objects)) - set(objects)
-    if unknown:
-        raise SplitError(f"split {split.name}: objects without trials: {sorted(unknown)}")
-    return np.isin(objects, split.train_objects), np.isin(objects, split.test_objects)
 
 
 def fit_split(features: FeatureSet, split: Split, config: DapStudyConfig, index: int,
@@ -375,6 +371,7 @@ def run_dap_study(
     echo=None,
     method_options: dict | None = None,
     record: dict | None = None,
+    labels: StudyLabels | None = None,
 ) -> dict[str, pd.DataFrame]:
     """Run the PHAC-2 DAP study and write its tables and figures into ``out``.
 
@@ -403,6 +400,9 @@ def run_dap_study(
     record : dict or None
         Filled with ``"attribute_solver"``: one :attr:`AttributeClassifierBank.solver_choice_`
         per fitted split (exact or approximate attribute models, and why), for the manifest.
+    labels : StudyLabels or None
+        How the tables name the run and whether the paper's numbers go beside
+        (:func:`tzsl.experiments.study_labels.study_labels`); default: a generic run, no paper.
 
     Returns
     -------
@@ -416,6 +416,8 @@ def run_dap_study(
     )
 
     config = config or DapStudyConfig()
+    labels = labels or StudyLabels()
+    paper = labels.paper
     tables: dict[str, pd.DataFrame] = {}
     with compute_context(config):  # one Dask cluster for all the study's fits
         random_results: list[SplitPosteriors] = []
@@ -427,41 +429,33 @@ def run_dap_study(
             random_results = fit_splits(features, random_splits, config, multilabel=config.multilabel,
                                         failures=failed)
         if random_results:
-            tables["table1_fusion"] = table1_fusion(random_results)
-            tables["table2_priors"] = table2_priors(random_results)
+            tables["table1_fusion"] = table1_fusion(random_results, paper=paper)
+            tables["table2_priors"] = table2_priors(random_results, paper=paper)
             if config.multilabel:
-                tables["multilabel"] = multilabel_table(random_results)
+                tables["multilabel"] = multilabel_table(random_results, paper=paper)
             per_split = attribute_accuracy_table(random_results, features.sensors)
             tables["attribute_accuracy_per_split"] = per_split
-            tables["attribute_accuracy"] = attribute_accuracy_summary(per_split, random_results)
+            tables["attribute_accuracy"] = attribute_accuracy_summary(per_split, random_results, paper=paper)
             out.write_figure("attribute_accuracy.png", attribute_accuracy_figure(tables["attribute_accuracy"]))
             if sweep:
                 tables["attribute_sweep"] = attribute_sweep(
                     random_results, config.sweep_min_attributes, config.sweep_max_subsets, seed=config.seed)
                 out.write_figure("attribute_sweep.png", attribute_sweep_figure(tables["attribute_sweep"]))
             if compare_methods:
-                tables.update(method_comparison(features, random_results, seed=config.seed,
+                tables.update(method_comparison(features, random_results, seed=config.seed, labels=labels,
                                                 **(method_options or {})))
         used = [r.split for r in random_results]
         if splits is None and "challenging" in kinds:
             challenging, map_coords = make_splits(features, "challenging", config)
             results = fit_splits(features, challenging, config, offset=100, failures=failed)
             used += [r.split for r in results]
-            tables["table3_challenging"] = table3_challenging(results, map_coords)
+            tables["table3_challenging"] = table3_challenging(results, map_coords, paper=paper)
             tables["object_map"] = map_coords
             out.write_figure("object_map.png", object_map_figure(map_coords))
         if failed:
             tables[FAILED_SPLITS] = pd.DataFrame(failed)
     _record_solvers(random_results + (results if splits is None and "challenging" in kinds else []), echo, record)
-    titles = {
-        "table1_fusion": "Table 1: MAXDAP vs AVGDAP (uni-prior), random splits - ours beside the paper",
-        "table2_priors": "Table 2: AVGDAP by attribute prior, random splits - ours beside the paper",
-        "table3_challenging": "Table 3: challenging splits (MAXDAP and AVGDAP, uni-prior) - the paper's mean beside ours",
-        "multilabel": "Independent vs multi-label attribute classifiers (AVGDAP, uni-prior)",
-        "attribute_accuracy": "Per-attribute test accuracy (mean over random splits and BioTacs)",
-        "phac2_methods": "DAP vs ESZSL vs embedding model on the same random splits (trial accuracy)",
-        "phac2_method_comparison": "Methods vs AVGDAP (uni-prior) on the same random splits, 95% intervals",
-    }
+    titles = table_titles(labels)
     if used:  # every split scored, readable by --splits; its classes go into the manifest too
         out.write_splits(SPLITS_FILE, used)
     for name, table in tables.items():
@@ -486,3 +480,20 @@ def _record_solvers(results: list[SplitPosteriors], echo, record: dict | None) -
         for text in solver_lines(choices):
             echo(text)
 
+
+
+def table_titles(labels: StudyLabels) -> dict[str, str]:
+    """Titles of the tables a run echoes (the paper's table names only beside its numbers)."""
+    beside = " - ours beside the paper" if labels.paper else ""
+    named = (lambda paper_name, name: paper_name if labels.paper else name)
+    return {
+        "table1_fusion": f"{named('Table 1: ', '')}MAXDAP vs AVGDAP (uni-prior), random splits{beside}",
+        "table2_priors": f"{named('Table 2: ', '')}AVGDAP by attribute prior, random splits{beside}",
+        "table3_challenging": f"{named('Table 3: ', '')}challenging splits (MAXDAP and AVGDAP, uni-prior)"
+                              + (" - the paper's mean beside ours" if labels.paper else ""),
+        "multilabel": "Independent vs multi-label attribute classifiers (AVGDAP, uni-prior)",
+        "attribute_accuracy": "Per-attribute test accuracy (mean over random splits and sensors)",
+        labels.methods_table: "AVGDAP and every compared method on the same random splits (trial accuracy)",
+        labels.comparison_table: "Methods vs AVGDAP (uni-prior) on the same random splits, 95% intervals",
+        "gzsl": "Generalised zero-shot: seen / unseen per-class accuracy, harmonic mean (H)",
+    }

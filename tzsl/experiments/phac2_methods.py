@@ -21,7 +21,15 @@ from tzsl.evaluation import Split, summarise_over_splits
 from tzsl.experiments._failures import ERROR_COLUMN, attempt
 from tzsl.experiments.paper_numbers import DAP_MULTILABEL_ACCURACY, DAP_TABLE1
 from tzsl.experiments.phac2_tables import split_label
-from tzsl.experiments.study_methods import comparison_file, comparison_trials, fit_predict, method_label, method_summary
+from tzsl.experiments.study_labels import StudyLabels
+from tzsl.experiments.study_methods import (
+    comparison_file,
+    comparison_trials,
+    fit_predict,
+    method_label,
+    method_summary,
+    split_masks,
+)
 
 if TYPE_CHECKING:
     from tzsl.experiments.phac2_dap import SplitPosteriors
@@ -39,12 +47,16 @@ COMPARISON_TABLE = comparison_file(STUDY)[: -len(".csv")]
 #: The DAP paper's numbers (random splits, uni-prior): Table 1 averages and section 4.4.
 PAPER = {"dap-max": DAP_TABLE1["average"][0], "dap-avg": DAP_TABLE1["average"][1],
          "multilabel-dap": DAP_MULTILABEL_ACCURACY}
+#: Notes of the rows read from the DAP posteriors: with the paper's numbers beside, and without.
+PAPER_NOTES = {"dap-avg": "the paper's method (reference); paper: Table 1 average",
+               "dap-max": "same fits as dap-avg; paper: Table 1 average",
+               "multilabel-dap": "classifier chain (section 4.4); paper: section 4.4"}
+GENERIC_NOTES = {"dap-avg": "reference (AVGDAP, uniform prior)", "dap-max": "same fits as dap-avg",
+                 "multilabel-dap": "classifier chain"}
 
 
 def _fit_predict_split(spec: dict, features: FeatureSet, split: Split, seed: int):
     """Fit on the split's training objects; (fit, true test rows)."""
-    from tzsl.experiments.phac2_dap import split_masks  # noqa: PLC0415 - phac2_dap re-exports this module
-
     attributes = list(split.kept_attributes)
     train, test = split_masks(features, split)
     objects = features.objects
@@ -56,20 +68,24 @@ def _fit_predict_split(spec: dict, features: FeatureSet, split: Split, seed: int
 
 
 def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed: int = 0,
-                      methods: tuple[dict, ...] | list[dict] = DEFAULT_METHODS) -> dict[str, pd.DataFrame]:
+                      methods: tuple[dict, ...] | list[dict] = DEFAULT_METHODS,
+                      labels: StudyLabels | None = None) -> dict[str, pd.DataFrame]:
     """Registry methods and AVGDAP on the same PHAC-2 splits (trial accuracy).
 
     Each method entry ``{"name": ..., **parameters}`` is built from the registry; a method
     taking a seed gets ``seed + i`` on split ``i``. Objects sharing an attribute row are merged
     into one training class by the methods that merge duplicates (ESZSL, the embedding model).
 
+    ``labels`` (:func:`~tzsl.experiments.study_labels.study_labels`; default: a generic run on
+    real data) name the tables and say whether the paper's numbers and notes go beside.
+
     Returns
     -------
     dict of DataFrame
-        ``"phac2_methods"``: one row per split (dap_avg_uni and one column per method label,
+        ``labels.methods_table`` (``"phac2_methods"`` for the paper preset): one row per split (dap_avg_uni and one column per method label,
         e.g. ``eszsl``, ``embedding_lam_0.1``; NaN where that fit failed, the reason in the
         ``error`` column), then mean and std rows;
-        ``"phac2_method_comparison"``: :func:`~tzsl.experiments.study_methods.method_summary`
+        ``labels.comparison_table``: :func:`~tzsl.experiments.study_methods.method_summary`
         with ``dap-avg`` as the reference; ``dap-max`` and ``multilabel-dap`` (when fitted) come
         from the same posteriors, their fit time is the DAP fit's.
     """
@@ -101,9 +117,11 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
         rows.append({**row, ERROR_COLUMN: "; ".join(errors)})
     per_split = summarise_over_splits(pd.DataFrame(rows)).reset_index()
     chance = float(np.mean([r.split.chance for r in results]))
-    notes = {"dap-avg": "the paper's method (reference); paper: Table 1 average",
-             "dap-max": "same fits as dap-avg; paper: Table 1 average",
-             "multilabel-dap": "classifier chain (section 4.4); paper: section 4.4"}
+    labels = labels or StudyLabels()
+    notes = PAPER_NOTES if labels.paper else GENERIC_NOTES
     summary = method_summary(pd.concat(trials, ignore_index=True), seconds, chance, REFERENCE_METHOD,
-                             study=STUDY, paper=PAPER, notes=notes)
-    return {"phac2_methods": per_split, COMPARISON_TABLE: summary}
+                             study=labels.study, data=labels.data, paper=PAPER if labels.paper else None,
+                             notes=notes)
+    if not labels.paper:  # paper_* headers only beside the paper's dataset and protocol
+        summary = summary.drop(columns="paper_accuracy")
+    return {labels.methods_table: per_split, labels.comparison_table: summary}

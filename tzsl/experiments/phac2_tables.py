@@ -126,8 +126,8 @@ def _paper(table: dict, split: str, i: int):
     return np.nan if value is None or value[i] is None else value[i]
 
 
-def table1_fusion(results: list[SplitPosteriors]) -> pd.DataFrame:
-    """Table 1: MAXDAP vs AVGDAP, uni-prior, per random split + mean/std + control, paper beside.
+def table1_fusion(results: list[SplitPosteriors], paper: bool = False) -> pd.DataFrame:
+    """Table 1: MAXDAP vs AVGDAP, uni-prior, per random split + mean/std + control (``paper``: the paper's beside).
 
     Every accuracy column has its interval columns and the table ``chance`` (and ``majority``
     where test objects have unequal trial counts): :func:`tzsl.experiments._trust.add_trust_columns`.
@@ -144,28 +144,30 @@ def table1_fusion(results: list[SplitPosteriors]) -> pd.DataFrame:
                                             "avgdap": ("avg", "uni", False, "trial"),
                                             "avgdap_per_class_mean": ("avg", "uni", False, "class_mean")})
     table = _with_trust(summarise_over_splits(pd.DataFrame(rows)).reset_index(), outcomes, control)
-    table["paper_maxdap"] = [_paper(DAP_TABLE1, s, 0) for s in table["split"]]
-    table["paper_avgdap"] = [_paper(DAP_TABLE1, s, 1) for s in table["split"]]
+    if paper:
+        table["paper_maxdap"] = [_paper(DAP_TABLE1, s, 0) for s in table["split"]]
+        table["paper_avgdap"] = [_paper(DAP_TABLE1, s, 1) for s in table["split"]]
     return table
 
 
-def table2_priors(results: list[SplitPosteriors]) -> pd.DataFrame:
-    """Table 2: AVGDAP with uni / test / train attribute priors, intervals, chance, control, paper beside."""
+def table2_priors(results: list[SplitPosteriors], paper: bool = False) -> pd.DataFrame:
+    """Table 2: AVGDAP with uni / test / train attribute priors, intervals, chance, control (``paper``: the paper's beside)."""
     from tzsl.experiments.paper_numbers import DAP_TABLE2  # noqa: PLC0415
 
     rows = [{"split": split_label(r.split), **{p: r.accuracy("avg", p) for p in PRIORS}} for r in results]
     outcomes, control = _outcomes(results, {p: ("avg", p, False, "trial") for p in PRIORS})
     table = _with_trust(summarise_over_splits(pd.DataFrame(rows)).reset_index(), outcomes, control)
-    for i, p in enumerate(PRIORS):
+    for i, p in enumerate(PRIORS if paper else ()):
         table[f"paper_{p}"] = [_paper(DAP_TABLE2, s, i) for s in table["split"]]
     return table
 
 
-def table3_challenging(results: list[SplitPosteriors], map_coords: pd.DataFrame | None = None) -> pd.DataFrame:
+def table3_challenging(results: list[SplitPosteriors], map_coords: pd.DataFrame | None = None,
+                       paper: bool = False) -> pd.DataFrame:
     """Table 3: challenging splits, MAXDAP and AVGDAP (uni-prior), sizes, intervals, chance, control.
 
-    The paper reports AVGDAP only, and only its mean (``paper_avgdap`` on the ``mean`` row):
-    partition numbering is arbitrary, so only the means compare.
+    The paper reports AVGDAP only, and only its mean (``paper_avgdap`` on the ``mean`` row, with
+    ``paper``): partition numbering is arbitrary, so only the means compare.
     """
     from tzsl.experiments.paper_numbers import DAP_TABLE3  # noqa: PLC0415
 
@@ -187,12 +189,13 @@ def table3_challenging(results: list[SplitPosteriors], map_coords: pd.DataFrame 
                                             "avgdap": ("avg", "uni", False, "trial"),
                                             "avgdap_per_class_mean": ("avg", "uni", False, "class_mean")})
     table = _with_trust(summarise_over_splits(pd.DataFrame(rows)).reset_index(), outcomes, control)
-    table["paper_avgdap"] = np.where(table["split"] == "mean", DAP_TABLE3["average"][2], np.nan)
+    if paper:
+        table["paper_avgdap"] = np.where(table["split"] == "mean", DAP_TABLE3["average"][2], np.nan)
     return table
 
 
-def multilabel_table(results: list[SplitPosteriors]) -> pd.DataFrame:
-    """Independent vs joint attribute classifiers (AVGDAP, uni-prior), paper beside (0.39 vs 0.31)."""
+def multilabel_table(results: list[SplitPosteriors], paper: bool = False) -> pd.DataFrame:
+    """Independent vs joint attribute classifiers (AVGDAP, uni-prior); ``paper``: section 4.4's numbers beside."""
     from tzsl.experiments.paper_numbers import DAP_INDEPENDENT_ACCURACY, DAP_MULTILABEL_ACCURACY  # noqa: PLC0415
 
     rows = [{"split": split_label(r.split), "independent": r.accuracy("avg", "uni"),
@@ -201,9 +204,10 @@ def multilabel_table(results: list[SplitPosteriors]) -> pd.DataFrame:
                             {"independent": ("avg", "uni", False, "trial"),
                              "multilabel": ("avg", "uni", True, "trial")}, control=False)
     table = add_trust_columns(summarise_over_splits(pd.DataFrame(rows)).reset_index(), outcomes)
-    mean = table["split"] == "mean"
-    table["paper_independent"] = np.where(mean, DAP_INDEPENDENT_ACCURACY, np.nan)
-    table["paper_multilabel"] = np.where(mean, DAP_MULTILABEL_ACCURACY, np.nan)
+    if paper:
+        mean = table["split"] == "mean"
+        table["paper_independent"] = np.where(mean, DAP_INDEPENDENT_ACCURACY, np.nan)
+        table["paper_multilabel"] = np.where(mean, DAP_MULTILABEL_ACCURACY, np.nan)
     return table
 
 
@@ -248,7 +252,7 @@ def attribute_accuracy_table(results: list[SplitPosteriors], sensors: tuple[str,
 
 
 def attribute_accuracy_summary(per_split: pd.DataFrame, results: list[SplitPosteriors] | None = None,
-                               paper: bool = True) -> pd.DataFrame:
+                               paper: bool = False) -> pd.DataFrame:
     """Mean over splits of the sensor-averaged per-attribute scores, intervals, baselines, paper beside.
 
     Columns: attribute, balanced_accuracy (headline) and accuracy, each with

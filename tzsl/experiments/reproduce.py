@@ -61,6 +61,7 @@ def reproduce_tables(
     """
     from tzsl.experiments.engine import check_experiment, execute_study, manifest_record  # noqa: PLC0415
     from tzsl.experiments.active_touch import ACTIVE_TOUCH_OUTPUTS  # noqa: PLC0415
+    from tzsl.experiments.study_labels import ZERO_SHOT_STUDIES  # noqa: PLC0415
     from tzsl.experiments.study_runners import phac2_outputs  # noqa: PLC0415
 
     say = echo or (lambda _msg: None)
@@ -68,7 +69,7 @@ def reproduce_tables(
     results = ResultsDir(out, force=force, staging=True)
     for exp in experiments:
         check_experiment(exp)
-        if exp.study == "phac2-dap":
+        if exp.study in ZERO_SHOT_STUDIES:
             results.check_free(phac2_outputs(exp.config))
         elif exp.study == "active-touch":
             results.check_free(ACTIVE_TOUCH_OUTPUTS)

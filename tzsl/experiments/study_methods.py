@@ -30,7 +30,9 @@ from typing import NamedTuple
 import numpy as np
 import pandas as pd
 
-from tzsl.evaluation import bootstrap_accuracy, paired_differences_table
+from tzsl.datasets import FeatureSet
+from tzsl.evaluation import Split, bootstrap_accuracy, paired_differences_table
+from tzsl.exceptions import SplitError
 from tzsl.experiments.config import method_label
 from tzsl.models import attribute_rows, available_methods, get_method
 
@@ -46,6 +48,7 @@ __all__ = [
     "method_input",
     "method_label",
     "method_summary",
+    "split_masks",
     "study_estimator",
     "takes_seed",
 ]
@@ -58,6 +61,15 @@ COMPARISON_COLUMNS = [
     "study", "data", "method", "accuracy", "ci95_low", "ci95_high", "paper_accuracy", "chance", "fit_seconds",
     "difference", "difference_ci95_low", "difference_ci95_high", "reference", "n_splits", "n_trials", "note",
 ]
+
+
+def split_masks(features: FeatureSet, split: Split) -> tuple[np.ndarray, np.ndarray]:
+    """Boolean masks (n_trials,) of the split's training and test trials; unknown objects raise SplitError."""
+    objects = features.objects
+    unknown = (set(split.train_objects) | set(split.test_objects)) - set(objects)
+    if unknown:
+        raise SplitError(f"split {split.name}: objects without trials: {sorted(unknown)}")
+    return np.isin(objects, split.train_objects), np.isin(objects, split.test_objects)
 
 
 def comparison_file(study: str) -> str:

@@ -49,7 +49,10 @@ def dropped_columns(methods) -> dict[str, list[str]]:
 
 
 def phac2_outputs(config) -> list[str]:
-    """Files a phac2-dap run writes (checked free before any computation)."""
+    """Files a zero-shot (or phac2-dap) run writes (checked free before any computation)."""
+    from tzsl.experiments.study_labels import StudyLabels, paper_protocol  # noqa: PLC0415
+
+    labels = StudyLabels(paper=paper_protocol(config.study, config)[0])
     kinds, methods = config.splits.kinds, config.methods
     names = ["manifest.json", "splits.csv", "failed_splits.csv"]
     if "random" in kinds or "file" in kinds:
@@ -60,7 +63,7 @@ def phac2_outputs(config) -> list[str]:
         if methods.sweep:
             names += ["attribute_sweep.csv", "attribute_sweep.png"]
         if methods.method_specs():
-            names += ["phac2_methods.csv", "phac2_method_comparison.csv"]
+            names += [f"{labels.methods_table}.csv", f"{labels.comparison_table}.csv"]
         if methods.gzsl:
             names.append("gzsl.csv")
     if "challenging" in kinds:
@@ -101,32 +104,26 @@ def _format(table: pd.DataFrame) -> str:
     return table.to_string(index=False, float_format=lambda v: f"{v:.3f}", na_rep="-")
 
 
-_TITLES = {
-    "table1_fusion": "Table 1: DAP sensor fusion (uni-prior), random splits - ours beside the paper",
-    "table2_priors": "Table 2: AVGDAP by attribute prior, random splits - ours beside the paper",
-    "table3_challenging": "Table 3: challenging splits (MAXDAP and AVGDAP, uni-prior) - the paper's mean beside ours",
-    "multilabel": "Independent vs multi-label attribute classifiers (AVGDAP, uni-prior)",
-    "attribute_accuracy": "Per-attribute test accuracy (mean over random splits and sensors)",
-    "phac2_methods": "DAP vs ESZSL vs embedding model on the same random splits (trial accuracy)",
-    "phac2_method_comparison": "Methods vs AVGDAP (uni-prior) on the same random splits, 95% intervals",
-    "gzsl": "Generalised zero-shot: seen / unseen per-class accuracy, harmonic mean (H)",
-}
-
 
 def prepare_phac2(exp: Experiment):
     """Load the dataset and the split file of a phac2-dap experiment and check the CV folds fit.
 
     Everything a phac2-dap run reads and draws before its first fit (``tzsl run --check`` calls
     it too): the random splits are drawn here, so a split that cannot be drawn is reported with
-    the experiment file before any fit. Returns ``(features, splits or None, split_file or None)``:
-    the file's splits (``kinds = ["file"]``), the random splits, or None (challenging only).
+    the experiment file before any fit. Settings the dataset cannot honour are relaxed first
+    (:func:`tzsl.experiments.relaxations.relax_to_dataset`). Returns ``(exp, features, splits or
+    None, split_file or None, relaxations)``: the relaxed experiment, the file's splits (``kinds =
+    ["file"]``), the random splits, or None (challenging only).
     """
     from tzsl.evaluation import read_splits_csv  # noqa: PLC0415
     from tzsl.exceptions import ConfigError, SplitError  # noqa: PLC0415
     from tzsl.experiments.phac2_dap import make_splits  # noqa: PLC0415
 
-    c = exp.config
+    from tzsl.experiments.relaxations import relax_to_dataset  # noqa: PLC0415
+
     features = phac2_features(exp)
+    exp, relaxed = relax_to_dataset(exp, features)
+    c = exp.config
     user_splits, split_file = None, None
     if c.splits.kinds == ["file"]:
         split_file = exp.resolve(c.splits.file) if c.splits.file is not None else (
@@ -141,19 +138,28 @@ def prepare_phac2(exp: Experiment):
                 user_splits, _ = make_splits(features, "random", dap_config(exp))
             except SplitError as exc:
                 raise ConfigError(f"{exp.source}: splits: {exc}") from None
-    return features, user_splits, split_file
+    return exp, features, user_splits, split_file, relaxed
 
 
-def run_phac2(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
-    from tzsl.experiments.gzsl import GZSL_FILE, gzsl_config_record, run_gzsl  # noqa: PLC0415
-    from tzsl.experiments.phac2_dap import make_splits, run_dap_study, solver_lines  # noqa: PLC0415
+def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
+    """``study = "zero-shot"`` and its paper preset ``"phac2-dap"``: one study, labelled by
+    :func:`~tzsl.experiments.study_labels.study_labels` (the paper's numbers only on its data)."""
+    from tzsl.experiments.gzsl import GZSL_FILE, RELAXED_COLUMN, gzsl_config_record, run_gzsl  # noqa: PLC0415
+    from tzsl.experiments.phac2_dap import make_splits, run_dap_study, solver_lines, table_titles  # noqa: PLC0415
+    from tzsl.experiments.study_labels import study_labels  # noqa: PLC0415
 
+    study = exp.study
+    exp, features, user_splits, split_file, relaxed = prepare_phac2(exp)
     c = exp.config
     config = dap_config(exp)
-    features, user_splits, split_file = prepare_phac2(exp)
+    labels = study_labels(study, c, features)
     say(f"{features.dataset}: {features.n_trials} trials, {features.n_objects} objects, "
         f"{len(features.sensors)} sensor(s), {features.X.shape[2]} features per sensor, "
         f"{features.attributes.shape[1]} attributes")
+    notes = [labels.note] if labels.note else []
+    notes += [f"relaxed {r.line()}" for r in relaxed]
+    for note in notes:
+        say(f"note: {note}")
     kinds = tuple(c.splits.kinds)
     methods = c.methods
     options = {"methods": methods.method_specs()}
@@ -161,24 +167,30 @@ def run_phac2(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) 
     solver_record: dict = {}
     tables = run_dap_study(features, results, config, kinds=kinds, splits=file_splits, sweep=methods.sweep,
                            compare_methods=bool(options["methods"]), method_options=options,
-                           record=solver_record)
+                           record=solver_record, labels=labels)
     for text in solver_lines(solver_record["attribute_solver"]):
         say(text)
-    gzsl_record = None
+    gzsl_record, gzsl_notes = None, []
     if methods.gzsl:
         gzsl = gzsl_config(exp)
         splits = user_splits if user_splits is not None else make_splits(features, "random", config)[0]
         tables["gzsl"] = run_gzsl(features, splits, config, gzsl, echo=say)
         results.write_csv(GZSL_FILE, tables["gzsl"])
         gzsl_record = gzsl_config_record(gzsl)
+        if RELAXED_COLUMN in tables["gzsl"].columns:
+            gzsl_notes = [t for t in dict.fromkeys(tables["gzsl"][RELAXED_COLUMN].fillna("")) if t and t != "-"]
+            for note in gzsl_notes:
+                say(f"note: relaxed gzsl {note}")
     drop = getattr(results, "drop", {})
-    for name, title in _TITLES.items():
+    for name, title in table_titles(labels).items():
         if name in tables:
             say(f"\n{title}\n{_format(tables[name].drop(columns=drop.get(f'{name}.csv', []), errors='ignore'))}")
     shown = {name: t.drop(columns=drop.get(f"{name}.csv", []), errors="ignore") for name, t in tables.items()}
-    record = {"study_kind": "phac2-dap", "phac2_dap": record_config(config), "kinds": list(kinds),
+    record = {"study_kind": study, "phac2_dap": record_config(config), "kinds": list(kinds),
               "splits_file": None if split_file is None else str(split_file),
-              "method_options": options,
+              "method_options": options, "labels": {"study": labels.study, "data": labels.data,
+                                                    "paper": labels.paper, "note": labels.note},
+              "relaxations": [r.record() for r in relaxed] + [{"setting": "gzsl", "why": n} for n in gzsl_notes],
               "gzsl": gzsl_record, "dataset": features.dataset, **solver_record}
     data_files = list(features.info.get("data_files", [])) + ([] if split_file is None else [split_file])
     return StudyRun(shown, record, data_files)

@@ -67,7 +67,13 @@ from tzsl.models._active_policy import (
     sequential_log_posterior,
     stop_reasons,
 )
-from tzsl.models._zsl_input import ZSLInputError, attribute_rows, class_grouped_folds, training_classes
+from tzsl.models._zsl_input import (
+    MIN_CV_CLASSES,
+    ZSLInputError,
+    attribute_rows,
+    class_grouped_folds,
+    training_classes,
+)
 from tzsl.models._validation import ParameterError
 from tzsl.models._zero_shot import ZeroShotClassifier, score_kind
 from tzsl.models._registry import (
@@ -129,6 +135,7 @@ __all__: list[str] = [
     "ZSLInputError",
     "attribute_rows",
     "class_grouped_folds",
+    "MIN_CV_CLASSES",
     "training_classes",
     "FAMILIES",
     "INPUT_KINDS",

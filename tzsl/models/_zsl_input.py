@@ -16,6 +16,7 @@ from sklearn.utils.validation import validate_data
 from tzsl.exceptions import ConfigError, TzslError
 
 __all__ = [
+    "MIN_CV_CLASSES",
     "ZSLInputError",
     "attribute_rows",
     "check_int",
@@ -112,6 +113,10 @@ def training_classes(Y: np.ndarray, est_name: str, groups=None) -> tuple[np.ndar
     return S, y
 
 
+#: Fewest training classes (distinct attribute rows) class-grouped CV can run on: 2 held out, 2 trained on.
+MIN_CV_CLASSES = 4
+
+
 def class_grouped_folds(
     groups, n_splits: int, who: str, *, strict: bool = False
 ) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -152,7 +157,7 @@ def class_grouped_folds(
     labels, g, counts = np.unique(groups, return_inverse=True, return_counts=True)
     g = g.ravel()
     n_groups = labels.size
-    if n_groups < 4:
+    if n_groups < MIN_CV_CLASSES:
         raise ZSLInputError(
             f"{who}: class-grouped cross-validation needs at least 4 training classes (distinct "
             f"attribute rows; classes sharing a row count once): 2 held out, 2 trained on; got {n_groups}"

@@ -1,6 +1,7 @@
 """The experiment schema: one typed model per study kind, every default written once.
 
-``study = "phac2-dap"`` (:class:`Phac2Study`), ``"fabric"`` (:class:`FabricStudy`),
+``study = "zero-shot"`` (:class:`ZeroShotStudy`, any dataset), its PHAC-2 paper preset
+``"phac2-dap"`` (:class:`Phac2Study`), ``"fabric"`` (:class:`FabricStudy`),
 ``"fabric-deep"`` (:class:`FabricDeepStudy`), ``"hand"`` (:class:`HandStudy`) and
 ``"active-touch"`` (:class:`ActiveTouchStudy`). Each table of
 an experiment file is a strict pydantic model (unknown keys, wrong types and bad ranges are
@@ -33,6 +34,10 @@ from tzsl.experiments.config._phac2 import (
     Phac2Splits,
     Phac2Study,
     Phac2Svm,
+    ZeroShotMethods,
+    ZeroShotSplits,
+    ZeroShotStudy,
+    every_feature_method,
 )
 from tzsl.experiments.config._studies import (
     ActiveMethods,
@@ -53,5 +58,5 @@ __all__ = [
     "FabricStudy", "HandFeatures", "HandMethods", "HandSimulation", "HandStudy", "Output", "Phac2Dataset",
     "Phac2Features", "Phac2Gzsl", "Phac2Methods", "Phac2Splits", "Phac2Study", "Phac2Svm", "builtin_names",
     "builtin_text", "config_from_options", "defaults", "estimator_parameters", "load_experiment", "to_toml",
-    "method_label", "validate",
+    "method_label", "validate", "ZeroShotMethods", "ZeroShotSplits", "ZeroShotStudy", "every_feature_method",
 ]

@@ -18,12 +18,12 @@ from typing import Any
 from pydantic import BaseModel, ValidationError
 
 from tzsl.exceptions import ConfigError, problems_error
-from tzsl.experiments.config._phac2 import Phac2Study
+from tzsl.experiments.config._phac2 import Phac2Study, ZeroShotStudy
 from tzsl.experiments.config._studies import ActiveTouchStudy, FabricDeepStudy, FabricStudy, HandStudy
 
 #: ``study = ...`` -> its schema.
 STUDY_MODELS: dict[str, type[BaseModel]] = {
-    "phac2-dap": Phac2Study, "fabric": FabricStudy, "fabric-deep": FabricDeepStudy, "hand": HandStudy,
+    "zero-shot": ZeroShotStudy, "phac2-dap": Phac2Study, "fabric": FabricStudy, "fabric-deep": FabricDeepStudy, "hand": HandStudy,
     "active-touch": ActiveTouchStudy,
 }
 STUDIES: tuple[str, ...] = tuple(STUDY_MODELS)

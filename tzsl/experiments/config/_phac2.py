@@ -1,9 +1,13 @@
-"""Schema of ``study = "phac2-dap"``: attribute SVMs + DAP on any plain-file dataset.
+"""Schemas of ``study = "zero-shot"`` (any dataset x every method x random and challenging splits)
+and of its PHAC-2 paper preset ``study = "phac2-dap"``.
 
-Covers the PHAC-2 tables (random + challenging splits), the multi-label comparison, the
-attribute-count sweep, the method comparison (ESZSL, embedding model) and GZSL. Defaults are
-the cheapest complete study (DAP only, random splits); the built-in files switch the rest on.
-Where a default belongs to an estimator (the SVM grids), it is read from that estimator.
+Both run the same study (:func:`tzsl.experiments.study_runners.run_zero_shot`): attribute SVMs
++ DAP (fusions, priors), the attribute tables, the attribute-count sweep, the method comparison
+and GZSL, on random and challenging unseen-class splits. ``zero-shot`` defaults to all of it
+with every registered feature method; ``phac2-dap`` defaults to the cheapest complete study (DAP
+only, random splits, the paper's 10 test objects) and adds the paper's numbers on the paper's
+dataset and protocol (:mod:`tzsl.experiments.study_labels`). Where a default belongs to an
+estimator (the SVM grids), it is read from that estimator.
 """
 
 from __future__ import annotations
@@ -138,6 +142,8 @@ class Phac2Splits(Section):
                                                "splits.csv)")
     random_min_train_positives: int = Field(2, ge=1)
     challenging_min_train_positives: int = Field(3, ge=1)
+    min_train_negatives: int = Field(1, ge=1, description="a split leaves out an attribute with fewer negative "
+                                                          "training objects")
 
     @field_validator("kinds")
     @classmethod
@@ -217,3 +223,52 @@ class Phac2Study(Section):
         if problems:
             raise ValueError("\n".join(f"@{key}: {why}" for key, why in problems))
         return self
+
+
+# --------------------------------------------------------------------------- zero-shot (generic)
+
+#: Registry methods read from the DAP study's own posteriors (no fit of their own).
+FROM_DAP_POSTERIORS = ("dap-avg", "dap-max", "multilabel-dap")
+
+
+def every_feature_method() -> list[dict]:
+    """``[{"name": m}, ...]`` for every registered method on feature vectors, except those read
+    from the DAP posteriors (:data:`FROM_DAP_POSTERIORS`)."""
+    from tzsl.models import available_methods, get_method  # noqa: PLC0415
+
+    return [{"name": name} for name in available_methods()
+            if get_method(name).input_kind == "features" and name not in FROM_DAP_POSTERIORS]
+
+
+class ZeroShotMethods(Phac2Methods):
+    """Every registered feature method beside DAP (``compare``), the sweep and GZSL: on by default."""
+
+    sweep: bool = Field(True, description="attribute-count sweep (random splits)")
+    sweep_min_attributes: int = Field(3, ge=1)
+    sweep_max_subsets: int = Field(200, ge=1)
+    compare: list[MethodEntry] = Field(default_factory=every_feature_method,
+                                       description=COMPARE_DESCRIPTION + " (default: every feature method)")
+    gzsl: bool = Field(True, description="generalised zero-shot evaluation (gzsl.csv, see [gzsl])")
+
+    @model_validator(mode="after")
+    def _registry(self):
+        """The default ``compare`` leaves out what the ``eszsl`` / ``embedding`` switches already run."""
+        if "compare" not in self.model_fields_set:
+            switched = {spec["name"] for spec in self._from_switches()}
+            self.compare = [spec for spec in self.compare if spec["name"] not in switched]
+        if self.compare:
+            self.compare = methods_ok(self.compare, tuple(method_label(s) for s in self._from_switches()))
+        return self
+
+
+class ZeroShotSplits(Phac2Splits):
+    kinds: list[Literal["random", "challenging", "file"]] = Field(["random", "challenging"])
+    n_test: int = Field(5, ge=1, description="test (unseen) objects per random split")
+
+
+class ZeroShotStudy(Phac2Study):
+    """``study = "zero-shot"``: any dataset, every registered feature method, random + challenging splits."""
+
+    study: Literal["zero-shot"] = "zero-shot"
+    methods: ZeroShotMethods = Field(default_factory=ZeroShotMethods)
+    splits: ZeroShotSplits = Field(default_factory=ZeroShotSplits)
