@@ -7,6 +7,8 @@ the rows): they exercise the study, they measure nothing.
 from __future__ import annotations
 
 import json
+import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -107,6 +109,11 @@ def test_the_template_runs_any_small_dataset_to_the_end(tmp_path_factory, n_clas
     manifest = json.loads((out / "manifest.json").read_text())
     noted = [line for line in result.output.splitlines() if line.startswith("note: relaxed ")]
     assert len(noted) == len(manifest["config"]["relaxations"])
+    # warnings: one line each, no source path, and the same ones in the manifest
+    stderr = result.stderr.splitlines()
+    assert not [line for line in stderr if ".py:" in line or not line.startswith("tzsl: ")], result.stderr
+    shown = {line[len("tzsl: warning: "):] for line in stderr if line.startswith("tzsl: warning: ")}
+    assert shown == {re.sub(r" \(x\d+\)$", "", line) for line in manifest["warnings"]}
 
 
 def test_paper_preset_on_another_dataset_says_what_it_maps_to(tmp_path):
@@ -153,3 +160,32 @@ def test_identical_rows_everywhere_fail_with_one_line(tmp_path):
     assert result.exit_code == 3
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"tzsl: error: {path}: splits: ")
+
+
+def test_recorded_warnings_are_one_line_and_counted():
+    from tzsl._warnings import one_line, recorded_warnings  # noqa: PLC0415
+
+    assert one_line(RuntimeWarning("first\nsecond"), RuntimeWarning) == "tzsl: warning: first"
+    assert one_line(DeprecationWarning("old"), DeprecationWarning) == "tzsl: warning: old (DeprecationWarning)"
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        warnings.showwarning = lambda *args, **kwargs: None  # the command line's printer, silenced
+        with recorded_warnings() as log:
+            for _ in range(3):
+                warnings.warn("edge of the grid", UserWarning, stacklevel=1)
+            warnings.warn("other", RuntimeWarning, stacklevel=1)
+    assert log.lines == ["edge of the grid (x3)", "other"]
+
+
+def test_the_command_line_prints_warnings_on_one_line(tmp_path, monkeypatch):
+    """A warning raised inside a command reaches the user as one line, without a source path."""
+    import tzsl.experiments.study_runners as runners  # noqa: PLC0415
+
+    def warns(*args, **kwargs):
+        warnings.warn("something to know\nwith a second line", RuntimeWarning, stacklevel=1)
+        raise SystemExit(0)
+
+    monkeypatch.setattr(runners, "prepare_phac2", warns)
+    dataset = simulated_dataset(tmp_path / "data", 12, 4, 1, seed=2)
+    result = _run("run", template_for(tmp_path, dataset, tmp_path / "out"), "--check")
+    assert result.stderr.splitlines() == ["tzsl: warning: something to know"]

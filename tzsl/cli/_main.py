@@ -16,11 +16,13 @@ from __future__ import annotations
 import functools
 import re
 import sys
+import warnings
 from pathlib import Path
 
 import click
 
 from tzsl import __version__
+from tzsl._warnings import one_line
 from tzsl.exceptions import PartialRunError, TzslError
 
 #: Exit code of a usage error (click's own code).
@@ -31,12 +33,20 @@ EXIT_TZSL_ERROR = 3
 SEED_LIMIT = 2**32
 
 
+def _show_one_line(message, category, filename, lineno, file=None, line=None) -> None:
+    """Show a Python warning as ``tzsl: warning: ...`` on stderr: one line, no source path."""
+    click.echo(one_line(message, category), err=True)
+
+
 class TzslGroup(click.Group):
-    """A click group: TzslError -> one message, exit 3; usage errors -> one line, exit 2."""
+    """A click group: TzslError -> one message, exit 3; usage errors -> one line, exit 2;
+    every warning -> one line ``tzsl: warning: ...``."""
 
     def invoke(self, ctx: click.Context):  # noqa: D401 - click API
         try:
-            return super().invoke(ctx)
+            with warnings.catch_warnings():
+                warnings.showwarning = _show_one_line
+                return super().invoke(ctx)
         except TzslError as exc:
             click.echo(f"tzsl: error: {exc}", err=True)
             ctx.exit(EXIT_TZSL_ERROR)

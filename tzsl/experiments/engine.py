@@ -22,6 +22,7 @@ from urllib.parse import urlparse
 
 import pandas as pd
 
+from tzsl._warnings import recorded_warnings
 from tzsl.exceptions import ConfigError, PartialRunError, problems_error
 from tzsl.experiments._failures import table_failures
 from tzsl.experiments._outputs import ResultsDir
@@ -312,12 +313,13 @@ def run_experiment(
     say = echo or (lambda _msg: None)
     results = results_folder(exp, force)
     say(f"{exp.source}: study {exp.study} -> {results.final_root}")
-    run = execute_study(exp, results, echo)  # checks the experiment (check_experiment) before any fit
+    with recorded_warnings() as shown:  # each one line on the command line; all in the manifest
+        run = execute_study(exp, results, echo)  # checks the experiment (check_experiment) before any fit
     failures = run.failures  # one scan of the tables' error columns
     results.write_manifest(manifest_record(exp, run), data_files=run.data_files,
                            extra={"experiment_sha256": hashlib.sha256(exp.text.encode()).hexdigest(),
                                   "experiment_toml": exp.text, "description": exp.config.description,
-                                  "tables": sorted(run.tables), "failures": failures})
+                                  "tables": sorted(run.tables), "failures": failures, "warnings": shown.lines})
     results.commit()
     if failures:
         error = PartialRunError(results.root, failures)

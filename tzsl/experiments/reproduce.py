@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from tzsl.exceptions import PartialRunError
+from tzsl._warnings import recorded_warnings
 from tzsl.experiments._outputs import ResultsDir
 
 #: The manifest of ``reproduce-tables``: built-in studies, run in this order.
@@ -74,12 +75,14 @@ def reproduce_tables(
         elif exp.study == "active-touch":
             results.check_free(ACTIVE_TOUCH_OUTPUTS)
     results.check_free(["manifest.json", "method_comparison.csv"])
-    records, data_files, timings, tables, done_tables = {}, [], {}, [], []
+    records, data_files, timings, tables, done_tables, warned = {}, [], {}, [], [], {}
     failures: list[str] = []
     for name, exp in zip(studies, experiments, strict=True):
         say(f"\n== {name} ({exp.source}) ==")
         start = time.perf_counter()
-        done = execute_study(exp, results, echo)
+        with recorded_warnings() as shown:
+            done = execute_study(exp, results, echo)
+        warned[name] = shown.lines
         timings[f"{name}_s"] = time.perf_counter() - start
         records[name] = manifest_record(exp, done)
         data_files += list(done.data_files)
@@ -94,7 +97,7 @@ def reproduce_tables(
         tables.append(COMPARISON_FILE[: -len(".csv")])
     results.write_manifest({"studies": records}, data_files=data_files,
                            extra={"timings_s": timings, "tables": tables, "reproduce_studies": list(studies),
-                                  "failures": failures})
+                                  "failures": failures, "warnings": warned})
     results.commit()
     if failures:
         raise PartialRunError(results.root, failures)
