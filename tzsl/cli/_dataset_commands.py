@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import re
 from pathlib import Path
 
@@ -105,13 +107,16 @@ def summary_lines(features_dims: str, data) -> list[str]:
 
 @cli.command()
 @click.argument("dataset_dir", type=click.Path(path_type=Path))
-def validate(dataset_dir: Path) -> None:
+@click.option("--json", "as_json", is_flag=True, help="Print the summary and the dataset card as one JSON object.")
+def validate(dataset_dir: Path, as_json: bool) -> None:
     """Check a plain-file dataset folder; list every problem with file and line.
 
-    Exit code 0 and a summary when the folder is valid, 2 and the list of problems
-    otherwise. See 'tzsl formats' for the format.
+    Exit code 0, a summary and a dataset card (classes, trials per class, positive classes per
+    attribute, identical attribute rows, attributes too rare to learn, the default split's
+    chance) when the folder is valid; 3 and the list of problems otherwise. See 'tzsl formats'
+    for the format.
     """
-    from tzsl.datasets import read_plain_dataset, validate_dataset  # noqa: PLC0415
+    from tzsl.datasets import card_lines, read_plain_dataset, validate_dataset  # noqa: PLC0415
     from tzsl.features import DEFAULT_SIGNAL_STATISTICS, SIGNAL_STATISTICS  # noqa: PLC0415
 
     problems = validate_dataset(dataset_dir, statistics=tuple(SIGNAL_STATISTICS))
@@ -131,9 +136,28 @@ def validate(dataset_dir: Path) -> None:
         baseline = config.get("baseline_rows", 0)
         dims = (f"{len(data.channels) * len(stats)} per sensor from signal files: {len(data.channels)} channels x "
                 f"{len(stats)} statistics ({', '.join(stats)}), baseline_rows={baseline}")
-    for line in summary_lines(dims, data):
+    card = _card(data)
+    if as_json:
+        click.echo(json.dumps({"dataset": data.name, "folder": str(dataset_dir), "valid": True,
+                               "features": dims, **card}, indent=2))
+        return
+    for line in summary_lines(dims, data) + card_lines(card):
         click.echo(line)
     click.echo(f"{dataset_dir}: valid")
+
+
+def _card(data) -> dict:
+    """The dataset card read against the generic study's default split (its schema defaults)."""
+    from tzsl.datasets import dataset_card  # noqa: PLC0415
+    from tzsl.experiments.config import ZeroShotSplits  # noqa: PLC0415
+    from tzsl.experiments.relaxations import SVM_MIN_OBJECTS, relaxed_n_test  # noqa: PLC0415
+
+    splits = ZeroShotSplits()
+    trials = data.trials.drop_duplicates("trial_id") if "trial_id" in data.trials.columns else data.trials
+    n_test = relaxed_n_test(data.object_attributes, splits)  # as the template's run will draw them
+    return dataset_card(data.classes, trials["class"].astype(str).tolist(), n_test=n_test,
+                        min_train_positives=max(splits.random_min_train_positives, SVM_MIN_OBJECTS),
+                        min_train_negatives=SVM_MIN_OBJECTS)
 
 
 @cli.command()

@@ -54,6 +54,7 @@ from tzsl.datasets._gelsight_press import PressRecord, load_gelsight_press
 from tzsl.datasets._video import avi_frame_count, read_video
 from tzsl.datasets._plain import PlainDataset, feature_set_to_plain, read_plain_dataset, write_plain_dataset
 from tzsl.datasets._synthetic import synthetic_dataset_arrays, write_synthetic_dataset
+from tzsl.datasets._card import card_lines, dataset_card
 from tzsl.datasets._signal_files import signal_from_arrays
 from tzsl.datasets._validate import Problem, read_signal_file, validate_dataset
 
@@ -120,6 +121,8 @@ __all__ = [
     "SPLITS_FILE",
     "Problem",
     "read_signal_file",
+    "card_lines",
+    "dataset_card",
     "signal_from_arrays",
     "validate_dataset",
 ]

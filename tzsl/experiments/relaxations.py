@@ -41,7 +41,7 @@ from tzsl.evaluation import challenging_splits, random_object_splits
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.models import MIN_CV_CLASSES
 
-__all__ = ["Relaxation", "relax_to_dataset"]
+__all__ = ["SVM_MIN_OBJECTS", "Relaxation", "relax_to_dataset", "relaxed_n_test"]
 
 
 @dataclass(frozen=True)
@@ -129,6 +129,17 @@ def _relax_random(source: str, A, splits, notes: list[Relaxation]) -> tuple[int,
                       f"objects with distinct rows) that leaves every kept attribute "
                       f"{splits.random_min_train_positives} positive and 2 negative training objects and "
                       f"{MIN_CV_CLASSES} distinct training attribute rows; nothing sound to run")
+
+
+def relaxed_n_test(object_attributes, splits) -> int:
+    """Test objects per random split the study will use on this attribute table (0: no sound split).
+
+    ``splits``: a ``[splits]`` section of the schema (its ``n_test`` before relaxation).
+    """
+    try:
+        return _relax_random("", object_attributes, splits, [])[0]
+    except ConfigError:
+        return 0
 
 
 def _relax_challenging(features: FeatureSet, splits, negatives: int,
