@@ -11,7 +11,7 @@ endif
 RESULTS ?= results
 N_JOBS ?= 2
 
-.PHONY: install browser test reproduce-tables readme-results bench bench-scale clean
+.PHONY: install browser test reproduce-tables readme-results bench bench-scale data clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -31,6 +31,10 @@ browser:
 
 test: install browser
 	$(BIN)/pytest -q
+
+# The papers' data into the data home (or TZSL_DATA_DIR), downloaded and checked against the registry.
+data: install
+	$(BIN)/tzsl data fetch
 
 reproduce-tables: install
 	$(BIN)/tzsl reproduce-tables --out $(RESULTS) --n-jobs $(N_JOBS) --force

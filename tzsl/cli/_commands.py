@@ -6,6 +6,7 @@ from tzsl.cli import _dataset_commands  # noqa: F401
 from tzsl.cli import _deep_commands  # noqa: F401
 from tzsl.cli import _hand_commands  # noqa: F401
 from tzsl.cli import _fabric_commands  # noqa: F401
+from tzsl.cli import _fetch_commands  # noqa: F401
 from tzsl.cli import _run_commands  # noqa: F401
 from tzsl.cli import _methods_commands  # noqa: F401
 from tzsl.cli import _predict_commands  # noqa: F401

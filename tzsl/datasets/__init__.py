@@ -55,6 +55,7 @@ from tzsl.datasets._video import avi_frame_count, read_video
 from tzsl.datasets._plain import PlainDataset, feature_set_to_plain, read_plain_dataset, write_plain_dataset
 from tzsl.datasets._synthetic import synthetic_dataset_arrays, write_synthetic_dataset
 from tzsl.datasets._card import card_lines, dataset_card
+from tzsl.datasets._fetch import MIRROR_ENV, FetchReport, fetch_datasets, registered_datasets
 from tzsl.datasets._signal_files import signal_from_arrays
 from tzsl.datasets._validate import Problem, read_signal_file, validate_dataset
 
@@ -122,6 +123,10 @@ __all__ = [
     "Problem",
     "read_signal_file",
     "card_lines",
+    "MIRROR_ENV",
+    "FetchReport",
+    "fetch_datasets",
+    "registered_datasets",
     "dataset_card",
     "signal_from_arrays",
     "validate_dataset",

@@ -346,6 +346,18 @@ def _check_against_csv(labels: pd.DataFrame, csv: Path) -> None:
         )
 
 
+def labels_csv_bytes(labels: pd.DataFrame) -> bytes:
+    """``phac2/derived/phac2_labels_60x24.csv`` as registered, from the pickles' label matrix.
+
+    ``labels``: (60, 24) 0/1, indexed ``<name>_<id>`` (:func:`read_penn_static_pickles`). Rows by
+    object id, columns ``object_id, object_name`` then the adjectives; CRLF line ends (as published).
+    """
+    parts = [str(key).rpartition("_") for key in labels.index]
+    table = pd.concat([pd.DataFrame({"object_id": [int(p[2]) for p in parts], "object_name": [p[0] for p in parts]}),
+                       labels.reset_index(drop=True)], axis=1).sort_values("object_id", kind="stable")
+    return table.to_csv(index=False, lineterminator="\r\n").encode()
+
+
 _CACHE: dict[tuple, PennStaticData] = {}
 _CACHE_LOCK = threading.Lock()
 

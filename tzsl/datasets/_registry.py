@@ -80,7 +80,7 @@ _LOCK = threading.Lock()
 
 
 @lru_cache(maxsize=1)
-def _registry() -> pooch.Pooch:
+def registry() -> pooch.Pooch:
     """The pooch registry (data home is substituted per call in :func:`fetch`)."""
     pup = pooch.create(path=".", base_url="", registry=None, retry_if_failed=0)
     with resources.files("tzsl.datasets").joinpath("registry.txt").open("r", encoding="utf-8") as fh:
@@ -101,7 +101,7 @@ def registered_files(prefix: str = "") -> list[str]:
     list of str
         Paths relative to the data home, with ``/`` separators.
     """
-    return sorted(name for name in _registry().registry if name.startswith(prefix))
+    return sorted(name for name in registry().registry if name.startswith(prefix))
 
 
 def registered_hash(relpath: str) -> str | None:
@@ -112,13 +112,13 @@ def registered_hash(relpath: str) -> str | None:
     KeyError
         ``relpath`` is not in the registry.
     """
-    value = _registry().registry[relpath]
+    value = registry().registry[relpath]
     return None if value == NO_HASH else value
 
 
 def source_of(relpath: str) -> str:
     """Human-readable public source of a registered file (used in error messages)."""
-    url = _registry().urls.get(relpath)
+    url = registry().urls.get(relpath)
     for prefix, text in _SOURCES:
         if relpath.startswith(prefix):
             return text + (f"; direct link: {url}" if url else "")
@@ -126,11 +126,11 @@ def source_of(relpath: str) -> str:
 
 
 def missing_message(relpath: str, home: Path) -> str:
-    """What to download, from where, and where to put it."""
+    """The one command that gets the file, then where it comes from and where it goes."""
     return (
-        f"dataset file {relpath!r} is missing. Download {source_of(relpath)} and save it as "
-        f"{home / relpath} (data home {home}; choose another with --data-dir or "
-        f"{DATA_DIR_ENV}). data/README.md lists every source."
+        f"dataset file {relpath!r} is missing: get it with `tzsl data fetch {relpath.split('/', 1)[0]}` "
+        f"(data home {home}; choose another with --data-dir or {DATA_DIR_ENV}). Source: "
+        f"{source_of(relpath)}; data/README.md lists every source."
     )
 
 
@@ -175,7 +175,7 @@ def fetch(
     ChecksumError
         The file's sha256 differs from the registry's (message gives both).
     """
-    pup = _registry()
+    pup = registry()
     if relpath not in pup.registry:
         raise KeyError(f"{relpath!r} is not in the tzsl dataset registry")
     home = get_data_home(data_dir)
@@ -189,24 +189,31 @@ def fetch(
     with _LOCK:
         if key in _VERIFIED:
             return path
-    expected = registered_hash(relpath)
-    if expected is not None:
-        alg, _, want = expected.partition(":")
-        got = pooch.file_hash(str(path), alg=alg)
-        if got.lower() != want.lower():
-            raise ChecksumError(
-                path,
-                f"{alg} mismatch for {relpath!r}: expected {want}, got {got}. The file is "
-                f"corrupt or a different version; download it again from {source_of(relpath)}.",
-            )
+    verify_file(path, relpath, pup.registry[relpath])
     with _LOCK:
         _VERIFIED.add(key)
     return path
 
 
+def verify_file(path: Path, relpath: str, expected: str) -> None:
+    """Raise ChecksumError unless ``path`` has the registered hash ``expected`` (``"alg:hex"``;
+    ``"none"``: nothing to check)."""
+    if expected == NO_HASH:
+        return
+    alg, _, want = expected.partition(":")
+    got = pooch.file_hash(str(path), alg=alg)
+    if got.lower() != want.lower():
+        raise ChecksumError(
+            path,
+            f"{alg} mismatch for {relpath!r}: expected {want}, got {got}. The file is "
+            f"corrupt or a different version; get it again with: tzsl data fetch {relpath.split('/', 1)[0]} "
+            f"(source: {source_of(relpath)}).",
+        )
+
+
 def _download(relpath: str, home: Path, downloader=None) -> Path:
     """Download one registered file into the data home with pooch (hash-checked)."""
-    pup = _registry()
+    pup = registry()
     pup_home = pooch.create(
         path=home, base_url="", registry={relpath: registered_hash(relpath)},
         urls={relpath: pup.urls[relpath]},

@@ -1,0 +1,116 @@
+"""``tzsl data fetch`` against a local HTTP server serving a small registry (never the network)."""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import http.server
+import threading
+from pathlib import Path
+
+import pooch
+import pytest
+from click.testing import CliRunner
+
+from tzsl.cli import cli
+from tzsl.cli._main import _register_commands
+from tzsl.datasets import fetch_datasets, registered_datasets
+from tzsl.exceptions import ChecksumError, ConfigError
+
+_register_commands()
+
+FILES = {"alpha/one.csv": b"a,b\n1,2\n", "alpha/sub/two.bin": bytes(range(200)) * 50, "beta/three.txt": b"three\n"}
+
+
+@pytest.fixture
+def server(tmp_path):
+    """A loopback HTTP server over a folder; yields (base URL, folder). Stops by itself."""
+    root = tmp_path / "served"
+    for name, content in FILES.items():
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
+        (root / name).write_bytes(content)
+    handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(root))
+    handler.log_message = lambda *args: None
+    httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    thread = threading.Thread(target=httpd.serve_forever, daemon=True)
+    thread.start()
+    yield f"http://127.0.0.1:{httpd.server_address[1]}", root
+    httpd.shutdown()
+    httpd.server_close()
+
+
+def _registry(tmp_path: Path, base: str, *, urls: bool = True) -> pooch.Pooch:
+    lines = [f"{name} sha256:{hashlib.sha256(content).hexdigest()}" + (f" {base}/{name}" if urls else "")
+             for name, content in FILES.items()]
+    lines.append("beta/local.csv sha256:" + "0" * 64)  # built locally: no URL
+    path = tmp_path / "registry.txt"
+    path.write_text("\n".join(lines) + "\n")
+    pup = pooch.create(path=".", base_url="", registry=None)
+    pup.load_registry(str(path))
+    return pup
+
+
+def test_fetch_downloads_verifies_and_skips_what_is_there(tmp_path, server):
+    base, _ = server
+    pup = _registry(tmp_path, base)
+    assert registered_datasets(pup) == ["alpha", "beta"]
+    home = tmp_path / "home"
+    lines: list[str] = []
+    [report] = fetch_datasets(["alpha"], home, pup=pup, progress=False, echo=lines.append)
+    assert sorted(report.downloaded) == ["alpha/one.csv", "alpha/sub/two.bin"] and not report.present
+    assert (home / "alpha/sub/two.bin").read_bytes() == FILES["alpha/sub/two.bin"]
+    assert lines == ["alpha: 0 present, 2 downloaded"]
+    # a rerun downloads nothing; a half-written file is replaced (resume after an interruption)
+    (home / "alpha/one.csv").write_bytes(b"a,")
+    [again] = fetch_datasets(["alpha"], home, pup=pup, progress=False)
+    assert again.present == ["alpha/sub/two.bin"] and again.downloaded == ["alpha/one.csv"]
+    assert (home / "alpha/one.csv").read_bytes() == FILES["alpha/one.csv"]
+
+
+def test_fetch_reports_files_without_url_and_refuses_a_bad_hash(tmp_path, server):
+    base, root = server
+    pup = _registry(tmp_path, base)
+    home = tmp_path / "home"
+    [report] = fetch_datasets(["beta"], home, pup=pup, progress=False)
+    assert report.downloaded == ["beta/three.txt"] and report.missing == ["beta/local.csv"]
+    (root / "alpha/one.csv").write_bytes(b"changed on the server\n")
+    with pytest.raises(ChecksumError) as info:
+        fetch_datasets(["alpha"], home, pup=pup, progress=False)
+    assert len(str(info.value).splitlines()) == 1 and base in str(info.value)
+    assert not (home / "alpha/one.csv").exists()  # never kept under its final name
+    with pytest.raises(ConfigError, match="unknown dataset"):
+        fetch_datasets(["gamma"], home, pup=pup)
+
+
+def test_mirror_replaces_the_registry_urls(tmp_path, server, monkeypatch):
+    base, _ = server
+    pup = _registry(tmp_path, "http://127.0.0.1:9/unreachable", urls=True)
+    monkeypatch.setenv("TZSL_DATA_MIRROR", base)
+    reports = fetch_datasets([], tmp_path / "home", pup=pup, progress=False)
+    assert [len(r.downloaded) for r in reports] == [2, 1]
+
+
+def test_cli_refuses_an_unknown_dataset_in_one_line():
+    result = CliRunner().invoke(cli, ["data", "fetch", "no-such-dataset", "--no-progress"])
+    assert result.exit_code == 3
+    assert result.stderr.strip().splitlines() == [
+        f"tzsl: error: unknown dataset(s) ['no-such-dataset']; known: {', '.join(registered_datasets())}"]
+
+
+def test_a_missing_file_names_the_command_that_gets_it(tmp_path):
+    from tzsl.datasets import fetch  # noqa: PLC0415
+    from tzsl.exceptions import DataMissingError  # noqa: PLC0415
+
+    with pytest.raises(DataMissingError, match=r"get it with `tzsl data fetch phac2`"):
+        fetch("phac2/derived/phac2_labels_60x24.csv", tmp_path)
+
+
+def test_the_penn_label_table_is_rebuilt_byte_for_byte_from_the_pickles(data_dir):
+    """The one locally built file phac2-penn needs: fetch builds it, identical to the registered one."""
+    from tzsl.datasets import fetch, registered_files  # noqa: PLC0415
+    from tzsl.datasets._phac2_penn import PENN_STATIC_DIR, labels_csv_bytes, read_penn_static_pickles  # noqa: PLC0415
+    from tzsl.datasets._registry import registered_hash  # noqa: PLC0415
+
+    data = read_penn_static_pickles([fetch(rel, data_dir) for rel in registered_files(PENN_STATIC_DIR)])
+    built = hashlib.sha256(labels_csv_bytes(data.labels)).hexdigest()
+    assert f"sha256:{built}" == registered_hash("phac2/derived/phac2_labels_60x24.csv")

@@ -1,0 +1,38 @@
+"""``tzsl data fetch``: get the papers' data (:mod:`tzsl.datasets` registry, pooch)."""
+
+from __future__ import annotations
+
+import click
+
+from tzsl.cli._main import cli, data_dir_option, no_progress_option
+
+
+@cli.group()
+def data() -> None:
+    """The papers' datasets: fetch them into the data home."""
+
+
+@data.command()
+@click.argument("names", nargs=-1)
+@click.option("--mirror", default=None, metavar="URL",
+              help="Base URL laid out like the data home (MIRROR/phac2/...), used for every file instead of "
+                   "the registry's public URLs; default $TZSL_DATA_MIRROR.")
+@data_dir_option
+@no_progress_option
+def fetch(names: tuple[str, ...], mirror: str | None, data_dir, no_progress: bool) -> None:
+    """Download and verify every registered file of NAMES (default: every dataset).
+
+    Files already present with the registered sha256 are kept, so an interrupted fetch goes on
+    where it stopped; a download is checked before it is moved into place. Names: the registry's
+    datasets (phac2, fabric, gelsight_press).
+    """
+    from tzsl.datasets import fetch_datasets, get_data_home  # noqa: PLC0415
+    from tzsl.exceptions import DataMissingError  # noqa: PLC0415
+
+    home = get_data_home(data_dir)
+    reports = fetch_datasets(names, data_dir, mirror=mirror, progress=not no_progress, echo=click.echo)
+    missing = [path for r in reports for path in r.missing]
+    if missing:
+        raise DataMissingError(home / missing[0], f"{len(missing)} registered file(s) have no public URL and were "
+                                                  "not fetched; give --mirror, or see data/README.md")
+    click.echo(f"data home {home}: complete for {', '.join(r.name for r in reports)}")

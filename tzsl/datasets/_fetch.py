@@ -1,0 +1,172 @@
+"""``tzsl data fetch``: every registered file of the papers' datasets, downloaded and verified.
+
+The registry (``registry.txt``: path, sha256, public URL) says what to get; pooch downloads
+each missing file to a temporary name, checks its sha256 and only then moves it into place, so
+an interrupted fetch leaves no half file and a rerun goes on where it stopped (files present and
+verified are skipped). ``mirror`` (or ``$TZSL_DATA_MIRROR``) is a base URL laid out like the data
+home (``MIRROR/phac2/...``): every file is taken from there instead, the locally built ones too.
+Files the registry lists without a URL are built from downloaded ones where tzsl can
+(``phac2/derived/phac2_labels_60x24.csv`` from the Penn pickles), else reported.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pooch
+
+from tzsl._io import atomic_write_bytes
+from tzsl.datasets._home import get_data_home
+from tzsl.datasets._registry import registered_hash, registry, source_of, verify_file
+from tzsl.exceptions import ChecksumError, ConfigError, DataMissingError
+
+__all__ = ["MIRROR_ENV", "FetchReport", "fetch_datasets", "registered_datasets"]
+
+#: Environment variable naming a mirror (see the module docstring).
+MIRROR_ENV = "TZSL_DATA_MIRROR"
+
+
+@dataclass
+class FetchReport:
+    """What :func:`fetch_datasets` did for one dataset (lists of registered paths)."""
+
+    name: str
+    present: list[str] = field(default_factory=list)
+    downloaded: list[str] = field(default_factory=list)
+    built: list[str] = field(default_factory=list)
+    missing: list[str] = field(default_factory=list)
+
+    def line(self) -> str:
+        parts = [f"{len(self.present)} present", f"{len(self.downloaded)} downloaded"]
+        if self.built:
+            parts.append(f"{len(self.built)} built from them")
+        if self.missing:
+            parts.append(f"{len(self.missing)} not downloadable (no public URL; {source_of(self.missing[0])})")
+        return f"{self.name}: " + ", ".join(parts)
+
+
+def registered_datasets(pup: pooch.Pooch | None = None) -> list[str]:
+    """Names of the datasets of the registry: the first folder of every registered path."""
+    return sorted({name.split("/", 1)[0] for name in (pup or registry()).registry})
+
+
+def _build_penn_labels(home: Path, pup: pooch.Pooch) -> bytes:
+    """The registered object x adjective CSV, rebuilt from the downloaded Penn pickles."""
+    from tzsl.datasets._phac2_penn import PENN_STATIC_DIR, labels_csv_bytes, read_penn_static_pickles  # noqa: PLC0415
+
+    pickles = [home / name for name in sorted(pup.registry) if name.startswith(PENN_STATIC_DIR)]
+    return labels_csv_bytes(read_penn_static_pickles(pickles).labels)
+
+
+#: Registered files without a public URL that tzsl builds from downloaded ones.
+BUILDERS: dict[str, Callable[[Path, pooch.Pooch], bytes]] = {
+    "phac2/derived/phac2_labels_60x24.csv": _build_penn_labels,
+}
+
+
+def _present(path: Path, relpath: str, pup: pooch.Pooch) -> bool:
+    """Whether ``path`` exists with the registered hash (a corrupt file is replaced)."""
+    if not path.is_file():
+        return False
+    try:
+        verify_file(path, relpath, pup.registry[relpath])
+    except ChecksumError:
+        path.unlink()
+        return False
+    return True
+
+
+def fetch_datasets(
+    names: Sequence[str] = (),
+    data_dir: str | os.PathLike | None = None,
+    *,
+    mirror: str | None = None,
+    progress: bool = True,
+    pup: pooch.Pooch | None = None,
+    echo: Callable[[str], None] | None = None,
+) -> list[FetchReport]:
+    """Download and verify every registered file of ``names`` (all datasets when empty).
+
+    Parameters
+    ----------
+    names : sequence of str
+        Dataset names (:func:`registered_datasets`: ``phac2``, ``fabric``, ``gelsight_press``).
+    data_dir : path-like, optional
+        Data home (:func:`tzsl.datasets.get_data_home`).
+    mirror : str, optional
+        Base URL laid out like the data home; default ``$TZSL_DATA_MIRROR``, else the
+        registry's public URLs.
+    progress : bool
+        A tqdm progress bar per download.
+    pup : pooch.Pooch, optional
+        The registry (default tzsl's own; tests pass a small one).
+    echo : callable, optional
+        Receives one line per dataset.
+
+    Raises
+    ------
+    ConfigError
+        An unknown dataset name.
+    ChecksumError
+        A downloaded file whose sha256 differs from the registry's (it is not kept).
+    """
+    pup = pup or registry()
+    known = registered_datasets(pup)
+    unknown = [n for n in names if n not in known]
+    if unknown:
+        raise ConfigError(f"unknown dataset(s) {unknown}; known: {', '.join(known)}")
+    mirror = mirror if mirror is not None else os.environ.get(MIRROR_ENV) or None
+    home = get_data_home(data_dir)
+    reports = []
+    for name in names or known:
+        report = FetchReport(name)
+        files = [f for f in sorted(pup.registry) if f.split("/", 1)[0] == name]
+        for relpath in files:
+            path = home / relpath
+            if _present(path, relpath, pup):
+                report.present.append(relpath)
+                continue
+            url = f"{mirror.rstrip('/')}/{relpath}" if mirror else pup.urls.get(relpath)
+            if url is None:
+                continue  # built below, or missing
+            try:
+                _download(relpath, url, home, pup, progress)
+            except DataMissingError:
+                if relpath in pup.urls:
+                    raise
+                continue  # a locally built file the mirror does not hold: built below, or missing
+            report.downloaded.append(relpath)
+        for relpath in files:
+            if relpath in report.present or relpath in report.downloaded:
+                continue
+            if relpath in BUILDERS and relpath in pup.registry:
+                path = home / relpath
+                atomic_write_bytes(path, BUILDERS[relpath](home, pup))
+                verify_file(path, relpath, pup.registry[relpath])
+                report.built.append(relpath)
+            else:
+                report.missing.append(relpath)
+        reports.append(report)
+        if echo is not None:
+            echo(report.line())
+    return reports
+
+
+def _download(relpath: str, url: str, home: Path, pup: pooch.Pooch, progress: bool) -> None:
+    """One file from ``url`` into the data home, hash-checked by pooch before it is moved into place."""
+    known = pup.registry[relpath]
+    single = pooch.create(path=home, base_url="", registry={relpath: None if known == "none" else known},
+                          urls={relpath: url}, retry_if_failed=2)
+    downloader = pooch.HTTPDownloader(progressbar=progress) if url.startswith("http") else None
+    try:
+        single.fetch(relpath, downloader=downloader)
+    except ValueError as exc:  # pooch's hash mismatch: the file is not kept
+        raise ChecksumError(home / relpath, f"{str(exc).splitlines()[0]} (downloaded from {url})") from None
+    except OSError as exc:
+        raise DataMissingError(home / relpath, f"cannot download {url}: {str(exc).splitlines()[0]}") from None
+    except Exception as exc:  # noqa: BLE001 - requests' HTTP errors: one line naming the URL
+        raise DataMissingError(home / relpath, f"cannot download {url}: {type(exc).__name__}: "
+                                               f"{str(exc).splitlines()[0] if str(exc) else ''}") from None
