@@ -9,11 +9,13 @@ from pathlib import Path
 
 import click
 
-from tzsl.cli._main import cli, data_dir_option, force_option
+from tzsl.cli._main import cli, data_dir_option, force_option, no_progress_option
 from tzsl.exceptions import ConfigError, DataFileError
 
 #: Datasets ``tzsl convert`` writes as plain-file folders.
 CONVERTIBLE = ("phac2-penn", "phac2-hold-mat")
+#: ``--from`` kinds (:data:`tzsl.datasets.LAB_FORMATS`, written here so --help stays fast).
+LAB_KINDS = ("ros-bag", "hdf5", "series")
 
 
 def _statistics_help() -> str:
@@ -161,24 +163,45 @@ def _card(data) -> dict:
 
 
 @cli.command()
-@click.option("--dataset", type=click.Choice(CONVERTIBLE), required=True,
-              help="phac2-penn: Penn per-trial features as feature columns; phac2-hold-mat: the raw "
-                   "HOLD-phase BioTac signals as one .npz signal file per trial and finger.")
+@click.option("--from", "source", type=click.Choice(LAB_KINDS), default=None,
+              help="A lab's own recordings, read as --mapping says: ros-bag (ROS 1/2 bags), hdf5 (your HDF5 "
+                   "layout), series (a folder of per-trial .csv/.npy time series).")
+@click.option("--mapping", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="The TOML mapping of --from: topics/groups/files to trials, sensors, channels and classes.")
+@click.option("--dataset", type=click.Choice(CONVERTIBLE), default=None,
+              help="A built-in dataset: phac2-penn (Penn per-trial features as feature columns) or phac2-hold-mat "
+                   "(the raw HOLD-phase BioTac signals as one .npz signal file per trial and finger).")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Dataset folder to write (must not exist or be empty, unless --force).")
+@no_progress_option
 @click.option("--min-objects", type=int, default=3, show_default=True,
               help="Keep attributes present in at least this many objects.")
 @click.option("--signal-format", type=click.Choice(["npz", "csv"]), default="npz", show_default=True,
               help="Signal file type for phac2-hold-mat.")
 @data_dir_option
 @force_option
-def convert(dataset: str, out: Path, min_objects: int, signal_format: str, data_dir: Path | None,
-            force: bool) -> None:
-    """Write a built-in dataset as a plain-file dataset folder (see 'tzsl formats').
+def convert(source: str | None, mapping: Path | None, dataset: str | None, out: Path, no_progress: bool,
+            min_objects: int, signal_format: str, data_dir: Path | None, force: bool) -> None:
+    """Write a lab's recordings (--from KIND --mapping FILE) or a built-in dataset (--dataset) as a
+    plain-file dataset folder (see 'tzsl formats'); check it with 'tzsl validate OUT'.
 
     In PHAC-2 every object is its own class; objects sharing an adjective row are allowed
     by '[classes] allow_identical_rows = true' in the written dataset.toml.
     """
+    if (source is None) == (dataset is None):
+        raise click.UsageError("give --from KIND --mapping FILE, or --dataset NAME")
+    if source is not None:
+        from tzsl.datasets import convert_lab_dataset  # noqa: PLC0415
+
+        if mapping is None:
+            raise click.UsageError("--from needs --mapping FILE")
+        if out.exists() and (not out.is_dir() or any(out.iterdir())) and not force:
+            raise ConfigError(f"{out} already exists; use --force to overwrite")
+        folder, done = convert_lab_dataset(source, mapping, out, force=force, progress=not no_progress)
+        click.echo(f"wrote {folder}: {done['classes']} classes x {done['attributes']} attributes, {done['trials']} "
+                   f"trials, {len(done['sensors'])} sensor(s), {len(done['channels'])} channels per signal file; "
+                   f"next: tzsl validate {folder}")
+        return
     from tzsl.datasets import feature_set_to_plain, load_phac2_hold_mat, write_plain_dataset  # noqa: PLC0415
     from tzsl.experiments.extract import extract_features  # noqa: PLC0415
     from tzsl.features import BIOTAC_CHANNELS, raw_trial_signals  # noqa: PLC0415

@@ -1,0 +1,138 @@
+"""The mapping files of ``tzsl convert --from ros-bag|hdf5|series``: where a lab's recordings keep
+their trials, sensors, channels and labels.
+
+One small TOML file per dataset, checked by pydantic (unknown keys, wrong types: every problem at
+once, one line each, naming the mapping file and the key). Paths in it are relative to the mapping
+file's folder, and a reader opens nothing outside what the mapping names.
+"""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from pathlib import Path
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+
+from tzsl.exceptions import ConfigError, DataFileError, problems_error
+
+__all__ = ["BagMapping", "Hdf5Mapping", "LabMapping", "SeriesMapping", "SensorFields", "load_lab_mapping"]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class SensorFields(_Strict):
+    """One sensor: where its channels are.
+
+    ``fields`` (ROS bags): dotted paths into the message of ``topic``, with ``[i]`` for list
+    items (``bt_data[0].pdc_data``); a field holding a sequence gives one channel per item.
+    ``datasets`` (HDF5): paths relative to a trial group; a 1-D dataset is one channel, a 2-D
+    dataset (time x k) k channels.
+    """
+
+    name: str = Field(min_length=1)
+    topic: str | None = None
+    fields: list[str] = []
+    datasets: list[str] = []
+
+
+class _Common(_Strict):
+    classes: str = Field(description="class-attribute table: class,<attribute>,... (one 0/1 row per class)")
+    name: str | None = Field(None, description="dataset name (default: the output folder's name)")
+    allow_identical_rows: bool = False
+
+
+class BagMapping(_Common):
+    """ROS 1 (``.bag``) or ROS 2 (folder with ``metadata.yaml``) bags read with ``rosbags``.
+
+    ``labels``: CSV with ``bag`` (a path as listed in ``bags``, relative to the mapping), ``trial_id``
+    and ``class``, and optionally ``start`` / ``end`` (seconds from the bag's first message) to cut
+    several trials (or exploratory procedures, one row each) out of one bag; without them a bag is
+    one trial. ``messages``: message type -> ``.msg`` file, for types the bags do not define.
+    """
+
+    kind: Literal["ros-bag"]
+    bags: list[str] = Field(min_length=1)
+    labels: str
+    sensors: list[SensorFields] = Field(min_length=1)
+    messages: dict[str, str] = {}
+    ros_distro: Literal["ros1", "ros2"] = "ros2"
+
+    @field_validator("sensors")
+    @classmethod
+    def _topics(cls, v):
+        missing = [s.name for s in v if not s.topic or not s.fields]
+        if missing:
+            raise ValueError(f"sensor(s) {missing} need a topic and fields")
+        return v
+
+
+class Hdf5Mapping(_Common):
+    """HDF5 files in a lab's own layout: every group matching ``trials`` is one trial."""
+
+    kind: Literal["hdf5"]
+    files: list[str] = Field(min_length=1)
+    trials: str = Field(description="group pattern, fnmatch per path segment ('*' does not cross '/'), "
+                                    "e.g. '/trial_*' or '/session_*/trial_*'")
+    label: str = Field(description="'attrs:NAME' (an attribute of the trial group) or 'dataset:PATH' "
+                                   "(a string dataset inside it)")
+    sensors: list[SensorFields] = Field(min_length=1)
+
+    @field_validator("label")
+    @classmethod
+    def _label(cls, v):
+        if not v.startswith(("attrs:", "dataset:")) or v.partition(":")[2] == "":
+            raise ValueError("use 'attrs:NAME' or 'dataset:PATH'")
+        return v
+
+    @field_validator("sensors")
+    @classmethod
+    def _datasets(cls, v):
+        missing = [s.name for s in v if not s.datasets]
+        if missing:
+            raise ValueError(f"sensor(s) {missing} need datasets")
+        return v
+
+
+class SeriesMapping(_Common):
+    """A folder of per-trial time series: ``.csv`` (a header of channel names) or ``.npy`` (time x k).
+
+    ``labels``: CSV with ``file`` (relative to the mapping), ``trial_id``, ``class`` and, for
+    several sensors, ``sensor``. ``channels``: names of ``.npy`` columns (default ``ch0``, ...).
+    """
+
+    kind: Literal["series"]
+    labels: str
+    channels: list[str] | None = None
+
+
+LabMapping = BagMapping | Hdf5Mapping | SeriesMapping
+_MODELS = {"ros-bag": BagMapping, "hdf5": Hdf5Mapping, "series": SeriesMapping}
+
+
+def load_lab_mapping(path: str | os.PathLike, kind: str) -> LabMapping:
+    """The checked mapping of ``kind`` in ``path`` (ConfigError: one line per problem)."""
+    path = Path(path)
+    try:
+        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise DataFileError(path, f"cannot read the mapping: {exc.strerror or exc}") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise DataFileError(path, f"not a TOML file: {str(exc).splitlines()[0]}") from None
+    raw.setdefault("kind", kind)
+    if raw["kind"] != kind:
+        raise ConfigError(f"{path}: kind: the mapping is for {raw['kind']!r}, not --from {kind}")
+    try:
+        return _MODELS[kind].model_validate(raw)
+    except ValidationError as exc:
+        problems = [f"{path}: {'.'.join(map(str, e['loc'])) or '(top)'}: {e['msg']}" for e in exc.errors()]
+        raise problems_error(problems, path) from None
+
+
+def mapped_path(mapping_file: Path, relative: str) -> Path:
+    """A path named in the mapping, relative to the mapping file's folder."""
+    p = Path(os.path.expanduser(relative))
+    return p if p.is_absolute() else mapping_file.parent / p
