@@ -10,9 +10,7 @@ import pytest
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-from tzsl.cli._main import EXIT_TZSL_ERROR, EXIT_USAGE, _register_commands
-
-_register_commands()
+from tzsl.cli import EXIT_TZSL_ERROR, EXIT_USAGE
 
 REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO / "tests" / "experiments"))
@@ -198,7 +196,7 @@ def test_binary_experiment_file_is_one_clear_error(tmp_path):
 
 def test_help_imports_no_heavy_library():
     """``tzsl --help`` stays fast: registering every command imports neither pandas, sklearn nor pydantic."""
-    code = ("import sys; from tzsl.cli._main import _register_commands, cli; _register_commands(); "
+    code = ("import sys; from tzsl.cli import cli; "
             "from click.testing import CliRunner; r = CliRunner().invoke(cli, ['--help']); assert r.exit_code == 0; "
             "print(sorted(m for m in ('pandas', 'sklearn', 'pydantic', 'numpy', 'torch') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,

@@ -7,10 +7,8 @@ import pytest
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-from tzsl.cli._main import EXIT_TZSL_ERROR, _register_commands
+from tzsl.cli import EXIT_TZSL_ERROR
 from tzsl.datasets._feature_table import read_feature_table
-
-_register_commands()
 
 
 def _run(*args: str):

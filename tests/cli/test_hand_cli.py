@@ -7,11 +7,9 @@ import pytest
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-from tzsl.cli._main import EXIT_TZSL_ERROR, _register_commands
+from tzsl.cli import EXIT_TZSL_ERROR
 from tzsl.datasets import load_hand_table4, read_grasps
 from tzsl.experiments.hand import HAND_OUTPUTS
-
-_register_commands()
 TABLE = load_hand_table4()
 
 

@@ -7,10 +7,8 @@ import json
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-from tzsl.cli._main import _register_commands
-from tzsl.models import available_methods, get_method
 
-_register_commands()
+from tzsl.models import available_methods, get_method
 
 
 def test_methods_table_lists_every_method():

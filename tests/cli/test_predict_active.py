@@ -13,12 +13,10 @@ import pytest
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-from tzsl.cli._main import _register_commands
+
 from tzsl.datasets import FeatureSet
 from tzsl.experiments.predict_active import PER_EP_KIND, load_per_ep_model, train_per_ep_bundle
 from tzsl.models import suggest_next_ep
-
-_register_commands()
 
 ATTRS = ["hard", "soft", "rough"]
 EP_NAMES = [f"{ep}:{f}" for ep in ("squeeze", "hold") for f in ("a", "b")]

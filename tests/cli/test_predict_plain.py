@@ -16,10 +16,8 @@ from click.testing import CliRunner
 
 from tzsl.bundle import read_bundle_header
 from tzsl.cli import cli
-from tzsl.cli._main import _register_commands
-from tzsl.datasets import write_plain_dataset
 
-_register_commands()
+from tzsl.datasets import write_plain_dataset
 
 ATTRS = ["hard", "soft", "rough"]
 CLASSES = pd.DataFrame(list(itertools.product([0, 1], repeat=3)), columns=ATTRS,

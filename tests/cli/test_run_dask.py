@@ -9,11 +9,10 @@ import pytest
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-from tzsl.cli._main import _register_commands
+
 from tzsl.datasets import write_synthetic_dataset
 
 distributed = pytest.importorskip("distributed")
-_register_commands()
 
 TOML = """
 study = "phac2-dap"

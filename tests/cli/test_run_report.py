@@ -10,9 +10,7 @@ import pytest
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-from tzsl.cli._main import EXIT_TZSL_ERROR, _register_commands
-
-_register_commands()
+from tzsl.cli import EXIT_TZSL_ERROR
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -7,9 +7,7 @@ import pytest
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-from tzsl.cli._main import EXIT_TZSL_ERROR, _register_commands
-
-_register_commands()
+from tzsl.cli import EXIT_TZSL_ERROR
 
 SKIP_REASON = "PyTorch is not installed (the optional deep extra: pip install 'tzsl[deep]')"
 # A small run: random frozen CNN on 16 x 16 frames, a few epochs (checks plumbing, not accuracy).

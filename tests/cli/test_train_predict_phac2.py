@@ -8,11 +8,9 @@ from click.testing import CliRunner
 
 from tzsl.bundle import read_bundle_header
 from tzsl.cli import cli
-from tzsl.cli._main import _register_commands
+
 from tzsl.datasets._feature_table import read_feature_table, write_feature_table
 from tzsl.experiments.predict import load_predictor
-
-_register_commands()
 
 
 def _ok(args):

@@ -10,12 +10,10 @@ import pytest
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-from tzsl.cli._main import EXIT_TZSL_ERROR, _register_commands
+from tzsl.cli import EXIT_TZSL_ERROR
 from tzsl.datasets import write_plain_dataset
 from tzsl.evaluation import random_object_splits, write_splits_csv
 from tzsl.features import SIGNAL_STATISTICS, load_plain_dataset
-
-_register_commands()
 
 
 def _run(*args: str):

@@ -10,13 +10,11 @@ import pytest
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-from tzsl.cli._main import _register_commands
+
 from tzsl.datasets import read_grasps, read_plain_dataset, validate_dataset, write_grasps
 from tzsl.exceptions import DataFileError
 from tests.datasets.test_grasps import _grasps
 from tests.datasets.test_validate import SIGNAL_TRIALS, _signal, signal_dataset
-
-_register_commands()
 
 
 def _outside_npz(tmp_path: Path) -> Path:

@@ -13,11 +13,9 @@ import pytest
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-from tzsl.cli._main import _register_commands
+
 from tzsl.datasets import fetch_datasets, registered_datasets
 from tzsl.exceptions import ChecksumError, ConfigError
-
-_register_commands()
 
 FILES = {"alpha/one.csv": b"a,b\n1,2\n", "alpha/sub/two.bin": bytes(range(200)) * 50, "beta/three.txt": b"three\n"}
 

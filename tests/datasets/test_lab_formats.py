@@ -16,11 +16,9 @@ import pytest
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-from tzsl.cli._main import _register_commands
+
 from tzsl.datasets import convert_lab_dataset, read_plain_dataset, read_signal_file, validate_dataset
 from tzsl.exceptions import ConfigError, DataFileError
-
-_register_commands()
 
 #: The BioTac messages (biotac_sensors package), the documented example of docs/user_guide/lab_formats.md.
 BIOTAC_MSG = """int32 pdc_data

@@ -288,14 +288,11 @@ def _cli(*args):
     from click.testing import CliRunner
 
     from tzsl.cli import cli
-    from tzsl.cli._main import _register_commands
-
-    _register_commands()
     return CliRunner().invoke(cli, [str(a) for a in args])
 
 
 def _one_line_error(result, path):
-    from tzsl.cli._main import EXIT_TZSL_ERROR
+    from tzsl.cli import EXIT_TZSL_ERROR
 
     assert result.exit_code == EXIT_TZSL_ERROR, result.output
     lines = result.stderr.strip().splitlines()

@@ -8,7 +8,7 @@ import pytest
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-from tzsl.cli._main import _register_commands
+
 from tzsl.experiments.predict import load_predictor, predict_grasps, read_class_table
 
 torch = pytest.importorskip("torch", reason="PyTorch is not installed (the optional deep extra)")
@@ -65,7 +65,6 @@ def test_predict_cli_with_deep_bundle(deep_bundle, tmp_path):
     pd.DataFrame({"class": ["a", "b", "c"], "attr_0": A[:, 0].astype(int), "attr_1": A[:, 1].astype(int),
                   "attr_2": A[:, 2].astype(int)}).to_csv(classes, index=False)
     read_class_table(classes, ["attr_0", "attr_1", "attr_2"])
-    _register_commands()
     result = CliRunner().invoke(cli, ["predict", "--model", str(path), "--classes", str(classes), "--k", "2",
                                       str(tmp_path / "p1.npz"), str(tmp_path / "p2.npz")])
     assert result.exit_code == 0, result.output

@@ -39,9 +39,6 @@ def recorded(monkeypatch):
 
 def test_reproduce_and_tzsl_run_hand_the_engine_the_same_configs(recorded, tmp_path):
     from tzsl.cli import cli
-    from tzsl.cli._main import _register_commands
-
-    _register_commands()
     result = CliRunner().invoke(cli, ["reproduce-tables", "--out", str(tmp_path / "all"), "--n-jobs", "2",
                                       "--no-progress"])
     assert result.exit_code == 0, result.output

@@ -19,14 +19,13 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tzsl.cli import cli
-from tzsl.cli._main import _register_commands
+
 from tzsl.datasets import write_plain_dataset
 from tzsl.experiments.config import load_experiment
 from tzsl.experiments.study_labels import paper_protocol
 
 REPO = Path(__file__).resolve().parents[2]
 TEMPLATE = REPO / "experiments" / "my_dataset_template.toml"
-_register_commands()
 
 
 def simulated_dataset(folder: Path, n_classes: int, n_attributes: int, n_sensors: int, *, seed: int,

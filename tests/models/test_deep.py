@@ -64,8 +64,8 @@ def frozen(**kw):
 # ------------------------------------------------------------------------- optional extra
 def test_core_never_imports_torch():
     code = (
-        "import sys, tzsl, tzsl.models, tzsl.experiments.deep, tzsl.cli._main\n"
-        "from tzsl.cli._main import _register_commands; _register_commands()\n"
+        "import sys, tzsl, tzsl.models, tzsl.experiments.deep, tzsl.cli\n"
+        "from tzsl.cli import cli\n"
         "from tzsl.models import DeepAttributeEmbedding; DeepAttributeEmbedding().get_params()\n"
         "assert 'torch' not in sys.modules, 'torch imported'\n"
     )

@@ -1,5 +1,5 @@
 """The ``tzsl`` command line: thin click commands that parse options and call a study."""
 
-from tzsl.cli._main import cli, main
+from tzsl.cli._main import EXIT_TZSL_ERROR, EXIT_USAGE, cli, main
 
-__all__ = ["cli", "main"]
+__all__ = ["EXIT_TZSL_ERROR", "EXIT_USAGE", "cli", "main"]

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import click
 
-from tzsl.cli._main import (
+from tzsl.cli._root import (
     backend_option,
     cli,
     data_dir_option,

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from tzsl.cli._main import cli, data_dir_option, force_option
+from tzsl.cli._root import cli, data_dir_option, force_option
 from tzsl.exceptions import ConfigError
 
 

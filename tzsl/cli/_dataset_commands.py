@@ -9,7 +9,7 @@ from pathlib import Path
 
 import click
 
-from tzsl.cli._main import cli, data_dir_option, force_option, no_progress_option
+from tzsl.cli._root import cli, data_dir_option, force_option, no_progress_option
 from tzsl.exceptions import ConfigError, DataFileError
 
 #: Datasets ``tzsl convert`` writes as plain-file folders.

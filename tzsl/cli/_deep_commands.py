@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from tzsl.cli._main import SchemaOption, cli, data_dir_option, force_option, no_progress_option, seed_option
+from tzsl.cli._root import SchemaOption, cli, data_dir_option, force_option, no_progress_option, seed_option
 from tzsl.exceptions import ConfigError
 
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import click
 
-from tzsl.cli._main import (
+from tzsl.cli._root import (
     cli,
     data_dir_option,
     force_option,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from tzsl.cli._main import cli, data_dir_option, no_progress_option
+from tzsl.cli._root import cli, data_dir_option, no_progress_option
 
 
 @cli.group()

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from tzsl.cli._main import (
+from tzsl.cli._root import (
     cli,
     force_option,
     n_jobs_option,

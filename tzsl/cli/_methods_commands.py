@@ -6,7 +6,7 @@ import json
 
 import click
 
-from tzsl.cli._main import cli
+from tzsl.cli._root import cli
 
 
 def _jsonable(value):

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import click
 
-from tzsl.cli._main import cli
+from tzsl.cli._root import cli
 from tzsl.exceptions import ConfigError
 
 

@@ -2,7 +2,8 @@
 
 Object splits for zero-shot evaluation (random and challenging, DAP paper 4.2 and 4.6),
 their CSV files, and the metrics reported per split (trial accuracy, per-class mean
-accuracy, per-attribute balanced accuracy, generalised-ZSL scores); mean and std rows over
+accuracy, per-attribute balanced accuracy, generalised-ZSL scores), the calibration of class posteriors
+(expected calibration error, Brier score, reliability table); mean and std rows over
 splits or seeds (:func:`summarise_over_splits`, the one place studies average); the GZSL
 protocol's held-out trials and calibrated stacking; hyper-parameter selection on training
 classes only (:func:`select_embedding_alpha`). The studies in :mod:`tzsl.experiments` import
@@ -17,6 +18,14 @@ from tzsl.evaluation._metrics import (
     summarise_over_splits,
     trial_accuracy,
 )
+from tzsl.evaluation._calibration import (
+    DEFAULT_N_BINS,
+    brier_terms,
+    calibration_intervals,
+    expected_calibration_error,
+    reliability_table,
+    top_label,
+)
 from tzsl.evaluation._challenging_splits import challenging_splits
 from tzsl.evaluation._split_io import read_splits_csv, write_splits_csv
 from tzsl.evaluation._splits import (
@@ -28,7 +37,13 @@ from tzsl.evaluation._splits import (
 )
 
 __all__: list[str] = [
+    "DEFAULT_N_BINS",
     "Split",
+    "brier_terms",
+    "calibration_intervals",
+    "expected_calibration_error",
+    "reliability_table",
+    "top_label",
     "attribute_exclusions",
     "challenging_splits",
     "check_attribute_table",

@@ -18,7 +18,7 @@ __all__ = ["ERROR_COLUMN", "EXIT_PARTIAL", "attempt", "error_text", "table_failu
 
 #: Column of a study table that holds the failure of that row's fit (empty when it succeeded).
 ERROR_COLUMN = "error"
-#: Exit code of a run that completed but with failed (split, method) fits (see tzsl.cli._main).
+#: Exit code of a run that completed but with failed (split, method) fits (see tzsl.cli._root).
 EXIT_PARTIAL = 1
 
 T = TypeVar("T")

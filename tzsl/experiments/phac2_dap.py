@@ -27,6 +27,7 @@ from tzsl.experiments.phac2_methods import method_comparison
 from tzsl.experiments.study_labels import StudyLabels
 from tzsl.experiments.study_methods import split_masks
 from tzsl.experiments.phac2_tables import (
+    table_titles,
     FUSIONS,
     PRIORS,
     attribute_accuracy_summary,
@@ -413,6 +414,7 @@ def run_dap_study(
         attribute_accuracy_figure,
         attribute_sweep_figure,
         object_map_figure,
+        reliability_figure,
     )
 
     config = config or DapStudyConfig()
@@ -444,6 +446,7 @@ def run_dap_study(
             if compare_methods:
                 tables.update(method_comparison(features, random_results, seed=config.seed, labels=labels,
                                                 **(method_options or {})))
+                out.write_figure("reliability.png", reliability_figure(tables["reliability"]))
         used = [r.split for r in random_results]
         if splits is None and "challenging" in kinds:
             challenging, map_coords = make_splits(features, "challenging", config)
@@ -481,19 +484,3 @@ def _record_solvers(results: list[SplitPosteriors], echo, record: dict | None) -
             echo(text)
 
 
-
-def table_titles(labels: StudyLabels) -> dict[str, str]:
-    """Titles of the tables a run echoes (the paper's table names only beside its numbers)."""
-    beside = " - ours beside the paper" if labels.paper else ""
-    named = (lambda paper_name, name: paper_name if labels.paper else name)
-    return {
-        "table1_fusion": f"{named('Table 1: ', '')}MAXDAP vs AVGDAP (uni-prior), random splits{beside}",
-        "table2_priors": f"{named('Table 2: ', '')}AVGDAP by attribute prior, random splits{beside}",
-        "table3_challenging": f"{named('Table 3: ', '')}challenging splits (MAXDAP and AVGDAP, uni-prior)"
-                              + (" - the paper's mean beside ours" if labels.paper else ""),
-        "multilabel": "Independent vs multi-label attribute classifiers (AVGDAP, uni-prior)",
-        "attribute_accuracy": "Per-attribute test accuracy (mean over random splits and sensors)",
-        labels.methods_table: "AVGDAP and every compared method on the same random splits (trial accuracy)",
-        labels.comparison_table: "Methods vs AVGDAP (uni-prior) on the same random splits, 95% intervals",
-        "gzsl": "Generalised zero-shot: seen / unseen per-class accuracy, harmonic mean (H)",
-    }

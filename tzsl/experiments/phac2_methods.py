@@ -15,9 +15,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
+from scipy.special import softmax
 
 from tzsl.datasets import FeatureSet
-from tzsl.evaluation import Split, summarise_over_splits
+from tzsl.evaluation import Split, reliability_table, summarise_over_splits
 from tzsl.experiments._failures import ERROR_COLUMN, attempt
 from tzsl.experiments.paper_numbers import DAP_MULTILABEL_ACCURACY, DAP_TABLE1
 from tzsl.experiments.phac2_tables import split_label
@@ -34,7 +35,8 @@ from tzsl.experiments.study_methods import (
 if TYPE_CHECKING:
     from tzsl.experiments.phac2_dap import SplitPosteriors
 
-__all__ = ["COMPARISON_TABLE", "DEFAULT_METHODS", "REFERENCE_METHOD", "STUDY", "method_comparison"]
+__all__ = ["COMPARISON_TABLE", "DEFAULT_METHODS", "REFERENCE_METHOD", "RELIABILITY_TABLE", "STUDY", "method_comparison",
+           "reliability_by_method"]
 
 #: Methods compared when none are given: ESZSL and the embedding model at lambda 0.1 and 1.
 DEFAULT_METHODS: tuple[dict, ...] = ({"name": "eszsl"}, {"name": "embedding", "lam": 0.1},
@@ -53,6 +55,20 @@ PAPER_NOTES = {"dap-avg": "the paper's method (reference); paper: Table 1 averag
                "multilabel-dap": "classifier chain (section 4.4); paper: section 4.4"}
 GENERIC_NOTES = {"dap-avg": "reference (AVGDAP, uniform prior)", "dap-max": "same fits as dap-avg",
                  "multilabel-dap": "classifier chain"}
+
+
+#: Table (file stem) of the reliability diagram: per method and equal-mass bin, confidence vs accuracy.
+RELIABILITY_TABLE = "reliability"
+
+
+def reliability_by_method(trials: pd.DataFrame) -> pd.DataFrame:
+    """:func:`tzsl.evaluation.reliability_table` of every method with class posteriors, over all
+    its test trials (every split): columns ``method, bin, n_trials, confidence, accuracy``."""
+    parts = [reliability_table(t["confidence"], t["top_correct"]).assign(method=method)
+             for method, t in trials.groupby("method", sort=False)
+             if "confidence" in t.columns and t["confidence"].notna().all()]
+    columns = ["method", "bin", "n_trials", "confidence", "accuracy"]
+    return pd.concat(parts, ignore_index=True)[columns] if parts else pd.DataFrame(columns=columns)
 
 
 def _fit_predict_split(spec: dict, features: FeatureSet, split: Split, seed: int):
@@ -95,11 +111,12 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
         label = split_label(r.split)
         objects = np.asarray(r.split.test_objects)[r.y]
         row = {"split": label, "chance": r.split.chance, "dap_avg_uni": r.accuracy("avg", "uni")}
-        from_posteriors = [(REFERENCE_METHOD, r.predict("avg", "uni")), ("dap-max", r.predict("max", "uni"))]
+        from_posteriors = [(REFERENCE_METHOD, ("avg", "uni", False)), ("dap-max", ("max", "uni", False))]
         if r.P_multilabel is not None:
-            from_posteriors.append(("multilabel-dap", r.predict("avg", "uni", multilabel=True)))
-        for name, predicted in from_posteriors:
-            trials.append(comparison_trials(name, label, objects, predicted == r.y))
+            from_posteriors.append(("multilabel-dap", ("avg", "uni", True)))
+        for name, variant in from_posteriors:
+            proba = softmax(r.scores(*variant), axis=1)  # the DAP class posterior over the test classes
+            trials.append(comparison_trials(name, label, objects, r.predict(*variant) == r.y, proba, r.y))
             seconds.setdefault(name, []).append(r.fit_seconds)
         errors = []
         for spec in methods:
@@ -112,16 +129,18 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
             fit, y = done
             correct = fit.predicted == y
             row[name] = float(correct.mean())
-            trials.append(comparison_trials(name, label, objects, correct))
+            trials.append(comparison_trials(name, label, objects, correct, fit.proba, y))
             seconds.setdefault(name, []).append(fit.fit_seconds)
         rows.append({**row, ERROR_COLUMN: "; ".join(errors)})
     per_split = summarise_over_splits(pd.DataFrame(rows)).reset_index()
     chance = float(np.mean([r.split.chance for r in results]))
     labels = labels or StudyLabels()
     notes = PAPER_NOTES if labels.paper else GENERIC_NOTES
-    summary = method_summary(pd.concat(trials, ignore_index=True), seconds, chance, REFERENCE_METHOD,
+    trials = pd.concat(trials, ignore_index=True)
+    summary = method_summary(trials, seconds, chance, REFERENCE_METHOD,
                              study=labels.study, data=labels.data, paper=PAPER if labels.paper else None,
                              notes=notes)
     if not labels.paper:  # paper_* headers only beside the paper's dataset and protocol
         summary = summary.drop(columns="paper_accuracy")
-    return {labels.methods_table: per_split, labels.comparison_table: summary}
+    return {labels.methods_table: per_split, labels.comparison_table: summary,
+            RELIABILITY_TABLE: reliability_by_method(trials)}

@@ -27,9 +27,11 @@ from tzsl.models import dap_accuracy_over_subsets
 
 if TYPE_CHECKING:
     from tzsl.experiments.phac2_dap import SplitPosteriors
+    from tzsl.experiments.study_labels import StudyLabels
 
 __all__ = [
     "CONTROL_ROW",
+    "table_titles",
     "FUSIONS",
     "PRIORS",
     "attribute_accuracy_summary",
@@ -336,3 +338,20 @@ def attribute_sweep(results: list[SplitPosteriors], min_attributes: int = 7, max
         accuracy_std=("accuracy_mean", "std"), chance=("chance", "mean"))
     mean.insert(0, "split", "mean")
     return add_trust_columns(pd.concat([table, mean], ignore_index=True), outcomes)
+
+
+def table_titles(labels: StudyLabels) -> dict[str, str]:
+    """Titles of the tables a run echoes (the paper's table names only beside its numbers)."""
+    beside = " - ours beside the paper" if labels.paper else ""
+    named = (lambda paper_name, name: paper_name if labels.paper else name)
+    return {
+        "table1_fusion": f"{named('Table 1: ', '')}MAXDAP vs AVGDAP (uni-prior), random splits{beside}",
+        "table2_priors": f"{named('Table 2: ', '')}AVGDAP by attribute prior, random splits{beside}",
+        "table3_challenging": f"{named('Table 3: ', '')}challenging splits (MAXDAP and AVGDAP, uni-prior)"
+                              + (" - the paper's mean beside ours" if labels.paper else ""),
+        "multilabel": "Independent vs multi-label attribute classifiers (AVGDAP, uni-prior)",
+        "attribute_accuracy": "Per-attribute test accuracy (mean over random splits and sensors)",
+        labels.methods_table: "AVGDAP and every compared method on the same random splits (trial accuracy)",
+        labels.comparison_table: "Methods vs AVGDAP (uni-prior) on the same random splits, 95% intervals",
+        "gzsl": "Generalised zero-shot: seen / unseen per-class accuracy, harmonic mean (H)",
+    }

@@ -31,7 +31,7 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets import FeatureSet
-from tzsl.evaluation import Split, bootstrap_accuracy, paired_differences_table
+from tzsl.evaluation import Split, bootstrap_accuracy, brier_terms, calibration_intervals, paired_differences_table, top_label
 from tzsl.exceptions import SplitError
 from tzsl.experiments.config import method_label
 from tzsl.models import attribute_rows, available_methods, get_method
@@ -59,7 +59,8 @@ COMPARISON_FILE = "method_comparison.csv"
 #: Columns of every study's method comparison (and of :data:`COMPARISON_FILE`).
 COMPARISON_COLUMNS = [
     "study", "data", "method", "accuracy", "ci95_low", "ci95_high", "paper_accuracy", "chance", "fit_seconds",
-    "difference", "difference_ci95_low", "difference_ci95_high", "reference", "n_splits", "n_trials", "note",
+    "difference", "difference_ci95_low", "difference_ci95_high", "reference", "n_splits", "n_trials",
+    "ece", "ece_ci95_low", "ece_ci95_high", "brier", "brier_ci95_low", "brier_ci95_high", "note",
 ]
 
 
@@ -101,11 +102,13 @@ def method_input(spec: dict, X: np.ndarray) -> np.ndarray:
 
 
 class MethodFit(NamedTuple):
-    """One fit of one method: the fitted estimator, predicted test rows, wall-clock fit seconds."""
+    """One fit of one method: the fitted estimator, predicted test rows, wall-clock fit seconds and
+    the class posteriors (n_test, n_test_classes) over the test classes (None: the method gives none)."""
 
     model: object
     predicted: np.ndarray
     fit_seconds: float
+    proba: np.ndarray | None = None
 
 
 def fit_predict(spec: dict, X_train: np.ndarray, classes_train: np.ndarray, class_rows: np.ndarray,
@@ -135,21 +138,31 @@ def fit_predict(spec: dict, X_train: np.ndarray, classes_train: np.ndarray, clas
     start = time.perf_counter()
     model.fit(method_input(spec, X_train), attribute_rows(classes_train, class_rows), classes_train)
     seconds = time.perf_counter() - start
-    return MethodFit(model, np.asarray(model.predict(method_input(spec, X_test), test_rows)), seconds)
+    X = method_input(spec, X_test)
+    proba = np.asarray(model.predict_proba(X, test_rows)) if hasattr(model, "predict_proba") else None
+    return MethodFit(model, np.asarray(model.predict(X, test_rows)), seconds, proba)
 
 
 # --------------------------------------------------------------------------- scoring, shared by every study
 
 
-def comparison_trials(method: str, split, classes: np.ndarray, correct: np.ndarray) -> pd.DataFrame:
+def comparison_trials(method: str, split, classes: np.ndarray, correct: np.ndarray,
+                      proba: np.ndarray | None = None, y: np.ndarray | None = None) -> pd.DataFrame:
     """One row per test trial of one method on one split: method, split, class, trial, correct (0/1).
 
     ``classes`` (n_trials,): the true class (object, fabric, grasped object) of each trial, the
-    bootstrap's cluster; ``trial`` is the position within the split (the pairing key).
+    bootstrap's cluster; ``trial`` is the position within the split (the pairing key). With the
+    class posteriors ``proba`` (n_trials, n_test_classes) and the true column ``y`` (n_trials,),
+    also ``confidence`` (top posterior), ``top_correct`` (argmax right) and ``brier`` (the trial's
+    Brier term), for the calibration columns of :func:`method_summary`.
     """
     classes = np.asarray(classes)
-    return pd.DataFrame({"method": method, "split": str(split), "class": classes,
-                         "trial": np.arange(len(classes)), "correct": np.asarray(correct, dtype=float)})
+    table = pd.DataFrame({"method": method, "split": str(split), "class": classes,
+                          "trial": np.arange(len(classes)), "correct": np.asarray(correct, dtype=float)})
+    if proba is not None:
+        table["confidence"], table["top_correct"] = top_label(proba, y)
+        table["brier"] = brier_terms(proba, y)
+    return table
 
 
 def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], chance: float, reference: str,
@@ -193,6 +206,7 @@ def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], ch
         rows.append({"study": study, "data": data, "method": method, "accuracy": iv.mean,
                      "ci95_low": iv.ci95_low, "ci95_high": iv.ci95_high, "paper_accuracy": paper.get(method, np.nan),
                      "chance": chance, "fit_seconds": float(np.mean(seconds)) if seconds else np.nan,
+                     **_calibration_columns(t),
                      "n_splits": t["split"].nunique(), "n_trials": len(t), "note": notes.get(method, "")})
     table = pd.DataFrame(rows)
     diffs = _paired_differences(trials, reference).rename(
@@ -201,6 +215,18 @@ def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], ch
                         on="method", how="left")
     table["reference"] = reference
     return table[COMPARISON_COLUMNS]
+
+
+def _calibration_columns(trials: pd.DataFrame) -> dict[str, float]:
+    """``ece`` and ``brier`` of one method's class posteriors with their intervals (NaN without them)."""
+    columns = {f"{m}{s}": np.nan for m in ("ece", "brier") for s in ("", "_ci95_low", "_ci95_high")}
+    if "confidence" not in trials.columns or trials["confidence"].isna().any():
+        return columns
+    found = calibration_intervals(trials["confidence"], trials["top_correct"], trials["brier"],
+                                  trials["class"].to_numpy(), trials["split"].to_numpy())
+    for name, iv in found.items():
+        columns.update({name: iv.mean, f"{name}_ci95_low": iv.ci95_low, f"{name}_ci95_high": iv.ci95_high})
+    return columns
 
 
 #: Studies by the input their methods take; a registered method of another input kind is listed

@@ -63,7 +63,8 @@ def phac2_outputs(config) -> list[str]:
         if methods.sweep:
             names += ["attribute_sweep.csv", "attribute_sweep.png"]
         if methods.method_specs():
-            names += [f"{labels.methods_table}.csv", f"{labels.comparison_table}.csv"]
+            names += [f"{labels.methods_table}.csv", f"{labels.comparison_table}.csv", "reliability.csv",
+                      "reliability.png"]
         if methods.gzsl:
             names.append("gzsl.csv")
     if "challenging" in kinds:
@@ -145,7 +146,8 @@ def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], Non
     """``study = "zero-shot"`` and its paper preset ``"phac2-dap"``: one study, labelled by
     :func:`~tzsl.experiments.study_labels.study_labels` (the paper's numbers only on its data)."""
     from tzsl.experiments.gzsl import GZSL_FILE, RELAXED_COLUMN, gzsl_config_record, run_gzsl  # noqa: PLC0415
-    from tzsl.experiments.phac2_dap import make_splits, run_dap_study, solver_lines, table_titles  # noqa: PLC0415
+    from tzsl.experiments.phac2_dap import make_splits, run_dap_study, solver_lines  # noqa: PLC0415
+    from tzsl.experiments.phac2_tables import table_titles  # noqa: PLC0415
     from tzsl.experiments.study_labels import study_labels  # noqa: PLC0415
 
     study = exp.study
