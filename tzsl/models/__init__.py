@@ -67,6 +67,7 @@ from tzsl.models._active_policy import (
     sequential_log_posterior,
     stop_reasons,
 )
+from tzsl.models._posterior_calibration import TemperatureCalibratedZSL, fit_temperature
 from tzsl.models._zsl_input import (
     MIN_CV_CLASSES,
     ZSLInputError,
@@ -135,6 +136,8 @@ __all__: list[str] = [
     "ZSLInputError",
     "attribute_rows",
     "class_grouped_folds",
+    "TemperatureCalibratedZSL",
+    "fit_temperature",
     "MIN_CV_CLASSES",
     "training_classes",
     "FAMILIES",
