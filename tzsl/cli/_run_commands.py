@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import time
 from pathlib import Path
 
@@ -41,8 +42,10 @@ def _overrides(out, n_jobs, seed, backend, scheduler, no_progress, data_dir) -> 
               "file, Dask scheduler), before any fit.")
 @click.option("--print-config", is_flag=True, help="Print the resolved experiment as TOML (every default filled in) "
               "and stop.")
+@click.option("--profile", is_flag=True, help="Print where the time went: wall and CPU seconds per study and stage "
+              "(always recorded in manifest.json).")
 def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, data_dir, force, check: bool,
-        print_config: bool) -> None:
+        print_config: bool, profile: bool) -> None:
     """Run a study: an experiment file (TOML) or a built-in study by NAME.
 
     Built-in studies: phac2-dap, phac2-gzsl, fabric, fabric-deep, hand-simulated (the files
@@ -71,8 +74,10 @@ def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, dat
         click.echo(f"{exp.source}: valid ({exp.study}); 'tzsl run {experiment} --print-config' shows every value")
         return
     start = time.perf_counter()
-    results, _ = run_experiment(exp, force=force, echo=click.echo)
+    results, done = run_experiment(exp, force=force, echo=click.echo)
     click.echo(f"\nwrote {len(results.written)} files to {results.root} in {time.perf_counter() - start:.0f} s")
+    if profile:
+        _echo_profile(done.record["profile"])
 
 
 @cli.command("reproduce-tables")
@@ -84,7 +89,9 @@ def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, dat
 @no_progress_option
 @data_dir_option
 @force_option
-def reproduce_tables(out, n_jobs, backend, scheduler, no_progress, data_dir, force):
+@click.option("--profile", is_flag=True, help="Print where the time went: wall and CPU seconds per study and stage "
+              "(always recorded in manifest.json).")
+def reproduce_tables(out, n_jobs, backend, scheduler, no_progress, data_dir, force, profile):
     """Every table (CSV) and figure (PNG) of both papers from the real data, paper numbers beside ours.
 
     Runs the built-in studies phac2-dap, fabric, hand-simulated and active-touch, in this order, exactly as
@@ -97,6 +104,16 @@ def reproduce_tables(out, n_jobs, backend, scheduler, no_progress, data_dir, for
     results = reproduce(out, force=force, echo=click.echo, n_jobs=n_jobs, backend=backend, scheduler=scheduler,
                         progress=False if no_progress else None, data_dir=data_dir)
     click.echo(f"\nwrote {len(results.written)} files to {out} in {time.perf_counter() - start:.0f} s")
+    if profile:
+        _echo_profile(json.loads((Path(out) / "manifest.json").read_text())["profile"])
+
+
+def _echo_profile(rows: list[dict]) -> None:
+    from tzsl._profile import profile_lines  # noqa: PLC0415
+
+    click.echo("\nwhere the time went (exclusive seconds per stage; 'other': no stage claimed it)")
+    for line in profile_lines(rows):
+        click.echo(line)
 
 
 @cli.command()

@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from tzsl._profile import timed
 from tzsl.evaluation._intervals import DEFAULT_N_BOOT, Interval
 from tzsl.exceptions import TzslError
 
@@ -112,6 +113,7 @@ def _cluster_weights(classes, splits, n_boot: int, rng: np.random.Generator) -> 
     return weights[:, cell]
 
 
+@timed("bootstrap")
 def calibration_intervals(confidence, correct, brier, classes, splits=None, *, n_bins: int = DEFAULT_N_BINS,
                           n_boot: int = DEFAULT_N_BOOT, random_state: int | None = 0) -> dict[str, Interval]:
     """ECE and Brier score with 95% intervals over splits and test classes.

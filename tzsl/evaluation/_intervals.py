@@ -40,6 +40,7 @@ from typing import Literal, NamedTuple
 import numpy as np
 import pandas as pd
 
+from tzsl._profile import timed
 from tzsl.exceptions import TzslError
 
 __all__ = [
@@ -159,6 +160,7 @@ def _interval(point: float, reps: np.ndarray) -> Interval:
     return Interval(float(point), float(low), float(high))
 
 
+@timed("bootstrap")
 def bootstrap_accuracy(
     correct,
     *,
@@ -194,6 +196,7 @@ def bootstrap_accuracy(
     return _interval(point[0], reps[:, 0])
 
 
+@timed("bootstrap")
 def bootstrap_accuracy_columns(
     correct,
     *,
@@ -222,6 +225,7 @@ def bootstrap_accuracy_columns(
     return point, low, high
 
 
+@timed("bootstrap")
 def paired_difference_interval(
     correct_a,
     correct_b,

@@ -29,6 +29,7 @@ from typing import Any
 
 import pandas as pd
 
+from tzsl._profile import timed
 from tzsl._io import atomic_write, ensure_folder, file_sha256
 from tzsl.exceptions import ConfigError
 
@@ -187,6 +188,7 @@ class ResultsDir:
         self.written.append(path)
         return path
 
+    @timed("write")
     def write_csv(self, name: str, table: pd.DataFrame, index: bool = False) -> Path:
         """Write ``table`` as CSV, numbers formatted by :func:`csv_ready` and :data:`CSV_FLOAT_FORMAT`."""
         target = self._target(name)
@@ -217,6 +219,7 @@ class ResultsDir:
                                    "attributes": list(s.kept_attributes), "file": name}
         return self._record(target)
 
+    @timed("figures")
     def write_figure(self, name: str, figure: Any, dpi: int = 120) -> Path:
         """Save a matplotlib figure as PNG and close it."""
         import matplotlib.pyplot as plt

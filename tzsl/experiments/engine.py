@@ -22,6 +22,7 @@ from urllib.parse import urlparse
 
 import pandas as pd
 
+from tzsl._profile import profiling
 from tzsl._warnings import recorded_warnings
 from tzsl.exceptions import ConfigError, PartialRunError, problems_error
 from tzsl.experiments._failures import table_failures
@@ -296,7 +297,8 @@ def run_experiment(
 
     ``overrides``: ``out``, ``n_jobs``, ``seed``, ``backend``, ``scheduler``, ``progress``,
     ``data_dir`` (see :data:`OVERRIDES`; None = as in the file). Writes the study's tables and
-    ``manifest.json`` (resolved settings, the file's text and checksum, data checksums, failures).
+    ``manifest.json`` (resolved settings, the file's text and checksum, data checksums, failures,
+    warnings, and ``config.profile``: wall and CPU seconds per stage, :mod:`tzsl._profile`).
 
     Raises
     ------
@@ -313,8 +315,9 @@ def run_experiment(
     say = echo or (lambda _msg: None)
     results = results_folder(exp, force)
     say(f"{exp.source}: study {exp.study} -> {results.final_root}")
-    with recorded_warnings() as shown:  # each one line on the command line; all in the manifest
+    with recorded_warnings() as shown, profiling(exp.study) as profile:  # warnings and time per stage
         run = execute_study(exp, results, echo)  # checks the experiment (check_experiment) before any fit
+    run.record["profile"] = profile.rows()
     failures = run.failures  # one scan of the tables' error columns
     results.write_manifest(manifest_record(exp, run), data_files=run.data_files,
                            extra={"experiment_sha256": hashlib.sha256(exp.text.encode()).hexdigest(),

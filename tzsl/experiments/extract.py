@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 
+from tzsl._profile import timed
 from tzsl.datasets import (
     FeatureSet,
     load_phac2_h5,
@@ -18,6 +19,7 @@ from tzsl.features import penn_feature_set, raw_feature_set
 DATASETS: tuple[str, ...] = ("phac2-penn", "phac2-h5", "phac2-hold-mat")
 
 
+@timed("load")
 def extract_features(
     dataset: str,
     data_dir: str | os.PathLike | None = None,

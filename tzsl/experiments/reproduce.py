@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from tzsl.exceptions import PartialRunError
+from tzsl._profile import profiling
 from tzsl._warnings import recorded_warnings
 from tzsl.experiments._outputs import ResultsDir
 
@@ -75,14 +76,16 @@ def reproduce_tables(
         elif exp.study == "active-touch":
             results.check_free(ACTIVE_TOUCH_OUTPUTS)
     results.check_free(["manifest.json", "method_comparison.csv"])
-    records, data_files, timings, tables, done_tables, warned = {}, [], {}, [], [], {}
+    records, data_files, timings, tables, done_tables, warned, profiles = {}, [], {}, [], [], {}, []
     failures: list[str] = []
     for name, exp in zip(studies, experiments, strict=True):
         say(f"\n== {name} ({exp.source}) ==")
         start = time.perf_counter()
-        with recorded_warnings() as shown:
+        with recorded_warnings() as shown, profiling(name) as profile:
             done = execute_study(exp, results, echo)
         warned[name] = shown.lines
+        done.record["profile"] = profile.rows()
+        profiles += done.record["profile"]
         timings[f"{name}_s"] = time.perf_counter() - start
         records[name] = manifest_record(exp, done)
         data_files += list(done.data_files)
@@ -97,7 +100,7 @@ def reproduce_tables(
         tables.append(COMPARISON_FILE[: -len(".csv")])
     results.write_manifest({"studies": records}, data_files=data_files,
                            extra={"timings_s": timings, "tables": tables, "reproduce_studies": list(studies),
-                                  "failures": failures, "warnings": warned})
+                                  "failures": failures, "warnings": warned, "profile": profiles})
     results.commit()
     if failures:
         raise PartialRunError(results.root, failures)

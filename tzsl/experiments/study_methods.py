@@ -30,6 +30,7 @@ from typing import NamedTuple
 import numpy as np
 import pandas as pd
 
+from tzsl._profile import timed
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, bootstrap_accuracy, brier_terms, calibration_intervals, paired_differences_table, top_label
 from tzsl.exceptions import SplitError
@@ -111,6 +112,7 @@ class MethodFit(NamedTuple):
     proba: np.ndarray | None = None
 
 
+@timed("fit")
 def fit_predict(spec: dict, X_train: np.ndarray, classes_train: np.ndarray, class_rows: np.ndarray,
                 X_test: np.ndarray, test_rows: np.ndarray, seed: int | None = None) -> MethodFit:
     """Fit the method on training trials; predict test trials among the test classes.

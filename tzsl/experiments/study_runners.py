@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from tzsl._profile import timed
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.config import Experiment
 from tzsl.experiments.engine import (
@@ -72,6 +73,7 @@ def phac2_outputs(config) -> list[str]:
     return names
 
 
+@timed("load")
 def phac2_features(exp: Experiment):
     """The FeatureSet of a phac2-dap experiment's ``[dataset]`` and ``[features]``."""
     ds, feat = exp.config.dataset, exp.config.features

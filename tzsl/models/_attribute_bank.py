@@ -19,6 +19,7 @@ from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 from tqdm.auto import tqdm
 
+from tzsl._profile import timed
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_svm import AttributeSVM
 from tzsl.models._attribute_training import AUTO_MAX_EXACT_TRIALS, SOLVERS, AttributeTrainingError, GridEdgeWarning
@@ -198,6 +199,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
             )
         return X
 
+    @timed("fit")
     def fit(self, X, A, groups=None):
         """Fit one classifier per (attribute, sensor).
 
@@ -274,6 +276,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
                 GridEdgeWarning, stacklevel=3,
             )
 
+    @timed("predict")
     def predict_proba(self, X) -> np.ndarray:
         """Attribute posteriors per sensor.
 
