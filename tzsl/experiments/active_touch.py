@@ -36,6 +36,7 @@ import numpy as np
 import pandas as pd
 from joblib import Parallel, delayed
 
+from tzsl._profile import stage
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import (
     Split,
@@ -360,9 +361,10 @@ def run_active_touch_study(features: FeatureSet, results_dir: ResultsDir, config
     for k, kind in enumerate(config.kinds):
         splits = make_active_splits(features, kind, config)
         seeds = [int(np.random.SeedSequence([config.seed, k, i]).generate_state(1)[0]) for i in range(len(splits))]
-        results = Parallel(n_jobs=config.n_jobs)(
-            delayed(evaluate_split)(features, split, seed=s, update=config.update, cv=config.cv,
-                                    n_samples=config.n_samples) for split, s in zip(splits, seeds))
+        with stage("fit"):  # per-EP attribute models and their evaluation, in joblib workers
+            results = Parallel(n_jobs=config.n_jobs)(
+                delayed(evaluate_split)(features, split, seed=s, update=config.update, cv=config.cv,
+                                        n_samples=config.n_samples) for split, s in zip(splits, seeds))
         for split, r in zip(splits, results):
             chosen[split.name] = r["chosen"]
             log(f"{split.name}: {len(r['objects'])} test trials, active after 1..4 EPs "

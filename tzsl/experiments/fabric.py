@@ -84,6 +84,7 @@ import numpy as np
 import pandas as pd
 from joblib import Parallel, delayed
 
+from tzsl._profile import stage
 from tzsl.datasets import FABRIC_ATTRIBUTE_SETS, load_fabric
 from tzsl.evaluation import DEFAULT_ALPHAS, select_embedding_alpha
 from tzsl.exceptions import ConfigError
@@ -293,11 +294,12 @@ def run_fabric_study(
 
     from tqdm.auto import tqdm
 
-    results = Parallel(n_jobs=n_jobs, return_as="generator")(jobs)
-    rows = [
-        {**m, **r}
-        for m, r in zip(meta, tqdm(results, total=len(jobs), desc="fabric fits", disable=not progress))
-    ]
+    with stage("fit"):  # the embedding and ESZSL fits, in joblib workers
+        results = Parallel(n_jobs=n_jobs, return_as="generator")(jobs)
+        rows = [
+            {**m, **r}
+            for m, r in zip(meta, tqdm(results, total=len(jobs), desc="fabric fits", disable=not progress))
+        ]
     outcomes, per_run = fabric_outcomes(rows)  # per-sample outcomes -> intervals in the table and the runs
     correct = [row.pop("correct", None) for row in rows]  # per test sample: the comparison's trials
     runs = pd.DataFrame(rows)
