@@ -87,3 +87,35 @@ def test_a_method_made_overconfident_on_purpose_gets_the_matching_temperature():
     np.testing.assert_allclose(tempered, fitted[1.0].predict_proba(X[~train], K[unseen]), atol=1e-3)
     assert (sharp.predict(X[~train], K[unseen]) == sharp.estimator_.predict(X[~train], K[unseen])).all()
     assert expected_calibration_error(*top_label(tempered, y)) <= expected_calibration_error(*top_label(raw, y))
+
+
+def test_a_study_entry_can_ask_for_tempered_posteriors():
+    """``{name = "eszsl", calibration = "temperature"}`` in [methods] compare (issue 21, item 2)."""
+    import pytest  # noqa: PLC0415
+
+    from tzsl.experiments.config import method_label  # noqa: PLC0415
+    from tzsl.experiments.config._common import methods_ok  # noqa: PLC0415
+    from tzsl.experiments.study_methods import study_estimator  # noqa: PLC0415
+
+    specs = methods_ok(["eszsl", {"name": "eszsl", "calibration": "temperature"}])
+    assert [method_label(s) for s in specs] == ["eszsl", "eszsl_calibration_temperature"]
+    model = study_estimator(specs[1], seed=0)
+    assert isinstance(model, TemperatureCalibratedZSL) and not isinstance(study_estimator(specs[0], 0),
+                                                                        TemperatureCalibratedZSL)
+    with pytest.raises(ValueError, match="the one calibration is 'temperature'"):
+        methods_ok([{"name": "sae", "calibration": "isotonic"}])
+
+
+def test_the_estimator_contract():
+    """Outside check_estimator (listed in NOT_CHECKED with the reason): validation, clone, get_params."""
+    import pytest  # noqa: PLC0415
+
+    from tzsl.models._validation import ParameterError  # noqa: PLC0415
+
+    model = TemperatureCalibratedZSL(estimator=build_method("eszsl"), n_folds=4, random_state=0)
+    assert clone(model).get_params()["n_folds"] == 4 and "estimator__attribute_model" in model.get_params()
+    K, cls, X = _data()
+    with pytest.raises(ParameterError, match="n_folds"):
+        TemperatureCalibratedZSL(estimator=build_method("eszsl"), n_folds=1).fit(X, K[cls], cls)
+    with pytest.raises(ParameterError, match="estimator"):
+        TemperatureCalibratedZSL().fit(X, K[cls], cls)

@@ -107,7 +107,7 @@ def test_all_estimators_lists_public_estimator_classes():
     assert {"ESZSL", "ESZSLCV", "EmbeddingZSL", "ZeroShotClassifier", "AttributeSVM",
             "AttributeClassifierBank", "MultiLabelAttributeClassifier", "HandDAPClassifier",
             "DeepAttributeEmbedding", "IAP", "SAE", "SAECV", "ALE", "SJE", "DeViSE", "LogisticAttribute",
-            "PerEPAttributeModel", "ScalableAttributeClassifier", "ScoreEnsembleZSL"} == set(names)
+            "PerEPAttributeModel", "ScalableAttributeClassifier", "ScoreEnsembleZSL", "TemperatureCalibratedZSL"} == set(names)
     for _, cls in all_estimators():  # keyword-only __init__ everywhere
         params = list(inspect.signature(cls.__init__).parameters.values())[1:]
         assert all(p.kind is p.KEYWORD_ONLY for p in params), cls

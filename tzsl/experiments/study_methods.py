@@ -34,8 +34,8 @@ from tzsl._profile import timed
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, bootstrap_accuracy, brier_terms, calibration_intervals, paired_differences_table, top_label
 from tzsl.exceptions import SplitError
-from tzsl.experiments.config import method_label
-from tzsl.models import attribute_rows, available_methods, get_method
+from tzsl.experiments.config import CALIBRATION_KEY, method_label
+from tzsl.models import TemperatureCalibratedZSL, attribute_rows, available_methods, get_method
 
 __all__ = [
     "COMPARISON_COLUMNS",
@@ -87,11 +87,13 @@ def takes_seed(spec: dict) -> bool:
 
 
 def study_estimator(spec: dict, seed: int | None):
-    """An unfitted estimator of the method entry ``spec``, seeded with ``seed`` where it is random."""
-    params = {k: v for k, v in spec.items() if k != "name"}
+    """An unfitted estimator of the method entry ``spec``, seeded with ``seed`` where it is random;
+    with ``calibration = "temperature"`` wrapped in :class:`tzsl.models.TemperatureCalibratedZSL`."""
+    params = {k: v for k, v in spec.items() if k not in ("name", CALIBRATION_KEY)}
     if seed is not None and takes_seed(spec):
         params["random_state"] = int(seed)
-    return get_method(spec["name"]).build(**params)
+    model = get_method(spec["name"]).build(**params)
+    return TemperatureCalibratedZSL(estimator=model) if CALIBRATION_KEY in spec else model
 
 
 def method_input(spec: dict, X: np.ndarray) -> np.ndarray:

@@ -24,6 +24,9 @@ NOT_CHECKED: dict[str, str] = {
     "PerEPAttributeModel": "takes per-sensor features (n_trials, n_sensors, n_features) split into EP "
     "column blocks by feature name; its per-EP LogisticAttribute passes check_estimator; tested in "
     "tests/models/test_active_touch.py",
+    "TemperatureCalibratedZSL": "composes a zero-shot estimator fitted on (X, Y attribute rows, groups) and "
+    "predicting over class_attributes given at predict time; needs >= 4 training classes for its class-grouped "
+    "folds; held to the contract (validation, clone, get_params) in tests/models/test_posterior_calibration.py",
     "HandDAPClassifier": "takes the packed grasp layout and a class-attribute DataFrame in fit(X, y, K); "
     "tested in tests/models/test_hand_dap.py",
 }

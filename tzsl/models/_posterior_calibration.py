@@ -86,7 +86,7 @@ class TemperatureCalibratedZSL(ValidatedParamsMixin, BaseEstimator):
         "random_state": ["random_state"],
     }
 
-    def __init__(self, estimator=None, *, n_folds: int = 3, random_state=None) -> None:
+    def __init__(self, *, estimator=None, n_folds: int = 3, random_state=None) -> None:
         self.estimator = estimator
         self.n_folds = n_folds
         self.random_state = random_state
