@@ -10,7 +10,8 @@ every accuracy) is unchanged.
 class-grouped folds of the training classes (:func:`tzsl.models.class_grouped_folds`) each hold
 some classes out; the method is refitted on the others and scores the held-out trials among the
 held-out classes' attribute rows (pseudo-unseen classes). ``T`` minimises the log-loss of those
-scores; the method is then refitted on every training trial.
+scores; the method is then refitted on every training trial. A fold leaves out the attributes
+its training objects cannot teach (fewer than 2 positive or negative objects), as a split does.
 """
 
 from __future__ import annotations
@@ -54,6 +55,20 @@ def fit_temperature(log_proba: list[np.ndarray], y: list[np.ndarray]) -> float:
         return float(total / sum(len(yy) for yy in y))
 
     return float(np.exp(minimize_scalar(loss, bounds=(-5.0, 5.0), method="bounded").x))
+
+
+def _trainable_attributes(Y: np.ndarray, units: np.ndarray, minimum: int = 2) -> np.ndarray:
+    """Attributes (mask, (n_attributes,)) with ``minimum`` positive and negative objects among ``units``.
+
+    A fold that holds classes out can leave an attribute with one positive training object, which
+    attribute classifiers tuned by object-grouped CV cannot fit: the fold leaves it out, as a
+    split does (:func:`tzsl.evaluation.random_object_splits`).
+    """
+    _, first = np.unique(units, return_index=True)
+    rows = Y[first]
+    positives = rows.sum(axis=0)
+    keep = (positives >= minimum) & (len(rows) - positives >= minimum)
+    return keep if keep.any() else np.ones(Y.shape[1], dtype=bool)
 
 
 class TemperatureCalibratedZSL(ValidatedParamsMixin, BaseEstimator):
@@ -109,10 +124,12 @@ class TemperatureCalibratedZSL(ValidatedParamsMixin, BaseEstimator):
         name = type(self).__name__
         S, y = training_classes(Y, name, groups)
         log_proba, truth, held_out = [], [], 0
+        units = y if groups is None else groups  # the objects an attribute model counts positives over
         for train, val in class_grouped_folds(y, self.n_folds, name):
             classes = np.unique(y[val])
-            model = clone(self.estimator).fit(X[train], Y[train], None if groups is None else groups[train])
-            P = np.asarray(model.predict_proba(X[val], S[classes]))
+            keep = _trainable_attributes(Y[train], units[train])
+            model = clone(self.estimator).fit(X[train], Y[train][:, keep], None if groups is None else groups[train])
+            P = np.asarray(model.predict_proba(X[val], S[classes][:, keep]))
             log_proba.append(np.log(np.clip(P, _EPS, None)))
             truth.append(np.searchsorted(classes, y[val]))
             held_out += len(classes)
