@@ -15,7 +15,6 @@ import hashlib
 import os
 import socket
 from collections.abc import Callable, Mapping
-from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 from urllib.parse import urlparse
@@ -25,9 +24,18 @@ import pandas as pd
 from tzsl._profile import profiling
 from tzsl._warnings import recorded_warnings
 from tzsl.exceptions import ConfigError, PartialRunError, problems_error
-from tzsl.experiments._failures import table_failures
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.config import Experiment, load_experiment, to_toml
+from tzsl.experiments.study_settings import (  # noqa: F401 - re-exported: the engine's vocabulary
+    StudyRun,
+    active_config,
+    dap_config,
+    deep_arguments,
+    fabric_arguments,
+    gzsl_config,
+    hand_config,
+    record_config,
+)
 from tzsl.experiments.study_labels import ZERO_SHOT_STUDIES
 
 #: The option names every front-end shares -> the key of the experiment they override.
@@ -70,98 +78,6 @@ def override_values(study: str | None, options: Mapping[str, Any], strict: bool 
             continue
         values[key] = value
     return values
-
-
-# --------------------------------------------------------------------------- settings -> study arguments
-
-
-def _svm_params(svm) -> dict:
-    """``[svm]`` -> :class:`~tzsl.models.AttributeSVM` parameters that differ from its defaults."""
-    from tzsl.models import AttributeSVM  # noqa: PLC0415
-
-    defaults = AttributeSVM().get_params()
-    params: dict[str, Any] = {"cv": None if svm.cv == 0 else svm.cv}
-    for key in ("C_range", "gamma_range", "n_C", "n_gamma", "grid", "n_draws", "scoring", "platt_weighting"):
-        value = getattr(svm, key)
-        params[key] = tuple(float(v) for v in value) if key.endswith("_range") else value
-    return {k: v for k, v in params.items() if v != defaults[k]}
-
-
-def dap_config(exp: Experiment):
-    """The :class:`~tzsl.experiments.phac2_dap.DapStudyConfig` of a phac2-dap experiment."""
-    from tzsl.experiments.phac2_dap import DapStudyConfig  # noqa: PLC0415
-
-    c = exp.config
-    return DapStudyConfig(
-        n_splits=c.splits.n_splits, n_test=c.splits.n_test, seed=c.splits.seed,
-        random_min_train_positives=c.splits.random_min_train_positives,
-        challenging_min_train_positives=c.splits.challenging_min_train_positives,
-        min_train_negatives=c.splits.min_train_negatives,
-        undersampling=c.svm.undersampling, svm_params=_svm_params(c.svm), multilabel=c.methods.multilabel,
-        sweep_min_attributes=c.methods.sweep_min_attributes, sweep_max_subsets=c.methods.sweep_max_subsets,
-        n_jobs=c.compute.n_jobs, backend=c.compute.backend, scheduler=c.compute.scheduler,
-        progress=c.compute.progress, cache=c.compute.cache,
-    )
-
-
-def gzsl_config(exp: Experiment):
-    """The :class:`~tzsl.experiments.gzsl.GzslConfig` of a phac2-dap experiment's ``[gzsl]``."""
-    from tzsl.experiments.gzsl import GzslConfig  # noqa: PLC0415
-
-    g = exp.config.gzsl
-    return GzslConfig(holdout_fraction=float(g.holdout_fraction), methods=tuple(g.methods), fusion=g.fusion,
-                      prior=g.prior, calibrated_stacking=g.calibrated_stacking, max_draws=g.max_draws)
-
-
-def fabric_arguments(exp: Experiment) -> dict:
-    """Keyword arguments of :func:`tzsl.experiments.fabric.run_fabric_study` (all but ``out``)."""
-    c = exp.config
-    return {
-        "data_dir": exp.resolve(c.dataset.data_dir), "seeds": c.splits.n_seeds, "configs": tuple(c.splits.configs),
-        "gelsight_root": exp.resolve(c.dataset.gelsight_root), "attributes": c.dataset.attributes,
-        "progress": c.compute.progress, "lams": tuple(c.methods.embedding_lambdas),
-        "alphas": tuple(float(a) for a in c.methods.alphas), "conditions": tuple(c.features.conditions),
-        "gelsight_conditions": None if c.features.gelsight_conditions is None
-        else tuple(c.features.gelsight_conditions),
-        "seed": c.splits.seed, "max_iter": c.methods.max_iter, "n_jobs": c.compute.n_jobs,
-        "methods": tuple(dict(spec) for spec in c.methods.compare),
-    }
-
-
-def deep_arguments(exp: Experiment) -> dict:
-    """Keyword arguments of :func:`tzsl.experiments.deep.run_deep_fabric_study` (all but ``out``)."""
-    c = exp.config
-    return {
-        "data_dir": exp.resolve(c.dataset.data_dir), "seeds": c.splits.n_seeds, "configs": tuple(c.splits.configs),
-        "gelsight_root": exp.resolve(c.dataset.gelsight_root), "attributes": c.dataset.attributes,
-        "progress": c.compute.progress, "lams": tuple(c.methods.embedding_lambdas),
-        "gelsight_conditions": None if c.features.gelsight_conditions is None
-        else tuple(c.features.gelsight_conditions),
-        "seed": c.splits.seed, "model_params": dict(c.methods.model) or None,
-        "save_model": exp.resolve(c.output.model),
-    }
-
-
-def hand_config(exp: Experiment):
-    """The :class:`~tzsl.experiments.hand.HandStudyConfig` of a hand experiment."""
-    from tzsl.experiments.hand import HandStudyConfig  # noqa: PLC0415
-
-    c = exp.config
-    values = {**c.simulation.model_dump(), **c.features.model_dump(),
-              **{k: v for k, v in c.methods.model_dump().items() if k != "model"},
-              "model_params": dict(c.methods.model), "n_jobs": c.compute.n_jobs}
-    return HandStudyConfig(**values)
-
-
-def active_config(exp: Experiment):
-    """The :class:`~tzsl.experiments.active_touch.ActiveTouchConfig` of an active-touch experiment."""
-    from tzsl.experiments.active_touch import ActiveTouchConfig  # noqa: PLC0415
-
-    c = exp.config
-    return ActiveTouchConfig(kinds=tuple(c.splits.kinds), n_splits=c.splits.n_splits, n_test=c.splits.n_test,
-                             seed=c.splits.seed, thresholds=tuple(float(t) for t in c.methods.thresholds),
-                             update=c.methods.update, cv=c.methods.cv, n_samples=c.methods.n_samples,
-                             n_boot=c.methods.n_boot, n_jobs=c.compute.n_jobs)
 
 
 # --------------------------------------------------------------------------- checks before any fit
@@ -232,20 +148,6 @@ def check_experiment(exp: Experiment) -> None:
 
 
 # --------------------------------------------------------------------------- running
-
-
-@dataclass
-class StudyRun:
-    """What :func:`execute_study` returns: the tables written and what the manifest records."""
-
-    tables: dict[str, pd.DataFrame]
-    record: dict[str, Any]
-    data_files: list = field(default_factory=list)
-
-    @property
-    def failures(self) -> list[str]:
-        """One line per failed (split, method) fit, read from the tables' ``error`` columns."""
-        return table_failures(self.tables)
 
 
 def execute_study(exp: Experiment, results: ResultsDir, echo: Callable[[str], None] | None = None) -> StudyRun:
@@ -375,8 +277,3 @@ def run(config_or_path: str | os.PathLike | Experiment, *, table: str | None = N
     out = done.tables[name].copy()
     out.attrs = {"results_dir": str(results.root), "tables": sorted(done.tables)}
     return out
-
-
-def record_config(config) -> dict:
-    """A dataclass config as a JSON-friendly dict (tuples as lists)."""
-    return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(config).items()}

@@ -1,7 +1,7 @@
 """One function per study kind: resolved settings -> the study's own call -> tables.
 
 Called only by :func:`tzsl.experiments.engine.execute_study`; each returns a
-:class:`~tzsl.experiments.engine.StudyRun` (tables written, manifest record, data files).
+:class:`~tzsl.experiments.study_settings.StudyRun` (tables written, manifest record, data files).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import pandas as pd
 from tzsl._profile import timed
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.config import Experiment
-from tzsl.experiments.engine import (
+from tzsl.experiments.study_settings import (
     StudyRun,
     active_config,
     dap_config,
