@@ -107,7 +107,6 @@ def _format(table: pd.DataFrame) -> str:
     return table.to_string(index=False, float_format=lambda v: f"{v:.3f}", na_rep="-")
 
 
-
 def prepare_phac2(exp: Experiment):
     """Load the dataset and the split file of a phac2-dap experiment and check the CV folds fit.
 
