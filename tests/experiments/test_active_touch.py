@@ -41,7 +41,8 @@ def test_study_writes_table_and_figure(tmp_path, monkeypatch):
     fs = _feature_set()
     config = ActiveTouchConfig(kinds=("random",), n_splits=2, thresholds=(0.5, 0.9), cv=3, n_samples=32, n_boot=200)
     tables = run_active_touch_study(fs, ResultsDir(tmp_path), config)
-    assert {"active_touch.csv", "active_touch_curves.csv", "active_touch_stop.csv", "active_touch.png"} == {
+    assert {"active_touch.csv", "active_touch_curves.csv", "active_touch_stop.csv", "active_touch_decided.csv",
+            "active_touch.png", "active_touch_stopping.png"} == {
         p.name for p in tmp_path.iterdir()}
     table = tables["active_touch_curves"]
     written = pd.read_csv(tmp_path / "active_touch_curves.csv")
