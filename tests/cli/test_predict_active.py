@@ -72,6 +72,22 @@ def test_bundle_records_eps_and_schema(simulated):
     assert model.confusion_.shape == (2, 3, 2, 10)
 
 
+def test_bundle_round_trip_keeps_the_fitted_exponents(simulated, tmp_path):
+    from tzsl.bundle import save_bundle
+    from tzsl.exceptions import ModelBundleError
+
+    root, meta, _, _ = simulated
+    model, loaded = load_per_ep_model(root / "per_ep.tzsl")
+    assert model.exponents_.shape == (4,) and model.exponents_[0] == 1.0 and (model.exponents_ > 0).all()
+    assert loaded["posterior"]["tempering"] == model.tempering == "subset"
+    np.testing.assert_allclose(loaded["posterior"]["exponents"], model.exponents_)
+    assert loaded["posterior"]["fitted_on_trials"] == model.tempering_trials_ > 0
+    del model.exponents_  # a bundle written before the tempered update
+    save_bundle(tmp_path / "old.tzsl", model, kind=PER_EP_KIND, metadata=meta)
+    with pytest.raises(ModelBundleError, match="no fitted posterior exponents"):
+        load_per_ep_model(tmp_path / "old.tzsl")
+
+
 def test_suggest_next_json_matches_the_policy(simulated):
     root, _, classes, test = simulated
     out = _ok("predict", "--model", root / "per_ep.tzsl", "--classes", classes, "--eps-done", "squeeze",
@@ -88,6 +104,10 @@ def test_suggest_next_json_matches_the_policy(simulated):
     assert report["ranking"][-1]["class"] == "u1"
     assert not report["decided"] and report["next_ep"] == "hold" and report["expected_gain_bits"] > 0
     assert [c["ep"] for c in report["candidates"]] == ["hold"]
+    post = report["posterior"]
+    assert set(post) == {"tempering", "exponent", "untempered_top_probability", "fitted_on"}
+    assert post == direct["posterior"] and post["exponent"] == pytest.approx(model.exponents_[1])
+    assert "pseudo-unseen training objects" in post["fitted_on"]
 
 
 def test_suggest_next_text_and_decided(simulated):
@@ -96,6 +116,7 @@ def test_suggest_next_text_and_decided(simulated):
                "--suggest-next", "--threshold", "0.999", root / "squeeze_only.csv")
     assert "EPs done squeeze (6 s)" in text and "not decided: top posterior" in text
     assert "suggested next EP: hold (expected entropy reduction" in text
+    assert "posterior: tempering 'subset', exponent" in text
     decided = json.loads(_ok("predict", "--model", root / "per_ep.tzsl", "--classes", classes, "--eps-done",
                              "squeeze", "--suggest-next", "--json", "--threshold", "0.01", root / "squeeze_only.csv"))
     assert decided["decided"] and decided["stop_reason"] == "threshold" and decided["next_ep"] is None

@@ -11,6 +11,7 @@ from tzsl.evaluation import random_object_splits
 from tzsl.exceptions import ConfigError
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.active_touch import ActiveTouchConfig, evaluate_split, run_active_touch_study
+from tzsl.experiments.active_touch_stopping import DECIDED_COLUMNS, stop_outcomes
 
 EPS = ("squeeze", "hold", "slow_slide", "fast_slide")
 
@@ -39,9 +40,11 @@ def _feature_set(n_objects=24, n_trials=3, n_attributes=6, seed=0) -> FeatureSet
 def test_study_writes_table_and_figure(tmp_path, monkeypatch):
     monkeypatch.delenv("TZSL_CACHE_DIR", raising=False)
     fs = _feature_set()
-    config = ActiveTouchConfig(kinds=("random",), n_splits=2, thresholds=(0.5, 0.9), cv=3, n_samples=32, n_boot=200)
+    config = ActiveTouchConfig(kinds=("random",), n_splits=2, thresholds=(0.5, 0.9), decided_thresholds=(0.5, 0.9), cv=3,
+                               n_samples=32, n_boot=200)
     tables = run_active_touch_study(fs, ResultsDir(tmp_path), config)
-    assert {"active_touch.csv", "active_touch_curves.csv", "active_touch_stop.csv", "active_touch.png"} == {
+    assert {"active_touch.csv", "active_touch_curves.csv", "active_touch_stop.csv", "active_touch_decided.csv",
+            "active_touch.png", "active_touch_stopping.png"} == {
         p.name for p in tmp_path.iterdir()}
     table = tables["active_touch_curves"]
     written = pd.read_csv(tmp_path / "active_touch_curves.csv")
@@ -73,6 +76,9 @@ def test_study_writes_table_and_figure(tmp_path, monkeypatch):
     np.testing.assert_allclose(stop["difference"], stop["accuracy"] - stop["all_eps_accuracy"], atol=1e-12)
     for _, g in stop.groupby("strategy"):  # a higher threshold never stops earlier
         assert g.sort_values("threshold")["mean_eps"].is_monotonic_increasing
+    assert (stop["posterior"] == "tempered").all()
+    _check_decided_table(tables["active_touch_decided"], pd.read_csv(tmp_path / "active_touch_decided.csv"))
+    assert len(table.attrs["exponents"]) == 2 and all(len(v) == 16 for v in table.attrs["exponents"].values())
     summary = tables["active_touch"]
     assert list(summary["strategy"][:3]) == ["active", "active_per_second", "best_fixed_train"]
     assert list(summary.columns[:7]) == ["split_kind", "strategy", "acc_1ep", "acc_1ep_ci95_low", "acc_1ep_ci95_high",
@@ -82,6 +88,36 @@ def test_study_writes_table_and_figure(tmp_path, monkeypatch):
     assert summary.loc[summary["strategy"] == "chance", "acc_1ep"].iloc[0] == pytest.approx(table["chance"].iloc[0])
     with pytest.raises(ConfigError, match="already exists"):
         run_active_touch_study(fs, ResultsDir(tmp_path), config)
+
+
+def _check_decided_table(dec: pd.DataFrame, written: pd.DataFrame) -> None:
+    assert tuple(dec.columns) == DECIDED_COLUMNS and list(written.columns) == list(DECIDED_COLUMNS)
+    assert set(dec["posterior"]) == {"tempered", "untempered"} and set(dec["strategy"]) == {"active", "random"}
+    assert len(dec) == 2 * 2 * 2  # posteriors x strategies x thresholds (0.5, 0.9)
+    assert dec["decided_share"].between(0, 1).all()
+    some = dec["decided_share"] > 0
+    assert (dec.loc[some, "decided_accuracy_ci95_low"] <= dec.loc[some, "decided_accuracy"] + 1e-12).all()
+    assert (dec.loc[some, "decided_accuracy"] <= dec.loc[some, "decided_accuracy_ci95_high"] + 1e-12).all()
+    assert dec.loc[~some, "decided_accuracy"].isna().all()
+    np.testing.assert_allclose(dec["decided_gap"], dec["decided_accuracy"] - dec["threshold"])
+    np.testing.assert_allclose(dec["eps_saved"], 4 - dec["mean_eps"])
+    np.testing.assert_allclose(dec["difference"], dec["accuracy"] - dec["all_eps_accuracy"], atol=1e-12)
+    for _, g in dec.groupby(["posterior", "strategy"]):  # a higher threshold decides fewer trials, later
+        g = g.sort_values("threshold")
+        assert g["decided_share"].is_monotonic_decreasing and g["mean_eps"].is_monotonic_increasing
+    active, random = dec[dec["strategy"] == "active"], dec[dec["strategy"] == "random"]
+    assert random["active_minus_random"].isna().all() and active["active_minus_random"].notna().all()
+    merged = active.merge(random, on=["posterior", "threshold"], suffixes=("", "_r"))
+    np.testing.assert_allclose(merged["active_minus_random"], merged["accuracy"] - merged["accuracy_r"], atol=1e-12)
+    np.testing.assert_allclose(merged["active_minus_random_eps"], merged["mean_eps"] - merged["mean_eps_r"])
+
+
+def test_stop_outcomes_stops_at_the_first_confident_ep():
+    top = np.array([[0.3, 0.95, 0.99], [0.2, 0.4, 0.6], [0.91, 0.5, 0.99]])
+    correct = np.array([[0, 1, 1], [0, 0, 1], [1, 0, 0]])
+    seconds = np.array([[1.0, 3.0, 6.0], [2.0, 3.0, 6.0], [3.0, 5.0, 6.0]])
+    out = stop_outcomes(top, correct, seconds, 0.9)
+    np.testing.assert_array_equal(out, [[1, 1, 2, 3.0], [0, 1, 3, 6.0], [1, 1, 1, 3.0]])
 
 
 @pytest.mark.slow
@@ -137,6 +173,7 @@ def test_tzsl_run_active_touch_writes_every_table(tmp_path, data_dir, monkeypatc
     results, run = run_experiment(path, out=tmp_path / "out")
     written = {p.name for p in (tmp_path / "out").iterdir()}
     assert written == {"active_touch.csv", "active_touch_curves.csv", "active_touch_stop.csv", "active_touch.png",
+                       "active_touch_decided.csv", "active_touch_stopping.png",
                        "active_touch_hand.csv", "active_touch_hand_stop.csv", "active_touch_hand.png", "manifest.json"}
     assert set(run.tables) == {n.removesuffix(".csv") for n in written if n.endswith(".csv")}
     assert run.record["hand"]["hand_data"] == "simulated"

@@ -19,8 +19,8 @@ from tzsl.models._active_touch import (
     run_policy,
     sequential_log_posterior,
     stop_reasons,
-    suggest_next_ep,
 )
+from tzsl.models._active_suggest import suggest_next_ep
 
 EPS = ("noise_a", "info", "noise_b")
 SECONDS = {"noise_a": 1.0, "info": 2.0, "noise_b": 3.0}

@@ -24,6 +24,10 @@ EPs it has completed by ``t`` (before any EP, the chance ``1 / n_classes`` of a 
 The stopping rule (top class posterior >= a threshold) is evaluated post hoc on each strategy's
 trajectory (a greedy policy's trajectory does not depend on when it stops): accuracy at the stop,
 mean EPs and seconds used, and the paired difference to running all four EPs on the same trials.
+The posterior is the model's tempered one (exponents fitted on pseudo-unseen training objects,
+:class:`tzsl.models.PerEPAttributeModel`); whether the rule keeps its promise (trials decided at
+``t`` right a fraction ``t`` of the time), tempered and untempered, active and random order, is
+the decided-at-t table of :mod:`tzsl.experiments.active_touch_stopping`.
 """
 
 from __future__ import annotations
@@ -47,6 +51,7 @@ from tzsl.evaluation import (
 )
 from tzsl.exceptions import ConfigError
 from tzsl.experiments._outputs import ResultsDir
+from tzsl.experiments.active_touch_stopping import decided_table, stop_outcomes, stopping_figure
 from tzsl.experiments.config import ActiveMethods, ActiveSplits
 from tzsl.experiments.phac2_dap import object_map_features
 from tzsl.models import PerEPAttributeModel, ep_column_blocks, run_policy
@@ -55,7 +60,7 @@ __all__ = ["ACTIVE_TOUCH_OUTPUTS", "ActiveTouchConfig", "evaluate_split", "run_a
 
 #: Files :func:`run_active_touch_study` writes.
 ACTIVE_TOUCH_OUTPUTS: tuple[str, ...] = ("active_touch.csv", "active_touch_curves.csv", "active_touch_stop.csv",
-                                         "active_touch.png")
+                                         "active_touch_decided.csv", "active_touch.png", "active_touch_stopping.png")
 _ACTIVE = ("active", "active_per_second")
 _SHORT = {"squeeze": "sq", "hold": "ho", "slow_slide": "ss", "fast_slide": "fs"}
 _SUMMARY = ("active", "active_per_second", "best_fixed_train", "first:*", "paper", "random",
@@ -79,6 +84,10 @@ class ActiveTouchConfig:
         Stopping rule: stop once the top class posterior is >= a threshold.
     update : {"dap", "confusion"}
         Per-EP class scores (see :class:`tzsl.models.PerEPAttributeModel`).
+    tempering : {"subset", "count", "none"}
+        Exponents of the sequential posterior, fitted on pseudo-unseen training objects.
+    decided_thresholds : tuple of float
+        Thresholds of the decided-at-t table (:mod:`tzsl.experiments.active_touch_stopping`).
     cv : int
         Grouped folds of the confusion estimate (training objects only).
     n_samples : int
@@ -96,6 +105,8 @@ class ActiveTouchConfig:
     seed: int = _S.seed
     thresholds: tuple[float, ...] = field(default_factory=lambda: tuple(_M.thresholds))
     update: str = _M.update
+    tempering: str = _M.tempering
+    decided_thresholds: tuple[float, ...] = field(default_factory=lambda: tuple(_M.decided_thresholds))
     cv: int = _M.cv
     n_samples: int = _M.n_samples
     n_boot: int = _M.n_boot
@@ -106,13 +117,13 @@ def _order_name(eps: tuple[str, ...], order: tuple[int, ...]) -> str:
     return "order:" + ">".join(_SHORT.get(eps[i], eps[i]) for i in order)
 
 
-def _run_orders(S: np.ndarray, y: np.ndarray, orders: list[tuple[int, ...]], sec: np.ndarray
+def _run_orders(S: np.ndarray, y: np.ndarray, orders: list[tuple[int, ...]], sec: np.ndarray, exponents=None
                 ) -> tuple[np.ndarray, np.ndarray]:
     """Correct indicator and top posterior (n_trials, n_orders, n_eps) of every fixed order after 1..n_eps EPs."""
     correct = np.empty((S.shape[0], len(orders), S.shape[1]), dtype=bool)
     top = np.empty(correct.shape)
     for o, order in enumerate(orders):
-        res = run_policy(S, None, sec, policy=order, random_state=o)
+        res = run_policy(S, None, sec, policy=order, exponents=exponents, random_state=o)
         correct[:, o] = res["predictions"][:, 1:] == y[:, None]
         top[:, o] = res["top_probability"][:, 1:]
     return correct, top
@@ -132,8 +143,12 @@ def _train_order_accuracy(model: PerEPAttributeModel, A_train: np.ndarray, group
     return _run_orders(S, y, orders, model.ep_seconds_)[0].mean(axis=(0, 2))
 
 
-def evaluate_split(features: FeatureSet, split: Split, *, seed: int, update: str, cv: int, n_samples: int) -> dict:
+def evaluate_split(features: FeatureSet, split: Split, *, seed: int, update: str, cv: int, n_samples: int,
+                   tempering: str = _M.tempering) -> dict:
     """Fit on the split's training objects and explore its test trials with every strategy.
+
+    Every strategy runs on the tempered posterior (exponents fitted on the training objects);
+    ``active`` and the fixed orders are also run on the untempered product, for comparison.
 
     Returns
     -------
@@ -142,14 +157,15 @@ def evaluate_split(features: FeatureSet, split: Split, *, seed: int, update: str
     seconds / top class posterior (n_trials, n_eps); not for ``random``), ``orders`` (names of
     the fixed orders), ``first_ep`` (active strategy -> (n_trials,) index of the first EP),
     ``objects`` (n_trials,), ``eps``, ``ep_seconds``, ``chosen`` (strategy -> order name chosen
-    on training objects), ``n_classes``.
+    on training objects), ``n_classes``, ``exponents`` (2 ** n_eps,) and ``untempered`` (``correct``,
+    ``seconds``, ``top`` of ``active`` and the fixed orders under the plain product).
     """
     attributes = list(split.kept_attributes)
     objects = features.objects
     train, test = np.isin(objects, split.train_objects), np.isin(objects, split.test_objects)
     A = features.attributes.loc[objects, attributes].to_numpy(dtype=int)
     model = PerEPAttributeModel(ep_columns=ep_column_blocks(features.feature_names), cv=cv, update=update,
-                                random_state=seed)
+                                tempering=tempering, random_state=seed)
     model.fit(features.X[train], A[train], objects[train])
     K = features.attributes.loc[list(split.test_objects), attributes].to_numpy(dtype=int)
     y = pd.Index(split.test_objects).get_indexer(objects[test])
@@ -157,7 +173,7 @@ def evaluate_split(features: FeatureSet, split: Split, *, seed: int, update: str
     eps, sec = model.eps_, model.ep_seconds_
     orders = list(permutations(range(len(eps))))
     names = [_order_name(eps, o) for o in orders]
-    fixed, fixed_top = _run_orders(S, y, orders, sec)
+    fixed, fixed_top = _run_orders(S, y, orders, sec, model.exponents_)
     correct, seconds, top = {}, {}, {}
     for o, (order, name) in enumerate(zip(orders, names)):
         correct[name], top[name] = fixed[:, o].astype(float), fixed_top[:, o]
@@ -172,14 +188,22 @@ def evaluate_split(features: FeatureSet, split: Split, *, seed: int, update: str
         correct[alias], seconds[alias], top[alias] = correct[name], seconds[name], top[name]
     L = model.outcome_log_likelihoods(K, n_samples=n_samples, random_state=seed)
     first_ep = {}
-    for policy in _ACTIVE:
-        res = run_policy(S, L, sec, policy=policy, random_state=seed)
-        correct[policy] = (res["predictions"][:, 1:] == y[:, None]).astype(float)
-        seconds[policy] = np.cumsum(sec[res["order"]], axis=1)
-        top[policy] = res["top_probability"][:, 1:]
-        first_ep[policy] = res["order"][:, 0]
+    plain = {"correct": {}, "seconds": {}, "top": {}}
+    _, plain_top = _run_orders(S, y, orders, sec)  # tempering does not change a fixed order's argmax
+    for o, name in enumerate(names):
+        plain["correct"][name], plain["seconds"][name], plain["top"][name] = correct[name], seconds[name], \
+            plain_top[:, o]
+    for policy, exponents, out in [(p, model.exponents_, None) for p in _ACTIVE] + [("active", None, plain)]:
+        res = run_policy(S, L, sec, policy=policy, exponents=exponents, random_state=seed)
+        target = {"correct": correct, "seconds": seconds, "top": top} if out is None else out
+        target["correct"][policy] = (res["predictions"][:, 1:] == y[:, None]).astype(float)
+        target["seconds"][policy] = np.cumsum(sec[res["order"]], axis=1)
+        target["top"][policy] = res["top_probability"][:, 1:]
+        if out is None:
+            first_ep[policy] = res["order"][:, 0]
     return {"correct": correct, "seconds": seconds, "top": top, "orders": names, "first_ep": first_ep,
-            "objects": objects[test], "eps": eps, "ep_seconds": sec, "chosen": chosen, "n_classes": K.shape[0]}
+            "objects": objects[test], "eps": eps, "ep_seconds": sec, "chosen": chosen, "n_classes": K.shape[0],
+            "exponents": model.exponents_, "untempered": plain}
 
 
 def _by_budget(r: dict, strategy: str, grid: np.ndarray) -> np.ndarray:
@@ -195,11 +219,7 @@ def _at_stop(r: dict, strategy: str, threshold: float) -> np.ndarray:
     """(n_trials, 3): correct at the stop, EPs used, seconds used; stop after the first EP with top >= threshold."""
     if strategy == "random":
         return np.mean([_at_stop(r, s, threshold) for s in r["orders"]], axis=0)
-    top, corr, sec = r["top"][strategy], r["correct"][strategy], r["seconds"][strategy]
-    hit = top >= threshold
-    k = np.where(hit.any(axis=1), hit.argmax(axis=1), top.shape[1] - 1)
-    rows = np.arange(top.shape[0])
-    return np.column_stack([corr[rows, k], k + 1, sec[rows, k]])
+    return stop_outcomes(r["top"][strategy], r["correct"][strategy], r["seconds"][strategy], threshold)[:, 1:]
 
 
 def _columns(results: list[dict], grid: np.ndarray) -> tuple[list[tuple[str, str, float]], np.ndarray]:
@@ -352,33 +372,44 @@ def run_active_touch_study(features: FeatureSet, results_dir: ResultsDir, config
         ``active_touch_curves`` (columns ``split_kind, data, strategy, x_kind ("eps" | "seconds" |
         "seconds_mean"), x, accuracy, ci95_low, ci95_high, n_splits, n_trials, chance`` and, where
         relevant, ``chosen_order``, ``first_<ep>``) and ``active_touch_stop`` (stopping rule per threshold:
-        accuracy, all-EPs accuracy, paired difference, mean EPs / seconds used and saved); each
-        with its interval columns. ``.attrs["chosen"]`` holds the orders chosen per split.
+        accuracy, all-EPs accuracy, paired difference, mean EPs / seconds used and saved; ``posterior``
+        names the tempering) and ``active_touch_decided`` (accuracy of the trials decided at each
+        threshold against it, tempered and untempered, active and random order:
+        :func:`tzsl.experiments.active_touch_stopping.decided_table`); each with its interval
+        columns. ``.attrs["chosen"]`` holds the orders chosen per split, ``.attrs["exponents"]`` the
+        posterior exponents fitted per split (indexed by :func:`tzsl.models.done_subset_index`).
     """
     results_dir.check_free(ACTIVE_TOUCH_OUTPUTS)
     log = log or (lambda _msg: None)
-    tables, stops, chosen = [], [], {}
+    tables, stops, decided, chosen, exponents = [], [], [], {}, {}
     for k, kind in enumerate(config.kinds):
         splits = make_active_splits(features, kind, config)
         seeds = [int(np.random.SeedSequence([config.seed, k, i]).generate_state(1)[0]) for i in range(len(splits))]
         with stage("fit"):  # per-EP attribute models and their evaluation, in joblib workers
             results = Parallel(n_jobs=config.n_jobs)(
                 delayed(evaluate_split)(features, split, seed=s, update=config.update, cv=config.cv,
-                                        n_samples=config.n_samples) for split, s in zip(splits, seeds))
+                                        n_samples=config.n_samples, tempering=config.tempering)
+                for split, s in zip(splits, seeds))
         for split, r in zip(splits, results):
             chosen[split.name] = r["chosen"]
+            exponents[split.name] = [float(x) for x in r["exponents"]]
             log(f"{split.name}: {len(r['objects'])} test trials, active after 1..4 EPs "
                 f"{np.round(r['correct']['active'].mean(axis=0), 3).tolist()}")
         table, stop = summarise(results, kind, thresholds=config.thresholds, n_boot=config.n_boot, seed=config.seed)
         tables.append(table)
-        stops.append(stop)
+        stops.append(stop.assign(posterior="untempered" if config.tempering == "none" else "tempered",
+                                 tempering=config.tempering))
+        decided.append(decided_table(results, kind, thresholds=config.decided_thresholds, n_boot=config.n_boot,
+                                     seed=config.seed))
     curves = pd.concat(tables, ignore_index=True)
     out = {"active_touch": summary_table(curves), "active_touch_curves": curves,
-           "active_touch_stop": pd.concat(stops, ignore_index=True)}
+           "active_touch_stop": pd.concat(stops, ignore_index=True),
+           "active_touch_decided": pd.concat(decided, ignore_index=True)}
     for name, table in out.items():
         results_dir.write_csv(f"{name}.csv", table)
     results_dir.write_figure("active_touch.png", _figure(curves))
+    results_dir.write_figure("active_touch_stopping.png", stopping_figure(out["active_touch_decided"]))
     for t in out.values():
-        t.attrs["chosen"] = chosen
+        t.attrs["chosen"], t.attrs["exponents"] = chosen, exponents
     return out
 

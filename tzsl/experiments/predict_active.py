@@ -36,8 +36,8 @@ __all__ = ["PER_EP_KIND", "active_report", "format_active_report", "load_per_ep_
 PER_EP_KIND = "per-ep"
 
 
-def train_per_ep_bundle(features: FeatureSet, save, *, seed: int = 0, cv: int | None = None, force: bool = False,
-                        **extra) -> dict:
+def train_per_ep_bundle(features: FeatureSet, save, *, seed: int = 0, cv: int | None = None,
+                        tempering: str | None = None, force: bool = False, **extra) -> dict:
     """Fit a per-EP model on the training objects and save it as a ``per-ep`` bundle.
 
     Parameters
@@ -49,7 +49,9 @@ def train_per_ep_bundle(features: FeatureSet, save, *, seed: int = 0, cv: int | 
     save : path
     seed : int
     cv : int, optional
-        Object-grouped folds of the confusion model; default the model's.
+        Object-grouped folds of the confusion model and of the posterior exponents; default the model's.
+    tempering : {"subset", "count", "none"}, optional
+        Exponents of the sequential posterior (fitted on pseudo-unseen training objects); default the model's.
     force : bool
     **extra
         JSON-serialisable provenance.
@@ -60,12 +62,14 @@ def train_per_ep_bundle(features: FeatureSet, save, *, seed: int = 0, cv: int | 
         The metadata saved.
     """
     sub = features
-    params = {} if cv is None else {"cv": int(cv)}
+    params = {**({} if cv is None else {"cv": int(cv)}), **({} if tempering is None else {"tempering": tempering})}
     model = PerEPAttributeModel(ep_columns=ep_column_blocks(sub.feature_names), random_state=seed, **params)
     model.fit(sub.X, sub.trial_attributes(), sub.objects)
     metadata = {"method": "per-ep", "attribute_names": [str(a) for a in sub.attributes.columns],
                 "input": feature_schema(sub, 3), "eps": list(model.eps_),
                 "ep_seconds": [float(s) for s in model.ep_seconds_],
+                "posterior": {"tempering": model.tempering, "exponents": [float(t) for t in model.exponents_],
+                              "fitted_on_trials": model.tempering_trials_, "folds": model.cv},
                 "training_objects": sorted(set(sub.objects)), "seed": int(seed), "dataset": sub.dataset, **extra}
     save_bundle(save, model, kind=PER_EP_KIND, metadata=metadata, force=force)
     return metadata
@@ -84,6 +88,9 @@ def load_per_ep_model(path: str | Path, *, trust_pickle: bool = False) -> tuple[
     if not isinstance(model, PerEPAttributeModel) or not hasattr(model, "banks_"):
         raise ModelBundleError(f"{path}: a per-ep bundle must hold a fitted PerEPAttributeModel, "
                                f"found {type(model).__name__}")
+    if np.shape(getattr(model, "exponents_", None)) != (2 ** len(model.eps_),):
+        raise ModelBundleError(f"{path}: per-ep bundle has no fitted posterior exponents (written before the "
+                               "tempered update); re-run 'tzsl train-attributes --per-ep'")
     schema, names = metadata.get("input"), metadata.get("attribute_names")
     if not (isinstance(schema, dict) and isinstance(schema.get("feature_names"), list)
             and isinstance(schema.get("sensors"), list) and isinstance(names, list)
@@ -137,9 +144,10 @@ def active_report(model: PerEPAttributeModel, metadata: dict, classes: pd.DataFr
     -------
     dict (JSON-serialisable)
         ``bundle``, ``trial``, ``threshold`` and the keys of :func:`~tzsl.models.suggest_next_ep`:
-        ``ranking`` (list of ``{"class", "probability"}``, best first), ``decided``, ``decision``,
-        ``stop_reason``, ``done_eps``, ``seconds_used``, ``next_ep``, ``expected_gain_bits``,
-        ``candidates`` (list of ``{"ep", "seconds", "expected_gain_bits"}``, best first).
+        ``ranking`` (list of ``{"class", "probability"}``, best first; tempered posterior), ``decided``,
+        ``decision``, ``stop_reason``, ``done_eps``, ``seconds_used``, ``next_ep``, ``expected_gain_bits``,
+        ``candidates`` (list of ``{"ep", "seconds", "expected_gain_bits"}``, best first), ``posterior``
+        (``{"tempering", "exponent", "untempered_top_probability", "fitted_on"}``).
     """
     if threshold is None:
         threshold = float(inspect.signature(suggest_next_ep).parameters["threshold"].default)
@@ -159,6 +167,9 @@ def format_active_report(report: dict, *, top: int = 5, suggest: bool = True) ->
     width = max(len(r["class"]) for r in ranking)
     lines += [f"  {i + 1:>3}. {r['class']:<{width}}  {r['probability']:.3f}" for i, r in enumerate(ranking)]
     best = report["ranking"][0]
+    post = report["posterior"]
+    lines.append(f"posterior: tempering {post['tempering']!r}, exponent {post['exponent']:.3g} for the EPs done "
+                 f"(untempered top {post['untempered_top_probability']:.3f}); fitted on {post['fitted_on']}")
     if report["decided"]:
         lines.append(f"decided: {report['decision']!r} (stop: {report['stop_reason']}; top posterior "
                      f"{best['probability']:.3f}, threshold {report['threshold']:g})")

@@ -262,8 +262,15 @@ def run_active_touch(exp: Experiment, results: ResultsDir, say: Callable[[str], 
     say("\nStopping rule vs all four EPs\n" + _format(stop[["split_kind", "strategy", "threshold", "accuracy",
                                                              "all_eps_accuracy", "difference", "mean_eps",
                                                              "mean_seconds"]]))
+    dec = tables["active_touch_decided"]
+    say("\nDoes the stopping rule keep its promise? Accuracy of the trials decided at t (active_touch_decided.csv)\n"
+        + _format(dec[dec["strategy"] == "active"][["split_kind", "posterior", "threshold", "decided_share",
+                                                     "decided_accuracy", "decided_accuracy_ci95_low",
+                                                     "decided_accuracy_ci95_high", "eps_saved", "difference",
+                                                     "active_minus_random"]]))
     record = {"study_kind": "active-touch", "active_touch": record_config(config), "dataset": features.dataset,
-              "orders_chosen_on_training_objects": tables["active_touch_curves"].attrs["chosen"]}
+              "orders_chosen_on_training_objects": tables["active_touch_curves"].attrs["chosen"],
+              "posterior_exponents_fitted_on_training_objects": tables["active_touch_curves"].attrs["exponents"]}
     if hand.simulated:
         from tzsl.datasets import load_hand_table4  # noqa: PLC0415
 

@@ -105,6 +105,8 @@ def active_config(exp: Experiment):
     return ActiveTouchConfig(kinds=tuple(c.splits.kinds), n_splits=c.splits.n_splits, n_test=c.splits.n_test,
                              seed=c.splits.seed, thresholds=tuple(float(t) for t in c.methods.thresholds),
                              update=c.methods.update, cv=c.methods.cv, n_samples=c.methods.n_samples,
+                             tempering=c.methods.tempering,
+                             decided_thresholds=tuple(float(t) for t in c.methods.decided_thresholds),
                              n_boot=c.methods.n_boot, n_jobs=c.compute.n_jobs)
 
 

@@ -58,10 +58,13 @@ from tzsl.models._active_touch import (
     PerEPAttributeModel,
     binned_confusion,
     ep_column_blocks,
-    suggest_next_ep,
 )
+from tzsl.models._active_suggest import suggest_next_ep
 from tzsl.models._active_policy import (
+    TEMPERINGS,
+    done_subset_index,
     expected_information_gain,
+    fit_posterior_exponents,
     outcome_log_likelihoods,
     run_policy,
     sequential_log_posterior,
@@ -151,6 +154,6 @@ __all__: list[str] = [
     "unregister_method",
     "ESZSL", "ESZSLCV", "EmbeddingZSL", "loss_weights", "IAP", "SAE", "SAECV", "ALE", "SJE", "DeViSE",
     "PHAC2_EP_SECONDS", "LogisticAttribute", "PerEPAttributeModel", "binned_confusion", "ep_column_blocks",
-    "suggest_next_ep",
+    "suggest_next_ep", "TEMPERINGS", "done_subset_index", "fit_posterior_exponents",
     "expected_information_gain", "outcome_log_likelihoods", "run_policy", "sequential_log_posterior",
     "stop_reasons", "ScoreEnsembleZSL", "zscore_rows"]

@@ -15,8 +15,11 @@ from tzsl.exceptions import ConfigError
 from tzsl.models._dap import break_ties, check_class_attributes
 
 __all__ = [
+    "TEMPERINGS",
     "binned_confusion",
+    "done_subset_index",
     "expected_information_gain",
+    "fit_posterior_exponents",
     "outcome_log_likelihoods",
     "run_policy",
     "sequential_log_posterior",
@@ -24,6 +27,10 @@ __all__ = [
 ]
 
 _LOG2 = np.log(2.0)
+#: How :func:`fit_posterior_exponents` shares exponents between sets of EPs done.
+TEMPERINGS: tuple[str, ...] = ("subset", "count", "none")
+_MAX_SUBSET_EPS = 12  # 2**12 exponents: beyond this, one exponent per set of EPs is not estimable
+_EXPONENT_BOUNDS = (1e-3, 10.0)
 
 
 def binned_confusion(posteriors, A, *, n_bins: int, smoothing: float) -> np.ndarray:
@@ -55,15 +62,36 @@ def binned_confusion(posteriors, A, *, n_bins: int, smoothing: float) -> np.ndar
     return counts / counts.sum(axis=3, keepdims=True)
 
 
-def sequential_log_posterior(ep_scores, done) -> np.ndarray:
-    """Normalised log class posterior after the EPs in ``done`` (naive Bayes across EPs).
+def done_subset_index(done) -> np.ndarray:
+    """Index of each set of EPs done: the bit mask ``sum_e done[e] 2**e``.
+
+    Parameters
+    ----------
+    done : array-like of shape (n_trials, n_eps) or (n_eps,), bool
+
+    Returns
+    -------
+    int ndarray of shape (n_trials,) (or a 0-d array for a 1-d ``done``)
+    """
+    D = np.asarray(done, dtype=bool)
+    return D.astype(np.int64) @ (np.int64(1) << np.arange(D.shape[-1], dtype=np.int64))
+
+
+def sequential_log_posterior(ep_scores, done, exponents=None) -> np.ndarray:
+    """Normalised log class posterior after the EPs in ``done`` (tempered naive Bayes across EPs).
+
+    ``log p(z | D) = tau_D sum_{e in D} s_e(z) + c`` with ``tau_D = exponents[done_subset_index(D)]``;
+    ``exponents=None`` (every ``tau_D = 1``) is the plain product of the EPs' evidence, exact only
+    when the EPs' observations are conditionally independent given the class.
 
     Parameters
     ----------
     ep_scores : array-like of shape (n_trials, n_eps, n_classes)
-        Per-EP DAP log-scores (:meth:`PerEPAttributeModel.ep_log_scores`).
+        Per-EP class log-scores (:meth:`PerEPAttributeModel.ep_log_scores`).
     done : array-like of shape (n_trials, n_eps) or (n_eps,), bool
         EPs done so far; none done gives the uniform posterior.
+    exponents : array-like of shape (2 ** n_eps,), optional
+        Exponent of each set of EPs done (:func:`fit_posterior_exponents`).
 
     Returns
     -------
@@ -73,7 +101,85 @@ def sequential_log_posterior(ep_scores, done) -> np.ndarray:
     S = np.asarray(ep_scores, dtype=np.float64)
     D = np.broadcast_to(np.asarray(done, dtype=bool), S.shape[:2])
     total = np.where(D[:, :, None], S, 0.0).sum(axis=1)
+    if exponents is not None:
+        tau = np.asarray(exponents, dtype=np.float64)
+        if tau.shape != (2 ** S.shape[1],):
+            raise ConfigError(f"exponents must have shape ({2 ** S.shape[1]},) for {S.shape[1]} EPs, got {tau.shape}")
+        total = total * tau[done_subset_index(D)][:, None]
     return total - logsumexp(total, axis=1, keepdims=True)
+
+
+def _nll(tau: float, total: np.ndarray, y: np.ndarray, valid: np.ndarray) -> float:
+    """Mean negative log-likelihood of the true classes under ``softmax(tau * total)`` over valid classes."""
+    z = np.where(valid, tau * total, -np.inf)
+    return float(np.mean(logsumexp(z, axis=1) - z[np.arange(y.size), y]))
+
+
+def _fit_exponent(total: np.ndarray, y: np.ndarray, valid: np.ndarray) -> float:
+    """The exponent minimising :func:`_nll` (convex in tau), searched on log tau within the bounds."""
+    from scipy.optimize import minimize_scalar  # noqa: PLC0415  (scipy.optimize is slow to import)
+
+    lo, hi = np.log(_EXPONENT_BOUNDS)
+    res = minimize_scalar(lambda t: _nll(np.exp(t), total, y, valid), bounds=(lo, hi), method="bounded",
+                          options={"xatol": 1e-4})
+    return float(np.exp(res.x))
+
+
+def fit_posterior_exponents(ep_scores, y, *, valid=None, tempering: str = "subset") -> np.ndarray:
+    """Exponents of the tempered sequential posterior, fitted by maximum likelihood on labelled trials.
+
+    For every set ``D`` of EPs done, ``tau_D`` minimises the mean negative log-likelihood of the
+    true classes under ``softmax(tau_D sum_{e in D} s_e)``. EPs whose evidence is redundant (the
+    same object felt by several EPs) get ``tau_D < 1``; calibrated, conditionally independent
+    EPs get ``tau_D`` near 1. Fit on held-out trials of pseudo-unseen classes (the caller's job:
+    :meth:`PerEPAttributeModel.fit` uses its object-grouped folds of the training objects).
+
+    Parameters
+    ----------
+    ep_scores : array-like of shape (n_trials, n_eps, n_classes)
+        Per-EP class log-scores of labelled held-out trials.
+    y : array-like of shape (n_trials,), int
+        True class (column of ``ep_scores``) of each trial.
+    valid : array-like of shape (n_trials, n_classes), bool, optional
+        Candidate classes of each trial (pools of different sizes padded to ``n_classes``);
+        default every class.
+    tempering : {"subset", "count", "none"}, default="subset"
+        ``"subset"``: one exponent per set of EPs done (at most 12 EPs); ``"count"``: one per
+        number of EPs done; ``"none"``: every exponent 1 (the untempered product).
+
+    Returns
+    -------
+    ndarray of shape (2 ** n_eps,)
+        ``exponents[done_subset_index(D)] = tau_D``; entry 0 (nothing done) is 1.
+    """
+    S = np.asarray(ep_scores, dtype=np.float64)
+    if S.ndim != 3:
+        raise ConfigError(f"ep_scores must have shape (n_trials, n_eps, n_classes), got {S.shape}")
+    n, E, Z = S.shape
+    y = np.asarray(y, dtype=int)
+    valid = np.ones((n, Z), dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
+    if tempering not in TEMPERINGS:
+        raise ConfigError(f"tempering must be one of {TEMPERINGS}, got {tempering!r}")
+    if y.shape != (n,) or valid.shape != (n, Z) or (n and not valid[np.arange(n), y].all()):
+        raise ConfigError(f"y must hold one valid class per trial ({n}) and valid have shape {(n, Z)}")
+    if tempering == "subset" and E > _MAX_SUBSET_EPS:
+        raise ConfigError(f"tempering 'subset' fits 2**n_eps exponents; with {E} EPs use tempering 'count'")
+    out = np.ones(2 ** E)
+    if tempering == "none" or n == 0:
+        return out
+    masks = np.arange(1, 2 ** E)
+    members = ((masks[:, None] >> np.arange(E)) & 1).astype(bool)  # (n_subsets, E)
+    totals = np.einsum("de,nez->dnz", members.astype(float), S)  # (n_subsets, n, Z)
+    if tempering == "subset":
+        for d, mask in enumerate(masks):
+            out[mask] = _fit_exponent(totals[d], y, valid)
+        return out
+    sizes = members.sum(axis=1)
+    for k in np.unique(sizes):
+        rows = np.flatnonzero(sizes == k)
+        out[masks[rows]] = _fit_exponent(totals[rows].reshape(-1, Z), np.tile(y, rows.size),
+                                         np.tile(valid, (rows.size, 1)))
+    return out
 
 
 def outcome_log_likelihoods(confusion, class_attributes, n_samples: int = 256, random_state=0) -> np.ndarray:
@@ -180,7 +286,8 @@ def stop_reasons(log_belief, n_done, seconds_used, next_seconds, *, threshold: f
 
 
 def run_policy(ep_scores, outcome_ll, ep_seconds, *, policy="active", threshold: float = 1.01,
-               max_eps: int | None = None, max_seconds: float | None = None, random_state=0) -> dict:
+               max_eps: int | None = None, max_seconds: float | None = None, exponents=None,
+               random_state=0) -> dict:
     """Run a choice rule on many trials at once, one EP per step.
 
     Parameters
@@ -194,6 +301,8 @@ def run_policy(ep_scores, outcome_ll, ep_seconds, *, policy="active", threshold:
         Greedy expected information gain (per second), or a fixed order of EP indices.
     threshold, max_eps, max_seconds
         Stopping rule (:func:`stop_reasons`); the default threshold above 1 never stops early.
+    exponents : array-like of shape (2 ** n_eps,), optional
+        Tempered posterior (:func:`sequential_log_posterior`); ``None``: the untempered product.
     random_state : int or None
         Seeds the tie-breaking of predictions.
 
@@ -219,7 +328,7 @@ def run_policy(ep_scores, outcome_ll, ep_seconds, *, policy="active", threshold:
     reason = np.full(n, "", dtype=object)
     preds = np.empty((n, E + 1), dtype=int)
     top = np.empty((n, E + 1))
-    lb = sequential_log_posterior(S, done)
+    lb = sequential_log_posterior(S, done, exponents)
     preds[:, 0] = break_ties(lb, rng)
     top[:, 0] = np.exp(lb.max(axis=1))
     if isinstance(policy, str) and policy not in ("active", "active_per_second"):
@@ -253,7 +362,7 @@ def run_policy(ep_scores, outcome_ll, ep_seconds, *, policy="active", threshold:
         done[rows, choice[rows]] = True
         order[rows, step] = choice[rows]
         used[rows] += sec[choice[rows]]
-        lb = np.where(active[:, None], sequential_log_posterior(S, done), lb)
+        lb = np.where(active[:, None], sequential_log_posterior(S, done, exponents), lb)
         preds[:, step + 1] = np.where(active, break_ties(lb, rng), preds[:, step])
         top[:, step + 1] = np.exp(lb.max(axis=1))
     r = np.where(done.all(axis=1) & active, "no_ep_left", "")

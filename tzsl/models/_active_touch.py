@@ -15,14 +15,18 @@ Model (all fitted on training objects only):
   confusion estimate needs stay within seconds per split on one core. The RBF
   :class:`tzsl.models.AttributeSVM` of the DAP study takes ~9 s per EP and split even with a
   1 x 1 grid, which times 6 fits x 4 EPs x 10 splits is too slow for this evaluation.
-* **Sequential posterior (naive Bayes across EPs).** ``log p(z | EPs done) = sum_e s_e(z) + c``
-  with ``s_e`` the DAP log-scores (:func:`tzsl.models.dap_log_scores`) of EP ``e``'s fused
-  attribute posteriors (:func:`tzsl.models.fuse_attribute_posteriors`). With a uniform class
-  prior, ``s_e(z) = log p(z | x_e) - log p(z) + const``, so the sum is exactly Bayes' rule
-  under the assumption that the EPs' observations are conditionally independent given the
-  class. They are not (the same object is felt by every EP), so the summed posterior is
-  over-confident; it ranks classes correctly under the assumption, and the stopping threshold
-  should be read with that in mind.
+* **Sequential posterior (tempered naive Bayes across EPs).** ``log p(z | D) = tau_D sum_{e in D}
+  s_e(z) + c`` with ``s_e`` the DAP log-scores (:func:`tzsl.models.dap_log_scores`) of EP ``e``'s
+  fused attribute posteriors (:func:`tzsl.models.fuse_attribute_posteriors`) and ``D`` the set of
+  EPs done. With ``tau_D = 1`` this is Bayes' rule under the assumption that the EPs'
+  observations are conditionally independent given the class; they are not (the same object is
+  felt by every EP) and DAP's product over attributes is itself over-confident, so the plain
+  product claims far more certainty than it has. The exponents ``tau_D`` are fitted by maximum
+  likelihood (:func:`fit_posterior_exponents`) on *pseudo-unseen* classes of the training
+  objects: in each of the ``cv`` object-grouped folds the held-out objects are the candidate
+  classes and their trials' out-of-fold per-EP scores the evidence (the same folds as the
+  confusion model; no test object is involved). ``tempering`` shares them per set of EPs
+  (``"subset"``), per number of EPs (``"count"``) or not at all (``"none"``: the plain product).
 * **Confusion (predictive) model.** Grouped ``cv``-fold cross-validation over the *training*
   objects gives out-of-fold fused posteriors ``p(a_m = 1 | x_e)``; per EP, attribute and true
   value ``v`` they are binned into ``n_bins`` equal bins on [0, 1] with add-``smoothing``
@@ -51,25 +55,25 @@ from collections.abc import Mapping, Sequence
 from numbers import Integral, Real
 
 import numpy as np
-from sklearn.base import BaseEstimator, ClassifierMixin, _fit_context
-from sklearn.linear_model import LogisticRegression
+from sklearn.base import BaseEstimator, _fit_context
 from sklearn.model_selection import GroupKFold
-from sklearn.pipeline import make_pipeline
-from sklearn.preprocessing import StandardScaler
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
-from sklearn.utils.multiclass import check_classification_targets
-from sklearn.utils.validation import check_is_fitted, validate_data
+from sklearn.utils.validation import check_is_fitted
 
 from tzsl.exceptions import ConfigError
 from tzsl.models._active_policy import (
+    TEMPERINGS,
     binned_confusion,
+    done_subset_index,
     expected_information_gain,
+    fit_posterior_exponents,
     outcome_log_likelihoods,
     run_policy,
     sequential_log_posterior,
     stop_reasons,
 )
 from tzsl.models._attribute_bank import AttributeClassifierBank
+from tzsl.models._logistic_attribute import LogisticAttribute
 from tzsl.models._dap import (
     attribute_prior,
     check_class_attributes,
@@ -79,6 +83,7 @@ from tzsl.models._dap import (
 
 __all__ = [
     "PHAC2_EP_SECONDS",
+    "TEMPERINGS",
     "LogisticAttribute",
     "PerEPAttributeModel",
     "binned_confusion",
@@ -88,7 +93,6 @@ __all__ = [
     "run_policy",
     "sequential_log_posterior",
     "stop_reasons",
-    "suggest_next_ep",
 ]
 
 #: Duration of each PHAC-2 EP in seconds (sources in the module docstring).
@@ -119,67 +123,6 @@ def ep_column_blocks(feature_names: Sequence[str], eps: Sequence[str] | None = N
     if empty:
         raise ConfigError(f"no feature columns for EP(s) {empty}; the features have EPs {sorted(set(prefixes))}")
     return blocks
-
-
-class LogisticAttribute(ClassifierMixin, BaseEstimator):
-    """z-score + L2 logistic regression for one attribute and one sensor.
-
-    ``fit(X, y, groups=None)`` accepts (and ignores) the object groups that
-    :class:`tzsl.models.AttributeClassifierBank` passes to every classifier.
-
-    Parameters
-    ----------
-    C : float, default=1.0
-        Inverse L2 strength (on z-scored features).
-    class_weight : {"balanced"}, dict or None, default="balanced"
-        ``"balanced"`` gives posteriors for a 50% attribute prior (as the DAP study's balanced Platt map).
-    max_iter : int, default=1000
-
-    Attributes
-    ----------
-    classes_ : ndarray of shape (2,)
-    pipeline_ : fitted Pipeline
-    n_iter_ : ndarray of shape (1,)
-    n_features_in_ : int
-    """
-
-    _parameter_constraints: dict = {
-        "C": [Interval(Real, 0, None, closed="neither")],
-        "class_weight": [dict, StrOptions({"balanced"}), None],
-        "max_iter": [Interval(Integral, 1, None, closed="left")],
-    }
-
-    def __init__(self, *, C=1.0, class_weight="balanced", max_iter=1000):
-        self.C = C
-        self.class_weight = class_weight
-        self.max_iter = max_iter
-
-    @_fit_context(prefer_skip_nested_validation=True)
-    def fit(self, X, y, groups=None):
-        """Fit on trials ``X`` of shape (n, d) with labels ``y`` of shape (n,); ``groups`` is unused."""
-        X, y = validate_data(self, X, y, dtype=np.float64)
-        check_classification_targets(y)
-        lr = LogisticRegression(C=self.C, class_weight=self.class_weight, max_iter=self.max_iter,
-                                solver="newton-cholesky")  # exact L2 fit, ~5x faster than lbfgs on ~50 columns
-        self.pipeline_ = make_pipeline(StandardScaler(), lr).fit(X, y)
-        self.classes_ = self.pipeline_.classes_
-        self.n_iter_ = self.pipeline_[-1].n_iter_
-        return self
-
-    def predict_proba(self, X) -> np.ndarray:
-        """Posteriors of shape (n, n_classes), columns ordered as ``classes_``."""
-        check_is_fitted(self)
-        return self.pipeline_.predict_proba(validate_data(self, X, dtype=np.float64, reset=False))
-
-    def decision_function(self, X) -> np.ndarray:
-        """Logit(s) of the fitted logistic regression."""
-        check_is_fitted(self)
-        return self.pipeline_.decision_function(validate_data(self, X, dtype=np.float64, reset=False))
-
-    def predict(self, X) -> np.ndarray:
-        """Most probable class, shape (n,)."""
-        check_is_fitted(self)
-        return self.classes_[self.predict_proba(X).argmax(axis=1)]
 
 
 def _trainable(A: np.ndarray, groups: np.ndarray) -> np.ndarray:
@@ -221,6 +164,9 @@ class PerEPAttributeModel(BaseEstimator):
         log-likelihood of the observed (binned, sensor-averaged) posteriors under the same
         confusion model the policy plans with (calibrated on training objects, so less
         over-confident than DAP).
+    tempering : {"subset", "count", "none"}, default="subset"
+        Exponents of the sequential posterior, fitted on pseudo-unseen training objects (module
+        docstring): one per set of EPs done, one per number of EPs done, or none (plain product).
     random_state : int, RandomState or None, default=None
         Seeds the fold shuffle and the banks.
 
@@ -234,6 +180,12 @@ class PerEPAttributeModel(BaseEstimator):
         training part has fewer than 2 objects of either value of the attribute.
     oof_groups_ : ndarray of shape (n_trials,)
         Training groups the out-of-fold posteriors belong to (the fit's ``groups``).
+    oof_folds_ : int ndarray of shape (n_trials,)
+        Fold in which each training trial was held out.
+    exponents_ : ndarray of shape (2 ** n_eps,)
+        ``tau_D`` of each set of EPs done, indexed by :func:`done_subset_index` (entry 0: nothing done).
+    tempering_trials_ : int
+        Held-out training trials the exponents were fitted on.
     confusion_ : ndarray of shape (n_eps, n_attributes, 2, n_bins)
         ``p(bin | a_m = v)`` per EP; sums to 1 over bins.
     train_prior_ : ndarray of shape (n_attributes,)
@@ -251,11 +203,12 @@ class PerEPAttributeModel(BaseEstimator):
         "fusion": [StrOptions({"avg", "max"})],
         "prior": [StrOptions({"uni", "train"})],
         "update": [StrOptions({"dap", "confusion"})],
+        "tempering": [StrOptions(set(TEMPERINGS))],
         "random_state": ["random_state"],
     }
 
     def __init__(self, *, ep_columns=None, estimator=None, ep_seconds=None, cv=5, n_bins=10, smoothing=1.0,
-                 fusion="avg", prior="uni", update="dap", random_state=None):
+                 fusion="avg", prior="uni", update="dap", tempering="subset", random_state=None):
         self.ep_columns = ep_columns
         self.estimator = estimator
         self.ep_seconds = ep_seconds
@@ -265,6 +218,7 @@ class PerEPAttributeModel(BaseEstimator):
         self.fusion = fusion
         self.prior = prior
         self.update = update
+        self.tempering = tempering
         self.random_state = random_state
 
     def _bank(self, seed: int) -> AttributeClassifierBank:
@@ -314,9 +268,11 @@ class PerEPAttributeModel(BaseEstimator):
 
         m = A.shape[1]
         oof = np.full((len(self.eps_), n, m), np.nan)
+        fold_of = np.full(n, -1)
         n_folds = min(self.cv, np.unique(groups).size)
         folds = GroupKFold(n_splits=n_folds, shuffle=True, random_state=int(seeds[-1]))
-        for train, held in folds.split(X, A, groups):
+        for f, (train, held) in enumerate(folds.split(X, A, groups)):
+            fold_of[held] = f
             ok = _trainable(A[train], groups[train])
             if not ok.any():
                 continue
@@ -325,12 +281,82 @@ class PerEPAttributeModel(BaseEstimator):
                                                      A[np.ix_(train, ok)], groups[train])
                 oof[i, held[:, None], np.flatnonzero(ok)[None, :]] = bank.predict_proba(
                     X[np.ix_(held, np.arange(X.shape[1]), cols[ep])]).mean(axis=1)
-        self.oof_posteriors_, self.oof_groups_ = oof, groups.copy()
+        self.oof_posteriors_, self.oof_groups_, self.oof_folds_ = oof, groups.copy(), fold_of
         self.confusion_ = binned_confusion(oof, A, n_bins=self.n_bins, smoothing=self.smoothing)
         self.train_prior_ = attribute_prior("train", train_attributes=A, groups=groups)
         self.n_attributes_, self.n_sensors_ = m, X.shape[1]
         self.n_features_in_ = X.shape[2]
+        self.exponents_ = np.ones(2 ** len(self.eps_))  # the untempered scores of the pseudo-unseen trials
+        S, y, valid = self.pseudo_unseen_scores(A)
+        self.exponents_ = fit_posterior_exponents(S, y, valid=valid, tempering=self.tempering)
+        self.tempering_trials_ = int(y.size)
         return self
+
+    def pseudo_unseen_scores(self, A) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per-EP class scores of the training trials with their fold's held-out objects as the candidate classes.
+
+        Each fold of the grouped cross-validation plays a zero-shot split on the training objects:
+        its held-out objects' distinct attribute rows are the candidate (pseudo-unseen) classes,
+        and their trials' out-of-fold posteriors the evidence (NaN, an attribute not trainable
+        in the fold, counts as 0.5: no evidence). Folds with fewer than two distinct rows are skipped.
+
+        Parameters
+        ----------
+        A : array-like of shape (n_trials, n_attributes)
+            The training attribute rows given to :meth:`fit`.
+
+        Returns
+        -------
+        scores : ndarray of shape (n_kept, n_eps, max_classes)
+            Per-EP log-scores, padded with 0 beyond each fold's classes.
+        y : int ndarray of shape (n_kept,)
+            True class (column) of each trial.
+        valid : bool ndarray of shape (n_kept, max_classes)
+            The fold's candidate classes.
+        """
+        check_is_fitted(self, "oof_folds_")
+        A = np.asarray(A, dtype=int)
+        parts = []
+        for f in np.unique(self.oof_folds_[self.oof_folds_ >= 0]):
+            held = np.flatnonzero(self.oof_folds_ == f)
+            K, y = np.unique(A[held], axis=0, return_inverse=True)
+            if K.shape[0] < 2:
+                continue
+            P = np.nan_to_num(self.oof_posteriors_[:, held], nan=0.5).transpose(1, 0, 2)[:, :, None, :]
+            parts.append((self.ep_log_scores(P, K), y.ravel()))
+        Z = max((p[0].shape[2] for p in parts), default=0)
+        S = np.zeros((sum(p[1].size for p in parts), len(self.eps_), Z))
+        valid = np.zeros((S.shape[0], Z), dtype=bool)
+        start = 0
+        for scores, y in parts:
+            S[start:start + y.size, :, :scores.shape[2]] = scores
+            valid[start:start + y.size, :scores.shape[2]] = True
+            start += y.size
+        y = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0, dtype=int)
+        return S, y, valid
+
+    def log_posterior(self, ep_scores, done, *, tempered: bool = True) -> np.ndarray:
+        """:func:`sequential_log_posterior` with this model's fitted exponents (or the plain product).
+
+        Parameters
+        ----------
+        ep_scores : array-like of shape (n_trials, n_eps, n_classes)
+            From :meth:`ep_log_scores`.
+        done : array-like of shape (n_trials, n_eps) or (n_eps,), bool
+        tempered : bool, default=True
+            ``False``: the untempered product (every exponent 1), for comparison.
+
+        Returns
+        -------
+        ndarray of shape (n_trials, n_classes)
+        """
+        check_is_fitted(self, "exponents_")
+        return sequential_log_posterior(ep_scores, done, self.exponents_ if tempered else None)
+
+    def exponent(self, done) -> float:
+        """The fitted exponent ``tau_D`` of one set of EPs done (bool array of shape (n_eps,))."""
+        check_is_fitted(self, "exponents_")
+        return float(self.exponents_[int(done_subset_index(np.asarray(done, dtype=bool)))])
 
     def predict_ep_proba(self, ep: str, X_ep) -> np.ndarray:
         """Attribute posteriors from one EP's feature block.
@@ -399,75 +425,3 @@ class PerEPAttributeModel(BaseEstimator):
         """:func:`outcome_log_likelihoods` with this model's confusion."""
         check_is_fitted(self)
         return outcome_log_likelihoods(self.confusion_, class_attributes, n_samples, random_state)
-
-
-def suggest_next_ep(model: PerEPAttributeModel, class_attributes, done_eps: Mapping[str, np.ndarray], *,
-                    class_names: Sequence[str] | None = None, threshold: float = 0.9, max_eps: int | None = None,
-                    max_seconds: float | None = None, n_samples: int = 256, random_state=0) -> dict:
-    """What a robot should do next: current ranking, whether it has decided, and the next EP.
-
-    Parameters
-    ----------
-    model : fitted PerEPAttributeModel
-    class_attributes : array-like of shape (n_classes, n_attributes)
-        0/1 attribute rows of the candidate (unseen) classes.
-    done_eps : mapping of str -> array-like of shape (n_sensors, n_ep_features)
-        The features of each EP done so far on the object (that EP's columns only).
-    class_names : sequence of str, optional
-        Default ``"0"``, ``"1"``, ...
-    threshold, max_eps, max_seconds
-        Stopping rule (:func:`stop_reasons`).
-    n_samples : int
-        Monte-Carlo outcomes per class for the expected gain.
-    random_state : int or None
-
-    Returns
-    -------
-    dict (JSON-serialisable)
-        ``ranking``: list of ``{"class", "probability"}``, best first; ``decided`` (bool);
-        ``decision`` (class or None); ``stop_reason`` (str or None); ``done_eps``; ``seconds_used``;
-        ``next_ep`` (str or None); ``expected_gain_bits`` (float or None); ``candidates``: list of
-        ``{"ep", "seconds", "expected_gain_bits"}`` for the EPs not done, best first.
-    """
-    check_is_fitted(model)
-    K = check_class_attributes(class_attributes, model.n_attributes_)
-    names = [str(i) for i in range(K.shape[0])] if class_names is None else [str(c) for c in class_names]
-    if len(names) != K.shape[0]:
-        raise ConfigError(f"{len(names)} class names for {K.shape[0]} classes")
-    unknown = [ep for ep in done_eps if ep not in model.eps_]
-    if unknown:
-        raise ConfigError(f"unknown EP(s) {unknown}; the model knows {list(model.eps_)}")
-    done = np.array([ep in done_eps for ep in model.eps_])
-    P = np.full((1, len(model.eps_), model.n_sensors_, model.n_attributes_), 0.5)  # EPs not done: unused
-    for i, ep in enumerate(model.eps_):
-        if done[i]:
-            P[0, i] = model.predict_ep_proba(ep, np.asarray(done_eps[ep], dtype=np.float64)[None])[0]
-    scores = model.ep_log_scores(P, K)
-    lb = sequential_log_posterior(scores, done[None])
-    used = float(model.ep_seconds_[done].sum())
-    left = np.flatnonzero(~done)
-    next_sec = float(model.ep_seconds_[left].min()) if left.size else np.inf
-    reason = stop_reasons(lb, [done.sum()], [used], [next_sec], threshold=threshold, max_eps=max_eps,
-                          max_seconds=max_seconds)[0]
-    prob = np.exp(lb[0])
-    rank = np.argsort(-prob, kind="stable")
-    candidates = []
-    if left.size:
-        g = expected_information_gain(lb, model.outcome_log_likelihoods(K, n_samples, random_state))[0]
-        affordable = [i for i in left if max_seconds is None or used + model.ep_seconds_[i] <= max_seconds]
-        candidates = sorted(({"ep": model.eps_[i], "seconds": float(model.ep_seconds_[i]),
-                              "expected_gain_bits": float(g[i])} for i in affordable),
-                            key=lambda c: -c["expected_gain_bits"])
-    decided = reason != ""
-    best = candidates[0] if candidates and not decided else None
-    return {
-        "ranking": [{"class": names[i], "probability": float(prob[i])} for i in rank],
-        "decided": bool(decided),
-        "decision": names[rank[0]] if decided else None,
-        "stop_reason": reason or None,
-        "done_eps": [ep for ep in model.eps_ if ep in done_eps],
-        "seconds_used": used,
-        "next_ep": best["ep"] if best else None,
-        "expected_gain_bits": best["expected_gain_bits"] if best else None,
-        "candidates": candidates,
-    }

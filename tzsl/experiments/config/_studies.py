@@ -284,9 +284,15 @@ class ActiveMethods(Section):
     n_samples: int = Field(128, ge=1, description="Monte-Carlo outcomes per class for the expected gain")
     thresholds: list[float] = Field([0.7, 0.9, 0.99], description="stopping rule: stop once the top class "
                                     "posterior is >= a threshold (one row per threshold)")
+    tempering: Literal["subset", "count", "none"] = Field(
+        "subset", description="exponents of the sequential posterior, fitted on pseudo-unseen training objects: one "
+        "per set of EPs done, one per number of EPs done, or none (the plain product of the EPs' evidence)")
+    decided_thresholds: list[float] = Field(
+        [0.5, 0.6, 0.7, 0.8, 0.85, 0.9, 0.95, 0.99], description="thresholds of the decided-at-t table: accuracy "
+        "of the trials whose top posterior reached t, against t")
     n_boot: int = Field(2000, ge=1, description="bootstrap replicates of the 95% intervals")
 
-    @field_validator("thresholds")
+    @field_validator("thresholds", "decided_thresholds")
     @classmethod
     def _thresholds(cls, v):
         if any(not 0 < t <= 1 for t in v):
