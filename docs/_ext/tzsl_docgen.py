@@ -21,6 +21,8 @@ from pathlib import Path
 #: Packages shown first in the API reference, in this order (the data flow); the others follow
 #: alphabetically.
 FIRST = ("tzsl", "tzsl.datasets", "tzsl.features", "tzsl.models", "tzsl.evaluation")
+#: Constants whose ``repr`` is longer than this are shown without their value.
+LONG_VALUE = 300
 
 
 class DocGenError(RuntimeError):
@@ -96,20 +98,22 @@ def api_pages(out: Path) -> list[str]:
     for unit in public_units():
         module = importlib.import_module(unit)
         names = public_names(module)
-        documented, aliases = [], []
+        documented, constants, aliases = [], [], []
         for name in names:
             try:
                 obj = getattr(module, name)
             except AttributeError as exc:
                 raise DocGenError(f"{unit}.__all__ names {name!r}, which the module does not have") from exc
             key = _identity(obj)
-            if key is not None and key in canonical:
+            if key is None:  # a constant: shown with its value on the module's page
+                constants.append((name, obj))
+                continue
+            if key in canonical:
                 aliases.append((name, canonical[key]))
                 continue
-            if key is not None:
-                canonical[key] = f"{unit}.{name}"
+            canonical[key] = f"{unit}.{name}"
             documented.append(name)
-        if not documented and not aliases and not (module.__doc__ or "").strip():
+        if not (documented or constants or aliases or (module.__doc__ or "").strip()):
             continue
         lines = [_heading(f"``{unit}``"), f".. automodule:: {unit}", "   :no-members:", "",
                  f".. currentmodule:: {unit}", ""]
@@ -117,6 +121,13 @@ def api_pages(out: Path) -> list[str]:
             lines += [".. autosummary::", "   :toctree: generated/", "   :nosignatures:", ""]
             lines += [f"   {name}" for name in documented]
             lines.append("")
+        if constants:
+            lines += [_heading("Constants", "-")]
+            for name, obj in constants:
+                lines.append(f".. autodata:: {name}")
+                if len(repr(obj)) > LONG_VALUE:
+                    lines.append("   :no-value:")
+                lines.append("")
         if aliases:
             lines += ["Also exported here (documented where first listed):", ""]
             lines += [f"* ``{unit}.{name}``: :obj:`{target}`" for name, target in aliases]

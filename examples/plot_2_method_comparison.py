@@ -85,6 +85,7 @@ y = np.arange(len(methods))
 ax1.errorbar(result["accuracy"], y, xerr=[result["accuracy"] - result["ci95_low"],
                                           result["ci95_high"] - result["accuracy"]], fmt="o", capsize=4)
 ax1.axvline(chance, color="grey", linestyle="--", label="chance")
+ax1.set_xlim(0, 1)
 ax1.set_yticks(y, methods)
 ax1.set_xlabel("accuracy, 95% interval")
 ax1.legend(loc="lower right")
