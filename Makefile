@@ -11,7 +11,7 @@ endif
 RESULTS ?= results
 N_JOBS ?= 2
 
-.PHONY: install browser test reproduce-tables readme-results bench bench-scale data clean
+.PHONY: install browser test reproduce-tables readme-results docs bench bench-scale data clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -42,6 +42,10 @@ reproduce-tables: install
 # The README's Results block, from the CSVs of reproduce-tables (never typed by hand).
 readme-results: install
 	$(BIN)/python -m tzsl.experiments.readme_results $(RESULTS) README.md
+
+# The documentation site (Sphinx): docs/_build/html, offline; runs every gallery example.
+docs: install
+	$(BIN)/python -m sphinx -b html -W --keep-going docs docs/_build/html
 
 bench: install
 	$(BIN)/tzsl bench

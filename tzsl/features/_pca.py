@@ -47,7 +47,7 @@ class VariancePCA(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEstimat
         The fitted PCA with ``n_components_`` components.
     n_components_ : int
         Number of kept components ``k``.
-    explained_variance_ratio_ : ndarray of shape (n_components_,)
+    explained_variance_ratio_ : ndarray of shape (n_components,)
         Share of the z-scored total variance explained by each kept component.
     reached_variance_ : float
         Sum of ``explained_variance_ratio_`` (below ``variance`` when the cap bites).
@@ -114,11 +114,11 @@ class VariancePCA(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEstimat
 
         Parameters
         ----------
-        X : array-like of shape (n_samples, n_features_in_)
+        X : array-like of shape (n_samples, n_features_in)
 
         Returns
         -------
-        ndarray of float64, shape (n_samples, n_components_)
+        ndarray of float64, shape (n_samples, n_components)
             Principal-component scores of the z-scored features (unit variance per
             component when ``whiten``).
         """
@@ -131,11 +131,11 @@ class VariancePCA(ClassNamePrefixFeaturesOutMixin, TransformerMixin, BaseEstimat
 
         Parameters
         ----------
-        X : array-like of shape (n_samples, n_components_)
+        X : array-like of shape (n_samples, n_components)
 
         Returns
         -------
-        ndarray of float64, shape (n_samples, n_features_in_)
+        ndarray of float64, shape (n_samples, n_features_in)
         """
         check_is_fitted(self)
         X = np.asarray(X, dtype=np.float64)

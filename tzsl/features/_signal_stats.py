@@ -196,7 +196,7 @@ class SignalStatistics(TransformerMixin, BaseEstimator):
     ----------
     n_channels_ : int
         Number of channels seen in ``fit``; ``transform`` requires the same.
-    feature_names_out_ : ndarray of str, shape (n_channels_ * n_statistics,)
+    feature_names_out_ : ndarray of str, shape (n_channels * n_statistics,)
         ``"<channel>_<statistic>"``, channel-major.
 
     Examples
@@ -293,7 +293,7 @@ class SignalStatistics(TransformerMixin, BaseEstimator):
         return signal_statistics(values, lengths, stats, baseline)
 
     def get_feature_names_out(self, input_features: object = None) -> np.ndarray:
-        """Output names ``"<channel>_<statistic>"``, shape (n_channels_ * n_statistics,)."""
+        """Output names ``"<channel>_<statistic>"``, shape (n_channels * n_statistics,)."""
         check_is_fitted(self)
         return self.feature_names_out_.copy()
 

@@ -369,7 +369,7 @@ class TextureDescriptor(TransformerMixin, BaseEstimator):
 
         Returns
         -------
-        ndarray of str, shape (n_features_out_,)
+        ndarray of str, shape (n_features_out,)
         """
         check_is_fitted(self, "n_features_out_")
         if self.n_frames_ is None:

@@ -254,7 +254,7 @@ class DAPRule(DecisionRule):
 
 
 class CompatibilityRule(DecisionRule):
-    """Bilinear compatibility ``s(x, z) = f(x) . a^z`` of a linear attribute embedding.
+    """Bilinear compatibility ``s(x, z) = f(x) @ a^z`` of a linear attribute embedding.
 
     ``f(x)`` is the attribute model's ``decision_function`` (ESZSL: ``x V``); class scores are
     ``f(X) K^T``. No parameters.
