@@ -18,7 +18,7 @@ CLASSES = pd.DataFrame({"hard": [1, 1, 0, 0, 1], "soft": [0, 0, 1, 1, 0], "rare"
 
 def test_card_counts_what_a_study_depends_on():
     trials = ["a"] * 3 + ["b"] * 5 + ["c"] * 4 + ["d"] * 4 + ["e"] * 2
-    card = dataset_card(CLASSES, trials, n_test=3, min_train_positives=2)
+    card = dataset_card(CLASSES, trials, n_test=3, min_train_positives=2, min_train_negatives=2)
     assert card["n_classes"] == 5 and card["n_classes_with_trials"] == 5
     assert card["trials_per_class"] == [2, 4.0, 5]
     assert card["positives"] == {"hard": 3, "soft": 2, "rare": 1}

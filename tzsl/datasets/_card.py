@@ -16,7 +16,7 @@ __all__ = ["card_lines", "dataset_card"]
 
 
 def dataset_card(classes: pd.DataFrame, trial_classes: Sequence[str], *, n_test: int,
-                 min_train_positives: int, min_train_negatives: int = 2) -> dict:
+                 min_train_positives: int, min_train_negatives: int) -> dict:
     """Counts a zero-shot study of this dataset depends on.
 
     Parameters
