@@ -50,6 +50,7 @@ from tzsl.evaluation._intervals import (  # noqa: E402
     add_interval_columns,
     bootstrap_accuracy,
     bootstrap_accuracy_columns,
+    bootstrap_trial_weights,
     paired_difference_interval,
     paired_differences_table,
     splits_for_paired_interval,
@@ -60,6 +61,7 @@ __all__ += [
     "add_interval_columns",
     "bootstrap_accuracy",
     "bootstrap_accuracy_columns",
+    "bootstrap_trial_weights",
     "paired_difference_interval",
     "paired_differences_table",
     "splits_for_paired_interval",
@@ -100,3 +102,22 @@ __all__ += ["choose_stacking_constant", "holdout_trials", "stacked_predict"]
 from tzsl.evaluation._model_selection import DEFAULT_ALPHAS, select_embedding_alpha  # noqa: E402
 
 __all__ += ["DEFAULT_ALPHAS", "select_embedding_alpha"]
+
+# Calibration of class posteriors: ECE (equal-mass bins), Brier score, reliability diagram points.
+from tzsl.evaluation._calibration import (  # noqa: E402
+    CALIBRATION_METRICS,
+    DEFAULT_N_BINS,
+    CalibrationTerms,
+    add_calibration_columns,
+    brier_score,
+    calibration_columns,
+    calibration_intervals,
+    calibration_terms,
+    equal_mass_bins,
+    expected_calibration_error,
+    reliability_table,
+)
+
+__all__ += ["CALIBRATION_METRICS", "DEFAULT_N_BINS", "CalibrationTerms", "add_calibration_columns", "brier_score",
+            "calibration_columns", "calibration_intervals", "calibration_terms", "equal_mass_bins",
+            "expected_calibration_error", "reliability_table"]
