@@ -81,6 +81,14 @@ from tzsl.models._registry import (
     unregister_method,
 )
 from tzsl.models._score_ensemble import ScoreEnsembleZSL, zscore_rows
+from tzsl.models._posterior_calibration import (
+    CALIBRATIONS,
+    CalibratedZeroShotClassifier,
+    CalibrationWarning,
+    fit_temperature,
+    pseudo_unseen_scores,
+    tempered_proba,
+)
 from tzsl.models import _builtin_methods  # noqa: F401,E402  (registers the shipped methods)
 
 __all__: list[str] = [
@@ -142,4 +150,6 @@ __all__: list[str] = [
     "PHAC2_EP_SECONDS", "LogisticAttribute", "PerEPAttributeModel", "binned_confusion", "ep_column_blocks",
     "suggest_next_ep",
     "expected_information_gain", "outcome_log_likelihoods", "run_policy", "sequential_log_posterior",
-    "stop_reasons", "ScoreEnsembleZSL", "zscore_rows"]
+    "stop_reasons", "ScoreEnsembleZSL", "zscore_rows",
+    "CALIBRATIONS", "CalibratedZeroShotClassifier", "CalibrationWarning", "fit_temperature", "pseudo_unseen_scores",
+    "tempered_proba"]

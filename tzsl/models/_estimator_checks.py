@@ -47,7 +47,7 @@ def check_instance(name: str, cls: type) -> BaseEstimator:
     -------
     estimator
     """
-    from tzsl.models import ESZSL, CompatibilityRule  # noqa: PLC0415 (the package imports us)
+    from tzsl.models import ESZSL, CompatibilityRule, ZeroShotClassifier  # noqa: PLC0415 (the package imports us)
 
     if name == "AttributeSVM":
         return cls(**_SMALL_SVM, random_state=0)
@@ -64,4 +64,7 @@ def check_instance(name: str, cls: type) -> BaseEstimator:
                    "early_stopping": False, "max_iter": 50}), random_state=0)
     if name == "ZeroShotClassifier":
         return cls(attribute_model=ESZSL(), decision_rule=CompatibilityRule(), random_state=0)
+    if name == "CalibratedZeroShotClassifier":
+        return cls(estimator=ZeroShotClassifier(attribute_model=ESZSL(), decision_rule=CompatibilityRule(),
+                                                random_state=0), random_state=0)
     return cls()

@@ -1,0 +1,302 @@
+"""Calibrated class posteriors for zero-shot methods: a temperature fitted on pseudo-unseen classes.
+
+A zero-shot method's class posterior (DAP's product over attributes, a softmax over ESZSL/SAE
+compatibilities, the ensemble's z-scores) is rarely calibrated: DAP multiplies attribute
+posteriors as if independent and is over-confident. :class:`CalibratedZeroShotClassifier`
+composes any zero-shot estimator (``fit(X, Y, groups)``, ``decision_function(X,
+class_attributes)``) with one scalar **temperature** ``T``:
+
+``p(z | x) = softmax_z(s(x, z) / T)``
+
+where ``s`` are the method's class scores (DAP: log-posteriors, so ``1 / T`` is a common
+exponent on every attribute factor: a tempered product). ``T`` is fitted honestly, on the
+training trials only, by the zero-shot protocol itself:
+
+1. the training classes (distinct attribute rows) are dealt into ``calibration_folds``
+   class-grouped folds (:func:`tzsl.models.class_grouped_folds`; which class goes to which fold
+   is seeded by ``random_state``);
+2. for each fold, the method is refitted on the other classes and scores the held-out
+   (*pseudo-unseen*) classes' trials among the held-out classes' rows, as a test trial is
+   scored among the test classes;
+3. ``T`` minimises the log-loss of those held-out trials (one scalar, bounded search on ``log
+   T``); the method is then fitted on all training trials.
+
+Dividing by ``T > 0`` keeps every trial's ranking, so :meth:`~CalibratedZeroShotClassifier.predict`
+and every accuracy are those of the method alone. Test objects are never used.
+
+When fewer than 4 training classes exist, no fold can hold out 2 classes and train on 2:
+the estimator then keeps ``T = 1``, warns (:class:`CalibrationWarning`) and records why in
+``calibration_info_`` (``"fitted": False``), which ``tzsl predict --json`` shows.
+"""
+
+from __future__ import annotations
+
+import warnings
+from numbers import Integral
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+from scipy.special import log_softmax, softmax
+from sklearn.base import BaseEstimator, clone
+from sklearn.utils import check_random_state
+from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
+from sklearn.utils.validation import check_is_fitted
+
+from tzsl.exceptions import ConfigError
+from tzsl.models._validation import ValidatedParamsMixin
+from tzsl.models._zsl_input import ZSLInputError, class_grouped_folds
+
+__all__ = [
+    "CALIBRATIONS",
+    "CalibratedZeroShotClassifier",
+    "CalibrationWarning",
+    "fit_temperature",
+    "pseudo_unseen_scores",
+    "tempered_proba",
+]
+
+#: Values of the ``calibration`` parameter: a fitted temperature, or none (the method's own softmax).
+CALIBRATIONS = ("temperature", "none")
+
+#: Search range of ``log T`` (T from about 0.007 to 150).
+LOG_T_BOUNDS = (-5.0, 5.0)
+
+
+class CalibrationWarning(UserWarning):
+    """The calibrator could not be fitted (too few training classes): ``T = 1`` was kept."""
+
+
+def tempered_proba(scores, temperature: float) -> np.ndarray:
+    """``softmax(scores / temperature)`` over the classes.
+
+    Parameters
+    ----------
+    scores : array-like of shape (n_trials, n_classes)
+        Class scores (larger is better; DAP: log-posteriors up to a per-trial constant).
+    temperature : float > 0
+
+    Returns
+    -------
+    ndarray of shape (n_trials, n_classes)
+        Rows sum to 1.
+    """
+    return softmax(np.asarray(scores, dtype=np.float64) / float(temperature), axis=1)
+
+
+def fit_temperature(scores: list[np.ndarray], y_true: list[np.ndarray]) -> float:
+    """The temperature minimising the log-loss of held-out trials, ``argmin_T -sum log softmax(s / T)_y``.
+
+    Parameters
+    ----------
+    scores : list of ndarray of shape (n_trials_f, n_classes_f)
+        Class scores of each fold's held-out trials among that fold's candidate classes.
+    y_true : list of int ndarray of shape (n_trials_f,)
+        Column of each trial's true class.
+
+    Returns
+    -------
+    float
+        ``T`` in ``exp(LOG_T_BOUNDS)``: > 1 softens an over-confident posterior, < 1 sharpens.
+
+    Raises
+    ------
+    ConfigError
+        No trials, or non-finite scores.
+    """
+    S = [np.asarray(s, dtype=np.float64) for s in scores]
+    Y = [np.asarray(y, dtype=int) for y in y_true]
+    if not S or sum(len(y) for y in Y) == 0:
+        raise ConfigError("fit_temperature: no held-out trials to fit the temperature on")
+    if not all(np.isfinite(s).all() for s in S):
+        raise ConfigError("fit_temperature: class scores hold NaN or infinite values")
+
+    def nll(log_t: float) -> float:
+        t = np.exp(log_t)
+        return -float(sum(log_softmax(s / t, axis=1)[np.arange(len(y)), y].sum() for s, y in zip(S, Y)))
+
+    best = minimize_scalar(nll, bounds=LOG_T_BOUNDS, method="bounded", options={"xatol": 1e-4})
+    return float(np.exp(best.x))
+
+
+def _class_codes(Y: np.ndarray) -> np.ndarray:
+    """Index of each trial's distinct attribute row (its training class)."""
+    return np.unique(Y, axis=0, return_inverse=True)[1].ravel()
+
+
+def pseudo_unseen_scores(estimator, X, Y, groups=None, *, n_folds: int = 3, random_state=None,
+                         score=None) -> list[tuple[object, np.ndarray]]:
+    """Refit on training classes minus a held-out group; score the held-out classes among themselves.
+
+    Parameters
+    ----------
+    estimator : unfitted zero-shot estimator
+        ``fit(X, Y, groups)`` and ``decision_function(X, class_attributes)``; cloned per fold.
+    X : array-like of shape (n_trials, ...)
+    Y : array-like of shape (n_trials, n_attributes)
+        Attribute row of each training trial's class.
+    groups : array-like of shape (n_trials,), optional
+        Object of each trial (passed on to the method's own grouped tuning).
+    n_folds : int, default 3
+        Class-grouped folds (capped so each holds out >= 2 classes).
+    random_state : int, RandomState or None
+        Seeds which class goes to which fold.
+    score : callable, optional
+        ``score(fitted, X_held_out, K_held_out)``; default ``fitted.decision_function``. May
+        return anything (e.g. scores under several decision rules).
+
+    Returns
+    -------
+    list of (scores, y_true)
+        Per fold: ``score``'s output for the held-out trials and the column (row of the
+        held-out classes' table, ``np.unique`` order) of each trial's class.
+
+    Raises
+    ------
+    ZSLInputError
+        Fewer than 4 training classes.
+    """
+    X = np.asarray(X)
+    Y = np.asarray(Y, dtype=np.float64)
+    Y = Y.reshape(-1, 1) if Y.ndim == 1 else Y
+    codes = _class_codes(Y)
+    relabel = check_random_state(random_state).permutation(codes.max() + 1)  # seeded fold dealing
+    folds = class_grouped_folds(relabel[codes], n_folds, "posterior calibration (pseudo-unseen classes)")
+    g = None if groups is None else np.asarray(groups)
+    score = score or (lambda fitted, Xv, K: fitted.decision_function(Xv, K))
+    out = []
+    for train, held in folds:
+        fitted = clone(estimator).fit(X[train], Y[train], None if g is None else g[train])
+        K, y = np.unique(Y[held], axis=0, return_inverse=True)
+        out.append((score(fitted, X[held], K), y.ravel()))
+    return out
+
+
+class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
+    """A zero-shot method whose ``predict_proba`` is calibrated on pseudo-unseen training classes.
+
+    See the module docstring for how the temperature is fitted.
+
+    Parameters
+    ----------
+    estimator : zero-shot estimator
+        ``fit(X, Y, groups=None)``, ``decision_function(X, class_attributes=None)`` and
+        ``predict(X, class_attributes=None)`` (a :class:`~tzsl.models.ZeroShotClassifier`, the
+        score ensemble). Cloned.
+    calibration : {"temperature", "none"} or None, default="temperature"
+        ``"none"`` / None: ``predict_proba`` is the method's own softmax (``T = 1``, no extra fits).
+    calibration_folds : int >= 2, default=3
+        Class-grouped folds of pseudo-unseen classes (each costs one more fit of the method).
+    random_state : int, RandomState instance or None, default=None
+        Seeds which training class goes to which fold.
+
+    Attributes
+    ----------
+    estimator_ : fitted estimator
+        The method fitted on all training trials.
+    temperature_ : float
+        ``T`` (1.0 when not calibrated).
+    calibration_info_ : dict
+        How ``T`` was fitted: ``method`` ("temperature" or "none"), ``fitted`` (bool),
+        ``temperature``, ``n_folds``, ``n_classes`` (training classes), ``n_held_out_trials``,
+        ``log_loss_before`` / ``log_loss_after`` (per held-out trial), ``fitted_on``
+        ("pseudo-unseen classes of the training objects"), ``reason`` when not fitted.
+    class_attributes_ : ndarray of shape (n_train_classes, n_attributes)
+        Distinct training rows (default candidates), from the method when it has them.
+    n_features_in_ : int
+        When the method has it.
+    """
+
+    _parameter_constraints: dict = {
+        "estimator": [HasMethods(["fit", "decision_function", "predict"])],
+        "calibration": [StrOptions(set(CALIBRATIONS)), None],
+        "calibration_folds": [Interval(Integral, 2, None, closed="left")],
+        "random_state": ["random_state"],
+    }
+
+    def __init__(self, *, estimator=None, calibration="temperature", calibration_folds=3, random_state=None):
+        self.estimator = estimator
+        self.calibration = calibration
+        self.calibration_folds = calibration_folds
+        self.random_state = random_state
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.target_tags.required = True
+        tags.target_tags.multi_output = True
+        return tags
+
+    def fit(self, X, Y, groups=None):
+        """Fit the temperature on pseudo-unseen training classes, then the method on all trials.
+
+        Parameters
+        ----------
+        X : array-like of shape (n_trials, n_features) or (n_trials, n_sensors, n_features)
+        Y : array-like of shape (n_trials, n_attributes)
+            Attribute row of each trial's class (1-D: one attribute).
+        groups : array-like of shape (n_trials,), optional
+            Object of each trial.
+
+        Returns
+        -------
+        self
+        """
+        self._validate_params()
+        if self.estimator is None:
+            raise ConfigError("CalibratedZeroShotClassifier: estimator is required")
+        if Y is None:
+            raise ValueError(f"{type(self).__name__} requires y to be passed, but the target y is None")
+        self.estimator_ = clone(self.estimator).fit(X, Y, groups)
+        A = np.asarray(Y, dtype=np.float64)
+        A = A.reshape(-1, 1) if A.ndim == 1 else A
+        n_classes = int(_class_codes(A).max()) + 1
+        info = {"method": "none" if self.calibration in (None, "none") else "temperature", "fitted": False,
+                "temperature": 1.0, "n_folds": 0, "n_classes": n_classes, "n_held_out_trials": 0,
+                "fitted_on": "pseudo-unseen classes of the training objects (class-grouped folds)"}
+        if info["method"] == "temperature":
+            info.update(self._fit_temperature(X, A, groups, n_classes))
+        self.temperature_ = float(info["temperature"])
+        self.calibration_info_ = info
+        for name in ("class_attributes_", "n_features_in_"):
+            if hasattr(self.estimator_, name):
+                setattr(self, name, getattr(self.estimator_, name))
+        return self
+
+    def _fit_temperature(self, X, A, groups, n_classes: int) -> dict:
+        try:
+            folds = pseudo_unseen_scores(self.estimator, X, A, groups, n_folds=self.calibration_folds,
+                                         random_state=self.random_state)
+        except ZSLInputError as exc:
+            if n_classes >= 4:
+                raise
+            reason = f"not calibrated: {n_classes} training classes, at least 4 are needed ({exc})"
+            warnings.warn(f"{type(self.estimator).__name__}: {reason}; predict_proba is the method's own softmax",
+                          CalibrationWarning, stacklevel=3)
+            return {"reason": reason}
+        scores, ys = [s for s, _ in folds], [y for _, y in folds]
+        t = fit_temperature(scores, ys)
+        n = sum(len(y) for y in ys)
+
+        def loss(temp: float) -> float:
+            return -sum(log_softmax(s / temp, axis=1)[np.arange(len(y)), y].sum() for s, y in zip(scores, ys)) / n
+
+        return {"fitted": True, "temperature": t, "n_folds": len(folds), "n_held_out_trials": n,
+                "log_loss_before": float(loss(1.0)), "log_loss_after": float(loss(t))}
+
+    def decision_function(self, X, class_attributes=None) -> np.ndarray:
+        """The method's class scores (not tempered); shape (n_trials, n_classes)."""
+        check_is_fitted(self)
+        return self.estimator_.decision_function(X, class_attributes)
+
+    def predict_proba(self, X, class_attributes=None) -> np.ndarray:
+        """Calibrated class posteriors ``softmax(scores / T)`` over the candidate classes; (n_trials, n_classes)."""
+        return tempered_proba(self.decision_function(X, class_attributes), self.temperature_)
+
+    def predict_proba_uncalibrated(self, X, class_attributes=None) -> np.ndarray:
+        """The method's own posteriors (``T = 1``), for reporting before / after; (n_trials, n_classes)."""
+        check_is_fitted(self)
+        return self.estimator_.predict_proba(X, class_attributes)
+
+    def predict(self, X, class_attributes=None) -> np.ndarray:
+        """The method's prediction (a temperature does not change the ranking); shape (n_trials,)."""
+        check_is_fitted(self)
+        return self.estimator_.predict(X, class_attributes)
