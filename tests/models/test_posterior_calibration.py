@@ -21,7 +21,9 @@ from tzsl.evaluation import calibration_terms, expected_calibration_error
 from tzsl.models import (
     CalibratedZeroShotClassifier,
     CalibrationWarning,
+    CompatibilityRule,
     DAPRule,
+    ESZSL,
     ZeroShotClassifier,
     build_method,
     fit_temperature,
@@ -117,11 +119,12 @@ def test_folds_hold_out_classes_and_are_seeded(data):
         return fitted.decision_function(Xv, K)
 
     folds = pseudo_unseen_scores(dap(1.0), X, A, groups, n_folds=3, random_state=1, score=score)
-    assert len(folds) == 3 and sum(len(y) for _, y in folds) == len(X)
+    assert len(folds) == 3 and sum(len(y) for _, y, _ in folds) == len(X)
     assert sum(len(k) for k in seen) == 30  # every training class held out once
     again = pseudo_unseen_scores(dap(1.0), X, A, groups, n_folds=3, random_state=1)
     other = pseudo_unseen_scores(dap(1.0), X, A, groups, n_folds=3, random_state=2)
     assert all(np.array_equal(a[1], b[1]) for a, b in zip(folds, again))
+    assert all(d == 0 for _, _, d in folds)
     assert not all(len(a[1]) == len(b[1]) and np.array_equal(a[1], b[1]) for a, b in zip(folds, other))
 
 
@@ -172,3 +175,22 @@ def test_registry_method_is_calibrated_on_learned_attributes():
     rows_ = np.arange(len(y_test))
     assert -np.log(P[rows_, y_test]).mean() < -np.log(P0[rows_, y_test]).mean()
     np.testing.assert_array_equal(P.argmax(axis=1), P0.argmax(axis=1))
+
+
+def test_a_fold_leaves_out_an_attribute_its_training_classes_cannot_learn():
+    """Attribute 0 belongs to 2 of 8 classes: a fold holding one of them out cannot learn it."""
+    rng = np.random.default_rng(9)
+    rows = np.column_stack([np.r_[1, 1, np.zeros(6)], np.unique(rng.integers(0, 2, (64, 6)), axis=0)[:8]])
+    _, X, y = simulate(rng, 8, 10, rows=rows)
+    seen = []
+
+    def score(fitted, Xv, K):
+        seen.append(K.shape[1])
+        return fitted.decision_function(Xv, K)
+
+    eszsl = ZeroShotClassifier(attribute_model=ESZSL(), decision_rule=CompatibilityRule())
+    folds = pseudo_unseen_scores(eszsl, X, rows[y], y, n_folds=4, random_state=0, score=score)
+    dropped = [d for _, _, d in folds]
+    assert max(dropped) >= 1 and all(k == rows.shape[1] - d for k, d in zip(seen, dropped))
+    est = CalibratedZeroShotClassifier(estimator=eszsl, calibration_folds=4, random_state=0).fit(X, rows[y], y)
+    assert est.calibration_info_["n_attributes_left_out"] == sum(dropped)

@@ -17,7 +17,10 @@ training trials only, by the zero-shot protocol itself:
    is seeded by ``random_state``);
 2. for each fold, the method is refitted on the other classes and scores the held-out
    (*pseudo-unseen*) classes' trials among the held-out classes' rows, as a test trial is
-   scored among the test classes;
+   scored among the test classes. A 0/1 attribute that fewer than
+   :data:`MIN_FOLD_CLASSES` of the fold's training classes have (or lack) cannot be learnt
+   there (the per-attribute classifiers need both kinds of object), so that fold leaves it
+   out, on both sides; ``calibration_info_`` counts such attributes;
 3. ``T`` minimises the log-loss of those held-out trials (one scalar, bounded search on ``log
    T``); the method is then fitted on all training trials.
 
@@ -57,6 +60,9 @@ __all__ = [
 
 #: Values of the ``calibration`` parameter: a fitted temperature, or none (the method's own softmax).
 CALIBRATIONS = ("temperature", "none")
+
+#: A fold keeps a 0/1 attribute when at least this many of its training classes have it and lack it.
+MIN_FOLD_CLASSES = 2
 
 #: Search range of ``log T`` (T from about 0.007 to 150).
 LOG_T_BOUNDS = (-5.0, 5.0)
@@ -146,9 +152,10 @@ def pseudo_unseen_scores(estimator, X, Y, groups=None, *, n_folds: int = 3, rand
 
     Returns
     -------
-    list of (scores, y_true)
-        Per fold: ``score``'s output for the held-out trials and the column (row of the
-        held-out classes' table, ``np.unique`` order) of each trial's class.
+    list of (scores, y_true, n_dropped)
+        Per fold: ``score``'s output for the held-out trials, the column (row of the held-out
+        classes' table, ``np.unique`` order) of each trial's class, and how many 0/1 attributes
+        the fold left out (module docstring; classes left with equal rows are merged).
 
     Raises
     ------
@@ -165,10 +172,32 @@ def pseudo_unseen_scores(estimator, X, Y, groups=None, *, n_folds: int = 3, rand
     score = score or (lambda fitted, Xv, K: fitted.decision_function(Xv, K))
     out = []
     for train, held in folds:
-        fitted = clone(estimator).fit(X[train], Y[train], None if g is None else g[train])
-        K, y = np.unique(Y[held], axis=0, return_inverse=True)
-        out.append((score(fitted, X[held], K), y.ravel()))
+        keep = _learnable_attributes(Y[train])
+        if not keep.any():
+            raise ZSLInputError("posterior calibration: a fold's training classes leave no attribute to learn")
+        fitted = _on_attributes(clone(estimator), keep).fit(X[train], Y[train][:, keep],
+                                                             None if g is None else g[train])
+        K, y = np.unique(Y[held][:, keep], axis=0, return_inverse=True)
+        out.append((score(fitted, X[held], K), y.ravel(), int((~keep).sum())))
     return out
+
+
+def _on_attributes(estimator, keep: np.ndarray):
+    """``estimator`` with every nested ``attribute_names`` parameter cut to the kept attributes."""
+    if keep.all():
+        return estimator
+    cut = {key: [name for name, k in zip(value, keep) if k]
+           for key, value in estimator.get_params(deep=True).items()
+           if key.split("__")[-1] == "attribute_names" and value is not None and len(value) == len(keep)}
+    return estimator.set_params(**cut)
+
+
+def _learnable_attributes(Y: np.ndarray) -> np.ndarray:
+    """Columns a fold can learn: not 0/1, or had and lacked by >= MIN_FOLD_CLASSES distinct rows; (m,) bool."""
+    rows = np.unique(Y, axis=0)
+    binary = np.isin(Y, (0.0, 1.0)).all(axis=0)
+    positives = rows.sum(axis=0)
+    return ~binary | ((positives >= MIN_FOLD_CLASSES) & (len(rows) - positives >= MIN_FOLD_CLASSES))
 
 
 class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
@@ -198,6 +227,7 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
     calibration_info_ : dict
         How ``T`` was fitted: ``method`` ("temperature" or "none"), ``fitted`` (bool),
         ``temperature``, ``n_folds``, ``n_classes`` (training classes), ``n_held_out_trials``,
+        ``n_attributes_left_out`` (summed over folds),
         ``log_loss_before`` / ``log_loss_after`` (per held-out trial), ``fitted_on``
         ("pseudo-unseen classes of the training objects"), ``reason`` when not fitted.
     class_attributes_ : ndarray of shape (n_train_classes, n_attributes)
@@ -272,7 +302,7 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
             warnings.warn(f"{type(self.estimator).__name__}: {reason}; predict_proba is the method's own softmax",
                           CalibrationWarning, stacklevel=3)
             return {"reason": reason}
-        scores, ys = [s for s, _ in folds], [y for _, y in folds]
+        scores, ys = [s for s, _, _ in folds], [y for _, y, _ in folds]
         t = fit_temperature(scores, ys)
         n = sum(len(y) for y in ys)
 
@@ -280,6 +310,7 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
             return -sum(log_softmax(s / temp, axis=1)[np.arange(len(y)), y].sum() for s, y in zip(scores, ys)) / n
 
         return {"fitted": True, "temperature": t, "n_folds": len(folds), "n_held_out_trials": n,
+                "n_attributes_left_out": int(sum(d for _, _, d in folds)),
                 "log_loss_before": float(loss(1.0)), "log_loss_after": float(loss(t))}
 
     def decision_function(self, X, class_attributes=None) -> np.ndarray:
