@@ -138,10 +138,15 @@ def test_fit_temperature_recovers_a_known_power():
 def test_too_few_classes_warns_and_records_why():
     rng = np.random.default_rng(4)
     rows, X, y = simulate(rng, 3, 10)
-    with pytest.warns(CalibrationWarning, match="3 training classes"):
+    with pytest.warns(CalibrationWarning, match="3 training classes are too few"):
         est = CalibratedZeroShotClassifier(estimator=dap(1.0)).fit(X, rows[y], y)
     assert est.temperature_ == 1.0 and not est.calibration_info_["fitted"]
     assert "at least 4" in est.calibration_info_["reason"]
+    # 5 classes with 0/1 attributes: a fold trains on 3, where no attribute is had and lacked by 2
+    rows5, X5, y5 = simulate(rng, 5, 10)
+    with pytest.warns(CalibrationWarning, match="leave no attribute"):
+        est5 = CalibratedZeroShotClassifier(estimator=dap(1.0)).fit(X5, rows5[y5], y5)
+    assert not est5.calibration_info_["fitted"]
 
 
 def test_turned_off_costs_no_fit_and_is_the_method(data):

@@ -24,6 +24,7 @@ from tzsl.exceptions import ConfigError, SplitError
 from tzsl.experiments._failures import ERROR_COLUMN, attempt
 from tzsl.experiments.config import DaskCompute, Phac2Methods, Phac2Splits, Phac2Svm
 from tzsl.experiments.phac2_methods import method_comparison
+from tzsl.experiments.study_calibration import write_reliability_figure
 from tzsl.experiments.phac2_tables import (
     FUSIONS,
     PRIORS,
@@ -442,6 +443,7 @@ def run_dap_study(
             if compare_methods:
                 tables.update(method_comparison(features, random_results, seed=config.seed,
                                                 **(method_options or {})))
+                write_reliability_figure(out, tables, "phac2")
         used = [r.split for r in random_results]
         if splits is None and "challenging" in kinds:
             challenging, map_coords = make_splits(features, "challenging", config)

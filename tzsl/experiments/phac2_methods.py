@@ -5,8 +5,10 @@ Every method of ``[methods]`` (``eszsl``, ``embedding`` and ``compare``, see
 training objects with :func:`tzsl.experiments.study_methods.fit_predict` and scored on the
 split's test trials. The reference is the paper's method, AVGDAP with a uniform prior, read
 from the already fitted DAP posteriors (no refit), as are MAXDAP and, when the study fitted it,
-the multi-label DAP. Scoring is the one of every study
-(:func:`tzsl.experiments.study_methods.method_summary`).
+the multi-label DAP; their temperatures are fitted on pseudo-unseen classes of each split's
+training objects (:func:`tzsl.experiments.study_calibration.dap_split_posteriors`). Scoring is the
+one of every study (:func:`tzsl.experiments.study_methods.method_summary`), with the study's
+reliability diagram (``phac2_reliability.csv``).
 """
 
 from __future__ import annotations
@@ -21,12 +23,14 @@ from tzsl.evaluation import Split, summarise_over_splits
 from tzsl.experiments._failures import ERROR_COLUMN, attempt
 from tzsl.experiments.paper_numbers import DAP_MULTILABEL_ACCURACY, DAP_TABLE1
 from tzsl.experiments.phac2_tables import split_label
+from tzsl.experiments.study_calibration import dap_split_posteriors, posterior_columns, reliability_by_method
 from tzsl.experiments.study_methods import comparison_file, comparison_trials, fit_predict, method_label, method_summary
 
 if TYPE_CHECKING:
     from tzsl.experiments.phac2_dap import SplitPosteriors
 
-__all__ = ["COMPARISON_TABLE", "DEFAULT_METHODS", "REFERENCE_METHOD", "STUDY", "method_comparison"]
+__all__ = ["COMPARISON_TABLE", "DEFAULT_METHODS", "RELIABILITY_TABLE", "REFERENCE_METHOD", "STUDY",
+           "method_comparison"]
 
 #: Methods compared when none are given: ESZSL and the embedding model at lambda 0.1 and 1.
 DEFAULT_METHODS: tuple[dict, ...] = ({"name": "eszsl"}, {"name": "embedding", "lam": 0.1},
@@ -36,6 +40,8 @@ REFERENCE_METHOD = "dap-avg"
 #: Study label of the rows; table key (file stem) of the comparison.
 STUDY = "phac2"
 COMPARISON_TABLE = comparison_file(STUDY)[: -len(".csv")]
+#: Table (and figure) stem of the study's reliability diagram.
+RELIABILITY_TABLE = f"{STUDY}_reliability"
 #: The DAP paper's numbers (random splits, uni-prior): Table 1 averages and section 4.4.
 PAPER = {"dap-max": DAP_TABLE1["average"][0], "dap-avg": DAP_TABLE1["average"][1],
          "multilabel-dap": DAP_MULTILABEL_ACCURACY}
@@ -55,6 +61,15 @@ def _fit_predict_split(spec: dict, features: FeatureSet, split: Split, seed: int
     return fit, y
 
 
+def _dap_posteriors(features: FeatureSet, r: SplitPosteriors, seed: int) -> dict:
+    """The split's DAP posteriors, calibrated on pseudo-unseen classes of its training objects."""
+    from tzsl.experiments.phac2_dap import split_masks  # noqa: PLC0415 - phac2_dap re-exports this module
+
+    train, _ = split_masks(features, r.split)
+    A = features.attributes.loc[features.objects[train], list(r.attributes)].to_numpy(dtype=int)
+    return dap_split_posteriors(r, features.X[train], A, features.objects[train], seed=seed)
+
+
 def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed: int = 0,
                       methods: tuple[dict, ...] | list[dict] = DEFAULT_METHODS) -> dict[str, pd.DataFrame]:
     """Registry methods and AVGDAP on the same PHAC-2 splits (trial accuracy).
@@ -70,7 +85,8 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
         e.g. ``eszsl``, ``embedding_lam_0.1``; NaN where that fit failed, the reason in the
         ``error`` column), then mean and std rows;
         ``"phac2_method_comparison"``: :func:`~tzsl.experiments.study_methods.method_summary`
-        with ``dap-avg`` as the reference; ``dap-max`` and ``multilabel-dap`` (when fitted) come
+        with ``dap-avg`` as the reference (with ECE and Brier score, calibrated and not);
+        ``"phac2_reliability"``: the reliability diagram's points of every method; ``dap-max`` and ``multilabel-dap`` (when fitted) come
         from the same posteriors, their fit time is the DAP fit's.
     """
     rows, trials = [], []
@@ -82,10 +98,16 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
         from_posteriors = [(REFERENCE_METHOD, r.predict("avg", "uni")), ("dap-max", r.predict("max", "uni"))]
         if r.P_multilabel is not None:
             from_posteriors.append(("multilabel-dap", r.predict("avg", "uni", multilabel=True)))
-        for name, predicted in from_posteriors:
-            trials.append(comparison_trials(name, label, objects, predicted == r.y))
-            seconds.setdefault(name, []).append(r.fit_seconds)
         errors = []
+        posteriors, error = attempt(_dap_posteriors, features, r, seed + i)
+        if posteriors is None:  # the DAP rows keep their accuracy; their calibration is NaN
+            posteriors = {}
+            errors.append(f"DAP calibration: {error}")
+        for name, predicted in from_posteriors:
+            P = posteriors.get(name, (None, None))
+            trials.append(comparison_trials(name, label, objects, predicted == r.y,
+                                            **posterior_columns(P[0], P[1], r.y, predicted)))
+            seconds.setdefault(name, []).append(r.fit_seconds)
         for spec in methods:
             name = method_label(spec)
             done, error = attempt(_fit_predict_split, spec, features, r.split, seed + i)
@@ -96,7 +118,8 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
             fit, y = done
             correct = fit.predicted == y
             row[name] = float(correct.mean())
-            trials.append(comparison_trials(name, label, objects, correct))
+            trials.append(comparison_trials(name, label, objects, correct,
+                                            **posterior_columns(fit.proba, fit.proba_uncalibrated, y, fit.predicted)))
             seconds.setdefault(name, []).append(fit.fit_seconds)
         rows.append({**row, ERROR_COLUMN: "; ".join(errors)})
     per_split = summarise_over_splits(pd.DataFrame(rows)).reset_index()
@@ -104,6 +127,7 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
     notes = {"dap-avg": "the paper's method (reference); paper: Table 1 average",
              "dap-max": "same fits as dap-avg; paper: Table 1 average",
              "multilabel-dap": "classifier chain (section 4.4); paper: section 4.4"}
-    summary = method_summary(pd.concat(trials, ignore_index=True), seconds, chance, REFERENCE_METHOD,
-                             study=STUDY, paper=PAPER, notes=notes)
-    return {"phac2_methods": per_split, COMPARISON_TABLE: summary}
+    trials = pd.concat(trials, ignore_index=True)
+    summary = method_summary(trials, seconds, chance, REFERENCE_METHOD, study=STUDY, paper=PAPER, notes=notes)
+    return {"phac2_methods": per_split, COMPARISON_TABLE: summary,
+            RELIABILITY_TABLE: reliability_by_method(trials, STUDY)}

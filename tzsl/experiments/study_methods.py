@@ -15,7 +15,9 @@ A study lists methods as ``{"name": registry name, **parameters}`` (the experime
 Every study then scores its methods the same way (:func:`method_summary`): one row per method of
 ``<study>_method_comparison.csv`` with the trial accuracy, its two-level bootstrap 95% interval
 (splits, then test classes with their trials), the paper's number where the paper has one, chance,
-the fit time, and the paired difference to the paper's method of that study on the same trials.
+the fit time, and the paired difference to the paper's method of that study on the same trials;
+where the trials carry posterior columns, the calibration of the class posteriors (ECE and Brier
+score, calibrated and uncalibrated, with intervals: :mod:`tzsl.experiments.study_calibration`).
 ``tzsl reproduce-tables`` stacks the studies' tables into ``method_comparison.csv``
 (:func:`combine_comparisons`), with a row saying why for every registered method a study cannot
 run (its input differs: grasps, frame sequences).
@@ -32,6 +34,7 @@ import pandas as pd
 
 from tzsl.evaluation import bootstrap_accuracy, paired_differences_table
 from tzsl.experiments.config import method_label
+from tzsl.experiments.study_calibration import CALIBRATION_COLUMNS, add_calibration, method_posteriors
 from tzsl.models import attribute_rows, available_methods, get_method
 
 __all__ = [
@@ -57,6 +60,7 @@ COMPARISON_FILE = "method_comparison.csv"
 COMPARISON_COLUMNS = [
     "study", "data", "method", "accuracy", "ci95_low", "ci95_high", "paper_accuracy", "chance", "fit_seconds",
     "difference", "difference_ci95_low", "difference_ci95_high", "reference", "n_splits", "n_trials", "note",
+    *CALIBRATION_COLUMNS,
 ]
 
 
@@ -89,11 +93,14 @@ def method_input(spec: dict, X: np.ndarray) -> np.ndarray:
 
 
 class MethodFit(NamedTuple):
-    """One fit of one method: the fitted estimator, predicted test rows, wall-clock fit seconds."""
+    """One fit of one method: the fitted estimator, predicted test rows, wall-clock fit seconds, and the
+    test trials' calibrated and uncalibrated class posteriors (None without ``predict_proba``)."""
 
     model: object
     predicted: np.ndarray
     fit_seconds: float
+    proba: np.ndarray | None = None
+    proba_uncalibrated: np.ndarray | None = None
 
 
 def fit_predict(spec: dict, X_train: np.ndarray, classes_train: np.ndarray, class_rows: np.ndarray,
@@ -123,21 +130,26 @@ def fit_predict(spec: dict, X_train: np.ndarray, classes_train: np.ndarray, clas
     start = time.perf_counter()
     model.fit(method_input(spec, X_train), attribute_rows(classes_train, class_rows), classes_train)
     seconds = time.perf_counter() - start
-    return MethodFit(model, np.asarray(model.predict(method_input(spec, X_test), test_rows)), seconds)
+    X_in = method_input(spec, X_test)
+    return MethodFit(model, np.asarray(model.predict(X_in, test_rows)), seconds, *method_posteriors(model, X_in, test_rows))
 
 
 # --------------------------------------------------------------------------- scoring, shared by every study
 
 
-def comparison_trials(method: str, split, classes: np.ndarray, correct: np.ndarray) -> pd.DataFrame:
+def comparison_trials(method: str, split, classes: np.ndarray, correct: np.ndarray,
+                      **posteriors: np.ndarray) -> pd.DataFrame:
     """One row per test trial of one method on one split: method, split, class, trial, correct (0/1).
 
     ``classes`` (n_trials,): the true class (object, fabric, grasped object) of each trial, the
-    bootstrap's cluster; ``trial`` is the position within the split (the pairing key).
+    bootstrap's cluster; ``trial`` is the position within the split (the pairing key);
+    ``posteriors``: per-trial calibration columns
+    (:func:`tzsl.experiments.study_calibration.posterior_columns`).
     """
     classes = np.asarray(classes)
     return pd.DataFrame({"method": method, "split": str(split), "class": classes,
-                         "trial": np.arange(len(classes)), "correct": np.asarray(correct, dtype=float)})
+                         "trial": np.arange(len(classes)), "correct": np.asarray(correct, dtype=float),
+                         **posteriors})
 
 
 def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], chance: float, reference: str,
@@ -188,7 +200,7 @@ def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], ch
     table = table.merge(diffs[["method", "difference", "difference_ci95_low", "difference_ci95_high"]],
                         on="method", how="left")
     table["reference"] = reference
-    return table[COMPARISON_COLUMNS]
+    return add_calibration(table, trials)[COMPARISON_COLUMNS]
 
 
 #: Studies by the input their methods take; a registered method of another input kind is listed

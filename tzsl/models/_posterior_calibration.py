@@ -27,9 +27,11 @@ training trials only, by the zero-shot protocol itself:
 Dividing by ``T > 0`` keeps every trial's ranking, so :meth:`~CalibratedZeroShotClassifier.predict`
 and every accuracy are those of the method alone. Test objects are never used.
 
-When fewer than 4 training classes exist, no fold can hold out 2 classes and train on 2:
-the estimator then keeps ``T = 1``, warns (:class:`CalibrationWarning`) and records why in
-``calibration_info_`` (``"fitted": False``), which ``tzsl predict --json`` shows.
+When the training classes are too few for pseudo-unseen folds (fewer than 4: no fold can hold
+out 2 classes and train on 2; or a fold whose training classes leave no attribute to learn, as
+with 5 classes and 0/1 attributes), the estimator keeps ``T = 1``, warns
+(:class:`CalibrationWarning`) and records why in ``calibration_info_`` (``"fitted": False``),
+which the method comparison and ``tzsl predict --json`` show.
 """
 
 from __future__ import annotations
@@ -295,10 +297,8 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
         try:
             folds = pseudo_unseen_scores(self.estimator, X, A, groups, n_folds=self.calibration_folds,
                                          random_state=self.random_state)
-        except ZSLInputError as exc:
-            if n_classes >= 4:
-                raise
-            reason = f"not calibrated: {n_classes} training classes, at least 4 are needed ({exc})"
+        except ZSLInputError as exc:  # too few classes for pseudo-unseen folds: say so, keep T = 1
+            reason = f"not calibrated: {n_classes} training classes are too few for pseudo-unseen folds ({exc})"
             warnings.warn(f"{type(self.estimator).__name__}: {reason}; predict_proba is the method's own softmax",
                           CalibrationWarning, stacklevel=3)
             return {"reason": reason}
