@@ -22,6 +22,7 @@ from tzsl.evaluation import (
     expected_calibration_error,
     reliability_table,
 )
+import tzsl.evaluation._calibration as calibration_module
 from tzsl.exceptions import TzslError
 
 
@@ -126,3 +127,17 @@ def test_bad_input_is_refused():
         equal_mass_bins([0.5], 0)
     with pytest.raises(TzslError, match="confidence"):
         expected_calibration_error([1.5], [1])
+
+
+def test_ece_interval_is_bias_corrected_and_covers_the_point():
+    """Few objects: the raw replicates sit above the point; the corrected interval brackets it."""
+    P, y, cls, spl = _calibrated(np.random.default_rng(4), n_splits=2, n_classes=10, trials=10)
+    t = calibration_terms(_sharpen(P, 2.0), y)
+    iv = calibration_intervals(t.confidence, t.correct, t.brier, classes=cls, splits=spl, n_boot=500)
+    bins = equal_mass_bins(t.confidence)
+    raw = np.concatenate([calibration_module._weighted_ece(t.confidence, t.correct, bins, 10, w)
+                          for w in bootstrap_trial_weights(cls, spl, n_boot=500)])
+    assert raw.mean() > iv["ece"].mean  # the upward bias the correction removes
+    assert 0.0 <= iv["ece"].ci95_low <= iv["ece"].mean <= iv["ece"].ci95_high
+    assert iv["ece"].ci95_high - iv["ece"].ci95_low == pytest.approx(
+        np.quantile(raw, 0.975) - max(np.quantile(raw, 0.025), raw.mean() - iv["ece"].mean), rel=1e-6)

@@ -199,3 +199,15 @@ def test_a_fold_leaves_out_an_attribute_its_training_classes_cannot_learn():
     assert max(dropped) >= 1 and all(k == rows.shape[1] - d for k, d in zip(seen, dropped))
     est = CalibratedZeroShotClassifier(estimator=eszsl, calibration_folds=4, random_state=0).fit(X, rows[y], y)
     assert est.calibration_info_["n_attributes_left_out"] == sum(dropped)
+
+
+def test_folds_refit_with_the_final_fit_s_tuned_hyperparameters():
+    """ESZSL's ridges are chosen once, on all training classes; the folds keep them (same score scale)."""
+    rng = np.random.default_rng(11)
+    rows, X, y = simulate(rng, 24, 10)
+    est = build_method("eszsl", random_state=0).fit(X, rows[y], y)
+    chosen = est.estimator_.attribute_model_
+    assert est.calibration_info_["pinned"] == f"gammas=({chosen.best_gamma_},), lams=({chosen.best_lam_},)"
+    assert est.estimator.attribute_model.gammas != (chosen.best_gamma_,)  # the parameter itself is untouched
+    sae = build_method("sae", random_state=0).fit(X, rows[y], y)
+    assert sae.calibration_info_["pinned"] == f"lams=({sae.estimator_.attribute_model_.best_lam_},)"

@@ -18,7 +18,12 @@ confidence, correctness and the per-trial Brier term do not depend on how many c
 were). Intervals use the project's two-level bootstrap (:mod:`tzsl.evaluation._intervals`:
 splits, then test classes with all their trials) through
 :func:`~tzsl.evaluation.bootstrap_trial_weights`; the bins are those of the point estimate
-(a resampled trial keeps its bin).
+(a resampled trial keeps its bin). ECE is an absolute value, biased upward on small samples,
+and a replicate drawn with replacement repeats objects, so the replicates sit above the point
+value (with 50 test objects the whole percentile range can lie above it). The ECE interval is
+therefore bias-corrected: the replicates are shifted by their mean minus the point value (the
+bootstrap estimate of that bias) before taking percentiles, and clipped at 0. The Brier score is
+a mean and uses the plain percentile interval.
 """
 
 from __future__ import annotations
@@ -224,7 +229,7 @@ def calibration_intervals(
     -------
     dict
         ``{"ece": Interval, "brier": Interval}``: point value on the trials given, and the
-        2.5 / 97.5 percentiles of the replicates.
+        2.5 / 97.5 percentiles of the replicates (ECE: bias-corrected, module docstring).
     """
     c, k = _check_terms(confidence, correct)
     b = np.asarray(brier, dtype=float)
@@ -236,12 +241,12 @@ def calibration_intervals(
     for w in bootstrap_trial_weights(classes, splits, n_boot=n_boot, random_state=random_state):
         ece.append(_weighted_ece(c, k, bins, n_used, w))
         brr.append(w @ b / w.sum(axis=1))
-    out = {}
-    for name, point, reps in (("ece", _weighted_ece(c, k, bins, n_used, np.ones((1, c.size)))[0],
-                               np.concatenate(ece)), ("brier", b.mean(), np.concatenate(brr))):
-        low, high = np.quantile(reps, [0.025, 0.975])
-        out[name] = Interval(float(point), float(low), float(high))
-    return out
+    point = float(_weighted_ece(c, k, bins, n_used, np.ones((1, c.size)))[0])
+    reps = np.concatenate(ece)
+    low, high = np.clip(np.quantile(reps - (reps.mean() - point), [0.025, 0.975]), 0.0, None)
+    brier_low, brier_high = np.quantile(np.concatenate(brr), [0.025, 0.975])
+    return {"ece": Interval(point, float(low), float(high)),
+            "brier": Interval(float(b.mean()), float(brier_low), float(brier_high))}
 
 
 #: Column suffixes of the calibrated posterior (what ``predict_proba`` returns) and of the raw one.

@@ -22,7 +22,12 @@ training trials only, by the zero-shot protocol itself:
    there (the per-attribute classifiers need both kinds of object), so that fold leaves it
    out, on both sides; ``calibration_info_`` counts such attributes;
 3. ``T`` minimises the log-loss of those held-out trials (one scalar, bounded search on ``log
-   T``); the method is then fitted on all training trials.
+   T``).
+
+The method is fitted on all training trials first; an attribute model that tunes its own
+hyper-parameters and offers ``selected_params()`` (ESZSL's ridges, SAE's ``lam``) is refitted
+on the folds with its choice pinned, so the fold scores have the scale of the final model (a
+re-tuned ridge changes the scale of the class scores, and with it the temperature).
 
 Dividing by ``T > 0`` keeps every trial's ranking, so :meth:`~CalibratedZeroShotClassifier.predict`
 and every accuracy are those of the method alone. Test objects are never used.
@@ -194,6 +199,20 @@ def _on_attributes(estimator, keep: np.ndarray):
     return estimator.set_params(**cut)
 
 
+def _selected(model) -> dict:
+    """``model.selected_params()`` when it has that method, else {}."""
+    pick = getattr(model, "selected_params", None)
+    return pick() if callable(pick) else {}
+
+
+def _pinned(template, fitted):
+    """``template`` (unfitted) with the fitted attribute model's tuned choice pinned (``selected_params``)."""
+    chosen = _selected(getattr(fitted, "attribute_model_", None))
+    if chosen and "attribute_model" in template.get_params(deep=False):
+        template.set_params(**{f"attribute_model__{k}": v for k, v in chosen.items()})
+    return template
+
+
 def _learnable_attributes(Y: np.ndarray) -> np.ndarray:
     """Columns a fold can learn: not 0/1, or had and lacked by >= MIN_FOLD_CLASSES distinct rows; (m,) bool."""
     rows = np.unique(Y, axis=0)
@@ -229,7 +248,8 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
     calibration_info_ : dict
         How ``T`` was fitted: ``method`` ("temperature" or "none"), ``fitted`` (bool),
         ``temperature``, ``n_folds``, ``n_classes`` (training classes), ``n_held_out_trials``,
-        ``n_attributes_left_out`` (summed over folds),
+        ``n_attributes_left_out`` (summed over folds), ``pinned`` (hyper-parameters held at the
+        final fit's choice in the folds),
         ``log_loss_before`` / ``log_loss_after`` (per held-out trial), ``fitted_on``
         ("pseudo-unseen classes of the training objects"), ``reason`` when not fitted.
     class_attributes_ : ndarray of shape (n_train_classes, n_attributes)
@@ -285,7 +305,8 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
                 "temperature": 1.0, "n_folds": 0, "n_classes": n_classes, "n_held_out_trials": 0,
                 "fitted_on": "pseudo-unseen classes of the training objects (class-grouped folds)"}
         if info["method"] == "temperature":
-            info.update(self._fit_temperature(X, A, groups, n_classes))
+            info.update(self._fit_temperature(_pinned(clone(self.estimator), self.estimator_), X, A, groups,
+                                              n_classes))
         self.temperature_ = float(info["temperature"])
         self.calibration_info_ = info
         for name in ("class_attributes_", "n_features_in_"):
@@ -293,9 +314,9 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
                 setattr(self, name, getattr(self.estimator_, name))
         return self
 
-    def _fit_temperature(self, X, A, groups, n_classes: int) -> dict:
+    def _fit_temperature(self, template, X, A, groups, n_classes: int) -> dict:
         try:
-            folds = pseudo_unseen_scores(self.estimator, X, A, groups, n_folds=self.calibration_folds,
+            folds = pseudo_unseen_scores(template, X, A, groups, n_folds=self.calibration_folds,
                                          random_state=self.random_state)
         except ZSLInputError as exc:  # too few classes for pseudo-unseen folds: say so, keep T = 1
             reason = f"not calibrated: {n_classes} training classes are too few for pseudo-unseen folds ({exc})"
@@ -309,7 +330,9 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
         def loss(temp: float) -> float:
             return -sum(log_softmax(s / temp, axis=1)[np.arange(len(y)), y].sum() for s, y in zip(scores, ys)) / n
 
+        pinned = _selected(getattr(self.estimator_, "attribute_model_", None))
         return {"fitted": True, "temperature": t, "n_folds": len(folds), "n_held_out_trials": n,
+                "pinned": ", ".join(f"{k}={v}" for k, v in pinned.items()),
                 "n_attributes_left_out": int(sum(d for _, _, d in folds)),
                 "log_loss_before": float(loss(1.0)), "log_loss_after": float(loss(t))}
 
