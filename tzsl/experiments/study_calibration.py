@@ -146,7 +146,10 @@ def reliability_figure(table: pd.DataFrame, comparison: pd.DataFrame | None = No
         for kind, column in (("calibrated", "ece"), ("uncalibrated", "ece_uncalibrated")):
             if column in comparison.columns:
                 ece.update({(kind, m): float(v) for m, v in zip(comparison["method"], comparison[column])})
+    n_methods = max(table["method"].nunique(), 1)
+    colours = plt.get_cmap("tab20")(np.arange(n_methods) % 20)  # one colour per method, same in both panels
     for ax, kind in zip(axes[0], kinds):
+        ax.set_prop_cycle(color=list(colours))
         ax.plot([0, 1], [0, 1], color="grey", ls=":", lw=1, label="calibrated")
         for method, t in table[table["posterior"] == kind].groupby("method", sort=False):
             value = ece.get((kind, method), np.nan)
