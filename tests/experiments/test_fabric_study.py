@@ -97,7 +97,7 @@ def test_zero_shot_run_fits_on_training_groups_only():
 
     def fit_model(X_tr, y_tr, S_tr):
         seen.update(X=X_tr, y=y_tr, S=S_tr)
-        return build_method("embedding", lam=1, early_stopping=False, random_state=0).fit(
+        return build_method("embedding", lam=1, early_stopping=False, random_state=0, calibration="none").fit(
             X_tr, attribute_rows(y_tr, S_tr), y_tr
         )
 

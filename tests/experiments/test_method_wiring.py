@@ -220,8 +220,9 @@ def test_input_shape_and_seed_come_from_the_registry(toy_method):
     np.testing.assert_array_equal(method_input({"name": "toy"}, X), X.reshape(4, 6))
     assert takes_seed({"name": "embedding"}) and not takes_seed({"name": "eszsl"})
     assert not takes_seed({"name": "embedding", "random_state": 3})
-    assert study_estimator({"name": "embedding"}, 7).attribute_model.random_state == 7
-    assert study_estimator({"name": "embedding", "random_state": 3}, 7).attribute_model.random_state == 3
+    calibrated = study_estimator({"name": "embedding"}, 7)  # the method inside its calibrator, both seeded
+    assert calibrated.estimator.attribute_model.random_state == 7 and calibrated.random_state == 7
+    assert study_estimator({"name": "embedding", "random_state": 3}, 7).estimator.attribute_model.random_state == 3
     with pytest.raises(ConfigError, match="input_ndim"):
         register_method("bad", family="embedding", paper="-", attribute_model=NearestMeanAttributes,
                         decision_rule=NearestAttributeRule, input_ndim=4)
@@ -246,7 +247,7 @@ class FailsOnSecondFit(NearestMeanAttributes):
 def failing_method():
     FailsOnSecondFit.fits = 0
     register_method("flaky", family="embedding", paper="test only", attribute_model=FailsOnSecondFit,
-                    decision_rule=NearestAttributeRule)
+                    decision_rule=NearestAttributeRule, calibratable=False)  # one fit per split, none per fold
     yield "flaky"
     unregister_method("flaky")
 

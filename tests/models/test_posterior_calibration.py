@@ -1,121 +1,213 @@
-"""A temperature fitted on pseudo-unseen training classes (issue 21, items 2 and 5).
+"""Posterior calibration where the truth is known (simulated data).
 
-SIMULATED data: classes with random attribute rows, features a noisy image of the rows. A
-method is made over-confident on purpose (its posterior raised to a power); the calibrator must
-find a temperature above 1 on the training classes alone and bring the ECE on unseen classes
-down, without changing a single prediction.
+The generator draws classes with random 0/1 attribute rows; a trial of class z has one feature
+per attribute, ``x_m ~ N(mu (2 a_m^z - 1), 1)``. Given the class, features are independent, so
+DAP with the uniform prior over the *true* attribute posteriors ``p(a_m = 1 | x_m) =
+sigmoid(2 mu x_m)`` is the Bayes posterior over the candidate classes: calibrated by
+construction. The same model with the attribute log-odds multiplied by ``power`` gives the
+Bayes posterior raised to ``power`` (over-confident for power > 1).
 """
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
-from scipy.special import softmax
+import pytest
+from scipy.special import expit
 from sklearn.base import BaseEstimator, clone
 
-from tzsl.datasets import synthetic_dataset_arrays
-from tzsl.evaluation import expected_calibration_error, top_label
-from tzsl.models import AttributeSVM, TemperatureCalibratedZSL, build_method, fit_temperature
+from tzsl.evaluation import calibration_terms, expected_calibration_error
+from tzsl.models import (
+    CalibratedZeroShotClassifier,
+    CalibrationWarning,
+    CompatibilityRule,
+    DAPRule,
+    ESZSL,
+    ZeroShotClassifier,
+    build_method,
+    fit_temperature,
+    get_method,
+    pseudo_unseen_scores,
+    tempered_proba,
+)
+
+MU = 0.8
 
 
-class Overconfident(BaseEstimator):
-    """A zero-shot method whose posterior is raised to ``power`` (over-confident on purpose)."""
+class TrueAttributePosteriors(BaseEstimator):
+    """The generator's exact attribute posteriors, log-odds times ``power`` (nothing to learn)."""
 
-    def __init__(self, estimator=None, power: float = 4.0):
-        self.estimator = estimator
+    score_kind = "probability"
+
+    def __init__(self, *, power=1.0):
         self.power = power
 
     def fit(self, X, Y, groups=None):
-        self.estimator_ = clone(self.estimator).fit(X, Y, groups)
+        self.n_features_in_ = np.asarray(X).shape[1]
         return self
 
-    def predict_proba(self, X, class_attributes):
-        P = self.estimator_.predict_proba(X, class_attributes) ** self.power
-        return P / P.sum(axis=1, keepdims=True)
-
-    def predict(self, X, class_attributes):
-        return self.estimator_.predict(X, class_attributes)
+    def predict_proba(self, X):
+        return expit(self.power * 2.0 * MU * np.asarray(X, dtype=float))
 
 
-def _data(seed: int = 0):
-    K, cls, X = synthetic_dataset_arrays(480, n_classes=40, n_attributes=12, n_sensors=1, n_features=10,
-                                         noise=1.0, seed=seed)
-    return K, cls, X[:, 0, :]
+def simulate(rng, n_classes, trials, n_attributes=8, rows=None):
+    """Class rows (distinct), features, class of each trial."""
+    if rows is None:
+        rows = np.unique(rng.integers(0, 2, size=(4 * n_classes, n_attributes)), axis=0)
+        rows = rows[rng.permutation(len(rows))[:n_classes]]
+    y = np.repeat(np.arange(len(rows)), trials)
+    X = MU * (2.0 * rows[y] - 1.0) + rng.standard_normal((len(y), rows.shape[1]))
+    return rows.astype(float), X, y
 
 
-def test_fit_temperature_recovers_a_known_temperature():
-    rng = np.random.default_rng(1)
-    logits = 2.0 * rng.normal(size=(4000, 5))
-    y = np.array([rng.choice(5, p=p) for p in softmax(logits, axis=1)])  # calibrated at T = 1
-    sharpened = 3.0 * logits  # = logits / T with T = 1/3: the fit must undo it
-    assert abs(fit_temperature([sharpened], [y]) - 3.0) < 0.3
+def dap(power):
+    return ZeroShotClassifier(attribute_model=TrueAttributePosteriors(power=power), decision_rule=DAPRule(prior="uni"))
 
 
-def _split():
-    K, cls, X = _data()
-    train = cls < 28  # 28 seen classes to fit on, 12 unseen to test on
-    unseen = np.unique(cls[~train])
-    return K, cls, X, train, unseen, np.searchsorted(unseen, cls[~train])
+@pytest.fixture(scope="module")
+def data():
+    rng = np.random.default_rng(0)
+    rows, X, y = simulate(rng, 40, 20)
+    train_rows, test_rows = rows[:30], rows[30:]
+    train = y < 30
+    _, X_test, y_test = simulate(rng, 10, 300, rows=test_rows)  # held-out trials of unseen classes
+    return X[train], train_rows[y[train]], y[train], X_test, test_rows, y_test
 
 
-def test_dap_overconfidence_is_detected_on_training_classes_and_corrected_on_unseen_ones():
-    """DAP multiplies attribute posteriors as if independent: over-confident by nature; the
-    temperature found on training classes alone lowers the ECE on the unseen ones."""
-    K, cls, X, train, unseen, y = _split()
-    X3 = X[:, None, :]  # one sensor
-    quick = AttributeSVM(n_C=1, n_gamma=1, n_draws=1, cv=3)  # one hyper-parameter pair: a quick fit
-    calibrated = TemperatureCalibratedZSL(estimator=build_method("dap-avg", estimator=quick), n_folds=3)
-    calibrated.fit(X3[train], K[cls[train]], cls[train])
-    assert calibrated.temperature_ > 1.0 and calibrated.n_pseudo_unseen_ == 28  # over-confident: softened
-    raw = calibrated.estimator_.predict_proba(X3[~train], K[unseen])
-    tempered = calibrated.predict_proba(X3[~train], K[unseen])
-    np.testing.assert_allclose(tempered.sum(axis=1), 1.0)
-    assert (tempered.argmax(axis=1) == raw.argmax(axis=1)).all()  # no prediction changes
-    before = expected_calibration_error(*top_label(raw, y))
-    after = expected_calibration_error(*top_label(tempered, y))
-    assert after < before
+def _ece(proba, y):
+    t = calibration_terms(proba, y)
+    return expected_calibration_error(t.confidence, t.correct)
 
 
-def test_a_method_made_overconfident_on_purpose_gets_the_matching_temperature():
-    """Raising a posterior to the power a multiplies its log by a: the fitted T must follow."""
-    K, cls, X, train, unseen, y = _split()
-    fitted = {power: TemperatureCalibratedZSL(estimator=Overconfident(estimator=build_method("eszsl"), power=power))
-              .fit(X[train], K[cls[train]], cls[train]) for power in (1.0, 4.0)}
-    assert abs(fitted[4.0].temperature_ / fitted[1.0].temperature_ - 4.0) < 0.1
-    sharp = fitted[4.0]
-    raw = sharp.estimator_.predict_proba(X[~train], K[unseen])
-    tempered = sharp.predict_proba(X[~train], K[unseen])
-    np.testing.assert_allclose(tempered, fitted[1.0].predict_proba(X[~train], K[unseen]), atol=1e-3)
-    assert (sharp.predict(X[~train], K[unseen]) == sharp.estimator_.predict(X[~train], K[unseen])).all()
-    assert expected_calibration_error(*top_label(tempered, y)) <= expected_calibration_error(*top_label(raw, y))
+def test_true_posterior_is_calibrated_and_a_sharpened_one_is_not(data):
+    X, A, groups, X_test, K, y_test = data
+    ece_true = _ece(dap(1.0).fit(X, A, groups).predict_proba(X_test, K), y_test)
+    ece_over = _ece(dap(3.0).fit(X, A, groups).predict_proba(X_test, K), y_test)
+    assert ece_true < 0.04
+    assert ece_over > 0.15
 
 
-def test_a_study_entry_can_ask_for_tempered_posteriors():
-    """``{name = "eszsl", calibration = "temperature"}`` in [methods] compare (issue 21, item 2)."""
-    import pytest  # noqa: PLC0415
-
-    from tzsl.experiments.config import method_label  # noqa: PLC0415
-    from tzsl.experiments.config._common import methods_ok  # noqa: PLC0415
-    from tzsl.experiments.study_methods import study_estimator  # noqa: PLC0415
-
-    specs = methods_ok(["eszsl", {"name": "eszsl", "calibration": "temperature"}])
-    assert [method_label(s) for s in specs] == ["eszsl", "eszsl_calibration_temperature"]
-    model = study_estimator(specs[1], seed=0)
-    assert isinstance(model, TemperatureCalibratedZSL) and not isinstance(study_estimator(specs[0], 0),
-                                                                        TemperatureCalibratedZSL)
-    with pytest.raises(ValueError, match="the one calibration is 'temperature'"):
-        methods_ok([{"name": "sae", "calibration": "isotonic"}])
+def test_calibrator_detects_and_corrects_over_confidence(data):
+    X, A, groups, X_test, K, y_test = data
+    over = CalibratedZeroShotClassifier(estimator=dap(3.0), random_state=0).fit(X, A, groups)
+    assert over.temperature_ == pytest.approx(3.0, rel=0.25)  # recovers the power from training classes
+    assert over.calibration_info_["fitted"] and over.calibration_info_["n_folds"] == 3
+    assert over.calibration_info_["log_loss_after"] < over.calibration_info_["log_loss_before"]
+    assert _ece(over.predict_proba(X_test, K), y_test) < 0.04
+    assert _ece(over.predict_proba_uncalibrated(X_test, K), y_test) > 0.15
+    # a temperature keeps every ranking: predictions (and accuracy) unchanged
+    np.testing.assert_array_equal(over.predict(X_test, K), dap(3.0).fit(X, A, groups).predict(X_test, K))
+    # an already calibrated method keeps T near 1
+    calibrated = CalibratedZeroShotClassifier(estimator=dap(1.0), random_state=0).fit(X, A, groups)
+    assert calibrated.temperature_ == pytest.approx(1.0, rel=0.25)
 
 
-def test_the_estimator_contract():
-    """Outside check_estimator (listed in NOT_CHECKED with the reason): validation, clone, get_params."""
-    import pytest  # noqa: PLC0415
+def test_under_confidence_is_sharpened(data):
+    X, A, groups, X_test, K, y_test = data
+    under = CalibratedZeroShotClassifier(estimator=dap(0.4), random_state=0).fit(X, A, groups)
+    assert under.temperature_ < 0.6
+    assert _ece(under.predict_proba(X_test, K), y_test) < _ece(under.predict_proba_uncalibrated(X_test, K), y_test)
 
-    from tzsl.models._validation import ParameterError  # noqa: PLC0415
 
-    model = TemperatureCalibratedZSL(estimator=build_method("eszsl"), n_folds=4, random_state=0)
-    assert clone(model).get_params()["n_folds"] == 4 and "estimator__attribute_model" in model.get_params()
-    K, cls, X = _data()
-    with pytest.raises(ParameterError, match="n_folds"):
-        TemperatureCalibratedZSL(estimator=build_method("eszsl"), n_folds=1).fit(X, K[cls], cls)
-    with pytest.raises(ParameterError, match="estimator"):
-        TemperatureCalibratedZSL().fit(X, K[cls], cls)
+def test_folds_hold_out_classes_and_are_seeded(data):
+    X, A, groups, *_ = data
+    seen = []
+
+    def score(fitted, Xv, K):
+        seen.append(K)
+        return fitted.decision_function(Xv, K)
+
+    folds = pseudo_unseen_scores(dap(1.0), X, A, groups, n_folds=3, random_state=1, score=score)
+    assert len(folds) == 3 and sum(len(y) for _, y, _ in folds) == len(X)
+    assert sum(len(k) for k in seen) == 30  # every training class held out once
+    again = pseudo_unseen_scores(dap(1.0), X, A, groups, n_folds=3, random_state=1)
+    other = pseudo_unseen_scores(dap(1.0), X, A, groups, n_folds=3, random_state=2)
+    assert all(np.array_equal(a[1], b[1]) for a, b in zip(folds, again))
+    assert all(d == 0 for _, _, d in folds)
+    assert not all(len(a[1]) == len(b[1]) and np.array_equal(a[1], b[1]) for a, b in zip(folds, other))
+
+
+def test_fit_temperature_recovers_a_known_power():
+    rng = np.random.default_rng(3)
+    logits = 2.0 * rng.standard_normal((4000, 6))
+    y = (rng.random((4000, 1)) > np.cumsum(tempered_proba(logits, 1.0), axis=1)).sum(axis=1)
+    assert fit_temperature([2.5 * logits], [y]) == pytest.approx(2.5, rel=0.1)
+
+
+def test_too_few_classes_warns_and_records_why():
+    rng = np.random.default_rng(4)
+    rows, X, y = simulate(rng, 3, 10)
+    with pytest.warns(CalibrationWarning, match="3 training classes are too few"):
+        est = CalibratedZeroShotClassifier(estimator=dap(1.0)).fit(X, rows[y], y)
+    assert est.temperature_ == 1.0 and not est.calibration_info_["fitted"]
+    assert "at least 4" in est.calibration_info_["reason"]
+    # 5 classes with 0/1 attributes: a fold trains on 3, where no attribute is had and lacked by 2
+    rows5, X5, y5 = simulate(rng, 5, 10)
+    with pytest.warns(CalibrationWarning, match="leave no attribute"):
+        est5 = CalibratedZeroShotClassifier(estimator=dap(1.0)).fit(X5, rows5[y5], y5)
+    assert not est5.calibration_info_["fitted"]
+
+
+def test_turned_off_costs_no_fit_and_is_the_method(data):
+    X, A, groups, X_test, K, _ = data
+    off = CalibratedZeroShotClassifier(estimator=dap(3.0), calibration="none").fit(X, A, groups)
+    assert off.calibration_info_["method"] == "none" and off.temperature_ == 1.0
+    np.testing.assert_allclose(off.predict_proba(X_test, K), off.predict_proba_uncalibrated(X_test, K))
+
+
+def test_registry_builds_calibrated_methods_unless_turned_off():
+    assert isinstance(build_method("eszsl"), CalibratedZeroShotClassifier)
+    assert isinstance(build_method("ensemble"), CalibratedZeroShotClassifier)
+    assert isinstance(build_method("eszsl", calibration="none"), ZeroShotClassifier)
+    assert get_method("dap-avg").parameters()["calibration"] == "temperature"
+    assert "calibration" not in get_method("hand-dap").parameters()  # its own estimator, not calibrated here
+    est = build_method("sae", calibration_folds=2, random_state=5)
+    assert est.calibration_folds == 2 and est.random_state == 5
+    assert isinstance(clone(est), CalibratedZeroShotClassifier)
+
+
+def test_registry_method_is_calibrated_on_learned_attributes():
+    """A learned method (ESZSL) on the generator: calibration lowers held-out log-loss and keeps accuracy."""
+    rng = np.random.default_rng(7)
+    rows, X, y = simulate(rng, 40, 15)
+    _, X_test, y_test = simulate(rng, 10, 100, rows=rows[30:])
+    train = y < 30
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        est = build_method("eszsl", random_state=0).fit(X[train], rows[y[train]], y[train])
+    P, P0 = est.predict_proba(X_test, rows[30:]), est.predict_proba_uncalibrated(X_test, rows[30:])
+    rows_ = np.arange(len(y_test))
+    assert -np.log(P[rows_, y_test]).mean() < -np.log(P0[rows_, y_test]).mean()
+    np.testing.assert_array_equal(P.argmax(axis=1), P0.argmax(axis=1))
+
+
+def test_a_fold_leaves_out_an_attribute_its_training_classes_cannot_learn():
+    """Attribute 0 belongs to 2 of 8 classes: a fold holding one of them out cannot learn it."""
+    rng = np.random.default_rng(9)
+    rows = np.column_stack([np.r_[1, 1, np.zeros(6)], np.unique(rng.integers(0, 2, (64, 6)), axis=0)[:8]])
+    _, X, y = simulate(rng, 8, 10, rows=rows)
+    seen = []
+
+    def score(fitted, Xv, K):
+        seen.append(K.shape[1])
+        return fitted.decision_function(Xv, K)
+
+    eszsl = ZeroShotClassifier(attribute_model=ESZSL(), decision_rule=CompatibilityRule())
+    folds = pseudo_unseen_scores(eszsl, X, rows[y], y, n_folds=4, random_state=0, score=score)
+    dropped = [d for _, _, d in folds]
+    assert max(dropped) >= 1 and all(k == rows.shape[1] - d for k, d in zip(seen, dropped))
+    est = CalibratedZeroShotClassifier(estimator=eszsl, calibration_folds=4, random_state=0).fit(X, rows[y], y)
+    assert est.calibration_info_["n_attributes_left_out"] == sum(dropped)
+
+
+def test_folds_refit_with_the_final_fit_s_tuned_hyperparameters():
+    """ESZSL's ridges are chosen once, on all training classes; the folds keep them (same score scale)."""
+    rng = np.random.default_rng(11)
+    rows, X, y = simulate(rng, 24, 10)
+    est = build_method("eszsl", random_state=0).fit(X, rows[y], y)
+    chosen = est.estimator_.attribute_model_
+    assert est.calibration_info_["pinned"] == f"gammas=({chosen.best_gamma_},), lams=({chosen.best_lam_},)"
+    assert est.estimator.attribute_model.gammas != (chosen.best_gamma_,)  # the parameter itself is untouched
+    sae = build_method("sae", random_state=0).fit(X, rows[y], y)
+    assert sae.calibration_info_["pinned"] == f"lams=({sae.estimator_.attribute_model_.best_lam_},)"

@@ -58,12 +58,13 @@ def test_toy_method_fits_and_predicts_through_the_registry(toy_method):
     assert "toy-ncm" in available_methods()
     method = get_method("toy-ncm")
     assert method.attribute_model is toy_method and method.parameters() == {
-        "shrink": 0.0, "metric": "sqeuclidean", "random_state": None}
+        "shrink": 0.0, "metric": "sqeuclidean", "random_state": None, "calibration": "temperature",
+        "calibration_folds": 3}
     rng = np.random.default_rng(0)
     rows = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0], [0, 1, 1]], float)
     y = np.repeat(np.arange(5), 10)
     X = rows[y] @ rng.normal(size=(3, 4)) * 3 + 0.2 * rng.normal(size=(50, 4))
-    clf = build_method("toy-ncm", shrink=0.1, random_state=0)
+    clf = build_method("toy-ncm", shrink=0.1, random_state=0, calibration="none")
     assert isinstance(clf, ZeroShotClassifier)
     clf.fit(X[y < 3], rows[y[y < 3]], y[y < 3])
     # default table: the training classes (clf.class_attributes_)
@@ -82,12 +83,12 @@ def test_builtin_methods_and_their_parameters():
     # defaults are read from the signatures, not written twice
     iap_params = get_method("iap").parameters()
     assert iap_params["prior"] == inspect.signature(DAPRule.__init__).parameters["prior"].default
-    clf = build_method("dap-max", n_jobs=1, random_state=3)
+    clf = build_method("dap-max", n_jobs=1, random_state=3).estimator  # inside its calibrator
     assert isinstance(clf.attribute_model, AttributeClassifierBank) and clf.attribute_model.random_state == 3
     assert clf.decision_rule.get_params() == {"fusion": "max", "prior": "uni", "eps": 1e-6}
     with pytest.raises(ConfigError, match="fixed"):
         build_method("dap-avg", prior="train")
-    eszsl = build_method("eszsl", cv=3)
+    eszsl = build_method("eszsl", cv=3, calibration="none")
     assert isinstance(eszsl.attribute_model, ESZSLCV) and eszsl.attribute_model.cv == 3
     assert build_method("ldap").fusion == "ldap"
     with pytest.raises(ConfigError, match="fixed"):
@@ -107,7 +108,8 @@ def test_all_estimators_lists_public_estimator_classes():
     assert {"ESZSL", "ESZSLCV", "EmbeddingZSL", "ZeroShotClassifier", "AttributeSVM",
             "AttributeClassifierBank", "MultiLabelAttributeClassifier", "HandDAPClassifier",
             "DeepAttributeEmbedding", "IAP", "SAE", "SAECV", "ALE", "SJE", "DeViSE", "LogisticAttribute",
-            "PerEPAttributeModel", "ScalableAttributeClassifier", "ScoreEnsembleZSL", "TemperatureCalibratedZSL"} == set(names)
+            "PerEPAttributeModel", "ScalableAttributeClassifier", "ScoreEnsembleZSL",
+            "CalibratedZeroShotClassifier"} == set(names)
     for _, cls in all_estimators():  # keyword-only __init__ everywhere
         params = list(inspect.signature(cls.__init__).parameters.values())[1:]
         assert all(p.kind is p.KEYWORD_ONLY for p in params), cls

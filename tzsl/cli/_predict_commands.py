@@ -48,7 +48,8 @@ def _names(text: str | None) -> list[str] | None:
                    "tzsl.models.suggest_next_ep, printed in the output].")
 @click.option("--max-eps", type=click.IntRange(min=1), default=None, help="Per-EP bundles: EP budget.")
 @click.option("--max-seconds", type=click.FloatRange(min=0), default=None, help="Per-EP bundles: budget in seconds.")
-@click.option("--json", "as_json", is_flag=True, help="Per-EP bundles: print the report as one JSON object.")
+@click.option("--json", "as_json", is_flag=True, help="Print the report as one JSON object (with the posteriors "
+                                                     "and how their calibrator was fitted).")
 @click.option("--trust-pickle", is_flag=True,
               help="Also load an old (format 1) bundle holding a pickle, which runs code from the file: "
                    "only for a file whose author you trust. Better: re-run the train command.")
@@ -69,18 +70,27 @@ def predict(model_path: Path, classes: Path, candidates: str | None, mode: str, 
     from tzsl.bundle import read_bundle_header  # noqa: PLC0415
 
     active = read_bundle_header(model_path).kind == "per-ep"
-    if not active and (eps_done or suggest_next or as_json or threshold is not None or max_eps or max_seconds):
-        raise ConfigError(f"{model_path}: --eps-done, --suggest-next, --threshold, --max-eps, --max-seconds and "
-                          "--json need a per-EP bundle (tzsl train-attributes --per-ep)")
+    if not active and (eps_done or suggest_next or threshold is not None or max_eps or max_seconds):
+        raise ConfigError(f"{model_path}: --eps-done, --suggest-next, --threshold, --max-eps and --max-seconds "
+                          "need a per-EP bundle (tzsl train-attributes --per-ep)")
     if active:
         _predict_active(model_path, classes, _names(candidates), grasp, _names(eps_done), suggest_next,
                         threshold, max_eps, max_seconds, as_json, top, trust_pickle)
         return
-    from tzsl.experiments.predict import format_prediction, load_predictor, predict_grasps, read_class_table  # noqa: PLC0415
+    from tzsl.experiments.predict import (  # noqa: PLC0415
+        format_prediction,
+        load_predictor,
+        predict_grasps,
+        prediction_report,
+        read_class_table,
+    )
 
     predictor = load_predictor(model_path, trust_pickle=trust_pickle)
     table = read_class_table(classes, predictor.attribute_names, candidates=_names(candidates))
     result = predict_grasps(predictor, table, list(grasp), mode=mode, k=k)
+    if as_json:
+        click.echo(json.dumps(prediction_report(result, predictor, top=top), sort_keys=False))
+        return
     click.echo(f"model: {predictor.describe()}")
     click.echo(f"classes: {len(table)} from {classes}")
     click.echo(format_prediction(result, top=top))

@@ -18,14 +18,6 @@ from tzsl.evaluation._metrics import (
     summarise_over_splits,
     trial_accuracy,
 )
-from tzsl.evaluation._calibration import (
-    DEFAULT_N_BINS,
-    brier_terms,
-    calibration_intervals,
-    expected_calibration_error,
-    reliability_table,
-    top_label,
-)
 from tzsl.evaluation._challenging_splits import challenging_splits
 from tzsl.evaluation._split_io import read_splits_csv, write_splits_csv
 from tzsl.evaluation._splits import (
@@ -37,13 +29,7 @@ from tzsl.evaluation._splits import (
 )
 
 __all__: list[str] = [
-    "DEFAULT_N_BINS",
     "Split",
-    "brier_terms",
-    "calibration_intervals",
-    "expected_calibration_error",
-    "reliability_table",
-    "top_label",
     "attribute_exclusions",
     "challenging_splits",
     "check_attribute_table",
@@ -64,6 +50,7 @@ from tzsl.evaluation._intervals import (  # noqa: E402
     Interval,
     bootstrap_accuracy,
     bootstrap_accuracy_columns,
+    bootstrap_trial_weights,
     paired_difference_interval,
     paired_differences_table,
     splits_for_paired_interval,
@@ -73,6 +60,7 @@ __all__ += [
     "Interval",
     "bootstrap_accuracy",
     "bootstrap_accuracy_columns",
+    "bootstrap_trial_weights",
     "paired_difference_interval",
     "paired_differences_table",
     "splits_for_paired_interval",
@@ -113,3 +101,22 @@ __all__ += ["choose_stacking_constant", "holdout_trials", "stacked_predict"]
 from tzsl.evaluation._model_selection import DEFAULT_ALPHAS, select_embedding_alpha  # noqa: E402
 
 __all__ += ["DEFAULT_ALPHAS", "select_embedding_alpha"]
+
+# Calibration of class posteriors: ECE (equal-mass bins), Brier score, reliability diagram points.
+from tzsl.evaluation._calibration import (  # noqa: E402
+    CALIBRATION_METRICS,
+    DEFAULT_N_BINS,
+    CalibrationTerms,
+    add_calibration_columns,
+    brier_score,
+    calibration_columns,
+    calibration_intervals,
+    calibration_terms,
+    equal_mass_bins,
+    expected_calibration_error,
+    reliability_table,
+)
+
+__all__ += ["CALIBRATION_METRICS", "DEFAULT_N_BINS", "CalibrationTerms", "add_calibration_columns", "brier_score",
+            "calibration_columns", "calibration_intervals", "calibration_terms", "equal_mass_bins",
+            "expected_calibration_error", "reliability_table"]

@@ -47,6 +47,7 @@ __all__ = [
     "Interval",
     "bootstrap_accuracy",
     "bootstrap_accuracy_columns",
+    "bootstrap_trial_weights",
     "paired_difference_interval",
     "paired_differences_table",
     "splits_for_paired_interval",
@@ -129,6 +130,81 @@ def _check_correct(correct, n_methods: int | None = None) -> np.ndarray:
     return c
 
 
+def _draw(rng: np.random.Generator, n_classes: np.ndarray, b: int):
+    """One chunk of ``b`` two-level draws (module docstring): splits, then classes within them.
+
+    Returns
+    -------
+    drawn : int ndarray of shape (b, n_splits)
+        Split drawn at each position.
+    nc : int ndarray of shape (b, n_splits)
+        Classes of each drawn split.
+    pick : int ndarray of shape (b, n_splits, max_classes)
+        Class position drawn in each slot (slots past ``nc`` are padding).
+    ok : bool ndarray of shape (b, n_splits, max_classes)
+        Which slots are real draws.
+    """
+    n_splits, max_classes = len(n_classes), int(n_classes.max())
+    drawn = rng.integers(0, n_splits, size=(b, n_splits))  # (b, S) split draws
+    nc = n_classes[drawn]  # (b, S)
+    pick = np.minimum((rng.random((b, n_splits, max_classes)) * nc[..., None]).astype(int), max_classes - 1)
+    ok = np.arange(max_classes) < nc[..., None]  # (b, S, C)
+    return drawn, nc, pick, ok
+
+
+def bootstrap_trial_weights(classes, splits=None, *, n_boot: int = DEFAULT_N_BOOT,
+                            random_state: int | np.random.Generator | None = 0):
+    """The two-level bootstrap of this module as per-trial weights, for statistics that are not means.
+
+    Replicate ``r`` counts trial ``i`` ``w[r, i]`` times: how often its split was drawn times
+    how often its class was drawn within it (its class brings all its trials, module
+    docstring). A statistic that is not a mean over splits of a per-split accuracy (the
+    expected calibration error pools trials into bins) is recomputed on each replicate from
+    these weights; the draws are those of :func:`bootstrap_accuracy` with the same seed.
+
+    Parameters
+    ----------
+    classes : array-like of shape (n_trials,)
+        True class (test object) of each trial.
+    splits : array-like of shape (n_trials,), optional
+        Split of each trial; None: one split.
+    n_boot : int, default 2000
+    random_state : int, Generator or None, default 0
+
+    Yields
+    ------
+    ndarray of shape (b, n_trials), float
+        Weights of ``b`` replicates (chunks of at most about ``CHUNK_CELLS`` cells; ``n_boot``
+        rows in all).
+    """
+    if not isinstance(n_boot, (int, np.integer)) or n_boot < 1:
+        raise TzslError(f"n_boot must be a positive integer, got {n_boot!r}")
+    n = len(np.asarray(classes))
+    n_correct, _, n_classes = _cells(np.zeros((n, 1)), classes, splits)
+    split_of, position = _trial_cells(classes, splits)
+    n_splits, max_classes = n_correct.shape[:2]
+    rng = np.random.default_rng(random_state)
+    chunk = max(1, CHUNK_CELLS // max(n, n_splits * max_classes))
+    for start in range(0, n_boot, chunk):
+        b = min(chunk, n_boot - start)
+        drawn, _, pick, ok = _draw(rng, n_classes, b)
+        counts = np.zeros((b, n_splits, max_classes))
+        rep = np.broadcast_to(np.arange(b)[:, None, None], pick.shape)
+        np.add.at(counts, (rep[ok], np.broadcast_to(drawn[..., None], pick.shape)[ok], pick[ok]), 1.0)
+        yield counts[:, split_of, position]
+
+
+def _trial_cells(classes, splits) -> tuple[np.ndarray, np.ndarray]:
+    """Each trial's split index and class position, as :func:`_cells` orders them."""
+    classes = np.asarray(classes)
+    splits = np.zeros(len(classes), dtype=int) if splits is None else np.asarray(splits)
+    frame = pd.DataFrame({"split": splits, "class": classes})
+    split_of = pd.factorize(frame["split"], sort=True)[0]
+    cell = frame.groupby(["split", "class"], sort=True).ngroup().to_numpy()
+    first_cell = pd.Series(cell).groupby(split_of).transform("min").to_numpy()
+    return split_of, cell - first_cell
+
+
 def _replicates(correct: np.ndarray, classes, splits, metric: str, n_boot: int, random_state
                 ) -> tuple[np.ndarray, np.ndarray]:
     """Point values (n_methods,) and bootstrap replicates (n_boot, n_methods)."""
@@ -145,10 +221,7 @@ def _replicates(correct: np.ndarray, classes, splits, metric: str, n_boot: int, 
     out = np.empty((n_boot, n_methods))
     for start in range(0, n_boot, chunk):
         b = min(chunk, n_boot - start)
-        drawn = rng.integers(0, n_splits, size=(b, n_splits))  # (b, S) split draws
-        nc = n_classes[drawn]  # (b, S)
-        pick = np.minimum((rng.random((b, n_splits, max_classes)) * nc[..., None]).astype(int), max_classes - 1)
-        ok = np.arange(max_classes) < nc[..., None]  # (b, S, C)
+        drawn, nc, pick, ok = _draw(rng, n_classes, b)
         rows = drawn[..., None]
         per_split = _split_accuracy(n_correct[rows, pick], n_trials[rows, pick], ok, nc, metric)
         out[start:start + b] = per_split.mean(axis=1)

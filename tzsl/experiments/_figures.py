@@ -87,18 +87,3 @@ def attribute_sweep_figure(sweep: pd.DataFrame):
     return fig
 
 
-def reliability_figure(table: pd.DataFrame):
-    """Reliability diagram: per method, mean top posterior (confidence) against accuracy in
-    equal-mass bins; the diagonal is perfect calibration (``table``: ``reliability.csv``)."""
-    fig, ax = plt.subplots(figsize=(6, 6))
-    ax.plot([0, 1], [0, 1], color="grey", lw=0.8, ls=":", label="calibrated")
-    for method, rows in table.groupby("method", sort=False):
-        ax.plot(rows["confidence"], rows["accuracy"], marker="o", ms=3, lw=1, label=str(method))
-    ax.set_xlim(0, 1)
-    ax.set_ylim(0, 1)
-    ax.set_xlabel("top class posterior (mean in bin)")
-    ax.set_ylabel("accuracy in bin")
-    ax.set_title("Reliability of the class posteriors (test objects, random splits)")
-    ax.legend(loc="upper left", fontsize=7)
-    fig.tight_layout()
-    return fig

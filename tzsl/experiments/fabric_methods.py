@@ -175,7 +175,7 @@ def run_job(
             warnings.simplefilter("always", ConvergenceWarning)
             model = build_method(
                 "embedding", lam=lam, alpha=alpha, early_stopping=False, max_iter=max_iter,
-                random_state=seed,
+                random_state=seed, calibration="none",
             ).fit(X_tr, attribute_rows(y_tr, S_tr), y_tr)
         info.update(
             alpha=alpha,
@@ -186,7 +186,7 @@ def run_job(
         return model
 
     def fit_eszsl(X_tr, y_tr, S_tr):
-        model = build_method("eszsl").fit(X_tr, attribute_rows(y_tr, S_tr), y_tr)
+        model = build_method("eszsl", calibration="none").fit(X_tr, attribute_rows(y_tr, S_tr), y_tr)
         cv = model.attribute_model_
         info.update(gamma=cv.best_gamma_, eszsl_lam=cv.best_lam_, cv_score=cv.best_score_)
         return model

@@ -295,7 +295,7 @@ def _eszsl_scores(features: FeatureSet, problem: GzslProblem) -> np.ndarray:
     objects = features.objects[fit]
     classes = np.unique(objects)
     S = features.attributes.loc[classes, list(problem.attributes)].to_numpy(dtype=float)
-    model = build_method("eszsl").fit(X[fit], attribute_rows(objects, S), objects)
+    model = build_method("eszsl", calibration="none").fit(X[fit], attribute_rows(objects, S), objects)
     return model.decision_function(X[problem.evaluate], problem.class_rows.astype(float))
 
 

@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from tzsl.experiments.paper_numbers import DAP_HAND_TABLE5
+from tzsl.experiments.study_calibration import posterior_columns
 from tzsl.experiments.study_methods import comparison_file, comparison_trials, fit_predict, method_label, method_summary
 
 __all__ = ["COMPARISON_TABLE", "REFERENCE_METHOD", "STUDY", "fusion_label", "hand_comparison", "registry_trials"]
@@ -68,7 +69,9 @@ def registry_trials(specs, X_train: np.ndarray, objects_train: np.ndarray, K: pd
     for spec in specs:
         fit = fit_predict(spec, X_train, np.asarray(objects_train), class_rows, X_test, K_test, seed)
         label = method_label(spec)
-        trials.append(comparison_trials(label, f"seed{seed}", y_test, names[fit.predicted] == y_test))
+        trials.append(comparison_trials(label, f"seed{seed}", y_test, names[fit.predicted] == y_test,
+                                        **posterior_columns(fit.proba, fit.proba_uncalibrated,
+                                                            pd.Index(names).get_indexer(y_test), fit.predicted)))
         seconds.setdefault(label, []).append(fit.fit_seconds)
     return trials, seconds
 

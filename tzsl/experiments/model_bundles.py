@@ -5,7 +5,11 @@ whatever the method (any of ``tzsl methods`` that is an attribute model + decisi
 hand's :class:`~tzsl.models.HandDAPClassifier`):
 
 payload (skops, see :mod:`tzsl.bundle`: loading it runs no code)
-    ``{"model": fitted estimator, "decision_rule": fitted DecisionRule}``.
+    ``{"model": fitted estimator, "decision_rule": fitted DecisionRule}``, plus ``"calibration"``
+    (a plain dict: the temperature and how it was fitted,
+    :attr:`tzsl.models.CalibratedZeroShotClassifier.calibration_info_`) when the model was saved
+    from a calibrated method; bundles without it predict with the method's own posteriors
+    (``tzsl predict`` says "uncalibrated").
     ``model.attribute_scores(X)`` gives the attribute scores (a fitted
     :class:`~tzsl.models.ZeroShotClassifier`; a HandDAPClassifier gives its fused posteriors) and
     ``decision_rule`` turns them and a class-attribute table given at predict time into class
@@ -32,7 +36,14 @@ import pandas as pd
 from tzsl.bundle import save_bundle
 from tzsl.datasets import FeatureSet, HandTable, read_grasps
 from tzsl.exceptions import ConfigError
-from tzsl.models import DAPRule, DecisionRule, HandDAPClassifier, ZeroShotClassifier, get_method
+from tzsl.models import (
+    CalibratedZeroShotClassifier,
+    DAPRule,
+    DecisionRule,
+    HandDAPClassifier,
+    ZeroShotClassifier,
+    get_method,
+)
 
 __all__ = [
     "DEEP_KIND",
@@ -75,7 +86,8 @@ def feature_schema(features: FeatureSet, ndim: int) -> dict:
 
 
 def save_model_bundle(path: str | Path, model: Any, decision_rule: DecisionRule, *, method: str,
-                      attribute_names: Sequence[str], input_schema: dict, force: bool = False, **extra) -> Path:
+                      attribute_names: Sequence[str], input_schema: dict, force: bool = False,
+                      calibration: dict | None = None, **extra) -> Path:
     """Write a ``"zero-shot"`` bundle (layout in the module docstring).
 
     Parameters
@@ -89,6 +101,9 @@ def save_model_bundle(path: str | Path, model: Any, decision_rule: DecisionRule,
     input_schema : dict
         The feature schema (see :func:`feature_schema`).
     force : bool
+    calibration : dict, optional
+        How the class posteriors are calibrated (``temperature`` > 0 and how it was fitted);
+        stored in the payload. None: the method's own posteriors.
     **extra
         JSON-serialisable provenance.
     """
@@ -100,14 +115,23 @@ def save_model_bundle(path: str | Path, model: Any, decision_rule: DecisionRule,
     if len(names) != decision_rule.n_attributes_:
         raise ConfigError(f"{len(names)} attribute names for a rule over {decision_rule.n_attributes_} attributes")
     metadata = {"method": method, "attribute_names": names, "input": dict(input_schema), **extra}
-    return save_bundle(path, {"model": model, "decision_rule": decision_rule}, kind=ZERO_SHOT_KIND,
-                       metadata=metadata, force=force)
+    payload = {"model": model, "decision_rule": decision_rule}
+    if calibration is not None:
+        payload["calibration"] = {k: (v if isinstance(v, str | int) else float(v)) for k, v in calibration.items()}
+    return save_bundle(path, payload, kind=ZERO_SHOT_KIND, metadata=metadata, force=force)
 
 
-def save_zero_shot_bundle(path: str | Path, classifier: ZeroShotClassifier, features: FeatureSet, *, method: str,
-                          ndim: int, force: bool = False, **extra) -> Path:
-    """Save a :class:`~tzsl.models.ZeroShotClassifier` fitted on ``features`` (attribute columns in order)."""
-    return save_model_bundle(path, classifier, classifier.decision_rule_, method=method,
+def save_zero_shot_bundle(path: str | Path, classifier: ZeroShotClassifier | CalibratedZeroShotClassifier,
+                          features: FeatureSet, *, method: str, ndim: int, force: bool = False, **extra) -> Path:
+    """Save a fitted :class:`~tzsl.models.ZeroShotClassifier` (or one inside its calibrator, whose
+    temperature is saved too) fitted on ``features`` (attribute columns in order)."""
+    calibration = None
+    if isinstance(classifier, CalibratedZeroShotClassifier):
+        classifier, calibration = classifier.estimator_, classifier.calibration_info_
+    if not isinstance(classifier, ZeroShotClassifier):
+        raise ConfigError(f"{type(classifier).__name__} is not an attribute model + decision rule; it cannot be "
+                          "saved for 'tzsl predict'")
+    return save_model_bundle(path, classifier, classifier.decision_rule_, method=method, calibration=calibration,
                              attribute_names=list(features.attributes.columns),
                              input_schema=feature_schema(features, ndim), force=force,
                              dataset=features.dataset, **extra)
@@ -175,8 +199,9 @@ def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | 
     provenance = {"training_objects": sorted(set(sub.objects)), "split": split_record, "seed": config.seed}
     if method is None:
         check_cv_folds(config.svm_params.get("cv"), len(set(sub.objects)), "command line")
-        clf = ZeroShotClassifier(attribute_model=attribute_bank(config, attributes, config.seed),
+        dap = ZeroShotClassifier(attribute_model=attribute_bank(config, attributes, config.seed),
                                  decision_rule=DAPRule(fusion=fusion, prior=prior), random_state=config.seed)
+        clf = CalibratedZeroShotClassifier(estimator=dap, random_state=config.seed)  # its default calibration
         with compute_context(config):
             clf.fit(sub.X, A, sub.objects)
         save_zero_shot_bundle(save, clf, sub, method=f"dap-{fusion}", ndim=3, force=force,
@@ -185,7 +210,7 @@ def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | 
                  "gamma": getattr(est, "gamma_", np.nan), "draw": getattr(est, "draw_", -1),
                  "positive_objects": int(sub.attributes[name].sum())}
                 for j, name in enumerate(attributes)
-                for est, sensor in zip(clf.attribute_model_.estimators_[j], sub.sensors, strict=True)]
+                for est, sensor in zip(clf.estimator_.attribute_model_.estimators_[j], sub.sensors, strict=True)]
         return pd.DataFrame(rows)
     spec = {"name": method}
     registered = get_method(method)

@@ -26,6 +26,7 @@ from tzsl.experiments.config import DaskCompute, Phac2Methods, Phac2Splits, Phac
 from tzsl.experiments.phac2_methods import method_comparison
 from tzsl.experiments.study_labels import StudyLabels
 from tzsl.experiments.study_methods import split_masks
+from tzsl.experiments.study_calibration import write_reliability_figure
 from tzsl.experiments.phac2_tables import (
     table_titles,
     FUSIONS,
@@ -414,7 +415,6 @@ def run_dap_study(
         attribute_accuracy_figure,
         attribute_sweep_figure,
         object_map_figure,
-        reliability_figure,
     )
 
     config = config or DapStudyConfig()
@@ -446,7 +446,7 @@ def run_dap_study(
             if compare_methods:
                 tables.update(method_comparison(features, random_results, seed=config.seed, labels=labels,
                                                 **(method_options or {})))
-                out.write_figure("reliability.png", reliability_figure(tables["reliability"]))
+                write_reliability_figure(out, tables, labels.reliability_table, labels.comparison_table)
         used = [r.split for r in random_results]
         if splits is None and "challenging" in kinds:
             challenging, map_coords = make_splits(features, "challenging", config)

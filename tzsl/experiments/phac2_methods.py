@@ -5,8 +5,10 @@ Every method of ``[methods]`` (``eszsl``, ``embedding`` and ``compare``, see
 training objects with :func:`tzsl.experiments.study_methods.fit_predict` and scored on the
 split's test trials. The reference is the paper's method, AVGDAP with a uniform prior, read
 from the already fitted DAP posteriors (no refit), as are MAXDAP and, when the study fitted it,
-the multi-label DAP. Scoring is the one of every study
-(:func:`tzsl.experiments.study_methods.method_summary`).
+the multi-label DAP; their temperatures are fitted on pseudo-unseen classes of each split's
+training objects (:func:`tzsl.experiments.study_calibration.dap_split_posteriors`). Scoring is the
+one of every study (:func:`tzsl.experiments.study_methods.method_summary`), with the study's
+reliability diagram (``phac2_reliability.csv``; ``reliability.csv`` outside the paper preset).
 """
 
 from __future__ import annotations
@@ -15,10 +17,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
-from scipy.special import softmax
 
 from tzsl.datasets import FeatureSet
-from tzsl.evaluation import Split, reliability_table, summarise_over_splits
+from tzsl.evaluation import Split, summarise_over_splits
 from tzsl.experiments._failures import ERROR_COLUMN, attempt
 from tzsl.experiments.paper_numbers import DAP_MULTILABEL_ACCURACY, DAP_TABLE1
 from tzsl.experiments.phac2_tables import split_label
@@ -31,12 +32,12 @@ from tzsl.experiments.study_methods import (
     method_summary,
     split_masks,
 )
+from tzsl.experiments.study_calibration import dap_split_posteriors, posterior_columns, reliability_by_method
 
 if TYPE_CHECKING:
     from tzsl.experiments.phac2_dap import SplitPosteriors
 
-__all__ = ["COMPARISON_TABLE", "DEFAULT_METHODS", "REFERENCE_METHOD", "RELIABILITY_TABLE", "STUDY", "method_comparison",
-           "reliability_by_method"]
+__all__ = ["COMPARISON_TABLE", "DEFAULT_METHODS", "REFERENCE_METHOD", "STUDY", "method_comparison"]
 
 #: Methods compared when none are given: ESZSL and the embedding model at lambda 0.1 and 1.
 DEFAULT_METHODS: tuple[dict, ...] = ({"name": "eszsl"}, {"name": "embedding", "lam": 0.1},
@@ -57,20 +58,6 @@ GENERIC_NOTES = {"dap-avg": "reference (AVGDAP, uniform prior)", "dap-max": "sam
                  "multilabel-dap": "classifier chain"}
 
 
-#: Table (file stem) of the reliability diagram: per method and equal-mass bin, confidence vs accuracy.
-RELIABILITY_TABLE = "reliability"
-
-
-def reliability_by_method(trials: pd.DataFrame) -> pd.DataFrame:
-    """:func:`tzsl.evaluation.reliability_table` of every method with class posteriors, over all
-    its test trials (every split): columns ``method, bin, n_trials, confidence, accuracy``."""
-    parts = [reliability_table(t["confidence"], t["top_correct"]).assign(method=method)
-             for method, t in trials.groupby("method", sort=False)
-             if "confidence" in t.columns and t["confidence"].notna().all()]
-    columns = ["method", "bin", "n_trials", "confidence", "accuracy"]
-    return pd.concat(parts, ignore_index=True)[columns] if parts else pd.DataFrame(columns=columns)
-
-
 def _fit_predict_split(spec: dict, features: FeatureSet, split: Split, seed: int):
     """Fit on the split's training objects; (fit, true test rows)."""
     attributes = list(split.kept_attributes)
@@ -81,6 +68,13 @@ def _fit_predict_split(spec: dict, features: FeatureSet, split: Split, seed: int
     fit = fit_predict(spec, features.X[train], objects[train], class_rows, features.X[test], K, seed)
     y = pd.Index(split.test_objects).get_indexer(objects[test])
     return fit, y
+
+
+def _dap_posteriors(features: FeatureSet, r: SplitPosteriors, seed: int) -> dict:
+    """The split's DAP posteriors, calibrated on pseudo-unseen classes of its training objects."""
+    train, _ = split_masks(features, r.split)
+    A = features.attributes.loc[features.objects[train], list(r.attributes)].to_numpy(dtype=int)
+    return dap_split_posteriors(r, features.X[train], A, features.objects[train], seed=seed)
 
 
 def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed: int = 0,
@@ -98,12 +92,13 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
     Returns
     -------
     dict of DataFrame
-        ``labels.methods_table`` (``"phac2_methods"`` for the paper preset): one row per split (dap_avg_uni and one column per method label,
-        e.g. ``eszsl``, ``embedding_lam_0.1``; NaN where that fit failed, the reason in the
+        ``labels.methods_table`` (``"phac2_methods"`` for the paper preset): one row per split
+        (dap_avg_uni and one column per method label, e.g. ``eszsl``, ``embedding_lam_0.1``; NaN where that fit failed, the reason in the
         ``error`` column), then mean and std rows;
         ``labels.comparison_table``: :func:`~tzsl.experiments.study_methods.method_summary`
-        with ``dap-avg`` as the reference; ``dap-max`` and ``multilabel-dap`` (when fitted) come
-        from the same posteriors, their fit time is the DAP fit's.
+        with ``dap-avg`` as the reference (with ECE and Brier score, calibrated and not);
+        ``labels.reliability_table``: the reliability diagram's points of every method; ``dap-max``
+        and ``multilabel-dap`` (when fitted) come from the same posteriors, their fit time is the DAP fit's.
     """
     rows, trials = [], []
     seconds: dict[str, list[float]] = {REFERENCE_METHOD: []}
@@ -111,14 +106,19 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
         label = split_label(r.split)
         objects = np.asarray(r.split.test_objects)[r.y]
         row = {"split": label, "chance": r.split.chance, "dap_avg_uni": r.accuracy("avg", "uni")}
-        from_posteriors = [(REFERENCE_METHOD, ("avg", "uni", False)), ("dap-max", ("max", "uni", False))]
+        from_posteriors = [(REFERENCE_METHOD, r.predict("avg", "uni")), ("dap-max", r.predict("max", "uni"))]
         if r.P_multilabel is not None:
-            from_posteriors.append(("multilabel-dap", ("avg", "uni", True)))
-        for name, variant in from_posteriors:
-            proba = softmax(r.scores(*variant), axis=1)  # the DAP class posterior over the test classes
-            trials.append(comparison_trials(name, label, objects, r.predict(*variant) == r.y, proba, r.y))
-            seconds.setdefault(name, []).append(r.fit_seconds)
+            from_posteriors.append(("multilabel-dap", r.predict("avg", "uni", multilabel=True)))
         errors = []
+        posteriors, error = attempt(_dap_posteriors, features, r, seed + i)
+        if posteriors is None:  # the DAP rows keep their accuracy; their calibration is NaN
+            posteriors = {}
+            errors.append(f"DAP calibration: {error}")
+        for name, predicted in from_posteriors:
+            P = posteriors.get(name, (None, None))
+            trials.append(comparison_trials(name, label, objects, predicted == r.y,
+                                            **posterior_columns(P[0], P[1], r.y, predicted)))
+            seconds.setdefault(name, []).append(r.fit_seconds)
         for spec in methods:
             name = method_label(spec)
             done, error = attempt(_fit_predict_split, spec, features, r.split, seed + i)
@@ -129,7 +129,8 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
             fit, y = done
             correct = fit.predicted == y
             row[name] = float(correct.mean())
-            trials.append(comparison_trials(name, label, objects, correct, fit.proba, y))
+            trials.append(comparison_trials(name, label, objects, correct,
+                                            **posterior_columns(fit.proba, fit.proba_uncalibrated, y, fit.predicted)))
             seconds.setdefault(name, []).append(fit.fit_seconds)
         rows.append({**row, ERROR_COLUMN: "; ".join(errors)})
     per_split = summarise_over_splits(pd.DataFrame(rows)).reset_index()
@@ -143,4 +144,4 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
     if not labels.paper:  # paper_* headers only beside the paper's dataset and protocol
         summary = summary.drop(columns="paper_accuracy")
     return {labels.methods_table: per_split, labels.comparison_table: summary,
-            RELIABILITY_TABLE: reliability_by_method(trials)}
+            labels.reliability_table: reliability_by_method(trials, labels.study)}

@@ -33,13 +33,12 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from scipy.special import softmax
 
 from tzsl.bundle import load_bundle, read_bundle_header
 from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
 from tzsl.experiments.model_bundles import DEEP_KIND, ZERO_SHOT_KIND
 from tzsl.experiments.predict_inputs import INPUT_FORMATS, describe_inputs, read_inputs
-from tzsl.models import DecisionRule, NearestAttributeRule, sc_mdap
+from tzsl.models import DecisionRule, NearestAttributeRule, sc_mdap, tempered_proba
 
 __all__ = [
     "PREDICT_KINDS",
@@ -48,12 +47,15 @@ __all__ = [
     "format_prediction",
     "load_predictor",
     "predict_grasps",
+    "prediction_report",
     "read_class_table",
     "top_ties",
 ]
 
 #: Bundle kinds ``tzsl predict`` reads as a model + decision rule.
 PREDICT_KINDS: tuple[str, ...] = (ZERO_SHOT_KIND, DEEP_KIND)
+#: Keys a zero-shot bundle's payload may hold (``calibration`` is optional).
+_PAYLOAD_KEYS = {"model", "decision_rule", "calibration"}
 _DESCRIPTIVE = ("split", "subset")
 
 
@@ -71,6 +73,9 @@ class Predictor:
         Feature schema (:mod:`tzsl.experiments.predict_inputs`).
     metadata : dict
         The bundle's metadata (with ``bundle``: kind, path, ...).
+    calibration : dict or None
+        The bundle's calibrator (``temperature`` and how it was fitted, see
+        :class:`tzsl.models.CalibratedZeroShotClassifier`); None for bundles saved without one.
     """
 
     model: Any
@@ -78,6 +83,7 @@ class Predictor:
     attribute_names: list[str]
     input: dict
     metadata: dict
+    calibration: dict | None = None
 
     @property
     def kind(self) -> str:
@@ -91,8 +97,27 @@ class Predictor:
     def describe(self) -> str:
         """One line naming the model."""
         inner = getattr(self.model, "attribute_model_", self.model)
+        fitted = self.calibration_report()
+        calibrated = (f"calibrated (temperature {fitted['temperature']:.3g})" if fitted["calibrated"]
+                      else "uncalibrated")
         return (f"{self.metadata.get('method', self.kind)} ({type(inner).__name__} + {type(self.rule).__name__}), "
-                f"{len(self.attribute_names)} attributes; input: {self.inputs}")
+                f"{len(self.attribute_names)} attributes, {calibrated} posteriors; input: {self.inputs}")
+
+    @property
+    def temperature(self) -> float:
+        """The calibrator's temperature (1.0 without one)."""
+        return float(self.calibration["temperature"]) if self.calibration else 1.0
+
+    def posteriors(self, class_scores: np.ndarray) -> np.ndarray:
+        """Class posteriors ``softmax(class_scores / temperature)`` along the last axis (calibrated when the bundle is)."""
+        return tempered_proba(np.atleast_2d(class_scores), self.temperature).reshape(np.shape(class_scores))
+
+    def calibration_report(self) -> dict:
+        """How the posteriors are calibrated: ``calibrated`` (bool), ``temperature`` and the calibrator's record."""
+        if not self.calibration:
+            return {"calibrated": False, "temperature": 1.0,
+                    "reason": "uncalibrated: the bundle holds no calibrator (saved without one, or by an older tzsl)"}
+        return {"calibrated": bool(self.calibration.get("fitted", False)), **self.calibration}
 
     def class_scores(self, scores: np.ndarray, K: np.ndarray) -> np.ndarray:
         """Class scores (n, c) of attribute scores ``scores`` (n, ...) against the classes ``K`` (c, m)."""
@@ -105,10 +130,15 @@ def _where(metadata: dict) -> str:
 
 def _checked(payload: Any, metadata: dict) -> Predictor:
     where = _where(metadata)
-    if not (isinstance(payload, dict) and set(payload) == {"model", "decision_rule"}):
-        raise ModelBundleError(f"{where}: a zero-shot bundle holds {{'model', 'decision_rule'}}, found "
+    if not (isinstance(payload, dict) and {"model", "decision_rule"} <= set(payload) <= _PAYLOAD_KEYS):
+        raise ModelBundleError(f"{where}: a zero-shot bundle holds {{'model', 'decision_rule'}} and optionally "
+                               f"'calibration', found "
                                f"{sorted(payload) if isinstance(payload, dict) else type(payload).__name__}")
-    model, rule = payload["model"], payload["decision_rule"]
+    model, rule, calibration = payload["model"], payload["decision_rule"], payload.get("calibration")
+    if calibration is not None:
+        t = calibration.get("temperature") if isinstance(calibration, dict) else None
+        if not (isinstance(t, float | int) and np.isfinite(t) and t > 0):
+            raise ModelBundleError(f"{where}: the calibration is not a dict with a positive temperature ({calibration!r})")
     if not callable(getattr(model, "attribute_scores", None)):
         raise ModelBundleError(f"{where}: the model ({type(model).__name__}) has no attribute_scores(X)")
     if not isinstance(rule, DecisionRule) or not hasattr(rule, "n_attributes_"):
@@ -128,7 +158,7 @@ def _checked(payload: Any, metadata: dict) -> Predictor:
             raise ModelBundleError(f"{where}: the feature schema needs sensors, feature_names and ndim 2 or 3")
     if schema["format"] == "hand-grasps" and not isinstance(schema.get("feature_params"), dict):
         raise ModelBundleError(f"{where}: the hand-grasps schema needs feature_params")
-    return Predictor(model, rule, [str(a) for a in names], schema, metadata)
+    return Predictor(model, rule, [str(a) for a in names], schema, metadata, calibration)
 
 
 def load_predictor(path: str | Path, *, trust_pickle: bool = False) -> Predictor:
@@ -249,7 +279,8 @@ class Prediction:
     classes : list of str, length c
     grasp_ids, sources, info : list of str, length n
     grasp_posteriors : ndarray of shape (n, c)
-        ``p(z | x)`` of every grasp alone (DAP, normalised over the candidate classes).
+        ``p(z | x)`` of every grasp alone, over the candidate classes (calibrated when the bundle
+        holds a calibrator: :meth:`Predictor.posteriors`).
     decisions : ndarray of int, shape (n,)
         Per-grasp top class (index into ``classes``).
     mode : {"sc", "df"}
@@ -324,11 +355,11 @@ def predict_grasps(
         steps = np.arange(1, n + 1).reshape((n,) + (1,) * (S.ndim - 1))
         run_scores = predictor.class_scores(np.cumsum(S, axis=0) / steps, K)  # super grasp of the first t grasps
         running = run_scores.argmax(axis=1)
-        final_p = softmax(run_scores[-1])
+        final_p = predictor.posteriors(run_scores[-1])
         final, n_used, decided = int(running[-1]), n, True
     return Prediction(
         classes=[str(c) for c in classes.index], grasp_ids=list(grasps.grasp_ids), sources=list(grasps.sources),
-        info=list(grasps.info), grasp_posteriors=softmax(scores, axis=1), decisions=decisions, mode=mode, k=int(k),
+        info=list(grasps.info), grasp_posteriors=predictor.posteriors(scores), decisions=decisions, mode=mode, k=int(k),
         decided=decided, n_used=n_used, final=final, final_posteriors=final_p, running=running,
         notes=list(grasps.notes),
     )
@@ -374,3 +405,29 @@ def format_prediction(pred: Prediction, top: int = 5) -> str:
         lines.append(f"DF-MDAP: decided {name(pred.final)} from all {n} grasp{'s' if n > 1 else ''} (eqs. 11-12):")
         lines += _ranking(pred.final_posteriors, pred.classes, top)
     return "\n".join(lines)
+
+
+def prediction_report(pred: Prediction, predictor: Predictor, top: int = 5) -> dict:
+    """The prediction as one JSON-serialisable object (``tzsl predict --json``).
+
+    Returns
+    -------
+    dict
+        ``model`` (method, kind), ``calibration`` (:meth:`Predictor.calibration_report`: whether
+        the posteriors are calibrated, the temperature and how it was fitted), ``grasps`` (per
+        grasp: id, source, the ``top`` classes with their posterior (0 = all), the decision),
+        ``fusion`` (mode, k, decided, decision, grasps used, and DF-MDAP's final ranking), ``notes``.
+    """
+    def ranking(p: np.ndarray) -> list[dict]:
+        order = np.argsort(-p, kind="stable")[: top if top > 0 else None]
+        return [{"class": pred.classes[i], "probability": float(p[i])} for i in order]
+
+    grasps = [{"grasp": pred.grasp_ids[i], "source": pred.sources[i], "ranking": ranking(pred.grasp_posteriors[i]),
+               "decision": pred.classes[int(pred.decisions[i])]} for i in range(len(pred.grasp_ids))]
+    fusion = {"mode": pred.mode, "k": pred.k, "decided": pred.decided, "decision": pred.classes[pred.final],
+              "grasps_used": pred.n_used}
+    if pred.final_posteriors is not None:
+        fusion["ranking"] = ranking(pred.final_posteriors)
+    return {"model": {"method": predictor.metadata.get("method", predictor.kind), "kind": predictor.kind},
+            "calibration": predictor.calibration_report(), "grasps": grasps, "fusion": fusion,
+            "notes": list(pred.notes)}

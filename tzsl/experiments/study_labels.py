@@ -53,6 +53,11 @@ class StudyLabels:
         """File stem of the method comparison."""
         return "phac2_method_comparison" if self.paper else "method_comparison"
 
+    @property
+    def reliability_table(self) -> str:
+        """File stem of the reliability diagram's points (and of its figure)."""
+        return "phac2_reliability" if self.paper else "reliability"
+
 
 def _protocol_differences(config) -> list[str]:
     """How the run's protocol differs from the DAP paper's (empty: it is the paper's)."""

@@ -15,7 +15,9 @@ A study lists methods as ``{"name": registry name, **parameters}`` (the experime
 Every study then scores its methods the same way (:func:`method_summary`): one row per method of
 ``<study>_method_comparison.csv`` with the trial accuracy, its two-level bootstrap 95% interval
 (splits, then test classes with their trials), the paper's number where the paper has one, chance,
-the fit time, and the paired difference to the paper's method of that study on the same trials.
+the fit time, and the paired difference to the paper's method of that study on the same trials;
+where the trials carry posterior columns, the calibration of the class posteriors (ECE and Brier
+score, calibrated and uncalibrated, with intervals: :mod:`tzsl.experiments.study_calibration`).
 ``tzsl reproduce-tables`` stacks the studies' tables into ``method_comparison.csv``
 (:func:`combine_comparisons`), with a row saying why for every registered method a study cannot
 run (its input differs: grasps, frame sequences).
@@ -32,10 +34,11 @@ import pandas as pd
 
 from tzsl._profile import timed
 from tzsl.datasets import FeatureSet
-from tzsl.evaluation import Split, bootstrap_accuracy, brier_terms, calibration_intervals, paired_differences_table, top_label
+from tzsl.evaluation import Split, bootstrap_accuracy, paired_differences_table
 from tzsl.exceptions import SplitError
-from tzsl.experiments.config import CALIBRATION_KEY, method_label
-from tzsl.models import TemperatureCalibratedZSL, attribute_rows, available_methods, get_method
+from tzsl.experiments.config import method_label
+from tzsl.experiments.study_calibration import CALIBRATION_COLUMNS, add_calibration, method_posteriors
+from tzsl.models import attribute_rows, available_methods, get_method
 
 __all__ = [
     "COMPARISON_COLUMNS",
@@ -60,8 +63,8 @@ COMPARISON_FILE = "method_comparison.csv"
 #: Columns of every study's method comparison (and of :data:`COMPARISON_FILE`).
 COMPARISON_COLUMNS = [
     "study", "data", "method", "accuracy", "ci95_low", "ci95_high", "paper_accuracy", "chance", "fit_seconds",
-    "difference", "difference_ci95_low", "difference_ci95_high", "reference", "n_splits", "n_trials",
-    "ece", "ece_ci95_low", "ece_ci95_high", "brier", "brier_ci95_low", "brier_ci95_high", "note",
+    "difference", "difference_ci95_low", "difference_ci95_high", "reference", "n_splits", "n_trials", "note",
+    *CALIBRATION_COLUMNS,
 ]
 
 
@@ -87,13 +90,12 @@ def takes_seed(spec: dict) -> bool:
 
 
 def study_estimator(spec: dict, seed: int | None):
-    """An unfitted estimator of the method entry ``spec``, seeded with ``seed`` where it is random;
-    with ``calibration = "temperature"`` wrapped in :class:`tzsl.models.TemperatureCalibratedZSL`."""
-    params = {k: v for k, v in spec.items() if k not in ("name", CALIBRATION_KEY)}
+    """An unfitted estimator of the method entry ``spec``, seeded with ``seed`` where it is random
+    (a calibratable method is built calibrated unless the entry says ``calibration = "none"``)."""
+    params = {k: v for k, v in spec.items() if k != "name"}
     if seed is not None and takes_seed(spec):
         params["random_state"] = int(seed)
-    model = get_method(spec["name"]).build(**params)
-    return TemperatureCalibratedZSL(estimator=model) if CALIBRATION_KEY in spec else model
+    return get_method(spec["name"]).build(**params)
 
 
 def method_input(spec: dict, X: np.ndarray) -> np.ndarray:
@@ -105,13 +107,14 @@ def method_input(spec: dict, X: np.ndarray) -> np.ndarray:
 
 
 class MethodFit(NamedTuple):
-    """One fit of one method: the fitted estimator, predicted test rows, wall-clock fit seconds and
-    the class posteriors (n_test, n_test_classes) over the test classes (None: the method gives none)."""
+    """One fit of one method: the fitted estimator, predicted test rows, wall-clock fit seconds, and the
+    test trials' calibrated and uncalibrated class posteriors (None without ``predict_proba``)."""
 
     model: object
     predicted: np.ndarray
     fit_seconds: float
     proba: np.ndarray | None = None
+    proba_uncalibrated: np.ndarray | None = None
 
 
 @timed("fit")
@@ -142,31 +145,26 @@ def fit_predict(spec: dict, X_train: np.ndarray, classes_train: np.ndarray, clas
     start = time.perf_counter()
     model.fit(method_input(spec, X_train), attribute_rows(classes_train, class_rows), classes_train)
     seconds = time.perf_counter() - start
-    X = method_input(spec, X_test)
-    proba = np.asarray(model.predict_proba(X, test_rows)) if hasattr(model, "predict_proba") else None
-    return MethodFit(model, np.asarray(model.predict(X, test_rows)), seconds, proba)
+    X_in = method_input(spec, X_test)
+    return MethodFit(model, np.asarray(model.predict(X_in, test_rows)), seconds, *method_posteriors(model, X_in, test_rows))
 
 
 # --------------------------------------------------------------------------- scoring, shared by every study
 
 
 def comparison_trials(method: str, split, classes: np.ndarray, correct: np.ndarray,
-                      proba: np.ndarray | None = None, y: np.ndarray | None = None) -> pd.DataFrame:
+                      **posteriors: np.ndarray) -> pd.DataFrame:
     """One row per test trial of one method on one split: method, split, class, trial, correct (0/1).
 
     ``classes`` (n_trials,): the true class (object, fabric, grasped object) of each trial, the
-    bootstrap's cluster; ``trial`` is the position within the split (the pairing key). With the
-    class posteriors ``proba`` (n_trials, n_test_classes) and the true column ``y`` (n_trials,),
-    also ``confidence`` (top posterior), ``top_correct`` (argmax right) and ``brier`` (the trial's
-    Brier term), for the calibration columns of :func:`method_summary`.
+    bootstrap's cluster; ``trial`` is the position within the split (the pairing key);
+    ``posteriors``: per-trial calibration columns
+    (:func:`tzsl.experiments.study_calibration.posterior_columns`).
     """
     classes = np.asarray(classes)
-    table = pd.DataFrame({"method": method, "split": str(split), "class": classes,
-                          "trial": np.arange(len(classes)), "correct": np.asarray(correct, dtype=float)})
-    if proba is not None:
-        table["confidence"], table["top_correct"] = top_label(proba, y)
-        table["brier"] = brier_terms(proba, y)
-    return table
+    return pd.DataFrame({"method": method, "split": str(split), "class": classes,
+                         "trial": np.arange(len(classes)), "correct": np.asarray(correct, dtype=float),
+                         **posteriors})
 
 
 def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], chance: float, reference: str,
@@ -210,7 +208,6 @@ def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], ch
         rows.append({"study": study, "data": data, "method": method, "accuracy": iv.mean,
                      "ci95_low": iv.ci95_low, "ci95_high": iv.ci95_high, "paper_accuracy": paper.get(method, np.nan),
                      "chance": chance, "fit_seconds": float(np.mean(seconds)) if seconds else np.nan,
-                     **_calibration_columns(t),
                      "n_splits": t["split"].nunique(), "n_trials": len(t), "note": notes.get(method, "")})
     table = pd.DataFrame(rows)
     diffs = _paired_differences(trials, reference).rename(
@@ -218,19 +215,7 @@ def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], ch
     table = table.merge(diffs[["method", "difference", "difference_ci95_low", "difference_ci95_high"]],
                         on="method", how="left")
     table["reference"] = reference
-    return table[COMPARISON_COLUMNS]
-
-
-def _calibration_columns(trials: pd.DataFrame) -> dict[str, float]:
-    """``ece`` and ``brier`` of one method's class posteriors with their intervals (NaN without them)."""
-    columns = {f"{m}{s}": np.nan for m in ("ece", "brier") for s in ("", "_ci95_low", "_ci95_high")}
-    if "confidence" not in trials.columns or trials["confidence"].isna().any():
-        return columns
-    found = calibration_intervals(trials["confidence"], trials["top_correct"], trials["brier"],
-                                  trials["class"].to_numpy(), trials["split"].to_numpy())
-    for name, iv in found.items():
-        columns.update({name: iv.mean, f"{name}_ci95_low": iv.ci95_low, f"{name}_ci95_high": iv.ci95_high})
-    return columns
+    return add_calibration(table, trials)[COMPARISON_COLUMNS]
 
 
 #: Studies by the input their methods take; a registered method of another input kind is listed

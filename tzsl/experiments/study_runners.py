@@ -64,8 +64,8 @@ def phac2_outputs(config) -> list[str]:
         if methods.sweep:
             names += ["attribute_sweep.csv", "attribute_sweep.png"]
         if methods.method_specs():
-            names += [f"{labels.methods_table}.csv", f"{labels.comparison_table}.csv", "reliability.csv",
-                      "reliability.png"]
+            names += [f"{labels.methods_table}.csv", f"{labels.comparison_table}.csv", f"{labels.reliability_table}.csv",
+                      f"{labels.reliability_table}.png"]
         if methods.gzsl:
             names.append("gzsl.csv")
     if "challenging" in kinds:

@@ -70,7 +70,6 @@ from tzsl.models._active_policy import (
     sequential_log_posterior,
     stop_reasons,
 )
-from tzsl.models._posterior_calibration import TemperatureCalibratedZSL, fit_temperature
 from tzsl.models._zsl_input import (
     MIN_CV_CLASSES,
     ZSLInputError,
@@ -92,6 +91,14 @@ from tzsl.models._registry import (
     unregister_method,
 )
 from tzsl.models._score_ensemble import ScoreEnsembleZSL, zscore_rows
+from tzsl.models._posterior_calibration import (
+    CALIBRATIONS,
+    CalibratedZeroShotClassifier,
+    CalibrationWarning,
+    fit_temperature,
+    pseudo_unseen_scores,
+    tempered_proba,
+)
 from tzsl.models import _builtin_methods  # noqa: F401,E402  (registers the shipped methods)
 
 __all__: list[str] = [
@@ -139,7 +146,6 @@ __all__: list[str] = [
     "ZSLInputError",
     "attribute_rows",
     "class_grouped_folds",
-    "TemperatureCalibratedZSL",
     "fit_temperature",
     "MIN_CV_CLASSES",
     "training_classes",
@@ -156,4 +162,6 @@ __all__: list[str] = [
     "PHAC2_EP_SECONDS", "LogisticAttribute", "PerEPAttributeModel", "binned_confusion", "ep_column_blocks",
     "suggest_next_ep", "TEMPERINGS", "done_subset_index", "fit_posterior_exponents",
     "expected_information_gain", "outcome_log_likelihoods", "run_policy", "sequential_log_posterior",
-    "stop_reasons", "ScoreEnsembleZSL", "zscore_rows"]
+    "stop_reasons", "ScoreEnsembleZSL", "zscore_rows",
+    "CALIBRATIONS", "CalibratedZeroShotClassifier", "CalibrationWarning", "fit_temperature", "pseudo_unseen_scores",
+    "tempered_proba"]

@@ -13,6 +13,7 @@ from scipy.special import logsumexp
 
 from tzsl.exceptions import ConfigError
 from tzsl.models._dap import break_ties, check_class_attributes
+from tzsl.models._posterior_calibration import fit_temperature
 
 __all__ = [
     "TEMPERINGS",
@@ -109,20 +110,10 @@ def sequential_log_posterior(ep_scores, done, exponents=None) -> np.ndarray:
     return total - logsumexp(total, axis=1, keepdims=True)
 
 
-def _nll(tau: float, total: np.ndarray, y: np.ndarray, valid: np.ndarray) -> float:
-    """Mean negative log-likelihood of the true classes under ``softmax(tau * total)`` over valid classes."""
-    z = np.where(valid, tau * total, -np.inf)
-    return float(np.mean(logsumexp(z, axis=1) - z[np.arange(y.size), y]))
-
-
 def _fit_exponent(total: np.ndarray, y: np.ndarray, valid: np.ndarray) -> float:
-    """The exponent minimising :func:`_nll` (convex in tau), searched on log tau within the bounds."""
-    from scipy.optimize import minimize_scalar  # noqa: PLC0415  (scipy.optimize is slow to import)
-
-    lo, hi = np.log(_EXPONENT_BOUNDS)
-    res = minimize_scalar(lambda t: _nll(np.exp(t), total, y, valid), bounds=(lo, hi), method="bounded",
-                          options={"xatol": 1e-4})
-    return float(np.exp(res.x))
+    """The exponent ``tau = 1 / T`` of the temperature fitted on ``total`` among each trial's valid classes."""
+    lo, hi = _EXPONENT_BOUNDS
+    return 1.0 / fit_temperature([np.where(valid, total, -np.inf)], [y], log_bounds=(-np.log(hi), -np.log(lo)))
 
 
 def fit_posterior_exponents(ep_scores, y, *, valid=None, tempering: str = "subset") -> np.ndarray:

@@ -36,4 +36,4 @@ register_method("sae", family="embedding", paper=SAE_PAPER, attribute_model=SAEC
 register_method("ale", family="compatibility", paper=ALE_PAPER, attribute_model=ALE, decision_rule=CompatibilityRule, description="bilinear compatibility, weighted approximate ranking loss (SGD)")
 register_method("sje", family="compatibility", paper=SJE_PAPER, attribute_model=SJE, decision_rule=CompatibilityRule, description="bilinear compatibility, structured max-margin loss (SGD)")
 register_method("devise", family="compatibility", paper=DEVISE_PAPER, attribute_model=DeViSE, decision_rule=CompatibilityRule, description="bilinear compatibility, hinge rank loss over violating classes (SGD)")
-register_method("ensemble", family="ensemble", paper=ENSEMBLE_PAPER, estimator=ScoreEnsembleZSL, description="DAP-AVG + ESZSL + SAE, class scores z-scored per trial and averaged (each member tuned on training objects only)", input_ndim=3)
+register_method("ensemble", family="ensemble", paper=ENSEMBLE_PAPER, estimator=ScoreEnsembleZSL, description="DAP-AVG + ESZSL + SAE, class scores z-scored per trial and averaged (each member tuned on training objects only)", input_ndim=3, calibratable=True)

@@ -24,9 +24,6 @@ NOT_CHECKED: dict[str, str] = {
     "PerEPAttributeModel": "takes per-sensor features (n_trials, n_sensors, n_features) split into EP "
     "column blocks by feature name; its per-EP LogisticAttribute passes check_estimator; tested in "
     "tests/models/test_active_touch.py",
-    "TemperatureCalibratedZSL": "composes a zero-shot estimator fitted on (X, Y attribute rows, groups) and "
-    "predicting over class_attributes given at predict time; needs >= 4 training classes for its class-grouped "
-    "folds; held to the contract (validation, clone, get_params) in tests/models/test_posterior_calibration.py",
     "HandDAPClassifier": "takes the packed grasp layout and a class-attribute DataFrame in fit(X, y, K); "
     "tested in tests/models/test_hand_dap.py",
 }
@@ -50,7 +47,7 @@ def check_instance(name: str, cls: type) -> BaseEstimator:
     -------
     estimator
     """
-    from tzsl.models import ESZSL, CompatibilityRule  # noqa: PLC0415 (the package imports us)
+    from tzsl.models import ESZSL, CompatibilityRule, ZeroShotClassifier  # noqa: PLC0415 (the package imports us)
 
     if name == "AttributeSVM":
         return cls(**_SMALL_SVM, random_state=0)
@@ -67,4 +64,7 @@ def check_instance(name: str, cls: type) -> BaseEstimator:
                    "early_stopping": False, "max_iter": 50}), random_state=0)
     if name == "ZeroShotClassifier":
         return cls(attribute_model=ESZSL(), decision_rule=CompatibilityRule(), random_state=0)
+    if name == "CalibratedZeroShotClassifier":
+        return cls(estimator=ZeroShotClassifier(attribute_model=ESZSL(), decision_rule=CompatibilityRule(),
+                                                random_state=0), random_state=0)
     return cls()

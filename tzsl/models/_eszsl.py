@@ -350,6 +350,15 @@ class ESZSLCV(_ESZSLBase):
         self.cv_val_classes_ = val_classes
         return self._finish_fit(X, S_u, y_u, self.best_gamma_, self.best_lam_)
 
+    def selected_params(self) -> dict:
+        """Parameters that refit this model with the chosen ridges and no search (``gammas``, ``lams``).
+
+        A refit on part of the training classes (posterior calibration's pseudo-unseen folds,
+        :class:`tzsl.models.CalibratedZeroShotClassifier`) then has the scale of this fit.
+        """
+        check_is_fitted(self)
+        return {"gammas": (self.best_gamma_,), "lams": (self.best_lam_,)}
+
     def _score_fold(self, X_tr, y_tr, X_va, y_va, S_u, gammas, lams) -> np.ndarray:
         """Zero-shot score on the held-out classes for every grid point: (n_gammas, n_lams)."""
         tr_rows = np.unique(y_tr)

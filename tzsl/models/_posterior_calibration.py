@@ -1,150 +1,361 @@
-"""A temperature for a zero-shot method's class posteriors, fitted on pseudo-unseen training classes.
+"""Calibrated class posteriors for zero-shot methods: a temperature fitted on pseudo-unseen classes.
 
-Class posteriors built from attribute scores (DAP's product over attributes, softmaxes over
-compatibility scores) are rarely frequencies. :class:`TemperatureCalibratedZSL` composes any
-zero-shot estimator and returns ``softmax(log p / T)`` for its posterior ``p``: ``T > 1`` softens
-an over-confident method, ``T < 1`` sharpens a timid one, and the ranking (so ``predict`` and
-every accuracy) is unchanged.
+A zero-shot method's class posterior (DAP's product over attributes, a softmax over ESZSL/SAE
+compatibilities, the ensemble's z-scores) is rarely calibrated: DAP multiplies attribute
+posteriors as if independent and is over-confident. :class:`CalibratedZeroShotClassifier`
+composes any zero-shot estimator (``fit(X, Y, groups)``, ``decision_function(X,
+class_attributes)``) with one scalar **temperature** ``T``:
 
-``T`` is chosen on the training data only, as a zero-shot method meets its test classes:
-class-grouped folds of the training classes (:func:`tzsl.models.class_grouped_folds`) each hold
-some classes out; the method is refitted on the others and scores the held-out trials among the
-held-out classes' attribute rows (pseudo-unseen classes). ``T`` minimises the log-loss of those
-scores; the method is then refitted on every training trial. A fold leaves out the attributes
-its training objects cannot teach (fewer than 2 positive or negative objects), as a split does.
+``p(z | x) = softmax_z(s(x, z) / T)``
+
+where ``s`` are the method's class scores (DAP: log-posteriors, so ``1 / T`` is a common
+exponent on every attribute factor: a tempered product). ``T`` is fitted honestly, on the
+training trials only, by the zero-shot protocol itself:
+
+1. the training classes (distinct attribute rows) are dealt into ``calibration_folds``
+   class-grouped folds (:func:`tzsl.models.class_grouped_folds`; which class goes to which fold
+   is seeded by ``random_state``);
+2. for each fold, the method is refitted on the other classes and scores the held-out
+   (*pseudo-unseen*) classes' trials among the held-out classes' rows, as a test trial is
+   scored among the test classes. A 0/1 attribute that fewer than
+   :data:`MIN_FOLD_CLASSES` of the fold's training classes have (or lack) cannot be learnt
+   there (the per-attribute classifiers need both kinds of object), so that fold leaves it
+   out, on both sides; ``calibration_info_`` counts such attributes;
+3. ``T`` minimises the log-loss of those held-out trials (one scalar, bounded search on ``log
+   T``).
+
+The method is fitted on all training trials first; an attribute model that tunes its own
+hyper-parameters and offers ``selected_params()`` (ESZSL's ridges, SAE's ``lam``) is refitted
+on the folds with its choice pinned, so the fold scores have the scale of the final model (a
+re-tuned ridge changes the scale of the class scores, and with it the temperature).
+
+Dividing by ``T > 0`` keeps every trial's ranking, so :meth:`~CalibratedZeroShotClassifier.predict`
+and every accuracy are those of the method alone. Test objects are never used.
+
+When the training classes are too few for pseudo-unseen folds (fewer than 4: no fold can hold
+out 2 classes and train on 2; or a fold whose training classes leave no attribute to learn, as
+with 5 classes and 0/1 attributes), the estimator keeps ``T = 1``, warns
+(:class:`CalibrationWarning`) and records why in ``calibration_info_`` (``"fitted": False``),
+which the method comparison and ``tzsl predict --json`` show.
 """
 
 from __future__ import annotations
 
+import warnings
 from numbers import Integral
 
 import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.special import log_softmax, softmax
 from sklearn.base import BaseEstimator, clone
-from sklearn.utils._param_validation import HasMethods, Interval
+from sklearn.utils import check_random_state
+from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
+from tzsl.exceptions import ConfigError
 from tzsl.models._validation import ValidatedParamsMixin
-from tzsl.models._zsl_input import class_grouped_folds, training_classes
+from tzsl.models._zsl_input import ZSLInputError, class_grouped_folds
 
-__all__ = ["TemperatureCalibratedZSL", "fit_temperature"]
+__all__ = [
+    "CALIBRATIONS",
+    "CalibratedZeroShotClassifier",
+    "CalibrationWarning",
+    "fit_temperature",
+    "pseudo_unseen_scores",
+    "tempered_proba",
+]
 
-#: Floor of a posterior before its log (a method may give exact zeros).
-_EPS = 1e-12
+#: Values of the ``calibration`` parameter: a fitted temperature, or none (the method's own softmax).
+CALIBRATIONS = ("temperature", "none")
+
+#: A fold keeps a 0/1 attribute when at least this many of its training classes have it and lack it.
+MIN_FOLD_CLASSES = 2
+
+#: Search range of ``log T`` (T from about 0.007 to 150).
+LOG_T_BOUNDS = (-5.0, 5.0)
 
 
-def fit_temperature(log_proba: list[np.ndarray], y: list[np.ndarray]) -> float:
-    """The ``T`` minimising the mean log-loss of ``softmax(log_proba / T)``.
+class CalibrationWarning(UserWarning):
+    """The calibrator could not be fitted (too few training classes): ``T = 1`` was kept."""
+
+
+def tempered_proba(scores, temperature: float) -> np.ndarray:
+    """``softmax(scores / temperature)`` over the classes.
 
     Parameters
     ----------
-    log_proba : list of ndarray, each (n_trials_f, n_classes_f)
-        Log posteriors of held-out trials over their fold's candidate classes.
-    y : list of ndarray, each (n_trials_f,)
-        True column of every trial.
+    scores : array-like of shape (n_trials, n_classes)
+        Class scores (larger is better; DAP: log-posteriors up to a per-trial constant).
+    temperature : float > 0
+
+    Returns
+    -------
+    ndarray of shape (n_trials, n_classes)
+        Rows sum to 1.
+    """
+    return softmax(np.asarray(scores, dtype=np.float64) / float(temperature), axis=1)
+
+
+def fit_temperature(scores: list[np.ndarray], y_true: list[np.ndarray], *,
+                    log_bounds: tuple[float, float] = LOG_T_BOUNDS) -> float:
+    """The temperature minimising the log-loss of held-out trials, ``argmin_T -sum log softmax(s / T)_y``.
+
+    Parameters
+    ----------
+    scores : list of ndarray of shape (n_trials_f, n_classes_f)
+        Class scores of each fold's held-out trials among that fold's candidate classes.
+    y_true : list of int ndarray of shape (n_trials_f,)
+        Column of each trial's true class.
+    log_bounds : (float, float), default=LOG_T_BOUNDS
+        Search interval of ``log T``.
 
     Returns
     -------
     float
-        ``T`` in [exp(-5), exp(5)] (searched on log T).
+        ``T`` in ``exp(log_bounds)``: > 1 softens an over-confident posterior, < 1 sharpens. A score of
+        ``-inf`` leaves that class out of that trial's candidates (pools of different sizes).
+
+    Raises
+    ------
+    ConfigError
+        No trials, or non-finite scores.
     """
-    def loss(log_t: float) -> float:
+    S = [np.asarray(s, dtype=np.float64) for s in scores]
+    Y = [np.asarray(y, dtype=int) for y in y_true]
+    if not S or sum(len(y) for y in Y) == 0:
+        raise ConfigError("fit_temperature: no held-out trials to fit the temperature on")
+    if not all(not np.isnan(s).any() and not np.isposinf(s).any() and np.isfinite(s[np.arange(len(y)), y]).all()
+               for s, y in zip(S, Y)):
+        raise ConfigError("fit_temperature: class scores hold NaN or +inf values, or a true class scored -inf")
+
+    def nll(log_t: float) -> float:
         t = np.exp(log_t)
-        total = sum(-log_softmax(lp / t, axis=1)[np.arange(len(yy)), yy].sum() for lp, yy in zip(log_proba, y))
-        return float(total / sum(len(yy) for yy in y))
+        return -float(sum(log_softmax(s / t, axis=1)[np.arange(len(y)), y].sum() for s, y in zip(S, Y)))
 
-    return float(np.exp(minimize_scalar(loss, bounds=(-5.0, 5.0), method="bounded").x))
+    best = minimize_scalar(nll, bounds=log_bounds, method="bounded", options={"xatol": 1e-4})
+    return float(np.exp(best.x))
 
 
-def _trainable_attributes(Y: np.ndarray, units: np.ndarray, minimum: int = 2) -> np.ndarray:
-    """Attributes (mask, (n_attributes,)) with ``minimum`` positive and negative objects among ``units``.
+def _class_codes(Y: np.ndarray) -> np.ndarray:
+    """Index of each trial's distinct attribute row (its training class)."""
+    return np.unique(Y, axis=0, return_inverse=True)[1].ravel()
 
-    A fold that holds classes out can leave an attribute with one positive training object, which
-    attribute classifiers tuned by object-grouped CV cannot fit: the fold leaves it out, as a
-    split does (:func:`tzsl.evaluation.random_object_splits`).
+
+def pseudo_unseen_scores(estimator, X, Y, groups=None, *, n_folds: int = 3, random_state=None,
+                         score=None) -> list[tuple[object, np.ndarray]]:
+    """Refit on training classes minus a held-out group; score the held-out classes among themselves.
+
+    Parameters
+    ----------
+    estimator : unfitted zero-shot estimator
+        ``fit(X, Y, groups)`` and ``decision_function(X, class_attributes)``; cloned per fold.
+    X : array-like of shape (n_trials, ...)
+    Y : array-like of shape (n_trials, n_attributes)
+        Attribute row of each training trial's class.
+    groups : array-like of shape (n_trials,), optional
+        Object of each trial (passed on to the method's own grouped tuning).
+    n_folds : int, default 3
+        Class-grouped folds (capped so each holds out >= 2 classes).
+    random_state : int, RandomState or None
+        Seeds which class goes to which fold.
+    score : callable, optional
+        ``score(fitted, X_held_out, K_held_out)``; default ``fitted.decision_function``. May
+        return anything (e.g. scores under several decision rules).
+
+    Returns
+    -------
+    list of (scores, y_true, n_dropped)
+        Per fold: ``score``'s output for the held-out trials, the column (row of the held-out
+        classes' table, ``np.unique`` order) of each trial's class, and how many 0/1 attributes
+        the fold left out (module docstring; classes left with equal rows are merged).
+
+    Raises
+    ------
+    ZSLInputError
+        Fewer than 4 training classes.
     """
-    _, first = np.unique(units, return_index=True)
-    rows = Y[first]
+    X = np.asarray(X)
+    Y = np.asarray(Y, dtype=np.float64)
+    Y = Y.reshape(-1, 1) if Y.ndim == 1 else Y
+    codes = _class_codes(Y)
+    relabel = check_random_state(random_state).permutation(codes.max() + 1)  # seeded fold dealing
+    folds = class_grouped_folds(relabel[codes], n_folds, "posterior calibration (pseudo-unseen classes)")
+    g = None if groups is None else np.asarray(groups)
+    score = score or (lambda fitted, Xv, K: fitted.decision_function(Xv, K))
+    out = []
+    for train, held in folds:
+        keep = _learnable_attributes(Y[train])
+        if not keep.any():
+            raise ZSLInputError("posterior calibration: a fold's training classes leave no attribute to learn")
+        fitted = _on_attributes(clone(estimator), keep).fit(X[train], Y[train][:, keep],
+                                                             None if g is None else g[train])
+        K, y = np.unique(Y[held][:, keep], axis=0, return_inverse=True)
+        out.append((score(fitted, X[held], K), y.ravel(), int((~keep).sum())))
+    return out
+
+
+def _on_attributes(estimator, keep: np.ndarray):
+    """``estimator`` with every nested ``attribute_names`` parameter cut to the kept attributes."""
+    if keep.all():
+        return estimator
+    cut = {key: [name for name, k in zip(value, keep) if k]
+           for key, value in estimator.get_params(deep=True).items()
+           if key.split("__")[-1] == "attribute_names" and value is not None and len(value) == len(keep)}
+    return estimator.set_params(**cut)
+
+
+def _selected(model) -> dict:
+    """``model.selected_params()`` when it has that method, else {}."""
+    pick = getattr(model, "selected_params", None)
+    return pick() if callable(pick) else {}
+
+
+def _pinned(template, fitted):
+    """``template`` (unfitted) with the fitted attribute model's tuned choice pinned (``selected_params``)."""
+    chosen = _selected(getattr(fitted, "attribute_model_", None))
+    if chosen and "attribute_model" in template.get_params(deep=False):
+        template.set_params(**{f"attribute_model__{k}": v for k, v in chosen.items()})
+    return template
+
+
+def _learnable_attributes(Y: np.ndarray) -> np.ndarray:
+    """Columns a fold can learn: not 0/1, or had and lacked by >= MIN_FOLD_CLASSES distinct rows; (m,) bool."""
+    rows = np.unique(Y, axis=0)
+    binary = np.isin(Y, (0.0, 1.0)).all(axis=0)
     positives = rows.sum(axis=0)
-    keep = (positives >= minimum) & (len(rows) - positives >= minimum)
-    return keep if keep.any() else np.ones(Y.shape[1], dtype=bool)
+    return ~binary | ((positives >= MIN_FOLD_CLASSES) & (len(rows) - positives >= MIN_FOLD_CLASSES))
 
 
-class TemperatureCalibratedZSL(ValidatedParamsMixin, BaseEstimator):
-    """A zero-shot estimator with tempered class posteriors (see the module docstring).
+class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
+    """A zero-shot method whose ``predict_proba`` is calibrated on pseudo-unseen training classes.
+
+    See the module docstring for how the temperature is fitted.
 
     Parameters
     ----------
     estimator : zero-shot estimator
-        Fits ``(X, Y, groups)`` with ``Y`` the attribute row of each trial's class and predicts
-        ``predict_proba(X, class_attributes)``, shape (n_trials, n_classes) (every method of
-        :func:`tzsl.models.build_method`).
-    n_folds : int, default=3
-        Class-grouped folds of the training classes (at most half the classes).
-    random_state : int, RandomState or None
-        Kept for the estimator protocol; the folds are deterministic.
+        ``fit(X, Y, groups=None)``, ``decision_function(X, class_attributes=None)`` and
+        ``predict(X, class_attributes=None)`` (a :class:`~tzsl.models.ZeroShotClassifier`, the
+        score ensemble). Cloned.
+    calibration : {"temperature", "none"} or None, default="temperature"
+        ``"none"`` / None: ``predict_proba`` is the method's own softmax (``T = 1``, no extra fits).
+    calibration_folds : int >= 2, default=3
+        Class-grouped folds of pseudo-unseen classes (each costs one more fit of the method).
+    random_state : int, RandomState instance or None, default=None
+        Seeds which training class goes to which fold.
 
     Attributes
     ----------
-    estimator_ : estimator
-        Fitted on every training trial.
+    estimator_ : fitted estimator
+        The method fitted on all training trials.
     temperature_ : float
-        The fitted ``T``.
-    n_pseudo_unseen_ : int
-        Held-out (pseudo-unseen) training classes the temperature was fitted on, over all folds.
+        ``T`` (1.0 when not calibrated).
+    calibration_info_ : dict
+        How ``T`` was fitted: ``method`` ("temperature" or "none"), ``fitted`` (bool),
+        ``temperature``, ``n_folds``, ``n_classes`` (training classes), ``n_held_out_trials``,
+        ``n_attributes_left_out`` (summed over folds), ``pinned`` (hyper-parameters held at the
+        final fit's choice in the folds),
+        ``log_loss_before`` / ``log_loss_after`` (per held-out trial), ``fitted_on``
+        ("pseudo-unseen classes of the training objects"), ``reason`` when not fitted.
+    class_attributes_ : ndarray of shape (n_train_classes, n_attributes)
+        Distinct training rows (default candidates), from the method when it has them.
+    n_features_in_ : int
+        When the method has it.
     """
 
-    _parameter_constraints = {
-        "estimator": [HasMethods(["fit", "predict_proba"])],
-        "n_folds": [Interval(Integral, 2, None, closed="left")],
+    _parameter_constraints: dict = {
+        "estimator": [HasMethods(["fit", "decision_function", "predict"])],
+        "calibration": [StrOptions(set(CALIBRATIONS)), None],
+        "calibration_folds": [Interval(Integral, 2, None, closed="left")],
         "random_state": ["random_state"],
     }
 
-    def __init__(self, *, estimator=None, n_folds: int = 3, random_state=None) -> None:
+    def __init__(self, *, estimator=None, calibration="temperature", calibration_folds=3, random_state=None):
         self.estimator = estimator
-        self.n_folds = n_folds
+        self.calibration = calibration
+        self.calibration_folds = calibration_folds
         self.random_state = random_state
 
-    def fit(self, X, Y, groups=None) -> TemperatureCalibratedZSL:
-        """Fit ``T`` on pseudo-unseen training classes, then the estimator on every trial.
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.target_tags.required = True
+        tags.target_tags.multi_output = True
+        return tags
+
+    def fit(self, X, Y, groups=None):
+        """Fit the temperature on pseudo-unseen training classes, then the method on all trials.
 
         Parameters
         ----------
-        X : array-like of shape (n_trials, ...)
-            Whatever ``estimator`` takes.
+        X : array-like of shape (n_trials, n_features) or (n_trials, n_sensors, n_features)
         Y : array-like of shape (n_trials, n_attributes)
-            Attribute row of each trial's class.
+            Attribute row of each trial's class (1-D: one attribute).
         groups : array-like of shape (n_trials,), optional
-            Object or class of each trial (passed on to ``estimator``).
+            Object of each trial.
+
+        Returns
+        -------
+        self
         """
         self._validate_params()
-        X, Y = np.asarray(X), np.asarray(Y)
-        groups = None if groups is None else np.asarray(groups)
-        name = type(self).__name__
-        S, y = training_classes(Y, name, groups)
-        log_proba, truth, held_out = [], [], 0
-        units = y if groups is None else groups  # the objects an attribute model counts positives over
-        for train, val in class_grouped_folds(y, self.n_folds, name):
-            classes = np.unique(y[val])
-            keep = _trainable_attributes(Y[train], units[train])
-            model = clone(self.estimator).fit(X[train], Y[train][:, keep], None if groups is None else groups[train])
-            P = np.asarray(model.predict_proba(X[val], S[classes][:, keep]))
-            log_proba.append(np.log(np.clip(P, _EPS, None)))
-            truth.append(np.searchsorted(classes, y[val]))
-            held_out += len(classes)
-        self.temperature_ = fit_temperature(log_proba, truth)
-        self.n_pseudo_unseen_ = held_out
+        if self.estimator is None:
+            raise ConfigError("CalibratedZeroShotClassifier: estimator is required")
+        if Y is None:
+            raise ValueError(f"{type(self).__name__} requires y to be passed, but the target y is None")
         self.estimator_ = clone(self.estimator).fit(X, Y, groups)
+        A = np.asarray(Y, dtype=np.float64)
+        A = A.reshape(-1, 1) if A.ndim == 1 else A
+        n_classes = int(_class_codes(A).max()) + 1
+        info = {"method": "none" if self.calibration in (None, "none") else "temperature", "fitted": False,
+                "temperature": 1.0, "n_folds": 0, "n_classes": n_classes, "n_held_out_trials": 0,
+                "fitted_on": "pseudo-unseen classes of the training objects (class-grouped folds)"}
+        if info["method"] == "temperature":
+            info.update(self._fit_temperature(_pinned(clone(self.estimator), self.estimator_), X, A, groups,
+                                              n_classes))
+        self.temperature_ = float(info["temperature"])
+        self.calibration_info_ = info
+        for name in ("class_attributes_", "n_features_in_"):
+            if hasattr(self.estimator_, name):
+                setattr(self, name, getattr(self.estimator_, name))
         return self
 
-    def predict_proba(self, X, class_attributes) -> np.ndarray:
-        """``softmax(log p / T)`` of the estimator's posterior ``p``, shape (n_trials, n_classes)."""
-        check_is_fitted(self, "estimator_")
-        P = np.asarray(self.estimator_.predict_proba(X, class_attributes))
-        return softmax(np.log(np.clip(P, _EPS, None)) / self.temperature_, axis=1)
+    def _fit_temperature(self, template, X, A, groups, n_classes: int) -> dict:
+        try:
+            folds = pseudo_unseen_scores(template, X, A, groups, n_folds=self.calibration_folds,
+                                         random_state=self.random_state)
+        except ZSLInputError as exc:  # too few classes for pseudo-unseen folds: say so, keep T = 1
+            reason = f"not calibrated: {n_classes} training classes are too few for pseudo-unseen folds ({exc})"
+            warnings.warn(f"{type(self.estimator).__name__}: {reason}; predict_proba is the method's own softmax",
+                          CalibrationWarning, stacklevel=3)
+            return {"reason": reason}
+        scores, ys = [s for s, _, _ in folds], [y for _, y, _ in folds]
+        t = fit_temperature(scores, ys)
+        n = sum(len(y) for y in ys)
 
-    def predict(self, X, class_attributes) -> np.ndarray:
-        """The estimator's prediction (a temperature does not change the ranking), shape (n_trials,)."""
-        check_is_fitted(self, "estimator_")
+        def loss(temp: float) -> float:
+            return -sum(log_softmax(s / temp, axis=1)[np.arange(len(y)), y].sum() for s, y in zip(scores, ys)) / n
+
+        pinned = _selected(getattr(self.estimator_, "attribute_model_", None))
+        return {"fitted": True, "temperature": t, "n_folds": len(folds), "n_held_out_trials": n,
+                "pinned": ", ".join(f"{k}={v}" for k, v in pinned.items()),
+                "n_attributes_left_out": int(sum(d for _, _, d in folds)),
+                "log_loss_before": float(loss(1.0)), "log_loss_after": float(loss(t))}
+
+    def decision_function(self, X, class_attributes=None) -> np.ndarray:
+        """The method's class scores (not tempered); shape (n_trials, n_classes)."""
+        check_is_fitted(self)
+        return self.estimator_.decision_function(X, class_attributes)
+
+    def predict_proba(self, X, class_attributes=None) -> np.ndarray:
+        """Calibrated class posteriors ``softmax(scores / T)`` over the candidate classes; (n_trials, n_classes)."""
+        return tempered_proba(self.decision_function(X, class_attributes), self.temperature_)
+
+    def predict_proba_uncalibrated(self, X, class_attributes=None) -> np.ndarray:
+        """The method's own posteriors (``T = 1``), for reporting before / after; (n_trials, n_classes)."""
+        check_is_fitted(self)
+        return self.estimator_.predict_proba(X, class_attributes)
+
+    def predict(self, X, class_attributes=None) -> np.ndarray:
+        """The method's prediction (a temperature does not change the ranking); shape (n_trials,)."""
+        check_is_fitted(self)
         return self.estimator_.predict(X, class_attributes)

@@ -16,6 +16,13 @@ or, as a decorator on the attribute model class::
 Parameters and their defaults are read from the classes' ``__init__`` signatures (never
 written twice); ``preset`` fixes some of them for the method (``dap-max`` is ``DAPRule``
 with ``fusion="max"``). A study builds a method with :func:`build_method`.
+
+A *calibratable* method (every attribute model + decision rule method, and estimators registered
+with ``calibratable=True``) is built inside a
+:class:`~tzsl.models.CalibratedZeroShotClassifier`, so its ``predict_proba`` is calibrated on
+pseudo-unseen training classes; its parameters ``calibration`` and ``calibration_folds`` (defaults
+from that class's signature) turn it off (``calibration="none"``: the bare method is built) or
+change the folds.
 """
 
 from __future__ import annotations
@@ -28,6 +35,7 @@ from types import MappingProxyType
 from sklearn.base import BaseEstimator
 
 from tzsl.exceptions import ConfigError
+from tzsl.models._posterior_calibration import CalibratedZeroShotClassifier
 
 __all__ = [
     "FAMILIES",
@@ -93,6 +101,9 @@ class Method:
         3 = ``(n_trials, n_sensors, n_features)`` (one model per sensor, fused by the rule).
     input_kind : {"features", "grasps", "frames"}
         See :data:`INPUT_KINDS`.
+    calibratable : bool
+        Built inside a :class:`~tzsl.models.CalibratedZeroShotClassifier` (parameters
+        ``calibration``, ``calibration_folds``).
     """
 
     name: str
@@ -105,6 +116,7 @@ class Method:
     description: str = ""
     input_ndim: int = 2
     input_kind: str = "features"
+    calibratable: bool = False
 
     def components(self) -> list[type]:
         """Classes whose parameters the method exposes (estimator, or model then rule)."""
@@ -121,6 +133,8 @@ class Method:
                     out.setdefault(name, default)
         if self.estimator is None:
             out.setdefault("random_state", None)  # the classifier's tie-breaking seed
+        if self.calibratable:
+            out.update(_calibration_parameters())
         return out
 
     def build(self, **params) -> BaseEstimator:
@@ -151,16 +165,32 @@ class Method:
                 f"method {self.name!r}: unknown parameter(s) {unknown}; known: {sorted(self.parameters())}"
             )
         merged = {**self.preset, **params}
+        calibrator = _calibrator()
+        calibration = {k: merged.pop(k) for k in list(merged)
+                       if self.calibratable and k in _calibration_parameters()}
         if self.estimator is not None:
-            return self.estimator(**merged)
-        from tzsl.models._zero_shot import ZeroShotClassifier  # noqa: PLC0415 (import cycle)
+            bare = self.estimator(**merged)
+        else:
+            from tzsl.models._zero_shot import ZeroShotClassifier  # noqa: PLC0415 (import cycle)
 
-        model_keys, rule_keys = _init_defaults(self.attribute_model), _init_defaults(self.decision_rule)
-        model = self.attribute_model(**{k: v for k, v in merged.items() if k in model_keys})
-        rule = self.decision_rule(**{k: v for k, v in merged.items() if k in rule_keys and k not in model_keys})
-        return ZeroShotClassifier(
-            attribute_model=model, decision_rule=rule, random_state=merged.get("random_state")
-        )
+            model_keys, rule_keys = _init_defaults(self.attribute_model), _init_defaults(self.decision_rule)
+            model = self.attribute_model(**{k: v for k, v in merged.items() if k in model_keys})
+            rule = self.decision_rule(**{k: v for k, v in merged.items() if k in rule_keys and k not in model_keys})
+            bare = ZeroShotClassifier(attribute_model=model, decision_rule=rule, random_state=merged.get("random_state"))
+        if not self.calibratable:
+            return bare
+        wrapped = calibrator(estimator=bare, random_state=merged.get("random_state"), **calibration)
+        return bare if wrapped.calibration in (None, "none") else wrapped
+
+
+def _calibrator() -> type:
+    """The calibrating meta-estimator every calibratable method is built inside."""
+    return CalibratedZeroShotClassifier
+
+
+def _calibration_parameters() -> dict[str, object]:
+    """The calibrator's own parameters and defaults (its ``estimator`` and ``random_state`` are the method's)."""
+    return {k: v for k, v in _init_defaults(_calibrator()).items() if k not in ("estimator", "random_state")}
 
 
 def register_method(
@@ -176,6 +206,7 @@ def register_method(
     replace: bool = False,
     input_ndim: int = 2,
     input_kind: str = "features",
+    calibratable: bool | None = None,
 ):
     """Register a method; without a model class, return a class decorator that registers it.
 
@@ -200,6 +231,10 @@ def register_method(
         3 for methods fitted on per-sensor input ``(n_trials, n_sensors, n_features)``.
     input_kind : {"features", "grasps", "frames"}, default="features"
         What the method fits on (:data:`INPUT_KINDS`).
+    calibratable : bool, optional
+        Build it inside a :class:`~tzsl.models.CalibratedZeroShotClassifier` (the estimator must
+        take ``fit(X, Y, groups)`` and ``decision_function(X, class_attributes)``). Default: True
+        for attribute model + decision rule methods, False for self-contained estimators.
 
     Returns
     -------
@@ -211,7 +246,7 @@ def register_method(
             kw = {"estimator": cls} if decision_rule is None else {"attribute_model": cls}
             register_method(name, family=family, paper=paper, decision_rule=decision_rule, preset=preset,
                             description=description, replace=replace, input_ndim=input_ndim,
-                            input_kind=input_kind, **kw)
+                            input_kind=input_kind, calibratable=calibratable, **kw)
             return cls
 
         return decorator
@@ -228,7 +263,8 @@ def register_method(
     method = Method(name=name, family=family, paper=paper, attribute_model=attribute_model,
                     decision_rule=decision_rule, estimator=estimator,
                     preset=MappingProxyType(dict(preset or {})), description=description,
-                    input_ndim=input_ndim, input_kind=input_kind)
+                    input_ndim=input_ndim, input_kind=input_kind,
+                    calibratable=(estimator is None) if calibratable is None else bool(calibratable))
     unknown = sorted(set(method.preset) - {k for c in method.components() for k in _init_defaults(c)})
     if unknown:
         raise ConfigError(f"method {name!r}: preset names unknown parameter(s) {unknown}")

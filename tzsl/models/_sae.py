@@ -35,6 +35,7 @@ import numpy as np
 from sklearn.base import _fit_context
 from sklearn.preprocessing import StandardScaler
 from sklearn.utils._param_validation import Interval, InvalidParameterError
+from sklearn.utils.validation import check_is_fitted
 
 from tzsl.models._attribute_model_base import EmbeddingAttributeModel
 from tzsl.models._decision import cosine_similarities
@@ -201,6 +202,15 @@ class SAECV(EmbeddingAttributeModel):
         self.lams = lams
         self.n_splits = n_splits
         self.standardize = standardize
+
+    def selected_params(self) -> dict:
+        """Parameters that refit this model with the chosen ``lam`` and no search (``lams``).
+
+        A refit on part of the training classes (posterior calibration's pseudo-unseen folds,
+        :class:`tzsl.models.CalibratedZeroShotClassifier`) then has the scale of this fit.
+        """
+        check_is_fitted(self)
+        return {"lams": (self.best_lam_,)}
 
     def _lam_grid(self) -> np.ndarray:
         try:

@@ -168,6 +168,8 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
             spec = _spec(entry)
             method = get_method(spec["name"])
             params = {k: v for k, v in spec.items() if k != "name"}
+            if method.calibratable:  # the ensemble's posterior is calibrated as a whole, not per member
+                params.setdefault("calibration", "none")
             if self.random_state is not None and "random_state" in method.parameters() and "random_state" not in params:
                 params["random_state"] = int(np.random.SeedSequence([int(self.random_state), i]).generate_state(1)[0] >> 1)
             self.member_input_ndims_.append(method.input_ndim)

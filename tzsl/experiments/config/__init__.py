@@ -13,7 +13,7 @@ their defaults from here; where a default is an estimator's, it is read from the
 (``tzsl methods``) with parameters, checked against the registry at load time.
 """
 
-from tzsl.experiments.config._common import CALIBRATION_KEY, SEED_LIMIT, Compute, DaskCompute, Output, method_label
+from tzsl.experiments.config._common import SEED_LIMIT, Compute, DaskCompute, Output, method_label
 from tzsl.experiments.config._load import (
     STUDIES,
     STUDY_MODELS,
@@ -53,7 +53,7 @@ from tzsl.experiments.config._studies import (
 )
 
 __all__ = [
-    "CALIBRATION_KEY", "SEED_LIMIT", "STUDIES", "STUDY_MODELS", "ActiveMethods", "ActiveSplits", "ActiveTouchStudy", "Compute",
+    "SEED_LIMIT", "STUDIES", "STUDY_MODELS", "ActiveMethods", "ActiveSplits", "ActiveTouchStudy", "Compute",
     "DaskCompute", "Experiment", "FabricDeepStudy",
     "FabricStudy", "HandFeatures", "HandMethods", "HandSimulation", "HandStudy", "Output", "Phac2Dataset",
     "Phac2Features", "Phac2Gzsl", "Phac2Methods", "Phac2Splits", "Phac2Study", "Phac2Svm", "builtin_names",

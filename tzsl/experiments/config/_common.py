@@ -88,11 +88,6 @@ COMPARE_DESCRIPTION = ('registry methods (tzsl methods) run on the same splits: 
                        '{name = "embedding", lam = 0.1}')
 
 
-#: Key of a ``compare`` entry that tempers the method's class posteriors on pseudo-unseen training
-#: classes (:class:`tzsl.models.TemperatureCalibratedZSL`): ``{name = "eszsl", calibration = "temperature"}``.
-CALIBRATION_KEY = "calibration"
-
-
 def method_label(spec: dict) -> str:
     """Column/row label of a method entry: ``{"name": "embedding", "lam": 0.1}`` -> ``embedding_lam_0.1``."""
     parts = [spec["name"]]
@@ -118,13 +113,9 @@ def methods_ok(values: list, taken: tuple[str, ...] = ()) -> list[dict]:
         if not isinstance(name, str):
             problems.append(f"@{key}.name: missing (a registry method name)")
             continue
-        if spec.get(CALIBRATION_KEY, "temperature") != "temperature":
-            problems.append(f"@{key}.{CALIBRATION_KEY}: {spec[CALIBRATION_KEY]!r}; the one calibration is "
-                            "'temperature'")
-            continue
         try:
             method = get_method(name)
-            method.build(**{k: v for k, v in spec.items() if k not in ("name", CALIBRATION_KEY)})
+            method.build(**{k: v for k, v in spec.items() if k != "name"})
         except ConfigError as exc:
             where = f"{key}.name" if str(exc).startswith("unknown method") else key
             problems.append(f"@{where}: {exc}")
