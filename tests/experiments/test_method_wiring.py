@@ -244,8 +244,10 @@ class FailsOnSecondFit(NearestMeanAttributes):
 
 
 @pytest.fixture
-def failing_method():
+def failing_method(monkeypatch, tmp_path):
     FailsOnSecondFit.fits = 0
+    # counts its own fits: an empty fit store, so no fit is read back from another test's run
+    monkeypatch.setenv("TZSL_CACHE_DIR", str(tmp_path / "own-cache"))
     register_method("flaky", family="embedding", paper="test only", attribute_model=FailsOnSecondFit,
                     decision_rule=NearestAttributeRule, calibratable=False)  # one fit per split, none per fold
     yield "flaky"

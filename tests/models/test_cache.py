@@ -1,44 +1,47 @@
-"""tzsl/models/_cache.py: where fits are cached, seed spawning, cached fits equal fresh ones."""
+"""tzsl/models/_cache.py: the fit store (keys, hits, warnings, counts), seed spawning, backends."""
 
 from __future__ import annotations
+
+import warnings
 
 import joblib
 import numpy as np
 import pytest
+from sklearn.exceptions import ConvergenceWarning
 from sklearn.linear_model import LogisticRegression
 
+from tzsl._profile import profiling
 from tzsl.exceptions import ConfigError
-from tzsl.models._cache import CACHE_ENV, fit_clone, parallel_context, resolve_memory, spawn_seeds
+from tzsl.models import AttributeClassifierBank, AttributeSVM, FitStore, fit_cached, fit_store_counts, resolve_store
+from tzsl.models._cache import CACHE_ENV, FITS_FOLDER, array_digest, fit_clone, parallel_context, spawn_seeds
 
 
-# ---------------------------------------------------------------------------- resolve_memory
-def test_resolve_memory_none_without_env_does_not_cache(monkeypatch):
+# ---------------------------------------------------------------------------- resolve_store
+def test_resolve_store_none_without_env_does_not_store(monkeypatch):
     monkeypatch.delenv(CACHE_ENV, raising=False)
-    memory = resolve_memory(None)
-    assert isinstance(memory, joblib.Memory)
-    assert memory.location is None
+    assert not resolve_store(None).enabled
 
 
-def test_resolve_memory_none_uses_the_env_folder(monkeypatch, tmp_path):
+def test_resolve_store_none_uses_the_env_folder(monkeypatch, tmp_path):
     monkeypatch.setenv(CACHE_ENV, str(tmp_path / "cache"))
-    assert resolve_memory(None).location == str(tmp_path / "cache")
+    assert resolve_store(None).folder == tmp_path / "cache" / FITS_FOLDER
 
 
-def test_resolve_memory_empty_env_means_no_cache(monkeypatch):
+def test_resolve_store_empty_env_means_no_store(monkeypatch):
     monkeypatch.setenv(CACHE_ENV, "")
-    assert resolve_memory(None).location is None
+    assert not resolve_store(None).enabled
 
 
-def test_resolve_memory_path_and_memory(tmp_path):
-    assert resolve_memory(tmp_path).location == str(tmp_path)
-    assert resolve_memory(str(tmp_path / "x")).location == str(tmp_path / "x")
-    given = joblib.Memory(str(tmp_path), verbose=0)
-    assert resolve_memory(given) is given
+def test_resolve_store_path_and_memory(tmp_path):
+    assert resolve_store(tmp_path).folder == tmp_path / FITS_FOLDER
+    assert resolve_store(str(tmp_path / "x")).folder == tmp_path / "x" / FITS_FOLDER
+    assert resolve_store(joblib.Memory(str(tmp_path), verbose=0)).folder == tmp_path / FITS_FOLDER
+    assert not resolve_store(joblib.Memory(None, verbose=0)).enabled
 
 
-def test_resolve_memory_rejects_other_types():
+def test_resolve_store_rejects_other_types():
     with pytest.raises(ConfigError, match="memory must be None, a folder path or a joblib.Memory, got int"):
-        resolve_memory(3)
+        resolve_store(3)
 
 
 # ---------------------------------------------------------------------------- spawn_seeds
@@ -62,7 +65,7 @@ def test_spawn_seeds_none_draws_fresh_entropy():
     assert spawn_seeds(None, 8) != spawn_seeds(None, 8)  # 2**-248 chance of a false failure
 
 
-# ---------------------------------------------------------------------------- cached fits
+# ---------------------------------------------------------------------------- the fit store
 @pytest.fixture
 def data():
     rng = np.random.default_rng(0)
@@ -71,33 +74,116 @@ def data():
     return X, y
 
 
-def test_cache_hit_returns_a_model_identical_to_the_fresh_fit(tmp_path, data):
+class CountingLR(LogisticRegression):
+    """LogisticRegression counting its fits (module level, so it pickles)."""
+
+    calls = 0
+
+    def fit(self, X, y, sample_weight=None):
+        type(self).calls += 1
+        return super().fit(X, y, sample_weight)
+
+
+def test_a_stored_fit_is_identical_to_a_fresh_one_and_is_not_refitted(tmp_path, data):
     X, y = data
-    memory = resolve_memory(tmp_path)
-    cached_fit = memory.cache(fit_clone)
-    estimator = LogisticRegression(C=0.5)
-    assert not cached_fit.check_call_in_cache(estimator, X, y, None)
-    first = cached_fit(estimator, X, y, None)
-    assert cached_fit.check_call_in_cache(estimator, X, y, None)
-    again = cached_fit(LogisticRegression(C=0.5), X, y, None)  # an equal template hits too
-    fresh = fit_clone(estimator, X, y, None)
-    assert again is not first  # read back from disk, not the same object
+    store = FitStore(tmp_path)
+    CountingLR.calls = 0
+    estimator = CountingLR(C=0.5)
+    first = fit_cached(estimator, X, y, store=store)
+    again = fit_cached(CountingLR(C=0.5), X.copy(), y.copy(), store=store)  # equal template, equal data
+    assert CountingLR.calls == 1
+    fresh = fit_clone(estimator, X, y)
+    assert again is not first  # read back from disk
     np.testing.assert_array_equal(again.coef_, fresh.coef_)
-    np.testing.assert_array_equal(again.intercept_, fresh.intercept_)
     np.testing.assert_array_equal(again.predict_proba(X), fresh.predict_proba(X))
-    assert not hasattr(estimator, "coef_")  # fit_clone leaves the template unfitted
+    assert not hasattr(estimator, "coef_")  # the template stays unfitted
+    assert len(list(tmp_path.rglob("*.joblib"))) == 1
 
 
-def test_cache_misses_when_data_or_parameters_change(tmp_path, data):
+def test_the_key_is_parameters_data_and_code_not_labels_or_parallelism(tmp_path, data):
     X, y = data
-    cached_fit = resolve_memory(tmp_path).cache(fit_clone)
-    base = cached_fit(LogisticRegression(C=0.5), X, y, None)
-    assert not cached_fit.check_call_in_cache(LogisticRegression(C=5.0), X, y, None)
+    store = FitStore(tmp_path)
+    d = (array_digest(X), array_digest(y))
+    base = store.key(AttributeSVM(C_range=(1.0, 10.0)), *d)
+    assert base == store.key(AttributeSVM(C_range=(1.0, 10.0), name="hard (sensor 0)"), *d)  # a label
+    assert base == store.key(AttributeClassifierBank(estimator=AttributeSVM(C_range=(1.0, 10.0)), n_jobs=1).estimator, *d)
+    bank = AttributeClassifierBank(estimator=AttributeSVM(), n_jobs=1)
+    assert store.key(bank, *d) == store.key(bank.set_params(n_jobs=4, progress=True), *d)
+    assert base != store.key(AttributeSVM(C_range=(1.0, 100.0)), *d)  # a parameter
+    assert base != store.key(AttributeSVM(C_range=(1.0, 10.0), random_state=1), *d)  # a seed
     X2 = X.copy()
-    X2[0, 0] += 1.0
-    assert not cached_fit.check_call_in_cache(LogisticRegression(C=0.5), X2, y, None)
-    other = cached_fit(LogisticRegression(C=5.0), X, y, None)
-    assert not np.array_equal(other.coef_, base.coef_)
+    X2[0, 0] += 1e-12
+    assert base != store.key(AttributeSVM(C_range=(1.0, 10.0)), array_digest(X2), d[1])  # the data
+    assert base != store.key(AttributeSVM(C_range=(1.0, 10.0)), d[0], array_digest(y.astype(float)))  # its dtype
+    groups = np.repeat(np.arange(8), 10)
+    assert store.key(AttributeSVM(), *d, array_digest(groups)) != store.key(AttributeSVM(), *d, array_digest(groups % 4))
+
+
+def test_a_generator_instance_is_never_stored(tmp_path, data):
+    X, y = data
+    store = FitStore(tmp_path)
+    assert store.key(AttributeSVM(random_state=np.random.RandomState(0)), array_digest(X)) is None
+    before = fit_store_counts().get("unstorable", 0)
+    fit_cached(LogisticRegression(random_state=np.random.RandomState(0)), X, y, store=store)
+    assert fit_store_counts()["unstorable"] == before + 1
+    assert not list(tmp_path.rglob("*.joblib"))
+
+
+class WarningLR(LogisticRegression):
+    def fit(self, X, y, sample_weight=None):
+        warnings.warn("did not converge", ConvergenceWarning)
+        return super().fit(X, y, sample_weight)
+
+
+def test_the_warnings_of_a_fit_are_raised_again_when_it_is_read_back(tmp_path, data):
+    X, y = data
+    store = FitStore(tmp_path)
+    for _ in range(2):  # computed, then read back
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            fit_cached(WarningLR(), X, y, store=store)
+        assert [str(w.message) for w in caught if w.category is ConvergenceWarning] == ["did not converge"]
+
+
+def test_counts_hits_misses_and_repeats_in_the_profile(tmp_path, data):
+    X, y = data
+    store = FitStore(tmp_path)
+    with profiling("test") as profile:
+        fit_cached(LogisticRegression(C=0.3), X, y, store=store)
+        fit_cached(LogisticRegression(C=0.3), X, y, store=store)
+        fit_cached(LogisticRegression(C=0.3), X, y, store=FitStore(None))
+    counts = {r["stage"]: r["calls"] for r in profile.rows() if r["stage"].startswith("fit_store.")}
+    assert counts == {"fit_store.miss": 1, "fit_store.hit": 1, "fit_store.repeat": 1, "fit_store.off": 1}
+
+
+def test_a_damaged_entry_is_refitted_loudly(tmp_path, data):
+    X, y = data
+    store = FitStore(tmp_path)
+    fit_cached(LogisticRegression(), X, y, store=store)
+    (entry,) = tmp_path.rglob("*.joblib")
+    entry.write_bytes(b"not a pickle")
+    with pytest.warns(UserWarning, match="unreadable fit-store entry"):
+        model = fit_cached(LogisticRegression(), X, y, store=store)
+    assert hasattr(model, "coef_")
+    assert joblib.load(entry)["estimator"].coef_.shape == model.coef_.shape  # overwritten
+
+
+def test_bank_fits_only_what_the_store_lacks_and_labels_its_fits(tmp_path):
+    rng = np.random.default_rng(1)
+    X = rng.normal(size=(60, 2, 3))
+    g = np.repeat(np.arange(12), 5)
+    A = np.stack([(np.arange(12) % 2)[g], (np.arange(12) // 6)[g]], axis=1)
+    tiny = {"n_C": 1, "n_gamma": 1, "n_draws": 1, "cv": 3}
+    before = fit_store_counts()
+    first = AttributeClassifierBank(estimator=AttributeSVM(**tiny), attribute_names=["a", "b"], memory=tmp_path,
+                                    random_state=0).fit(X, A, g)
+    second = AttributeClassifierBank(estimator=AttributeSVM(**tiny), attribute_names=["x", "y"], memory=tmp_path,
+                                     random_state=0, n_jobs=2).fit(X, A, g)  # other labels, other n_jobs: same fits
+    after = fit_store_counts()
+    assert after.get("miss", 0) - before.get("miss", 0) == 4
+    assert after.get("hit", 0) - before.get("hit", 0) == 4
+    np.testing.assert_array_equal(first.predict_proba(X), second.predict_proba(X))
+    assert second.estimators_[1][0].name == "y (sensor 0)"  # the asking bank's label, not the stored one
 
 
 def test_parallel_context_validates_backend():

@@ -348,7 +348,7 @@ def load_fabric(
             + "; ".join(", ".join(map(str, d)) for d in dups)
             + " share one attribute vector (they cannot be told apart by attributes)",
             UserWarning,
-            stacklevel=2,
+            stacklevel=3,  # past load_fabric and its profile wrapper
         )
     image_table = (
         _image_table(fabrics, home)

@@ -15,7 +15,7 @@ import numpy as np
 from sklearn.exceptions import ConvergenceWarning
 
 from tzsl.exceptions import ConfigError
-from tzsl.models import attribute_rows, build_method, class_grouped_folds
+from tzsl.models import attribute_rows, build_method, class_grouped_folds, fit_cached
 
 __all__ = ["DEFAULT_ALPHAS", "select_embedding_alpha"]
 
@@ -95,10 +95,10 @@ def select_embedding_alpha(
                 # a fold fit stopped at max_iter is still scored (weakly regularised fits on
                 # 2 classes can take long); the final fit records its convergence
                 warnings.simplefilter("ignore", ConvergenceWarning)
-                model = build_method(  # a selection fit needs no calibrated posterior
+                model = fit_cached(build_method(  # a selection fit needs no calibrated posterior
                     "embedding", lam=lam, alpha=alpha, early_stopping=False, max_iter=max_iter,
                     random_state=random_state, calibration="none",
-                ).fit(X[tr], attribute_rows(y[tr], S_tr), y[tr])
+                ), X[tr], attribute_rows(y[tr], S_tr), y[tr])
             scores[a, f] = float(np.mean(model.predict(X[va], S_u[va_groups]) == y_va.ravel()))
     best = int(np.argmax(scores.mean(axis=1)))
     return alphas[best], scores

@@ -54,7 +54,7 @@ from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.active_touch_stopping import decided_table, stop_outcomes, stopping_figure
 from tzsl.experiments.config import ActiveMethods, ActiveSplits
 from tzsl.experiments.phac2_dap import object_map_features
-from tzsl.models import PerEPAttributeModel, ep_column_blocks, run_policy
+from tzsl.models import PerEPAttributeModel, count_fits, ep_column_blocks, fit_cached, fit_store_counts, run_policy
 
 __all__ = ["ACTIVE_TOUCH_OUTPUTS", "ActiveTouchConfig", "evaluate_split", "run_active_touch_study", "summarise"]
 
@@ -164,9 +164,10 @@ def evaluate_split(features: FeatureSet, split: Split, *, seed: int, update: str
     objects = features.objects
     train, test = np.isin(objects, split.train_objects), np.isin(objects, split.test_objects)
     A = features.attributes.loc[objects, attributes].to_numpy(dtype=int)
-    model = PerEPAttributeModel(ep_columns=ep_column_blocks(features.feature_names), cv=cv, update=update,
-                                tempering=tempering, random_state=seed)
-    model.fit(features.X[train], A[train], objects[train])
+    before = fit_store_counts()
+    model = fit_cached(PerEPAttributeModel(ep_columns=ep_column_blocks(features.feature_names), cv=cv,
+                                           update=update, tempering=tempering, random_state=seed),
+                       features.X[train], A[train], objects[train])
     K = features.attributes.loc[list(split.test_objects), attributes].to_numpy(dtype=int)
     y = pd.Index(split.test_objects).get_indexer(objects[test])
     S = model.ep_log_scores(model.predict_proba(features.X[test]), K)
@@ -203,7 +204,7 @@ def evaluate_split(features: FeatureSet, split: Split, *, seed: int, update: str
             first_ep[policy] = res["order"][:, 0]
     return {"correct": correct, "seconds": seconds, "top": top, "orders": names, "first_ep": first_ep,
             "objects": objects[test], "eps": eps, "ep_seconds": sec, "chosen": chosen, "n_classes": K.shape[0],
-            "exponents": model.exponents_, "untempered": plain}
+            "exponents": model.exponents_, "untempered": plain, "fit_store": fit_store_counts(since=before)}
 
 
 def _by_budget(r: dict, strategy: str, grid: np.ndarray) -> np.ndarray:
@@ -391,6 +392,8 @@ def run_active_touch_study(features: FeatureSet, results_dir: ResultsDir, config
                                         n_samples=config.n_samples, tempering=config.tempering)
                 for split, s in zip(splits, seeds))
         for split, r in zip(splits, results):
+            for name, n in r.pop("fit_store").items():  # the workers' fit-store events, into the profile
+                count_fits(name, n)
             chosen[split.name] = r["chosen"]
             exponents[split.name] = [float(x) for x in r["exponents"]]
             log(f"{split.name}: {len(r['objects'])} test trials, active after 1..4 EPs "

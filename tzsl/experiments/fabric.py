@@ -120,6 +120,7 @@ from tzsl.experiments.fabric_methods import (
 )
 from tzsl.experiments.study_methods import method_label, takes_seed
 from tzsl.features import TextureDescriptor
+from tzsl.models import count_fits
 
 __all__ = [
     "DEFAULT_ALPHAS",
@@ -300,6 +301,9 @@ def run_fabric_study(
             {**m, **r}
             for m, r in zip(meta, tqdm(results, total=len(jobs), desc="fabric fits", disable=not progress))
         ]
+    for row in rows:  # the jobs' fit-store events, into this run's profile
+        for name, n in row.pop("_fit_store", {}).items():
+            count_fits(name, n)
     outcomes, per_run = fabric_outcomes(rows)  # per-sample outcomes -> intervals in the table and the runs
     correct = [row.pop("correct", None) for row in rows]  # per test sample: the comparison's trials
     runs = pd.DataFrame(rows)

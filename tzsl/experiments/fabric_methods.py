@@ -39,7 +39,7 @@ from tzsl.experiments.study_methods import (
     method_summary,
     study_estimator,
 )
-from tzsl.models import attribute_rows, build_method
+from tzsl.models import attribute_rows, build_method, fit_cached, fit_store_counts
 
 __all__ = ["COMPARISON_TABLE", "REFERENCE_LAMBDA", "ZeroShotRun", "fabric_comparison", "run_job", "zero_shot_run"]
 
@@ -166,6 +166,7 @@ def run_job(
     written to the runs table); ``fit_seconds`` times the fit with its model selection.
     """
     info: dict = {}
+    before = fit_store_counts()
 
     def fit_embedding(X_tr, y_tr, S_tr):
         alpha, scores = select_embedding_alpha(
@@ -173,10 +174,10 @@ def run_job(
         )
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", ConvergenceWarning)
-            model = build_method(
+            model = fit_cached(build_method(
                 "embedding", lam=lam, alpha=alpha, early_stopping=False, max_iter=max_iter,
                 random_state=seed, calibration="none",
-            ).fit(X_tr, attribute_rows(y_tr, S_tr), y_tr)
+            ), X_tr, attribute_rows(y_tr, S_tr), y_tr)
         info.update(
             alpha=alpha,
             cv_score=np.nan if scores is None else float(scores.mean(axis=1).max()),
@@ -186,14 +187,13 @@ def run_job(
         return model
 
     def fit_eszsl(X_tr, y_tr, S_tr):
-        model = build_method("eszsl", calibration="none").fit(X_tr, attribute_rows(y_tr, S_tr), y_tr)
+        model = fit_cached(build_method("eszsl", calibration="none"), X_tr, attribute_rows(y_tr, S_tr), y_tr)
         cv = model.attribute_model_
         info.update(gamma=cv.best_gamma_, eszsl_lam=cv.best_lam_, cv_score=cv.best_score_)
         return model
 
     def fit_registry(X_tr, y_tr, S_tr):
-        model = study_estimator(spec, seed)
-        model.fit(method_input(spec, X_tr), attribute_rows(y_tr, S_tr), y_tr)
+        model = fit_cached(study_estimator(spec, seed), method_input(spec, X_tr), attribute_rows(y_tr, S_tr), y_tr)
         return _ShapedInput(model, spec)
 
     def timed(X_tr, y_tr, S_tr):  # the fit and its model selection, not the prediction
@@ -205,6 +205,7 @@ def run_job(
     chosen = fit_registry if spec is not None else fit_eszsl if method == ESZSL_METHOD else fit_embedding
     with threadpool_limits(limits=1):  # many small fits: one BLAS thread each, parallel over fits
         run, error = attempt(zero_shot_run, timed, samples_X, groups, A, split)
+    info["_fit_store"] = fit_store_counts(since=before)  # this job's fit-store events (not a runs column)
     if run is None:  # recorded in the runs table (NaN scores), reported at the end of the run
         return {"method": method, "seed": seed, "accuracy": np.nan, "per_class_mean_accuracy": np.nan,
                 "n_train": int(split.is_train(groups).sum()), "n_test": int(split.is_test(groups).sum()),

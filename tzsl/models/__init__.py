@@ -91,6 +91,7 @@ from tzsl.models._registry import (
     unregister_method,
 )
 from tzsl.models._score_ensemble import ScoreEnsembleZSL, zscore_rows
+from tzsl.models._cache import FITS_FOLDER, FitStore, count_fits, fit_cached, fit_store_counts, resolve_store
 from tzsl.models._posterior_calibration import (
     CALIBRATIONS,
     CalibratedZeroShotClassifier,
@@ -102,6 +103,12 @@ from tzsl.models._posterior_calibration import (
 from tzsl.models import _builtin_methods  # noqa: F401,E402  (registers the shipped methods)
 
 __all__: list[str] = [
+    "FITS_FOLDER",
+    "FitStore",
+    "count_fits",
+    "fit_cached",
+    "fit_store_counts",
+    "resolve_store",
     "DeepAttributeEmbedding",
     "load_deep_bundle",
     "save_deep_bundle",

@@ -54,6 +54,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from numbers import Integral, Real
 
+import joblib
 import numpy as np
 from sklearn.base import BaseEstimator, _fit_context
 from sklearn.model_selection import GroupKFold
@@ -223,7 +224,11 @@ class PerEPAttributeModel(BaseEstimator):
 
     def _bank(self, seed: int) -> AttributeClassifierBank:
         template = LogisticAttribute() if self.estimator is None else self.estimator
-        return AttributeClassifierBank(estimator=template, n_jobs=1, backend="sequential", random_state=seed)
+        # the default logistic fits take about as long as reading one back from the fit store: the
+        # store keeps this model's whole fit instead (tzsl.models.fit_cached), not its many small ones
+        memory = joblib.Memory(None, verbose=0) if self.estimator is None else None
+        return AttributeClassifierBank(estimator=template, n_jobs=1, backend="sequential", random_state=seed,
+                                       memory=memory)
 
     @_fit_context(prefer_skip_nested_validation=False)
     def fit(self, X, A, groups=None):

@@ -24,7 +24,16 @@ from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_svm import AttributeSVM
 from tzsl.models._attribute_training import AUTO_MAX_EXACT_TRIALS, SOLVERS, AttributeTrainingError, GridEdgeWarning
 from tzsl.models._scalable_attribute import ScalableAttributeClassifier
-from tzsl.models._cache import fit_clone, parallel_context, resolve_memory, spawn_seeds
+from tzsl.models._cache import (
+    array_digest,
+    count_fits,
+    fit_clone,
+    fit_recorded,
+    parallel_context,
+    resolve_store,
+    spawn_seeds,
+    stored_fit,
+)
 from tzsl.models._validation import ValidatedParamsMixin
 
 __all__ = ["AttributeClassifierBank"]
@@ -63,8 +72,11 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         joblib backend. ``"dask"`` runs the fits on the current ``dask.distributed`` Client.
         Results do not depend on the backend or ``n_jobs``.
     memory : None, str, Path or joblib.Memory, default=None
-        Cache of fitted per-(attribute, sensor) models, keyed on the data and all parameters.
-        ``None``: ``$TZSL_CACHE_DIR`` if set, else no caching.
+        Cache folder of the fit store (:func:`tzsl.models.resolve_store`): each per-(attribute,
+        sensor) fit is read from ``<folder>/fits`` when an equal fit (same estimator parameters,
+        training arrays and code) was stored before, by this or any other model, table or
+        study; only the others are fitted (in parallel) and stored. ``None``:
+        ``$TZSL_CACHE_DIR`` if set, else no store.
     progress : bool, default=False
         Show a tqdm progress bar over the fits.
     random_state : int, RandomState or None, default=None
@@ -181,12 +193,46 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         names = self._names(np.shape(A)[1])
         return X, _check_attribute_matrix(A, n, names), names
 
-    def _run_fits(self, tasks: list, desc: str) -> list:
-        """Run joblib ``tasks`` on ``self.backend`` / ``self.n_jobs``; results in task order."""
+    def _run_fits(self, tasks: list, desc: str, on_result=None) -> list:
+        """Run joblib ``tasks`` on ``self.backend`` / ``self.n_jobs``; results in task order.
+
+        ``on_result(i, result)`` is called as each result arrives (the fit store saves it then,
+        so an interrupted run keeps the fits it finished).
+        """
+        if not tasks:
+            return []
         with parallel_context(self.backend):
             backend = None if self.backend == "dask" else self.backend
             results = Parallel(n_jobs=self.n_jobs, backend=backend, return_as="generator")(tasks)
-            return list(tqdm(results, total=len(tasks), desc=desc, disable=not self.progress))
+            out = []
+            for i, result in enumerate(tqdm(results, total=len(tasks), desc=desc, disable=not self.progress)):
+                if on_result is not None:
+                    on_result(i, result)
+                out.append(result)
+            return out
+
+    def _fit_stored(self, templates: list, data: list[tuple], digests: list[tuple], desc: str) -> list:
+        """Fit clones of ``templates[i]`` on ``data[i]``, reading and writing the fit store.
+
+        ``digests[i]``: the :func:`array_digest` of each array of ``data[i]`` (computed once per
+        array by the caller). Only the fits the store does not hold go to the workers; the
+        fitted estimators come back in task order.
+        """
+        store = resolve_store(self.memory)
+        if not store.enabled:
+            count_fits("off", len(templates))
+            return self._run_fits([delayed(fit_clone)(t, *d) for t, d in zip(templates, data)], desc)
+        keys = [store.key(t, *dg) for t, dg in zip(templates, digests)]
+        fitted = [stored_fit(store, k, t) for k, t in zip(keys, templates)]
+        todo = [i for i, f in enumerate(fitted) if f is None]
+
+        def save(n: int, result) -> None:
+            store.save(keys[todo[n]], *result)
+
+        done = self._run_fits([delayed(fit_recorded)(templates[i], *data[i]) for i in todo], desc, save)
+        for i, (est, _, _) in zip(todo, done):
+            fitted[i] = est
+        return fitted
 
     def _check_predict_input(self, X) -> np.ndarray:
         """``X`` as float64 (n_trials, n_sensors_, n_features_in_), after the fitted check."""
@@ -235,11 +281,11 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
                     )
         template = self._choose_template(n)
         seeds = spawn_seeds(self.random_state, A.shape[1] * s)
-        memory = resolve_memory(self.memory)
-        fit_one = memory.cache(fit_clone)
         # one array per sensor, shared by every attribute's task: the Dask backend scatters each once
         per_sensor = [np.ascontiguousarray(X[:, k, :]) for k in range(s)]
-        tasks = []
+        targets = [np.ascontiguousarray(A[:, j]) for j in range(A.shape[1])]
+        digests = _digests(per_sensor, targets, groups) if resolve_store(self.memory).enabled else None
+        templates, data, keys = [], [], []
         for j, nm in enumerate(names):
             for k in range(s):
                 est = clone(template)
@@ -248,8 +294,10 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
                     est.set_params(random_state=seeds[j * s + k])
                 if "name" in params:
                     est.set_params(name=f"{nm} (sensor {k})")
-                tasks.append(delayed(fit_one)(est, per_sensor[k], A[:, j], groups))
-        fitted = self._run_fits(tasks, "attribute fits")
+                templates.append(est)
+                data.append((per_sensor[k], targets[j], groups))
+                keys.append(None if digests is None else (digests[0][k], digests[1][j], digests[2]))
+        fitted = self._fit_stored(templates, data, keys, "attribute fits")
         self.estimators_ = [fitted[j * s : (j + 1) * s] for j in range(A.shape[1])]
         self.n_sensors_, self.n_attributes_, self.n_features_in_ = s, A.shape[1], d
         self._record_grid_edges(names)
@@ -273,7 +321,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
             warnings.warn(
                 f"{len(self.grid_edge_hits_)} hyper-parameter choices of {n_fits} (attribute, sensor) fits sit on a "
                 f"grid edge ({detail}); the optimum may lie outside the grid (see grid_edge_hits_)",
-                GridEdgeWarning, stacklevel=3,
+                GridEdgeWarning, stacklevel=4,  # 4: past fit and its profile wrapper
             )
 
     @timed("predict")
@@ -295,6 +343,12 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
             for k, est in enumerate(per_sensor):
                 P[:, k, j] = est.predict_proba(X[:, k, :])[:, 1]
         return P
+
+
+def _digests(per_sensor: list, targets: list, groups) -> tuple[list[str], list[str], str]:
+    """:func:`array_digest` of each sensor's features, each attribute's targets and the groups (once each)."""
+    return ([array_digest(x) for x in per_sensor], [array_digest(t) for t in targets],
+            array_digest(np.zeros(0) if groups is None else groups))
 
 
 def _check_3d(X) -> np.ndarray:

@@ -22,7 +22,6 @@ unchanged.
 from __future__ import annotations
 
 import numpy as np
-from joblib import delayed
 from sklearn.base import clone
 from sklearn.compose import ColumnTransformer
 from sklearn.utils import check_random_state
@@ -31,7 +30,7 @@ from sklearn.utils._param_validation import StrOptions
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_bank import AttributeClassifierBank
 from tzsl.models._attribute_training import default_preprocessor
-from tzsl.models._cache import fit_clone, resolve_memory, spawn_seeds
+from tzsl.models._cache import array_digest, resolve_store, spawn_seeds
 
 __all__ = ["MultiLabelAttributeClassifier"]
 
@@ -121,8 +120,10 @@ class MultiLabelAttributeClassifier(AttributeClassifierBank):
                 raise ConfigError(f"order must be a permutation of 0..{m - 1}, got {self.order!r}")
         template = self._template()
         base_pre = template.get_params().get("preprocessor") or default_preprocessor()
-        fit_one = resolve_memory(self.memory).cache(fit_clone)
-        tasks = []
+        storing = resolve_store(self.memory).enabled
+        groups_digest = array_digest(np.zeros(0) if groups is None else groups) if storing else None
+        targets = [np.ascontiguousarray(A[:, j]) for j in range(m)]
+        templates, data, digests = [], [], []
         for t, j in enumerate(order):
             prev = A[:, order[:t]].astype(float)
             for k in range(s):
@@ -131,8 +132,11 @@ class MultiLabelAttributeClassifier(AttributeClassifierBank):
                     random_state=seeds[t * s + k],
                     name=f"{names[j]} (sensor {k}, chain position {t})",
                 )
-                tasks.append(delayed(fit_one)(est, np.hstack([X[:, k, :], prev]), A[:, j], groups))
-        fitted = self._run_fits(tasks, "chain fits")
+                inputs = np.hstack([X[:, k, :], prev])
+                templates.append(est)
+                data.append((inputs, targets[j], groups))
+                digests.append((array_digest(inputs), array_digest(targets[j]), groups_digest) if storing else None)
+        fitted = self._fit_stored(templates, data, digests, "chain fits")
         self.estimators_ = [fitted[t * s : (t + 1) * s] for t in range(m)]
         self.order_ = order
         self.n_sensors_, self.n_attributes_, self.n_features_in_ = s, m, d

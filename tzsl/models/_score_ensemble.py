@@ -30,6 +30,7 @@ from sklearn.utils.validation import check_array, check_is_fitted
 
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_svm import AttributeSVM
+from tzsl.models._cache import fit_cached
 from tzsl.models._dap import break_ties
 from tzsl.models._registry import get_method
 from tzsl.models._validation import ValidatedParamsMixin
@@ -174,7 +175,7 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
                 params["random_state"] = int(np.random.SeedSequence([int(self.random_state), i]).generate_state(1)[0] >> 1)
             self.member_input_ndims_.append(method.input_ndim)
             est = method.build(**params)  # a new instance
-            self.estimators_.append(est.fit(self._member_input(method.input_ndim, X), A, groups))
+            self.estimators_.append(fit_cached(est, self._member_input(method.input_ndim, X), A, groups))
         w = np.ones(len(self.methods)) if self.weights is None else np.asarray(self.weights, dtype=np.float64)
         self.weights_ = w / w.sum()
         self.class_attributes_ = np.unique(A, axis=0)
