@@ -20,6 +20,7 @@ from tzsl.evaluation import (
     calibration_terms,
     equal_mass_bins,
     expected_calibration_error,
+    expected_ece_if_calibrated,
     reliability_table,
 )
 import tzsl.evaluation._calibration as calibration_module
@@ -58,6 +59,18 @@ def test_calibrated_posteriors_have_small_ece_and_sharpened_ones_large():
     assert iv["brier"].ci95_low < iv["brier"].mean < iv["brier"].ci95_high
     # a calibrated posterior has a lower expected Brier score than its sharpened version
     assert brier_score(P, y) < brier_score(_sharpen(P, 4.0), y)
+
+
+def test_ece_if_calibrated_matches_the_ece_of_calibrated_draws_and_shrinks_with_trials():
+    """The reference is the ECE that calibrated outcomes show: simulated calibrated labels land
+    near it, an over-confident posterior far above it, and more trials lower it."""
+    rng = np.random.default_rng(1)
+    c = rng.uniform(0.1, 0.9, 500)
+    measured = [expected_calibration_error(c, rng.random(c.size) < c) for _ in range(200)]
+    reference = expected_ece_if_calibrated(c, n_draws=2000, random_state=2)
+    assert reference == pytest.approx(np.mean(measured), rel=0.1)
+    assert expected_calibration_error(c, rng.random(c.size) < c**3) > 2 * reference
+    assert expected_ece_if_calibrated(np.tile(c, 20)) < reference / 3
 
 
 def test_terms_and_brier_by_hand():

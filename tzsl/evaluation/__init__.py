@@ -114,9 +114,10 @@ from tzsl.evaluation._calibration import (  # noqa: E402
     calibration_terms,
     equal_mass_bins,
     expected_calibration_error,
+    expected_ece_if_calibrated,
     reliability_table,
 )
 
 __all__ += ["CALIBRATION_METRICS", "DEFAULT_N_BINS", "CalibrationTerms", "add_calibration_columns", "brier_score",
             "calibration_columns", "calibration_intervals", "calibration_terms", "equal_mass_bins",
-            "expected_calibration_error", "reliability_table"]
+            "expected_calibration_error", "expected_ece_if_calibrated", "reliability_table"]

@@ -48,6 +48,7 @@ __all__ = [
     "calibration_terms",
     "equal_mass_bins",
     "expected_calibration_error",
+    "expected_ece_if_calibrated",
     "reliability_table",
 ]
 
@@ -200,6 +201,37 @@ def reliability_table(confidence, correct, *, n_bins: int = DEFAULT_N_BINS) -> p
                          "confidence_low": frame["c"].min().to_numpy(), "confidence_high": frame["c"].max().to_numpy()})
 
 
+def expected_ece_if_calibrated(confidence, *, n_bins: int = DEFAULT_N_BINS, n_draws: int = 1000,
+                               random_state: int | np.random.Generator | None = 0) -> float:
+    """The ECE a perfectly calibrated posterior with these confidences would show on this many trials.
+
+    ECE is biased upwards on a finite sample: even when every trial is right with probability
+    equal to its confidence, the per-bin accuracies scatter around the confidences. This draws
+    ``correct ~ Bernoulli(confidence)`` ``n_draws`` times (one array operation) and returns the
+    mean ECE with the same equal-mass bins: the value to compare a measured ECE with.
+
+    Parameters
+    ----------
+    confidence : array-like of shape (n_trials,)
+        Top-class probability of each trial, in [0, 1].
+    n_bins : int, default 10
+    n_draws : int, default 1000
+    random_state : int, Generator or None, default 0
+
+    Returns
+    -------
+    float
+        Mean ECE over the draws.
+    """
+    c, _ = _check_terms(confidence, np.zeros(np.shape(confidence)))
+    bins = equal_mass_bins(c, n_bins)
+    onehot = np.zeros((c.size, int(bins.max()) + 1))
+    onehot[np.arange(c.size), bins] = 1.0
+    draws = np.random.default_rng(random_state).random((n_draws, c.size)) < c  # (n_draws, n_trials)
+    gap = (draws - c) @ onehot  # (n_draws, n_bins): summed correct minus confidence per bin
+    return float(np.abs(gap).sum(axis=1).mean() / c.size)
+
+
 def calibration_intervals(
     confidence,
     correct,
@@ -254,8 +286,11 @@ VARIANTS = ("", "_uncalibrated")
 
 
 def calibration_columns(suffix: str = "") -> list[str]:
-    """Columns :func:`add_calibration_columns` adds for one variant (``""`` or ``"_uncalibrated"``)."""
-    return [f"{m}{suffix}{end}" for m in CALIBRATION_METRICS for end in ("", "_ci95_low", "_ci95_high")]
+    """Columns :func:`add_calibration_columns` adds for one variant (``""`` or ``"_uncalibrated"``):
+    ECE and Brier with their intervals, then ``ece<suffix>_if_calibrated``
+    (:func:`expected_ece_if_calibrated`, what the ECE is compared with)."""
+    return ([f"{m}{suffix}{end}" for m in CALIBRATION_METRICS for end in ("", "_ci95_low", "_ci95_high")]
+            + [f"ece{suffix}_if_calibrated"])
 
 
 def add_calibration_columns(
@@ -301,7 +336,8 @@ def add_calibration_columns(
             iv = calibration_intervals(t[f"confidence{suffix}"], t["correct"], t[f"brier{suffix}"],
                                        classes=t[class_column].to_numpy(), splits=t[split_column].to_numpy(),
                                        n_bins=n_bins, n_boot=n_boot, random_state=random_state)
-            values[key] = [x for m in CALIBRATION_METRICS for x in iv[m]]
+            values[key] = [x for m in CALIBRATION_METRICS for x in iv[m]] + [
+                expected_ece_if_calibrated(t[f"confidence{suffix}"], n_bins=n_bins, random_state=random_state)]
         for j, column in enumerate(calibration_columns(suffix)):
             out[column] = [values[k][j] if k in values else np.nan for k in out[by]]
     return out

@@ -102,7 +102,8 @@ SECTIONS: tuple[Section, ...] = (
             "calibration error: trials sorted by top-class probability into equal-size bins, the trial-weighted "
             "mean gap between mean probability and share right; 0 = calibrated) and the multi-class Brier score, "
             "each with a 95% interval resampling splits and test objects, in the method comparison (columns ece, "
-            "brier: calibrated posteriors; *_uncalibrated: the method's own). The calibrator is one temperature "
+            "brier: calibrated posteriors; *_uncalibrated: the method's own; ece_if_calibrated: the ECE a perfectly "
+            "calibrated posterior would show on as many trials, the floor to compare with). The calibrator is one temperature "
             "per method and split fitted on pseudo-unseen classes of the training objects only (class-grouped "
             "folds), so it keeps every ranking and accuracy. Reliability diagram: accuracy against mean "
             "top-class probability per bin; points below the diagonal are over-confident.",

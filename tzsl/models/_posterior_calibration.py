@@ -53,6 +53,7 @@ from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
 from tzsl.exceptions import ConfigError
+from tzsl.models._attribute_training import GridEdgeWarning
 from tzsl.models._validation import ValidatedParamsMixin
 from tzsl.models._zsl_input import ZSLInputError, class_grouped_folds
 
@@ -187,8 +188,10 @@ def pseudo_unseen_scores(estimator, X, Y, groups=None, *, n_folds: int = 3, rand
         keep = _learnable_attributes(Y[train])
         if not keep.any():
             raise ZSLInputError("posterior calibration: a fold's training classes leave no attribute to learn")
-        fitted = _on_attributes(clone(estimator), keep).fit(X[train], Y[train][:, keep],
-                                                             None if g is None else g[train])
+        with warnings.catch_warnings():  # a fold's grid edges are not the user's: the final fit reports its own
+            warnings.simplefilter("ignore", GridEdgeWarning)
+            fitted = _on_attributes(clone(estimator), keep).fit(X[train], Y[train][:, keep],
+                                                                 None if g is None else g[train])
         K, y = np.unique(Y[held][:, keep], axis=0, return_inverse=True)
         out.append((score(fitted, X[held], K), y.ravel(), int((~keep).sum())))
     return out
