@@ -109,9 +109,8 @@ class DapStudyConfig:
     svm_params : dict
         Further :class:`~tzsl.models.AttributeSVM` parameters (grids, draws, cv). The default
         ``cv=5`` tunes on 5 object-grouped stratified folds of the training objects; ``cv=None``
-        is the paper's leave-one-object-out, about 7x slower per fit for the same accuracy on
-        PHAC-2 (mean AVGDAP over the 5 seed-0 random splits: 0.304 leave-one-object-out,
-        0.310 with 5 folds).
+        is the paper's leave-one-object-out, several times slower per fit (compare the two with
+        ``[svm] cv`` in a study file; ``tzsl bench`` times one split's fits).
     multilabel : bool
         Also fit the joint (multi-label) attribute model on the random splits (section 4.4).
     sweep_min_attributes, sweep_max_subsets : int

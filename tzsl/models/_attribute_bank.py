@@ -170,10 +170,8 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
             tqdm.write(f"attribute models: {self.solver_choice_['solver']} ({reason})")
         if not approximate:
             return exact
-        # the exact model's protocol and search grid: on PHAC-2 (5 seed-0 random splits, AVGDAP) the
-        # approximate model's own grid (gamma 0.001-1 x 4, C 0.1-1000 x 5, 3 folds, 1 draw) gave 0.264
-        # [0.142, 0.392], the exact model's grid, folds and draws 0.314 [0.196, 0.436] (exact 0.310), and
-        # the lower grouped-CV log-loss on training objects (0.479 vs 0.494)
+        # one protocol for both solvers: the approximate model searches the exact model's grid with
+        # its folds and draws
         params = exact.get_params(deep=False)
         shared = {k: v for k, v in params.items()
                   if k in ("preprocessor", "platt_weighting", "name", "random_state", "C_range", "gamma_range",

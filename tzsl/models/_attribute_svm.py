@@ -152,9 +152,8 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
         for the training prior). DAP divides each posterior by the attribute prior ``p(a_m)``:
         ``"balanced"`` posteriors already carry a 50% prior, so they pair with DAP's ``"uni"``
         prior (dividing by 0.5 changes nothing); with DAP's ``"train"`` prior the training prior
-        would be divided out twice, so that pairing needs ``"empirical"``. PHAC-2, 5 random
-        splits (seed 0), AVGDAP: balanced+uni 0.310, balanced+train 0.226 (double correction),
-        empirical+train 0.286, empirical+uni 0.290.
+        would be divided out twice, so that pairing needs ``"empirical"`` (Table 2 of
+        ``tzsl reproduce-tables`` shows the priors side by side).
     name : str or None, default=None
         Attribute name used in error messages.
     random_state : int, RandomState or None, default=None
