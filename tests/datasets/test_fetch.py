@@ -112,3 +112,60 @@ def test_the_penn_label_table_is_rebuilt_byte_for_byte_from_the_pickles(data_dir
     data = read_penn_static_pickles([fetch(rel, data_dir) for rel in registered_files(PENN_STATIC_DIR)])
     built = hashlib.sha256(labels_csv_bytes(data.labels)).hexdigest()
     assert f"sha256:{built}" == registered_hash("phac2/derived/phac2_labels_60x24.csv")
+
+
+# A Data2.py in the shape of the fabric paper's (Python 2, never executed): fabrics 1..5 in 3 groups.
+DATA2 = """import numpy as np
+class Data():
+    def __init__(self, attr_num):
+        self.large_classify = [
+            [4, 1],
+            [2, 5],
+            [3]
+        ]
+        print 'python 2'
+"""
+GROUPS_CSV = b"fabric_id,fabric_name,group\n1,F0001,0\n2,F0002,1\n3,F0003,2\n4,F0004,0\n5,F0005,1\n"
+
+
+def test_fabric_groups_are_built_from_the_papers_group_lists(tmp_path):
+    from tzsl.datasets._fabric import fabric_groups_csv_bytes  # noqa: PLC0415
+    from tzsl.exceptions import DataFileError  # noqa: PLC0415
+
+    assert fabric_groups_csv_bytes(DATA2) == GROUPS_CSV
+    for bad in ("no groups here", DATA2.replace("[3]", "[3, 4]"), DATA2.replace("[3]", "[__import__]")):
+        with pytest.raises(DataFileError) as info:
+            fabric_groups_csv_bytes(bad, origin="Data2.py")
+        assert str(info.value).startswith("Data2.py: ") and len(str(info.value).splitlines()) == 1
+
+
+def test_fetch_builds_fabric_groups_and_leaves_reference_copies_out(tmp_path):
+    from tzsl.datasets import REFERENCE_ONLY  # noqa: PLC0415
+
+    served = tmp_path / "served"
+    (served / "fabric/sources").mkdir(parents=True)
+    (served / "fabric/sources/Data2.py").write_text(DATA2)
+    handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(served))
+    handler.log_message = lambda *args: None
+    httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=httpd.serve_forever, daemon=True).start()
+    try:
+        base = f"http://127.0.0.1:{httpd.server_address[1]}"
+        reference = sorted(REFERENCE_ONLY)[0]
+        lines = [
+                 f"fabric/fabric_groups.csv sha256:{hashlib.sha256(GROUPS_CSV).hexdigest()}",
+                 f"{reference} sha256:{'0' * 64}"]
+        (tmp_path / "registry.txt").write_text("\n".join(lines) + "\n")
+        pup = pooch.create(path=".", base_url="", registry=None)
+        pup.load_registry(str(tmp_path / "registry.txt"))
+        home = tmp_path / "home"
+        sources = {"fabric/fabric_groups.csv": {"fabric/sources/Data2.py": (
+            f"sha256:{hashlib.sha256(DATA2.encode()).hexdigest()}", f"{base}/fabric/sources/Data2.py")}}
+        fabric, phac2 = fetch_datasets([], home, pup=pup, progress=False, build_sources=sources)
+    finally:
+        httpd.shutdown()
+        httpd.server_close()
+    assert fabric.built == ["fabric/fabric_groups.csv"] and (home / "fabric/sources/Data2.py").read_text() == DATA2
+    assert (home / "fabric/fabric_groups.csv").read_bytes() == GROUPS_CSV
+    assert phac2.reference == [reference] and phac2.missing == []
+    assert "no study reads them" in phac2.line()

@@ -57,7 +57,7 @@ from tzsl.datasets._synthetic import synthetic_dataset_arrays, write_synthetic_d
 from tzsl.datasets._card import card_lines, dataset_card
 from tzsl.datasets._lab_formats import LAB_FORMATS, convert_lab_dataset
 from tzsl.datasets._lab_mapping import BagMapping, Hdf5Mapping, SeriesMapping, load_lab_mapping
-from tzsl.datasets._fetch import MIRROR_ENV, FetchReport, fetch_datasets, registered_datasets
+from tzsl.datasets._fetch import MIRROR_ENV, REFERENCE_ONLY, FetchReport, fetch_datasets, registered_datasets
 from tzsl.datasets._signal_files import signal_from_arrays
 from tzsl.datasets._validate import Problem, read_signal_file, validate_dataset
 
@@ -132,6 +132,7 @@ __all__ = [
     "SeriesMapping",
     "load_lab_mapping",
     "MIRROR_ENV",
+    "REFERENCE_ONLY",
     "FetchReport",
     "fetch_datasets",
     "registered_datasets",

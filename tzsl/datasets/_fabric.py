@@ -30,6 +30,7 @@ User-supplied GelSight fabric press videos are read by
 
 from __future__ import annotations
 
+import ast
 import os
 import re
 import warnings
@@ -49,6 +50,7 @@ __all__ = [
     "PAPER_ATTRIBUTE_NAMES",
     "FabricData",
     "FabricSplit",
+    "fabric_groups_csv_bytes",
     "fabric_zsl_split",
     "load_fabric",
     "read_depth_images",
@@ -85,6 +87,56 @@ _DEPTH_PREFIX = "fabric/depth224/"
 # ---------------------------------------------------------------------------------
 # tables
 # ---------------------------------------------------------------------------------
+#: Registered source of ``fabric_groups.csv``: the group lists of the fabric paper's code.
+FABRIC_GROUPS_SOURCE = "fabric/sources/Data2.py"
+
+
+def fabric_groups_csv_bytes(source: str, origin: str = FABRIC_GROUPS_SOURCE) -> bytes:
+    """``fabric_groups.csv`` built from the text of the paper code's ``Data2.py``.
+
+    The group membership is the literal list ``self.large_classify = [[...], ...]`` (one list of
+    1-based fabric ids per group). The file is Python 2; only that literal is parsed
+    (:func:`ast.literal_eval`), nothing is executed.
+
+    Parameters
+    ----------
+    source : str
+        Text of ``Data2.py``.
+    origin : str
+        Name of the source in error messages.
+
+    Returns
+    -------
+    bytes
+        CSV with columns fabric_id, fabric_name (``F0001``...), group (0-based), one row per
+        fabric in id order, ``\n`` line ends.
+
+    Raises
+    ------
+    DataFileError
+        No group literal, or groups that do not hold every fabric 1..N exactly once.
+    """
+    at = source.find("large_classify")
+    start = source.find("[", at) if at >= 0 else -1
+    depth, end = 0, -1
+    for end in range(max(start, 0), len(source) if start >= 0 else 0):
+        depth += {"[": 1, "]": -1}.get(source[end], 0)
+        if depth == 0:
+            break
+    try:
+        groups = ast.literal_eval(source[start:end + 1]) if start >= 0 and depth == 0 else None
+    except (ValueError, SyntaxError):
+        groups = None
+    if not (isinstance(groups, list) and all(isinstance(g, list) for g in groups)):
+        raise DataFileError(origin, "no 'large_classify = [[...], ...]' list of fabric ids per group")
+    member = {int(f): g for g, ids in enumerate(groups) for f in ids}
+    n = sum(len(g) for g in groups)
+    if len(member) != n or sorted(member) != list(range(1, n + 1)):
+        raise DataFileError(origin, f"large_classify does not hold the fabric ids 1..{n} exactly once")
+    rows = "".join(f"{i},F{i:04d},{member[i]}\n" for i in range(1, n + 1))
+    return (",".join(_GROUP_COLUMNS) + "\n" + rows).encode()
+
+
 def read_fabric_groups(path: str | os.PathLike, *, n_groups: int | None = N_GROUPS) -> pd.DataFrame:
     """Read and validate a ``fabric_groups.csv``.
 

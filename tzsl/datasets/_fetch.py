@@ -6,7 +6,9 @@ an interrupted fetch leaves no half file and a rerun goes on where it stopped (f
 verified are skipped). ``mirror`` (or ``$TZSL_DATA_MIRROR``) is a base URL laid out like the data
 home (``MIRROR/phac2/...``): every file is taken from there instead, the locally built ones too.
 Files the registry lists without a URL are built from downloaded ones where tzsl can
-(``phac2/derived/phac2_labels_60x24.csv`` from the Penn pickles), else reported.
+(``phac2/derived/phac2_labels_60x24.csv`` from the Penn pickles, ``fabric/fabric_groups.csv`` from
+the fabric paper's ``Data2.py``); derived reference copies that no study reads
+(:data:`REFERENCE_ONLY`) are reported and left out; anything else is reported missing.
 """
 
 from __future__ import annotations
@@ -20,10 +22,10 @@ import pooch
 
 from tzsl._io import atomic_write_bytes
 from tzsl.datasets._home import get_data_home
-from tzsl.datasets._registry import registered_hash, registry, source_of, verify_file
+from tzsl.datasets._registry import download_file, registry, source_of, verify_file
 from tzsl.exceptions import ChecksumError, ConfigError, DataMissingError
 
-__all__ = ["MIRROR_ENV", "FetchReport", "fetch_datasets", "registered_datasets"]
+__all__ = ["MIRROR_ENV", "REFERENCE_ONLY", "FetchReport", "fetch_datasets", "registered_datasets"]
 
 #: Environment variable naming a mirror (see the module docstring).
 MIRROR_ENV = "TZSL_DATA_MIRROR"
@@ -38,6 +40,7 @@ class FetchReport:
     downloaded: list[str] = field(default_factory=list)
     built: list[str] = field(default_factory=list)
     missing: list[str] = field(default_factory=list)
+    reference: list[str] = field(default_factory=list)
 
     def line(self) -> str:
         parts = [f"{len(self.present)} present", f"{len(self.downloaded)} downloaded"]
@@ -45,6 +48,9 @@ class FetchReport:
             parts.append(f"{len(self.built)} built from them")
         if self.missing:
             parts.append(f"{len(self.missing)} not downloadable (no public URL; {source_of(self.missing[0])})")
+        if self.reference:
+            parts.append(f"{len(self.reference)} reference cop{'y' if len(self.reference) == 1 else 'ies'} without "
+                         "a public URL left out (no study reads them)")
         return f"{self.name}: " + ", ".join(parts)
 
 
@@ -61,10 +67,52 @@ def _build_penn_labels(home: Path, pup: pooch.Pooch) -> bytes:
     return labels_csv_bytes(read_penn_static_pickles(pickles).labels)
 
 
+def _build_fabric_groups(home: Path, pup: pooch.Pooch) -> bytes:
+    """The registered fabric x group CSV, rebuilt from the downloaded ``Data2.py`` of the paper's code."""
+    from tzsl.datasets._fabric import FABRIC_GROUPS_SOURCE, fabric_groups_csv_bytes  # noqa: PLC0415
+
+    source = home / FABRIC_GROUPS_SOURCE
+    return fabric_groups_csv_bytes(source.read_text(encoding="utf-8"), origin=str(source))
+
+
 #: Registered files without a public URL that tzsl builds from downloaded ones.
 BUILDERS: dict[str, Callable[[Path, pooch.Pooch], bytes]] = {
     "phac2/derived/phac2_labels_60x24.csv": _build_penn_labels,
+    "fabric/fabric_groups.csv": _build_fabric_groups,
 }
+
+#: Public files a builder reads that are not data (so not in the registry): path in the data
+#: home -> (sha256 of the file at that commit, URL). Downloaded (and hash-checked) only to build.
+BUILD_SOURCES: dict[str, dict[str, tuple[str, str]]] = {
+    "fabric/fabric_groups.csv": {
+        "fabric/sources/Data2.py": (
+            "sha256:e3c5567299d0ec313047bb76802bb8967a5df2acdc0f74e76c77768c962c3501",
+            "https://raw.githubusercontent.com/GitGroot/gelsight_zeroshot_category/"
+            "a20cbfa4057a33888f6c1be106407e8a607a89ad/Data2.py"),
+    },
+}
+
+
+def _fetch_build_sources(relpath: str, home: Path, mirror: str | None, progress: bool,
+                         sources: dict[str, dict[str, tuple[str, str]]]) -> None:
+    """Download (hash-checked, kept for reruns) the public files the builder of ``relpath`` reads."""
+    needed = sources.get(relpath, {})
+    if not needed:
+        return
+    pup = pooch.create(path=home, base_url="", registry={p: h for p, (h, _) in needed.items()},
+                       urls={p: u for p, (_, u) in needed.items()})
+    for source in needed:
+        if not _present(home / source, source, pup):
+            download_file(source, home, url=f"{mirror.rstrip('/')}/{source}" if mirror else None, pup=pup,
+                     progress=progress)
+
+#: Registered files no study reads: derived reference copies of ``../shared/data`` (no public URL)
+#: that the test suite compares tzsl's own readers with. A fetch reports them, and does not fail.
+REFERENCE_ONLY: frozenset[str] = frozenset({
+    "phac2/derived/phac2_penn_original_adjective_splits.json",
+    "phac2/derived/phac2_penn_static_features.npz",
+    "phac2/derived/phac2_trials_600.csv",
+})
 
 
 def _present(path: Path, relpath: str, pup: pooch.Pooch) -> bool:
@@ -87,6 +135,7 @@ def fetch_datasets(
     progress: bool = True,
     pup: pooch.Pooch | None = None,
     echo: Callable[[str], None] | None = None,
+    build_sources: dict[str, dict[str, tuple[str, str]]] | None = None,
 ) -> list[FetchReport]:
     """Download and verify every registered file of ``names`` (all datasets when empty).
 
@@ -105,6 +154,8 @@ def fetch_datasets(
         The registry (default tzsl's own; tests pass a small one).
     echo : callable, optional
         Receives one line per dataset.
+    build_sources : dict, optional
+        The public files builders read (default :data:`BUILD_SOURCES`; tests pass their own).
 
     Raises
     ------
@@ -114,6 +165,7 @@ def fetch_datasets(
         A downloaded file whose sha256 differs from the registry's (it is not kept).
     """
     pup = pup or registry()
+    build_sources = BUILD_SOURCES if build_sources is None else build_sources
     known = registered_datasets(pup)
     unknown = [n for n in names if n not in known]
     if unknown:
@@ -133,7 +185,7 @@ def fetch_datasets(
             if url is None:
                 continue  # built below, or missing
             try:
-                _download(relpath, url, home, pup, progress)
+                download_file(relpath, home, url=url, pup=pup, progress=progress)
             except DataMissingError:
                 if relpath in pup.urls:
                     raise
@@ -143,30 +195,16 @@ def fetch_datasets(
             if relpath in report.present or relpath in report.downloaded:
                 continue
             if relpath in BUILDERS and relpath in pup.registry:
+                _fetch_build_sources(relpath, home, mirror, progress, build_sources)
                 path = home / relpath
                 atomic_write_bytes(path, BUILDERS[relpath](home, pup))
                 verify_file(path, relpath, pup.registry[relpath])
                 report.built.append(relpath)
+            elif relpath in REFERENCE_ONLY:
+                report.reference.append(relpath)
             else:
                 report.missing.append(relpath)
         reports.append(report)
         if echo is not None:
             echo(report.line())
     return reports
-
-
-def _download(relpath: str, url: str, home: Path, pup: pooch.Pooch, progress: bool) -> None:
-    """One file from ``url`` into the data home, hash-checked by pooch before it is moved into place."""
-    known = pup.registry[relpath]
-    single = pooch.create(path=home, base_url="", registry={relpath: None if known == "none" else known},
-                          urls={relpath: url}, retry_if_failed=2)
-    downloader = pooch.HTTPDownloader(progressbar=progress) if url.startswith("http") else None
-    try:
-        single.fetch(relpath, downloader=downloader)
-    except ValueError as exc:  # pooch's hash mismatch: the file is not kept
-        raise ChecksumError(home / relpath, f"{str(exc).splitlines()[0]} (downloaded from {url})") from None
-    except OSError as exc:
-        raise DataMissingError(home / relpath, f"cannot download {url}: {str(exc).splitlines()[0]}") from None
-    except Exception as exc:  # noqa: BLE001 - requests' HTTP errors: one line naming the URL
-        raise DataMissingError(home / relpath, f"cannot download {url}: {type(exc).__name__}: "
-                                               f"{str(exc).splitlines()[0] if str(exc) else ''}") from None

@@ -182,7 +182,7 @@ def fetch(
     path = home / relpath
     if not path.is_file():
         if download and relpath in pup.urls:
-            return _download(relpath, home, downloader)
+            return download_file(relpath, home, downloader=downloader)
         raise DataMissingError(path, missing_message(relpath, home))
     stat = path.stat()
     key = (str(path.resolve()), stat.st_size, stat.st_mtime_ns)
@@ -211,19 +211,57 @@ def verify_file(path: Path, relpath: str, expected: str) -> None:
         )
 
 
-def _download(relpath: str, home: Path, downloader=None) -> Path:
-    """Download one registered file into the data home with pooch (hash-checked)."""
-    pup = registry()
-    pup_home = pooch.create(
-        path=home, base_url="", registry={relpath: registered_hash(relpath)},
-        urls={relpath: pup.urls[relpath]},
-        # network downloads are retried; a caller-supplied downloader handles its own failures
-        retry_if_failed=2 if downloader is None else 0,
-    )
+def download_file(relpath: str, home: Path, *, url: str | None = None, pup: pooch.Pooch | None = None,
+             downloader=None, progress: bool = False) -> Path:
+    """Download one registered file into the data home with pooch, hash-checked before it is moved
+    into place (an interrupted or corrupt download leaves no file).
+
+    Parameters
+    ----------
+    relpath : str
+        Registered path relative to the data home.
+    home : Path
+        The data home.
+    url : str, optional
+        Where to get it (a mirror); default the registry's public URL.
+    pup : pooch.Pooch, optional
+        The registry (default tzsl's own; tests pass a small one).
+    downloader : callable, optional
+        A pooch downloader; default pooch's HTTP downloader (with a tqdm bar when ``progress``).
+    progress : bool, default False
+
+    Returns
+    -------
+    Path
+        ``home / relpath``.
+
+    Raises
+    ------
+    ChecksumError
+        The download's hash differs from the registry's (nothing is kept).
+    DataMissingError
+        No URL, or the download failed (one line naming the URL).
+    """
+    pup = pup or registry()
+    url = url or pup.urls.get(relpath)
+    if url is None:
+        raise DataMissingError(home / relpath, missing_message(relpath, home))
+    known = pup.registry[relpath]
+    single = pooch.create(path=home, base_url="", registry={relpath: None if known == NO_HASH else known},
+                          urls={relpath: url},
+                          # network downloads are retried; a caller-supplied downloader handles its own failures
+                          retry_if_failed=2 if downloader is None else 0)
+    if downloader is None and url.startswith("http"):
+        downloader = pooch.HTTPDownloader(progressbar=progress)
     try:
-        path = Path(pup_home.fetch(relpath, downloader=downloader))
-    except ValueError as exc:  # pooch's hash mismatch
-        raise ChecksumError(home / relpath, str(exc)) from None
+        path = Path(single.fetch(relpath, downloader=downloader))
+    except ValueError as exc:  # pooch's hash mismatch: the file is not kept
+        raise ChecksumError(home / relpath, f"{str(exc).splitlines()[0]} (downloaded from {url})") from None
+    except OSError as exc:
+        raise DataMissingError(home / relpath, f"cannot download {url}: {str(exc).splitlines()[0]}") from None
+    except Exception as exc:  # noqa: BLE001 - requests' HTTP errors: one line naming the URL
+        raise DataMissingError(home / relpath, f"cannot download {url}: {type(exc).__name__}: "
+                                               f"{str(exc).splitlines()[0] if str(exc) else ''}") from None
     stat = path.stat()
     with _LOCK:
         _VERIFIED.add((str(path.resolve()), stat.st_size, stat.st_mtime_ns))
