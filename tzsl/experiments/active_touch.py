@@ -40,6 +40,7 @@ import numpy as np
 import pandas as pd
 from joblib import Parallel, delayed
 
+from tzsl._parallel import reissued, relayed
 from tzsl._profile import stage
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import (
@@ -387,10 +388,10 @@ def run_active_touch_study(features: FeatureSet, results_dir: ResultsDir, config
         splits = make_active_splits(features, kind, config)
         seeds = [int(np.random.SeedSequence([config.seed, k, i]).generate_state(1)[0]) for i in range(len(splits))]
         with stage("fit"):  # per-EP attribute models and their evaluation, in joblib workers
-            results = Parallel(n_jobs=config.n_jobs)(
-                delayed(evaluate_split)(features, split, seed=s, update=config.update, cv=config.cv,
-                                        n_samples=config.n_samples, tempering=config.tempering)
-                for split, s in zip(splits, seeds))
+            results = [reissued(r) for r in Parallel(n_jobs=config.n_jobs)(
+                delayed(relayed(evaluate_split))(features, split, seed=s, update=config.update, cv=config.cv,
+                                                 n_samples=config.n_samples, tempering=config.tempering)
+                for split, s in zip(splits, seeds))]
         for split, r in zip(splits, results):
             for name, n in r.pop("fit_store").items():  # the workers' fit-store events, into the profile
                 count_fits(name, n)

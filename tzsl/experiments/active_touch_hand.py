@@ -36,6 +36,7 @@ import pandas as pd
 from joblib import Parallel, delayed
 from sklearn.model_selection import StratifiedKFold
 
+from tzsl._parallel import reissued, relayed
 from tzsl.datasets import HandTable, simulate_grasps
 from tzsl.evaluation import bootstrap_accuracy_columns, paired_difference_interval
 from tzsl.experiments.hand import HandStudyConfig, fit_hand_model, hand_features
@@ -198,8 +199,8 @@ def run_active_hand(table: HandTable, results_dir, config: HandActiveConfig,
     log = log or (lambda _msg: None)
     study = HandStudyConfig()
     strategies = ["active", *(f"fixed:{t}" for t in GRASP_TYPES), "random_type", "random_grasp"]
-    runs = Parallel(n_jobs=config.n_jobs)(delayed(_evaluate_seed)(table, study, config, seed, strategies)
-                                         for seed in config.seeds)
+    runs = [reissued(r) for r in Parallel(n_jobs=config.n_jobs)(
+        delayed(relayed(_evaluate_seed))(table, study, config, seed, strategies) for seed in config.seeds)]
     for seed, r in zip(config.seeds, runs):
         log(f"simulated hand, seed {seed}: active after 1..{config.max_grasps} grasps "
             f"{np.round(r['strategies']['active']['correct'].mean(axis=0), 3).tolist()}")

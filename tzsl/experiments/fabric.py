@@ -84,6 +84,7 @@ import numpy as np
 import pandas as pd
 from joblib import Parallel, delayed
 
+from tzsl._parallel import reissued, relayed
 from tzsl._profile import stage
 from tzsl.datasets import FABRIC_ATTRIBUTE_SETS, load_fabric
 from tzsl.evaluation import DEFAULT_ALPHAS, select_embedding_alpha
@@ -282,21 +283,21 @@ def run_fabric_study(
             }
             for lam, label in zip(lams, labels):
                 for sd in seed_list:
-                    jobs.append(delayed(run_job)(s.X, s.groups, A, split, f"lam_{label}", lam, sd,
+                    jobs.append(delayed(relayed(run_job))(s.X, s.groups, A, split, f"lam_{label}", lam, sd,
                                                   tuple(alphas), max_iter))
                     meta.append(row_meta)
-            jobs.append(delayed(run_job)(s.X, s.groups, A, split, ESZSL_METHOD, None, None, (), max_iter))
+            jobs.append(delayed(relayed(run_job))(s.X, s.groups, A, split, ESZSL_METHOD, None, None, (), max_iter))
             meta.append(row_meta)
             for spec in methods:  # registry methods: every seed if the method is random, else once
                 for sd in seed_list if takes_seed(spec) else [None]:
-                    jobs.append(delayed(run_job)(s.X, s.groups, A, split, method_label(spec), None, sd, (),
+                    jobs.append(delayed(relayed(run_job))(s.X, s.groups, A, split, method_label(spec), None, sd, (),
                                                   max_iter, spec))
                     meta.append(row_meta)
 
     from tqdm.auto import tqdm
 
     with stage("fit"):  # the embedding and ESZSL fits, in joblib workers
-        results = Parallel(n_jobs=n_jobs, return_as="generator")(jobs)
+        results = map(reissued, Parallel(n_jobs=n_jobs, return_as="generator")(jobs))
         rows = [
             {**m, **r}
             for m, r in zip(meta, tqdm(results, total=len(jobs), desc="fabric fits", disable=not progress))

@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 from joblib import Parallel, delayed
 
+from tzsl._parallel import reissued, relayed
 from tzsl._profile import stage
 from tzsl._io import file_sha256
 from tzsl.datasets import FabricData, get_cache_dir, load_gelsight_fabric_videos, read_depth_images
@@ -310,9 +311,9 @@ def gelsight_samples(
 
         tqdm.write(f"key frames and descriptors of {len(paths)} GelSight videos (cached afterwards)")
     with stage("features"):  # key frames and descriptors, in joblib workers (cached)
-        results = Parallel(n_jobs=n_jobs)(
-            delayed(cached)(file_sha256(p), p, sel_params, desc_params, max_side) for p in paths
-        )
+        results = [reissued(r) for r in Parallel(n_jobs=n_jobs)(
+            delayed(relayed(cached))(file_sha256(p), p, sel_params, desc_params, max_side) for p in paths
+        )]
     lengths = {r[1].shape[0] for r in results}
     if len(lengths) > 1:
         raise DataFileError(Path(root), f"videos give descriptors of different lengths {sorted(lengths)}")

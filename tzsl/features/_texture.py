@@ -58,6 +58,7 @@ from scipy import fft as sfft
 from sklearn.base import BaseEstimator, TransformerMixin
 from sklearn.utils.validation import check_is_fitted
 
+from tzsl._parallel import reissued, relayed
 from tzsl.exceptions import ConfigError, DataFileError
 
 __all__ = ["TextureDescriptor", "texture_feature_names"]
@@ -360,7 +361,7 @@ class TextureDescriptor(TransformerMixin, BaseEstimator):
             )
         flat = X.reshape(-1, *X.shape[-2:])
         chunks = [flat[i : i + _CHUNK] for i in range(0, flat.shape[0], _CHUNK)]
-        parts = Parallel(n_jobs=self.n_jobs)(delayed(_describe)(c, params) for c in chunks)
+        parts = [reissued(r) for r in Parallel(n_jobs=self.n_jobs)(delayed(relayed(_describe))(c, params) for c in chunks)]
         out = np.concatenate(parts, axis=0)
         return out.reshape(X.shape[0], -1)
 

@@ -48,6 +48,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
+from tzsl._parallel import reissued, relayed
 from tzsl.exceptions import ConfigError, SplitError, TzslError
 from tzsl.features import unpack_grasp_features
 from tzsl.models._dap import dap_log_scores
@@ -323,7 +324,8 @@ class HandDAPClassifier(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
             self._check_labels(labels, name, "joint angles")
             svm = SVC(kernel="rbf", C=self.shape_C, gamma=self.shape_gamma, class_weight="balanced")
             jobs.append((make_pipeline(StandardScaler(), self._calibrated(svm, int(seeds[3]))), shape, labels))
-        fitted = Parallel(n_jobs=self.n_jobs)(delayed(_fit_one)(est, Xj, yj) for est, Xj, yj in jobs)
+        fitted = [reissued(r) for r in Parallel(n_jobs=self.n_jobs)(delayed(relayed(_fit_one))(est, Xj, yj)
+                                                                     for est, Xj, yj in jobs)]
         n_mat_models = len(groups) * len(mat_attrs)
         self.material_models_ = [
             fitted[i * len(mat_attrs) : (i + 1) * len(mat_attrs)] for i in range(len(groups))
