@@ -11,7 +11,7 @@ from tzsl.datasets._grasps import (
     write_grasps,
 )
 from tzsl.datasets._hand_simulator import SimulatedGrasps, simulate_grasps
-from tzsl.datasets._home import get_cache_dir, get_data_home
+from tzsl.datasets._home import CACHE_DIR_ENV, get_cache_dir, get_data_home
 from tzsl.datasets._phac2_h5 import (
     iter_phac2_h5,
     list_phac2_h5_trials,
@@ -85,6 +85,7 @@ __all__ = [
     "write_feature_table",
     "get_data_home",
     "get_cache_dir",
+    "CACHE_DIR_ENV",
     "fetch",
     "registered_files",
     "safe_load_pickle",
