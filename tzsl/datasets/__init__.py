@@ -58,6 +58,7 @@ from tzsl.datasets._card import card_lines, dataset_card
 from tzsl.datasets._lab_formats import LAB_FORMATS, convert_lab_dataset
 from tzsl.datasets._lab_mapping import BagMapping, Hdf5Mapping, SeriesMapping, load_lab_mapping
 from tzsl.datasets._fetch import MIRROR_ENV, FetchReport, fetch_datasets, registered_datasets
+from tzsl.datasets._signal_cache import SignalTable, read_signal_table
 from tzsl.datasets._signal_files import signal_from_arrays
 from tzsl.datasets._validate import Problem, read_signal_file, validate_dataset
 
@@ -86,6 +87,8 @@ __all__ = [
     "get_data_home",
     "get_cache_dir",
     "CACHE_DIR_ENV",
+    "SignalTable",
+    "read_signal_table",
     "fetch",
     "registered_files",
     "safe_load_pickle",
