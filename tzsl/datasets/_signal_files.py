@@ -6,7 +6,7 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Sequence
-from pathlib import Path, PurePosixPath
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -140,9 +140,10 @@ def resolve_signal_path(folder: Path, text: str, root: str | None = None) -> tup
 
     ``root``: ``os.path.realpath(folder)``, when resolving many cells of one folder.
     """
-    pure = PurePosixPath(text.replace("\\", "/"))
-    if text and pure.suffix.lower() not in SIGNAL_SUFFIXES:
-        return None, f"signal_file {text!r}: unsupported type {pure.suffix!r}; use {' or '.join(SIGNAL_SUFFIXES)}"
+    suffix = os.path.splitext(text.replace("\\", "/").rstrip("/").rpartition("/")[2])[1]
+    suffix = "" if suffix == "." else suffix  # PurePosixPath(text).suffix, without its cost
+    if text and suffix.lower() not in SIGNAL_SUFFIXES:
+        return None, f"signal_file {text!r}: unsupported type {suffix!r}; use {' or '.join(SIGNAL_SUFFIXES)}"
     return resolve_inside(folder, text, "signal_file", root)
 
 
