@@ -123,3 +123,12 @@ def test_parallel_reads_equal_one_process_and_name_a_bad_file(dataset, tmp_path,
     with pytest.raises(DataFileError, match=r"trial t7: .*channel 'r' is infinite at row 1"):
         read_signal_table(data, n_jobs=2, cache=tmp_path / "cache")
     assert not (tmp_path / "cache").exists()  # nothing cached from a failed read
+
+
+def test_a_cache_that_cannot_be_written_warns_and_reads(dataset, tmp_path):
+    folder, signals = dataset
+    blocked = tmp_path / "file"
+    blocked.write_text("not a folder")
+    with pytest.warns(RuntimeWarning, match="signal cache not written"):
+        table = read_signal_table(read_plain_dataset(folder), cache=blocked)
+    _assert_table_holds(table, signals)

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import warnings
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,7 +32,7 @@ import numpy as np
 from tzsl._io import atomic_write, ensure_folder
 from tzsl.datasets._home import CACHE_DIR_ENV, get_cache_dir
 from tzsl.datasets._signal_files import check_signal_values, read_checked_signal
-from tzsl.exceptions import DataFileError
+from tzsl.exceptions import ConfigError, DataFileError
 
 __all__ = ["SIGNAL_CACHE_VERSION", "SignalTable", "read_signal_table", "signal_cache_folder"]
 
@@ -229,5 +230,9 @@ def read_signal_table(data, min_rows: int = 1, *, n_jobs: int | None = None,
     np.cumsum([len(s) for s in signals], out=offsets[1:])
     values = np.concatenate(signals) if signals else np.empty((0, len(data.channels)))
     if key is not None and key == _key(data):  # no file changed while it was read
-        _store_entry(entry, key, values, offsets)
+        try:
+            _store_entry(entry, key, values, offsets)
+        except (ConfigError, OSError) as exc:  # a cache that cannot be written costs time, not the run
+            warnings.warn(f"signal cache not written ({str(exc).splitlines()[0]}); the next run reads the files "
+                          "again", RuntimeWarning, stacklevel=2)
     return SignalTable(values=values, offsets=offsets, n_trials=data.n_trials)
