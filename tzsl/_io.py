@@ -130,18 +130,42 @@ def max_npz_bytes() -> int:
     return value
 
 
-def _declared(zf: zipfile.ZipFile, info: zipfile.ZipInfo) -> tuple[tuple[int, ...], np.dtype, int]:
-    """Shape, dtype and data size that one ``.npy`` member declares (only its header is read)."""
-    with zf.open(info) as fh:
-        version = np.lib.format.read_magic(fh)
-        if version == (1, 0):
-            shape, fortran, dtype = np.lib.format.read_array_header_1_0(fh)
-        elif version == (2, 0):
-            shape, fortran, dtype = np.lib.format.read_array_header_2_0(fh)
-        else:
-            raise ValueError(f"unsupported .npy format version {version}")
-        header_size = fh.tell()
-    return shape, dtype, header_size
+def _declared(fh: IO[bytes]) -> tuple[tuple[int, ...], bool, np.dtype, int]:
+    """Shape, Fortran order, dtype and header size that one open ``.npy`` member declares (reads its header)."""
+    version = np.lib.format.read_magic(fh)
+    if version == (1, 0):
+        shape, fortran, dtype = np.lib.format.read_array_header_1_0(fh)
+    elif version == (2, 0):
+        shape, fortran, dtype = np.lib.format.read_array_header_2_0(fh)
+    else:
+        raise ValueError(f"unsupported .npy format version {version}")
+    return shape, fortran, dtype, fh.tell()
+
+
+def _read_member(fh: IO[bytes], info: zipfile.ZipInfo, where, before: int, limit: int) -> tuple[str, np.ndarray, int]:
+    """Key, array and byte size of one open ``.npz`` member, its header checked before any allocation.
+
+    ``before``: bytes of the members already read (the ``limit`` is on the total).
+    """
+    shape, fortran, dtype, header_size = _declared(fh)
+    if dtype.hasobject:
+        raise DataFileError(where, f"array {info.filename!r} holds Python objects (a pickle); "
+                            "tzsl only reads numeric and text arrays")
+    nbytes = int(np.prod(shape, dtype=object)) * dtype.itemsize
+    if before + nbytes > limit:
+        raise DataFileError(where, f"arrays declare {before + nbytes:,} bytes (array {info.filename!r} has shape "
+                            f"{tuple(shape)} of {dtype}), more than the limit of {limit:,}; "
+                            f"raise it with the environment variable {MAX_NPZ_BYTES_ENV} if the "
+                            "file is genuine")
+    if info.file_size < header_size + nbytes:
+        raise DataFileError(where, f"array {info.filename!r} declares shape {tuple(shape)} of {dtype} "
+                            f"({nbytes:,} bytes) but holds {info.file_size - header_size:,}: the file "
+                            "is truncated or corrupt")
+    data = bytearray(nbytes)  # writable, like np.load's arrays
+    if fh.readinto(data) != nbytes:
+        raise EOFError(f"array {info.filename!r} ends before its {nbytes:,} bytes")
+    key = info.filename[: -len(".npy")] if info.filename.endswith(".npy") else info.filename
+    return key, np.frombuffer(data, dtype=dtype).reshape(shape, order="F" if fortran else "C"), nbytes
 
 
 def read_npz(source: str | Path | IO[bytes], *, name: str | Path | None = None,
@@ -175,29 +199,14 @@ def read_npz(source: str | Path | IO[bytes], *, name: str | Path | None = None,
     where = name if name is not None else source
     limit = max_npz_bytes() if limit is None else limit
     try:
+        arrays, total = {}, 0
         with zipfile.ZipFile(source) as zf:
-            members = [i for i in zf.infolist() if not i.is_dir()]
-            total = 0
-            for info in members:
-                shape, dtype, header_size = _declared(zf, info)
-                if dtype.hasobject:
-                    raise DataFileError(where, f"array {info.filename!r} holds Python objects (a pickle); "
-                                        "tzsl only reads numeric and text arrays")
-                nbytes = int(np.prod(shape, dtype=object)) * dtype.itemsize
-                total += nbytes
-                if total > limit:
-                    raise DataFileError(where, f"arrays declare {total:,} bytes (array {info.filename!r} has shape "
-                                        f"{tuple(shape)} of {dtype}), more than the limit of {limit:,}; "
-                                        f"raise it with the environment variable {MAX_NPZ_BYTES_ENV} if the "
-                                        "file is genuine")
-                if info.file_size < header_size + nbytes:
-                    raise DataFileError(where, f"array {info.filename!r} declares shape {tuple(shape)} of {dtype} "
-                                        f"({nbytes:,} bytes) but holds {info.file_size - header_size:,}: the file "
-                                        "is truncated or corrupt")
-        if hasattr(source, "seek"):
-            source.seek(0)
-        with np.load(source, allow_pickle=False) as npz:
-            return {key: npz[key] for key in npz.files}
+            for info in zf.infolist():  # each member opened once: its header checked, then its data read
+                if not info.is_dir():
+                    with zf.open(info) as fh:
+                        key, arrays[key], nbytes = _read_member(fh, info, where, total, limit)
+                    total += nbytes
+        return arrays
     except DataFileError:
         raise
     except FileNotFoundError:

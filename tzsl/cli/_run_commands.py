@@ -91,17 +91,22 @@ def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, dat
 @force_option
 @click.option("--profile", is_flag=True, help="Print where the time went: wall and CPU seconds per study and stage "
               "(always recorded in manifest.json).")
-def reproduce_tables(out, n_jobs, backend, scheduler, no_progress, data_dir, force, profile):
+@click.option("--study", "studies", multiple=True, metavar="NAME",
+              help="Run only this study (a built-in name or an experiment file); repeatable. Default: "
+              "phac2-dap, fabric, hand-simulated and active-touch.")
+def reproduce_tables(out, n_jobs, backend, scheduler, no_progress, data_dir, force, profile, studies):
     """Every table (CSV) and figure (PNG) of both papers from the real data, paper numbers beside ours.
 
     Runs the built-in studies phac2-dap, fabric, hand-simulated and active-touch, in this order, exactly as
     'tzsl run NAME' does, into one folder with one manifest.json. The hand study runs on
     SIMULATED grasps (the paper's Shadow-hand data are not public).
     """
+    from tzsl.experiments.reproduce import REPRODUCE_STUDIES  # noqa: PLC0415
     from tzsl.experiments.reproduce import reproduce_tables as reproduce  # noqa: PLC0415
 
     start = time.perf_counter()
-    results = reproduce(out, force=force, echo=click.echo, n_jobs=n_jobs, backend=backend, scheduler=scheduler,
+    results = reproduce(out, force=force, echo=click.echo, studies=tuple(studies) or REPRODUCE_STUDIES,
+                        n_jobs=n_jobs, backend=backend, scheduler=scheduler,
                         progress=False if no_progress else None, data_dir=data_dir)
     click.echo(f"\nwrote {len(results.written)} files to {out} in {time.perf_counter() - start:.0f} s")
     if profile:

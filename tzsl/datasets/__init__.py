@@ -11,7 +11,7 @@ from tzsl.datasets._grasps import (
     write_grasps,
 )
 from tzsl.datasets._hand_simulator import SimulatedGrasps, simulate_grasps
-from tzsl.datasets._home import get_cache_dir, get_data_home
+from tzsl.datasets._home import CACHE_DIR_ENV, get_cache_dir, get_data_home
 from tzsl.datasets._phac2_h5 import (
     iter_phac2_h5,
     list_phac2_h5_trials,
@@ -58,6 +58,7 @@ from tzsl.datasets._card import card_lines, dataset_card
 from tzsl.datasets._lab_formats import LAB_FORMATS, convert_lab_dataset
 from tzsl.datasets._lab_mapping import BagMapping, Hdf5Mapping, SeriesMapping, load_lab_mapping
 from tzsl.datasets._fetch import MIRROR_ENV, REFERENCE_ONLY, FetchReport, fetch_datasets, registered_datasets
+from tzsl.datasets._signal_cache import SignalTable, read_signal_table
 from tzsl.datasets._signal_files import signal_from_arrays
 from tzsl.datasets._validate import Problem, read_signal_file, validate_dataset
 
@@ -85,6 +86,9 @@ __all__ = [
     "write_feature_table",
     "get_data_home",
     "get_cache_dir",
+    "CACHE_DIR_ENV",
+    "SignalTable",
+    "read_signal_table",
     "fetch",
     "registered_files",
     "safe_load_pickle",

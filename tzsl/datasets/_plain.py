@@ -23,14 +23,12 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets._plain_write import feature_set_to_plain, settings_to_toml, write_plain_dataset
+from tzsl.datasets._signal_files import read_checked_signal
 from tzsl.datasets._types import FeatureSet
 from tzsl.datasets._validate import (
     DEFAULT_SENSOR,
     SPLITS_FILE,
     TRIALS_FILE,
-    check_signal_values,
-    read_signal_file,
-    resolve_signal_path,
     scan_dataset,
 )
 from tzsl.exceptions import ConfigError, DataFileError, TzslError, problems_error
@@ -170,20 +168,8 @@ class PlainDataset:
         """:meth:`read_signal`; ``root`` = ``os.path.realpath(self.folder)`` when reading many."""
         if self.signal_files is None or self.channels is None:
             raise DataFileError(self.folder, "dataset has feature columns, not signal files")
-        rel = str(self.signal_files[trial, sensor])
-        tid = str(self.trials["trial_id"].iat[trial])
-        path, reason = resolve_signal_path(self.folder, rel, root)
-        if path is None:
-            raise DataFileError(self.folder / TRIALS_FILE, reason, trial=tid)
-        channels, values = read_signal_file(path)
-        absent = [c for c in self.channels if c not in channels]
-        if absent:
-            raise DataFileError(path, f"channel(s) {absent} missing (has {list(channels)})", trial=tid)
-        values = values[:, [channels.index(c) for c in self.channels]]
-        problems = check_signal_values(rel, self.channels, values, path.suffix.lower() == ".csv", min_rows)
-        if problems:
-            raise DataFileError(self.folder, "; ".join(map(str, problems)), trial=tid)
-        return values
+        return read_checked_signal(self.folder, str(self.signal_files[trial, sensor]),
+                                   str(self.trials["trial_id"].iat[trial]), self.channels, min_rows, root)
 
     def read_signals(self, trials: Sequence[int], sensor: int, min_rows: int = 1,
                      n_threads: int | None = None) -> list[np.ndarray]:

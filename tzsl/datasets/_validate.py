@@ -369,7 +369,7 @@ def _scan_signal_files(folder: Path, settings: dict, problems: list[Problem], sc
         if path is None:
             problems.append(Problem(tname, line, f"trial {tid!r}: {reason}"))
             continue
-        if not path.is_file():
+        if not os.path.isfile(path):
             problems.append(Problem(tname, line, f"trial {tid!r}: signal file {text!r} not found"))
             continue
         if not check_signals and scan.channels is not None:

@@ -1,4 +1,4 @@
-"""``make bench``: time one full random PHAC-2 split three ways (issue: speed of the attribute fits).
+"""``make bench-fit`` (``tzsl bench``): time one full random PHAC-2 split three ways (issue: speed of the attribute fits).
 
 1. **literal**: what a user would write from the paper's text (section 4.4): per attribute and
    BioTac, z-score + PCA(95%), under-sample class 0 once at random to balance, then

@@ -110,7 +110,10 @@ class DapStudyConfig:
         Further :class:`~tzsl.models.AttributeSVM` parameters (grids, draws, cv). The default
         ``cv=5`` tunes on 5 object-grouped stratified folds of the training objects; ``cv=None``
         is the paper's leave-one-object-out, several times slower per fit (compare the two with
-        ``[svm] cv`` in a study file; ``tzsl bench`` times one split's fits).
+        ``[svm] cv`` in a study file; ``make bench-fit`` times one split's fits).
+    solver, max_exact_trials
+        Exact SVMs or the approximate model (see :class:`tzsl.models.AttributeClassifierBank`);
+        ``[svm] solver`` and ``max_exact_trials`` of an experiment file.
     multilabel : bool
         Also fit the joint (multi-label) attribute model on the random splits (section 4.4).
     sweep_min_attributes, sweep_max_subsets : int
@@ -135,6 +138,8 @@ class DapStudyConfig:
     min_train_negatives: int = _SPLITS.min_train_negatives
     undersampling: str = _SVM.undersampling
     svm_params: dict = field(default_factory=lambda: {"cv": _SVM.cv})
+    solver: str = _SVM.solver
+    max_exact_trials: int = _SVM.max_exact_trials
     multilabel: bool = _METHODS.multilabel
     sweep_min_attributes: int = _METHODS.sweep_min_attributes
     sweep_max_subsets: int = _METHODS.sweep_max_subsets
@@ -263,6 +268,7 @@ def attribute_bank(config: DapStudyConfig, attributes, seed: int) -> AttributeCl
     return AttributeClassifierBank(
         estimator=attribute_estimator(config, seed), attribute_names=list(attributes), n_jobs=config.n_jobs,
         backend=config.backend, memory=_memory(config), progress=config.progress, random_state=seed,
+        solver=config.solver, max_exact_trials=config.max_exact_trials,
     )
 
 

@@ -86,8 +86,10 @@ def phac2_features(exp: Experiment):
         from tzsl.features import load_plain_dataset  # noqa: PLC0415
 
         folder = exp.resolve(ds.plain)
+        compute = exp.config.compute  # signal files: read in n_jobs processes, cached with the fits
         features = load_plain_dataset(folder, statistics=feat.statistics, baseline_rows=feat.baseline_rows,
-                                      channels=feat.channels, min_objects=ds.min_objects)
+                                      channels=feat.channels, min_objects=ds.min_objects, n_jobs=compute.n_jobs,
+                                      cache=compute.cache)
         features.info.setdefault("data_files", sorted(str(p) for p in Path(folder).rglob("*") if p.is_file()))
         return features
     from tzsl.experiments.sources import load_study_features  # noqa: PLC0415

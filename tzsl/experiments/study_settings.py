@@ -42,6 +42,7 @@ def dap_config(exp: Experiment):
         challenging_min_train_positives=c.splits.challenging_min_train_positives,
         min_train_negatives=c.splits.min_train_negatives,
         undersampling=c.svm.undersampling, svm_params=_svm_params(c.svm), multilabel=c.methods.multilabel,
+        solver=c.svm.solver, max_exact_trials=c.svm.max_exact_trials,
         sweep_min_attributes=c.methods.sweep_min_attributes, sweep_max_subsets=c.methods.sweep_max_subsets,
         n_jobs=c.compute.n_jobs, backend=c.compute.backend, scheduler=c.compute.scheduler,
         progress=c.compute.progress, cache=c.compute.cache,

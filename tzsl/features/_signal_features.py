@@ -15,7 +15,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from tzsl.datasets import FeatureSet, PlainDataset, RawTrial, read_plain_dataset
+from tzsl.datasets import FeatureSet, PlainDataset, RawTrial, read_plain_dataset, read_signal_table
 from tzsl.exceptions import ConfigError
 from tzsl.features._attribute_filter import filter_attributes
 from tzsl.features._baseline import check_raw_trial
@@ -27,7 +27,7 @@ from tzsl.features._signal_stats import (
 )
 from tzsl.features._time_average import biotac_channel_matrix
 
-#: Trials summarised per batch (bounds memory: one batch of signals is held at a time).
+#: Trials summarised per batch (bounds the memory of the summary statistics' intermediate arrays).
 _BATCH = 256
 
 FEATURE_SOURCES = ("auto", "columns", "signals")
@@ -41,6 +41,8 @@ def plain_feature_set(
     baseline_rows: int | None = None,
     channels: Sequence[str] | None = None,
     min_objects: int | None = None,
+    n_jobs: int | None = None,
+    cache: bool | str | os.PathLike | None = None,
 ) -> FeatureSet:
     """The FeatureSet of a read plain-file dataset.
 
@@ -63,6 +65,12 @@ def plain_feature_set(
         If given, keep only attributes present in at least this many objects with trials
         (:func:`~tzsl.features.filter_attributes`); dropped names go to
         ``info["dropped_attributes"]``. Default: keep every attribute of ``classes.csv``.
+    n_jobs : int, optional
+        Processes reading the signal files (joblib convention; default: this process only).
+    cache : bool, path-like or None
+        The consolidated signal cache of :func:`tzsl.datasets.read_signal_table`: a cache folder,
+        ``True`` (the default cache folder), ``False`` (none) or ``None`` (``$TZSL_CACHE_DIR`` if
+        set, else none).
 
     Returns
     -------
@@ -90,7 +98,7 @@ def plain_feature_set(
             raise ConfigError(f"{data.folder}: statistics/baseline_rows/channels apply to signal datasets only")
         result = data.to_feature_set()
     else:
-        result = _signal_feature_set(data, statistics, baseline_rows, channels)
+        result = _signal_feature_set(data, statistics, baseline_rows, channels, n_jobs, cache)
     if min_objects is not None:
         kept, dropped = filter_attributes(result.attributes, min_objects)
         result.attributes = kept
@@ -104,6 +112,8 @@ def _signal_feature_set(
     statistics: Sequence[str] | None,
     baseline_rows: int | None,
     channels: Sequence[str] | None,
+    n_jobs: int | None,
+    cache: bool | str | os.PathLike | None,
 ) -> FeatureSet:
     config = data.settings.get("signals", {})
     stats = check_statistics(tuple(statistics) if statistics is not None
@@ -117,11 +127,11 @@ def _signal_feature_set(
     extractor = SignalStatistics(statistics=stats, baseline_rows=baseline or None, channels=data.channels)
     n_trials, n_sensors = data.n_trials, len(data.sensors)
     X = np.empty((n_trials, n_sensors, len(data.channels) * len(stats)))
-    first = [data.read_signal(0, 0, need)]
-    extractor.fit(first)
+    table = read_signal_table(data, need, n_jobs=n_jobs, cache=cache)
+    extractor.fit(table.signals(0, 0, 1))
     for s in range(n_sensors):
         for lo in range(0, n_trials, _BATCH):
-            batch = data.read_signals(range(lo, min(lo + _BATCH, n_trials)), s, need)
+            batch = table.signals(s, lo, min(lo + _BATCH, n_trials))
             X[lo:lo + len(batch), s] = extractor.transform(batch)
     return data.to_feature_set(
         X, tuple(extractor.get_feature_names_out()),
@@ -145,6 +155,8 @@ def load_plain_dataset(
     baseline_rows: int | None = None,
     channels: Sequence[str] | None = None,
     min_objects: int | None = None,
+    n_jobs: int | None = None,
+    cache: bool | str | os.PathLike | None = None,
 ) -> FeatureSet:
     """Read a plain-file dataset folder into a FeatureSet, in one call.
 
@@ -158,7 +170,8 @@ def load_plain_dataset(
     >>> fs.X.shape, fs.attributes.shape, fs.info["classes"].shape   # doctest: +SKIP
     """
     return plain_feature_set(read_plain_dataset(folder), features, statistics=statistics,
-                             baseline_rows=baseline_rows, channels=channels, min_objects=min_objects)
+                             baseline_rows=baseline_rows, channels=channels, min_objects=min_objects,
+                             n_jobs=n_jobs, cache=cache)
 
 
 def raw_trial_signals(trial: RawTrial) -> list[np.ndarray]:

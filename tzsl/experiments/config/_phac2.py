@@ -42,6 +42,13 @@ def _svm_default(name: str):
     return list(value) if isinstance(value, tuple) else value
 
 
+def _bank_default(name: str):
+    """The default of :class:`~tzsl.models.AttributeClassifierBank`'s parameter ``name``."""
+    from tzsl.models import AttributeClassifierBank  # noqa: PLC0415
+
+    return inspect.signature(AttributeClassifierBank).parameters[name].default
+
+
 def _min_objects_default() -> int:
     """:func:`tzsl.experiments.extract.extract_features`' own attribute filter."""
     from tzsl.experiments.extract import extract_features  # noqa: PLC0415
@@ -176,6 +183,12 @@ class Phac2Svm(Section):
     scoring: Literal["log_loss", "balanced_accuracy"] = Field(default_factory=lambda: _svm_default("scoring"))
     platt_weighting: Literal["balanced", "empirical"] = Field(
         default_factory=lambda: _svm_default("platt_weighting"))
+    solver: Literal["auto", "exact", "approximate"] = Field(
+        default_factory=lambda: _bank_default("solver"),
+        description="'exact': these SVMs; 'approximate': Nystroem features + logistic regression (linear in "
+                    "trials); 'auto': exact up to max_exact_trials training trials, approximate above")
+    max_exact_trials: int = Field(default_factory=lambda: _bank_default("max_exact_trials"), ge=1,
+                                  description="largest training set (trials) that solver = 'auto' fits exactly")
 
     @field_validator("cv")
     @classmethod
