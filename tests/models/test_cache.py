@@ -40,7 +40,7 @@ def test_resolve_store_path_and_memory(tmp_path):
 
 
 def test_resolve_store_rejects_other_types():
-    with pytest.raises(ConfigError, match="memory must be None, a folder path or a joblib.Memory, got int"):
+    with pytest.raises(ConfigError, match="memory must be None, False, a folder path or a joblib.Memory, got int"):
         resolve_store(3)
 
 

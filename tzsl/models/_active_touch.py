@@ -54,7 +54,6 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from numbers import Integral, Real
 
-import joblib
 import numpy as np
 from sklearn.base import BaseEstimator, _fit_context
 from sklearn.model_selection import GroupKFold
@@ -226,7 +225,7 @@ class PerEPAttributeModel(BaseEstimator):
         template = LogisticAttribute() if self.estimator is None else self.estimator
         # the default logistic fits take about as long as reading one back from the fit store: the
         # store keeps this model's whole fit instead (tzsl.models.fit_cached), not its many small ones
-        memory = joblib.Memory(None, verbose=0) if self.estimator is None else None
+        memory = False if self.estimator is None else None
         return AttributeClassifierBank(estimator=template, n_jobs=1, backend="sequential", random_state=seed,
                                        memory=memory)
 

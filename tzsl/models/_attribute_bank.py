@@ -15,7 +15,7 @@ from numbers import Integral
 import numpy as np
 from sklearn.base import BaseEstimator, clone
 from joblib import Parallel, delayed
-from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
+from sklearn.utils._param_validation import HasMethods, Interval, Options, StrOptions
 from sklearn.utils.validation import check_is_fitted
 from tqdm.auto import tqdm
 
@@ -71,12 +71,12 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
     backend : {"loky", "dask", "threading", "sequential"}, default="loky"
         joblib backend. ``"dask"`` runs the fits on the current ``dask.distributed`` Client.
         Results do not depend on the backend or ``n_jobs``.
-    memory : None, str, Path or joblib.Memory, default=None
+    memory : None, False, str, Path or joblib.Memory, default=None
         Cache folder of the fit store (:func:`tzsl.models.resolve_store`): each per-(attribute,
         sensor) fit is read from ``<folder>/fits`` when an equal fit (same estimator parameters,
         training arrays and code) was stored before, by this or any other model, table or
         study; only the others are fitted (in parallel) and stored. ``None``:
-        ``$TZSL_CACHE_DIR`` if set, else no store.
+        ``$TZSL_CACHE_DIR`` if set, else no store; ``False``: no store.
     progress : bool, default=False
         Show a tqdm progress bar over the fits.
     random_state : int, RandomState or None, default=None
@@ -113,7 +113,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         "attribute_names": [None, "array-like"],
         "n_jobs": [None, Integral],
         "backend": [StrOptions({"loky", "dask", "threading", "sequential", "multiprocessing"})],
-        "memory": [None, str, os.PathLike, HasMethods(["cache"])],
+        "memory": [None, Options(bool, {False}), str, os.PathLike, HasMethods(["cache"])],
         "progress": ["boolean"],
         "random_state": ["random_state"],
         "solver": [StrOptions(set(SOLVERS))],

@@ -214,8 +214,9 @@ def resolve_store(memory=None) -> FitStore:
 
     Parameters
     ----------
-    memory : None, str, Path or joblib.Memory
+    memory : None, False, str, Path or joblib.Memory
         ``None``: ``$TZSL_CACHE_DIR/fits`` when that variable is set (non-empty), else no store.
+        ``False``: no store.
         A folder: ``folder/fits``. A ``joblib.Memory``: ``fits`` beside its location (none if
         it has no location).
 
@@ -223,14 +224,16 @@ def resolve_store(memory=None) -> FitStore:
     -------
     FitStore
     """
-    if isinstance(memory, joblib.Memory):
+    if memory is False:
+        location = None
+    elif isinstance(memory, joblib.Memory):
         location = memory.location
     elif memory is None:
         location = os.environ.get(CACHE_ENV) or None
     elif isinstance(memory, (str, os.PathLike)):
         location = os.fspath(memory)
     else:
-        raise ConfigError(f"memory must be None, a folder path or a joblib.Memory, got {type(memory).__name__}")
+        raise ConfigError(f"memory must be None, False, a folder path or a joblib.Memory, got {type(memory).__name__}")
     return FitStore(None if location is None else Path(location).expanduser() / FITS_FOLDER)
 
 
