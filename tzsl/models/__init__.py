@@ -15,6 +15,7 @@ from tzsl.models._attribute_training import (
     balanced_object_draws,
     default_preprocessor,
     fit_platt,
+    fit_platt_many,
     gamma_grid,
 )
 from tzsl.models._scalable_attribute import ScalableAttributeClassifier
@@ -132,6 +133,7 @@ __all__: list[str] = [
     "balanced_object_draws",
     "default_preprocessor",
     "fit_platt",
+    "fit_platt_many",
     "gamma_grid",
     "MultiLabelAttributeClassifier",
     "attribute_prior",

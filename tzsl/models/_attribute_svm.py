@@ -49,7 +49,7 @@ from tzsl.models._attribute_training import (
     balanced_object_draws,
     balanced_sample_weights,
     default_preprocessor,
-    fit_platt,
+    fit_platt_many,
     gamma_grid,
     grid_edges,
 )
@@ -265,15 +265,37 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
     def _draws(self, yb, groups, rng) -> tuple[list[np.ndarray], np.ndarray]:
         return balanced_object_draws(yb, groups, self.n_draws if self.undersampling != "none" else 0, rng)
 
-    def _criterion(self, oof: np.ndarray, yb: np.ndarray, w_cal: np.ndarray) -> tuple[float, float]:
-        a, b = fit_platt(oof, yb, w_cal)
-        z = a * oof + b
-        ll = float(-(w_cal * np.where(yb, log_expit(z), log_expit(-z))).sum() / w_cal.sum())
+    def _criteria(self, oof: np.ndarray, yb: np.ndarray, w_cal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Grouped-CV criterion and Platt sigmoid of every configuration, all at once.
+
+        Parameters
+        ----------
+        oof : ndarray of shape (..., n_train)
+            Out-of-fold SVM scores of each configuration.
+        yb : bool ndarray of shape (n_train,)
+        w_cal : ndarray of shape (n_train,)
+            Platt sample weights.
+
+        Returns
+        -------
+        crit : ndarray of shape (..., 2)
+            (criterion, tie-break): class-weighted log-loss of the Platt posteriors and 0, or
+            minus the balanced accuracy of the score's sign and the log-loss.
+        platt : ndarray of shape (..., 2)
+            Each configuration's ``(a, b)`` (:func:`fit_platt_many`).
+        """
+        O = oof.reshape(-1, oof.shape[-1])
+        a, b = fit_platt_many(O, yb, w_cal)
+        z = a[:, None] * O + b[:, None]
+        ll = -(w_cal * np.where(yb, log_expit(z), log_expit(-z))).sum(axis=1) / w_cal.sum()
         if self.scoring == "log_loss":
-            return ll, 0.0
-        pred = oof > 0
-        bacc = 0.5 * (pred[yb].mean() + (~pred[~yb]).mean())
-        return -float(bacc), ll
+            crit = np.stack([ll, np.zeros_like(ll)], axis=1)
+        else:
+            pred = O > 0
+            bacc = 0.5 * (pred[:, yb].mean(axis=1) + (~pred[:, ~yb]).mean(axis=1))
+            crit = np.stack([-bacc, ll], axis=1)
+        shape = oof.shape[:-1] + (2,)
+        return crit.reshape(shape), np.stack([a, b], axis=1).reshape(shape)
 
     def _grid_oof(self, D, yb, groups, draws, fold_seed, Cs, gammas, cw, oof) -> None:
         """Fill ``oof[draw, gamma, C]`` with out-of-fold SVM scores of every training trial.
@@ -380,15 +402,13 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
             w_cal = balanced_sample_weights(yb) if self.platt_weighting == "balanced" else np.ones(n)
             if self.undersampling == "bagging":
                 oof = np.tensordot(draw_w, oof, axes=(0, 0))[None]
-            crit = np.empty(oof.shape[:3] + (2,))
-            for key in np.ndindex(*oof.shape[:3]):
-                crit[key] = self._criterion(oof[key], yb, w_cal)
+            crit, platt = self._criteria(oof, yb, w_cal)
             flat = np.lexsort((crit[..., 1].ravel(), crit[..., 0].ravel()))[0]
             di, gi, ci = np.unravel_index(flat, oof.shape[:3])
             self.cv_scores_ = crit[..., 0]
             self.C_, self.gamma_ = float(Cs[ci]), float(gammas[gi])
             self.oof_scores_ = oof[di, gi, ci].copy()
-            self.platt_ = fit_platt(self.oof_scores_, yb, w_cal)
+            self.platt_ = (float(platt[di, gi, ci, 0]), float(platt[di, gi, ci, 1]))
         self.grid_edges_ = grid_edges({"C": (Cs, int(ci)), "gamma": (gammas, int(gi))})
         if self.undersampling == "bagging":
             chosen = range(len(draws))

@@ -48,6 +48,7 @@ from tzsl.models._attribute_training import (
     balanced_object_draws,
     default_preprocessor,
     fit_platt,
+    fit_platt_many,
 )
 from tzsl.models._platt_binary import PlattBinaryClassifierMixin
 
@@ -264,11 +265,10 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
                 if out.size:
                     oof[di, gi, :, out] = scores.T
                 full[di, gi] = (feature_map, solutions)
-        crit = np.empty(oof.shape[:3])
-        for key in np.ndindex(*oof.shape[:3]):
-            a, b = fit_platt(oof[key], yb, w_cal)
-            z = a * oof[key] + b
-            crit[key] = -(w_cal * np.where(yb, log_expit(z), log_expit(-z))).sum() / w_cal.sum()
+        O = oof.reshape(-1, n)
+        a, b = fit_platt_many(O, yb, w_cal)  # every configuration's sigmoid in one Newton solve
+        z = a[:, None] * O + b[:, None]
+        crit = (-(w_cal * np.where(yb, log_expit(z), log_expit(-z))).sum(axis=1) / w_cal.sum()).reshape(oof.shape[:3])
         di, gi, ci = np.unravel_index(int(np.argmin(crit)), crit.shape)
         return int(di), int(gi), int(ci), crit, oof[di, gi, ci].copy(), w_cal, full[di, gi]
 
