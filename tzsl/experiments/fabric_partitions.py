@@ -45,12 +45,18 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
+from joblib import Parallel, delayed
+
 from tzsl.datasets import FabricSplit
 from tzsl.evaluation import bootstrap_accuracy
 from tzsl.exceptions import ConfigError
+from tzsl.experiments.fabric_methods import run_job
+from tzsl.experiments.fabric_samples import FabricSamples
+from tzsl.experiments.fabric_tables import ESZSL_METHOD
 from tzsl.models import MIN_CV_CLASSES
 
-__all__ = ["PARTITION_COLUMNS", "group_partitions", "partition_census", "partition_outcomes", "partition_summary"]
+__all__ = ["PARTITION_COLUMNS", "group_partitions", "partition_census", "partition_outcomes", "partition_summary",
+           "run_partitions"]
 
 #: Columns of :func:`partition_summary`.
 PARTITION_COLUMNS = ("condition", "method", "metric", "n_partitions", "n_failed", "n_test_groups", "accuracy", "ci95_low",
@@ -199,3 +205,42 @@ def partition_outcomes(runs: Sequence[dict], meta: Sequence[dict]) -> pd.DataFra
     out = pd.concat(frames, ignore_index=True)
     out["n_failed"] = [failed[k] for k in zip(out["condition"], out["method"])]
     return out
+
+
+def run_partitions(samples: Sequence[FabricSamples], attribute_matrix, *, min_test: int = 4,
+                   both_signs: bool = True, max_partitions: int | None = None, random_state: int = 0,
+                   max_iter: int = 500, n_jobs: int | None = 1) -> tuple[pd.DataFrame, list[FabricSplit]]:
+    """ESZSL (class-grouped CV, deterministic) on every valid partition, per data condition.
+
+    Parameters
+    ----------
+    samples : sequence of FabricSamples
+        The study's data conditions (``X`` (n, d), ``groups`` (n,)).
+    attribute_matrix : array-like of shape (n_groups, n_attributes)
+    min_test, both_signs, max_partitions, random_state
+        :func:`group_partitions`.
+    max_iter : int
+        Passed to :func:`~tzsl.experiments.fabric_methods.run_job` (unused by ESZSL).
+    n_jobs : int or None
+        joblib workers over fits.
+
+    Returns
+    -------
+    summary : DataFrame
+        :func:`partition_summary` (empty with :data:`PARTITION_COLUMNS` when no partition is valid).
+    partitions : list of FabricSplit
+    """
+    A = np.asarray(attribute_matrix, dtype=np.float64)
+    parts = group_partitions(A, min_test=min_test, both_signs=both_signs, max_partitions=max_partitions,
+                             random_state=random_state)
+    if not parts:
+        return pd.DataFrame(columns=list(PARTITION_COLUMNS)), parts
+    # one fit per (condition, partition): every partition has its own training groups, nothing to share
+    jobs = [(s, p) for s in samples for p in parts]
+    runs = Parallel(n_jobs=n_jobs)(delayed(run_job)(s.X, s.groups, A, p, ESZSL_METHOD, None, None, (), max_iter)
+                                   for s, p in jobs)
+    meta = [{"condition": s.condition, "partition": p.config, "n_test_groups": len(p.test_groups)} for s, p in jobs]
+    outcomes = partition_outcomes(runs, meta)
+    if outcomes.empty:
+        return pd.DataFrame(columns=list(PARTITION_COLUMNS)), parts
+    return partition_summary(outcomes, random_state=random_state), parts
