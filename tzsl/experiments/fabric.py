@@ -334,16 +334,15 @@ def run_fabric_study(
     extra_tables: dict[str, pd.DataFrame] = {}
     if partitions is not None:
         part_key = partitions.get("attributes") or attributes
+        rules = {k: v for k, v in partitions.items() if k != "attributes"}  # min_test, both_signs, max_partitions
         with warnings.catch_warnings(), stage("partitions"):
             warnings.filterwarnings("ignore", message="fabric attribute matrix", category=UserWarning)
             A_part = load_fabric(data_dir, part_key, images=False).attributes.to_numpy(dtype=np.float64)
-            summary, parts = run_partitions(
-                samples, A_part, min_test=partitions.get("min_test", 4), both_signs=partitions.get("both_signs", True),
-                max_partitions=partitions.get("max_partitions"), random_state=seed, max_iter=max_iter, n_jobs=n_jobs,
-            )
+            summary, parts = run_partitions(samples, A_part, **rules, random_state=seed, max_iter=max_iter,
+                                            n_jobs=n_jobs)
         if not parts:
-            warnings.warn(f"fabric partitions: no valid partition of the {part_key} groups with >= "
-                 f"{partitions.get('min_test', 4)} test groups; fabric_partitions.csv is empty", UserWarning, stacklevel=2)
+            warnings.warn(f"fabric partitions: no valid partition of the {part_key} groups under {rules}; "
+                          "fabric_partitions.csv is empty", UserWarning, stacklevel=2)
         out.write_csv(PARTITIONS_FILE, summary.assign(attributes=part_key))
         extra_tables["partitions"] = summary
     config = {
