@@ -331,6 +331,27 @@ def test_gelsight_layout_runs_through_the_study(gelsight_root, data_dir, tmp_pat
     assert len(manifest["gelsight_videos_sha256"]) == 64
 
 
+@pytest.mark.slow
+def test_partitions_add_a_table_and_leave_the_others_unchanged(gelsight_root, data_dir, tmp_path):
+    kwargs = dict(data_dir=data_dir, configs=(1,), gelsight_root=gelsight_root, gelsight_conditions=["Flat"],
+                  conditions=(), seeds=1, lams=(0,), alphas=(0.1,), progress=False)
+    plain = run_fabric_study(ResultsDir(tmp_path / "plain"), **kwargs)
+    parts = {"attributes": "a12", "min_test": 4, "both_signs": False, "max_partitions": 3}
+    both = run_fabric_study(ResultsDir(tmp_path / "both"), partitions=parts, **kwargs)
+    assert (tmp_path / "plain" / "fabric_table1.csv").read_bytes() == (tmp_path / "both" / "fabric_table1.csv").read_bytes()
+    comparisons = [pd.read_csv(tmp_path / d / "fabric_method_comparison.csv").drop(columns="fit_seconds")
+                   for d in ("plain", "both")]  # fit_seconds is a timing
+    pd.testing.assert_frame_equal(*comparisons)
+    assert not (tmp_path / "plain" / "fabric_partitions.csv").exists()
+    table = pd.read_csv(tmp_path / "both" / "fabric_partitions.csv")
+    assert table["n_partitions"].eq(3).all() and table["attributes"].eq("a12").all()
+    assert table["chance"].eq(0.25).all() and set(table["metric"]) == {"class_mean", "trial"}
+    assert both["partitions"].shape[0] == 2 and "partitions" not in plain
+    with pytest.warns(UserWarning, match="no valid partition of the a8 groups"):
+        run_fabric_study(ResultsDir(tmp_path / "a8"), partitions={"min_test": 4}, **kwargs)
+    assert pd.read_csv(tmp_path / "a8" / "fabric_partitions.csv").empty
+
+
 def test_gelsight_groups_must_index_the_attribute_matrix(gelsight_root, data_dir, tmp_path):
     root = tmp_path / "bad"
     shutil.copytree(gelsight_root / "Flat", root / "Flat")

@@ -65,6 +65,8 @@ Outputs (through :class:`~tzsl.experiments._outputs.ResultsDir`)
 ----------------------------------------------------------------
 ``fabric_table1.csv`` (:func:`fabric_table`), ``fabric_runs.csv`` (one row per fit),
 ``fabric_lambda.png`` (accuracy vs lambda, ours and the paper's: Fig. 6),
+``fabric_partitions.csv`` (with ``partitions``: ESZSL over repeated group partitions with >= 4
+test groups, interval, chance and a majority baseline: :mod:`tzsl.experiments.fabric_partitions`),
 ``fabric_method_comparison.csv`` (every method on the same test samples, intervals and paired
 differences to the embedding model at the paper's lambda 0.1:
 :func:`tzsl.experiments.fabric_methods.fabric_comparison`) and ``fabric_manifest.json``.
@@ -119,6 +121,7 @@ from tzsl.experiments.fabric_methods import (
     run_job,
     zero_shot_run,
 )
+from tzsl.experiments.fabric_partitions import run_partitions
 from tzsl.experiments.study_methods import method_label, takes_seed
 from tzsl.features import TextureDescriptor
 from tzsl.models import count_fits
@@ -149,6 +152,7 @@ TABLE_FILE = "fabric_table1.csv"
 RUNS_FILE = "fabric_runs.csv"
 FIGURE_FILE = "fabric_lambda.png"
 MANIFEST_FILE = "fabric_manifest.json"
+PARTITIONS_FILE = "fabric_partitions.csv"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -178,6 +182,7 @@ def run_fabric_study(
     n_jobs: int | None = 1,
     cache_dir=None,
     methods: Sequence[dict] = (),
+    partitions: dict | None = None,
 ) -> dict[str, pd.DataFrame]:
     """Run the fabric study and write its table, runs, figure and manifest.
 
@@ -219,13 +224,17 @@ def run_fabric_study(
         Registry methods run beside ESZSL (``{"name": ..., **parameters}``, the experiment's
         ``methods.compare``); rows of the runs table named by
         :func:`~tzsl.experiments.study_methods.method_label`, one per seed if the method is random.
+    partitions : dict or None
+        Run the repeated group partitions (``attributes`` (None: ``attributes``), ``min_test``,
+        ``both_signs``, ``max_partitions``: :func:`~tzsl.experiments.fabric_partitions.run_partitions`)
+        and write ``fabric_partitions.csv``; None: not run.
 
     Returns
     -------
     dict of str -> DataFrame
         ``"table1"`` (:func:`fabric_table`) and ``"runs"`` (one row per fit: condition,
         config, method, seed, accuracy, per_class_mean_accuracy, chosen hyper-parameters,
-        predicted counts per test group).
+        predicted counts per test group); with ``partitions`` also ``"partitions"``.
     """
     seeds = _check_seeds(seeds)
     configs = [int(c) for c in configs]
@@ -243,7 +252,8 @@ def run_fabric_study(
         raise ConfigError(f"unknown depth condition(s) {unknown}; choose from {list(DEPTH_CONDITIONS)}")
     if not conditions and gelsight_root is None:
         raise ConfigError("nothing to run: no depth condition and no --gelsight-root")
-    out.check_free([TABLE_FILE, RUNS_FILE, FIGURE_FILE, f"{COMPARISON_TABLE}.csv", MANIFEST_FILE])
+    out.check_free([TABLE_FILE, RUNS_FILE, FIGURE_FILE, f"{COMPARISON_TABLE}.csv", MANIFEST_FILE]
+                   + ([PARTITIONS_FILE] if partitions is not None else []))
 
     with warnings.catch_warnings():
         # duplicate attribute vectors are expected (a8: groups 3, 4, 5); recorded in the note
@@ -326,6 +336,20 @@ def run_fabric_study(
                                    {c: p.split for c, p in headline.items()}, seed_list, labels)
     out.write_csv(f"{COMPARISON_TABLE}.csv", comparison)
     out.write_figure(FIGURE_FILE, fabric_lambda_figure(table, lams))
+    extra_tables: dict[str, pd.DataFrame] = {}
+    if partitions is not None:
+        part_key = partitions.get("attributes") or attributes
+        rules = {k: v for k, v in partitions.items() if k != "attributes"}  # min_test, both_signs, max_partitions
+        with warnings.catch_warnings(), stage("partitions"):
+            warnings.filterwarnings("ignore", message="fabric attribute matrix", category=UserWarning)
+            A_part = load_fabric(data_dir, part_key, images=False).attributes.to_numpy(dtype=np.float64)
+            summary, parts = run_partitions(samples, A_part, **rules, random_state=seed, max_iter=max_iter,
+                                            n_jobs=n_jobs)
+        if not parts:
+            warnings.warn(f"fabric partitions: no valid partition of the {part_key} groups under {rules}; "
+                          "fabric_partitions.csv is empty", UserWarning, stacklevel=2)
+        out.write_csv(PARTITIONS_FILE, summary.assign(attributes=part_key))
+        extra_tables["partitions"] = summary
     config = {
         "study": "fabric zero-shot (F18)",
         "attributes": attributes,
@@ -348,9 +372,10 @@ def run_fabric_study(
         "gelsight_root": None if gelsight_root is None else str(gelsight_root),
         "duplicate_groups": [list(d) for d in fabric.duplicate_groups],
         "n_jobs": n_jobs,
+        "partitions": None if partitions is None else dict(partitions),
     }
     data_files = [fabric.root / "fabric_groups.csv", fabric.root / FABRIC_ATTRIBUTE_SETS[attributes][0]]
     data_files += [Path(p) for p in (fabric.images["path"] if conditions else [])]
     data_files += [Path(p) for s in gel for p in s.samples["path"]]
     out.write_manifest(config, [p for p in data_files if p.is_file()], name=MANIFEST_FILE, extra=digests)
-    return {"table1": table, "runs": runs, COMPARISON_TABLE: comparison}
+    return {"table1": table, "runs": runs, COMPARISON_TABLE: comparison, **extra_tables}

@@ -70,6 +70,7 @@ def fabric_arguments(exp: Experiment) -> dict:
         else tuple(c.features.gelsight_conditions),
         "seed": c.splits.seed, "max_iter": c.methods.max_iter, "n_jobs": c.compute.n_jobs,
         "methods": tuple(dict(spec) for spec in c.methods.compare),
+        "partitions": c.partitions.model_dump(exclude={"enabled"}) if c.partitions.enabled else None,
     }
 
 

@@ -94,6 +94,17 @@ class FabricSplits(Section):
     _configs = field_validator("configs")(lambda v: distinct(non_empty(v)))
 
 
+class FabricPartitions(Section):
+    """Repeated group partitions (:mod:`tzsl.experiments.fabric_partitions`): ESZSL over every valid split."""
+
+    enabled: bool = Field(False, description="run the protocol (writes fabric_partitions.csv)")
+    attributes: FabricAttributes | None = Field(None, description="group x attribute matrix of the partitions "
+                                                                  "(unset: [dataset] attributes)")
+    min_test: int = Field(4, ge=2, le=7, description="fewest test groups per partition")
+    both_signs: bool = Field(True, description="every attribute positive and negative in some training group")
+    max_partitions: int | None = Field(None, ge=1, description="random sample of this many (unset: all)")
+
+
 class FabricStudy(Section):
     """``study = "fabric"``: texture descriptors + EmbeddingZSL / ESZSL (fabric paper Table 1)."""
 
@@ -103,6 +114,7 @@ class FabricStudy(Section):
     features: FabricFeatures = Field(default_factory=FabricFeatures)
     methods: FabricMethods = Field(default_factory=FabricMethods)
     splits: FabricSplits = Field(default_factory=FabricSplits)
+    partitions: FabricPartitions = Field(default_factory=FabricPartitions)
     compute: Compute = Field(default_factory=Compute)
     output: Output = Field(default_factory=Output)
 
