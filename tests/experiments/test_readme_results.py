@@ -188,3 +188,16 @@ def test_block_tabulates_every_method_by_study_from_the_comparison(tmp_path):
     assert "| `dap-avg` | 0.31 (0.19-0.44) [0.39] |  |" in block
     assert "| `sae` | 0.35 (0.24-0.46), Δ +0.04 (-0.07, +0.16) | 0.30 (0.20-0.40), Δ -0.10 (-0.20, +0.00) |" in block
     assert "| `ldap` | n/a |  |" in block
+
+
+def test_one_file_holds_several_named_blocks(tmp_path, monkeypatch):
+    from tzsl.experiments import readme_results  # noqa: PLC0415
+
+    monkeypatch.setitem(readme_results.BLOCKS, "a", lambda root: f"A from {root.name}")
+    monkeypatch.setitem(readme_results.BLOCKS, "a-b", lambda root: "AB")
+    page = tmp_path / "page.md"
+    page.write_text(f"x\n{begin('a-b')}\nold\n{end('a-b')}\nmiddle\n{begin('a')}\nold\n{end('a')}\ny\n")
+    assert update_file(page, tmp_path)
+    assert page.read_text() == (f"x\n{begin('a-b')}\nAB\n{end('a-b')}\nmiddle\n{begin('a')}\nA from {tmp_path.name}\n"
+                                f"{end('a')}\ny\n")
+    assert not update_file(page, tmp_path, check=True)

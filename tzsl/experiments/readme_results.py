@@ -292,7 +292,8 @@ def update_file(target: str | Path, results: str | Path, check: bool = False) ->
     for name in names:
         if name not in BLOCKS:
             raise ConfigError(f"{path}: unknown block {name!r} (known: {', '.join(BLOCKS)})")
-        pattern = re.compile(re.escape("<!-- results:begin " + name) + r"[^>]*-->\n.*?" + re.escape(end(name)), re.S)
+        opening = re.escape(f"<!-- results:begin {name}") + r"(?: [^>]*)?-->\n"
+        pattern = re.compile(opening + r".*?" + re.escape(end(name)), re.S)
         if text.count(f"results:begin {name} ") != 1 or len(pattern.findall(new)) != 1:
             raise ConfigError(f"{path}: needs exactly one {begin(name)!r} ... {end(name)!r} block")
         block = f"{begin(name)}\n{BLOCKS[name](Path(results))}\n{end(name)}"
