@@ -9,9 +9,11 @@ ifneq ($(wildcard $(SHARED_DATA)),)
 export TZSL_DATA_DIR ?= $(SHARED_DATA)
 endif
 RESULTS ?= results
+# stage-2 output folder of experiments/benchmarks/phac2_accuracy.py (accuracy.csv, grid_summary.csv)
+BENCH_RESULTS ?= /tmp/tzsl_accuracy
 N_JOBS ?= 2
 
-.PHONY: install browser test reproduce-tables readme-results docs bench bench-fit bench-scale data clean
+.PHONY: install browser test reproduce-tables readme-results numbers numbers-check docs bench bench-fit bench-scale data clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -39,9 +41,22 @@ data: install
 reproduce-tables: install
 	$(BIN)/tzsl reproduce-tables --out $(RESULTS) --n-jobs $(N_JOBS) --force
 
-# The README's Results block, from the CSVs of reproduce-tables (never typed by hand).
+# Every published number is generated between markers from the CSVs of the shipped code, never
+# typed (tzsl.experiments.readme_results): each target file = the results folder its blocks read.
+NUMBERS := README.md=$(RESULTS) experiments/benchmarks/README.md=$(BENCH_RESULTS)
+
+# The README's Results block alone, from the CSVs of reproduce-tables.
 readme-results: install
 	$(BIN)/python -m tzsl.experiments.readme_results $(RESULTS) README.md
+
+numbers: install
+	@for pair in $(NUMBERS); do $(BIN)/python -m tzsl.experiments.readme_results $${pair#*=} $${pair%%=*} || exit 1; done
+
+# Fails when a generated block drifts from its CSVs or a measured number is typed outside the blocks.
+numbers-check: install
+	@status=0; for pair in $(NUMBERS); do \
+	  $(BIN)/python -m tzsl.experiments.readme_results $${pair#*=} $${pair%%=*} --check || status=1; done; \
+	$(BIN)/python -m tzsl.experiments.typed_numbers . || status=1; exit $$status
 
 # The documentation site (Sphinx): docs/_build/html, offline; runs every gallery example.
 docs: install

@@ -1,12 +1,19 @@
-"""The README's Results block is generated from result CSVs (tzsl.experiments.readme_results)."""
+"""Generated number blocks (README, benchmark README) from result CSVs (tzsl.experiments.readme_results)."""
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
+import numpy as np
 import pandas as pd
 import pytest
 
 from tzsl.exceptions import ConfigError
-from tzsl.experiments.readme_results import BEGIN, END, main, results_block, update_readme
+from tzsl.experiments.readme_results import BEGIN, END, begin, end, main, results_block, update_file
+from tzsl.experiments.reproduce import reproduce_tables
+
+REPO = Path(__file__).resolve().parents[2]
 
 
 def _results(root):
@@ -47,7 +54,7 @@ def test_update_rewrites_only_the_block_and_check_reports_drift(tmp_path):
     results = _results(tmp_path / "results")
     readme = tmp_path / "README.md"
     readme.write_text(f"# title\n\n## Results\n{BEGIN}\nold numbers\n{END}\n\n## After\ntext\n")
-    assert update_readme(readme, results, check=True)
+    assert update_file(readme, results, check=True)
     assert "old numbers" in readme.read_text()  # check does not write
     assert main([str(results), str(readme), "--check"]) == 1
     assert main([str(results), str(readme)]) == 0
@@ -55,7 +62,7 @@ def test_update_rewrites_only_the_block_and_check_reports_drift(tmp_path):
     assert "old numbers" not in text and text.startswith("# title\n\n## Results\n") and text.endswith("## After\ntext\n")
     assert "0.310 [0.241, 0.379]" in text
     assert main([str(results), str(readme), "--check"]) == 0  # up to date: no drift
-    assert not update_readme(readme, results)
+    assert not update_file(readme, results)
 
 
 def test_errors(tmp_path):
@@ -66,16 +73,102 @@ def test_errors(tmp_path):
         results_block(tmp_path / "empty")
     readme = tmp_path / "README.md"
     readme.write_text("no markers\n")
+    with pytest.raises(ConfigError, match="needs a"):
+        update_file(readme, _results(tmp_path / "r"))
+    readme.write_text(f"{begin('nope')}\n{end('nope')}\n")
+    with pytest.raises(ConfigError, match="unknown block 'nope'"):
+        update_file(readme, tmp_path / "r")
+    readme.write_text(f"{BEGIN}\nx\n{END}\n{BEGIN}\ny\n{END}\n")
     with pytest.raises(ConfigError, match="needs exactly one"):
-        update_readme(readme, _results(tmp_path / "r"))
+        update_file(readme, tmp_path / "r")
+    readme.write_text(f"{BEGIN}\nno end\n")
+    with pytest.raises(ConfigError, match="needs exactly one"):
+        update_file(readme, tmp_path / "r")
     assert main([str(tmp_path / "r"), str(readme)]) == 3
 
 
 def test_repository_readme_has_the_block():
-    from pathlib import Path
-
-    text = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    text = (REPO / "README.md").read_text()
     assert text.count(BEGIN) == 1 and text.count(END) == 1
+    bench = (REPO / "experiments" / "benchmarks" / "README.md").read_text()
+    assert bench.count(begin("phac2-accuracy-benchmark")) == 1 and bench.count(end("phac2-accuracy-benchmark")) == 1
+
+
+TINY_HAND = """
+study = "hand"
+[dataset]
+builtin = "hand-simulated"
+[simulation]
+n_grasps_per_object = 20
+[methods]
+max_T = 2
+max_k = 2
+sequence_length = 4
+n_sequences = 4
+[splits]
+seeds = [0]
+[compute]
+progress = false
+"""
+
+
+def test_check_on_a_tiny_reproduce_run_passes_then_fails_on_drift(tmp_path):
+    """The README's own block mechanism on CSVs the shipped reproduce-tables writes (a tiny hand study)."""
+    study = tmp_path / "hand.toml"
+    study.write_text(TINY_HAND)
+    reproduce_tables(tmp_path / "results", studies=(str(study),))
+    readme = tmp_path / "README.md"
+    readme.write_text((REPO / "README.md").read_text())
+    assert main([str(tmp_path / "results"), str(readme), "--check"]) == 1  # the repository's block is another run's
+    assert main([str(tmp_path / "results"), str(readme)]) == 0
+    assert main([str(tmp_path / "results"), str(readme), "--check"]) == 0
+    table = pd.read_csv(tmp_path / "results" / "hand_table5.csv")
+    mean = table["seed"].astype(str) == "mean"
+    assert f"{table.loc[mean, 'all'].iloc[0]:.3f} [" in readme.read_text()
+    table.loc[mean, "all"] += 0.01  # the results move: the committed numbers drift
+    table.to_csv(tmp_path / "results" / "hand_table5.csv", index=False)
+    assert main([str(tmp_path / "results"), str(readme), "--check"]) == 1
+
+
+@pytest.fixture
+def accuracy_benchmark(monkeypatch):
+    """The PHAC-2 accuracy benchmark's stage-2 module (experiments/benchmarks/phac2_accuracy.py)."""
+    monkeypatch.syspath_prepend(str(REPO / "experiments" / "benchmarks"))
+    import phac2_accuracy  # noqa: PLC0415
+
+    yield phac2_accuracy
+    sys.modules.pop("phac2_accuracy", None)
+    sys.modules.pop("phac2_posteriors", None)
+
+
+def test_benchmark_block_from_the_benchmarks_own_summary(tmp_path, accuracy_benchmark):
+    """accuracy.csv as the benchmark's summarise writes it (synthetic trials) -> the benchmark README's block."""
+    rng = np.random.default_rng(0)
+    frames = []
+    for kind, n_splits in (("random", 4), ("challenging", 2)):
+        for split in range(n_splits):
+            classes = np.repeat(np.arange(5), 4)
+            for method, p in (("dap-avg[paper]", 0.3), ("sae", 0.5)):
+                frames.append(pd.DataFrame({"kind": kind, "split": f"{kind}{split}", "method": method, "class": classes,
+                                            "correct": (rng.random(classes.size) < p).astype(float), "weight": np.nan}))
+    table = accuracy_benchmark.summarise(pd.concat(frames, ignore_index=True))
+    out = tmp_path / "bench"
+    out.mkdir()
+    table.to_csv(out / "accuracy.csv", index=False, float_format="%.4f")
+    pd.DataFrame({"grid": ["paper"], "n_fits": [10], "mean_cv_log_loss": [0.47], "gamma=0.01": [0.9],
+                  "gamma=0.1": [0.1]}).to_csv(out / "grid_summary.csv", index=False)
+    readme = tmp_path / "README.md"
+    readme.write_text((REPO / "experiments" / "benchmarks" / "README.md").read_text())
+    assert main([str(out), str(readme)]) == 0
+    text = readme.read_text()
+    assert "| method | random (4 splits) | diff | challenging (2 splits) | diff |" in text
+    sae = table[(table.method == "sae") & (table.kind == "random")].iloc[0]
+    assert (f"| `sae` | {sae.accuracy:.3f} [{sae.ci95_low:.3f}, {sae.ci95_high:.3f}] | "
+            f"{sae.diff_vs_avgdap:+.3f} [{sae.diff_ci95_low:+.3f}, {sae.diff_ci95_high:+.3f}] |") in text
+    assert "| `dap-avg[paper]` | " in text and "| paper | 10 | 0.470 | 90% | 10% |" in text
+    assert main([str(out), str(readme), "--check"]) == 0
+    with pytest.raises(ConfigError, match="no accuracy.csv"):
+        update_file(readme, tmp_path / "empty")
 
 
 def test_block_tabulates_every_method_by_study_from_the_comparison(tmp_path):
@@ -95,3 +188,16 @@ def test_block_tabulates_every_method_by_study_from_the_comparison(tmp_path):
     assert "| `dap-avg` | 0.31 (0.19-0.44) [0.39] |  |" in block
     assert "| `sae` | 0.35 (0.24-0.46), Δ +0.04 (-0.07, +0.16) | 0.30 (0.20-0.40), Δ -0.10 (-0.20, +0.00) |" in block
     assert "| `ldap` | n/a |  |" in block
+
+
+def test_one_file_holds_several_named_blocks(tmp_path, monkeypatch):
+    from tzsl.experiments import readme_results  # noqa: PLC0415
+
+    monkeypatch.setitem(readme_results.BLOCKS, "a", lambda root: f"A from {root.name}")
+    monkeypatch.setitem(readme_results.BLOCKS, "a-b", lambda root: "AB")
+    page = tmp_path / "page.md"
+    page.write_text(f"x\n{begin('a-b')}\nold\n{end('a-b')}\nmiddle\n{begin('a')}\nold\n{end('a')}\ny\n")
+    assert update_file(page, tmp_path)
+    assert page.read_text() == (f"x\n{begin('a-b')}\nAB\n{end('a-b')}\nmiddle\n{begin('a')}\nA from {tmp_path.name}\n"
+                                f"{end('a')}\ny\n")
+    assert not update_file(page, tmp_path, check=True)

@@ -25,7 +25,7 @@ trials) uses the same drawn splits and classes for both methods in every replica
 the difference keeps its pairing and the interval reflects only how the methods differ
 on the same trials. :func:`splits_for_paired_interval` sizes a comparison: from pilot
 per-split differences with standard deviation ``sd``, ``n = ceil((1.96 sd / h)^2)``
-splits give an interval of half-width about ``h`` (0.05) on the mean difference.
+splits give an interval of half-width about ``h`` (by default 0.05) on the mean difference.
 
 Everything is seeded (``random_state``) and vectorised with numpy; replicates are drawn
 in chunks so memory stays bounded (about ``CHUNK_CELLS`` cells per chunk).

@@ -71,7 +71,7 @@ test groups, interval, chance and a majority baseline: :mod:`tzsl.experiments.fa
 differences to the embedding model at the paper's lambda 0.1:
 :func:`tzsl.experiments.fabric_methods.fabric_comparison`) and ``fabric_manifest.json``.
 
-Caching: the texture descriptors (about 20-40 s for the 1300 images on 2 cores) are cached with
+Caching: the texture descriptors (the costly step for the 1300 images) are cached with
 :class:`joblib.Memory` under :func:`tzsl.datasets.get_cache_dir`, keyed on the sha256 of the
 image (or video) files and the descriptor parameters; a re-run only refits the models.
 """

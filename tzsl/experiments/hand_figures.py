@@ -128,7 +128,8 @@ def attribute_accuracy_figure(df: pd.DataFrame, data_label: str):
     quoted = mean["paper_accuracy"].notna().to_numpy()
     ax.scatter(x[quoted], mean.loc[quoted, "paper_accuracy"], marker="_", s=300, color="k", zorder=3,
                label="paper (quoted in text)")
-    ax.axhline(paper.DAP_HAND_MEAN_ATTRIBUTE_ACCURACY, color="k", ls=":", lw=0.8, label="paper: mean 0.89")
+    ax.axhline(paper.DAP_HAND_MEAN_ATTRIBUTE_ACCURACY, color="k", ls=":", lw=0.8,
+               label=f"paper: mean {paper.DAP_HAND_MEAN_ATTRIBUTE_ACCURACY:.2f}")
     ax.set_xticks(x, mean["attribute"], rotation=60, ha="right")
     ax.set_ylim(0, 1.02)
     ax.set_ylabel("test accuracy")

@@ -13,7 +13,7 @@ Model (all fitted on training objects only):
   come straight from a log-loss fit (no separate Platt cross-validation), it has no
   hyper-parameter grid, and a fit takes milliseconds, so the 5 extra cross-validation fits the
   confusion estimate needs stay within seconds per split on one core. The RBF
-  :class:`tzsl.models.AttributeSVM` of the DAP study takes ~9 s per EP and split even with a
+  :class:`tzsl.models.AttributeSVM` of the DAP study takes seconds per EP and split even with a
   1 x 1 grid, which times 6 fits x 4 EPs x 10 splits is too slow for this evaluation.
 * **Sequential posterior (tempered naive Bayes across EPs).** ``log p(z | D) = tau_D sum_{e in D}
   s_e(z) + c`` with ``s_e`` the DAP log-scores (:func:`tzsl.models.dap_log_scores`) of EP ``e``'s
@@ -45,8 +45,8 @@ EP durations (:data:`PHAC2_EP_SECONDS`, seconds): hold 10 (the controller state
 slow slide 5 and fast slide 2 (Penn controller constants ``SlowSlideTime = 5``,
 ``FastSlideTime = 2`` for the 5 cm slides, consistent with ``pdc_area / pdc_max`` lower bounds of
 ~400 and ~146 samples), squeeze 6 (not fixed by the controller: it closes 2.5 mm/s until the
-pressure set-point and reopens at the same speed; the median over the 600 trials of
-``4 (gripper_mean - gripper_min) / 2.5 mm/s`` is 6.2 s).
+pressure set-point and reopens at the same speed; 6 is the median over the 600 trials of
+``4 (gripper_mean - gripper_min) / 2.5 mm/s``, rounded).
 """
 
 from __future__ import annotations

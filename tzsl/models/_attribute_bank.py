@@ -89,8 +89,8 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         (the exact model's time grows as trials^2). The choice and its reason are in
         ``solver_choice_`` and printed when ``progress`` is on.
     max_exact_trials : int, default=3000
-        Largest training set fitted exactly by ``solver="auto"`` (about 15 minutes per split of
-        30 attributes x 2 sensors on 2 cores at 4,000 trials, issue 15).
+        Largest training set fitted exactly by ``solver="auto"`` (the exact model's cost against
+        trials is measured by ``make bench-scale``).
 
     Attributes
     ----------

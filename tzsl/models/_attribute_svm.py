@@ -74,8 +74,8 @@ def _svc_fit_decision(K_train: np.ndarray, y: np.ndarray, C: float, class_weight
 
     The same libsvm calls, with the same arguments, as ``SVC(kernel="precomputed", C=C,
     class_weight=...).fit(K_train, y).decision_function(K_eval)``, so the numbers are identical
-    (``test_libsvm_path_equals_svc``), without ``SVC``'s per-call input validation, which took
-    about 70% of the time on the small (a few hundred trials) problems of the grid search.
+    (``test_libsvm_path_equals_svc``), without ``SVC``'s per-call input validation, which dominated
+    the time on the small (a few hundred trials) problems of the grid search.
 
     Parameters
     ----------
@@ -124,13 +124,11 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
     grid : {"paper", "extended"}, default="extended"
         ``"paper"``: ``gamma`` from ``gamma_range`` and ``n_gamma`` as the DAP paper tuned it.
         ``"extended"``: that grid plus two decades below its low end (0.001, 0.0001 for the
-        paper's range; :func:`tzsl.models.gamma_grid`), because on PHAC-2 167 of 188
-        (attribute, sensor) fits chose the paper grid's low edge 0.01. The paper-reproduction
-        studies pin ``"paper"``. PHAC-2, 20 random + 5 challenging splits, cv=5
-        (``experiments/benchmarks/phac2_accuracy.py``): the extended grid lowers the chosen fits' grouped-CV
-        log-loss (0.472 -> 0.449) but not AVGDAP's test accuracy (random 0.307 -> 0.308, paired
-        +0.001 [-0.031, 0.030]; challenging 0.194 -> 0.213, +0.019 [-0.044, 0.085]); 31% of
-        fits then choose its own low edge 1e-4 (near-linear).
+        paper's range; :func:`tzsl.models.gamma_grid`), because on PHAC-2 most (attribute, sensor)
+        fits chose the paper grid's low edge. The paper-reproduction studies pin ``"paper"``. The
+        two grids' accuracy, grouped-CV log-loss and share of fits at each gamma are measured by
+        ``experiments/benchmarks/phac2_accuracy.py`` (its generated tables in
+        ``experiments/benchmarks/README.md``).
     cv : None, int or splitter, default=None
         Object-grouped cross-validation on the training trials. ``None``: leave-one-object-out
         (``LeaveOneGroupOut``); int: ``StratifiedGroupKFold(min(cv, n), shuffle=True)`` with ``n``

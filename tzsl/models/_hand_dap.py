@@ -124,7 +124,7 @@ def fuse_grasp_posteriors(
 
 
 def _fit_one(estimator, X: np.ndarray, y: np.ndarray):
-    # the problems are tiny (~100 x 8): multi-threaded BLAS only adds overhead (10x on a busy host)
+    # the problems are tiny (~100 x 8): multi-threaded BLAS only adds overhead
     with threadpool_limits(limits=1):
         return clone(estimator).fit(X, y)
 

@@ -59,7 +59,7 @@ class LogisticAttribute(ClassifierMixin, BaseEstimator):
         X, y = validate_data(self, X, y, dtype=np.float64)
         check_classification_targets(y)
         lr = LogisticRegression(C=self.C, class_weight=self.class_weight, max_iter=self.max_iter,
-                                solver="newton-cholesky")  # exact L2 fit, ~5x faster than lbfgs on ~50 columns
+                                solver="newton-cholesky")  # exact L2 fit, faster than lbfgs on ~50 columns
         self.pipeline_ = make_pipeline(StandardScaler(), lr).fit(X, y)
         self.classes_ = self.pipeline_.classes_
         self.n_iter_ = self.pipeline_[-1].n_iter_

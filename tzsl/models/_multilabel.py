@@ -1,7 +1,8 @@
 """Multi-label attribute classifier: attributes modelled jointly by a classifier chain (F8).
 
-The DAP paper (§4.4) compares its independent per-attribute SVMs (0.39 zero-shot accuracy) with
-a multi-label SVM from scikit-multilearn that drops the independence assumption (0.31). scikit-
+The DAP paper (§4.4) compares its independent per-attribute SVMs with a multi-label SVM from
+scikit-multilearn that drops the independence assumption (the paper's two accuracies are
+``DAP_INDEPENDENT_ACCURACY`` and ``DAP_MULTILABEL_ACCURACY`` of :mod:`tzsl.experiments.paper_numbers`). scikit-
 multilearn is unmaintained, so the joint model here is a **classifier chain** (Read et al., 2011;
 the same idea as :class:`sklearn.multioutput.ClassifierChain`) per sensor:
 
