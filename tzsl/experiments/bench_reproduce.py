@@ -41,10 +41,9 @@ from tzsl.experiments.reproduce import REPRODUCE_STUDIES
 
 __all__ = ["BENCH_COLUMNS", "GOAL_S", "REFERENCE_S", "bench_table", "main", "run_reproduce"]
 
-#: Issue 22 ("Speed of the whole"), measured on a fresh clone of main on 2 cores (shared machine):
-#: ``make reproduce-tables`` took 184 s cold (new ``TZSL_CACHE_DIR``, load about 1.5) and 90 s warm;
-#: the studies one by one (cold, load about 3) took phac2-dap 91 s, fabric 114 s,
-#: hand-simulated 30 s, active-touch 86 s. Seconds, keyed (study, run); ``"total"`` is the whole command.
+#: The wall seconds issue 22 ("Speed of the whole") reports for ``make reproduce-tables`` on a fresh
+#: clone of main on 2 cores (shared machine; cold: a new ``TZSL_CACHE_DIR``), as the issue states them:
+#: the whole command cold and warm, and each study cold. Keyed (study, run); ``"total"`` is the command.
 REFERENCE_S: dict[tuple[str, str], float] = {
     ("total", "cold"): 184.0,
     ("total", "warm"): 90.0,
@@ -53,7 +52,7 @@ REFERENCE_S: dict[tuple[str, str], float] = {
     ("hand-simulated", "cold"): 30.0,
     ("active-touch", "cold"): 86.0,
 }
-#: Issue 22's goal for the whole command on 2 cores: cold under 60 s, warm (everything cached) under 10 s.
+#: Issue 22's goal for the whole command on 2 cores, cold and warm (everything cached), in seconds.
 GOAL_S: dict[str, float] = {"cold": 60.0, "warm": 10.0}
 #: Columns of the bench CSV, one row per (run, study, stage); stage ``"total"`` is the study's (or,
 #: for study ``"total"``, the command's) wall time.

@@ -98,15 +98,13 @@ SECTIONS: tuple[Section, ...] = (
             tables=("method_comparison", "phac2_method_comparison", "phac2_methods", "fabric_method_comparison",
                     "hand_method_comparison")),
     Section("calibration", "Calibration: do the class posteriors mean what they say?",
-            "Each method's class posterior on the test objects, checked against what happened: ECE (expected "
-            "calibration error: trials sorted by top-class probability into equal-size bins, the trial-weighted "
-            "mean gap between mean probability and share right; 0 = calibrated) and the multi-class Brier score, "
-            "each with a 95% interval resampling splits and test objects, in the method comparison (columns ece, "
-            "brier: calibrated posteriors; *_uncalibrated: the method's own; ece_if_calibrated: the ECE a perfectly "
-            "calibrated posterior would show on as many trials, the floor to compare with). The calibrator is one temperature "
-            "per method and split fitted on pseudo-unseen classes of the training objects only (class-grouped "
-            "folds), so it keeps every ranking and accuracy. Reliability diagram: accuracy against mean "
-            "top-class probability per bin; points below the diagonal are over-confident.",
+            "Each method's class posterior on the test objects against what happened: ECE (trials sorted by top-class "
+            "probability into equal-size bins; the trial-weighted mean gap between mean probability and share right) "
+            "and the multi-class Brier score, with 95% intervals resampling splits and test objects (method comparison "
+            "columns ece, brier; *_uncalibrated: the method's own posterior; ece_if_calibrated: the ECE a perfectly "
+            "calibrated posterior shows on as many trials). The calibrator is one temperature per method and split, "
+            "fitted on pseudo-unseen classes of the training objects, so rankings and accuracy are unchanged. Reliability "
+            "diagram: accuracy against mean top-class probability per bin; below the diagonal is over-confident.",
             tables=("reliability", "phac2_reliability", "fabric_reliability", "hand_reliability"),
             figures=("reliability", "phac2_reliability", "fabric_reliability", "hand_reliability")),
     Section("gzsl", "Generalised zero-shot recognition",
@@ -136,10 +134,9 @@ SECTIONS: tuple[Section, ...] = (
             "In the a8 attribute matrix groups 3, 4 and 5 share one row, so the paper's split "
             "(protocol 'paper') is not zero-shot for test group 5; it is kept as a reproduction row. "
             "The headline is the 'zero-shot-drop' variant (group 5 dropped from the test set, training "
-            "unchanged) and its per-class mean accuracy (the _pcma columns). fabric_partitions: ESZSL on "
-            "every valid partition of the groups into >= 4 test groups and the rest (a12 attributes; a8 has "
-            "none), mean over partitions with a bootstrap interval resampling partitions and test groups, "
-            "beside chance (1 / test groups) and the majority baseline; compare class_mean rows with chance.",
+            "unchanged) and its per-class mean accuracy (the _pcma columns). fabric_partitions: ESZSL on every valid "
+            "partition of the groups into >= 4 test groups and the rest (a12 attributes; a8 has none), mean over "
+            "partitions (interval resampling partitions and test groups) beside chance and the majority baseline.",
             tables=("fabric_table1", "fabric_partitions", "fabric_runs"), figures=("fabric_lambda",)),
     Section("fabric-deep", "Fabric paper: deep attribute embedding",
             "The end-to-end network on GelSight frames.",
