@@ -103,7 +103,7 @@ SECTIONS: tuple[Section, ...] = (
             "and the multi-class Brier score, with 95% intervals resampling splits and test objects (method comparison "
             "columns ece, brier; *_uncalibrated: the method's own posterior; ece_if_calibrated: the ECE a perfectly "
             "calibrated posterior shows on as many trials). The calibrator is one temperature per method and split, "
-            "fitted on pseudo-unseen classes of the training objects, so rankings and accuracy are unchanged. Reliability "
+            "fitted on pseudo-unseen classes of the training objects: rankings and accuracy are unchanged. Reliability "
             "diagram: accuracy against mean top-class probability per bin; below the diagonal is over-confident.",
             tables=("reliability", "phac2_reliability", "fabric_reliability", "hand_reliability"),
             figures=("reliability", "phac2_reliability", "fabric_reliability", "hand_reliability")),
