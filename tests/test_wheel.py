@@ -12,23 +12,9 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "tests" / "experiments"))
+from test_reproduce import TINY_HAND  # noqa: E402
 
-TINY_HAND = """
-study = "hand"
-[dataset]
-builtin = "hand-simulated"
-[simulation]
-n_grasps_per_object = 20
-[methods]
-max_T = 2
-max_k = 2
-sequence_length = 4
-n_sequences = 4
-[splits]
-seeds = [0]
-[compute]
-progress = false
-"""
 
 
 @pytest.mark.slow

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+import sys
+from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -10,23 +12,11 @@ import pytest
 from tzsl.experiments.bench_reproduce import BENCH_COLUMNS, GOAL_S, REFERENCE_S, bench_table, main, summary_lines
 from tzsl.experiments.reproduce import REPRODUCE_STUDIES
 
-TINY_HAND = """
-study = "hand"
-[dataset]
-builtin = "hand-simulated"
-[simulation]
-n_grasps_per_object = 20
-[methods]
-max_T = 2
-max_k = 2
-sequence_length = 4
-n_sequences = 4
-compare = []
-[splits]
-seeds = [0]
-[compute]
-progress = false
-"""
+sys.path.insert(0, str(Path(__file__).parent))
+from test_reproduce import TINY_HAND  # noqa: E402
+
+#: The shared tiny hand study, without the registry methods.
+TINY_HAND_NO_COMPARE = TINY_HAND.replace("[splits]", "compare = []\n[splits]")
 
 
 def _manifest(studies, seconds):
@@ -59,7 +49,7 @@ def test_reference_and_goal_only_for_what_the_issue_measured():
 
 def test_bench_runs_cold_and_warm_and_writes_the_csv(tmp_path, capsys):
     hand = tmp_path / "hand.toml"
-    hand.write_text(TINY_HAND)
+    hand.write_text(TINY_HAND_NO_COMPARE)
     out = tmp_path / "bench.csv"
     main(["--study", str(hand), "--n-jobs", "1", "--out", str(out), "--keep", str(tmp_path / "work")])
     table = pd.read_csv(out)

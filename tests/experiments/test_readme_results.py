@@ -13,6 +13,9 @@ from tzsl.exceptions import ConfigError
 from tzsl.experiments.readme_results import BEGIN, END, begin, end, main, results_block, update_file
 from tzsl.experiments.reproduce import reproduce_tables
 
+sys.path.insert(0, str(Path(__file__).parent))
+from test_reproduce import TINY_HAND  # noqa: E402
+
 REPO = Path(__file__).resolve().parents[2]
 
 
@@ -94,22 +97,6 @@ def test_repository_readme_has_the_block():
     assert bench.count(begin("phac2-accuracy-benchmark")) == 1 and bench.count(end("phac2-accuracy-benchmark")) == 1
 
 
-TINY_HAND = """
-study = "hand"
-[dataset]
-builtin = "hand-simulated"
-[simulation]
-n_grasps_per_object = 20
-[methods]
-max_T = 2
-max_k = 2
-sequence_length = 4
-n_sequences = 4
-[splits]
-seeds = [0]
-[compute]
-progress = false
-"""
 
 
 def test_check_on_a_tiny_reproduce_run_passes_then_fails_on_drift(tmp_path):
