@@ -14,8 +14,8 @@ import pytest
 from tzsl.datasets import FeatureSet, feature_set_to_plain
 from tzsl.exceptions import ConfigError
 from tzsl.experiments.config import STUDIES, builtin_names, load_experiment, to_toml, validate
-from tzsl.experiments.engine import active_config, check_experiment, dap_config, fabric_arguments, gzsl_config, \
-    hand_config, run_experiment
+from tzsl.experiments.engine import check_experiment, run_experiment
+from tzsl.experiments.study_settings import active_config, dap_config, fabric_arguments, gzsl_config, hand_config
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -9,7 +9,7 @@ import pytest
 
 from tzsl.exceptions import ConfigError
 from tzsl.experiments.config import load_experiment
-from tzsl.experiments.engine import dap_config
+from tzsl.experiments.study_settings import dap_config
 from tzsl.experiments.phac2_dap import attribute_bank
 from tzsl.models import AttributeClassifierBank
 

@@ -98,7 +98,7 @@ def _experiment(values: dict):
 def splits(kind, n_splits, n_test, out, dataset, features_file, plain_dir, path, seed, data_dir, force):
     """Write object splits as CSV (split, object, role), usable with 'tzsl evaluate --splits'."""
     from tzsl.evaluation import write_splits_csv  # noqa: PLC0415
-    from tzsl.experiments.engine import dap_config  # noqa: PLC0415
+    from tzsl.experiments.study_settings import dap_config  # noqa: PLC0415
     from tzsl.experiments.phac2_dap import make_splits  # noqa: PLC0415
     from tzsl.experiments.study_runners import phac2_features  # noqa: PLC0415
 
@@ -142,7 +142,8 @@ def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep
     Without --splits every object trains the model (a model for recognising new objects);
     with --splits only that split's training objects do.
     """
-    from tzsl.experiments.engine import check_experiment, dap_config  # noqa: PLC0415
+    from tzsl.experiments.engine import check_experiment  # noqa: PLC0415
+    from tzsl.experiments.study_settings import dap_config  # noqa: PLC0415
     from tzsl.experiments.study_runners import phac2_features  # noqa: PLC0415
 
     if out.exists() and not force:
@@ -177,7 +178,7 @@ def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep
 
 
 def _train_per_ep(features, out, splits_file, split_name, exp, force) -> None:
-    from tzsl.experiments.engine import dap_config  # noqa: PLC0415
+    from tzsl.experiments.study_settings import dap_config  # noqa: PLC0415
     from tzsl.experiments.model_bundles import training_subset  # noqa: PLC0415
     from tzsl.experiments.predict_active import train_per_ep_bundle  # noqa: PLC0415
 

@@ -26,16 +26,7 @@ from tzsl._warnings import recorded_warnings
 from tzsl.exceptions import ConfigError, PartialRunError, problems_error
 from tzsl.experiments._outputs import ResultsDir
 from tzsl.experiments.config import Experiment, load_experiment, to_toml
-from tzsl.experiments.study_settings import (  # noqa: F401 - re-exported: the engine's vocabulary
-    StudyRun,
-    active_config,
-    dap_config,
-    deep_arguments,
-    fabric_arguments,
-    gzsl_config,
-    hand_config,
-    record_config,
-)
+from tzsl.experiments.study_settings import StudyRun
 from tzsl.experiments.study_labels import ZERO_SHOT_STUDIES
 
 #: The option names every front-end shares -> the key of the experiment they override.
