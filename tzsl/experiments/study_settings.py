@@ -58,17 +58,26 @@ def gzsl_config(exp: Experiment):
                       prior=g.prior, calibrated_stacking=g.calibrated_stacking, max_draws=g.max_draws)
 
 
-def fabric_arguments(exp: Experiment) -> dict:
-    """Keyword arguments of :func:`tzsl.experiments.fabric.run_fabric_study` (all but ``out``)."""
+def _fabric_data_arguments(exp: Experiment) -> dict:
+    """The arguments both fabric studies (embedding and deep) take: data, groups, splits, lambdas."""
     c = exp.config
     return {
         "data_dir": exp.resolve(c.dataset.data_dir), "seeds": c.splits.n_seeds, "configs": tuple(c.splits.configs),
         "gelsight_root": exp.resolve(c.dataset.gelsight_root), "attributes": c.dataset.attributes,
         "progress": c.compute.progress, "lams": tuple(c.methods.embedding_lambdas),
-        "alphas": tuple(float(a) for a in c.methods.alphas), "conditions": tuple(c.features.conditions),
         "gelsight_conditions": None if c.features.gelsight_conditions is None
         else tuple(c.features.gelsight_conditions),
-        "seed": c.splits.seed, "max_iter": c.methods.max_iter, "n_jobs": c.compute.n_jobs,
+        "seed": c.splits.seed,
+    }
+
+
+def fabric_arguments(exp: Experiment) -> dict:
+    """Keyword arguments of :func:`tzsl.experiments.fabric.run_fabric_study` (all but ``out``)."""
+    c = exp.config
+    return {
+        **_fabric_data_arguments(exp),
+        "alphas": tuple(float(a) for a in c.methods.alphas), "conditions": tuple(c.features.conditions),
+        "max_iter": c.methods.max_iter, "n_jobs": c.compute.n_jobs,
         "methods": tuple(dict(spec) for spec in c.methods.compare),
         "partitions": c.partitions.model_dump(exclude={"enabled"}) if c.partitions.enabled else None,
     }
@@ -78,12 +87,7 @@ def deep_arguments(exp: Experiment) -> dict:
     """Keyword arguments of :func:`tzsl.experiments.deep.run_deep_fabric_study` (all but ``out``)."""
     c = exp.config
     return {
-        "data_dir": exp.resolve(c.dataset.data_dir), "seeds": c.splits.n_seeds, "configs": tuple(c.splits.configs),
-        "gelsight_root": exp.resolve(c.dataset.gelsight_root), "attributes": c.dataset.attributes,
-        "progress": c.compute.progress, "lams": tuple(c.methods.embedding_lambdas),
-        "gelsight_conditions": None if c.features.gelsight_conditions is None
-        else tuple(c.features.gelsight_conditions),
-        "seed": c.splits.seed, "model_params": dict(c.methods.model) or None,
+        **_fabric_data_arguments(exp), "model_params": dict(c.methods.model) or None,
         "save_model": exp.resolve(c.output.model),
     }
 
