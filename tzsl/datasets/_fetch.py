@@ -21,6 +21,7 @@ from pathlib import Path
 import pooch
 
 from tzsl._io import atomic_write_bytes
+from tzsl.datasets._fabric import FABRIC_GROUPS_SOURCE, fabric_groups_csv_bytes
 from tzsl.datasets._home import get_data_home
 from tzsl.datasets._registry import download_file, registry, source_of, verify_file
 from tzsl.exceptions import ChecksumError, ConfigError, DataMissingError
@@ -69,8 +70,6 @@ def _build_penn_labels(home: Path, pup: pooch.Pooch) -> bytes:
 
 def _build_fabric_groups(home: Path, pup: pooch.Pooch) -> bytes:
     """The registered fabric x group CSV, rebuilt from the downloaded ``Data2.py`` of the paper's code."""
-    from tzsl.datasets._fabric import FABRIC_GROUPS_SOURCE, fabric_groups_csv_bytes  # noqa: PLC0415
-
     source = home / FABRIC_GROUPS_SOURCE
     return fabric_groups_csv_bytes(source.read_text(encoding="utf-8"), origin=str(source))
 
@@ -85,7 +84,7 @@ BUILDERS: dict[str, Callable[[Path, pooch.Pooch], bytes]] = {
 #: home -> (sha256 of the file at that commit, URL). Downloaded (and hash-checked) only to build.
 BUILD_SOURCES: dict[str, dict[str, tuple[str, str]]] = {
     "fabric/fabric_groups.csv": {
-        "fabric/sources/Data2.py": (
+        FABRIC_GROUPS_SOURCE: (
             "sha256:e3c5567299d0ec313047bb76802bb8967a5df2acdc0f74e76c77768c962c3501",
             "https://raw.githubusercontent.com/GitGroot/gelsight_zeroshot_category/"
             "a20cbfa4057a33888f6c1be106407e8a607a89ad/Data2.py"),
