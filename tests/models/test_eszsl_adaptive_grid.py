@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from tzsl.models import ESZSLCV
-from tzsl.models._eszsl import extend_at_edge
+from tzsl.models._zsl_input import extend_at_edge
 
 
 def problem(seed=0, n_classes=12, n_attributes=8, n_features=20, per_class=15, noise=0.3):
@@ -69,3 +69,19 @@ def test_zero_extensions_keeps_the_edge_and_reports_it():
     model = ESZSLCV(gammas=(1e4, 1e5), lams=(1.0, 2.0), grid_extensions=0).fit(X, Y, groups)
     np.testing.assert_array_equal(model.gammas_, (1e4, 1e5))
     assert model.at_grid_edge_
+
+
+def test_sae_selected_edge_extends_and_interior_does_not():
+    from tzsl.models import SAECV
+
+    X, Y, groups = problem()
+    fixed = SAECV(lams=(1e6, 1e7), grid_extensions=0).fit(X, Y, groups)
+    assert fixed.at_grid_edge_ and fixed.best_lam_ == 1e6
+    adaptive = SAECV(lams=(1e6, 1e7), grid_extensions=4).fit(X, Y, groups)
+    assert adaptive.lams_.size > 2 and adaptive.best_lam_ < 1e6
+    assert adaptive.best_score_ >= fixed.best_score_
+    assert adaptive.cv_scores_.shape[0] == adaptive.lams_.size
+    if not adaptive.at_grid_edge_:  # interior: rerunning on the final grid changes nothing
+        again = SAECV(lams=adaptive.lams_, grid_extensions=4).fit(X, Y, groups)
+        np.testing.assert_array_equal(again.lams_, adaptive.lams_)
+        assert again.best_lam_ == adaptive.best_lam_

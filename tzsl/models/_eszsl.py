@@ -42,7 +42,9 @@ from tzsl.models._validation import ParameterError, ValidatedParamsMixin
 from tzsl.models._zsl_input import (
     ZSLInputError,
     attribute_rows,
+    DEFAULT_GRID_EXTENSIONS,
     class_grouped_folds,
+    extend_at_edge,
     training_classes,
     validate_features,
     validate_features_and_rows,
@@ -55,39 +57,10 @@ from tzsl.models._zsl_input import check_positive as _check_positive  # noqa: E4
 from tzsl.models._zsl_input import encode_training_classes as _encode_training_classes  # noqa: E402, F401
 from tzsl.models._zsl_input import validate_class_table as _validate_attributes  # noqa: E402, F401
 
-__all__ = [
-    "DEFAULT_GRID_EXTENSIONS", "AttributeEmbeddingModel", "ESZSL", "ESZSLCV", "ZSLInputError", "attribute_rows",
-    "extend_at_edge", "training_classes",
-]
+__all__ = ["AttributeEmbeddingModel", "ESZSL", "ESZSLCV", "ZSLInputError", "attribute_rows", "training_classes"]
 
 #: Default regulariser grid of :class:`ESZSLCV` (the paper's 10^-3 .. 10^3).
 DEFAULT_GRID: tuple[float, ...] = (1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0, 1000.0)
-
-#: Default bound on the log-scale steps :class:`ESZSLCV` adds beyond a grid edge that was selected.
-DEFAULT_GRID_EXTENSIONS = 3
-
-
-def extend_at_edge(grid: np.ndarray, index: int) -> np.ndarray | None:
-    """``grid`` (sorted, > 0) extended one log-scale step beyond the edge at ``index``; None if interior.
-
-    The step is the ratio of the two values at that edge (a 1-point grid is never extended).
-
-    Parameters
-    ----------
-    grid : ndarray of shape (k,)
-        Increasing positive values.
-    index : int
-        Position of the selected value.
-
-    Returns
-    -------
-    ndarray of shape (k + 1,) or None
-    """
-    if grid.size < 2 or 0 < index < grid.size - 1:
-        return None
-    if index == 0:
-        return np.concatenate([[grid[0] * grid[0] / grid[1]], grid])
-    return np.concatenate([grid, [grid[-1] * grid[-1] / grid[-2]]])
 
 # --------------------------------------------------------------------------------------------
 # closed form
@@ -265,7 +238,7 @@ class ESZSLCV(_ESZSLBase):
         Per-sample accuracy or mean per-class accuracy on the held-out classes.
     standardize : bool, default=True
         As in :class:`ESZSL`; the scaler is refitted on each fold's training part.
-    grid_extensions : int >= 0, default=DEFAULT_GRID_EXTENSIONS
+    grid_extensions : int >= 0, default=3 (``DEFAULT_GRID_EXTENSIONS``)
         Adaptive grid: while the selected ``gamma`` or ``lam`` is the smallest or largest of its
         grid, that grid gains one log-scale step beyond the edge (the ratio of its two outer
         values) and the whole grid is rescored on the same folds, at most this many times.
