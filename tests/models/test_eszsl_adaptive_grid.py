@@ -85,3 +85,24 @@ def test_sae_selected_edge_extends_and_interior_does_not():
         again = SAECV(lams=adaptive.lams_, grid_extensions=4).fit(X, Y, groups)
         np.testing.assert_array_equal(again.lams_, adaptive.lams_)
         assert again.best_lam_ == adaptive.best_lam_
+
+
+def test_grid_edge_share_reads_models_and_fills_the_comparison_column():
+    import pandas as pd
+
+    from tzsl.experiments.study_methods import COMPARISON_COLUMNS, grid_edge_share, method_summary
+
+    X, Y, groups = problem()
+    at_edge = ESZSLCV(gammas=(1e4, 1e5), lams=(1.0,), grid_extensions=0).fit(X, Y, groups)
+    assert grid_edge_share(at_edge) == 1.0
+    assert np.isnan(grid_edge_share(object()))
+    assert "share_at_grid_edge" in COMPARISON_COLUMNS
+    rng = np.random.default_rng(0)
+    trials = pd.concat([
+        pd.DataFrame({"method": m, "split": np.repeat(["s0", "s1"], 10), "class": np.tile(np.arange(5), 4), "trial": np.tile(np.arange(10), 2),
+                      "correct": rng.integers(0, 2, 20).astype(float)}) for m in ("ref", "eszsl")
+    ], ignore_index=True)
+    table = method_summary(trials, {"ref": [1.0], "eszsl": [1.0]}, 0.2, "ref", study="t",
+                           grid_edge={"eszsl": [1.0, 0.0, 0.0, 1.0]})
+    share = table.set_index("method")["share_at_grid_edge"]
+    assert share["eszsl"] == 0.5 and np.isnan(share["ref"])

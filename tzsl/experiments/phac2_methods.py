@@ -27,6 +27,7 @@ from tzsl.experiments.study_methods import (
     comparison_file,
     comparison_trials,
     fit_predict,
+    grid_edge_share,
     method_label,
     method_summary,
     split_masks,
@@ -103,10 +104,11 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
         ``error`` column), then mean and std rows;
         ``labels.comparison_table``: :func:`~tzsl.experiments.study_methods.method_summary`
         with ``dap-avg`` as the reference; ``dap-max`` and ``multilabel-dap`` (when fitted) come
-        from the same posteriors, their fit time is the DAP fit's.
+        from the same posteriors, their fit time and grid-edge share are the DAP fit's.
     """
     rows, trials = [], []
     seconds: dict[str, list[float]] = {REFERENCE_METHOD: []}
+    edges: dict[str, list[float]] = {}
     for i, r in enumerate(results):
         label = split_label(r.split)
         objects = np.asarray(r.split.test_objects)[r.y]
@@ -118,6 +120,7 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
             proba = softmax(r.scores(*variant), axis=1)  # the DAP class posterior over the test classes
             trials.append(comparison_trials(name, label, objects, r.predict(*variant) == r.y, proba, r.y))
             seconds.setdefault(name, []).append(r.fit_seconds)
+            edges.setdefault(name, []).append(grid_edge_share(r.model))
         errors = []
         for spec in methods:
             name = method_label(spec)
@@ -131,6 +134,7 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
             row[name] = float(correct.mean())
             trials.append(comparison_trials(name, label, objects, correct, fit.proba, y))
             seconds.setdefault(name, []).append(fit.fit_seconds)
+            edges.setdefault(name, []).append(grid_edge_share(fit.model))
         rows.append({**row, ERROR_COLUMN: "; ".join(errors)})
     per_split = summarise_over_splits(pd.DataFrame(rows)).reset_index()
     chance = float(np.mean([r.split.chance for r in results]))
@@ -139,7 +143,7 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
     trials = pd.concat(trials, ignore_index=True)
     summary = method_summary(trials, seconds, chance, REFERENCE_METHOD,
                              study=labels.study, data=labels.data, paper=PAPER if labels.paper else None,
-                             notes=notes)
+                             notes=notes, grid_edge=edges)
     if not labels.paper:  # paper_* headers only beside the paper's dataset and protocol
         summary = summary.drop(columns="paper_accuracy")
     return {labels.methods_table: per_split, labels.comparison_table: summary,
