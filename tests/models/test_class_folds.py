@@ -58,7 +58,7 @@ def test_all_three_tuners_fit_the_issue_case():
     assert eszsl.cv_scores_.shape[-1] == 5
     assert all(len(v) >= 2 for v in eszsl.cv_val_classes_)
     sae = SAECV(lams=(0.1, 10.0)).fit(X, A)
-    assert sae.cv_scores_.shape == (2, 5)
+    assert sae.cv_scores_.shape == (sae.lams_.size, 5)
     alpha, scores = select_embedding_alpha(X, y, S, lam=0.1, alphas=(1.0, 0.01), random_state=0, max_iter=50)
     assert scores.shape == (2, 5) and alpha in (1.0, 0.01)
 

@@ -138,7 +138,7 @@ def test_cv_grid_scores_equal_brute_force_refits():
     X, y, A = zsl_problem(n_classes=8, per_class=10, seed=5)
     gammas, lams = (0.01, 1.0, 100.0), (0.1, 10.0)
     cv = GroupKFold(n_splits=3)
-    model = ESZSLCV(gammas=gammas, lams=lams, cv=cv, scoring="balanced_accuracy").fit(X, A[y], y)
+    model = ESZSLCV(gammas=gammas, lams=lams, cv=cv, scoring="balanced_accuracy", grid_extensions=0).fit(X, A[y], y)
     assert model.cv_scores_.shape == (3, 2, 3)
     for f, (tr, va) in enumerate(cv.split(X, y, groups=y)):
         val_classes = np.unique(y[va])

@@ -28,6 +28,7 @@ from tzsl.experiments.study_methods import (
     comparison_file,
     comparison_trials,
     fit_predict,
+    grid_edge_share,
     method_label,
     method_summary,
     split_masks,
@@ -98,10 +99,12 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
         ``labels.comparison_table``: :func:`~tzsl.experiments.study_methods.method_summary`
         with ``dap-avg`` as the reference (with ECE and Brier score, calibrated and not);
         ``labels.reliability_table``: the reliability diagram's points of every method; ``dap-max``
-        and ``multilabel-dap`` (when fitted) come from the same posteriors, their fit time is the DAP fit's.
+        and ``multilabel-dap`` (when fitted) come from the same posteriors, their fit time and grid-edge
+        share are the DAP fit's.
     """
     rows, trials = [], []
     seconds: dict[str, list[float]] = {REFERENCE_METHOD: []}
+    edges: dict[str, list[float]] = {}
     for i, r in enumerate(results):
         label = split_label(r.split)
         objects = np.asarray(r.split.test_objects)[r.y]
@@ -119,6 +122,7 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
             trials.append(comparison_trials(name, label, objects, predicted == r.y,
                                             **posterior_columns(P[0], P[1], r.y, predicted)))
             seconds.setdefault(name, []).append(r.fit_seconds)
+            edges.setdefault(name, []).append(grid_edge_share(r.model))
         for spec in methods:
             name = method_label(spec)
             done, error = attempt(_fit_predict_split, spec, features, r.split, seed + i)
@@ -132,6 +136,7 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
             trials.append(comparison_trials(name, label, objects, correct,
                                             **posterior_columns(fit.proba, fit.proba_uncalibrated, y, fit.predicted)))
             seconds.setdefault(name, []).append(fit.fit_seconds)
+            edges.setdefault(name, []).append(grid_edge_share(fit.model))
         rows.append({**row, ERROR_COLUMN: "; ".join(errors)})
     per_split = summarise_over_splits(pd.DataFrame(rows)).reset_index()
     chance = float(np.mean([r.split.chance for r in results]))
@@ -140,7 +145,7 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
     trials = pd.concat(trials, ignore_index=True)
     summary = method_summary(trials, seconds, chance, REFERENCE_METHOD,
                              study=labels.study, data=labels.data, paper=PAPER if labels.paper else None,
-                             notes=notes)
+                             notes=notes, grid_edge=edges)
     if not labels.paper:  # paper_* headers only beside the paper's dataset and protocol
         summary = summary.drop(columns="paper_accuracy")
     return {labels.methods_table: per_split, labels.comparison_table: summary,

@@ -49,6 +49,7 @@ __all__ = [
     "comparison_file",
     "comparison_trials",
     "fit_predict",
+    "grid_edge_share",
     "method_input",
     "method_label",
     "method_summary",
@@ -63,7 +64,7 @@ COMPARISON_FILE = "method_comparison.csv"
 #: Columns of every study's method comparison (and of :data:`COMPARISON_FILE`).
 COMPARISON_COLUMNS = [
     "study", "data", "method", "accuracy", "ci95_low", "ci95_high", "paper_accuracy", "chance", "fit_seconds",
-    "difference", "difference_ci95_low", "difference_ci95_high", "reference", "n_splits", "n_trials", "note",
+    "share_at_grid_edge", "difference", "difference_ci95_low", "difference_ci95_high", "reference", "n_splits", "n_trials", "note",
     *CALIBRATION_COLUMNS,
 ]
 
@@ -152,6 +153,30 @@ def fit_predict(spec: dict, X_train: np.ndarray, classes_train: np.ndarray, clas
 # --------------------------------------------------------------------------- scoring, shared by every study
 
 
+def grid_edge_share(model) -> float:
+    """Share of a fitted model's hyper-parameter searches whose chosen value sits at a grid edge.
+
+    Reads ``at_grid_edge_`` (ESZSLCV, SAECV: one search) or an attribute bank's ``grid_edge_hits_``
+    (one search per (attribute, sensor) fit; a fit counts once however many of its parameters
+    are at an edge), looking through ``attribute_model_`` and ``estimator_`` wrappers.
+
+    Returns
+    -------
+    float
+        In [0, 1]; NaN when the model records no grid search.
+    """
+    for inner in ("attribute_model_", "estimator_"):
+        if hasattr(model, inner):
+            return grid_edge_share(getattr(model, inner))
+    if hasattr(model, "at_grid_edge_"):
+        return float(model.at_grid_edge_)
+    if hasattr(model, "grid_edge_hits_") and hasattr(model, "estimators_"):
+        n_fits = sum(len(per) for per in model.estimators_)
+        hit = {(h["attribute"], h["sensor"]) for h in model.grid_edge_hits_}
+        return len(hit) / n_fits if n_fits else float("nan")
+    return float("nan")
+
+
 def comparison_trials(method: str, split, classes: np.ndarray, correct: np.ndarray,
                       **posteriors: np.ndarray) -> pd.DataFrame:
     """One row per test trial of one method on one split: method, split, class, trial, correct (0/1).
@@ -169,7 +194,8 @@ def comparison_trials(method: str, split, classes: np.ndarray, correct: np.ndarr
 
 def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], chance: float, reference: str,
                    *, study: str, data: str = "real", paper: dict[str, float] | None = None,
-                   notes: dict[str, str] | None = None) -> pd.DataFrame:
+                   notes: dict[str, str] | None = None,
+                   grid_edge: dict[str, list[float]] | None = None) -> pd.DataFrame:
     """One row per method: accuracy with its 95% interval, fit time, paired difference to ``reference``.
 
     Parameters
@@ -191,6 +217,9 @@ def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], ch
         The paper's accuracy per method, where it reports one.
     notes : dict, optional
         A note per method (e.g. where the paper's number comes from).
+    grid_edge : dict, optional
+        :func:`grid_edge_share` of every fit, per method; ``share_at_grid_edge`` is their mean
+        (NaN: no grid search recorded).
 
     Returns
     -------
@@ -200,7 +229,7 @@ def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], ch
         their trials); difference = method minus ``reference`` on the same trials, with its
         paired interval; fit_seconds the mean per fit.
     """
-    paper, notes = paper or {}, notes or {}
+    paper, notes, grid_edge = paper or {}, notes or {}, grid_edge or {}
     rows = []
     for method, t in trials.groupby("method", sort=False):
         iv = bootstrap_accuracy(t["correct"].to_numpy(), classes=t["class"].to_numpy(), splits=t["split"].to_numpy())
@@ -208,6 +237,7 @@ def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], ch
         rows.append({"study": study, "data": data, "method": method, "accuracy": iv.mean,
                      "ci95_low": iv.ci95_low, "ci95_high": iv.ci95_high, "paper_accuracy": paper.get(method, np.nan),
                      "chance": chance, "fit_seconds": float(np.mean(seconds)) if seconds else np.nan,
+                     "share_at_grid_edge": _mean_or_nan(grid_edge.get(method, [])),
                      "n_splits": t["split"].nunique(), "n_trials": len(t), "note": notes.get(method, "")})
     table = pd.DataFrame(rows)
     diffs = _paired_differences(trials, reference).rename(
@@ -216,6 +246,12 @@ def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], ch
                         on="method", how="left")
     table["reference"] = reference
     return add_calibration(table, trials)[COMPARISON_COLUMNS]
+
+
+def _mean_or_nan(values: list[float]) -> float:
+    """Mean of the finite values; NaN when there are none."""
+    finite = [v for v in values if v is not None and np.isfinite(v)]
+    return float(np.mean(finite)) if finite else float("nan")
 
 
 #: Studies by the input their methods take; a registered method of another input kind is listed

@@ -42,7 +42,9 @@ from tzsl.models._validation import ParameterError, ValidatedParamsMixin
 from tzsl.models._zsl_input import (
     ZSLInputError,
     attribute_rows,
+    DEFAULT_GRID_EXTENSIONS,
     class_grouped_folds,
+    extend_at_edge,
     training_classes,
     validate_features,
     validate_features_and_rows,
@@ -236,11 +238,20 @@ class ESZSLCV(_ESZSLBase):
         Per-sample accuracy or mean per-class accuracy on the held-out classes.
     standardize : bool, default=True
         As in :class:`ESZSL`; the scaler is refitted on each fold's training part.
+    grid_extensions : int >= 0, default=3 (``DEFAULT_GRID_EXTENSIONS``)
+        Adaptive grid: while the selected ``gamma`` or ``lam`` is the smallest or largest of its
+        grid, that grid gains one log-scale step beyond the edge (the ratio of its two outer
+        values) and the whole grid is rescored on the same folds, at most this many times.
+        0 keeps the given grids.
 
     Attributes
     ----------
     best_gamma_, best_lam_ : float
-        Chosen regularisers (ties: first in grid order, gammas outer).
+        Chosen regularisers (ties: first in grid order, gammas outer; grids are sorted).
+    gammas_, lams_ : ndarray
+        The final (sorted, possibly extended) grids that were scored.
+    at_grid_edge_ : bool
+        Whether a chosen value is still at an edge of its final grid (extension bound reached).
     cv_scores_ : ndarray of shape (n_gammas, n_lams, n_splits)
     mean_cv_scores_ : ndarray of shape (n_gammas, n_lams)
     best_score_ : float
@@ -256,6 +267,7 @@ class ESZSLCV(_ESZSLBase):
         "lams": ["array-like"],
         "cv": [None, Interval(Integral, 2, None, closed="left"), HasMethods(["split"])],
         "scoring": [StrOptions({"accuracy", "balanced_accuracy"})],
+        "grid_extensions": [Interval(Integral, 0, None, closed="left")],
     }
 
     def __init__(
@@ -266,12 +278,14 @@ class ESZSLCV(_ESZSLBase):
         cv=None,
         scoring="accuracy",
         standardize=True,
+        grid_extensions=DEFAULT_GRID_EXTENSIONS,
     ):
         self.gammas = gammas
         self.lams = lams
         self.cv = cv
         self.scoring = scoring
         self.standardize = standardize
+        self.grid_extensions = grid_extensions
 
     def _check_param_values(self) -> None:
         for name in ("gammas", "lams"):
@@ -314,9 +328,10 @@ class ESZSLCV(_ESZSLBase):
         """
         self._validate_params()
         name = type(self).__name__
-        gammas = np.asarray(self.gammas, dtype=np.float64).ravel()
-        lams = np.asarray(self.lams, dtype=np.float64).ravel()
+        gammas = np.sort(np.asarray(self.gammas, dtype=np.float64).ravel())
+        lams = np.sort(np.asarray(self.lams, dtype=np.float64).ravel())
         X, S_u, y_u = self._start_fit(X, Y, groups)
+        self.gammas_, self.lams_, self.at_grid_edge_ = gammas, lams, False
         if gammas.size == lams.size == 1:  # nothing to choose: no cross-validation
             self.cv_scores_ = np.empty((1, 1, 0))
             self.mean_cv_scores_ = np.full((1, 1), np.nan)
@@ -344,6 +359,19 @@ class ESZSLCV(_ESZSLBase):
         self.cv_scores_ = np.stack(scores, axis=-1)
         self.mean_cv_scores_ = self.cv_scores_.mean(axis=-1)
         gi, li = np.unravel_index(np.argmax(self.mean_cv_scores_), self.mean_cv_scores_.shape)
+        for _ in range(int(self.grid_extensions)):  # adaptive: step beyond an edge that was selected
+            new_g, new_l = extend_at_edge(gammas, gi), extend_at_edge(lams, li)
+            if new_g is None and new_l is None:
+                break
+            gammas = gammas if new_g is None else new_g
+            lams = lams if new_l is None else new_l
+            self.cv_scores_ = np.stack(
+                [self._score_fold(X[tr], y_u[tr], X[va], y_u[va], S_u, gammas, lams) for tr, va in folds], axis=-1
+            )
+            self.mean_cv_scores_ = self.cv_scores_.mean(axis=-1)
+            gi, li = np.unravel_index(np.argmax(self.mean_cv_scores_), self.mean_cv_scores_.shape)
+        self.gammas_, self.lams_ = gammas, lams
+        self.at_grid_edge_ = extend_at_edge(gammas, gi) is not None or extend_at_edge(lams, li) is not None
         self.best_gamma_ = float(gammas[gi])
         self.best_lam_ = float(lams[li])
         self.best_score_ = float(self.mean_cv_scores_[gi, li])

@@ -39,7 +39,13 @@ from sklearn.utils.validation import check_is_fitted
 
 from tzsl.models._attribute_model_base import EmbeddingAttributeModel
 from tzsl.models._decision import cosine_similarities
-from tzsl.models._zsl_input import class_grouped_folds, training_classes, validate_features_and_rows
+from tzsl.models._zsl_input import (
+    DEFAULT_GRID_EXTENSIONS,
+    class_grouped_folds,
+    extend_at_edge,
+    training_classes,
+    validate_features_and_rows,
+)
 
 __all__ = ["DEFAULT_LAMS", "SAE", "SAECV", "sylvester_solution"]
 
@@ -175,10 +181,18 @@ class SAECV(EmbeddingAttributeModel):
         (see Notes for fewer than 4 classes).
     standardize : bool, default=True
         As in :class:`SAE`; the scaler is refitted on each fold's training part.
+    grid_extensions : int >= 0, default=3 (``DEFAULT_GRID_EXTENSIONS``)
+        Adaptive grid: while the chosen ``lam`` is the smallest or largest of the grid, the grid
+        gains one log-scale step beyond that edge and is rescored on the same folds, at most this
+        many times (:func:`~tzsl.models._zsl_input.extend_at_edge`). 0 keeps ``lams``.
 
     Attributes
     ----------
     best_lam_ : float
+    lams_ : ndarray
+        The final (sorted, possibly extended) grid that was scored.
+    at_grid_edge_ : bool
+        Whether ``best_lam_`` is still at an edge of ``lams_`` (extension bound reached).
     best_score_ : float
         Mean held-out zero-shot accuracy of ``best_lam_``.
     cv_scores_ : ndarray of shape (n_lams, n_splits)
@@ -196,12 +210,17 @@ class SAECV(EmbeddingAttributeModel):
         "lams": ["array-like"],
         "n_splits": [Interval(Integral, 2, None, closed="left")],
         "standardize": ["boolean"],
+        "grid_extensions": [Interval(Integral, 0, None, closed="left")],
     }
 
-    def __init__(self, *, lams=DEFAULT_LAMS, n_splits: int = 5, standardize: bool = True):
+    def __init__(
+        self, *, lams=DEFAULT_LAMS, n_splits: int = 5, standardize: bool = True,
+        grid_extensions: int = DEFAULT_GRID_EXTENSIONS,
+    ):
         self.lams = lams
         self.n_splits = n_splits
         self.standardize = standardize
+        self.grid_extensions = grid_extensions
 
     def selected_params(self) -> dict:
         """Parameters that refit this model with the chosen ``lam`` and no search (``lams``).
@@ -224,6 +243,18 @@ class SAECV(EmbeddingAttributeModel):
             )
         return lams
 
+    def _score_grid(self, prepared, lams: np.ndarray) -> int:
+        """Fill ``cv_scores_`` (n_lams, n_folds) for ``lams`` on the prepared folds; index of the best lambda."""
+        scores = []
+        for parts, X_va, candidate_rows, truth in prepared:
+            fold = []
+            for lam in lams:
+                E = X_va @ _solve_parts(parts, lam).T  # (n_held_out, n_attributes)
+                fold.append(np.mean(np.argmax(cosine_similarities(E, candidate_rows), axis=1) == truth))
+            scores.append(fold)
+        self.cv_scores_ = np.asarray(scores).T
+        return int(np.argmax(self.cv_scores_.mean(axis=1)))
+
     @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X, y, groups=None):
         """Choose ``lam`` by class-held-out CV, then refit on all training trials.
@@ -241,7 +272,7 @@ class SAECV(EmbeddingAttributeModel):
         -------
         self : SAECV
         """
-        lams = self._lam_grid()
+        lams = np.sort(self._lam_grid())
         X, A = validate_features_and_rows(self, X, y)
         rows, cls = training_classes(A, "SAECV")
         n_classes = rows.shape[0]
@@ -249,7 +280,7 @@ class SAECV(EmbeddingAttributeModel):
             folds = class_grouped_folds(cls, self.n_splits, "SAECV")
         else:  # leave one class out, scored among all rows (Notes)
             folds = [(np.flatnonzero(cls != c), np.flatnonzero(cls == c)) for c in range(n_classes)]
-        scores = []
+        prepared = []  # per fold: the Sylvester parts (shared by every lambda), held-out features and truth
         for train, held_out in folds:
             held_rows = np.unique(cls[held_out])
             candidates = held_rows if held_rows.size >= 2 else np.arange(n_classes)
@@ -257,17 +288,18 @@ class SAECV(EmbeddingAttributeModel):
             if self.standardize:
                 scaler = StandardScaler().fit(X_tr)
                 X_tr, X_va = scaler.transform(X_tr), scaler.transform(X_va)
-            parts = _sylvester_parts(A[train], X_tr)
             truth = np.searchsorted(candidates, cls[held_out])
-            candidate_rows = rows[candidates]
-            fold = []
-            for lam in lams:
-                E = X_va @ _solve_parts(parts, lam).T  # (n_held_out, n_attributes)
-                fold.append(np.mean(np.argmax(cosine_similarities(E, candidate_rows), axis=1) == truth))
-            scores.append(fold)
-        self.cv_scores_ = np.asarray(scores).T
+            prepared.append((_sylvester_parts(A[train], X_tr), X_va, rows[candidates], truth))
+        best = self._score_grid(prepared, lams)
+        for _ in range(int(self.grid_extensions)):  # adaptive: step beyond an edge that was selected
+            wider = extend_at_edge(lams, best)
+            if wider is None:
+                break
+            lams = wider
+            best = self._score_grid(prepared, lams)
+        self.lams_ = lams
+        self.at_grid_edge_ = lams.size > 1 and extend_at_edge(lams, best) is not None
         mean = self.cv_scores_.mean(axis=1)
-        best = int(np.argmax(mean))
         self.best_lam_ = float(lams[best])
         self.best_score_ = float(mean[best])
         self.class_attributes_ = rows

@@ -16,6 +16,7 @@ from sklearn.utils.validation import validate_data
 from tzsl.exceptions import ConfigError, TzslError
 
 __all__ = [
+    "DEFAULT_GRID_EXTENSIONS",
     "MIN_CV_CLASSES",
     "ZSLInputError",
     "attribute_rows",
@@ -24,6 +25,7 @@ __all__ = [
     "check_positive",
     "class_grouped_folds",
     "encode_training_classes",
+    "extend_at_edge",
     "training_classes",
     "validate_class_table",
     "validate_features",
@@ -179,6 +181,33 @@ def class_grouped_folds(
     return [
         (np.flatnonzero(fold_of_sample != f), np.flatnonzero(fold_of_sample == f)) for f in range(k)
     ]
+
+
+#: Default bound on the log-scale steps the CV models (:class:`ESZSLCV`, :class:`SAECV`) add beyond a grid edge that was selected.
+DEFAULT_GRID_EXTENSIONS = 3
+
+
+def extend_at_edge(grid: np.ndarray, index: int) -> np.ndarray | None:
+    """``grid`` (sorted, > 0) extended one log-scale step beyond the edge at ``index``; None if interior.
+
+    The step is the ratio of the two values at that edge (a 1-point grid is never extended).
+
+    Parameters
+    ----------
+    grid : ndarray of shape (k,)
+        Increasing positive values.
+    index : int
+        Position of the selected value.
+
+    Returns
+    -------
+    ndarray of shape (k + 1,) or None
+    """
+    if grid.size < 2 or 0 < index < grid.size - 1:
+        return None
+    if index == 0:
+        return np.concatenate([[grid[0] * grid[0] / grid[1]], grid])
+    return np.concatenate([grid, [grid[-1] * grid[-1] / grid[-2]]])
 
 
 def attribute_rows(y, class_attributes) -> np.ndarray:
