@@ -42,21 +42,21 @@ reproduce-tables: install
 	$(BIN)/tzsl reproduce-tables --out $(RESULTS) --n-jobs $(N_JOBS) --force
 
 # Every published number is generated between markers from the CSVs of the shipped code, never
-# typed (tzsl.experiments.readme_results): each target file = the results folder its blocks read.
+# typed (tzsl.reporting.readme_results): each target file = the results folder its blocks read.
 NUMBERS := README.md=$(RESULTS) experiments/benchmarks/README.md=$(BENCH_RESULTS)
 
 # The README's Results block alone, from the CSVs of reproduce-tables.
 readme-results: install
-	$(BIN)/python -m tzsl.experiments.readme_results $(RESULTS) README.md
+	$(BIN)/python -m tzsl.reporting.readme_results $(RESULTS) README.md
 
 numbers: install
-	@for pair in $(NUMBERS); do $(BIN)/python -m tzsl.experiments.readme_results $${pair#*=} $${pair%%=*} || exit 1; done
+	@for pair in $(NUMBERS); do $(BIN)/python -m tzsl.reporting.readme_results $${pair#*=} $${pair%%=*} || exit 1; done
 
 # Fails when a generated block drifts from its CSVs or a measured number is typed outside the blocks.
 numbers-check: install
 	@status=0; for pair in $(NUMBERS); do \
-	  $(BIN)/python -m tzsl.experiments.readme_results $${pair#*=} $${pair%%=*} --check || status=1; done; \
-	$(BIN)/python -m tzsl.experiments.typed_numbers . || status=1; exit $$status
+	  $(BIN)/python -m tzsl.reporting.readme_results $${pair#*=} $${pair%%=*} --check || status=1; done; \
+	$(BIN)/python -m tzsl.reporting.typed_numbers . || status=1; exit $$status
 
 # The documentation site (Sphinx): docs/_build/html, offline; runs every gallery example.
 docs: install
@@ -66,7 +66,7 @@ docs: install
 # study and stage, with the ratio to the issue's numbers; the table also goes to $(BENCH_CSV).
 BENCH_CSV ?= bench/reproduce_bench.csv
 bench: install
-	$(BIN)/python -m tzsl.experiments.bench_reproduce --n-jobs $(N_JOBS) --out $(BENCH_CSV) --force
+	$(BIN)/python -m tzsl.benchmarks.bench_reproduce --n-jobs $(N_JOBS) --out $(BENCH_CSV) --force
 
 # One PHAC-2 split's attribute fits (issue 15): the paper's literal recipe vs tzsl; the literal recipe
 # takes tens of minutes (BENCH_FIT_ARGS=--skip-literal times tzsl only).
@@ -77,7 +77,7 @@ bench-fit: install
 # Cost against trials on SIMULATED data (issue 15); e.g. make bench-scale SCALE_SIZES=1000,4000 for a quick run.
 SCALE_SIZES ?= 1000,4000,16000,64000,100000
 bench-scale: install
-	$(BIN)/python -m tzsl.experiments.bench_scale --sizes $(SCALE_SIZES) --n-jobs $(N_JOBS) --work bench_scale
+	$(BIN)/python -m tzsl.benchmarks.bench_scale --sizes $(SCALE_SIZES) --n-jobs $(N_JOBS) --work bench_scale
 
 clean:
 	rm -rf $(VENV) .pytest_cache .hypothesis $(RESULTS) .tzsl_cache bench_scale bench

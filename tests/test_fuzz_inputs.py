@@ -157,7 +157,7 @@ def test_read_broken_grasp_folder(data):
 def phac2_model(tmp_path_factory):
     from tzsl.datasets import FeatureSet
     from tzsl.datasets._feature_table import write_feature_table
-    from tzsl.experiments.model_bundles import save_zero_shot_bundle
+    from tzsl.inference.model_bundles import save_zero_shot_bundle
     from tzsl.models import AttributeClassifierBank, AttributeSVM, DAPRule, ZeroShotClassifier
 
     root = tmp_path_factory.mktemp("fuzz_model")
@@ -358,7 +358,7 @@ def test_run_broken_experiment_file_writes_only_under_out(data):
 @pytest.fixture(scope="module")
 def hand_model(tmp_path_factory):
     from tzsl.datasets import load_hand_table4, simulate_grasps
-    from tzsl.experiments.model_bundles import train_hand_bundle
+    from tzsl.inference.model_bundles import train_hand_bundle
 
     root = tmp_path_factory.mktemp("fuzz_hand")
     table = load_hand_table4()

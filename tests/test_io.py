@@ -1,6 +1,6 @@
 """tzsl/_io.py: atomic writes (replace in one step, no partial file, umask permissions, one-line failures),
 file checksums, and .npz files checked before loading. The refusal to overwrite without --force lives in
-ResultsDir and is tested in tests/experiments/test_outputs.py."""
+ResultsDir and is tested in tests/studies/test_outputs.py."""
 
 from __future__ import annotations
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tzsl.experiments.readme_results import BEGIN, END
-from tzsl.experiments.typed_numbers import ALLOWED, main, scan, scanned_files
+from tzsl.reporting.readme_results import BEGIN, END
+from tzsl.reporting.typed_numbers import ALLOWED, main, scan, scanned_files
 
 REPO = Path(__file__).resolve().parent.parent
 

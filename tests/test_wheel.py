@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / "tests" / "experiments"))
+sys.path.insert(0, str(REPO / "tests" / "studies"))
 from test_reproduce import TINY_HAND  # noqa: E402
 
 
@@ -58,4 +58,4 @@ def test_wheel_install_runs_builtin_studies(tmp_path):
     assert ran.returncode == 0, ran.stdout + ran.stderr
     assert (work / "res" / "hand_table5.csv").is_file() and (work / "res" / "manifest.json").is_file()
     assert not any(p.name == "tzsl" for p in work.iterdir())
-    assert os.path.isdir(os.path.join(target, "tzsl", "experiments", "builtin"))
+    assert os.path.isdir(os.path.join(target, "tzsl", "studies", "builtin"))

@@ -20,7 +20,8 @@ from pathlib import Path
 
 #: Packages shown first in the API reference, in this order (the data flow); the others follow
 #: alphabetically.
-FIRST = ("tzsl", "tzsl.datasets", "tzsl.features", "tzsl.models", "tzsl.evaluation")
+FIRST = ("tzsl", "tzsl.datasets", "tzsl.features", "tzsl.models", "tzsl.evaluation", "tzsl.studies",
+         "tzsl.reporting", "tzsl.inference", "tzsl.benchmarks", "tzsl.cli")
 #: Constants whose ``repr`` is longer than this are shown without their value.
 LONG_VALUE = 300
 
@@ -186,7 +187,7 @@ def formats_page(out: Path) -> None:
 
 def experiments_page(out: Path, repo: Path) -> None:
     """Every built-in study, resolved with every default (``tzsl run NAME --print-config``)."""
-    from tzsl.experiments.config import builtin_names
+    from tzsl.studies.config import builtin_names
 
     lines = []
     for name in builtin_names():

@@ -34,8 +34,8 @@ import numpy as np
 import pandas as pd
 
 from tzsl.evaluation import bootstrap_accuracy, paired_difference_interval
-from tzsl.experiments.extract import extract_features
-from tzsl.experiments.phac2_dap import split_masks
+from tzsl.studies.extract import extract_features
+from tzsl.studies.zero_shot.study import split_masks
 from tzsl.models import attribute_rows, build_method
 
 from phac2_posteriors import study_splits  # noqa: E402  (run from experiments/benchmarks/ or with it on sys.path)

@@ -8,7 +8,7 @@ refitted on all training objects. tzsl's candidates are the registered ``eszsl``
 (:class:`tzsl.models.ESZSLCV`: z-scored features, class-grouped folds) with its shipped adaptive
 grid and with the fixed grid (``grid_extensions=0``).
 
-Splits: the library's seeded random splits (``tzsl.experiments.phac2_dap.make_splits``), on
+Splits: the library's seeded random splits (``tzsl.studies.zero_shot.study.make_splits``), on
 SELECTION seeds (``--seed``) and CONFIRMATION seeds (``--seed + --confirm-offset``), disjoint.
 Output CSV: one row per (purpose, method): mean accuracy with its two-level bootstrap interval and
 the paired difference to the public formulation with its interval, plus the share of fits whose
@@ -27,8 +27,8 @@ import numpy as np
 import pandas as pd
 
 from tzsl.evaluation import bootstrap_accuracy, paired_difference_interval
-from tzsl.experiments.extract import extract_features
-from tzsl.experiments.phac2_dap import DapStudyConfig, make_splits, split_masks
+from tzsl.studies.extract import extract_features
+from tzsl.studies.zero_shot.study import DapStudyConfig, make_splits, split_masks
 from tzsl.models import attribute_rows, build_method
 
 PUBLIC_GRID = 10.0 ** np.arange(-3, 4)

@@ -14,8 +14,8 @@ warnings.simplefilter("ignore")
 from pathlib import Path
 import numpy as np, pandas as pd
 from sklearn.preprocessing import QuantileTransformer
-from tzsl.experiments.extract import extract_features
-from tzsl.experiments.phac2_dap import split_masks
+from tzsl.studies.extract import extract_features
+from tzsl.studies.zero_shot.study import split_masks
 from phac2_posteriors import study_splits
 from phac2_accuracy import embedding_scores, zrows
 f = extract_features('phac2-penn')

@@ -2,7 +2,7 @@
 
 For each split (``--n-random`` seeded random splits, seed ``--seed``, and the 5 challenging
 splits) and each gamma grid (``paper``, ``extended``) the per-(attribute, BioTac) SVM bank of
-the PHAC-2 study (:func:`tzsl.experiments.phac2_dap.fit_split`, 5 object-grouped folds,
+the PHAC-2 study (:func:`tzsl.studies.zero_shot.study.fit_split`, 5 object-grouped folds,
 ``select`` under-sampling) is fitted on the split's training objects. Saved per split:
 
 * ``P_test`` (n_test_trials, 2, m): test posteriors ``p(a_m = 1 | x_s)``;
@@ -29,8 +29,8 @@ from pathlib import Path
 import numpy as np
 from scipy.special import expit
 
-from tzsl.experiments.extract import extract_features
-from tzsl.experiments.phac2_dap import DapStudyConfig, fit_split, make_splits, split_masks
+from tzsl.studies.extract import extract_features
+from tzsl.studies.zero_shot.study import DapStudyConfig, fit_split, make_splits, split_masks
 from tzsl.models import GridEdgeWarning
 
 GRIDS = ("paper", "extended")

@@ -13,7 +13,7 @@ from tzsl.cli import cli
 from tzsl.cli import EXIT_TZSL_ERROR, EXIT_USAGE
 
 REPO = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(REPO / "tests" / "experiments"))
+sys.path.insert(0, str(REPO / "tests" / "studies"))
 from test_config_run import _plain_dataset  # noqa: E402
 
 
@@ -64,7 +64,7 @@ def _evaluate_and_run(toy: Path, tmp_path: Path, kind: str) -> tuple[dict, dict]
 
 def test_evaluate_builds_the_same_config_as_the_toml(toy):
     from tzsl.cli._dap_commands import evaluate_values
-    from tzsl.experiments.config import config_from_options, load_experiment
+    from tzsl.studies.config import config_from_options, load_experiment
 
     path = toy / "same.toml"
     path.write_text(EVALUATE_TOML.format(kind="challenging") + '[output]\nfolder = "o"\n')

@@ -41,7 +41,7 @@ def test_extract_hold_mat_writes_table_and_refuses_overwrite(data_dir, tmp_path)
 
 def test_hold_mat_gripper_features_match_penn(data_dir):
     """The two real sources agree: HOLD min/mean aperture == Penn features 20/21 (HOLD EP)."""
-    from tzsl.experiments.extract import extract_features
+    from tzsl.studies.extract import extract_features
 
     hold = extract_features("phac2-hold-mat", data_dir=data_dir)
     penn = extract_features("phac2-penn", data_dir=data_dir)

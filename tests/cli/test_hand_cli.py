@@ -9,7 +9,7 @@ from click.testing import CliRunner
 from tzsl.cli import cli
 from tzsl.cli import EXIT_TZSL_ERROR
 from tzsl.datasets import load_hand_table4, read_grasps
-from tzsl.experiments.hand import HAND_OUTPUTS
+from tzsl.studies.hand.study import HAND_OUTPUTS
 TABLE = load_hand_table4()
 
 

@@ -15,7 +15,7 @@ from click.testing import CliRunner
 from tzsl.cli import cli
 
 from tzsl.datasets import FeatureSet
-from tzsl.experiments.predict_active import PER_EP_KIND, load_per_ep_model, train_per_ep_bundle
+from tzsl.inference.predict_active import PER_EP_KIND, load_per_ep_model, train_per_ep_bundle
 from tzsl.models import suggest_next_ep
 
 ATTRS = ["hard", "soft", "rough"]

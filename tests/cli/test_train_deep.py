@@ -79,7 +79,7 @@ def test_train_deep_and_the_matching_experiment_file_write_the_same_tables(torch
     """train-deep is a front-end of the fabric-deep study: its config and tables are those of the file."""
     import pandas as pd
 
-    from tzsl.experiments.engine import run_experiment
+    from tzsl.studies.engine import run_experiment
 
     result = _run("train-deep", "--out", str(tmp_path / "cli" / "m.tzsl-deep"), "--data-dir", str(data_dir),
                   "--config", "2", "--lam", "inf", "--seed", "3", "--early-stopping", *FAST)
@@ -157,8 +157,8 @@ def test_train_deep_on_user_gelsight_videos(torch, data_dir, tmp_path):
 def test_deep_fabric_study_table(torch, data_dir, tmp_path):
     """The study behind ``evaluate-fabric --model deep``: runs, table, manifest; refuses overwrites."""
     from tzsl.exceptions import ConfigError
-    from tzsl.experiments._outputs import ResultsDir
-    from tzsl.experiments.deep import format_deep_table, run_deep_fabric_study
+    from tzsl.studies._outputs import ResultsDir
+    from tzsl.studies.fabric.deep import format_deep_table, run_deep_fabric_study
 
     params = {"backbone": "small-cnn", "image_size": 16, "hidden_size": 8, "epochs": 2, "n_threads": 1}
     kwargs = dict(data_dir=data_dir, seeds=2, configs=(1,), progress=False, lams=(0.1, "inf"),
@@ -186,7 +186,7 @@ def test_evaluate_fabric_model_deep_calls_the_deep_study(torch, tmp_path, monkey
     itself is tested above)."""
     import pandas as pd
 
-    import tzsl.experiments.deep as deep
+    import tzsl.studies.fabric.deep as deep
 
     seen = {}
 

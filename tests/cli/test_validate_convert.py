@@ -89,7 +89,7 @@ def penn_folder(data_dir, tmp_path_factory) -> Path:
 
 @pytest.mark.realdata
 def test_penn_round_trip_equals_built_in_features(penn_folder, data_dir):
-    from tzsl.experiments.extract import extract_features
+    from tzsl.studies.extract import extract_features
 
     ref = extract_features("phac2-penn", data_dir=data_dir)
     fs = load_plain_dataset(penn_folder)
@@ -131,7 +131,7 @@ def test_convert_refuses_overwrite(penn_folder, data_dir):
 
 @pytest.mark.realdata
 def test_hold_signal_dataset_reproduces_time_averages(data_dir, tmp_path):
-    from tzsl.experiments.extract import extract_features
+    from tzsl.studies.extract import extract_features
     from tzsl.features import BIOTAC_CHANNELS
 
     out = tmp_path / "hold"

@@ -8,7 +8,7 @@ import pytest
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.models import AttributeClassifierBank, AttributeSVM, AttributeTrainingError
 from tzsl.models import GridEdgeWarning, fit_platt
-from tzsl.models._cache import spawn_seeds
+from tzsl._fit_store import spawn_seeds
 
 TINY = dict(n_C=2, n_gamma=2, n_draws=2, cv=3)
 

@@ -1,4 +1,4 @@
-"""tzsl/models/_cache.py: the fit store (keys, hits, warnings, counts), seed spawning, backends."""
+"""tzsl/_fit_store.py: the fit store (keys, hits, warnings, counts), seed spawning, backends."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from sklearn.linear_model import LogisticRegression
 from tzsl._profile import profiling
 from tzsl.exceptions import ConfigError
 from tzsl.models import AttributeClassifierBank, AttributeSVM, FitStore, fit_cached, fit_store_counts, resolve_store
-from tzsl.models._cache import CACHE_ENV, FITS_FOLDER, array_digest, fit_clone, parallel_context, spawn_seeds
+from tzsl._fit_store import CACHE_ENV, FITS_FOLDER, array_digest, fit_clone, parallel_context, spawn_seeds
 
 
 # ---------------------------------------------------------------------------- resolve_store

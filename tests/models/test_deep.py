@@ -64,7 +64,7 @@ def frozen(**kw):
 # ------------------------------------------------------------------------- optional extra
 def test_core_never_imports_torch():
     code = (
-        "import sys, tzsl, tzsl.models, tzsl.experiments.deep, tzsl.cli\n"
+        "import sys, tzsl, tzsl.models, tzsl.studies.fabric.deep, tzsl.cli\n"
         "from tzsl.cli import cli\n"
         "from tzsl.models import DeepAttributeEmbedding; DeepAttributeEmbedding().get_params()\n"
         "assert 'torch' not in sys.modules, 'torch imported'\n"

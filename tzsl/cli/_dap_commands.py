@@ -1,8 +1,8 @@
 """PHAC-2 / DAP commands: ``splits``, ``train-attributes``, ``evaluate``, ``bench``.
 
 ``evaluate`` is a front-end of the engine: its options become a ``study = "phac2-dap"``
-experiment (:func:`tzsl.experiments.config.config_from_options`) run by
-:func:`tzsl.experiments.engine.run_experiment`, so it writes exactly what the matching TOML
+experiment (:func:`tzsl.studies.config.config_from_options`) run by
+:func:`tzsl.studies.engine.run_experiment`, so it writes exactly what the matching TOML
 file writes. Option defaults come from the schema.
 """
 
@@ -78,7 +78,7 @@ def _study_values(seed, n_jobs, backend, scheduler, undersampling, cv, grid, no_
 
 
 def _experiment(values: dict):
-    from tzsl.experiments.config import config_from_options  # noqa: PLC0415
+    from tzsl.studies.config import config_from_options  # noqa: PLC0415
 
     return config_from_options(STUDY, values)
 
@@ -98,9 +98,9 @@ def _experiment(values: dict):
 def splits(kind, n_splits, n_test, out, dataset, features_file, plain_dir, path, seed, data_dir, force):
     """Write object splits as CSV (split, object, role), usable with 'tzsl evaluate --splits'."""
     from tzsl.evaluation import write_splits_csv  # noqa: PLC0415
-    from tzsl.experiments.study_settings import dap_config  # noqa: PLC0415
-    from tzsl.experiments.phac2_dap import make_splits  # noqa: PLC0415
-    from tzsl.experiments.study_runners import phac2_features  # noqa: PLC0415
+    from tzsl.studies.study_settings import dap_config  # noqa: PLC0415
+    from tzsl.studies.zero_shot.study import make_splits  # noqa: PLC0415
+    from tzsl.studies.zero_shot.runner import phac2_features  # noqa: PLC0415
 
     if out.exists() and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite")
@@ -142,9 +142,9 @@ def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep
     Without --splits every object trains the model (a model for recognising new objects);
     with --splits only that split's training objects do.
     """
-    from tzsl.experiments.engine import check_experiment  # noqa: PLC0415
-    from tzsl.experiments.study_settings import dap_config  # noqa: PLC0415
-    from tzsl.experiments.study_runners import phac2_features  # noqa: PLC0415
+    from tzsl.studies.engine import check_experiment  # noqa: PLC0415
+    from tzsl.studies.study_settings import dap_config  # noqa: PLC0415
+    from tzsl.studies.zero_shot.runner import phac2_features  # noqa: PLC0415
 
     if out.exists() and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite")
@@ -169,7 +169,7 @@ def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep
         _train_per_ep(features, out, splits_file, split_name, exp, force)
         click.echo(f"fitted in {time.perf_counter() - start:.1f} s; wrote {out}")
         return
-    from tzsl.experiments.model_bundles import train_attribute_bundle  # noqa: PLC0415
+    from tzsl.inference.model_bundles import train_attribute_bundle  # noqa: PLC0415
 
     summary = train_attribute_bundle(features, dap_config(exp), out, method=method, splits_file=splits_file,
                                      split_name=split_name, fusion=fusion, prior=prior, force=force)
@@ -178,9 +178,9 @@ def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep
 
 
 def _train_per_ep(features, out, splits_file, split_name, exp, force) -> None:
-    from tzsl.experiments.study_settings import dap_config  # noqa: PLC0415
-    from tzsl.experiments.model_bundles import training_subset  # noqa: PLC0415
-    from tzsl.experiments.predict_active import train_per_ep_bundle  # noqa: PLC0415
+    from tzsl.studies.study_settings import dap_config  # noqa: PLC0415
+    from tzsl.inference.model_bundles import training_subset  # noqa: PLC0415
+    from tzsl.inference.predict_active import train_per_ep_bundle  # noqa: PLC0415
 
     config = dap_config(exp)
     sub, split = training_subset(features, splits_file, split_name, config.random_min_train_positives)
@@ -225,7 +225,7 @@ def evaluate(force, **options):
     The same as 'tzsl run' on the matching experiment file (study = "phac2-dap"); see
     'tzsl run phac2-dap --print-config' for every setting.
     """
-    from tzsl.experiments.engine import run_experiment  # noqa: PLC0415
+    from tzsl.studies.engine import run_experiment  # noqa: PLC0415
 
     exp = _experiment(evaluate_values(**options))
     results, _ = run_experiment(exp, force=force, echo=click.echo)
@@ -242,9 +242,9 @@ def evaluate(force, **options):
 @force_option
 def bench(split_index, skip_literal, out, seed, data_dir, force):
     """Time one random PHAC-2 split: the paper's literal recipe vs tzsl (n_jobs 1 and 2), with accuracies."""
-    from tzsl.experiments.bench import run_bench  # noqa: PLC0415
-    from tzsl.experiments.extract import extract_features  # noqa: PLC0415
-    from tzsl.experiments.phac2_dap import DapStudyConfig  # noqa: PLC0415
+    from tzsl.benchmarks.bench import run_bench  # noqa: PLC0415
+    from tzsl.studies.extract import extract_features  # noqa: PLC0415
+    from tzsl.studies.zero_shot.study import DapStudyConfig  # noqa: PLC0415
 
     if out is not None and out.exists() and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite")

@@ -26,7 +26,7 @@ def extract(dataset: str, path: Path | None, out: Path | None, min_objects: int,
             force: bool) -> None:
     """Extract per-trial, per-sensor features and print a summary."""
     from tzsl.datasets import feature_table_paths, write_feature_table  # noqa: PLC0415
-    from tzsl.experiments.extract import extract_features, format_summary, summarise  # noqa: PLC0415
+    from tzsl.studies.extract import extract_features, format_summary, summarise  # noqa: PLC0415
 
     if out is not None:
         if out.suffix not in (".csv", ".npz"):

@@ -151,8 +151,8 @@ def validate(dataset_dir: Path, as_json: bool) -> None:
 def _card(data) -> dict:
     """The dataset card read against the generic study's default split (its schema defaults)."""
     from tzsl.datasets import dataset_card  # noqa: PLC0415
-    from tzsl.experiments.config import ZeroShotSplits  # noqa: PLC0415
-    from tzsl.experiments.relaxations import SVM_MIN_OBJECTS, relaxed_n_test  # noqa: PLC0415
+    from tzsl.studies.config import ZeroShotSplits  # noqa: PLC0415
+    from tzsl.studies.zero_shot.relaxations import SVM_MIN_OBJECTS, relaxed_n_test  # noqa: PLC0415
 
     splits = ZeroShotSplits()
     trials = data.trials.drop_duplicates("trial_id") if "trial_id" in data.trials.columns else data.trials
@@ -203,7 +203,7 @@ def convert(source: str | None, mapping: Path | None, dataset: str | None, out: 
                    f"next: tzsl validate {folder}")
         return
     from tzsl.datasets import feature_set_to_plain, load_phac2_hold_mat, write_plain_dataset  # noqa: PLC0415
-    from tzsl.experiments.extract import extract_features  # noqa: PLC0415
+    from tzsl.studies.extract import extract_features  # noqa: PLC0415
     from tzsl.features import BIOTAC_CHANNELS, raw_trial_signals  # noqa: PLC0415
 
     if out.exists() and (not out.is_dir() or any(out.iterdir())) and not force:

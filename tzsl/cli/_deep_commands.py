@@ -14,7 +14,7 @@ def model_default(name: str):
     """The default of :class:`~tzsl.models.DeepAttributeEmbedding`'s parameter ``name``, read when needed."""
 
     def read():
-        from tzsl.experiments.config import estimator_parameters  # noqa: PLC0415
+        from tzsl.studies.config import estimator_parameters  # noqa: PLC0415
 
         value = estimator_parameters("DeepAttributeEmbedding")[name]
         return str(value) if name in ("lam", "finetune") else value
@@ -165,8 +165,8 @@ def train_deep(out: Path, results: Path | None, config: str, attributes: str, ge
     in capture order (5 evenly spaced), or the 5 key frames of every press video under
     --gelsight-root.
     """
-    from tzsl.experiments.config import config_from_options  # noqa: PLC0415
-    from tzsl.experiments.engine import run_experiment  # noqa: PLC0415
+    from tzsl.studies.config import config_from_options  # noqa: PLC0415
+    from tzsl.studies.engine import run_experiment  # noqa: PLC0415
 
     if out.exists() and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite it")

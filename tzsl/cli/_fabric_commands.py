@@ -1,7 +1,7 @@
 """Fabric study command: ``evaluate-fabric``, a front-end of the engine.
 
 ``--model classical`` builds a ``study = "fabric"`` experiment, ``--model deep`` a
-``study = "fabric-deep"`` one; both run through :func:`tzsl.experiments.engine.run_experiment`
+``study = "fabric-deep"`` one; both run through :func:`tzsl.studies.engine.run_experiment`
 exactly as ``tzsl run`` runs the matching file. Option defaults come from the schema.
 """
 
@@ -22,7 +22,7 @@ from tzsl.cli._root import (
 )
 
 #: Model families of ``evaluate-fabric``; "classical" = texture descriptors + EmbeddingZSL / ESZSL;
-#: "deep" = the CNN + LSTM of tzsl.experiments.deep (needs the deep extra).
+#: "deep" = the CNN + LSTM of tzsl.studies.fabric.deep (needs the deep extra).
 FABRIC_MODELS = ("classical", "deep")
 
 
@@ -71,8 +71,8 @@ def evaluate_fabric(out: Path, n_seeds, configs: tuple[str, ...], gelsight_root:
     per split config; plus GelSight rows with --gelsight-root. The same as 'tzsl run fabric'
     (or 'tzsl run fabric-deep' with --model deep) with these settings.
     """
-    from tzsl.experiments.config import config_from_options  # noqa: PLC0415
-    from tzsl.experiments.engine import run_experiment  # noqa: PLC0415
+    from tzsl.studies.config import config_from_options  # noqa: PLC0415
+    from tzsl.studies.engine import run_experiment  # noqa: PLC0415
 
     study, values = evaluate_fabric_values(model, out, n_seeds, configs, gelsight_root, attributes, no_progress,
                                            data_dir, n_jobs, seed)

@@ -114,8 +114,8 @@ def evaluate_hand(force: bool, **options) -> None:
     The same as 'tzsl run' on a study = "hand" file with these settings ('tzsl run
     hand-simulated --print-config' shows every setting).
     """
-    from tzsl.experiments.config import config_from_options  # noqa: PLC0415
-    from tzsl.experiments.engine import run_experiment  # noqa: PLC0415
+    from tzsl.studies.config import config_from_options  # noqa: PLC0415
+    from tzsl.studies.engine import run_experiment  # noqa: PLC0415
 
     exp = config_from_options(STUDY, evaluate_hand_values(**options))
     if options["grasps"] is None:
@@ -139,7 +139,7 @@ def evaluate_hand(force: bool, **options) -> None:
 @force_option
 def train_hand(grasps: Path, table: Path | None, out: Path, fusion: str, seed: int, force: bool) -> None:
     """Fit the hand attribute classifiers on the training objects and save a model bundle."""
-    from tzsl.experiments.model_bundles import train_hand_bundle  # noqa: PLC0415
+    from tzsl.inference.model_bundles import train_hand_bundle  # noqa: PLC0415
 
     start = time.perf_counter()
     model, meta = train_hand_bundle(grasps, _table(table), out, fusion=fusion, seed=seed, force=force)

@@ -77,7 +77,7 @@ def predict(model_path: Path, classes: Path, candidates: str | None, mode: str, 
         _predict_active(model_path, classes, _names(candidates), grasp, _names(eps_done), suggest_next,
                         threshold, max_eps, max_seconds, as_json, top, trust_pickle)
         return
-    from tzsl.experiments.predict import (  # noqa: PLC0415
+    from tzsl.inference.predict import (  # noqa: PLC0415
         format_prediction,
         load_predictor,
         predict_grasps,
@@ -98,8 +98,8 @@ def predict(model_path: Path, classes: Path, candidates: str | None, mode: str, 
 
 def _predict_active(model_path, classes, candidates, grasp, eps_done, suggest_next, threshold, max_eps,
                     max_seconds, as_json, top, trust_pickle) -> None:
-    from tzsl.experiments.predict import read_class_table  # noqa: PLC0415
-    from tzsl.experiments.predict_active import active_report, format_active_report, load_per_ep_model  # noqa: PLC0415
+    from tzsl.inference.predict import read_class_table  # noqa: PLC0415
+    from tzsl.inference.predict_active import active_report, format_active_report, load_per_ep_model  # noqa: PLC0415
 
     if not eps_done:
         raise ConfigError(f"{model_path}: a per-EP bundle needs --eps-done (the EPs done so far, e.g. squeeze,hold)")

@@ -10,7 +10,7 @@ memory, a bug) or that completed with failed (split, method) fits (listed one pe
 :class:`~tzsl.exceptions.TzslError`, printed as its message, never a traceback).
 
 This module imports only click: ``tzsl --help`` must stay fast. Option defaults that belong to
-the experiment schema (:mod:`tzsl.experiments.config`) are read from it lazily, when a command
+the experiment schema (:mod:`tzsl.studies.config`) are read from it lazily, when a command
 runs or shows its own help.
 """
 
@@ -69,7 +69,7 @@ class TzslGroup(click.Group):
 
 @functools.cache
 def _study_defaults(study: str):
-    from tzsl.experiments.config import defaults  # noqa: PLC0415
+    from tzsl.studies.config import defaults  # noqa: PLC0415
 
     required = {"phac2-dap": {"dataset": {"builtin": "phac2-penn"}}, "zero-shot": {"dataset": {"builtin": "phac2-penn"}},
                 "hand": {"dataset": {"builtin": "hand-simulated"}}}.get(study, {})

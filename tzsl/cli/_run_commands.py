@@ -49,13 +49,12 @@ def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, dat
     """Run a study: an experiment file (TOML) or a built-in study by NAME.
 
     Built-in studies: phac2-dap, phac2-gzsl, fabric, fabric-deep, hand-simulated (the files
-    in tzsl/experiments/builtin/; print one with 'tzsl run NAME --print-config'). Every
+    in tzsl/studies/builtin/; print one with 'tzsl run NAME --print-config'). Every
     unknown key, wrong type or bad value is reported as FILE: key.path: reason. Options
     override the file's settings. See experiments/README.md.
     """
-    from tzsl.experiments.config import load_experiment, to_toml  # noqa: PLC0415
-    from tzsl.experiments.engine import check_experiment, override_values, run_experiment  # noqa: PLC0415
-    from tzsl.experiments.study_labels import ZERO_SHOT_STUDIES  # noqa: PLC0415
+    from tzsl.studies.config import get_study, load_experiment, to_toml  # noqa: PLC0415
+    from tzsl.studies.engine import check_experiment, override_values, run_experiment  # noqa: PLC0415
 
     overrides = _overrides(out, n_jobs, seed, backend, scheduler, no_progress, data_dir)
     exp = load_experiment(experiment)
@@ -66,11 +65,9 @@ def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, dat
         return
     if check:
         check_experiment(exp)
-        if exp.study in ZERO_SHOT_STUDIES:
-            from tzsl.experiments.study_runners import prepare_phac2  # noqa: PLC0415
-
-            for relaxed in prepare_phac2(exp)[-1]:  # reads the dataset and split file; no fit
-                click.echo(f"note: relaxed {relaxed.line()}")
+        notes = get_study(exp.study).hook("notes")
+        for note in notes(exp) if notes is not None else []:  # may read the dataset and split file; no fit
+            click.echo(f"note: {note}")
         click.echo(f"{exp.source}: valid ({exp.study}); 'tzsl run {experiment} --print-config' shows every value")
         return
     start = time.perf_counter()
@@ -101,8 +98,8 @@ def reproduce_tables(out, n_jobs, backend, scheduler, no_progress, data_dir, for
     'tzsl run NAME' does, into one folder with one manifest.json. The hand study runs on
     SIMULATED grasps (the paper's Shadow-hand data are not public).
     """
-    from tzsl.experiments.reproduce import REPRODUCE_STUDIES  # noqa: PLC0415
-    from tzsl.experiments.reproduce import reproduce_tables as reproduce  # noqa: PLC0415
+    from tzsl.studies.reproduce import REPRODUCE_STUDIES  # noqa: PLC0415
+    from tzsl.studies.reproduce import reproduce_tables as reproduce  # noqa: PLC0415
 
     start = time.perf_counter()
     results = reproduce(out, force=force, echo=click.echo, studies=tuple(studies) or REPRODUCE_STUDIES,
@@ -132,7 +129,7 @@ def report(results_dir: Path, out: Path | None, force: bool) -> None:
     Every CSV table (paper columns shaded), every PNG figure (embedded) and every manifest
     (collapsible), with the tzsl version and date. No other file is needed to view it.
     """
-    from tzsl.experiments.report import write_report  # noqa: PLC0415
+    from tzsl.reporting.report import write_report  # noqa: PLC0415
 
     path = write_report(results_dir, out=out, force=force)
     click.echo(f"wrote {path} ({path.stat().st_size / 1024:.0f} KiB)")

@@ -6,7 +6,7 @@ accuracy, per-attribute balanced accuracy, generalised-ZSL scores), the calibrat
 (expected calibration error, Brier score, reliability table); mean and std rows over
 splits or seeds (:func:`summarise_over_splits`, the one place studies average); the GZSL
 protocol's held-out trials and calibrated stacking; hyper-parameter selection on training
-classes only (:func:`select_embedding_alpha`). The studies in :mod:`tzsl.experiments` import
+classes only (:func:`select_embedding_alpha`). The studies in :mod:`tzsl.studies` import
 these from here.
 """
 
@@ -92,12 +92,12 @@ from tzsl.evaluation._zero_shot_check import (  # noqa: E402
 
 __all__ += ["ZeroShotVariant", "seen_test_classes", "zero_shot_variant"]
 
-# GZSL protocol pieces (moved from tzsl.experiments.gzsl)
+# GZSL protocol pieces (moved from tzsl.studies.zero_shot.gzsl)
 from tzsl.evaluation._gzsl import choose_stacking_constant, holdout_trials, stacked_predict  # noqa: E402
 
 __all__ += ["choose_stacking_constant", "holdout_trials", "stacked_predict"]
 
-# model selection on training classes (moved from tzsl.experiments.fabric)
+# model selection on training classes (moved from tzsl.studies.fabric.study)
 from tzsl.evaluation._model_selection import DEFAULT_ALPHAS, select_embedding_alpha  # noqa: E402
 
 __all__ += ["DEFAULT_ALPHAS", "select_embedding_alpha"]
@@ -121,3 +121,14 @@ from tzsl.evaluation._calibration import (  # noqa: E402
 __all__ += ["CALIBRATION_METRICS", "DEFAULT_N_BINS", "CalibrationTerms", "add_calibration_columns", "brier_score",
             "calibration_columns", "calibration_intervals", "calibration_terms", "equal_mass_bins",
             "expected_calibration_error", "expected_ece_if_calibrated", "reliability_table"]
+
+# Trust columns: the interval, chance and majority baseline beside every accuracy a study writes.
+from tzsl.evaluation._trust import (  # noqa: E402
+    INTERVAL_DOC,
+    Outcomes,
+    add_trust_columns,
+    attribute_intervals,
+    interval_columns,
+)
+
+__all__ += ["INTERVAL_DOC", "Outcomes", "add_trust_columns", "attribute_intervals", "interval_columns"]

@@ -5,7 +5,7 @@ test trials; :func:`stacked_predict` and :func:`choose_stacking_constant` are ca
 (Chao et al., ECCV 2016): a constant ``gamma`` subtracted from every seen class's score before
 the argmax, chosen to maximise the harmonic mean of seen and unseen per-class mean accuracy
 (:func:`tzsl.evaluation.gzsl_scores`) on labelled calibration data. The study that composes
-them is :mod:`tzsl.experiments.gzsl`.
+them is :mod:`tzsl.studies.zero_shot.gzsl`.
 """
 
 from __future__ import annotations

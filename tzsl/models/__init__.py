@@ -92,7 +92,7 @@ from tzsl.models._registry import (
     unregister_method,
 )
 from tzsl.models._score_ensemble import ScoreEnsembleZSL, zscore_rows
-from tzsl.models._cache import FITS_FOLDER, FitStore, count_fits, fit_cached, fit_store_counts, resolve_store
+from tzsl._fit_store import FITS_FOLDER, FitStore, count_fits, fit_cached, fit_store_counts, resolve_store
 from tzsl.models._posterior_calibration import (
     CALIBRATIONS,
     CalibratedZeroShotClassifier,

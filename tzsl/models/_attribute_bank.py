@@ -24,7 +24,7 @@ from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_svm import AttributeSVM
 from tzsl.models._attribute_training import AUTO_MAX_EXACT_TRIALS, SOLVERS, AttributeTrainingError, GridEdgeWarning
 from tzsl.models._scalable_attribute import ScalableAttributeClassifier
-from tzsl.models._cache import (
+from tzsl._fit_store import (
     array_digest,
     count_fits,
     fit_clone,

@@ -2,7 +2,7 @@
 
 The DAP paper (§4.4) compares its independent per-attribute SVMs with a multi-label SVM from
 scikit-multilearn that drops the independence assumption (the paper's two accuracies are
-``DAP_INDEPENDENT_ACCURACY`` and ``DAP_MULTILABEL_ACCURACY`` of :mod:`tzsl.experiments.paper_numbers`). scikit-
+``DAP_INDEPENDENT_ACCURACY`` and ``DAP_MULTILABEL_ACCURACY`` of :mod:`tzsl.studies.paper_numbers`). scikit-
 multilearn is unmaintained, so the joint model here is a **classifier chain** (Read et al., 2011;
 the same idea as :class:`sklearn.multioutput.ClassifierChain`) per sensor:
 
@@ -31,7 +31,7 @@ from sklearn.utils._param_validation import StrOptions
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_bank import AttributeClassifierBank
 from tzsl.models._attribute_training import default_preprocessor
-from tzsl.models._cache import array_digest, resolve_store, spawn_seeds
+from tzsl._fit_store import array_digest, resolve_store, spawn_seeds
 
 __all__ = ["MultiLabelAttributeClassifier"]
 

@@ -30,7 +30,7 @@ from sklearn.utils.validation import check_array, check_is_fitted
 
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_svm import AttributeSVM
-from tzsl.models._cache import fit_cached
+from tzsl._fit_store import fit_cached
 from tzsl.models._dap import break_ties
 from tzsl.models._registry import get_method
 from tzsl.models._validation import ValidatedParamsMixin

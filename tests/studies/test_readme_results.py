@@ -1,0 +1,190 @@
+"""Generated number blocks (README, benchmark README) from result CSVs (tzsl.reporting.readme_results)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from tzsl.exceptions import ConfigError
+from tzsl.reporting.readme_results import BEGIN, END, begin, end, main, results_block, update_file
+from tzsl.studies.reproduce import reproduce_tables
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_reproduce import TINY_HAND  # noqa: E402
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def _results(root):
+    root.mkdir()
+    pd.DataFrame({
+        "split": ["1", "2", "mean", "std", "control"], "chance": [0.1] * 5,
+        "maxdap": [0.3, 0.2, 0.25, 0.07, 0.1], "maxdap_ci95_low": [0.2, 0.1, 0.15, None, 0.08],
+        "maxdap_ci95_high": [0.4, 0.3, 0.35, None, 0.12],
+        "avgdap": [0.35, 0.27, 0.31, 0.06, 0.099], "avgdap_ci95_low": [0.3, 0.2, 0.2412, None, 0.07],
+        "avgdap_ci95_high": [0.4, 0.33, 0.3791, None, 0.13], "paper_maxdap": [None, None, 0.37, None, None],
+        "paper_avgdap": [None, None, 0.39, None, None],
+    }).to_csv(root / "table1_fusion.csv", index=False)
+    sub = root / "fabric"
+    sub.mkdir()
+    pd.DataFrame({
+        "condition": ["depth-sequence"] * 2, "config": [1, 1], "protocol": ["paper", "zero-shot-drop"],
+        "zero_shot": [False, True], "test_groups": ["0 5 7", "0 7"], "chance": [1 / 3, 0.5],
+        "majority": [0.48, 0.55], "lam_0": [0.45, 0.6], "lam_0_ci95_low": [0.3, 0.4], "lam_0_ci95_high": [0.6, 0.8],
+        "lam_0_pcma": [0.4, 0.58], "lam_0_pcma_ci95_low": [0.3, 0.41], "lam_0_pcma_ci95_high": [0.5, 0.77],
+        "paper_lam_0": [0.7545, None], "paper_row": ["Average", ""],
+    }).to_csv(sub / "fabric_table1.csv", index=False)
+    pd.DataFrame({"data": ["simulated"] * 2, "seed": ["0", "mean"], "method": ["LDAP"] * 2, "all": [0.5, 0.5],
+                  "all_ci95_low": [0.4, 0.41], "all_ci95_high": [0.6, 0.59], "chance": [0.1, 0.1],
+                  "paper_all": [None, 0.5963]}).to_csv(root / "hand_table5.csv", index=False)
+    return root
+
+
+def test_block_shows_ours_with_interval_baseline_and_paper(tmp_path):
+    block = results_block(_results(tmp_path / "results"))
+    assert "| PHAC-2 Table 1, AVGDAP (uniform prior), mean of 2 random splits | 0.310 [0.241, 0.379] | chance 0.100; " \
+           "shuffled-rows control 0.099 [0.070, 0.130] | 0.39 |" in block
+    assert "zero-shot variant (zero-shot-drop: test groups 0 7), per-class mean accuracy | 0.580 [0.410, 0.770]" in block
+    assert "NOT zero-shot" in block and "majority 0.480" in block and "0.7545" in block
+    assert "Hand Table 5 (SIMULATED grasps), LDAP" in block and "0.500 [0.410, 0.590]" in block
+
+
+def test_update_rewrites_only_the_block_and_check_reports_drift(tmp_path):
+    results = _results(tmp_path / "results")
+    readme = tmp_path / "README.md"
+    readme.write_text(f"# title\n\n## Results\n{BEGIN}\nold numbers\n{END}\n\n## After\ntext\n")
+    assert update_file(readme, results, check=True)
+    assert "old numbers" in readme.read_text()  # check does not write
+    assert main([str(results), str(readme), "--check"]) == 1
+    assert main([str(results), str(readme)]) == 0
+    text = readme.read_text()
+    assert "old numbers" not in text and text.startswith("# title\n\n## Results\n") and text.endswith("## After\ntext\n")
+    assert "0.310 [0.241, 0.379]" in text
+    assert main([str(results), str(readme), "--check"]) == 0  # up to date: no drift
+    assert not update_file(readme, results)
+
+
+def test_errors(tmp_path):
+    with pytest.raises(ConfigError, match="no such results folder"):
+        results_block(tmp_path / "missing")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(ConfigError, match="none of the result tables"):
+        results_block(tmp_path / "empty")
+    readme = tmp_path / "README.md"
+    readme.write_text("no markers\n")
+    with pytest.raises(ConfigError, match="needs a"):
+        update_file(readme, _results(tmp_path / "r"))
+    readme.write_text(f"{begin('nope')}\n{end('nope')}\n")
+    with pytest.raises(ConfigError, match="unknown block 'nope'"):
+        update_file(readme, tmp_path / "r")
+    readme.write_text(f"{BEGIN}\nx\n{END}\n{BEGIN}\ny\n{END}\n")
+    with pytest.raises(ConfigError, match="needs exactly one"):
+        update_file(readme, tmp_path / "r")
+    readme.write_text(f"{BEGIN}\nno end\n")
+    with pytest.raises(ConfigError, match="needs exactly one"):
+        update_file(readme, tmp_path / "r")
+    assert main([str(tmp_path / "r"), str(readme)]) == 3
+
+
+def test_repository_readme_has_the_block():
+    text = (REPO / "README.md").read_text()
+    assert text.count(BEGIN) == 1 and text.count(END) == 1
+    bench = (REPO / "experiments" / "benchmarks" / "README.md").read_text()
+    assert bench.count(begin("phac2-accuracy-benchmark")) == 1 and bench.count(end("phac2-accuracy-benchmark")) == 1
+
+
+
+
+def test_check_on_a_tiny_reproduce_run_passes_then_fails_on_drift(tmp_path):
+    """The README's own block mechanism on CSVs the shipped reproduce-tables writes (a tiny hand study)."""
+    study = tmp_path / "hand.toml"
+    study.write_text(TINY_HAND)
+    reproduce_tables(tmp_path / "results", studies=(str(study),))
+    readme = tmp_path / "README.md"
+    readme.write_text((REPO / "README.md").read_text())
+    assert main([str(tmp_path / "results"), str(readme), "--check"]) == 1  # the repository's block is another run's
+    assert main([str(tmp_path / "results"), str(readme)]) == 0
+    assert main([str(tmp_path / "results"), str(readme), "--check"]) == 0
+    table = pd.read_csv(tmp_path / "results" / "hand_table5.csv")
+    mean = table["seed"].astype(str) == "mean"
+    assert f"{table.loc[mean, 'all'].iloc[0]:.3f} [" in readme.read_text()
+    table.loc[mean, "all"] += 0.01  # the results move: the committed numbers drift
+    table.to_csv(tmp_path / "results" / "hand_table5.csv", index=False)
+    assert main([str(tmp_path / "results"), str(readme), "--check"]) == 1
+
+
+@pytest.fixture
+def accuracy_benchmark(monkeypatch):
+    """The PHAC-2 accuracy benchmark's stage-2 module (experiments/benchmarks/phac2_accuracy.py)."""
+    monkeypatch.syspath_prepend(str(REPO / "experiments" / "benchmarks"))
+    import phac2_accuracy  # noqa: PLC0415
+
+    yield phac2_accuracy
+    sys.modules.pop("phac2_accuracy", None)
+    sys.modules.pop("phac2_posteriors", None)
+
+
+def test_benchmark_block_from_the_benchmarks_own_summary(tmp_path, accuracy_benchmark):
+    """accuracy.csv as the benchmark's summarise writes it (synthetic trials) -> the benchmark README's block."""
+    rng = np.random.default_rng(0)
+    frames = []
+    for kind, n_splits in (("random", 4), ("challenging", 2)):
+        for split in range(n_splits):
+            classes = np.repeat(np.arange(5), 4)
+            for method, p in (("dap-avg[paper]", 0.3), ("sae", 0.5)):
+                frames.append(pd.DataFrame({"kind": kind, "split": f"{kind}{split}", "method": method, "class": classes,
+                                            "correct": (rng.random(classes.size) < p).astype(float), "weight": np.nan}))
+    table = accuracy_benchmark.summarise(pd.concat(frames, ignore_index=True))
+    out = tmp_path / "bench"
+    out.mkdir()
+    table.to_csv(out / "accuracy.csv", index=False, float_format="%.4f")
+    pd.DataFrame({"grid": ["paper"], "n_fits": [10], "mean_cv_log_loss": [0.47], "gamma=0.01": [0.9],
+                  "gamma=0.1": [0.1]}).to_csv(out / "grid_summary.csv", index=False)
+    readme = tmp_path / "README.md"
+    readme.write_text((REPO / "experiments" / "benchmarks" / "README.md").read_text())
+    assert main([str(out), str(readme)]) == 0
+    text = readme.read_text()
+    assert "| method | random (4 splits) | diff | challenging (2 splits) | diff |" in text
+    sae = table[(table.method == "sae") & (table.kind == "random")].iloc[0]
+    assert (f"| `sae` | {sae.accuracy:.3f} [{sae.ci95_low:.3f}, {sae.ci95_high:.3f}] | "
+            f"{sae.diff_vs_avgdap:+.3f} [{sae.diff_ci95_low:+.3f}, {sae.diff_ci95_high:+.3f}] |") in text
+    assert "| `dap-avg[paper]` | " in text and "| paper | 10 | 0.470 | 90% | 10% |" in text
+    assert main([str(out), str(readme), "--check"]) == 0
+    with pytest.raises(ConfigError, match="no accuracy.csv"):
+        update_file(readme, tmp_path / "empty")
+
+
+def test_block_tabulates_every_method_by_study_from_the_comparison(tmp_path):
+    root = _results(tmp_path / "results")
+    pd.DataFrame({
+        "study": ["phac2-random", "phac2-random", "phac2-random", "hand"],
+        "data": ["real", "real", "real", "simulated"],
+        "method": ["dap-avg", "sae", "ldap", "sae"],
+        "accuracy": [0.31, 0.35, None, 0.3], "ci95_low": [0.19, 0.24, None, 0.2], "ci95_high": [0.44, 0.46, None, 0.4],
+        "paper_accuracy": [0.39, None, None, None], "chance": [0.1, 0.1, None, 0.1],
+        "difference": [None, 0.04, None, -0.1], "difference_ci95_low": [None, -0.07, None, -0.2],
+        "difference_ci95_high": [None, 0.16, None, 0.0], "reference": ["dap-avg"] * 3 + ["ldap"],
+        "note": ["", "", "not applicable: takes grasps", ""],
+    }).to_csv(root / "method_comparison.csv", index=False)
+    block = results_block(root)
+    assert "| method | phac2-random, ref. dap-avg, chance 0.10 | hand (SIMULATED), ref. ldap, chance 0.10 |" in block
+    assert "| `dap-avg` | 0.31 (0.19-0.44) [0.39] |  |" in block
+    assert "| `sae` | 0.35 (0.24-0.46), Δ +0.04 (-0.07, +0.16) | 0.30 (0.20-0.40), Δ -0.10 (-0.20, +0.00) |" in block
+    assert "| `ldap` | n/a |  |" in block
+
+
+def test_one_file_holds_several_named_blocks(tmp_path, monkeypatch):
+    from tzsl.reporting import readme_results  # noqa: PLC0415
+
+    monkeypatch.setitem(readme_results.BLOCKS, "a", lambda root: f"A from {root.name}")
+    monkeypatch.setitem(readme_results.BLOCKS, "a-b", lambda root: "AB")
+    page = tmp_path / "page.md"
+    page.write_text(f"x\n{begin('a-b')}\nold\n{end('a-b')}\nmiddle\n{begin('a')}\nold\n{end('a')}\ny\n")
+    assert update_file(page, tmp_path)
+    assert page.read_text() == (f"x\n{begin('a-b')}\nAB\n{end('a-b')}\nmiddle\n{begin('a')}\nA from {tmp_path.name}\n"
+                                f"{end('a')}\ny\n")
+    assert not update_file(page, tmp_path, check=True)

@@ -1,0 +1,137 @@
+"""``tzsl reproduce-tables`` is the built-in experiment files run by the engine: no second code path."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from tzsl.exceptions import ConfigError
+from tzsl.studies import engine
+from tzsl.studies.config import load_experiment
+from tzsl.studies.reproduce import REPRODUCE_STUDIES, reproduce_experiments, reproduce_tables
+from tzsl.models import available_methods
+
+
+def test_reproduce_runs_the_builtin_files_unchanged():
+    assert REPRODUCE_STUDIES == ("phac2-dap", "fabric", "hand-simulated", "active-touch")
+    for name, exp in zip(REPRODUCE_STUDIES, reproduce_experiments(), strict=True):
+        assert exp.config == load_experiment(name).config, name
+
+
+@pytest.fixture
+def recorded(monkeypatch):
+    """Replace the study execution by a recorder of the experiments it receives."""
+    seen: list = []
+
+    def fake_execute(exp, results, echo=None):
+        seen.append((exp.source, exp.config))
+        results.write_csv(f"{exp.study}.csv", __import__("pandas").DataFrame({"x": [1]}))
+        return engine.StudyRun({exp.study: None}, {"study_kind": exp.study})
+
+    monkeypatch.setattr(engine, "execute_study", fake_execute)
+    monkeypatch.setattr(engine, "check_experiment", lambda exp: None)
+    return seen
+
+
+def test_reproduce_and_tzsl_run_hand_the_engine_the_same_configs(recorded, tmp_path):
+    from tzsl.cli import cli
+    result = CliRunner().invoke(cli, ["reproduce-tables", "--out", str(tmp_path / "all"), "--n-jobs", "2",
+                                      "--no-progress"])
+    assert result.exit_code == 0, result.output
+    from_reproduce = list(recorded)
+    recorded.clear()
+    for name in REPRODUCE_STUDIES:
+        ran = CliRunner().invoke(cli, ["run", name, "--out", str(tmp_path / name), "--n-jobs", "2", "--no-progress"])
+        assert ran.exit_code == 0, ran.output
+    from_run = [(source, config.model_dump(exclude={"output"})) for source, config in recorded]
+    assert [(s, c.model_dump(exclude={"output"})) for s, c in from_reproduce] == from_run
+    assert [s for s, _ in from_run] == [f"builtin:{n}" for n in REPRODUCE_STUDIES]
+    assert all(c["compute"]["n_jobs"] == 2 and c["compute"]["progress"] is False for _, c in from_run)
+    manifest = json.loads((tmp_path / "all" / "manifest.json").read_text())
+    assert manifest["reproduce_studies"] == list(REPRODUCE_STUDIES)
+    assert sorted(manifest["config"]["studies"]) == sorted(REPRODUCE_STUDIES)
+    assert "resolved_toml" in manifest["config"]["studies"]["phac2-dap"]
+
+
+def test_reproduce_refuses_existing_results_before_any_study(recorded, tmp_path):
+    (tmp_path / "manifest.json").write_text("{}")
+    with pytest.raises(ConfigError, match="already exists"):
+        reproduce_tables(tmp_path)
+    assert recorded == []
+
+
+TINY_PHAC2 = """
+study = "phac2-dap"
+[dataset]
+builtin = "phac2-penn"
+data_dir = "{data_dir}"
+[splits]
+kinds = ["random"]
+n_splits = 1
+[svm]
+cv = 3
+n_C = 1
+n_gamma = 1
+n_draws = 1
+[compute]
+cache = false
+progress = false
+"""
+
+TINY_HAND = """
+study = "hand"
+[dataset]
+builtin = "hand-simulated"
+[simulation]
+n_grasps_per_object = 20
+[methods]
+max_T = 2
+max_k = 2
+sequence_length = 4
+n_sequences = 4
+[splits]
+seeds = [0]
+[compute]
+progress = false
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.realdata
+def test_reproduce_csvs_are_byte_identical_to_running_each_file(tmp_path, data_dir):
+    phac2 = tmp_path / "phac2.toml"
+    phac2.write_text(TINY_PHAC2.format(data_dir=data_dir))
+    hand = tmp_path / "hand.toml"
+    hand.write_text(TINY_HAND)
+    reproduce_tables(tmp_path / "all", studies=(str(phac2), str(hand)))
+    engine.run_experiment(phac2, out=tmp_path / "phac2")
+    engine.run_experiment(hand, out=tmp_path / "hand")
+    together = {p.name: p.read_bytes() for p in (tmp_path / "all").glob("*.csv")}
+    alone = {p.name: p.read_bytes() for d in ("phac2", "hand") for p in (tmp_path / d).glob("*.csv")}
+    assert {"table1_fusion.csv", "table2_priors.csv", "hand_table5.csv"} <= set(together)
+    # method comparisons hold wall-clock fit times: equal but for those
+    timed = {"hand_method_comparison.csv", "method_comparison.csv"}
+    assert {k: v for k, v in together.items() if k not in timed} == {k: v for k, v in alone.items() if k not in timed}
+    read = lambda p: pd.read_csv(p).drop(columns="fit_seconds")  # noqa: E731
+    rows = read(tmp_path / "hand" / "hand_method_comparison.csv")
+    pd.testing.assert_frame_equal(read(tmp_path / "all" / "hand_method_comparison.csv"), rows)
+    combined = read(tmp_path / "all" / "method_comparison.csv")  # reproduce-tables only: every method x study
+    pd.testing.assert_frame_equal(combined.iloc[: len(rows)], rows, check_dtype=False)
+    rest = combined.iloc[len(rows):]
+    assert set(rest["method"]) | set(rows["method"].str.split("_").str[0]) == set(available_methods())
+    assert rest["accuracy"].isna().all() and rest["note"].str.startswith("not").all()
+    manifest = json.loads((tmp_path / "all" / "manifest.json").read_text())
+    assert manifest["reproduce_studies"] == [str(phac2), str(hand)]
+    assert set(manifest["outputs"]) >= {f"{name}" for name in together}
+
+
+def test_reproduce_tables_paths(tmp_path):
+    """Built-in names and experiment files both work as studies."""
+    path = Path(tmp_path / "h.toml")
+    path.write_text(TINY_HAND)
+    (exp,) = reproduce_experiments((str(path),), n_jobs=2, seed=5)  # no seed key in a hand study: skipped
+    assert exp.config.compute.n_jobs == 2 and exp.config.splits.seeds == [0]

@@ -1,0 +1,75 @@
+"""Calibration in a study: posterior columns, ECE/Brier columns, reliability table, figure and report section.
+
+Simulated posteriors (labels drawn from them: calibrated by construction; sharpened: over-confident).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from tzsl.reporting.report import render_report
+from tzsl.studies.study_calibration import (
+    CALIBRATION_COLUMNS,
+    posterior_columns,
+    reliability_by_method,
+    reliability_figure,
+)
+from tzsl.studies.study_methods import COMPARISON_COLUMNS, comparison_trials, method_summary
+
+
+def _split(rng, n_classes=10, trials=30):
+    logits = rng.standard_normal((n_classes * trials, n_classes)) * 1.5
+    P = np.exp(logits) / np.exp(logits).sum(axis=1, keepdims=True)
+    y = (rng.random((len(P), 1)) > np.cumsum(P, axis=1)).sum(axis=1)
+    Q = P**4 / (P**4).sum(axis=1, keepdims=True)
+    return P, Q, y, np.repeat(np.arange(n_classes), trials)
+
+
+def _trials(rng):
+    parts = []
+    for s in range(4):
+        P, Q, y, objects = _split(rng)
+        classes = np.array([f"s{s}o{o}" for o in objects])
+        pred = P.argmax(axis=1)
+        # "calibrated": predict_proba is the true posterior, the method's own is sharpened
+        parts.append(comparison_trials("calibrated", s, classes, pred == y, **posterior_columns(P, Q, y, pred)))
+        parts.append(comparison_trials("raw", s, classes, pred == y, **posterior_columns(Q, Q, y, pred)))
+        parts.append(comparison_trials("no-posterior", s, classes, pred == y))
+    return pd.concat(parts, ignore_index=True)
+
+
+def test_method_summary_has_ece_and_brier_with_intervals(tmp_path):
+    trials = _trials(np.random.default_rng(0))
+    table = method_summary(trials, {}, 0.1, "calibrated", study="simulated-study", data="simulated")
+    assert list(table.columns) == COMPARISON_COLUMNS and set(CALIBRATION_COLUMNS) <= set(table.columns)
+    t = table.set_index("method")
+    assert t.loc["calibrated", "ece"] < 0.05 < 0.15 < t.loc["raw", "ece"]
+    assert t.loc["calibrated", "ece_uncalibrated"] == t.loc["raw", "ece"]  # same raw posteriors, same trials
+    assert t.loc["calibrated", "brier"] < t.loc["calibrated", "brier_uncalibrated"]
+    assert (t.loc[["calibrated", "raw"], "ece_ci95_low"] <= t.loc[["calibrated", "raw"], "ece"]).all()
+    assert (t.loc[["calibrated", "raw"], "brier_ci95_high"] > t.loc[["calibrated", "raw"], "brier"]).all()
+    assert t.loc["no-posterior", CALIBRATION_COLUMNS].isna().all()
+    assert t.loc["raw", "accuracy"] == t.loc["calibrated", "accuracy"]
+
+
+def test_reliability_table_figure_and_report_section(tmp_path):
+    trials = _trials(np.random.default_rng(1))
+    rel = reliability_by_method(trials, "simulated-study")
+    assert set(rel["method"]) == {"calibrated", "raw"} and set(rel["posterior"]) == {"calibrated", "uncalibrated"}
+    assert rel.groupby(["method", "posterior"])["n_trials"].sum().eq(1200).all()
+    over = rel[(rel["method"] == "raw") & (rel["posterior"] == "calibrated")]
+    top = over[over["bin"] == over["bin"].max()].iloc[0]
+    assert top["accuracy"] < top["confidence"] - 0.05  # over-confident: below the diagonal
+    summary = method_summary(trials, {}, 0.1, "calibrated", study="simulated-study", data="simulated")
+    fig = reliability_figure(rel, summary)
+    labels = [t.get_text() for ax in fig.axes for t in ax.get_legend().get_texts()]
+    assert any(label.startswith("raw (ECE ") for label in labels)
+    root = tmp_path / "res"
+    root.mkdir()
+    fig.savefig(root / "phac2_reliability.png")
+    rel.to_csv(root / "phac2_reliability.csv", index=False)
+    summary.to_csv(root / "phac2_method_comparison.csv", index=False)
+    page = render_report(root)
+    assert 'id="calibration"' in page and page.index('id="calibration"') < page.index("phac2_reliability.png")
+    assert "phac2_reliability.csv" in page and "ece_uncalibrated" in page and "brier" in page

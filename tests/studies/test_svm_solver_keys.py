@@ -1,0 +1,56 @@
+"""``[svm] solver`` and ``max_exact_trials``: validated, defaults from AttributeClassifierBank, passed to the bank."""
+
+from __future__ import annotations
+
+import inspect
+from pathlib import Path
+
+import pytest
+
+from tzsl.exceptions import ConfigError
+from tzsl.studies.config import load_experiment
+from tzsl.studies.study_settings import dap_config
+from tzsl.studies.zero_shot.study import attribute_bank
+from tzsl.models import AttributeClassifierBank
+
+
+def _experiment(tmp_path: Path, svm: str):
+    path = tmp_path / "exp.toml"
+    path.write_text(f"study = 'phac2-dap'\n[dataset]\nplain = 'd'\n[svm]\n{svm}\n")
+    return load_experiment(path)
+
+
+def test_defaults_are_the_banks():
+    svm = load_experiment("phac2-dap").config.svm
+    params = inspect.signature(AttributeClassifierBank).parameters
+    assert svm.solver == params["solver"].default
+    assert svm.max_exact_trials == params["max_exact_trials"].default
+
+
+def test_schema_offers_exactly_the_banks_solvers():
+    from tzsl.studies.config._phac2 import Phac2Svm
+    from tzsl.models._attribute_training import SOLVERS
+
+    field = Phac2Svm.model_fields["solver"]
+    assert set(field.annotation.__args__) == set(SOLVERS)
+
+
+def test_the_keys_reach_the_estimator(tmp_path):
+    exp = _experiment(tmp_path, "solver = 'approximate'\nmax_exact_trials = 123")
+    config = dap_config(exp)
+    assert (config.solver, config.max_exact_trials) == ("approximate", 123)
+    bank = attribute_bank(config, ["a", "b"], seed=0)
+    assert bank.get_params()["solver"] == "approximate"
+    assert bank.get_params()["max_exact_trials"] == 123
+    assert "solver" not in config.svm_params and "max_exact_trials" not in config.svm_params  # not SVM parameters
+
+
+@pytest.mark.parametrize(("svm", "message"), [
+    ("solver = 'fast'", "svm.solver: 'fast': expected 'auto', 'exact' or 'approximate'"),
+    ("max_exact_trials = 0", "svm.max_exact_trials: 0: must be >= 1"),
+    ("max_exact_trials = 'many'", "svm.max_exact_trials: 'many': expected a valid integer"),
+])
+def test_bad_values_are_named_with_file_and_key(tmp_path, svm, message):
+    with pytest.raises(ConfigError) as err:
+        _experiment(tmp_path, svm)
+    assert f"{tmp_path / 'exp.toml'}: {message}" in str(err.value)

@@ -1,1 +1,0 @@
-"""Studies: compose data, features, models and evaluation; write tables, figures, manifest."""

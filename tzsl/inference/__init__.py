@@ -1,0 +1,1 @@
+"""Inference for robots: model bundles, ``tzsl predict`` inputs and the next-EP suggestion."""

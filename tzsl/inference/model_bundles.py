@@ -1,0 +1,263 @@
+"""Save fitted zero-shot models as bundles that ``tzsl predict`` reads through one path.
+
+Every bundle of kind ``"zero-shot"`` (:data:`ZERO_SHOT_KIND`) holds the same three things,
+whatever the method (any of ``tzsl methods`` that is an attribute model + decision rule, and the
+hand's :class:`~tzsl.models.HandDAPClassifier`):
+
+payload (skops, see :mod:`tzsl.bundle`: loading it runs no code)
+    ``{"model": fitted estimator, "decision_rule": fitted DecisionRule}``, plus ``"calibration"``
+    (a plain dict: the temperature and how it was fitted,
+    :attr:`tzsl.models.CalibratedZeroShotClassifier.calibration_info_`) when the model was saved
+    from a calibrated method; bundles without it predict with the method's own posteriors
+    (``tzsl predict`` says "uncalibrated").
+    ``model.attribute_scores(X)`` gives the attribute scores (a fitted
+    :class:`~tzsl.models.ZeroShotClassifier`; a HandDAPClassifier gives its fused posteriors) and
+    ``decision_rule`` turns them and a class-attribute table given at predict time into class
+    scores (priors, sensor fusion and tie-breaking live there).
+metadata (JSON)
+    ``method``: the registry name; ``attribute_names``: list of m str, the rule's attribute axis;
+    ``input``: the feature schema :mod:`tzsl.inference.predict_inputs` reads inputs with;
+    plus provenance (``training_objects``, ``seed``, ``dataset``, ...).
+
+The deep CNN + LSTM keeps its own bundle kind ``"deep"`` (its weights are an ``.npz`` payload,
+:func:`tzsl.models.save_deep_bundle`); ``tzsl predict`` composes it with a
+:class:`~tzsl.models.NearestAttributeRule` on loading, so it is predicted the same way.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from tzsl.bundle import save_bundle
+from tzsl.datasets import FeatureSet, HandTable, read_grasps
+from tzsl.exceptions import ConfigError
+from tzsl.models import (
+    CalibratedZeroShotClassifier,
+    DAPRule,
+    DecisionRule,
+    HandDAPClassifier,
+    ZeroShotClassifier,
+    get_method,
+)
+
+__all__ = [
+    "DEEP_KIND",
+    "ZERO_SHOT_KIND",
+    "feature_schema",
+    "save_model_bundle",
+    "save_zero_shot_bundle",
+    "train_attribute_bundle",
+    "train_hand_bundle",
+    "training_subset",
+]
+
+#: Bundle kind of every skops-stored zero-shot model.
+ZERO_SHOT_KIND = "zero-shot"
+#: Bundle kind of the deep CNN + LSTM (npz weights).
+DEEP_KIND = "deep"
+
+
+def feature_schema(features: FeatureSet, ndim: int) -> dict:
+    """The ``input`` metadata of a model fitted on ``features``.
+
+    Parameters
+    ----------
+    features : FeatureSet
+        The training features: their sensors and feature names are the layout the model reads.
+        Signal datasets (``features.info`` holding ``statistics``) also record the channels,
+        statistics and baseline rows, so signal files can be given at predict time.
+    ndim : {2, 3}
+        The method's input (:attr:`tzsl.models.Method.input_ndim`).
+    """
+    if ndim not in (2, 3):
+        raise ConfigError(f"ndim must be 2 or 3, got {ndim!r}")
+    schema: dict[str, Any] = {"format": "features", "sensors": [str(s) for s in features.sensors],
+                              "feature_names": [str(f) for f in features.feature_names], "ndim": int(ndim)}
+    info = features.info or {}
+    if "statistics" in info:
+        schema["signals"] = {"channels": list(info["channels"]), "statistics": list(info["statistics"]),
+                             "baseline_rows": int(info.get("baseline_rows", 0))}
+    return schema
+
+
+def save_model_bundle(path: str | Path, model: Any, decision_rule: DecisionRule, *, method: str,
+                      attribute_names: Sequence[str], input_schema: dict, force: bool = False,
+                      calibration: dict | None = None, **extra) -> Path:
+    """Write a ``"zero-shot"`` bundle (layout in the module docstring).
+
+    Parameters
+    ----------
+    path : str or Path
+    model : fitted estimator with ``attribute_scores(X)``
+    decision_rule : fitted DecisionRule over ``len(attribute_names)`` attributes
+    method : str
+        Registry name (shown by ``tzsl predict``).
+    attribute_names : sequence of str, length m
+    input_schema : dict
+        The feature schema (see :func:`feature_schema`).
+    force : bool
+    calibration : dict, optional
+        How the class posteriors are calibrated (``temperature`` > 0 and how it was fitted);
+        stored in the payload. None: the method's own posteriors.
+    **extra
+        JSON-serialisable provenance.
+    """
+    if not callable(getattr(model, "attribute_scores", None)):
+        raise ConfigError(f"{type(model).__name__} has no attribute_scores(X); it cannot be saved for 'tzsl predict'")
+    if not isinstance(decision_rule, DecisionRule) or not hasattr(decision_rule, "n_attributes_"):
+        raise ConfigError("decision_rule must be a fitted tzsl.models.DecisionRule")
+    names = [str(a) for a in attribute_names]
+    if len(names) != decision_rule.n_attributes_:
+        raise ConfigError(f"{len(names)} attribute names for a rule over {decision_rule.n_attributes_} attributes")
+    metadata = {"method": method, "attribute_names": names, "input": dict(input_schema), **extra}
+    payload = {"model": model, "decision_rule": decision_rule}
+    if calibration is not None:
+        payload["calibration"] = {k: (v if isinstance(v, str | int) else float(v)) for k, v in calibration.items()}
+    return save_bundle(path, payload, kind=ZERO_SHOT_KIND, metadata=metadata, force=force)
+
+
+def save_zero_shot_bundle(path: str | Path, classifier: ZeroShotClassifier | CalibratedZeroShotClassifier,
+                          features: FeatureSet, *, method: str, ndim: int, force: bool = False, **extra) -> Path:
+    """Save a fitted :class:`~tzsl.models.ZeroShotClassifier` (or one inside its calibrator, whose
+    temperature is saved too) fitted on ``features`` (attribute columns in order)."""
+    calibration = None
+    if isinstance(classifier, CalibratedZeroShotClassifier):
+        classifier, calibration = classifier.estimator_, classifier.calibration_info_
+    if not isinstance(classifier, ZeroShotClassifier):
+        raise ConfigError(f"{type(classifier).__name__} is not an attribute model + decision rule; it cannot be "
+                          "saved for 'tzsl predict'")
+    return save_model_bundle(path, classifier, classifier.decision_rule_, method=method, calibration=calibration,
+                             attribute_names=list(features.attributes.columns),
+                             input_schema=feature_schema(features, ndim), force=force,
+                             dataset=features.dataset, **extra)
+
+
+# ---------------------------------------------------------------------------- training commands
+def training_subset(features: FeatureSet, splits_file=None, split_name: str | None = None,
+                    min_train_positives: int = 1) -> tuple[FeatureSet, str | None]:
+    """Features of one split's training objects (with the split's kept attributes), or of every object.
+
+    Returns
+    -------
+    features : FeatureSet
+    split : str or None
+        The split's name (None without ``splits_file``).
+    """
+    from tzsl.evaluation import read_splits_csv  # noqa: PLC0415
+
+    if splits_file is None:
+        return features, None
+    splits = read_splits_csv(splits_file, features.attributes, min_train_positives=min_train_positives)
+    chosen = splits[0] if split_name is None else next((s for s in splits if s.name == split_name), None)
+    if chosen is None:
+        raise ConfigError(f"{splits_file}: no split named {split_name!r}; have {[s.name for s in splits]}")
+    sub = features.subset(np.isin(features.objects, chosen.train_objects))
+    sub.attributes = sub.attributes[list(chosen.kept_attributes)]
+    return sub, chosen.name
+
+
+def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | None = None, splits_file=None,
+                           split_name: str | None = None, fusion: str = "avg", prior: str = "uni",
+                           force: bool = False) -> pd.DataFrame:
+    """Fit a zero-shot model (all objects, or one split's training objects) and save a bundle.
+
+    Parameters
+    ----------
+    features : FeatureSet
+    config : DapStudyConfig
+        The study's attribute-SVM settings (used when ``method`` is None).
+    save : path
+    method : str, optional
+        A registered attribute model + decision rule method (``tzsl methods``), fitted with its
+        defaults and ``config.seed``. None: the DAP study's tuned per-(attribute, sensor) SVMs
+        with ``fusion`` and ``prior``.
+    splits_file, split_name
+        Train on the training objects of this split only.
+    fusion : {"avg", "max"}
+    prior : {"uni", "train", "test"}
+    force : bool
+
+    Returns
+    -------
+    DataFrame
+        DAP: one row per (attribute, sensor) with the chosen ``C``, ``gamma``, under-sampling
+        draw and positive training objects; other methods: one row per attribute with its
+        positive training objects.
+    """
+    from tzsl.studies.zero_shot.study import attribute_bank, check_cv_folds, compute_context  # noqa: PLC0415
+    from tzsl.studies.study_methods import method_input, study_estimator  # noqa: PLC0415
+    from tzsl.models import attribute_rows  # noqa: PLC0415
+
+    sub, split_record = training_subset(features, splits_file, split_name, config.random_min_train_positives)
+    attributes = list(sub.attributes.columns)
+    A = sub.trial_attributes()
+    provenance = {"training_objects": sorted(set(sub.objects)), "split": split_record, "seed": config.seed}
+    if method is None:
+        check_cv_folds(config.svm_params.get("cv"), len(set(sub.objects)), "command line")
+        dap = ZeroShotClassifier(attribute_model=attribute_bank(config, attributes, config.seed),
+                                 decision_rule=DAPRule(fusion=fusion, prior=prior), random_state=config.seed)
+        clf = CalibratedZeroShotClassifier(estimator=dap, random_state=config.seed)  # its default calibration
+        with compute_context(config):
+            clf.fit(sub.X, A, sub.objects)
+        save_zero_shot_bundle(save, clf, sub, method=f"dap-{fusion}", ndim=3, force=force,
+                              undersampling=config.undersampling, **provenance)
+        rows = [{"attribute": name, "sensor": sensor, "C": getattr(est, "C_", np.nan),
+                 "gamma": getattr(est, "gamma_", np.nan), "draw": getattr(est, "draw_", -1),
+                 "positive_objects": int(sub.attributes[name].sum())}
+                for j, name in enumerate(attributes)
+                for est, sensor in zip(clf.estimator_.attribute_model_.estimators_[j], sub.sensors, strict=True)]
+        return pd.DataFrame(rows)
+    spec = {"name": method}
+    registered = get_method(method)
+    if registered.estimator is not None:
+        raise ConfigError(f"method {method!r} is a self-contained estimator; train-attributes saves attribute "
+                          "model + decision rule methods (see 'tzsl methods')")
+    clf = study_estimator(spec, config.seed)
+    objects = sub.objects
+    class_rows = sub.attributes.loc[np.unique(objects), attributes].to_numpy(dtype=float)
+    clf.fit(method_input(spec, sub.X), attribute_rows(objects, class_rows), objects)
+    save_zero_shot_bundle(save, clf, sub, method=method, ndim=registered.input_ndim, force=force, **provenance)
+    return pd.DataFrame({"attribute": attributes,
+                         "positive_objects": [int(sub.attributes[a].sum()) for a in attributes]})
+
+
+def train_hand_bundle(grasps_dir: str | Path, table: HandTable, save: str | Path, *, fusion: str = "ldap",
+                      seed: int = 0, config=None, force: bool = False) -> tuple[HandDAPClassifier, dict]:
+    """Fit the hand model on the training objects' grasps of a grasp folder and save a bundle.
+
+    The bundle holds the HandDAPClassifier (attribute scores: its fused posteriors) and a
+    :class:`~tzsl.models.DAPRule` with the model's constant attribute prior; the input schema is
+    ``{"format": "hand-grasps", "feature_params": ...}``.
+
+    Returns
+    -------
+    model : HandDAPClassifier
+    metadata : dict
+        As saved, plus ``n_training_grasps`` and ``n_ignored_grasps`` (grasps of other objects).
+    """
+    from tzsl.studies.hand.study import HandStudyConfig, feature_params, fit_hand_model, hand_features  # noqa: PLC0415
+
+    config = HandStudyConfig() if config is None else config
+    save = Path(save)
+    if save.exists() and not force:
+        raise ConfigError(f"{save} already exists; use --force to overwrite it")
+    features = hand_features(read_grasps(grasps_dir), table, config)
+    model = fit_hand_model(features, table, config, seed, fusion=fusion)
+    n_train = int(np.isin(features.objects, table.train_objects).sum())
+    names = [str(a) for a in model.K_.columns]
+    rule = DAPRule(prior=[float(model.prior)] * len(names)).fit(model.K_.to_numpy(dtype=int))
+    metadata = {
+        "material_attributes": list(model.material_attributes_), "shape_attributes": list(model.shape_attributes_),
+        "training_objects": [str(c) for c in model.classes_], "fusion": model.fusion, "prior": float(model.prior),
+        "class_table": table.source, "grasps": str(grasps_dir), "seed": int(seed),
+        "n_training_grasps": n_train, "n_ignored_grasps": len(features) - n_train,
+    }
+    schema = {"format": "hand-grasps", "feature_params": dict(feature_params(config))}
+    save_model_bundle(save, model, rule, method="hand-dap", attribute_names=names, input_schema=schema, force=force,
+                      **metadata)
+    return model, {"method": "hand-dap", "attribute_names": names, "input": schema, **metadata}

@@ -1,0 +1,433 @@
+"""Classify new grasps with a saved model bundle, grasp by grasp, with multi-grasp fusion.
+
+This is the engine of ``tzsl predict``. Every model is predicted the same way, whatever the
+method: a bundle (:mod:`tzsl.inference.model_bundles`) holds a fitted model whose
+``attribute_scores(X)`` gives attribute scores, a fitted decision rule
+(:class:`tzsl.models.DecisionRule`), the attribute names and a feature schema. The input files
+are read into the model's input by that schema (:mod:`tzsl.inference.predict_inputs`), the
+candidate classes arrive as a *class table* (their attribute rows; the grasped object's own row
+is never needed), and the rule ranks them. With several grasps the decision is fused:
+
+* **SC-MDAP** (default, ``mode="sc"``): classify grasp by grasp, in the order given, and stop at
+  the first class decided ``k`` times (DAP paper section 5.7.3). If no class reaches ``k`` the
+  result says it has *not* decided (and names the most frequent class).
+* **DF-MDAP** (``mode="df"``): average the grasps' attribute scores into one "super grasp"
+  (eqs. 11-12; per sensor, before the rule fuses sensors) and classify it; the running decision
+  after each grasp is reported too.
+
+Class table (``classes.csv``): first column the class name (any header), then one 0/1 column per
+attribute, named exactly as the model's attributes (a missing or unknown attribute is an error).
+Lines starting with ``#`` are comments, and columns named ``split`` or ``subset`` are descriptive
+and not used - so the shipped Table 4 file (``tzsl/datasets/hand_table4.csv``) works as is. A
+plain dataset folder stands for its ``classes.csv`` (then attributes the model does not know are
+ignored); ``candidates`` picks some of its rows.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from io import StringIO
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from tzsl.bundle import load_bundle, read_bundle_header
+from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
+from tzsl.inference.model_bundles import DEEP_KIND, ZERO_SHOT_KIND
+from tzsl.inference.predict_inputs import INPUT_FORMATS, describe_inputs, read_inputs
+from tzsl.models import DecisionRule, NearestAttributeRule, sc_mdap, tempered_proba
+
+__all__ = [
+    "PREDICT_KINDS",
+    "Prediction",
+    "Predictor",
+    "format_prediction",
+    "load_predictor",
+    "predict_grasps",
+    "prediction_report",
+    "read_class_table",
+    "top_ties",
+]
+
+#: Bundle kinds ``tzsl predict`` reads as a model + decision rule.
+PREDICT_KINDS: tuple[str, ...] = (ZERO_SHOT_KIND, DEEP_KIND)
+#: Keys a zero-shot bundle's payload may hold (``calibration`` is optional).
+_PAYLOAD_KEYS = {"model", "decision_rule", "calibration"}
+_DESCRIPTIVE = ("split", "subset")
+
+
+# ---------------------------------------------------------------------------- the saved model
+@dataclass
+class Predictor:
+    """A loaded bundle: model + decision rule + attribute names + feature schema.
+
+    Attributes
+    ----------
+    model : fitted estimator with ``attribute_scores(X)``
+    rule : fitted DecisionRule
+    attribute_names : list of str, length m
+    input : dict
+        Feature schema (:mod:`tzsl.inference.predict_inputs`).
+    metadata : dict
+        The bundle's metadata (with ``bundle``: kind, path, ...).
+    calibration : dict or None
+        The bundle's calibrator (``temperature`` and how it was fitted, see
+        :class:`tzsl.models.CalibratedZeroShotClassifier`); None for bundles saved without one.
+    """
+
+    model: Any
+    rule: DecisionRule
+    attribute_names: list[str]
+    input: dict
+    metadata: dict
+    calibration: dict | None = None
+
+    @property
+    def kind(self) -> str:
+        return str(self.metadata.get("bundle", {}).get("kind", ""))
+
+    @property
+    def inputs(self) -> str:
+        """What the model takes as input files."""
+        return describe_inputs(self.input)
+
+    def describe(self) -> str:
+        """One line naming the model."""
+        inner = getattr(self.model, "attribute_model_", self.model)
+        fitted = self.calibration_report()
+        calibrated = (f"calibrated (temperature {fitted['temperature']:.3g})" if fitted["calibrated"]
+                      else "uncalibrated")
+        return (f"{self.metadata.get('method', self.kind)} ({type(inner).__name__} + {type(self.rule).__name__}), "
+                f"{len(self.attribute_names)} attributes, {calibrated} posteriors; input: {self.inputs}")
+
+    @property
+    def temperature(self) -> float:
+        """The calibrator's temperature (1.0 without one)."""
+        return float(self.calibration["temperature"]) if self.calibration else 1.0
+
+    def posteriors(self, class_scores: np.ndarray) -> np.ndarray:
+        """Class posteriors ``softmax(class_scores / temperature)`` along the last axis (calibrated when the bundle is)."""
+        return tempered_proba(np.atleast_2d(class_scores), self.temperature).reshape(np.shape(class_scores))
+
+    def calibration_report(self) -> dict:
+        """How the posteriors are calibrated: ``calibrated`` (bool), ``temperature`` and the calibrator's record."""
+        if not self.calibration:
+            return {"calibrated": False, "temperature": 1.0,
+                    "reason": "uncalibrated: the bundle holds no calibrator (saved without one, or by an older tzsl)"}
+        return {"calibrated": bool(self.calibration.get("fitted", False)), **self.calibration}
+
+    def class_scores(self, scores: np.ndarray, K: np.ndarray) -> np.ndarray:
+        """Class scores (n, c) of attribute scores ``scores`` (n, ...) against the classes ``K`` (c, m)."""
+        return self.rule.decision_function(scores, K)
+
+
+def _where(metadata: dict) -> str:
+    return metadata.get("bundle", {}).get("path", "model bundle")
+
+
+def _checked(payload: Any, metadata: dict) -> Predictor:
+    where = _where(metadata)
+    if not (isinstance(payload, dict) and {"model", "decision_rule"} <= set(payload) <= _PAYLOAD_KEYS):
+        raise ModelBundleError(f"{where}: a zero-shot bundle holds {{'model', 'decision_rule'}} and optionally "
+                               f"'calibration', found "
+                               f"{sorted(payload) if isinstance(payload, dict) else type(payload).__name__}")
+    model, rule, calibration = payload["model"], payload["decision_rule"], payload.get("calibration")
+    if calibration is not None:
+        t = calibration.get("temperature") if isinstance(calibration, dict) else None
+        if not (isinstance(t, float | int) and np.isfinite(t) and t > 0):
+            raise ModelBundleError(f"{where}: the calibration is not a dict with a positive temperature ({calibration!r})")
+    if not callable(getattr(model, "attribute_scores", None)):
+        raise ModelBundleError(f"{where}: the model ({type(model).__name__}) has no attribute_scores(X)")
+    if not isinstance(rule, DecisionRule) or not hasattr(rule, "n_attributes_"):
+        raise ModelBundleError(f"{where}: the decision rule is not a fitted DecisionRule ({type(rule).__name__})")
+    missing = [k for k in ("attribute_names", "input") if k not in metadata]
+    if missing:
+        raise ModelBundleError(f"{where}: zero-shot bundle metadata lacks {missing}")
+    names, schema = metadata["attribute_names"], metadata["input"]
+    if not isinstance(names, list) or len(names) != rule.n_attributes_:
+        raise ModelBundleError(f"{where}: metadata attribute_names do not match the rule's "
+                               f"{rule.n_attributes_} attributes")
+    if not isinstance(schema, dict) or schema.get("format") not in INPUT_FORMATS:
+        raise ModelBundleError(f"{where}: metadata input is not a feature schema of format {list(INPUT_FORMATS)}")
+    if schema["format"] == "features":
+        ok = all(isinstance(schema.get(k), list) for k in ("sensors", "feature_names")) and schema.get("ndim") in (2, 3)
+        if not ok:
+            raise ModelBundleError(f"{where}: the feature schema needs sensors, feature_names and ndim 2 or 3")
+    if schema["format"] == "hand-grasps" and not isinstance(schema.get("feature_params"), dict):
+        raise ModelBundleError(f"{where}: the hand-grasps schema needs feature_params")
+    return Predictor(model, rule, [str(a) for a in names], schema, metadata, calibration)
+
+
+def load_predictor(path: str | Path, *, trust_pickle: bool = False) -> Predictor:
+    """Load a bundle (see :func:`tzsl.bundle.load_bundle`; no code is run) as a :class:`Predictor`.
+
+    ``trust_pickle=True`` also loads old (format version 1) pickle bundles, which can run code:
+    only for files whose author you trust.
+
+    Raises
+    ------
+    ModelBundleError
+        Unreadable / corrupt / foreign bundle, a kind ``tzsl predict`` does not read, or a
+        payload that is not a model + decision rule.
+    """
+    kind = read_bundle_header(path).kind  # verified, nothing deserialised yet
+    if kind == DEEP_KIND:
+        from tzsl.models import load_deep_bundle  # noqa: PLC0415 - needs the deep extra
+
+        model = load_deep_bundle(path, trust_pickle=trust_pickle)
+        metadata = dict(read_bundle_header(path).metadata)
+        metadata["bundle"] = {"kind": kind, "path": str(path)}
+        names = metadata.get("attribute_names") or [f"attr_{j}" for j in range(int(model.n_attributes_))]
+        rule = NearestAttributeRule().fit(np.asarray(model.class_attributes_, dtype=float))
+        return _checked({"model": model, "decision_rule": rule},
+                        {**metadata, "method": "cnn-lstm", "attribute_names": list(names), "input": {"format": "frames"}})
+    if kind not in PREDICT_KINDS:
+        hint = " (a per-EP model: give --eps-done)" if kind == "per-ep" else ""
+        raise ModelBundleError(f"{path}: no predictor for bundles of kind {kind!r}{hint} (known: {list(PREDICT_KINDS)}); "
+                               "re-save models of older tzsl versions with this one")
+    payload, metadata = load_bundle(path, expected_kind=kind, trust_pickle=trust_pickle)
+    return _checked(payload, metadata)
+
+
+# ---------------------------------------------------------------------------- class table
+def read_class_table(path: str | Path, attribute_names: Sequence[str], *,
+                     candidates: Sequence[str] | None = None) -> pd.DataFrame:
+    """Read candidate classes and check their attributes against the model's.
+
+    Parameters
+    ----------
+    path : str or Path
+        CSV file: class name in the first column, then 0/1 attribute columns (format in the
+        module docstring); or a dataset folder, standing for its ``classes.csv`` (whose
+        attributes the model does not know, e.g. dropped for a split, are then ignored).
+    attribute_names : sequence of str
+        The model's attributes, in the model's order.
+    candidates : sequence of str, optional
+        Keep only these classes, in this order (e.g. the unseen ones of a dataset's table).
+
+    Returns
+    -------
+    DataFrame of shape (n_classes, n_attributes), int 0/1
+        Indexed by class name, columns in ``attribute_names`` order.
+
+    Raises
+    ------
+    DataFileError
+        Missing file, missing or unknown attribute columns, non-0/1 entries, duplicate or empty
+        class names (naming the file, the class and the attribute).
+    """
+    path = Path(path)
+    extra_ok = path.is_dir()
+    if extra_ok:
+        path = path / "classes.csv"
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise DataFileError(path, "class table not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise DataFileError(path, f"cannot read the class table ({exc})") from None
+    body = "\n".join(line for line in text.splitlines() if line.strip() and not line.lstrip().startswith("#"))
+    try:
+        table = pd.read_csv(StringIO(body), dtype=str, keep_default_na=False)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
+        raise DataFileError(path, f"cannot parse the class table: {exc}") from None
+    if table.shape[1] < 2 or table.empty:
+        raise DataFileError(path, "a class table needs a class-name column, attribute columns and at least one row")
+    name_col = table.columns[0]
+    names = table[name_col].str.strip()
+    if (names == "").any():
+        raise DataFileError(path, f"empty class name on row(s) {list(np.flatnonzero(names == '') + 2)}")
+    if names.duplicated().any():
+        raise DataFileError(path, f"duplicate class name(s) {sorted(set(names[names.duplicated()]))}")
+    given = [c for c in table.columns[1:] if c not in _DESCRIPTIVE]
+    wanted = [str(a) for a in attribute_names]
+    missing = [a for a in wanted if a not in given]
+    unknown = [a for a in given if a not in wanted]
+    if missing or (unknown and not extra_ok):
+        parts = []
+        if missing:
+            parts.append(f"missing attribute column(s) {missing}")
+        if unknown:
+            parts.append(f"unknown attribute column(s) {unknown}")
+        raise DataFileError(path, "; ".join(parts) + f"; the model's attributes are {wanted}")
+    values = table[wanted].apply(lambda c: c.str.strip())
+    bad = ~values.isin(["0", "1"])
+    if bad.any().any():
+        r, c = np.argwhere(bad.to_numpy())[0]
+        raise DataFileError(
+            path, f"class {names.iloc[r]!r}, attribute {wanted[c]!r}: value {values.iat[r, c]!r} is not 0 or 1"
+        )
+    table = pd.DataFrame(values.to_numpy(dtype=int), index=pd.Index(names, name="class"), columns=wanted)
+    if candidates is None:
+        return table
+    absent = [c for c in candidates if c not in table.index]
+    if absent or not candidates:
+        raise DataFileError(path, f"candidate class(es) {absent} not in the table; it has {list(table.index)}")
+    return table.loc[list(candidates)]
+
+
+# ---------------------------------------------------------------------------- prediction
+@dataclass
+class Prediction:
+    """Result of :func:`predict_grasps`.
+
+    Attributes
+    ----------
+    classes : list of str, length c
+    grasp_ids, sources, info : list of str, length n
+    grasp_posteriors : ndarray of shape (n, c)
+        ``p(z | x)`` of every grasp alone, over the candidate classes (calibrated when the bundle
+        holds a calibrator: :meth:`Predictor.posteriors`).
+    decisions : ndarray of int, shape (n,)
+        Per-grasp top class (index into ``classes``).
+    mode : {"sc", "df"}
+    k : int
+        SC-MDAP's number of equal classifications.
+    decided : bool
+        SC-MDAP: some class reached ``k``; DF-MDAP: always True.
+    n_used : int
+        Grasps used for the decision.
+    final : int
+        Decided class (SC-MDAP undecided: the most frequent class, ties to the earliest).
+    final_posteriors : ndarray of shape (c,) or None
+        DF-MDAP: ``p(z | super grasp)``.
+    running : ndarray of int, shape (n,) or None
+        DF-MDAP: decision after the first 1, 2, ..., n grasps.
+    notes : list of str
+    """
+
+    classes: list[str]
+    grasp_ids: list[str]
+    sources: list[str]
+    info: list[str]
+    grasp_posteriors: np.ndarray
+    decisions: np.ndarray
+    mode: str
+    k: int
+    decided: bool
+    n_used: int
+    final: int
+    final_posteriors: np.ndarray | None = None
+    running: np.ndarray | None = None
+    notes: list[str] = field(default_factory=list)
+
+
+def predict_grasps(
+    predictor: Predictor, classes: pd.DataFrame, inputs: Sequence[str | Path], *, mode: str = "sc", k: int = 3
+) -> Prediction:
+    """Classify the grasps in ``inputs`` among ``classes`` and fuse them (SC-MDAP or DF-MDAP).
+
+    Parameters
+    ----------
+    predictor : Predictor
+        From :func:`load_predictor`.
+    classes : DataFrame of shape (c, m)
+        From :func:`read_class_table` (columns in the model's attribute order).
+    inputs : sequence of paths
+        In arrival order, read by the predictor's feature schema.
+    mode : {"sc", "df"}
+    k : int
+        Equal classifications SC-MDAP needs.
+    """
+    if mode not in ("sc", "df"):
+        raise ConfigError(f"fusion mode must be 'sc' (SC-MDAP) or 'df' (DF-MDAP), got {mode!r}")
+    if not isinstance(k, int | np.integer) or k < 1:
+        raise ConfigError(f"k must be a positive integer, got {k!r}")
+    if list(classes.columns) != predictor.attribute_names:
+        raise ConfigError("class table columns are not in the model's attribute order; read it with read_class_table")
+    K = classes.to_numpy(dtype=float)
+    grasps = read_inputs(predictor.input, inputs)
+    S = np.asarray(predictor.model.attribute_scores(grasps.X), dtype=float)
+    n = grasps.X.shape[0]
+    if S.shape[0] != n or S.shape[-1] != len(predictor.attribute_names):
+        raise ModelBundleError(f"{_where(predictor.metadata)}: the model returned attribute scores of shape "
+                               f"{S.shape} for {n} grasps and {len(predictor.attribute_names)} attributes")
+    scores = predictor.class_scores(S, K)
+    decisions = scores.argmax(axis=1)
+    final_p = running = None
+    if mode == "sc":
+        d, used, ok = sc_mdap(decisions[None, :], int(k))
+        final, n_used, decided = int(d[0]), int(used[0]), bool(ok[0])
+    else:
+        steps = np.arange(1, n + 1).reshape((n,) + (1,) * (S.ndim - 1))
+        run_scores = predictor.class_scores(np.cumsum(S, axis=0) / steps, K)  # super grasp of the first t grasps
+        running = run_scores.argmax(axis=1)
+        final_p = predictor.posteriors(run_scores[-1])
+        final, n_used, decided = int(running[-1]), n, True
+    return Prediction(
+        classes=[str(c) for c in classes.index], grasp_ids=list(grasps.grasp_ids), sources=list(grasps.sources),
+        info=list(grasps.info), grasp_posteriors=predictor.posteriors(scores), decisions=decisions, mode=mode, k=int(k),
+        decided=decided, n_used=n_used, final=final, final_posteriors=final_p, running=running,
+        notes=list(grasps.notes),
+    )
+
+
+def top_ties(p: np.ndarray) -> np.ndarray:
+    """Indices of the classes whose posterior equals the top one (up to rounding), shape (t,)."""
+    return np.flatnonzero(np.isclose(p, p.max(), rtol=1e-9, atol=1e-12))
+
+
+def _ranking(p: np.ndarray, classes: list[str], top: int) -> list[str]:
+    order = np.argsort(-p, kind="stable")[: top if top > 0 else None]
+    width = max(len(c) for c in classes)
+    lines = [f"  {r + 1:>3}. {classes[i]:<{width}}  {p[i]:.3f}" for r, i in enumerate(order)]
+    tied = top_ties(p)
+    if tied.size > 1:
+        lines.append(f"       tie at the top: {', '.join(classes[i] for i in tied)} have equal posteriors "
+                     "(the evidence cannot tell them apart; the listed first is an arbitrary pick)")
+    return lines
+
+
+def format_prediction(pred: Prediction, top: int = 5) -> str:
+    """Human-readable report: each grasp's ranked classes, then the multi-grasp decision."""
+    lines = [f"note: {n}" for n in pred.notes]
+    n = len(pred.grasp_ids)
+    for i in range(n):
+        lines.append(f"grasp {i + 1}/{n}: {pred.grasp_ids[i]} ({pred.sources[i]}; {pred.info[i]})")
+        lines += _ranking(pred.grasp_posteriors[i], pred.classes, top)
+    name = lambda j: repr(pred.classes[int(j)])  # noqa: E731
+    if pred.mode == "sc":
+        seq = ", ".join(pred.classes[int(d)] for d in pred.decisions)
+        lines.append(f"per-grasp decisions: {seq}")
+        if pred.decided:
+            lines.append(f"SC-MDAP (k={pred.k}): decided {name(pred.final)} after grasp {pred.n_used} of {n} "
+                         f"({pred.k} equal classification{'s' if pred.k > 1 else ''})")
+        else:
+            count = int((pred.decisions == pred.final).sum())
+            lines.append(f"SC-MDAP (k={pred.k}): NOT decided after {n} grasp{'s' if n > 1 else ''}: no class reached "
+                         f"{pred.k} equal classifications (most frequent so far: {name(pred.final)}, {count} of {n})")
+    else:
+        seq = ", ".join(pred.classes[int(d)] for d in pred.running)
+        lines.append(f"DF-MDAP decision after each grasp: {seq}")
+        lines.append(f"DF-MDAP: decided {name(pred.final)} from all {n} grasp{'s' if n > 1 else ''} (eqs. 11-12):")
+        lines += _ranking(pred.final_posteriors, pred.classes, top)
+    return "\n".join(lines)
+
+
+def prediction_report(pred: Prediction, predictor: Predictor, top: int = 5) -> dict:
+    """The prediction as one JSON-serialisable object (``tzsl predict --json``).
+
+    Returns
+    -------
+    dict
+        ``model`` (method, kind), ``calibration`` (:meth:`Predictor.calibration_report`: whether
+        the posteriors are calibrated, the temperature and how it was fitted), ``grasps`` (per
+        grasp: id, source, the ``top`` classes with their posterior (0 = all), the decision),
+        ``fusion`` (mode, k, decided, decision, grasps used, and DF-MDAP's final ranking), ``notes``.
+    """
+    def ranking(p: np.ndarray) -> list[dict]:
+        order = np.argsort(-p, kind="stable")[: top if top > 0 else None]
+        return [{"class": pred.classes[i], "probability": float(p[i])} for i in order]
+
+    grasps = [{"grasp": pred.grasp_ids[i], "source": pred.sources[i], "ranking": ranking(pred.grasp_posteriors[i]),
+               "decision": pred.classes[int(pred.decisions[i])]} for i in range(len(pred.grasp_ids))]
+    fusion = {"mode": pred.mode, "k": pred.k, "decided": pred.decided, "decision": pred.classes[pred.final],
+              "grasps_used": pred.n_used}
+    if pred.final_posteriors is not None:
+        fusion["ranking"] = ranking(pred.final_posteriors)
+    return {"model": {"method": predictor.metadata.get("method", predictor.kind), "kind": predictor.kind},
+            "calibration": predictor.calibration_report(), "grasps": grasps, "fusion": fusion,
+            "notes": list(pred.notes)}

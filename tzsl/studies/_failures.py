@@ -1,0 +1,57 @@
+"""A failure in one (split, method) is recorded, not fatal: MOABB's ``error_score = nan``, once.
+
+Studies call :func:`attempt` around each (split, method) fit. A failure becomes a one-line
+``error`` text (``"ZSLInputError: ..."``) in that row of the study's table, with NaN scores, and
+the other fits go on. :func:`table_failures` reads every ``error`` column of the tables a run
+wrote; the engine (:func:`tzsl.studies.engine.run_experiment`) records them in the manifest
+and ``tzsl run`` lists them on stderr and exits with :data:`EXIT_PARTIAL` at the end.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import Any, TypeVar
+
+import pandas as pd
+
+__all__ = ["ERROR_COLUMN", "EXIT_PARTIAL", "attempt", "error_text", "table_failures"]
+
+#: Column of a study table that holds the failure of that row's fit (empty when it succeeded).
+ERROR_COLUMN = "error"
+#: Exit code of a run that completed but with failed (split, method) fits (see tzsl.cli._root).
+EXIT_PARTIAL = 1
+
+T = TypeVar("T")
+
+
+def error_text(exc: BaseException) -> str:
+    """One line naming the error type and its message's first line."""
+    message = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {message[0]}" if message else type(exc).__name__
+
+
+def attempt(fit: Callable[..., T], *args: Any, **kwargs: Any) -> tuple[T | None, str]:
+    """``(fit(*args, **kwargs), "")``, or ``(None, error_text)`` if it raised an Exception.
+
+    KeyboardInterrupt, SystemExit and MemoryError are not caught: they stop the run (exit 1).
+    """
+    try:
+        return fit(*args, **kwargs), ""
+    except MemoryError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - recorded in the table, reported at the end
+        return None, error_text(exc)
+
+
+def table_failures(tables: Mapping[str, pd.DataFrame]) -> list[str]:
+    """``"table: split=..., method=...: error"`` for every row with a non-empty error, all tables."""
+    lines: list[str] = []
+    for name, table in tables.items():
+        if not isinstance(table, pd.DataFrame) or ERROR_COLUMN not in table.columns:
+            continue
+        failed = table[table[ERROR_COLUMN].fillna("").astype(str).str.len() > 0]
+        keys = [c for c in ("condition", "config", "split", "seed", "method") if c in table.columns]
+        for _, row in failed.iterrows():
+            where = ", ".join(f"{k}={row[k]}" for k in keys if not pd.isna(row[k]))
+            lines.append(f"{name}: {where}: {row[ERROR_COLUMN]}")
+    return lines

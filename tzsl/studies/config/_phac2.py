@@ -1,0 +1,287 @@
+"""Schemas of ``study = "zero-shot"`` (any dataset x every method x random and challenging splits)
+and of its PHAC-2 paper preset ``study = "phac2-dap"``.
+
+Both run the same study (:func:`tzsl.studies.zero_shot.runner.run_zero_shot`): attribute SVMs
++ DAP (fusions, priors), the attribute tables, the attribute-count sweep, the method comparison
+and GZSL, on random and challenging unseen-class splits. ``zero-shot`` defaults to all of it
+with every registered feature method; ``phac2-dap`` defaults to the cheapest complete study (DAP
+only, random splits, the paper's 10 test objects) and adds the paper's numbers on the paper's
+dataset and protocol (:mod:`tzsl.studies.study_labels`). Where a default belongs to an
+estimator (the SVM grids), it is read from that estimator.
+"""
+
+from __future__ import annotations
+
+import inspect
+from typing import Literal
+
+from pydantic import Field, field_validator, model_validator
+
+from tzsl.studies.config._common import (
+    COMPARE_DESCRIPTION,
+    DaskCompute,
+    MethodEntry,
+    Output,
+    Section,
+    Seed,
+    distinct,
+    lambdas_ok,
+    method_label,
+    methods_ok,
+    non_empty,
+)
+
+BUILTIN_DATASETS = ("phac2-penn", "phac2-h5", "phac2-hold-mat")
+
+
+def _svm_default(name: str):
+    """The default of :class:`~tzsl.models.AttributeSVM`'s parameter ``name``."""
+    from tzsl.models import AttributeSVM  # noqa: PLC0415
+
+    value = inspect.signature(AttributeSVM).parameters[name].default
+    return list(value) if isinstance(value, tuple) else value
+
+
+def _bank_default(name: str):
+    """The default of :class:`~tzsl.models.AttributeClassifierBank`'s parameter ``name``."""
+    from tzsl.models import AttributeClassifierBank  # noqa: PLC0415
+
+    return inspect.signature(AttributeClassifierBank).parameters[name].default
+
+
+def _min_objects_default() -> int:
+    """:func:`tzsl.studies.extract.extract_features`' own attribute filter."""
+    from tzsl.studies.extract import extract_features  # noqa: PLC0415
+
+    return inspect.signature(extract_features).parameters["min_objects"].default
+
+
+class Phac2Dataset(Section):
+    builtin: Literal["phac2-penn", "phac2-h5", "phac2-hold-mat"] | None = Field(
+        None, description="a built-in dataset")
+    plain: str | None = Field(None, description="a plain-file dataset folder (tzsl formats)")
+    features: str | None = Field(None, description="a feature table written by tzsl extract --out")
+    path: str | None = Field(None, description="the HDF5 file of builtin = 'phac2-h5'")
+    data_dir: str | None = Field(None, description="data home (default: $TZSL_DATA_DIR or the user data folder)")
+    min_objects: int | None = Field(None, ge=1, description="keep attributes present in >= this many objects "
+                                    "(built-in: the extractor's default; plain folders: keep all)")
+
+    @model_validator(mode="after")
+    def _one_source(self):
+        sources = [k for k in ("builtin", "plain", "features") if getattr(self, k) is not None]
+        if len(sources) != 1:
+            raise ValueError(f"needs exactly one of builtin, plain, features; got {sources or 'none'}")
+        if self.path is not None and self.builtin != "phac2-h5":
+            raise ValueError("path is the HDF5 file of builtin = 'phac2-h5' only")
+        if self.builtin == "phac2-h5" and self.path is None:
+            raise ValueError("builtin = 'phac2-h5' needs path = the HDF5 release file")
+        if self.features is not None and self.min_objects is not None:
+            raise ValueError("min_objects does not apply to a feature table")
+        if self.builtin is not None and self.min_objects is None:
+            self.min_objects = _min_objects_default()
+        return self
+
+
+class Phac2Features(Section):
+    """For plain folders with signal files; unset = the folder's dataset.toml [signals]."""
+
+    statistics: list[str] | None = Field(None, description="per-channel statistics of signal files")
+    baseline_rows: int | None = Field(None, ge=0, description="baseline rows subtracted from signal files")
+    channels: list[str] | None = Field(None, description="signal channels to use, in order")
+
+
+class Phac2Methods(Section):
+    dap: Literal[True] = Field(True, description="DAP with independent attribute SVMs (always runs)")
+    fusions: list[Literal["max", "avg"]] = Field(["max", "avg"], description="Table 1 columns")
+    priors: list[Literal["uni", "test", "train"]] = Field(["uni", "test", "train"], description="Table 2 columns")
+    multilabel: bool = Field(False, description="joint multi-label attribute model (random splits)")
+    sweep: bool = Field(False, description="attribute-count sweep (random splits)")
+    sweep_min_attributes: int = Field(7, ge=1)
+    sweep_max_subsets: int = Field(1000, ge=1)
+    eszsl: bool = Field(False, description="ESZSL on the random splits (phac2_methods.csv)")
+    embedding: bool = Field(False, description="the fabric paper's embedding model (phac2_methods.csv)")
+    embedding_lambdas: list[float] = Field([0.1, 1.0], description="lambdas of the embedding model")
+    compare: list[MethodEntry] = Field([], description=COMPARE_DESCRIPTION)
+    gzsl: bool = Field(False, description="generalised zero-shot evaluation (gzsl.csv, see [gzsl])")
+
+    _lists = field_validator("fusions", "priors")(lambda v: distinct(non_empty(v)))
+    _lams = field_validator("embedding_lambdas")(lambdas_ok)
+
+    def _from_switches(self) -> list[dict]:
+        """The methods ``eszsl`` and ``embedding`` (+ ``embedding_lambdas``) switch on."""
+        specs = [{"name": "eszsl"}] if self.eszsl else []
+        if self.embedding:
+            specs += [{"name": "embedding", "lam": float(lam)} for lam in self.embedding_lambdas]
+        return specs
+
+    @model_validator(mode="after")
+    def _registry(self):
+        if self.compare:
+            self.compare = methods_ok(self.compare, tuple(method_label(s) for s in self._from_switches()))
+        return self
+
+    def method_specs(self) -> list[dict]:
+        """Every method compared with DAP on the random splits: the switches' then ``compare``'s.
+
+        Each as ``{"name": registry name, **parameters}`` (see :func:`tzsl.models.build_method`).
+        """
+        return self._from_switches() + [dict(s) for s in self.compare]
+
+
+class Phac2Gzsl(Section):
+    holdout_fraction: float = Field(0.3, gt=0, lt=1, description="fraction of each training object's trials "
+                                                               "held out as seen-class test trials")
+    methods: list[Literal["dap", "eszsl"]] = Field(["dap", "eszsl"])
+    fusion: Literal["avg", "max"] = "avg"
+    prior: Literal["uni", "train", "test"] = "uni"
+    calibrated_stacking: bool = True
+    max_draws: int = Field(1000, ge=1, description="draws of pseudo-unseen training classes")
+
+    _methods = field_validator("methods")(lambda v: distinct(non_empty(v)))
+
+
+class Phac2Splits(Section):
+    kinds: list[Literal["random", "challenging", "file"]] = Field(["random"])
+    n_splits: int = Field(5, ge=1, description="random splits")
+    n_test: int = Field(10, ge=1, description="test objects per random split")
+    seed: int = Seed
+    file: str | None = Field(None, description="split CSV for kinds = ['file'] (default: the plain folder's "
+                                               "splits.csv)")
+    random_min_train_positives: int = Field(2, ge=1)
+    challenging_min_train_positives: int = Field(3, ge=1)
+    min_train_negatives: int = Field(1, ge=1, description="a split leaves out an attribute with fewer negative "
+                                                          "training objects")
+
+    @field_validator("kinds")
+    @classmethod
+    def _kinds(cls, v):
+        distinct(non_empty(v))
+        if "file" in v and len(v) > 1:
+            raise ValueError("['file'] cannot be combined with random/challenging")
+        return v
+
+    @model_validator(mode="after")
+    def _file(self):
+        if self.file is not None and "file" not in self.kinds:
+            raise ValueError("file is given but kinds does not include 'file'")
+        return self
+
+
+class Phac2Svm(Section):
+    """Per-(attribute, sensor) RBF-SVM (:class:`~tzsl.models.AttributeSVM`); unset keys take its defaults."""
+
+    cv: int = Field(5, ge=0, description="object-grouped folds; 0 = leave-one-object-out")
+    undersampling: Literal["select", "bagging", "none"] = Field(default_factory=lambda: _svm_default("undersampling"))
+    C_range: list[float] = Field(default_factory=lambda: _svm_default("C_range"))
+    gamma_range: list[float] = Field(default_factory=lambda: _svm_default("gamma_range"))
+    n_C: int = Field(default_factory=lambda: _svm_default("n_C"), ge=1)
+    n_gamma: int = Field(default_factory=lambda: _svm_default("n_gamma"), ge=1)
+    grid: Literal["paper", "extended"] = Field(
+        default_factory=lambda: _svm_default("grid"),
+        description="gamma grid: 'paper' (gamma_range, n_gamma) or 'extended' (two decades below it added)")
+    n_draws: int = Field(default_factory=lambda: _svm_default("n_draws"), ge=1)
+    scoring: Literal["log_loss", "balanced_accuracy"] = Field(default_factory=lambda: _svm_default("scoring"))
+    platt_weighting: Literal["balanced", "empirical"] = Field(
+        default_factory=lambda: _svm_default("platt_weighting"))
+    solver: Literal["auto", "exact", "approximate"] = Field(
+        default_factory=lambda: _bank_default("solver"),
+        description="'exact': these SVMs; 'approximate': Nystroem features + logistic regression (linear in "
+                    "trials); 'auto': exact up to max_exact_trials training trials, approximate above")
+    max_exact_trials: int = Field(default_factory=lambda: _bank_default("max_exact_trials"), ge=1,
+                                  description="largest training set (trials) that solver = 'auto' fits exactly")
+
+    @field_validator("cv")
+    @classmethod
+    def _cv(cls, v):
+        if v == 1:
+            raise ValueError("use 0 (leave-one-object-out) or at least 2 folds")
+        return v
+
+    @field_validator("C_range", "gamma_range")
+    @classmethod
+    def _range(cls, v):
+        if len(v) != 2 or not 0 < v[0] <= v[1]:
+            raise ValueError("expected [low, high] with 0 < low <= high")
+        return v
+
+
+class Phac2Study(Section):
+    """``study = "phac2-dap"``."""
+
+    study: Literal["phac2-dap"] = "phac2-dap"
+    description: str = ""
+    dataset: Phac2Dataset
+    features: Phac2Features = Field(default_factory=Phac2Features)
+    methods: Phac2Methods = Field(default_factory=Phac2Methods)
+    gzsl: Phac2Gzsl = Field(default_factory=Phac2Gzsl)
+    splits: Phac2Splits = Field(default_factory=Phac2Splits)
+    svm: Phac2Svm = Field(default_factory=Phac2Svm)
+    compute: DaskCompute = Field(default_factory=DaskCompute)
+    output: Output = Field(default_factory=Output)
+
+    @model_validator(mode="after")
+    def _across_tables(self):
+        problems = []
+        given = [k for k, v in self.features.model_dump().items() if v is not None]
+        if given and self.dataset.plain is None:
+            problems.append(("features", f"{', '.join(given)} apply to plain signal datasets only"))
+        kinds = self.splits.kinds
+        if kinds == ["file"] and self.splits.file is None and self.dataset.plain is None:
+            problems.append(("splits.kinds", "['file'] needs file = a split CSV (or a plain dataset folder "
+                                             "with splits.csv)"))
+        if self.methods.gzsl and kinds == ["challenging"]:
+            problems.append(("methods.gzsl", "runs on the random (or file) splits; kinds has neither"))
+        if self.compute.scheduler is not None and self.compute.backend != "dask":
+            problems.append(("compute.scheduler", "needs backend = 'dask'"))
+        if problems:
+            raise ValueError("\n".join(f"@{key}: {why}" for key, why in problems))
+        return self
+
+
+# --------------------------------------------------------------------------- zero-shot (generic)
+
+#: Registry methods read from the DAP study's own posteriors (no fit of their own).
+FROM_DAP_POSTERIORS = ("dap-avg", "dap-max", "multilabel-dap")
+
+
+def every_feature_method() -> list[dict]:
+    """``[{"name": m}, ...]`` for every registered method on feature vectors, except those read
+    from the DAP posteriors (:data:`FROM_DAP_POSTERIORS`)."""
+    from tzsl.models import available_methods, get_method  # noqa: PLC0415
+
+    return [{"name": name} for name in available_methods()
+            if get_method(name).input_kind == "features" and name not in FROM_DAP_POSTERIORS]
+
+
+class ZeroShotMethods(Phac2Methods):
+    """Every registered feature method beside DAP (``compare``), the sweep and GZSL: on by default."""
+
+    sweep: bool = Field(True, description="attribute-count sweep (random splits)")
+    sweep_min_attributes: int = Field(3, ge=1)
+    sweep_max_subsets: int = Field(200, ge=1)
+    compare: list[MethodEntry] = Field(default_factory=every_feature_method,
+                                       description=COMPARE_DESCRIPTION + " (default: every feature method)")
+    gzsl: bool = Field(True, description="generalised zero-shot evaluation (gzsl.csv, see [gzsl])")
+
+    @model_validator(mode="after")
+    def _registry(self):
+        """The default ``compare`` leaves out what the ``eszsl`` / ``embedding`` switches already run."""
+        if "compare" not in self.model_fields_set:
+            switched = {spec["name"] for spec in self._from_switches()}
+            self.compare = [spec for spec in self.compare if spec["name"] not in switched]
+        if self.compare:
+            self.compare = methods_ok(self.compare, tuple(method_label(s) for s in self._from_switches()))
+        return self
+
+
+class ZeroShotSplits(Phac2Splits):
+    kinds: list[Literal["random", "challenging", "file"]] = Field(["random", "challenging"])
+    n_test: int = Field(5, ge=1, description="test (unseen) objects per random split")
+
+
+class ZeroShotStudy(Phac2Study):
+    """``study = "zero-shot"``: any dataset, every registered feature method, random + challenging splits."""
+
+    study: Literal["zero-shot"] = "zero-shot"
+    methods: ZeroShotMethods = Field(default_factory=ZeroShotMethods)
+    splits: ZeroShotSplits = Field(default_factory=ZeroShotSplits)

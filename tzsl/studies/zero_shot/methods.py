@@ -1,0 +1,152 @@
+"""Registry methods vs DAP on the same PHAC-2 splits (``phac2_methods.csv``, ``phac2_method_comparison.csv``).
+
+Every method of ``[methods]`` (``eszsl``, ``embedding`` and ``compare``, see
+:meth:`~tzsl.studies.config.Phac2Methods.method_specs`) is fitted on each random split's
+training objects with :func:`tzsl.studies.study_methods.fit_predict` and scored on the
+split's test trials. The reference is the paper's method, AVGDAP with a uniform prior, read
+from the already fitted DAP posteriors (no refit), as are MAXDAP and, when the study fitted it,
+the multi-label DAP; their temperatures are fitted on pseudo-unseen classes of each split's
+training objects (:func:`tzsl.studies.study_calibration.dap_split_posteriors`). Scoring is the
+one of every study (:func:`tzsl.studies.study_methods.method_summary`), with the study's
+reliability diagram (``phac2_reliability.csv``; ``reliability.csv`` outside the paper preset).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pandas as pd
+
+from tzsl.datasets import FeatureSet
+from tzsl.evaluation import Split, summarise_over_splits
+from tzsl.studies._failures import ERROR_COLUMN, attempt
+from tzsl.studies.paper_numbers import DAP_MULTILABEL_ACCURACY, DAP_TABLE1
+from tzsl.studies.zero_shot.tables import split_label
+from tzsl.studies.study_labels import StudyLabels
+from tzsl.studies.study_methods import (
+    comparison_file,
+    comparison_trials,
+    fit_predict,
+    grid_edge_share,
+    method_label,
+    method_summary,
+    split_masks,
+)
+from tzsl.studies.study_calibration import dap_split_posteriors, posterior_columns, reliability_by_method
+
+if TYPE_CHECKING:
+    from tzsl.studies.zero_shot.study import SplitPosteriors
+
+__all__ = ["COMPARISON_TABLE", "DEFAULT_METHODS", "REFERENCE_METHOD", "STUDY", "method_comparison"]
+
+#: Methods compared when none are given: ESZSL and the embedding model at lambda 0.1 and 1.
+DEFAULT_METHODS: tuple[dict, ...] = ({"name": "eszsl"}, {"name": "embedding", "lam": 0.1},
+                                     {"name": "embedding", "lam": 1.0})
+#: Row label of the paper's method (AVGDAP, uniform prior) in ``method_comparison.csv``.
+REFERENCE_METHOD = "dap-avg"
+#: Study label of the rows; table key (file stem) of the comparison.
+STUDY = "phac2"
+COMPARISON_TABLE = comparison_file(STUDY)[: -len(".csv")]
+#: The DAP paper's numbers (random splits, uni-prior): Table 1 averages and section 4.4.
+PAPER = {"dap-max": DAP_TABLE1["average"][0], "dap-avg": DAP_TABLE1["average"][1],
+         "multilabel-dap": DAP_MULTILABEL_ACCURACY}
+#: Notes of the rows read from the DAP posteriors: with the paper's numbers beside, and without.
+PAPER_NOTES = {"dap-avg": "the paper's method (reference); paper: Table 1 average",
+               "dap-max": "same fits as dap-avg; paper: Table 1 average",
+               "multilabel-dap": "classifier chain (section 4.4); paper: section 4.4"}
+GENERIC_NOTES = {"dap-avg": "reference (AVGDAP, uniform prior)", "dap-max": "same fits as dap-avg",
+                 "multilabel-dap": "classifier chain"}
+
+
+def _fit_predict_split(spec: dict, features: FeatureSet, split: Split, seed: int):
+    """Fit on the split's training objects; (fit, true test rows)."""
+    attributes = list(split.kept_attributes)
+    train, test = split_masks(features, split)
+    objects = features.objects
+    class_rows = features.attributes.loc[np.unique(objects[train]), attributes].to_numpy(dtype=float)
+    K = features.attributes.loc[list(split.test_objects), attributes].to_numpy(dtype=float)
+    fit = fit_predict(spec, features.X[train], objects[train], class_rows, features.X[test], K, seed)
+    y = pd.Index(split.test_objects).get_indexer(objects[test])
+    return fit, y
+
+
+def _dap_posteriors(features: FeatureSet, r: SplitPosteriors, seed: int) -> dict:
+    """The split's DAP posteriors, calibrated on pseudo-unseen classes of its training objects."""
+    train, _ = split_masks(features, r.split)
+    A = features.attributes.loc[features.objects[train], list(r.attributes)].to_numpy(dtype=int)
+    return dap_split_posteriors(r, features.X[train], A, features.objects[train], seed=seed)
+
+
+def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed: int = 0,
+                      methods: tuple[dict, ...] | list[dict] = DEFAULT_METHODS,
+                      labels: StudyLabels | None = None) -> dict[str, pd.DataFrame]:
+    """Registry methods and AVGDAP on the same PHAC-2 splits (trial accuracy).
+
+    Each method entry ``{"name": ..., **parameters}`` is built from the registry; a method
+    taking a seed gets ``seed + i`` on split ``i``. Objects sharing an attribute row are merged
+    into one training class by the methods that merge duplicates (ESZSL, the embedding model).
+
+    ``labels`` (:func:`~tzsl.studies.study_labels.study_labels`; default: a generic run on
+    real data) name the tables and say whether the paper's numbers and notes go beside.
+
+    Returns
+    -------
+    dict of DataFrame
+        ``labels.methods_table`` (``"phac2_methods"`` for the paper preset): one row per split
+        (dap_avg_uni and one column per method label, e.g. ``eszsl``, ``embedding_lam_0.1``; NaN where that fit failed, the reason in the
+        ``error`` column), then mean and std rows;
+        ``labels.comparison_table``: :func:`~tzsl.studies.study_methods.method_summary`
+        with ``dap-avg`` as the reference (with ECE and Brier score, calibrated and not);
+        ``labels.reliability_table``: the reliability diagram's points of every method; ``dap-max``
+        and ``multilabel-dap`` (when fitted) come from the same posteriors, their fit time and grid-edge
+        share are the DAP fit's.
+    """
+    rows, trials = [], []
+    seconds: dict[str, list[float]] = {REFERENCE_METHOD: []}
+    edges: dict[str, list[float]] = {}
+    for i, r in enumerate(results):
+        label = split_label(r.split)
+        objects = np.asarray(r.split.test_objects)[r.y]
+        row = {"split": label, "chance": r.split.chance, "dap_avg_uni": r.accuracy("avg", "uni")}
+        from_posteriors = [(REFERENCE_METHOD, r.predict("avg", "uni")), ("dap-max", r.predict("max", "uni"))]
+        if r.P_multilabel is not None:
+            from_posteriors.append(("multilabel-dap", r.predict("avg", "uni", multilabel=True)))
+        errors = []
+        posteriors, error = attempt(_dap_posteriors, features, r, seed + i)
+        if posteriors is None:  # the DAP rows keep their accuracy; their calibration is NaN
+            posteriors = {}
+            errors.append(f"DAP calibration: {error}")
+        for name, predicted in from_posteriors:
+            P = posteriors.get(name, (None, None))
+            trials.append(comparison_trials(name, label, objects, predicted == r.y,
+                                            **posterior_columns(P[0], P[1], r.y, predicted)))
+            seconds.setdefault(name, []).append(r.fit_seconds)
+            edges.setdefault(name, []).append(grid_edge_share(r.model))
+        for spec in methods:
+            name = method_label(spec)
+            done, error = attempt(_fit_predict_split, spec, features, r.split, seed + i)
+            if done is None:  # NaN for this (split, method), reported at the end of the run
+                row[name] = np.nan
+                errors.append(f"{name}: {error}")
+                continue
+            fit, y = done
+            correct = fit.predicted == y
+            row[name] = float(correct.mean())
+            trials.append(comparison_trials(name, label, objects, correct,
+                                            **posterior_columns(fit.proba, fit.proba_uncalibrated, y, fit.predicted)))
+            seconds.setdefault(name, []).append(fit.fit_seconds)
+            edges.setdefault(name, []).append(grid_edge_share(fit.model))
+        rows.append({**row, ERROR_COLUMN: "; ".join(errors)})
+    per_split = summarise_over_splits(pd.DataFrame(rows)).reset_index()
+    chance = float(np.mean([r.split.chance for r in results]))
+    labels = labels or StudyLabels()
+    notes = PAPER_NOTES if labels.paper else GENERIC_NOTES
+    trials = pd.concat(trials, ignore_index=True)
+    summary = method_summary(trials, seconds, chance, REFERENCE_METHOD,
+                             study=labels.study, data=labels.data, paper=PAPER if labels.paper else None,
+                             notes=notes, grid_edge=edges)
+    if not labels.paper:  # paper_* headers only beside the paper's dataset and protocol
+        summary = summary.drop(columns="paper_accuracy")
+    return {labels.methods_table: per_split, labels.comparison_table: summary,
+            labels.reliability_table: reliability_by_method(trials, labels.study)}

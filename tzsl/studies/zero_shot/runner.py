@@ -1,0 +1,205 @@
+"""The zero-shot study's runner: ``study = "zero-shot"`` and its PHAC-2 paper preset ``"phac2-dap"``.
+
+Registered in :mod:`tzsl.studies.config` (:func:`~tzsl.studies.config.register_study`):
+:func:`run_zero_shot` runs a checked experiment, :func:`zero_shot_results` opens its results folder,
+:func:`zero_shot_outputs` lists the files it writes and :func:`relaxation_notes` says, before any
+fit, which settings the dataset cannot honour (``tzsl run --check``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from pathlib import Path
+
+import pandas as pd
+
+from tzsl._profile import timed
+from tzsl.studies._outputs import ResultsDir
+from tzsl.studies.config import Experiment
+from tzsl.studies.study_settings import StudyRun, dap_config, format_table, gzsl_config, record_config
+
+__all__ = ["SelectedColumns", "dropped_columns", "phac2_features", "prepare_phac2", "relaxation_notes",
+           "run_zero_shot", "zero_shot_outputs", "zero_shot_results"]
+
+
+class SelectedColumns(ResultsDir):
+    """A results folder that leaves unselected fusion / prior columns out of Tables 1 and 2."""
+
+    def __init__(self, root, force: bool, drop: Mapping[str, list[str]], staging: bool = False) -> None:
+        super().__init__(root, force=force, staging=staging)
+        self.drop = dict(drop)
+
+    def write_csv(self, name: str, table: pd.DataFrame, index: bool = False) -> Path:
+        return super().write_csv(name, table.drop(columns=self.drop.get(name, []), errors="ignore"), index)
+
+
+def dropped_columns(methods) -> dict[str, list[str]]:
+    """Columns of Tables 1 and 2 that ``[methods] fusions`` / ``priors`` leave out."""
+    drop: dict[str, list[str]] = {"table1_fusion.csv": [], "table2_priors.csv": []}
+    for fusion in sorted({"max", "avg"} - set(methods.fusions)):
+        for column in [f"{fusion}dap"] + (["avgdap_per_class_mean"] if fusion == "avg" else []):
+            drop["table1_fusion.csv"] += [column, f"{column}_ci95_low", f"{column}_ci95_high"]
+        drop["table1_fusion.csv"].append(f"paper_{fusion}dap")
+    for prior in sorted({"uni", "test", "train"} - set(methods.priors)):
+        drop["table2_priors.csv"] += [prior, f"{prior}_ci95_low", f"{prior}_ci95_high", f"paper_{prior}"]
+    return drop
+
+
+def zero_shot_outputs(config) -> list[str]:
+    """Files a zero-shot (or phac2-dap) run writes (checked free before any computation)."""
+    from tzsl.studies.study_labels import StudyLabels, paper_protocol  # noqa: PLC0415
+
+    labels = StudyLabels(paper=paper_protocol(config.study, config)[0])
+    kinds, methods = config.splits.kinds, config.methods
+    names = ["manifest.json", "splits.csv", "failed_splits.csv"]
+    if "random" in kinds or "file" in kinds:
+        names += ["table1_fusion.csv", "table2_priors.csv", "attribute_accuracy.csv",
+                  "attribute_accuracy_per_split.csv", "attribute_accuracy.png"]
+        if methods.multilabel:
+            names.append("multilabel.csv")
+        if methods.sweep:
+            names += ["attribute_sweep.csv", "attribute_sweep.png"]
+        if methods.method_specs():
+            names += [f"{labels.methods_table}.csv", f"{labels.comparison_table}.csv", f"{labels.reliability_table}.csv",
+                      f"{labels.reliability_table}.png"]
+        if methods.gzsl:
+            names.append("gzsl.csv")
+    if "challenging" in kinds:
+        names += ["table3_challenging.csv", "object_map.csv", "object_map.png"]
+    return names
+
+
+def zero_shot_results(exp: Experiment, force: bool) -> ResultsDir:
+    """The staged results folder of a zero-shot run, leaving unselected fusion / prior columns out."""
+    results = SelectedColumns(Path(exp.config.output.folder), force, dropped_columns(exp.config.methods), staging=True)
+    results.check_free(zero_shot_outputs(exp.config))
+    return results
+
+
+@timed("load")
+def phac2_features(exp: Experiment):
+    """The FeatureSet of a phac2-dap experiment's ``[dataset]`` and ``[features]``."""
+    ds, feat = exp.config.dataset, exp.config.features
+    if ds.builtin is not None:
+        from tzsl.studies.extract import extract_features  # noqa: PLC0415
+
+        return extract_features(ds.builtin, data_dir=exp.resolve(ds.data_dir), path=exp.resolve(ds.path),
+                                min_objects=ds.min_objects)
+    if ds.plain is not None:
+        from tzsl.features import load_plain_dataset  # noqa: PLC0415
+
+        folder = exp.resolve(ds.plain)
+        compute = exp.config.compute  # signal files: read in n_jobs processes, cached with the fits
+        features = load_plain_dataset(folder, statistics=feat.statistics, baseline_rows=feat.baseline_rows,
+                                      channels=feat.channels, min_objects=ds.min_objects, n_jobs=compute.n_jobs,
+                                      cache=compute.cache)
+        features.info.setdefault("data_files", sorted(str(p) for p in Path(folder).rglob("*") if p.is_file()))
+        return features
+    from tzsl.studies.sources import load_study_features  # noqa: PLC0415
+
+    features = load_study_features(None, features_file=exp.resolve(ds.features))
+    features.info.setdefault("data_files", [str(exp.resolve(ds.features))])
+    return features
+
+
+def _check_folds(exp: Experiment, n_train_objects: int) -> None:
+    from tzsl.studies.zero_shot.study import check_cv_folds  # noqa: PLC0415
+
+    check_cv_folds(exp.config.svm.cv, n_train_objects, exp.source)
+
+
+def prepare_phac2(exp: Experiment):
+    """Load the dataset and the split file of a phac2-dap experiment and check the CV folds fit.
+
+    Everything a phac2-dap run reads and draws before its first fit (``tzsl run --check`` calls
+    it too): the random splits are drawn here, so a split that cannot be drawn is reported with
+    the experiment file before any fit. Settings the dataset cannot honour are relaxed first
+    (:func:`tzsl.studies.zero_shot.relaxations.relax_to_dataset`). Returns ``(exp, features, splits or
+    None, split_file or None, relaxations)``: the relaxed experiment, the file's splits (``kinds =
+    ["file"]``), the random splits, or None (challenging only).
+    """
+    from tzsl.evaluation import read_splits_csv  # noqa: PLC0415
+    from tzsl.exceptions import ConfigError, SplitError  # noqa: PLC0415
+    from tzsl.studies.zero_shot.study import make_splits  # noqa: PLC0415
+
+    from tzsl.studies.zero_shot.relaxations import relax_to_dataset  # noqa: PLC0415
+
+    features = phac2_features(exp)
+    exp, relaxed = relax_to_dataset(exp, features)
+    c = exp.config
+    user_splits, split_file = None, None
+    if c.splits.kinds == ["file"]:
+        split_file = exp.resolve(c.splits.file) if c.splits.file is not None else (
+            exp.resolve(c.dataset.plain) / "splits.csv")
+        user_splits = read_splits_csv(split_file, features.attributes,
+                                      min_train_positives=c.splits.random_min_train_positives)
+        _check_folds(exp, min(len(s.train_objects) for s in user_splits))
+    else:
+        _check_folds(exp, features.n_objects - (c.splits.n_test if "random" in c.splits.kinds else 0))
+        if "random" in c.splits.kinds:
+            try:
+                user_splits, _ = make_splits(features, "random", dap_config(exp))
+            except SplitError as exc:
+                raise ConfigError(f"{exp.source}: splits: {exc}") from None
+    return exp, features, user_splits, split_file, relaxed
+
+
+def relaxation_notes(exp: Experiment) -> list[str]:
+    """``relaxed ...`` lines for the settings the dataset cannot honour (reads the data; no fit)."""
+    return [f"relaxed {relaxed.line()}" for relaxed in prepare_phac2(exp)[-1]]
+
+
+def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
+    """``study = "zero-shot"`` and its paper preset ``"phac2-dap"``: one study, labelled by
+    :func:`~tzsl.studies.study_labels.study_labels` (the paper's numbers only on its data)."""
+    from tzsl.studies.zero_shot.gzsl import GZSL_FILE, RELAXED_COLUMN, gzsl_config_record, run_gzsl  # noqa: PLC0415
+    from tzsl.studies.zero_shot.study import make_splits, run_dap_study, solver_lines  # noqa: PLC0415
+    from tzsl.studies.zero_shot.tables import table_titles  # noqa: PLC0415
+    from tzsl.studies.study_labels import study_labels  # noqa: PLC0415
+
+    study = exp.study
+    exp, features, user_splits, split_file, relaxed = prepare_phac2(exp)
+    c = exp.config
+    config = dap_config(exp)
+    labels = study_labels(study, c, features)
+    say(f"{features.dataset}: {features.n_trials} trials, {features.n_objects} objects, "
+        f"{len(features.sensors)} sensor(s), {features.X.shape[2]} features per sensor, "
+        f"{features.attributes.shape[1]} attributes")
+    notes = [labels.note] if labels.note else []
+    notes += [f"relaxed {r.line()}" for r in relaxed]
+    for note in notes:
+        say(f"note: {note}")
+    kinds = tuple(c.splits.kinds)
+    methods = c.methods
+    options = {"methods": methods.method_specs()}
+    file_splits = user_splits if split_file is not None else None  # random ones are redrawn identically
+    solver_record: dict = {}
+    tables = run_dap_study(features, results, config, kinds=kinds, splits=file_splits, sweep=methods.sweep,
+                           compare_methods=bool(options["methods"]), method_options=options,
+                           record=solver_record, labels=labels)
+    for text in solver_lines(solver_record["attribute_solver"]):
+        say(text)
+    gzsl_record, gzsl_notes = None, []
+    if methods.gzsl:
+        gzsl = gzsl_config(exp)
+        splits = user_splits if user_splits is not None else make_splits(features, "random", config)[0]
+        tables["gzsl"] = run_gzsl(features, splits, config, gzsl, echo=say)
+        results.write_csv(GZSL_FILE, tables["gzsl"])
+        gzsl_record = gzsl_config_record(gzsl)
+        if RELAXED_COLUMN in tables["gzsl"].columns:
+            gzsl_notes = [t for t in dict.fromkeys(tables["gzsl"][RELAXED_COLUMN].fillna("")) if t and t != "-"]
+            for note in gzsl_notes:
+                say(f"note: relaxed gzsl {note}")
+    drop = getattr(results, "drop", {})
+    for name, title in table_titles(labels).items():
+        if name in tables:
+            say(f"\n{title}\n{format_table(tables[name].drop(columns=drop.get(f'{name}.csv', []), errors='ignore'))}")
+    shown = {name: t.drop(columns=drop.get(f"{name}.csv", []), errors="ignore") for name, t in tables.items()}
+    record = {"study_kind": study, "phac2_dap": record_config(config), "kinds": list(kinds),
+              "splits_file": None if split_file is None else str(split_file),
+              "method_options": options, "labels": {"study": labels.study, "data": labels.data,
+                                                    "paper": labels.paper, "note": labels.note},
+              "relaxations": [r.record() for r in relaxed] + [{"setting": "gzsl", "why": n} for n in gzsl_notes],
+              "gzsl": gzsl_record, "dataset": features.dataset, **solver_record}
+    data_files = list(features.info.get("data_files", [])) + ([] if split_file is None else [split_file])
+    return StudyRun(shown, record, data_files)

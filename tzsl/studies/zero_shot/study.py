@@ -1,0 +1,491 @@
+"""The PHAC-2 DAP study (DAP paper section 4): Tables 1-3, multi-label comparison, sweep.
+
+One call of :func:`run_dap_study` fits the attribute classifiers once per split and scores
+every DAP variant from the same test posteriors, so MAXDAP/AVGDAP and the three priors are
+compared on identical fits. The attribute-count sweep (section 4.7) reuses those posteriors.
+
+Everything that is fitted (z-scoring, PCA, SVM hyper-parameters, under-sampling draw, Platt
+sigmoid) sees training objects only. Splits are drawn from the class-attribute table (random)
+or from an unsupervised 2-D map of all objects' features (challenging), as in the paper.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from tzsl.datasets import FeatureSet
+from tzsl.evaluation import Split, challenging_splits, random_object_splits
+from tzsl.exceptions import ConfigError, SplitError
+from tzsl.studies._failures import ERROR_COLUMN, attempt
+from tzsl.studies.config import DaskCompute, Phac2Methods, Phac2Splits, Phac2Svm
+from tzsl.studies.zero_shot.methods import method_comparison
+from tzsl.studies.study_labels import StudyLabels
+from tzsl.studies.study_methods import split_masks
+from tzsl.studies.study_calibration import write_reliability_figure
+from tzsl.studies.zero_shot.tables import (
+    table_titles,
+    FUSIONS,
+    PRIORS,
+    attribute_accuracy_summary,
+    attribute_accuracy_table,
+    attribute_subsets,
+    attribute_sweep,
+    multilabel_table,
+    split_label,
+    table1_fusion,
+    table2_priors,
+    table3_challenging,
+)
+from tzsl.models import (
+    AttributeClassifierBank,
+    AttributeSVM,
+    MultiLabelAttributeClassifier,
+    attribute_prior,
+    dap_log_scores,
+    fuse_attribute_posteriors,
+)
+
+#: Table (``failed_splits.csv``) of the splits whose DAP fit failed; written only when one did.
+FAILED_SPLITS = "failed_splits"
+
+_SPLITS, _SVM, _METHODS, _COMPUTE = Phac2Splits(), Phac2Svm(), Phac2Methods(), DaskCompute()
+
+#: Every split a study scored, in the format ``tzsl evaluate --splits`` reads back.
+SPLITS_FILE = "splits.csv"
+
+
+__all__ = [
+    "FUSIONS",
+    "SPLITS_FILE",
+    "PRIORS",
+    "DapStudyConfig",
+    "SplitPosteriors",
+    "attribute_accuracy_summary",
+    "attribute_accuracy_table",
+    "attribute_bank",
+    "attribute_estimator",
+    "check_cv_folds",
+    "attribute_subsets",
+    "attribute_sweep",
+    "compute_context",
+    "fit_split",
+    "fit_splits",
+    "make_splits",
+    "method_comparison",
+    "multilabel_table",
+    "object_map_features",
+    "run_dap_study",
+    "solver_lines",
+    "split_masks",
+    "table1_fusion",
+    "table2_priors",
+    "table3_challenging",
+]
+
+@dataclass
+class DapStudyConfig:
+    """Settings of the PHAC-2 DAP study; every field is recorded in the manifest.
+
+    Attributes
+    ----------
+    n_splits, n_test : int
+        Random splits and test objects per random split (paper: 5 and 10).
+    seed : int
+        Seeds the split draws, the under-sampling draws and the sweep's subsets.
+    random_min_train_positives : int
+        Random splits leave out an attribute with fewer positive training objects. 2 is the
+        least object-grouped cross-validation can work with; the paper states no rule.
+    challenging_min_train_positives : int
+        The paper's rule for challenging splits: each attribute trained on >= 3 objects.
+    min_train_negatives : int
+        Both split kinds leave out an attribute with fewer negative training objects.
+    undersampling : {"select", "bagging", "none"}
+        Class-0 under-sampling of the attribute SVMs (see :class:`tzsl.models.AttributeSVM`).
+    svm_params : dict
+        Further :class:`~tzsl.models.AttributeSVM` parameters (grids, draws, cv). The default
+        ``cv=5`` tunes on 5 object-grouped stratified folds of the training objects; ``cv=None``
+        is the paper's leave-one-object-out, several times slower per fit (compare the two with
+        ``[svm] cv`` in a study file; ``make bench-fit`` times one split's fits).
+    solver, max_exact_trials
+        Exact SVMs or the approximate model (see :class:`tzsl.models.AttributeClassifierBank`);
+        ``[svm] solver`` and ``max_exact_trials`` of an experiment file.
+    multilabel : bool
+        Also fit the joint (multi-label) attribute model on the random splits (section 4.4).
+    sweep_min_attributes, sweep_max_subsets : int
+        Attribute-count sweep: j from this many to all attributes, at most this many subsets
+        per j (paper: 7 and 1000).
+    n_jobs, backend, scheduler
+        Parallel fits; ``backend="dask"`` with ``scheduler=None`` starts a local cluster.
+    progress : bool
+        tqdm progress bars over the fits.
+    cache : bool
+        Cache every fitted (attribute, sensor) model with joblib.Memory under
+        :func:`tzsl.datasets.get_cache_dir` (``$TZSL_CACHE_DIR``), keyed on training data and
+        parameters, so an interrupted run resumes and a re-run does not refit.
+    """
+
+    # every default is the experiment schema's (tzsl.studies.config), written once there
+    n_splits: int = _SPLITS.n_splits
+    n_test: int = _SPLITS.n_test
+    seed: int = _SPLITS.seed
+    random_min_train_positives: int = _SPLITS.random_min_train_positives
+    challenging_min_train_positives: int = _SPLITS.challenging_min_train_positives
+    min_train_negatives: int = _SPLITS.min_train_negatives
+    undersampling: str = _SVM.undersampling
+    svm_params: dict = field(default_factory=lambda: {"cv": _SVM.cv})
+    solver: str = _SVM.solver
+    max_exact_trials: int = _SVM.max_exact_trials
+    multilabel: bool = _METHODS.multilabel
+    sweep_min_attributes: int = _METHODS.sweep_min_attributes
+    sweep_max_subsets: int = _METHODS.sweep_max_subsets
+    n_jobs: int = _COMPUTE.n_jobs
+    backend: str = _COMPUTE.backend
+    scheduler: str | None = _COMPUTE.scheduler
+    progress: bool = _COMPUTE.progress
+    cache: bool = _COMPUTE.cache
+
+
+@dataclass
+class SplitPosteriors:
+    """Test-set attribute posteriors of one split, enough to score every DAP variant.
+
+    Attributes
+    ----------
+    split : Split
+    attributes : tuple of str, length m
+        Attributes the split's classifiers were trained on.
+    P : ndarray of shape (n_test_trials, n_sensors, m)
+        ``p(a_m = 1 | x_s)`` of every test trial from the independent classifiers.
+    K : ndarray of shape (n_test_objects, m)
+        Test objects' attribute rows (the unseen classes), in ``split.test_objects`` order.
+    y : ndarray of shape (n_test_trials,)
+        Row of ``K`` of each test trial's object.
+    train_prior : ndarray of shape (m,)
+        Attribute frequency over training objects.
+    P_multilabel : ndarray of shape (n_test_trials, n_sensors, m) or None
+        Posteriors of the joint (multi-label) model, when fitted.
+    model : AttributeClassifierBank or None
+        The fitted independent attribute classifiers.
+    fit_seconds : float
+        Wall-clock seconds of fitting them (small when the fit cache had them).
+    """
+
+    split: Split
+    attributes: tuple[str, ...]
+    P: np.ndarray
+    K: np.ndarray
+    y: np.ndarray
+    train_prior: np.ndarray
+    P_multilabel: np.ndarray | None = None
+    model: AttributeClassifierBank | None = None
+    fit_seconds: float = float("nan")
+
+    def accuracy(self, fusion: str = "avg", prior: str = "uni", multilabel: bool = False) -> float:
+        """DAP trial accuracy on this split's test objects."""
+        return float((self.predict(fusion, prior, multilabel) == self.y).mean())
+
+    def predict(self, fusion: str = "avg", prior: str = "uni", multilabel: bool = False) -> np.ndarray:
+        """Predicted test-object row of every test trial, shape (n_test_trials,)."""
+        return self.scores(fusion, prior, multilabel).argmax(axis=1)
+
+    def scores(self, fusion: str = "avg", prior: str = "uni", multilabel: bool = False,
+               K: np.ndarray | None = None) -> np.ndarray:
+        """DAP log scores (n_test_trials, n_test_objects) against ``K`` (default the true rows).
+
+        The prior is always the one of the true rows (a permuted ``K``, as in the negative
+        control, has the same attribute frequencies).
+        """
+        P = self.P_multilabel if multilabel else self.P
+        if P is None:
+            raise ConfigError("no multi-label posteriors were computed for this split")
+        present, absent = fuse_attribute_posteriors(P, fusion)
+        return dap_log_scores(present, self.K if K is None else K, self._prior(prior), P_absent=absent)
+
+    def _prior(self, prior: str) -> np.ndarray:
+        if prior == "train":
+            return self.train_prior
+        return attribute_prior(prior, class_attributes=self.K)
+
+
+# --------------------------------------------------------------------------- splits
+
+
+def object_map_features(features: FeatureSet) -> pd.DataFrame:
+    """Per-trial feature rows indexed by object, both sensors side by side (n_trials, s * d)."""
+    n, s, d = features.X.shape
+    return pd.DataFrame(features.X.reshape(n, s * d), index=pd.Index(features.objects, name="object_name"))
+
+
+def make_splits(features: FeatureSet, kind: str, config: DapStudyConfig) -> tuple[list[Split], pd.DataFrame | None]:
+    """Random (F5) or challenging (F6) object splits of ``features``; the map for challenging."""
+    if kind == "random":
+        splits = random_object_splits(
+            features.attributes, n_test=config.n_test, n_splits=config.n_splits, random_state=config.seed,
+            min_train_positives=config.random_min_train_positives, min_train_negatives=config.min_train_negatives,
+        )
+        return splits, None
+    if kind == "challenging":
+        return challenging_splits(
+            object_map_features(features), features.attributes,
+            min_train_positives=config.challenging_min_train_positives, min_train_negatives=config.min_train_negatives,
+        )
+    raise ConfigError(f"unknown split kind {kind!r}; choose random or challenging")
+
+
+# --------------------------------------------------------------------------- fitting
+
+
+def check_cv_folds(cv, n_train_objects: int, where: str) -> None:
+    """Refuse more object-grouped CV folds (``svm.cv`` / ``--cv``) than training objects, before any fit.
+
+    ``cv``: an int (folds) or None / 0 (leave-one-object-out, always possible); ``where`` starts
+    the message (the experiment file or ``command line``).
+    """
+    if cv and int(cv) > n_train_objects:
+        raise ConfigError(f"{where}: svm.cv: {int(cv)} object-grouped folds, but a split has only "
+                          f"{n_train_objects} training objects; use at most {n_train_objects} (0 = "
+                          "leave-one-object-out)")
+
+
+def attribute_estimator(config: DapStudyConfig, seed: int) -> AttributeSVM:
+    """The per-(attribute, sensor) SVM template of the study."""
+    return AttributeSVM(undersampling=config.undersampling, random_state=seed, **config.svm_params)
+
+
+def _memory(config: DapStudyConfig) -> str | None:
+    from tzsl.datasets import get_cache_dir  # noqa: PLC0415
+
+    return str(get_cache_dir()) if config.cache else None
+
+
+def attribute_bank(config: DapStudyConfig, attributes, seed: int) -> AttributeClassifierBank:
+    """Independent per-(attribute, sensor) classifiers, parallel and cached."""
+    return AttributeClassifierBank(
+        estimator=attribute_estimator(config, seed), attribute_names=list(attributes), n_jobs=config.n_jobs,
+        backend=config.backend, memory=_memory(config), progress=config.progress, random_state=seed,
+        solver=config.solver, max_exact_trials=config.max_exact_trials,
+    )
+
+
+def fit_split(features: FeatureSet, split: Split, config: DapStudyConfig, index: int,
+              multilabel: bool = False) -> SplitPosteriors:
+    """Fit the attribute classifiers on the split's training objects; posteriors of its test trials."""
+    attributes = split.kept_attributes
+    train, test = split_masks(features, split)
+    A = features.attributes.loc[features.objects, list(attributes)].to_numpy(dtype=int)
+    groups = features.objects
+    seed = int(np.random.SeedSequence([config.seed, index]).generate_state(1)[0])
+    bank = attribute_bank(config, attributes, seed)
+    start = time.perf_counter()
+    bank.fit(features.X[train], A[train], groups[train])
+    fit_seconds = time.perf_counter() - start
+    P = bank.predict_proba(features.X[test])
+    P_ml = None
+    if multilabel:
+        joint = MultiLabelAttributeClassifier(
+            estimator=attribute_estimator(config, seed), attribute_names=list(attributes), n_jobs=config.n_jobs,
+            backend=config.backend, memory=_memory(config), progress=config.progress, random_state=seed,
+        )
+        joint.fit(features.X[train], A[train], groups[train])
+        P_ml = joint.predict_proba(features.X[test])
+    K = features.attributes.loc[list(split.test_objects), list(attributes)].to_numpy(dtype=int)
+    y = pd.Index(split.test_objects).get_indexer(groups[test])
+    prior = attribute_prior("train", train_attributes=A[train], groups=groups[train])
+    return SplitPosteriors(split=split, attributes=tuple(attributes), P=P, K=K, y=y, train_prior=prior,
+                           P_multilabel=P_ml, model=bank, fit_seconds=fit_seconds)
+
+
+@contextlib.contextmanager
+def compute_context(config: DapStudyConfig):
+    """A Dask client for ``backend="dask"`` (the scheduler's, or a local cluster); else nothing."""
+    if config.backend != "dask":
+        yield None
+        return
+    try:
+        from dask.distributed import Client, LocalCluster  # noqa: PLC0415
+    except ImportError as exc:  # pragma: no cover - depends on the install
+        raise ConfigError("--backend dask needs dask.distributed: pip install 'tzsl[dask]'") from exc
+    from dask.distributed import default_client  # noqa: PLC0415
+
+    try:  # nested use (a study calling fit_splits twice): keep the cluster that is already up
+        yield default_client()
+        return
+    except ValueError:
+        pass
+    if config.scheduler:
+        with Client(config.scheduler) as client:
+            yield client
+    else:
+        workers = max(1, config.n_jobs if config.n_jobs and config.n_jobs > 0 else 2)
+        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                          dashboard_address=None) as cluster, Client(cluster) as client:
+            yield client
+
+
+def fit_splits(features: FeatureSet, splits: list[Split], config: DapStudyConfig,
+               multilabel: bool = False, offset: int = 0, failures: list[dict] | None = None) -> list[SplitPosteriors]:
+    """:func:`fit_split` for every split (index ``offset + i`` seeds split ``i``).
+
+    ``failures``: if a list, a split whose fit fails is left out and recorded there as
+    ``{"split", "method": "dap", "error"}`` (the run goes on); if every split fails, the last
+    split's error is raised. Without it, the first failure is raised.
+    """
+    if failures is None:
+        with compute_context(config):
+            return [fit_split(features, s, config, offset + i, multilabel=multilabel) for i, s in enumerate(splits)]
+    results = []
+    with compute_context(config):
+        for i, s in enumerate(splits):
+            done, error = attempt(fit_split, features, s, config, offset + i, multilabel=multilabel)
+            if done is None:
+                failures.append({"split": split_label(s), "method": "dap", ERROR_COLUMN: error})
+            else:
+                results.append(done)
+        if splits and not results:  # nothing to tabulate: the error ends the run
+            fit_split(features, splits[-1], config, offset + len(splits) - 1, multilabel=multilabel)
+    return results
+
+
+# --------------------------------------------------------------------------- the study
+
+
+def _print(echo, title: str, table: pd.DataFrame) -> None:
+    """Echo ``table`` for people: 3 decimals, whole-number columns (counts) without decimals."""
+    if echo is None:
+        return
+    shown = table.copy()
+    for column in shown.select_dtypes("number").columns:
+        values = shown[column].dropna()
+        if len(values) and np.all(np.isclose(values, np.round(values))):
+            shown[column] = shown[column].map(lambda v: "-" if pd.isna(v) else f"{v:.0f}")
+    echo(f"\n{title}")
+    echo(shown.to_string(index=False, float_format=lambda v: f"{v:.3f}", na_rep="-"))
+
+
+def run_dap_study(
+    features: FeatureSet,
+    out,
+    config: DapStudyConfig | None = None,
+    kinds: tuple[str, ...] = ("random", "challenging"),
+    splits: list[Split] | None = None,
+    sweep: bool = True,
+    compare_methods: bool = False,
+    echo=None,
+    method_options: dict | None = None,
+    record: dict | None = None,
+    labels: StudyLabels | None = None,
+) -> dict[str, pd.DataFrame]:
+    """Run the PHAC-2 DAP study and write its tables and figures into ``out``.
+
+    Parameters
+    ----------
+    features : FeatureSet
+        Per-trial, per-sensor features (e.g. ``extract_features("phac2-penn")``).
+    out : tzsl.studies._outputs.ResultsDir
+        Where tables (CSV) and figures (PNG) go; existing files need ``force``.
+    config : DapStudyConfig or None
+    kinds : tuple of {"random", "challenging"}
+        Which split families to run. Ignored when ``splits`` is given.
+    splits : list of Split or None
+        User-supplied splits (``tzsl evaluate --splits FILE``): scored like random splits
+        (Tables 1 and 2), no paper numbers are matched to them beyond the split label.
+    sweep : bool
+        Run the attribute-count sweep on the random splits.
+    compare_methods : bool
+        Also fit registry methods on the random splits (``phac2_methods.csv``,
+        ``phac2_method_comparison.csv``).
+    echo : callable or None
+        Receives human-readable tables (the CLI passes ``click.echo``).
+    method_options : dict or None
+        Keyword arguments of :func:`method_comparison` (``methods``: registry entries) when
+        ``compare_methods``; default: ESZSL and embedding lambdas 0.1 and 1.
+    record : dict or None
+        Filled with ``"attribute_solver"``: one :attr:`AttributeClassifierBank.solver_choice_`
+        per fitted split (exact or approximate attribute models, and why), for the manifest.
+    labels : StudyLabels or None
+        How the tables name the run and whether the paper's numbers go beside
+        (:func:`tzsl.studies.study_labels.study_labels`); default: a generic run, no paper.
+
+    Returns
+    -------
+    dict of DataFrame
+        Every table written, keyed by file stem.
+    """
+    from tzsl.studies.zero_shot._figures import (  # noqa: PLC0415
+        attribute_accuracy_figure,
+        attribute_sweep_figure,
+        object_map_figure,
+    )
+
+    config = config or DapStudyConfig()
+    labels = labels or StudyLabels()
+    paper = labels.paper
+    tables: dict[str, pd.DataFrame] = {}
+    with compute_context(config):  # one Dask cluster for all the study's fits
+        random_results: list[SplitPosteriors] = []
+        failed: list[dict] = []  # splits whose DAP fit failed: failed_splits.csv, reported at the end
+        if splits is not None:
+            random_results = fit_splits(features, splits, config, multilabel=config.multilabel, failures=failed)
+        elif "random" in kinds:
+            random_splits, _ = make_splits(features, "random", config)
+            random_results = fit_splits(features, random_splits, config, multilabel=config.multilabel,
+                                        failures=failed)
+        if random_results:
+            tables["table1_fusion"] = table1_fusion(random_results, paper=paper)
+            tables["table2_priors"] = table2_priors(random_results, paper=paper)
+            if config.multilabel:
+                tables["multilabel"] = multilabel_table(random_results, paper=paper)
+            per_split = attribute_accuracy_table(random_results, features.sensors)
+            tables["attribute_accuracy_per_split"] = per_split
+            tables["attribute_accuracy"] = attribute_accuracy_summary(per_split, random_results, paper=paper)
+            out.write_figure("attribute_accuracy.png", attribute_accuracy_figure(tables["attribute_accuracy"]))
+            if sweep:
+                tables["attribute_sweep"] = attribute_sweep(
+                    random_results, config.sweep_min_attributes, config.sweep_max_subsets, seed=config.seed)
+                out.write_figure("attribute_sweep.png", attribute_sweep_figure(tables["attribute_sweep"]))
+            if compare_methods:
+                tables.update(method_comparison(features, random_results, seed=config.seed, labels=labels,
+                                                **(method_options or {})))
+                write_reliability_figure(out, tables, labels.reliability_table, labels.comparison_table)
+        used = [r.split for r in random_results]
+        if splits is None and "challenging" in kinds:
+            challenging, map_coords = make_splits(features, "challenging", config)
+            results = fit_splits(features, challenging, config, offset=100, failures=failed)
+            used += [r.split for r in results]
+            tables["table3_challenging"] = table3_challenging(results, map_coords, paper=paper)
+            tables["object_map"] = map_coords
+            out.write_figure("object_map.png", object_map_figure(map_coords))
+        if failed:
+            tables[FAILED_SPLITS] = pd.DataFrame(failed)
+    _record_solvers(random_results + (results if splits is None and "challenging" in kinds else []), echo, record)
+    titles = table_titles(labels)
+    if used:  # every split scored, readable by --splits; its classes go into the manifest too
+        out.write_splits(SPLITS_FILE, used)
+    for name, table in tables.items():
+        out.write_csv(f"{name}.csv", table)
+        if name in titles:
+            _print(echo, titles[name], table)
+    return tables
+
+
+def solver_lines(choices: list[dict]) -> list[str]:
+    """One line per distinct attribute-solver choice (``record["attribute_solver"]`` entries)."""
+    return list(dict.fromkeys(f"attribute models: {c['solver']} ({c['reason']})" for c in choices))
+
+
+def _record_solvers(results: list[SplitPosteriors], echo, record: dict | None) -> None:
+    """Echo each distinct attribute-solver choice once; store every split's in ``record``."""
+    choices = [{"split": r.split.name, **r.model.solver_choice_} for r in results
+               if r.model is not None and hasattr(r.model, "solver_choice_")]
+    if record is not None:
+        record["attribute_solver"] = choices
+    if echo is not None:
+        for text in solver_lines(choices):
+            echo(text)
+
+
