@@ -12,8 +12,8 @@ from sklearn.linear_model import LogisticRegression
 
 from tzsl._profile import profiling
 from tzsl.exceptions import ConfigError
-from tzsl.models import AttributeClassifierBank, AttributeSVM, FitStore, fit_cached, fit_store_counts, resolve_store
-from tzsl._fit_store import CACHE_ENV, FITS_FOLDER, array_digest, fit_clone, parallel_context, spawn_seeds
+from tzsl.models import AttributeClassifierBank, AttributeSVM, fit_cached, fit_store_counts, resolve_store
+from tzsl._fit_store import CACHE_ENV, FitStore, FITS_FOLDER, array_digest, fit_clone, parallel_context, spawn_seeds
 
 
 # ---------------------------------------------------------------------------- resolve_store

@@ -96,7 +96,7 @@ def test_splits_written_to_a_results_folder_read_back_exactly_with_their_rule(tm
     from tzsl.studies._outputs import ResultsDir
     from tzsl.studies.zero_shot.study import DapStudyConfig, make_splits
 
-    from tests.experiments.test_phac2_dap import synthetic_features
+    from tests.studies.test_phac2_dap import synthetic_features
 
     features = synthetic_features(n_objects=40, n_attributes=6, trials=2)
     config = DapStudyConfig(n_splits=2, n_test=5, progress=False)

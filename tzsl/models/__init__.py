@@ -92,7 +92,7 @@ from tzsl.models._registry import (
     unregister_method,
 )
 from tzsl.models._score_ensemble import ScoreEnsembleZSL, zscore_rows
-from tzsl._fit_store import FITS_FOLDER, FitStore, count_fits, fit_cached, fit_store_counts, resolve_store
+from tzsl._fit_store import FITS_FOLDER, count_fits, fit_cached, fit_store_counts, resolve_store
 from tzsl.models._posterior_calibration import (
     CALIBRATIONS,
     CalibratedZeroShotClassifier,
@@ -105,7 +105,6 @@ from tzsl.models import _builtin_methods  # noqa: F401,E402  (registers the ship
 
 __all__: list[str] = [
     "FITS_FOLDER",
-    "FitStore",
     "count_fits",
     "fit_cached",
     "fit_store_counts",
