@@ -177,6 +177,19 @@ def methods_page(out: Path) -> None:
     _write(out / "methods_table.md", "\n".join(lines))
 
 
+def datasets_page(out: Path) -> None:
+    """The dataset registry (``tzsl datasets --json``): name, what it holds, its content, where it comes from."""
+    datasets = json.loads(tzsl_cli("datasets", "--json"))
+    if not datasets:
+        raise DocGenError("`tzsl datasets --json` lists no dataset")
+    lines = ["| name (`--dataset`, `[dataset] builtin`) | what it is | content | source |", "|---|---|---|---|"]
+    for d in datasets:
+        what = d["description"] + ("; needs `path`" if d["needs_path"] else "")
+        cells = [f"`{d['name']}`", what, f"{d['content']} ({', '.join(d['eps'])})", d["source"]]
+        lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
+    _write(out / "datasets_table.md", "\n".join(lines) + "\n")
+
+
 # --------------------------------------------------------------------------- formats, experiment files
 
 
@@ -212,5 +225,6 @@ def generate(docs: Path) -> None:
         shutil.rmtree(stubs)
     cli_page(out)
     methods_page(out)
+    datasets_page(out)
     formats_page(out)
     experiments_page(out, docs.parent)

@@ -34,7 +34,7 @@ import numpy as np
 import pandas as pd
 
 from tzsl.evaluation import bootstrap_accuracy, paired_difference_interval
-from tzsl.studies.extract import extract_features
+from tzsl.features import dataset_features
 from tzsl.studies.zero_shot.study import split_masks
 from tzsl.models import attribute_rows, build_method
 
@@ -208,7 +208,7 @@ def grid_summary(cache: Path) -> pd.DataFrame:
 
 
 def run(cache: Path, n_random: int, seed: int) -> pd.DataFrame:
-    features = extract_features("phac2-penn")
+    features = dataset_features("phac2-penn")
     records = []
     for kind, index, split in study_splits(features, n_random, seed):
         base = base_scores(features, split, index, cache)

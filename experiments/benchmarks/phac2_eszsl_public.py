@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 from tzsl.evaluation import bootstrap_accuracy, paired_difference_interval
-from tzsl.studies.extract import extract_features
+from tzsl.features import dataset_features
 from tzsl.studies.zero_shot.study import DapStudyConfig, make_splits, split_masks
 from tzsl.models import attribute_rows, build_method
 
@@ -120,7 +120,7 @@ def main() -> None:
     ap.add_argument("--confirm-offset", type=int, default=1000, help="confirmation seed = seed + offset")
     args = ap.parse_args()
     warnings.simplefilter("ignore")
-    features = extract_features("phac2-penn")
+    features = dataset_features("phac2-penn")
     trials = pd.concat([run(features, "select", args.seed, args.n_splits),
                         run(features, "confirm", args.seed + args.confirm_offset, args.n_splits)], ignore_index=True)
     table = summarise(trials)

@@ -14,11 +14,11 @@ warnings.simplefilter("ignore")
 from pathlib import Path
 import numpy as np, pandas as pd
 from sklearn.preprocessing import QuantileTransformer
-from tzsl.studies.extract import extract_features
+from tzsl.features import dataset_features
 from tzsl.studies.zero_shot.study import split_masks
 from phac2_posteriors import study_splits
 from phac2_accuracy import embedding_scores, zrows
-f = extract_features('phac2-penn')
+f = dataset_features('phac2-penn')
 o = f.objects
 X0 = f.X.reshape(len(o), -1)
 res = []

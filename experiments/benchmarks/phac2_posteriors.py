@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 from scipy.special import expit
 
-from tzsl.studies.extract import extract_features
+from tzsl.features import dataset_features
 from tzsl.studies.zero_shot.study import DapStudyConfig, fit_split, make_splits, split_masks
 from tzsl.models import GridEdgeWarning
 
@@ -64,7 +64,7 @@ def main() -> None:
     ap.add_argument("--n-jobs", type=int, default=1)
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
-    features = extract_features("phac2-penn")
+    features = dataset_features("phac2-penn")
     warnings.simplefilter("ignore", GridEdgeWarning)
     for grid in args.grids:
         for kind, index, split in study_splits(features, args.n_random, args.seed):

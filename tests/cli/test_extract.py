@@ -41,10 +41,10 @@ def test_extract_hold_mat_writes_table_and_refuses_overwrite(data_dir, tmp_path)
 
 def test_hold_mat_gripper_features_match_penn(data_dir):
     """The two real sources agree: HOLD min/mean aperture == Penn features 20/21 (HOLD EP)."""
-    from tzsl.studies.extract import extract_features
+    from tzsl.features import dataset_features
 
-    hold = extract_features("phac2-hold-mat", data_dir=data_dir)
-    penn = extract_features("phac2-penn", data_dir=data_dir)
+    hold = dataset_features("phac2-hold-mat", data_dir=data_dir)
+    penn = dataset_features("phac2-penn", data_dir=data_dir)
     penn_rows = penn.trials.set_index("trial_id").index.get_indexer(hold.trials["trial_id"])
     assert (penn_rows >= 0).all()
     for raw_name, penn_name in (("aperture_min", "gripper_min"), ("aperture_mean", "gripper_mean")):

@@ -79,7 +79,7 @@ def test_report_command(tmp_path):
 def test_plain_folder_from_convert_gives_the_builtin_accuracies(tmp_path, data_dir):
     """Done when: convert PHAC-2 to a plain folder, validate it, run it from a TOML file -> same accuracies."""
     from tzsl.studies._outputs import ResultsDir
-    from tzsl.studies.extract import extract_features
+    from tzsl.features import dataset_features
     from tzsl.studies.zero_shot.study import DapStudyConfig, run_dap_study
 
     folder = tmp_path / "phac2_plain"
@@ -96,7 +96,7 @@ def test_plain_folder_from_convert_gives_the_builtin_accuracies(tmp_path, data_d
 
     config = DapStudyConfig(n_splits=2, n_test=10, seed=0, svm_params=dict(TINY), multilabel=False, progress=False,
                             cache=False)
-    builtin = run_dap_study(extract_features("phac2-penn", data_dir=data_dir), ResultsDir(tmp_path / "builtin"),
+    builtin = run_dap_study(dataset_features("phac2-penn", data_dir=data_dir), ResultsDir(tmp_path / "builtin"),
                             config, kinds=("random",), sweep=False)["table1_fusion"]
     assert list(ours["split"].astype(str)) == ["1", "2", "mean", "std", "control"]
     for column in ("maxdap", "avgdap", "avgdap_per_class_mean", "n_attributes", "n_test_objects"):

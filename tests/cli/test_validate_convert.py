@@ -89,9 +89,9 @@ def penn_folder(data_dir, tmp_path_factory) -> Path:
 
 @pytest.mark.realdata
 def test_penn_round_trip_equals_built_in_features(penn_folder, data_dir):
-    from tzsl.studies.extract import extract_features
+    from tzsl.features import dataset_features
 
-    ref = extract_features("phac2-penn", data_dir=data_dir)
+    ref = dataset_features("phac2-penn", data_dir=data_dir)
     fs = load_plain_dataset(penn_folder)
     np.testing.assert_array_equal(fs.X, ref.X)  # exact equality
     assert fs.X.dtype == ref.X.dtype
@@ -131,7 +131,7 @@ def test_convert_refuses_overwrite(penn_folder, data_dir):
 
 @pytest.mark.realdata
 def test_hold_signal_dataset_reproduces_time_averages(data_dir, tmp_path):
-    from tzsl.studies.extract import extract_features
+    from tzsl.features import dataset_features
     from tzsl.features import BIOTAC_CHANNELS
 
     out = tmp_path / "hold"
@@ -146,7 +146,7 @@ def test_hold_signal_dataset_reproduces_time_averages(data_dir, tmp_path):
     assert result.exit_code == 0, result.output
     assert "23 channels x 1 statistics (mean), baseline_rows=100" in result.output
 
-    ref = extract_features("phac2-hold-mat", data_dir=data_dir)
+    ref = dataset_features("phac2-hold-mat", data_dir=data_dir)
     fs = load_plain_dataset(out)
     assert fs.X.shape == (60, 2, 23)
     assert fs.feature_names == tuple(f"{c}_mean" for c in BIOTAC_CHANNELS)

@@ -123,10 +123,10 @@ def test_stop_outcomes_stops_at_the_first_confident_ep():
 @pytest.mark.slow
 @pytest.mark.realdata
 def test_one_real_phac2_split(data_dir, monkeypatch):
-    from tzsl.studies.extract import extract_features
+    from tzsl.features import dataset_features
 
     monkeypatch.delenv("TZSL_CACHE_DIR", raising=False)
-    fs = extract_features("phac2-penn", data_dir=data_dir)
+    fs = dataset_features("phac2-penn", data_dir=data_dir)
     split = random_object_splits(fs.attributes, n_test=10, n_splits=1, random_state=0)[0]
     res = evaluate_split(fs, split, seed=0, update="dap", cv=3, n_samples=32)
     assert res["eps"] == EPS

@@ -243,12 +243,12 @@ def evaluate(force, **options):
 def bench(split_index, skip_literal, out, seed, data_dir, force):
     """Time one random PHAC-2 split: the paper's literal recipe vs tzsl (n_jobs 1 and 2), with accuracies."""
     from tzsl.benchmarks.bench import run_bench  # noqa: PLC0415
-    from tzsl.studies.extract import extract_features  # noqa: PLC0415
+    from tzsl.features import dataset_features  # noqa: PLC0415
     from tzsl.studies.zero_shot.study import DapStudyConfig  # noqa: PLC0415
 
     if out is not None and out.exists() and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite")
-    features = extract_features("phac2-penn", data_dir=data_dir)
+    features = dataset_features("phac2-penn", data_dir=data_dir)
     default = DapStudyConfig(seed=seed)  # timed on the paper's grid, like the literal recipe beside it
     config = DapStudyConfig(seed=seed, svm_params={**default.svm_params, "grid": "paper"})
     table = run_bench(features, config, split_index=split_index, skip_literal=skip_literal,

@@ -9,11 +9,10 @@ from pathlib import Path
 
 import click
 
-from tzsl.cli._root import cli, data_dir_option, force_option, no_progress_option
+from tzsl.cli._root import DatasetName, cli, data_dir_option, force_option, no_progress_option, schema_option
 from tzsl.exceptions import ConfigError, DataFileError
 
 #: Datasets ``tzsl convert`` writes as plain-file folders.
-CONVERTIBLE = ("phac2-penn", "phac2-hold-mat")
 #: ``--from`` kinds (:data:`tzsl.datasets.LAB_FORMATS`, written here so --help stays fast).
 LAB_KINDS = ("ros-bag", "hdf5", "series")
 
@@ -168,16 +167,16 @@ def _card(data) -> dict:
                    "layout), series (a folder of per-trial .csv/.npy time series).")
 @click.option("--mapping", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="The TOML mapping of --from: topics/groups/files to trials, sensors, channels and classes.")
-@click.option("--dataset", type=click.Choice(CONVERTIBLE), default=None,
-              help="A built-in dataset: phac2-penn (Penn per-trial features as feature columns) or phac2-hold-mat "
-                   "(the raw HOLD-phase BioTac signals as one .npz signal file per trial and finger).")
+@click.option("--dataset", type=DatasetName(convertible=True), default=None,
+              help="A built-in dataset ('tzsl datasets' lists them): published features are written as feature "
+                   "columns, raw signals as one signal file per trial and sensor.")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Dataset folder to write (must not exist or be empty, unless --force).")
 @no_progress_option
-@click.option("--min-objects", type=int, default=3, show_default=True,
+@schema_option("--min-objects", study="zero-shot", key="dataset.min_objects", type=int,
               help="Keep attributes present in at least this many objects.")
 @click.option("--signal-format", type=click.Choice(["npz", "csv"]), default="npz", show_default=True,
-              help="Signal file type for phac2-hold-mat.")
+              help="Signal file type of a dataset of raw signals.")
 @data_dir_option
 @force_option
 def convert(source: str | None, mapping: Path | None, dataset: str | None, out: Path, no_progress: bool,
@@ -202,18 +201,17 @@ def convert(source: str | None, mapping: Path | None, dataset: str | None, out: 
                    f"trials, {len(done['sensors'])} sensor(s), {len(done['channels'])} channels per signal file; "
                    f"next: tzsl validate {folder}")
         return
-    from tzsl.datasets import feature_set_to_plain, load_phac2_hold_mat, write_plain_dataset  # noqa: PLC0415
-    from tzsl.studies.extract import extract_features  # noqa: PLC0415
-    from tzsl.features import BIOTAC_CHANNELS, raw_trial_signals  # noqa: PLC0415
+    from tzsl.datasets import feature_set_to_plain, get_dataset, write_plain_dataset  # noqa: PLC0415
+    from tzsl.features import BIOTAC_CHANNELS, dataset_features, raw_trial_signals  # noqa: PLC0415
 
     if out.exists() and (not out.is_dir() or any(out.iterdir())) and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite")
-    features = extract_features(dataset, data_dir=data_dir, min_objects=min_objects)
-    if dataset == "phac2-penn":
+    features = dataset_features(dataset, data_dir=data_dir, min_objects=min_objects)
+    if get_dataset(dataset).content == "static-features":
         feature_set_to_plain(features, out, force=force)
         what = f"{features.X.shape[2]} feature columns per sensor"
     else:
-        raw = {t.trial_id: t for t in load_phac2_hold_mat(data_dir)}
+        raw = {t.trial_id: t for t in get_dataset(dataset).load(data_dir)}
         trials = features.trials
         signals = [raw_trial_signals(raw[tid]) for tid in trials["trial_id"]]
         classes = features.attributes.rename_axis("class")

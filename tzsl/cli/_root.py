@@ -145,6 +145,27 @@ def parse_seeds(ctx, param, text):
 
 # --------------------------------------------------------------------------- shared options
 
+class DatasetName(click.ParamType):
+    """A built-in dataset's name, checked against the dataset registry when given (``--help`` reads no data
+    library); ``convertible=True``: only those ``tzsl convert --dataset`` writes."""
+
+    name = "dataset"
+
+    def __init__(self, convertible: bool | None = None) -> None:
+        self.convertible = convertible
+
+    def get_metavar(self, param, ctx=None) -> str:  # noqa: ARG002 (click's signature)
+        return "NAME"
+
+    def convert(self, value, param, ctx):
+        from tzsl.datasets import dataset_names  # noqa: PLC0415 (keep --help fast)
+
+        names = dataset_names(convertible=self.convertible)
+        if value not in names:
+            self.fail(f"{value!r}: expected one of {', '.join(names)} ('tzsl datasets' lists them)", param, ctx)
+        return value
+
+
 data_dir_option = click.option(
     "--data-dir",
     type=click.Path(file_okay=False, path_type=Path),

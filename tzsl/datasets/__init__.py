@@ -1,5 +1,7 @@
 """Dataset registry, data home and loaders (files -> arrays + a trial table)."""
 
+from tzsl.datasets._builtin import TactileDataset, dataset_names, get_dataset, register_dataset
+
 from tzsl.datasets._grasps import (
     FINGER_NAMES,
     JOINT_NAMES,
@@ -63,6 +65,10 @@ from tzsl.datasets._signal_files import signal_from_arrays
 from tzsl.datasets._validate import Problem, read_signal_file, validate_dataset
 
 __all__ = [
+    "TactileDataset",
+    "dataset_names",
+    "get_dataset",
+    "register_dataset",
     "FINGER_NAMES",
     "JOINT_NAMES",
     "Grasp",

@@ -8,6 +8,7 @@ from tzsl.features._baseline import (
     ep_masks,
     remove_baseline,
 )
+from tzsl.features._dataset_features import DEFAULT_MIN_OBJECTS, dataset_features, load_features
 from tzsl.features._feature_sets import penn_feature_set, raw_feature_set
 from tzsl.features._grasp_features import (
     CLOSING_JOINTS,
@@ -34,6 +35,9 @@ from tzsl.features._signal_stats import DEFAULT_SIGNAL_STATISTICS, SIGNAL_STATIS
 from tzsl.features._signal_features import load_plain_dataset, plain_feature_set, raw_trial_signals
 
 __all__: list[str] = [
+    "DEFAULT_MIN_OBJECTS",
+    "dataset_features",
+    "load_features",
     "CLOSING_JOINTS",
     "MATERIAL_FEATURES",
     "GraspFeatures",

@@ -24,7 +24,7 @@ def active_touch_outputs(config) -> list[str]:
 
 def run_active_touch(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
     from tzsl.studies.active_touch.study import run_active_touch_study  # noqa: PLC0415
-    from tzsl.studies.extract import extract_features  # noqa: PLC0415
+    from tzsl.features import load_features  # noqa: PLC0415
 
     from tzsl.studies.active_touch.hand import HandActiveConfig, run_active_hand  # noqa: PLC0415
 
@@ -32,7 +32,7 @@ def run_active_touch(exp: Experiment, results: ResultsDir, say: Callable[[str], 
     results.check_free(active_touch_outputs(exp.config))
     config = active_config(exp)
     ds = exp.config.dataset
-    features = extract_features(ds.builtin, data_dir=exp.resolve(ds.data_dir))
+    features = load_features(ds.builtin, data_dir=exp.resolve(ds.data_dir))
     tables = run_active_touch_study(features, results, config, log=say if exp.config.compute.progress else None)
     stop = tables["active_touch_stop"]
     say("\nActive touch: accuracy after 1..4 EPs (95% intervals in active_touch.csv)\n"

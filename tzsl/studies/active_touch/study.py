@@ -359,7 +359,7 @@ def run_active_touch_study(features: FeatureSet, results_dir: ResultsDir, config
     Parameters
     ----------
     features : FeatureSet
-        EP-prefixed features (``extract_features("phac2-penn")``).
+        EP-prefixed features (``dataset_features("phac2-penn")``).
     results_dir : ResultsDir
         :data:`ACTIVE_TOUCH_OUTPUTS` must be free (checked before computing) unless forced; the
         manifest is the engine's.

@@ -17,6 +17,8 @@ from typing import Literal
 
 from pydantic import Field, field_validator, model_validator
 
+from tzsl.datasets import dataset_names, get_dataset
+
 from tzsl.studies.config._common import (
     COMPARE_DESCRIPTION,
     DaskCompute,
@@ -30,9 +32,6 @@ from tzsl.studies.config._common import (
     methods_ok,
     non_empty,
 )
-
-BUILTIN_DATASETS = ("phac2-penn", "phac2-h5", "phac2-hold-mat")
-
 
 def _svm_default(name: str):
     """The default of :class:`~tzsl.models.AttributeSVM`'s parameter ``name``."""
@@ -49,19 +48,12 @@ def _bank_default(name: str):
     return inspect.signature(AttributeClassifierBank).parameters[name].default
 
 
-def _min_objects_default() -> int:
-    """:func:`tzsl.studies.extract.extract_features`' own attribute filter."""
-    from tzsl.studies.extract import extract_features  # noqa: PLC0415
-
-    return inspect.signature(extract_features).parameters["min_objects"].default
-
-
 class Phac2Dataset(Section):
-    builtin: Literal["phac2-penn", "phac2-h5", "phac2-hold-mat"] | None = Field(
-        None, description="a built-in dataset")
+    builtin: str | None = Field(None, description=f"a built-in dataset ({', '.join(dataset_names())})")
     plain: str | None = Field(None, description="a plain-file dataset folder (tzsl formats)")
     features: str | None = Field(None, description="a feature table written by tzsl extract --out")
-    path: str | None = Field(None, description="the HDF5 file of builtin = 'phac2-h5'")
+    path: str | None = Field(None, description="the file of a built-in dataset that reads one (phac2-h5: the HDF5 "
+                                               "release)")
     data_dir: str | None = Field(None, description="data home (default: $TZSL_DATA_DIR or the user data folder)")
     min_objects: int | None = Field(None, ge=1, description="keep attributes present in >= this many objects "
                                     "(built-in: the extractor's default; plain folders: keep all)")
@@ -71,14 +63,20 @@ class Phac2Dataset(Section):
         sources = [k for k in ("builtin", "plain", "features") if getattr(self, k) is not None]
         if len(sources) != 1:
             raise ValueError(f"needs exactly one of builtin, plain, features; got {sources or 'none'}")
-        if self.path is not None and self.builtin != "phac2-h5":
-            raise ValueError("path is the HDF5 file of builtin = 'phac2-h5' only")
-        if self.builtin == "phac2-h5" and self.path is None:
-            raise ValueError("builtin = 'phac2-h5' needs path = the HDF5 release file")
+        if self.builtin is not None and self.builtin not in dataset_names():
+            raise ValueError(f"builtin = {self.builtin!r}: expected one of {', '.join(dataset_names())}")
+        needs_path = self.builtin is not None and get_dataset(self.builtin).needs_path
+        if self.path is not None and not needs_path:
+            raise ValueError(f"path is the input file of a built-in dataset that reads one "
+                             f"({', '.join(n for n in dataset_names() if get_dataset(n).needs_path)}) only")
+        if needs_path and self.path is None:
+            raise ValueError(f"builtin = {self.builtin!r} needs path = its input file")
         if self.features is not None and self.min_objects is not None:
             raise ValueError("min_objects does not apply to a feature table")
         if self.builtin is not None and self.min_objects is None:
-            self.min_objects = _min_objects_default()
+            from tzsl.features import DEFAULT_MIN_OBJECTS  # noqa: PLC0415
+
+            self.min_objects = DEFAULT_MIN_OBJECTS
         return self
 
 

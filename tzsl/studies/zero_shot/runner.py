@@ -13,7 +13,6 @@ from pathlib import Path
 
 import pandas as pd
 
-from tzsl._profile import timed
 from tzsl.studies._outputs import ResultsDir
 from tzsl.studies.config import Experiment
 from tzsl.studies.study_settings import StudyRun, dap_config, format_table, gzsl_config, record_config
@@ -76,30 +75,18 @@ def zero_shot_results(exp: Experiment, force: bool) -> ResultsDir:
     return results
 
 
-@timed("load")
 def phac2_features(exp: Experiment):
-    """The FeatureSet of a phac2-dap experiment's ``[dataset]`` and ``[features]``."""
-    ds, feat = exp.config.dataset, exp.config.features
-    if ds.builtin is not None:
-        from tzsl.studies.extract import extract_features  # noqa: PLC0415
+    """The FeatureSet of a zero-shot experiment's ``[dataset]`` and ``[features]``
+    (:func:`tzsl.features.load_features`)."""
+    from tzsl.features import load_features  # noqa: PLC0415
 
-        return extract_features(ds.builtin, data_dir=exp.resolve(ds.data_dir), path=exp.resolve(ds.path),
-                                min_objects=ds.min_objects)
-    if ds.plain is not None:
-        from tzsl.features import load_plain_dataset  # noqa: PLC0415
-
-        folder = exp.resolve(ds.plain)
-        compute = exp.config.compute  # signal files: read in n_jobs processes, cached with the fits
-        features = load_plain_dataset(folder, statistics=feat.statistics, baseline_rows=feat.baseline_rows,
-                                      channels=feat.channels, min_objects=ds.min_objects, n_jobs=compute.n_jobs,
-                                      cache=compute.cache)
-        features.info.setdefault("data_files", sorted(str(p) for p in Path(folder).rglob("*") if p.is_file()))
-        return features
-    from tzsl.studies.sources import load_study_features  # noqa: PLC0415
-
-    features = load_study_features(None, features_file=exp.resolve(ds.features))
-    features.info.setdefault("data_files", [str(exp.resolve(ds.features))])
-    return features
+    ds, feat, compute = exp.config.dataset, exp.config.features, exp.config.compute
+    plain_options = {} if ds.plain is None else {  # signal files: read in n_jobs processes, cached with the fits
+        "statistics": feat.statistics, "baseline_rows": feat.baseline_rows, "channels": feat.channels,
+        "n_jobs": compute.n_jobs, "cache": compute.cache}
+    return load_features(ds.builtin, features_file=exp.resolve(ds.features), plain=exp.resolve(ds.plain),
+                         data_dir=exp.resolve(ds.data_dir), path=exp.resolve(ds.path), min_objects=ds.min_objects,
+                         **plain_options)
 
 
 def _check_folds(exp: Experiment, n_train_objects: int) -> None:

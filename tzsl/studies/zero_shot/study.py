@@ -385,7 +385,7 @@ def run_dap_study(
     Parameters
     ----------
     features : FeatureSet
-        Per-trial, per-sensor features (e.g. ``extract_features("phac2-penn")``).
+        Per-trial, per-sensor features (e.g. ``dataset_features("phac2-penn")``).
     out : tzsl.studies._outputs.ResultsDir
         Where tables (CSV) and figures (PNG) go; existing files need ``force``.
     config : DapStudyConfig or None

@@ -1,0 +1,146 @@
+"""The dataset contract: a built-in dataset is its metadata plus a load method (as MOABB's ``BaseDataset``).
+
+Every built-in dataset is a :class:`TactileDataset` registered by name; ``tzsl extract --dataset``,
+``[dataset] builtin = ...`` in an experiment file, ``tzsl convert --dataset`` and the docs read the
+names and descriptions from here. A dataset reads files (``load``: the data as published, no
+features); :func:`tzsl.features.dataset_features` turns what it reads into a
+:class:`~tzsl.datasets.FeatureSet`. A user's own data need no class: the plain-file format
+(``tzsl formats``) and the lab readers (``tzsl convert --from``) cover it.
+
+Adding a built-in dataset: a subclass with its metadata and ``load`` (and ``labels`` for raw
+signals), then one :func:`register_dataset` line.
+"""
+
+from __future__ import annotations
+
+import os
+from abc import ABC, abstractmethod
+from typing import ClassVar, Literal
+
+import pandas as pd
+
+from tzsl.datasets._phac2_h5 import load_phac2_h5
+from tzsl.datasets._phac2_hold_mat import load_phac2_hold_mat, load_phac2_labels
+from tzsl.datasets._phac2_penn import PennStaticData, load_phac2_penn
+from tzsl.datasets._types import PHAC2_EPS, RawTrial
+from tzsl.exceptions import ConfigError
+
+__all__ = ["TactileDataset", "dataset_names", "get_dataset", "register_dataset"]
+
+PathLike = str | os.PathLike
+
+
+class TactileDataset(ABC):
+    """A built-in tactile dataset.
+
+    Attributes
+    ----------
+    name : str
+        Its name (``[dataset] builtin = name``).
+    description : str
+        One line: what it holds (trials, sensors, features).
+    source : str
+        Where it comes from (publication or release).
+    content : {"static-features", "signals"}
+        ``load`` returns per-trial features as published (:class:`~tzsl.datasets.PennStaticData`)
+        or raw signals (a list of :class:`~tzsl.datasets.RawTrial`, with ``labels``).
+    eps : tuple of str
+        The exploratory procedures its trials hold.
+    needs_path : bool
+        ``load`` reads a file the user gives (``path``) instead of the data home.
+    convertible : bool
+        ``tzsl convert --dataset`` can write it as a plain-file folder.
+    """
+
+    name: ClassVar[str]
+    description: ClassVar[str]
+    source: ClassVar[str]
+    content: ClassVar[Literal["static-features", "signals"]]
+    eps: ClassVar[tuple[str, ...]]
+    needs_path: ClassVar[bool] = False
+    convertible: ClassVar[bool] = True
+
+    @abstractmethod
+    def load(self, data_dir: PathLike | None = None, path: PathLike | None = None) -> PennStaticData | list[RawTrial]:
+        """The data as published (files read from the data home, or ``path``)."""
+
+    def labels(self, data_dir: PathLike | None = None) -> pd.DataFrame:
+        """The object x attribute table of a ``signals`` dataset (objects as rows, 0/1)."""
+        raise NotImplementedError(f"{self.name} publishes its labels with its features")
+
+    def data_files(self, loaded: PennStaticData | list[RawTrial]) -> list[str]:
+        """The files ``loaded`` was read from (recorded in every manifest)."""
+        if isinstance(loaded, PennStaticData):
+            return sorted(str(p) for p in loaded.sources)
+        return sorted({str(t.source) for t in loaded})
+
+
+class Phac2Penn(TactileDataset):
+    name = "phac2-penn"
+    description = "Penn's static features of all 600 PHAC-2 trials (60 objects x 10), 2 BioTacs x 4 EPs"
+    source = "Chu et al. (2015), PHAC-2; Penn's per-trial static features"
+    content = "static-features"
+    eps = tuple(PHAC2_EPS)
+
+    def load(self, data_dir=None, path=None) -> PennStaticData:
+        return load_phac2_penn(data_dir)
+
+
+class Phac2HoldMat(TactileDataset):
+    name = "phac2-hold-mat"
+    description = "the raw HOLD-phase signals of 6 PHAC-2 objects x 10 trials (MATLAB), 2 BioTacs"
+    source = "Chu et al. (2015), PHAC-2 raw release (HOLD phase)"
+    content = "signals"
+    eps = ("hold",)
+
+    def load(self, data_dir=None, path=None) -> list[RawTrial]:
+        return load_phac2_hold_mat(data_dir)
+
+    def labels(self, data_dir=None) -> pd.DataFrame:
+        return load_phac2_labels(data_dir)
+
+
+class Phac2H5(TactileDataset):
+    name = "phac2-h5"
+    description = "the official raw PHAC-2 HDF5 release at --path, 2 BioTacs x 4 EPs"
+    source = "Chu et al. (2015), PHAC-2 HDF5 release (not redistributed; give its path)"
+    content = "signals"
+    eps = tuple(PHAC2_EPS)
+    needs_path = True
+    convertible = False
+
+    def load(self, data_dir=None, path=None) -> list[RawTrial]:
+        if path is None:
+            raise ConfigError(f"--dataset {self.name} needs --path pointing at the PHAC-2 HDF5 release file")
+        return load_phac2_h5(path)
+
+    def labels(self, data_dir=None) -> pd.DataFrame:
+        return load_phac2_labels(data_dir)
+
+
+_DATASETS: dict[str, TactileDataset] = {}
+
+
+def register_dataset(dataset: TactileDataset) -> TactileDataset:
+    """Register a built-in dataset under its name; returns it (a taken name is a ValueError)."""
+    if dataset.name in _DATASETS:
+        raise ValueError(f"dataset {dataset.name!r} is already registered")
+    _DATASETS[dataset.name] = dataset
+    return dataset
+
+
+def get_dataset(name: str) -> TactileDataset:
+    """The registered dataset ``name``; a one-line ConfigError with the known names otherwise."""
+    if name not in _DATASETS:
+        raise ConfigError(f"unknown dataset {name!r}; choose one of {', '.join(_DATASETS)}")
+    return _DATASETS[name]
+
+
+def dataset_names(*, convertible: bool | None = None) -> tuple[str, ...]:
+    """Names of the registered datasets (``convertible=True``: those ``tzsl convert --dataset`` writes)."""
+    return tuple(n for n, d in _DATASETS.items() if convertible is None or d.convertible == convertible)
+
+
+register_dataset(Phac2Penn())
+register_dataset(Phac2H5())
+register_dataset(Phac2HoldMat())
