@@ -450,7 +450,7 @@ def run_dap_study(
                 out.write_figure("attribute_sweep.png", attribute_sweep_figure(tables["attribute_sweep"]))
             if compare_methods:
                 tables.update(method_comparison(features, random_results, seed=config.seed, labels=labels,
-                                                **(method_options or {})))
+                                                n_jobs=config.n_jobs, **(method_options or {})))
                 write_reliability_figure(out, tables, labels.reliability_table, labels.comparison_table)
         used = [r.split for r in random_results]
         if splits is None and "challenging" in kinds:

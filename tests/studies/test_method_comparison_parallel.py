@@ -1,0 +1,47 @@
+"""The PHAC-2 / zero-shot method comparison runs its (split, method) fits in n_jobs workers (issue 22)."""
+
+from __future__ import annotations
+
+import pandas as pd
+
+from tests.studies.test_phac2_dap import _config, synthetic_features
+from tzsl.studies.zero_shot.methods import method_comparison
+from tzsl.studies.zero_shot.study import fit_splits, make_splits
+
+METHODS = ({"name": "eszsl"}, {"name": "sae"}, {"name": "embedding", "lam": 1.0}, {"name": "no-such-method"})
+
+
+def test_parallel_fits_give_the_serial_tables_and_record_failures_alike():
+    features = synthetic_features(n_objects=20)
+    config = _config(n_test=5)
+    splits, _ = make_splits(features, "random", config)
+    results = fit_splits(features, splits, config)
+    serial = method_comparison(features, results, seed=3, methods=METHODS, n_jobs=1)
+    parallel = method_comparison(features, results, seed=3, methods=METHODS, n_jobs=2)
+    assert serial.keys() == parallel.keys()
+    for name, table in serial.items():
+        left, right = table.drop(columns=["fit_seconds"], errors="ignore"), parallel[name].drop(
+            columns=["fit_seconds"], errors="ignore")
+        pd.testing.assert_frame_equal(left, right, check_exact=True, obj=name)
+    per_split = serial["methods_per_split"]
+    assert per_split["error"].str.contains("no-such-method").sum() == len(splits)  # recorded, not raised
+
+
+def test_a_plugin_method_is_fitted_in_this_process_where_it_is_registered():
+    from tests.studies.test_method_wiring import NearestMeanAttributes  # noqa: PLC0415
+    from tzsl.models import NearestAttributeRule, register_method, unregister_method  # noqa: PLC0415
+    from tzsl.studies.zero_shot.methods import _is_builtin  # noqa: PLC0415
+
+    register_method("plugin-x", family="embedding", paper="test only", attribute_model=NearestMeanAttributes,
+                    decision_rule=NearestAttributeRule, description="test")
+    try:
+        assert not _is_builtin({"name": "plugin-x"})
+        features = synthetic_features(n_objects=20)
+        config = _config(n_test=5, n_splits=1)
+        results = fit_splits(features, make_splits(features, "random", config)[0], config)
+        table = method_comparison(features, results, methods=({"name": "plugin-x"},), n_jobs=2)["methods_per_split"]
+        fitted = table[~table["split"].isin(["mean", "std"])]
+        assert fitted["error"].fillna("").eq("").all() and fitted["plugin-x"].notna().all()
+    finally:
+        unregister_method("plugin-x")
+    assert _is_builtin({"name": "eszsl"}) and not _is_builtin({"name": "no-such-method"})
