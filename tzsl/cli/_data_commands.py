@@ -8,7 +8,7 @@ import click
 
 import json
 
-from tzsl.cli._root import DatasetName, cli, data_dir_option, force_option, schema_option
+from tzsl.cli._root import RegistryName, cli, data_dir_option, force_option, schema_option
 from tzsl.exceptions import ConfigError
 
 
@@ -36,7 +36,7 @@ def datasets(as_json: bool) -> None:
 
 
 @cli.command()
-@click.option("--dataset", type=DatasetName(), required=True,
+@click.option("--dataset", type=RegistryName("dataset"), required=True,
               help="A built-in dataset ('tzsl datasets' lists them).")
 @click.option("--path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Input file of a dataset that reads one (phac2-h5: the HDF5 release).")

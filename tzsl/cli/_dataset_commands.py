@@ -9,12 +9,11 @@ from pathlib import Path
 
 import click
 
-from tzsl.cli._root import DatasetName, cli, data_dir_option, force_option, no_progress_option, schema_option
+from tzsl.cli._root import RegistryName, cli, data_dir_option, force_option, no_progress_option, schema_option
 from tzsl.exceptions import ConfigError, DataFileError
 
 #: Datasets ``tzsl convert`` writes as plain-file folders.
 #: ``--from`` kinds (:data:`tzsl.datasets.LAB_FORMATS`, written here so --help stays fast).
-LAB_KINDS = ("ros-bag", "hdf5", "series")
 
 
 def _statistics_help() -> str:
@@ -162,12 +161,12 @@ def _card(data) -> dict:
 
 
 @cli.command()
-@click.option("--from", "source", type=click.Choice(LAB_KINDS), default=None,
+@click.option("--from", "source", type=RegistryName("lab-format"), default=None,
               help="A lab's own recordings, read as --mapping says: ros-bag (ROS 1/2 bags), hdf5 (your HDF5 "
                    "layout), series (a folder of per-trial .csv/.npy time series).")
 @click.option("--mapping", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="The TOML mapping of --from: topics/groups/files to trials, sensors, channels and classes.")
-@click.option("--dataset", type=DatasetName(convertible=True), default=None,
+@click.option("--dataset", type=RegistryName("convertible"), default=None,
               help="A built-in dataset ('tzsl datasets' lists them): published features are written as feature "
                    "columns, raw signals as one signal file per trial and sensor.")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), required=True,

@@ -145,24 +145,27 @@ def parse_seeds(ctx, param, text):
 
 # --------------------------------------------------------------------------- shared options
 
-class DatasetName(click.ParamType):
-    """A built-in dataset's name, checked against the dataset registry when given (``--help`` reads no data
-    library); ``convertible=True``: only those ``tzsl convert --dataset`` writes."""
+class RegistryName(click.ParamType):
+    """A name checked against a registry of :mod:`tzsl.datasets` when given, so ``--help`` reads no data
+    library: the built-in datasets (``"dataset"``, ``"convertible"``: those ``tzsl convert --dataset``
+    writes) or the lab formats of ``tzsl convert --from`` (``"lab-format"``)."""
 
-    name = "dataset"
+    name = "name"
 
-    def __init__(self, convertible: bool | None = None) -> None:
-        self.convertible = convertible
+    def __init__(self, registry: str) -> None:
+        self.registry = registry
 
     def get_metavar(self, param, ctx=None) -> str:  # noqa: ARG002 (click's signature)
-        return "NAME"
+        return "KIND" if self.registry == "lab-format" else "NAME"
 
     def convert(self, value, param, ctx):
-        from tzsl.datasets import dataset_names  # noqa: PLC0415 (keep --help fast)
+        from tzsl.datasets import LAB_FORMATS, dataset_names  # noqa: PLC0415 (keep --help fast)
 
-        names = dataset_names(convertible=self.convertible)
+        names = {"dataset": dataset_names(), "convertible": dataset_names(convertible=True),
+                 "lab-format": LAB_FORMATS}[self.registry]
         if value not in names:
-            self.fail(f"{value!r}: expected one of {', '.join(names)} ('tzsl datasets' lists them)", param, ctx)
+            hint = "" if self.registry == "lab-format" else " ('tzsl datasets' lists them)"
+            self.fail(f"{value!r}: expected one of {', '.join(names)}{hint}", param, ctx)
         return value
 
 

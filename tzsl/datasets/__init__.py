@@ -57,7 +57,7 @@ from tzsl.datasets._video import avi_frame_count, read_video
 from tzsl.datasets._plain import PlainDataset, feature_set_to_plain, read_plain_dataset, write_plain_dataset
 from tzsl.datasets._synthetic import synthetic_dataset_arrays, write_synthetic_dataset
 from tzsl.datasets._card import card_lines, dataset_card
-from tzsl.datasets._lab_formats import LAB_FORMATS, convert_lab_dataset
+from tzsl.datasets._lab_formats import LAB_FORMATS, LAB_READERS, convert_lab_dataset
 from tzsl.datasets._lab_mapping import BagMapping, Hdf5Mapping, SeriesMapping, load_lab_mapping
 from tzsl.datasets._fetch import MIRROR_ENV, REFERENCE_ONLY, FetchReport, fetch_datasets, registered_datasets
 from tzsl.datasets._signal_cache import SignalTable, read_signal_table
@@ -136,6 +136,7 @@ __all__ = [
     "read_signal_file",
     "card_lines",
     "LAB_FORMATS",
+    "LAB_READERS",
     "convert_lab_dataset",
     "BagMapping",
     "Hdf5Mapping",

@@ -15,6 +15,7 @@ from __future__ import annotations
 import fnmatch
 import os
 import re
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -27,10 +28,9 @@ from tzsl.datasets._signal_files import read_signal_file
 from tzsl.datasets._feature_table import read_csv_table
 from tzsl.exceptions import ConfigError, DataFileError
 
-__all__ = ["LAB_FORMATS", "convert_lab_dataset"]
+__all__ = ["LAB_FORMATS", "LAB_READERS", "convert_lab_dataset"]
 
 #: ``tzsl convert --from`` kinds read from a lab's own recordings.
-LAB_FORMATS = ("ros-bag", "hdf5", "series")
 
 Trials = dict[str, dict[str, tuple[list[str], np.ndarray]]]  # trial -> sensor -> (channels, values)
 
@@ -282,6 +282,16 @@ def _read_series(mapping_file: Path, mapping: SeriesMapping, progress: bool) -> 
 # --------------------------------------------------------------------------- writing
 
 
+#: Every lab format ``tzsl convert --from`` reads: its mapping file's model and its reader. A new format
+#: is a mapping model (:mod:`tzsl.datasets._lab_mapping`), a reader here, and one line in this table.
+LAB_READERS: dict[str, tuple[type, Callable[[Path, object, bool], tuple[Trials, pd.DataFrame]]]] = {
+    "ros-bag": (BagMapping, _read_bags),
+    "hdf5": (Hdf5Mapping, _read_hdf5),
+    "series": (SeriesMapping, _read_series),
+}
+LAB_FORMATS: tuple[str, ...] = tuple(LAB_READERS)
+
+
 def convert_lab_dataset(kind: str, mapping_file: str | os.PathLike, out: str | os.PathLike, *,
                         force: bool = False, progress: bool = True) -> tuple[Path, dict]:
     """Read a lab's recordings as its mapping says and write them as a plain-file dataset.
@@ -292,9 +302,9 @@ def convert_lab_dataset(kind: str, mapping_file: str | os.PathLike, out: str | o
     if kind not in LAB_FORMATS:
         raise ConfigError(f"--from {kind}: choose one of {', '.join(LAB_FORMATS)}")
     mapping_file = Path(mapping_file)
-    mapping = load_lab_mapping(mapping_file, kind)
+    model, reader = LAB_READERS[kind]
+    mapping = load_lab_mapping(mapping_file, kind, model)
     classes = _classes(mapping_file, mapping)
-    reader = {"ros-bag": _read_bags, "hdf5": _read_hdf5, "series": _read_series}[kind]
     trials, table = reader(mapping_file, mapping, progress)
     unknown = sorted(set(table["class"].astype(str)) - set(classes.index))
     if unknown:

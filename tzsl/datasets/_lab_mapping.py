@@ -110,11 +110,10 @@ class SeriesMapping(_Common):
 
 
 LabMapping = BagMapping | Hdf5Mapping | SeriesMapping
-_MODELS = {"ros-bag": BagMapping, "hdf5": Hdf5Mapping, "series": SeriesMapping}
 
 
-def load_lab_mapping(path: str | os.PathLike, kind: str) -> LabMapping:
-    """The checked mapping of ``kind`` in ``path`` (ConfigError: one line per problem)."""
+def load_lab_mapping(path: str | os.PathLike, kind: str, model: type[BaseModel]) -> LabMapping:
+    """The checked mapping of ``kind`` in ``path``, validated by ``model`` (ConfigError: one line per problem)."""
     path = Path(path)
     try:
         raw = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -126,7 +125,7 @@ def load_lab_mapping(path: str | os.PathLike, kind: str) -> LabMapping:
     if raw["kind"] != kind:
         raise ConfigError(f"{path}: kind: the mapping is for {raw['kind']!r}, not --from {kind}")
     try:
-        return _MODELS[kind].model_validate(raw)
+        return model.model_validate(raw)
     except ValidationError as exc:
         problems = [f"{path}: {'.'.join(map(str, e['loc'])) or '(top)'}: {e['msg']}" for e in exc.errors()]
         raise problems_error(problems, path) from None
