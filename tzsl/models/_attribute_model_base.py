@@ -27,13 +27,20 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 
-__all__ = ["EmbeddingAttributeModel", "attribute_model_tags"]
+__all__ = ["EmbeddingAttributeModel", "attribute_model_tags", "attribute_table_tags"]
+
+
+def attribute_table_tags(tags):
+    """Tags of an estimator fitted on an attribute table: ``y`` (= ``A``, one row per trial) is required
+    and may be 2-D (the zero-shot classifiers, ESZSL, the calibrator, the ensemble)."""
+    tags.target_tags.required = True
+    tags.target_tags.multi_output = True
+    return tags
 
 
 def attribute_model_tags(tags):
     """Tags of a multi-output attribute model: ``y`` (= ``A``) is required and 2-D."""
-    tags.target_tags.required = True
-    tags.target_tags.multi_output = True
+    tags = attribute_table_tags(tags)
     tags.target_tags.single_output = False
     return tags
 

@@ -38,6 +38,7 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
+from tzsl.models._attribute_model_base import attribute_table_tags
 from tzsl.models._validation import ParameterError, ValidatedParamsMixin
 from tzsl.models._zsl_input import (
     ZSLInputError,
@@ -102,10 +103,7 @@ class AttributeEmbeddingModel(ValidatedParamsMixin, BaseEstimator):
     score_kind = "embedding"
 
     def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
-        tags.target_tags.required = True
-        tags.target_tags.multi_output = True
-        return tags
+        return attribute_table_tags(super().__sklearn_tags__())
 
     def _embed(self, X: np.ndarray) -> np.ndarray:  # pragma: no cover
         raise NotImplementedError

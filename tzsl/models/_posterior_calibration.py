@@ -52,6 +52,7 @@ from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
+from tzsl.models._attribute_model_base import attribute_table_tags
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_training import GridEdgeWarning
 from tzsl.models._validation import ValidatedParamsMixin
@@ -280,10 +281,7 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
         self.random_state = random_state
 
     def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
-        tags.target_tags.required = True
-        tags.target_tags.multi_output = True
-        return tags
+        return attribute_table_tags(super().__sklearn_tags__())
 
     def fit(self, X, Y, groups=None):
         """Fit the temperature on pseudo-unseen training classes, then the method on all trials.

@@ -28,6 +28,7 @@ from scipy.special import softmax
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_array, check_is_fitted
 
+from tzsl.models._attribute_model_base import attribute_table_tags
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_svm import AttributeSVM
 from tzsl._fit_store import fit_cached
@@ -114,10 +115,7 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
         self.random_state = random_state
 
     def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
-        tags.target_tags.required = True
-        tags.target_tags.multi_output = True
-        return tags
+        return attribute_table_tags(super().__sklearn_tags__())
 
     def _check_param_values(self) -> None:
         if len(self.methods) == 0:

@@ -26,6 +26,7 @@ from sklearn.base import BaseEstimator, clone
 from sklearn.utils._param_validation import HasMethods
 from sklearn.utils.validation import check_is_fitted
 
+from tzsl.models._attribute_model_base import attribute_table_tags
 from tzsl.exceptions import ConfigError
 from tzsl.models._decision import SCORE_KINDS
 from tzsl.models._validation import ValidatedParamsMixin
@@ -92,10 +93,7 @@ class ZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
         self.random_state = random_state
 
     def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
-        tags.target_tags.required = True
-        tags.target_tags.multi_output = True
-        return tags
+        return attribute_table_tags(super().__sklearn_tags__())
 
     def _check_compatible(self, rule) -> None:
         kind = score_kind(self.attribute_model)
