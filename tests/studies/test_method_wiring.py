@@ -218,7 +218,8 @@ def test_input_shape_and_seed_come_from_the_registry(toy_method):
     assert method_input({"name": "dap-avg"}, X).shape == (4, 2, 3)
     assert method_input({"name": "dap-avg"}, X[:, 0]).shape == (4, 1, 3)  # one sensor
     np.testing.assert_array_equal(method_input({"name": "toy"}, X), X.reshape(4, 6))
-    assert takes_seed({"name": "embedding"}) and not takes_seed({"name": "eszsl"})
+    assert takes_seed({"name": "embedding"}) and takes_seed({"name": "eszsl"})  # eszsl: its calibrator's folds
+    assert study_estimator({"name": "eszsl"}, 7).random_state == 7
     assert not takes_seed({"name": "embedding", "random_state": 3})
     calibrated = study_estimator({"name": "embedding"}, 7)  # the method inside its calibrator, both seeded
     assert calibrated.estimator.attribute_model.random_state == 7 and calibrated.random_state == 7

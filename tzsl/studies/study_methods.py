@@ -25,7 +25,6 @@ run (its input differs: grasps, frame sequences).
 
 from __future__ import annotations
 
-import inspect
 import time
 from typing import NamedTuple
 
@@ -84,10 +83,9 @@ def comparison_file(study: str) -> str:
 
 
 def takes_seed(spec: dict) -> bool:
-    """Whether the study seeds this entry: its estimator takes ``random_state`` and the entry sets none."""
-    method = get_method(spec["name"])
-    first = method.estimator if method.estimator is not None else method.attribute_model
-    return "random_state" not in spec and "random_state" in inspect.signature(first).parameters
+    """Whether the study seeds this entry: the method takes ``random_state`` (its estimator, its attribute
+    model, or the calibrator that deals its pseudo-unseen folds) and the entry sets none."""
+    return "random_state" not in spec and "random_state" in get_method(spec["name"]).parameters()
 
 
 def study_estimator(spec: dict, seed: int | None):
