@@ -103,7 +103,7 @@ def test_halving_reaches_the_estimator_from_the_experiment_file(tmp_path):
     assert attribute_estimator(config, seed=0).search == "halving"
     default = dap_config(_experiment(tmp_path, ""))
     assert "search" not in default.svm_params  # the default is not written out
-    assert attribute_estimator(default, seed=0).search == AttributeSVM().search
+    assert attribute_estimator(default, seed=0).search == AttributeSVM().search == "halving"
     with pytest.raises(ConfigError, match="svm.search: 'random'"):
         _experiment(tmp_path, "search = 'random'")
 
