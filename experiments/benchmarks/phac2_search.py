@@ -34,7 +34,7 @@ from tzsl._io import atomic_write
 from tzsl.evaluation import bootstrap_accuracy, paired_difference_interval
 from tzsl.experiments.extract import extract_features
 from tzsl.experiments.phac2_dap import DapStudyConfig, fit_split, make_splits
-from tzsl.models._attribute_search import SEARCHES
+from tzsl.models import SEARCHES
 
 
 def chosen(bank) -> list[tuple]:

@@ -124,3 +124,10 @@ def test_halving_leaves_bagging_to_the_grid_and_refuses_unknown_values():
     assert np.isfinite(bagged.fit(X[:, 0], A[:, 0], g).cv_scores_).all()
     with pytest.raises(ParameterError, match="search"):
         AttributeSVM(search="random").fit(X[:, 0], A[:, 0], g)
+
+
+def test_schema_offers_exactly_the_estimators_searches():
+    from tzsl.experiments.config._phac2 import Phac2Svm  # noqa: PLC0415
+    from tzsl.models import SEARCHES  # noqa: PLC0415
+
+    assert set(Phac2Svm.model_fields["search"].annotation.__args__) == set(SEARCHES)
