@@ -131,3 +131,14 @@ def test_schema_offers_exactly_the_estimators_searches():
     from tzsl.models import SEARCHES  # noqa: PLC0415
 
     assert set(Phac2Svm.model_fields["search"].annotation.__args__) == set(SEARCHES)
+
+
+def test_halving_without_the_kernel_cache_gives_the_same_model(monkeypatch):
+    X, A, g = make_problem(n_objects=20, seed=3)
+    params = dict(n_C=3, n_gamma=3, n_draws=2, cv=4, search="halving", random_state=1)
+    kept = AttributeSVM(**params).fit(X[:, 0], A[:, 0], g)
+    monkeypatch.setattr(svm_module, "HALVING_KERNEL_BYTES", 0)  # recompute every kernel in every round
+    recomputed = AttributeSVM(**params).fit(X[:, 0], A[:, 0], g)
+    np.testing.assert_array_equal(kept.cv_scores_, recomputed.cv_scores_)
+    assert (kept.C_, kept.gamma_, kept.draw_, kept.platt_) == (recomputed.C_, recomputed.gamma_, recomputed.draw_,
+                                                                recomputed.platt_)

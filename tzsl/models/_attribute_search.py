@@ -26,13 +26,15 @@ from sklearn.svm import _libsvm  # noqa: PLC2701 - see svc_fit_decision
 
 from tzsl.models._attribute_training import AttributeTrainingError
 
-__all__ = ["HALVING_FACTOR", "SEARCHES", "UNIT_WEIGHT", "balanced_class_weight", "halving_rounds",
+__all__ = ["HALVING_FACTOR", "HALVING_KERNEL_BYTES", "SEARCHES", "UNIT_WEIGHT", "balanced_class_weight", "halving_rounds",
            "successive_halving", "svc_fit_decision"]
 
 #: ``search`` options of :class:`~tzsl.models.AttributeSVM`.
 SEARCHES = ("grid", "halving")
 #: Survivors are divided, and folds multiplied, by this much per round of ``search="halving"``.
 HALVING_FACTOR = 3
+#: Most bytes of RBF kernels ``search="halving"`` keeps between its rounds (above it, each round recomputes them).
+HALVING_KERNEL_BYTES = 256 * 2**20
 #: Class weights (class 0, class 1) when classes are not balanced by weight.
 UNIT_WEIGHT = np.ones(2)
 _EMPTY = np.empty(0)

@@ -54,6 +54,7 @@ from tzsl.models._attribute_training import (
     grid_edges,
 )
 from tzsl.models._attribute_search import (
+    HALVING_KERNEL_BYTES,
     SEARCHES,
     UNIT_WEIGHT,
     balanced_class_weight,
@@ -324,13 +325,18 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
         _libsvm.set_verbosity_wrap(0)
         parts = [self._draw_parts(D, yb, groups, keep, fold_seed, cw) for keep in draws]
         kernels: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
+        # every (draw, gamma) kernel is kept for the later rounds while they fit in HALVING_KERNEL_BYTES
+        keep_kernels = sum(p[3].nbytes for p in parts) * len(gammas) <= HALVING_KERNEL_BYTES
 
         def kernel(di: int, gi: int) -> tuple[np.ndarray, np.ndarray]:
-            if (di, gi) not in kernels:
-                n_draw = parts[di][0].size
-                K = np.exp(parts[di][3] * -gammas[gi])
-                kernels[di, gi] = (np.ascontiguousarray(K[:n_draw]), np.ascontiguousarray(K[n_draw:]))
-            return kernels[di, gi]
+            if (di, gi) in kernels:
+                return kernels[di, gi]
+            n_draw = parts[di][0].size
+            K = np.exp(parts[di][3] * -gammas[gi])
+            pair = np.ascontiguousarray(K[:n_draw]), np.ascontiguousarray(K[n_draw:])
+            if keep_kernels:
+                kernels[di, gi] = pair
+            return pair
 
         def fit(di: int, gi: int, cis: np.ndarray, folds: range, outside: bool) -> None:
             idx, out, y_draw, _, fold_index, fold_w, w_full = parts[di]
