@@ -11,6 +11,8 @@ endif
 RESULTS ?= results
 # stage-2 output folder of experiments/benchmarks/phac2_accuracy.py (accuracy.csv, grid_summary.csv)
 BENCH_RESULTS ?= /tmp/tzsl_accuracy
+# output folder of experiments/benchmarks/phac2_search.py (search_summary_*.csv)
+SEARCH_RESULTS ?= /tmp/tzsl_search
 N_JOBS ?= 2
 
 .PHONY: install browser test reproduce-tables readme-results numbers numbers-check docs bench bench-fit bench-scale data clean
@@ -43,7 +45,8 @@ reproduce-tables: install
 
 # Every published number is generated between markers from the CSVs of the shipped code, never
 # typed (tzsl.reporting.readme_results): each target file = the results folder its blocks read.
-NUMBERS := README.md=$(RESULTS) experiments/benchmarks/README.md=$(BENCH_RESULTS)
+NUMBERS := README.md=$(RESULTS) experiments/benchmarks/README.md=$(BENCH_RESULTS) \
+	docs/user_guide/performance.md=$(SEARCH_RESULTS)
 
 # The README's Results block alone, from the CSVs of reproduce-tables.
 readme-results: install

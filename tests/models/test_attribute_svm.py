@@ -126,8 +126,8 @@ def test_selected_draw_depends_only_on_training_objects():
     """The kept draw is a function of training data and seed: test rows are never passed in."""
     X, A, g = make_problem(seed=2, n_objects=16)
     tr = g < 12
-    m1 = AttributeSVM(**{**TINY, "n_draws": 4}, random_state=7).fit(X[tr, 1], A[tr, 2], g[tr])
-    m2 = AttributeSVM(**{**TINY, "n_draws": 4}, random_state=7).fit(X[tr, 1], A[tr, 2], g[tr])
+    m1 = AttributeSVM(**{**TINY, "n_draws": 4}, search="grid", random_state=7).fit(X[tr, 1], A[tr, 2], g[tr])
+    m2 = AttributeSVM(**{**TINY, "n_draws": 4}, search="grid", random_state=7).fit(X[tr, 1], A[tr, 2], g[tr])
     assert m1.draw_ == m2.draw_
     best = np.unravel_index(np.argmin(m1.cv_scores_), m1.cv_scores_.shape)
     assert m1.cv_scores_[best] == m1.cv_scores_[m1.draw_].min()
@@ -244,8 +244,8 @@ def test_fast_grid_equals_svc_reference_bitwise(params):
     X, A, g = make_problem(n_objects=18, seed=4)
     tr = g < 14
     for j in range(A.shape[1]):
-        fast = AttributeSVM(**params, random_state=j).fit(X[tr, 0], A[tr, j], g[tr])
-        ref = ReferenceSVCGrid(**params, random_state=j).fit(X[tr, 0], A[tr, j], g[tr])
+        fast = AttributeSVM(**params, search="grid", random_state=j).fit(X[tr, 0], A[tr, j], g[tr])
+        ref = ReferenceSVCGrid(**params, search="grid", random_state=j).fit(X[tr, 0], A[tr, j], g[tr])
         np.testing.assert_array_equal(fast.oof_scores_, ref.oof_scores_)
         np.testing.assert_array_equal(fast.cv_scores_, ref.cv_scores_)
         assert (fast.C_, fast.gamma_, fast.draw_, fast.platt_) == (ref.C_, ref.gamma_, ref.draw_, ref.platt_)
@@ -274,8 +274,8 @@ def test_gamma_grids():
     np.testing.assert_allclose(gamma_grid((0.01, 1.0), 3, "paper"), [0.01, 0.1, 1.0])
     np.testing.assert_allclose(gamma_grid((0.01, 1.0), 3, "extended"), [1e-4, 1e-3, 0.01, 0.1, 1.0])
     X, A, g = make_problem()
-    paper = AttributeSVM(**TINY, grid="paper", random_state=0).fit(X[:, 0], A[:, 0], g)
-    extended = AttributeSVM(**TINY, grid="extended", random_state=0).fit(X[:, 0], A[:, 0], g)
+    paper = AttributeSVM(**TINY, grid="paper", search="grid", random_state=0).fit(X[:, 0], A[:, 0], g)
+    extended = AttributeSVM(**TINY, grid="extended", search="grid", random_state=0).fit(X[:, 0], A[:, 0], g)
     assert paper.cv_scores_.shape[1] == 2 and extended.cv_scores_.shape[1] == 4
     assert paper.gamma_ >= 0.01
     # the paper's points are scored identically on both grids (same draws, folds and seeds)
@@ -294,8 +294,8 @@ def test_extended_grid_leaves_the_low_edge_when_a_wide_kernel_fits_best():
     groups = np.repeat(np.arange(n_obj), trials)
     X = centres[groups] + rng.normal(size=(groups.size, d))
     params = dict(n_C=2, n_draws=1, cv=4, preprocessor=None, random_state=0)
-    paper = AttributeSVM(grid="paper", **params).fit(X, y_obj[groups], groups)
-    extended = AttributeSVM(grid="extended", **params).fit(X, y_obj[groups], groups)
+    paper = AttributeSVM(grid="paper", search="grid", **params).fit(X, y_obj[groups], groups)
+    extended = AttributeSVM(grid="extended", search="grid", **params).fit(X, y_obj[groups], groups)
     assert ("gamma", 0.01, "low") in paper.grid_edges_
     assert extended.gamma_ < 0.01
     assert extended.cv_scores_.min() <= paper.cv_scores_.min()

@@ -60,7 +60,8 @@ def test_svm_defaults_are_read_from_the_estimator():
 
     svm = load_experiment("phac2-gzsl").config.svm  # the file leaves the grids out
     params = AttributeSVM().get_params()
-    for key in ("C_range", "gamma_range", "n_C", "n_gamma", "n_draws", "scoring", "platt_weighting", "undersampling"):
+    for key in ("C_range", "gamma_range", "n_C", "n_gamma", "n_draws", "scoring", "platt_weighting", "undersampling",
+                "search"):
         value = getattr(svm, key)
         assert (tuple(value) if isinstance(value, list) else value) == params[key], key
 

@@ -188,3 +188,21 @@ def test_one_file_holds_several_named_blocks(tmp_path, monkeypatch):
     assert page.read_text() == (f"x\n{begin('a-b')}\nAB\n{end('a-b')}\nmiddle\n{begin('a')}\nA from {tmp_path.name}\n"
                                 f"{end('a')}\ny\n")
     assert not update_file(page, tmp_path, check=True)
+
+
+def test_search_benchmark_block_reads_every_summary(tmp_path):
+    from tzsl.reporting.readme_results import search_benchmark_block  # noqa: PLC0415
+
+    with pytest.raises(ConfigError, match="phac2_search.py"):
+        search_benchmark_block(tmp_path)
+    for seed, low in ((0, -0.02), (1, -0.04)):
+        pd.DataFrame([{"seed": seed, "grid": "paper", "n_splits": 10, "grid_avgdap": 0.3, "grid_ci95_low": 0.2,
+                       "grid_ci95_high": 0.4, "halving_avgdap": 0.29, "halving_ci95_low": 0.2,
+                       "halving_ci95_high": 0.39, "difference": low / 2, "difference_ci95_low": low,
+                       "difference_ci95_high": 0.01 if seed == 0 else -0.001, "same_choice_share": 0.5,
+                       "grid_cpu_s": 47.5, "halving_cpu_s": 28.9, "cpu_ratio": 1.64}]).to_csv(
+            tmp_path / f"search_summary_seed{seed}_paper.csv", index=False)
+    block = search_benchmark_block(tmp_path)
+    assert "| paper | 0 | 10 | 0.300 [0.200, 0.400] | 0.290 [0.200, 0.390] | -0.010 [-0.020, +0.010] | yes | 50% |" in block
+    assert "| paper | 1 | 10 |" in block and "-0.020 [-0.040, -0.001] | no |" in block
+    assert "| 47.5 | 28.9 | 1.64 |" in block

@@ -17,8 +17,10 @@ Trials of several splits are pooled (each split's posterior is over its own test
 confidence, correctness and the per-trial Brier term do not depend on how many classes there
 were). Intervals use the project's two-level bootstrap (:mod:`tzsl.evaluation._intervals`:
 splits, then test classes with all their trials) through
-:func:`~tzsl.evaluation.bootstrap_trial_weights`; the bins are those of the point estimate
-(a resampled trial keeps its bin). ECE is an absolute value, biased upward on small samples,
+:func:`~tzsl.evaluation.bootstrap_cell_weights`; the bins are those of the point estimate
+(a resampled trial keeps its bin). A replicate is a row of cell counts (times each (split,
+class) cell was drawn), and its per-bin sums and Brier total are that row times the per-cell
+sums: one matrix product for all replicates, no (replicates, trials) matrix. ECE is an absolute value, biased upward on small samples,
 and a replicate drawn with replacement repeats objects, so the replicates sit above the point
 value (with 50 test objects the whole percentile range can lie above it). The ECE interval is
 therefore bias-corrected: the replicates are shifted by their mean minus the point value (the
@@ -33,7 +35,7 @@ from typing import NamedTuple
 import numpy as np
 import pandas as pd
 
-from tzsl.evaluation._intervals import DEFAULT_N_BOOT, Interval, bootstrap_trial_weights
+from tzsl.evaluation._intervals import DEFAULT_N_BOOT, Interval, bootstrap_cell_weights, cluster_cells
 from tzsl.exceptions import TzslError
 
 __all__ = [
@@ -269,10 +271,19 @@ def calibration_intervals(
         raise TzslError(f"brier must be finite with one value per trial ({c.size}), got shape {b.shape}")
     bins = equal_mass_bins(c, n_bins)
     n_used = int(bins.max()) + 1
+    cell = cluster_cells(classes, splits)[0]
+    if cell.size != c.size:
+        raise TzslError(f"classes must have one entry per trial ({c.size}), got {cell.size}")
+    n_cells = int(cell.max()) + 1
+    # per-cell sums: (accuracy - confidence) per (cell, bin), trials and Brier terms per cell
+    gap_sums = np.bincount(cell * n_used + bins, weights=k - c, minlength=n_cells * n_used).reshape(n_cells, n_used)
+    trial_counts = np.bincount(cell, minlength=n_cells).astype(float)
+    brier_sums = np.bincount(cell, weights=b, minlength=n_cells)
     ece, brr = [], []
-    for w in bootstrap_trial_weights(classes, splits, n_boot=n_boot, random_state=random_state):
-        ece.append(_weighted_ece(c, k, bins, n_used, w))
-        brr.append(w @ b / w.sum(axis=1))
+    for w in bootstrap_cell_weights(classes, splits, n_boot=n_boot, random_state=random_state):
+        total = w @ trial_counts
+        ece.append(np.abs(w @ gap_sums).sum(axis=1) / total)
+        brr.append(w @ brier_sums / total)
     point = float(_weighted_ece(c, k, bins, n_used, np.ones((1, c.size)))[0])
     reps = np.concatenate(ece)
     low, high = np.clip(np.quantile(reps - (reps.mean() - point), [0.025, 0.975]), 0.0, None)

@@ -47,7 +47,9 @@ __all__ = [
     "Interval",
     "bootstrap_accuracy",
     "bootstrap_accuracy_columns",
+    "bootstrap_cell_weights",
     "bootstrap_trial_weights",
+    "cluster_cells",
     "paired_difference_interval",
     "paired_differences_table",
     "splits_for_paired_interval",
@@ -71,6 +73,44 @@ class Interval(NamedTuple):
     ci95_high: float
 
 
+def cluster_cells(classes, splits=None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The bootstrap's clusters: one cell per (split, class), numbered by split, then class.
+
+    Parameters
+    ----------
+    classes : array-like of shape (n_trials,)
+        True class (test object) of each trial (sortable labels, not missing).
+    splits : array-like of shape (n_trials,), optional
+        Split of each trial; None: one split.
+
+    Returns
+    -------
+    cell : int ndarray of shape (n_trials,)
+        Cell of each trial, in ``0 .. n_cells - 1`` (sorted by split label, then class label).
+    split_of_cell : int ndarray of shape (n_cells,)
+        Split (position among the sorted split labels) of each cell.
+    position : int ndarray of shape (n_cells,)
+        Position of each cell among its split's cells.
+    n_classes : int ndarray of shape (n_splits,)
+        Cells (classes) of each split.
+    """
+    classes = np.asarray(classes)
+    n = classes.shape[0] if classes.ndim else 0
+    splits = np.zeros(n, dtype=int) if splits is None else np.asarray(splits)
+    for name, v in (("classes", classes), ("splits", splits)):
+        if v.shape != (n,):
+            raise TzslError(f"{name} must have one entry per trial ({n}), got shape {v.shape}")
+    split_code, class_code = pd.factorize(splits, sort=True)[0], pd.factorize(classes, sort=True)[0]
+    if (split_code < 0).any() or (class_code < 0).any():
+        raise TzslError("classes and splits must not be missing")
+    n_labels = int(class_code.max()) + 1 if n else 1
+    keys, cell = np.unique(split_code.astype(np.int64) * n_labels + class_code, return_inverse=True)
+    split_of_cell = keys // n_labels
+    n_classes = np.bincount(split_of_cell)
+    position = np.arange(keys.size) - (np.cumsum(n_classes) - n_classes)[split_of_cell]
+    return cell.ravel(), split_of_cell, position, n_classes
+
+
 def _cells(correct: np.ndarray, classes, splits) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per (split, class) sums, padded to the largest split.
 
@@ -83,22 +123,10 @@ def _cells(correct: np.ndarray, classes, splits) -> tuple[np.ndarray, np.ndarray
     n_classes : int ndarray, shape (n_splits,)
     """
     n = correct.shape[0]
-    classes = np.asarray(classes)
-    splits = np.zeros(n, dtype=int) if splits is None else np.asarray(splits)
-    for name, v in (("classes", classes), ("splits", splits)):
-        if v.shape != (n,):
-            raise TzslError(f"{name} must have one entry per trial ({n}), got shape {v.shape}")
-    frame = pd.DataFrame({"split": splits, "class": classes})
-    if frame.isna().any().any():
-        raise TzslError("classes and splits must not be missing")
-    cell = frame.groupby(["split", "class"], sort=True).ngroup().to_numpy()
-    n_cells = int(cell.max()) + 1
-    cell_split = np.empty(n_cells, dtype=int)
-    cell_split[cell] = pd.factorize(frame["split"], sort=True)[0]
-    split_of_cell, position = cell_split, np.empty(n_cells, dtype=int)
-    n_classes = np.bincount(split_of_cell)
-    starts = np.concatenate([[0], np.cumsum(n_classes)[:-1]])
-    position[:] = np.arange(n_cells) - starts[split_of_cell]  # ngroup is sorted by split first
+    if np.shape(classes) != (n,):
+        raise TzslError(f"classes must have one entry per trial ({n}), got shape {np.shape(classes)}")
+    cell, split_of_cell, position, n_classes = cluster_cells(classes, splits)
+    n_cells = split_of_cell.size
     sums = np.zeros((n_cells, correct.shape[1]))
     np.add.at(sums, cell, correct)
     counts = np.bincount(cell, minlength=n_cells)
@@ -152,6 +180,48 @@ def _draw(rng: np.random.Generator, n_classes: np.ndarray, b: int):
     return drawn, nc, pick, ok
 
 
+def bootstrap_cell_weights(classes, splits=None, *, n_boot: int = DEFAULT_N_BOOT,
+                           random_state: int | np.random.Generator | None = 0):
+    """The two-level bootstrap of this module as draw counts of its (split, class) cells.
+
+    Replicate ``r`` draws cell ``k`` (a test class of a split, :func:`cluster_cells`)
+    ``w[r, k]`` times: how often its split was drawn times how often its class was drawn
+    within it; every trial of the cell counts that many times. A statistic that is a sum over
+    trials (the calibration error's per-bin sums, the Brier score) is then ``w`` times the
+    per-cell sums: one matrix product for all replicates, whatever the number of trials. The
+    draws (and their chunks) are those of :func:`bootstrap_trial_weights` with the same seed.
+
+    Parameters
+    ----------
+    classes : array-like of shape (n_trials,)
+        True class (test object) of each trial.
+    splits : array-like of shape (n_trials,), optional
+        Split of each trial; None: one split.
+    n_boot : int, default 2000
+    random_state : int, Generator or None, default 0
+
+    Yields
+    ------
+    ndarray of shape (b, n_cells), float
+        Draw counts of ``b`` replicates (``n_boot`` rows in all), cells numbered as
+        :func:`cluster_cells` numbers them.
+    """
+    if not isinstance(n_boot, (int, np.integer)) or n_boot < 1:
+        raise TzslError(f"n_boot must be a positive integer, got {n_boot!r}")
+    _, split_of_cell, position, n_classes = cluster_cells(classes, splits)
+    n_splits, max_classes = len(n_classes), int(n_classes.max())
+    rng = np.random.default_rng(random_state)
+    # the chunk of the per-trial weights (bootstrap_trial_weights), so both draw the same numbers
+    chunk = max(1, CHUNK_CELLS // max(len(np.asarray(classes)), n_splits * max_classes))
+    flat_cell = split_of_cell * max_classes + position  # each cell's slot in (split, class position)
+    for start in range(0, n_boot, chunk):
+        b = min(chunk, n_boot - start)
+        drawn, _, pick, ok = _draw(rng, n_classes, b)
+        slot = (np.arange(b)[:, None, None] * n_splits + drawn[..., None]) * max_classes + pick
+        counts = np.bincount(slot[ok], minlength=b * n_splits * max_classes).reshape(b, -1)
+        yield counts[:, flat_cell].astype(float)
+
+
 def bootstrap_trial_weights(classes, splits=None, *, n_boot: int = DEFAULT_N_BOOT,
                             random_state: int | np.random.Generator | None = 0):
     """The two-level bootstrap of this module as per-trial weights, for statistics that are not means.
@@ -160,7 +230,9 @@ def bootstrap_trial_weights(classes, splits=None, *, n_boot: int = DEFAULT_N_BOO
     how often its class was drawn within it (its class brings all its trials, module
     docstring). A statistic that is not a mean over splits of a per-split accuracy (the
     expected calibration error pools trials into bins) is recomputed on each replicate from
-    these weights; the draws are those of :func:`bootstrap_accuracy` with the same seed.
+    these weights; the draws are those of :func:`bootstrap_accuracy` with the same seed. Sums
+    over trials are cheaper from :func:`bootstrap_cell_weights` (these weights are its counts,
+    each repeated for the trials of its cell).
 
     Parameters
     ----------
@@ -177,32 +249,9 @@ def bootstrap_trial_weights(classes, splits=None, *, n_boot: int = DEFAULT_N_BOO
         Weights of ``b`` replicates (chunks of at most about ``CHUNK_CELLS`` cells; ``n_boot``
         rows in all).
     """
-    if not isinstance(n_boot, (int, np.integer)) or n_boot < 1:
-        raise TzslError(f"n_boot must be a positive integer, got {n_boot!r}")
-    n = len(np.asarray(classes))
-    n_correct, _, n_classes = _cells(np.zeros((n, 1)), classes, splits)
-    split_of, position = _trial_cells(classes, splits)
-    n_splits, max_classes = n_correct.shape[:2]
-    rng = np.random.default_rng(random_state)
-    chunk = max(1, CHUNK_CELLS // max(n, n_splits * max_classes))
-    for start in range(0, n_boot, chunk):
-        b = min(chunk, n_boot - start)
-        drawn, _, pick, ok = _draw(rng, n_classes, b)
-        counts = np.zeros((b, n_splits, max_classes))
-        rep = np.broadcast_to(np.arange(b)[:, None, None], pick.shape)
-        np.add.at(counts, (rep[ok], np.broadcast_to(drawn[..., None], pick.shape)[ok], pick[ok]), 1.0)
-        yield counts[:, split_of, position]
-
-
-def _trial_cells(classes, splits) -> tuple[np.ndarray, np.ndarray]:
-    """Each trial's split index and class position, as :func:`_cells` orders them."""
-    classes = np.asarray(classes)
-    splits = np.zeros(len(classes), dtype=int) if splits is None else np.asarray(splits)
-    frame = pd.DataFrame({"split": splits, "class": classes})
-    split_of = pd.factorize(frame["split"], sort=True)[0]
-    cell = frame.groupby(["split", "class"], sort=True).ngroup().to_numpy()
-    first_cell = pd.Series(cell).groupby(split_of).transform("min").to_numpy()
-    return split_of, cell - first_cell
+    cell = cluster_cells(classes, splits)[0]
+    for counts in bootstrap_cell_weights(classes, splits, n_boot=n_boot, random_state=random_state):
+        yield counts[:, cell]
 
 
 def _replicates(correct: np.ndarray, classes, splits, metric: str, n_boot: int, random_state

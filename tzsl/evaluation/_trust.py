@@ -32,7 +32,7 @@ import numpy as np
 import pandas as pd
 
 from tzsl.evaluation._baselines import chance_accuracy, majority_class_accuracy
-from tzsl.evaluation._intervals import bootstrap_accuracy
+from tzsl.evaluation._intervals import bootstrap_accuracy, cluster_cells
 from tzsl.exceptions import TzslError
 
 __all__ = ["INTERVAL_DOC", "Outcomes", "add_trust_columns", "attribute_intervals", "interval_columns"]
@@ -241,14 +241,9 @@ def attribute_intervals(correct, truth, classes, splits, *, n_boot: int = 2000, 
         shape (n_attributes + 1,), the last entry for the mean over attributes.
     """
     correct, truth = np.asarray(correct, dtype=float), np.asarray(truth, dtype=float)
-    frame = pd.DataFrame({"split": np.asarray(splits), "class": np.asarray(classes)})
-    cell = frame.groupby(["split", "class"], sort=True).ngroup().to_numpy()
-    n_cells, m = int(cell.max()) + 1, correct.shape[1]
-    split_of = np.empty(n_cells, dtype=int)
-    split_of[cell] = pd.factorize(frame["split"], sort=True)[0]
-    n_classes = np.bincount(split_of)
+    cell, split_of, position, n_classes = cluster_cells(classes, splits)
+    n_cells, m = split_of.size, correct.shape[1]
     S, C = len(n_classes), int(n_classes.max())
-    position = np.arange(n_cells) - np.concatenate([[0], np.cumsum(n_classes)[:-1]])[split_of]
     sums, truths = np.zeros((n_cells, m)), np.zeros((n_cells, m))
     np.add.at(sums, cell, correct)
     truths[cell] = truth

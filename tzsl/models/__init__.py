@@ -6,6 +6,7 @@ One protocol (:class:`ZeroShotClassifier` = attribute model + decision rule), a 
 
 from tzsl.models._attribute_svm import AttributeSVM
 from tzsl.models._attribute_bank import AttributeClassifierBank
+from tzsl.models._attribute_search import SEARCHES
 from tzsl.models._attribute_training import (
     AUTO_MAX_EXACT_TRIALS,
     GRIDS,
@@ -127,6 +128,7 @@ __all__: list[str] = [
     "AUTO_MAX_EXACT_TRIALS",
     "SOLVERS",
     "GRIDS",
+    "SEARCHES",
     "GridEdgeWarning",
     "ScalableAttributeClassifier",
     "balanced_object_draws",

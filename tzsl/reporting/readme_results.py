@@ -9,7 +9,9 @@ Markdown file ``TARGET`` between ``<!-- results:begin NAME (...) -->`` and
   reproduce-tables``, each as ``ours [95% interval]`` beside its chance or baseline and the
   paper's number (read from the table, which reads it from the code's paper-value tables);
 * ``phac2-accuracy-benchmark`` (``experiments/benchmarks/README.md``): the ``accuracy.csv`` and
-  ``grid_summary.csv`` of ``experiments/benchmarks/phac2_accuracy.py``.
+  ``grid_summary.csv`` of ``experiments/benchmarks/phac2_accuracy.py``;
+* ``attribute-search-benchmark`` (``docs/user_guide/performance.md``): the
+  ``search_summary_*.csv`` of ``experiments/benchmarks/phac2_search.py``.
 
 ``make numbers`` runs it on every target; ``--check`` (``make numbers-check``) exits with
 status 1 when a block differs from what the results give. Tables that are missing are left
@@ -30,7 +32,7 @@ import pandas as pd
 from tzsl.exceptions import ConfigError
 
 __all__ = ["BEGIN", "BLOCKS", "END", "begin", "benchmark_accuracy_block", "block_spans", "comparison_lines", "end",
-           "main", "results_block", "update_file"]
+           "main", "results_block", "search_benchmark_block", "update_file"]
 
 _MARKER = re.compile(r"<!-- results:(begin|end) ([\w-]+)[^>]*-->")
 
@@ -253,8 +255,44 @@ def benchmark_accuracy_block(results: str | Path) -> str:
     return "\n".join(lines)
 
 
+def search_benchmark_block(results: str | Path) -> str:
+    """Full grid vs successive halving (``experiments/benchmarks/phac2_search.py``), one row per seed and grid.
+
+    Reads every ``search_summary_seed<S>_<grid>.csv`` under ``results``.
+
+    Raises
+    ------
+    ConfigError
+        No such file under ``results``.
+    """
+    root = Path(results)
+    found = sorted(root.rglob("search_summary_*.csv")) if root.is_dir() else []
+    if not found:
+        raise ConfigError(f"{root}: no search_summary_*.csv; run experiments/benchmarks/phac2_search.py --out {root} "
+                          "first")
+    table = pd.concat([pd.read_csv(f) for f in found]).sort_values(["grid", "seed"])
+    lines = ["Generated from `search_summary_*.csv` by `make numbers`: AVGDAP (uniform prior) trial accuracy "
+             "[95% interval] of each search, the paired difference halving minus grid on the same trials "
+             "[95% interval], the share of (attribute, sensor) models that chose the grid's configuration, and "
+             "the CPU seconds of all attribute fits of each search (one process, one core).", "",
+             "| gamma grid | seed | splits | grid | halving | halving - grid | interval holds 0 or is above it | "
+             "same choice | CPU grid (s) | CPU halving (s) | CPU ratio |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for _, r in table.iterrows():
+        diff = (f"{float(r['difference']):+.3f} [{float(r['difference_ci95_low']):+.3f}, "
+                f"{float(r['difference_ci95_high']):+.3f}]")
+        lines.append(f"| {r['grid']} | {int(r['seed'])} | {int(r['n_splits'])} | "
+                     f"{_ours(r, 'grid_avgdap', 'grid_ci95_low', 'grid_ci95_high')} | "
+                     f"{_ours(r, 'halving_avgdap', 'halving_ci95_low', 'halving_ci95_high')} | {diff} | "
+                     f"{'yes' if float(r['difference_ci95_high']) >= 0 else 'no'} | "
+                     f"{100 * float(r['same_choice_share']):.0f}% | {float(r['grid_cpu_s']):.1f} | "
+                     f"{float(r['halving_cpu_s']):.1f} | {float(r['cpu_ratio']):.2f} |")
+    return "\n".join(lines)
+
+
 #: Block name -> the function that makes its Markdown from a results folder.
-BLOCKS: dict[str, Callable[[Path], str]] = {"readme": results_block, "phac2-accuracy-benchmark": benchmark_accuracy_block}
+BLOCKS: dict[str, Callable[[Path], str]] = {"readme": results_block, "phac2-accuracy-benchmark": benchmark_accuracy_block,
+                                            "attribute-search-benchmark": search_benchmark_block}
 
 
 def block_spans(text: str) -> list[tuple[int, int]]:

@@ -25,7 +25,8 @@ def _svm_params(svm) -> dict:
 
     defaults = AttributeSVM().get_params()
     params: dict[str, Any] = {"cv": None if svm.cv == 0 else svm.cv}
-    for key in ("C_range", "gamma_range", "n_C", "n_gamma", "grid", "n_draws", "scoring", "platt_weighting"):
+    for key in ("C_range", "gamma_range", "n_C", "n_gamma", "grid", "n_draws", "scoring", "platt_weighting",
+                "search"):
         value = getattr(svm, key)
         params[key] = tuple(float(v) for v in value) if key.endswith("_range") else value
     return {k: v for k, v in params.items() if v != defaults[k]}

@@ -181,6 +181,9 @@ class Phac2Svm(Section):
     scoring: Literal["log_loss", "balanced_accuracy"] = Field(default_factory=lambda: _svm_default("scoring"))
     platt_weighting: Literal["balanced", "empirical"] = Field(
         default_factory=lambda: _svm_default("platt_weighting"))
+    search: Literal["grid", "halving"] = Field(
+        default_factory=lambda: _svm_default("search"),
+        description="'grid': every (draw, C, gamma) on every fold; 'halving': successive halving over the folds")
     solver: Literal["auto", "exact", "approximate"] = Field(
         default_factory=lambda: _bank_default("solver"),
         description="'exact': these SVMs; 'approximate': Nystroem features + logistic regression (linear in "
