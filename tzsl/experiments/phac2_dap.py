@@ -95,14 +95,9 @@ class DapStudyConfig:
     ----------
     n_splits, n_test : int
         Random splits and test objects per random split (paper: 5 and 10).
-    seed : int
-        Seeds the split draws, the under-sampling draws and the sweep's subsets, together with
-        ``purpose`` (:attr:`study_seed`).
-    purpose : {"select", "confirm"}
-        Selection or confirmation splits (:data:`tzsl.evaluation.PURPOSES`): the random splits
-        are drawn from that purpose's test sets only, and every fit is seeded from
-        :attr:`study_seed`. Challenging splits are the same five partitions for both purposes
-        (the map has no seed); only their fits' seeds differ.
+    seed, purpose : int and {"select", "confirm"}
+        Seed the split draws, the under-sampling draws and the sweep's subsets (:attr:`study_seed`);
+        random splits come from ``purpose``'s test sets only (:data:`tzsl.evaluation.PURPOSES`).
     random_min_train_positives : int
         Random splits leave out an attribute with fewer positive training objects. 2 is the
         least object-grouped cross-validation can work with; the paper states no rule.
