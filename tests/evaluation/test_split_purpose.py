@@ -96,3 +96,20 @@ def test_the_study_schema_defaults_to_confirmation_and_refuses_other_purposes():
     assert Phac2Splits(purpose="select").purpose == "select"
     with pytest.raises(ValidationError):
         Phac2Splits(purpose="report")
+
+
+def test_the_command_line_takes_the_purpose():
+    from click.testing import CliRunner  # noqa: PLC0415
+
+    from tzsl.cli import cli  # noqa: PLC0415
+    from tzsl.cli._dap_commands import evaluate_values  # noqa: PLC0415
+    from tzsl.experiments.config import config_from_options  # noqa: PLC0415
+
+    for command in ("splits", "evaluate"):
+        shown = CliRunner().invoke(cli, [command, "--help"])
+        assert "--purpose [select|confirm]" in shown.output and "default: confirm" in shown.output
+    values = evaluate_values(kind="random", splits_file=None, n_splits=1, n_test=4, multilabel=False, sweep=False,
+                             out="o", dataset="phac2-penn", features_file=None, plain_dir=None, path=None,
+                             undersampling=None, cv=None, grid=None, no_progress=True, no_cache=True, seed=3, n_jobs=1,
+                             backend=None, scheduler=None, data_dir=None, purpose="select")
+    assert config_from_options("phac2-dap", values).config.splits.purpose == "select"
