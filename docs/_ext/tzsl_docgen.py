@@ -2,7 +2,7 @@
 
 Nothing here is typed by hand: the API reference lists every public name (``__all__`` of every
 public package and module of tzsl), the command reference is ``tzsl COMMAND --help``, the method
-list is ``tzsl methods --json``, the plain format is ``tzsl formats`` and the experiment-file
+list is ``tzsl methods --json``, the inherited choices are ``tzsl.models.inherited_choices()``, the plain format is ``tzsl formats`` and the experiment-file
 reference is ``tzsl run NAME --print-config``. Everything is written under ``docs/_generated/``
 (not tracked by git) before Sphinx reads the sources, so the pages follow the code.
 """
@@ -188,6 +188,20 @@ def datasets_page(out: Path) -> None:
         cells = [f"`{d['name']}`", what, f"{d['content']} ({', '.join(d['eps'])})", d["source"]]
         lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
     _write(out / "datasets_table.md", "\n".join(lines) + "\n")
+def choices_page(out: Path) -> None:
+    """Every choice a user inherits (:data:`tzsl.models.INHERITED_CHOICES`), values read from the code."""
+    from tzsl.models import inherited_choices
+
+    choices = inherited_choices()
+    if not choices:
+        raise DocGenError("tzsl.models.INHERITED_CHOICES lists no choice")
+    lines = []
+    for c in choices:
+        lines += [f"### `{c['key']}`", "", c["what"][:1].upper() + c["what"][1:] + ".", "",
+                  f"* **value:** `{c['value']}`", f"* **chosen on:** {c['selection']}",
+                  f"* **numbers shown for it:** {c['numbers']}",
+                  f"* **makes the choice again:** {'`' + c['command'] + '`' if c['command'] else 'no command'}", ""]
+    _write(out / "choices_table.md", "\n".join(lines))
 
 
 # --------------------------------------------------------------------------- formats, experiment files
@@ -226,5 +240,6 @@ def generate(docs: Path) -> None:
     cli_page(out)
     methods_page(out)
     datasets_page(out)
+    choices_page(out)
     formats_page(out)
     experiments_page(out, docs.parent)

@@ -8,8 +8,9 @@ refitted on all training objects. tzsl's candidates are the registered ``eszsl``
 (:class:`tzsl.models.ESZSLCV`: z-scored features, class-grouped folds) with its shipped adaptive
 grid and with the fixed grid (``grid_extensions=0``).
 
-Splits: the library's seeded random splits (``tzsl.studies.zero_shot.study.make_splits``), on
-SELECTION seeds (``--seed``) and CONFIRMATION seeds (``--seed + --confirm-offset``), disjoint.
+Splits: the library's seeded random splits (``tzsl.studies.zero_shot.study.make_splits``) of seed
+``--seed``, once as SELECTION and once as CONFIRMATION splits (``purpose``: disjoint test sets for
+every seed, :func:`tzsl.evaluation.split_purpose`).
 Output CSV: one row per (purpose, method): mean accuracy with its two-level bootstrap interval and
 the paired difference to the public formulation with its interval, plus the share of fits whose
 chosen value is at a grid edge::
@@ -72,7 +73,7 @@ def tzsl_eszsl(X_tr, objects_tr, rows_tr, X_te, K, **params) -> tuple[np.ndarray
 
 def run(features, purpose: str, seed: int, n_splits: int) -> pd.DataFrame:
     """Per-trial correctness of every method on ``n_splits`` random splits of ``seed``."""
-    splits, _ = make_splits(features, "random", DapStudyConfig(n_splits=n_splits, seed=seed))
+    splits, _ = make_splits(features, "random", DapStudyConfig(n_splits=n_splits, seed=seed, purpose=purpose))
     objects = features.objects
     X = features.X.reshape(len(objects), -1)
     records = []
@@ -89,7 +90,7 @@ def run(features, purpose: str, seed: int, n_splits: int) -> pd.DataFrame:
             "tzsl-eszsl[fixed grid]": tzsl_eszsl(X[train], objects[train], rows_tr, X[test], K, grid_extensions=0),
         }
         for name, (scores, edge) in methods.items():
-            records.append(pd.DataFrame({"purpose": purpose, "seed": seed, "split": f"{seed}-{index}", "method": name,
+            records.append(pd.DataFrame({"purpose": purpose, "seed": seed, "split": f"{purpose}-{seed}-{index}", "method": name,
                                          "class": objects[test], "correct": (scores.argmax(1) == y).astype(float),
                                          "at_edge": edge}))
         print(purpose, split.name, {k: round(float((s.argmax(1) == y).mean()), 3) for k, (s, _) in methods.items()},
@@ -116,13 +117,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--n-splits", type=int, default=20)
-    ap.add_argument("--seed", type=int, default=0, help="selection seed")
-    ap.add_argument("--confirm-offset", type=int, default=1000, help="confirmation seed = seed + offset")
+    ap.add_argument("--seed", type=int, default=0, help="seed of the selection and of the confirmation splits")
     args = ap.parse_args()
     warnings.simplefilter("ignore")
     features = dataset_features("phac2-penn")
     trials = pd.concat([run(features, "select", args.seed, args.n_splits),
-                        run(features, "confirm", args.seed + args.confirm_offset, args.n_splits)], ignore_index=True)
+                        run(features, "confirm", args.seed, args.n_splits)], ignore_index=True)
     table = summarise(trials)
     tmp = args.out.with_suffix(".tmp")
     table.to_csv(tmp, index=False, float_format="%.4f")

@@ -103,9 +103,13 @@ def test_the_template_runs_any_small_dataset_to_the_end(tmp_path_factory, n_clas
     out = root / "out"
     comparison = pd.read_csv(out / "method_comparison.csv")
     assert set(comparison["data"]) == {"sim-SIMULATED"} and set(comparison["study"]) == {"zero-shot"}
+    # the default purpose of a reported study: confirmation splits, in the manifest and both method tables
+    assert set(comparison["purpose"]) == {"confirm"}
+    assert set(pd.read_csv(out / "methods_per_split.csv")["purpose"]) == {"confirm"}
     for table in out.glob("*.csv"):
         assert not [c for c in pd.read_csv(table, nrows=0).columns if c.startswith("paper")], table.name
     manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["config"]["purpose"] == "confirm" == manifest["config"]["phac2_dap"]["purpose"]
     noted = [line for line in result.output.splitlines() if line.startswith("note: relaxed ")]
     assert len(noted) == len(manifest["config"]["relaxations"])
     # warnings: one line each, no source path, and the same ones in the manifest

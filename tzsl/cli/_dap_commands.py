@@ -83,6 +83,13 @@ def _experiment(values: dict):
     return config_from_options(STUDY, values)
 
 
+#: ``--purpose`` of ``tzsl splits`` and ``tzsl evaluate`` (``[splits] purpose``).
+purpose_option = schema_option(
+    "--purpose", study=STUDY, key="splits.purpose", type=click.Choice(["select", "confirm"]),
+    help="Selection splits (to make a choice) or confirmation splits (to report it); no seed of one draws a "
+         "random split of the other.")
+
+
 @cli.command()
 @click.option("--split", "kind", type=click.Choice(["random", "challenging"]), default="random", show_default=True,
               help="Split family.")
@@ -90,12 +97,13 @@ def _experiment(values: dict):
                help="Random splits to draw.")
 @schema_option("--n-test", study=STUDY, key="splits.n_test", type=click.IntRange(min=1),
                help="Test objects per random split.")
+@purpose_option
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path), required=True, help="Split CSV to write.")
 @_source_options
 @seed_option
 @data_dir_option
 @force_option
-def splits(kind, n_splits, n_test, out, dataset, features_file, plain_dir, path, seed, data_dir, force):
+def splits(kind, n_splits, n_test, purpose, out, dataset, features_file, plain_dir, path, seed, data_dir, force):
     """Write object splits as CSV (split, object, role), usable with 'tzsl evaluate --splits'."""
     from tzsl.evaluation import write_splits_csv  # noqa: PLC0415
     from tzsl.studies.study_settings import dap_config  # noqa: PLC0415
@@ -105,7 +113,8 @@ def splits(kind, n_splits, n_test, out, dataset, features_file, plain_dir, path,
     if out.exists() and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite")
     exp = _experiment({**_dataset_values(dataset, features_file, plain_dir, path, data_dir),
-                       "splits.n_splits": n_splits, "splits.n_test": n_test, "splits.seed": seed})
+                       "splits.n_splits": n_splits, "splits.n_test": n_test, "splits.seed": seed,
+                       "splits.purpose": purpose})
     made, _ = make_splits(phac2_features(exp), kind, dap_config(exp))
     write_splits_csv(made, out)
     for s in made:
@@ -191,13 +200,14 @@ def _train_per_ep(features, out, splits_file, split_name, exp, force) -> None:
 
 def evaluate_values(kind, splits_file, n_splits, n_test, multilabel, sweep, out, dataset, features_file, plain_dir,
                     path, undersampling, cv, grid, no_progress, no_cache, seed, n_jobs, backend, scheduler,
-                    data_dir) -> dict:
+                    data_dir, purpose: str | None = None) -> dict:
     """``tzsl evaluate``'s options as experiment keys (``{"table.key": value}``)."""
     kinds = ["file"] if splits_file is not None else (["random", "challenging"] if kind == "both" else [kind])
     return {**_dataset_values(dataset, features_file, plain_dir, path, data_dir),
             **_study_values(seed, n_jobs, backend, scheduler, undersampling, cv, grid, no_progress, no_cache),
             "splits.kinds": kinds, "splits.file": None if splits_file is None else str(splits_file),
             "splits.n_splits": n_splits, "splits.n_test": n_test, "methods.multilabel": multilabel,
+            **({} if purpose is None else {"splits.purpose": purpose}),
             "methods.sweep": sweep, "output.folder": str(out)}
 
 
@@ -210,6 +220,7 @@ def evaluate_values(kind, splits_file, n_splits, n_test, multilabel, sweep, out,
                help="Random splits.")
 @schema_option("--n-test", study=STUDY, key="splits.n_test", type=click.IntRange(min=1),
                help="Test objects per random split.")
+@purpose_option
 @schema_option("--multilabel/--no-multilabel", study=STUDY, key="methods.multilabel",
                help="Also fit the joint (multi-label) attribute model on the random splits.")
 @schema_option("--sweep/--no-sweep", study=STUDY, key="methods.sweep", help="Attribute-count sweep (F10).")

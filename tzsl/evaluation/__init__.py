@@ -21,14 +21,18 @@ from tzsl.evaluation._metrics import (
 from tzsl.evaluation._challenging_splits import challenging_splits
 from tzsl.evaluation._split_io import read_splits_csv, write_splits_csv
 from tzsl.evaluation._splits import (
+    PURPOSES,
     Split,
     attribute_exclusions,
     check_attribute_table,
     duplicate_attribute_groups,
+    purpose_seed,
     random_object_splits,
+    split_purpose,
 )
 
 __all__: list[str] = [
+    "PURPOSES",
     "Split",
     "attribute_exclusions",
     "challenging_splits",
@@ -38,8 +42,10 @@ __all__: list[str] = [
     "per_attribute_balanced_accuracy",
     "per_class_accuracy",
     "per_class_mean_accuracy",
+    "purpose_seed",
     "random_object_splits",
     "read_splits_csv",
+    "split_purpose",
     "summarise_over_splits",
     "trial_accuracy",
     "write_splits_csv",

@@ -15,10 +15,18 @@ recognised from its attribute row alone. Two rules from the DAP paper (sections 
 
 Distinctness of test vectors is checked on the attributes kept for the split, i.e. after
 the exclusions: those are the only attributes a ZSL model of that split sees.
+
+Selection and confirmation splits (:data:`PURPOSES`): a choice (a method, a grid, a default) is
+made on *selection* splits and the numbers shown for it come from *confirmation* splits. Every
+test-object set belongs to exactly one of the two (:func:`split_purpose`, a hash of the sorted
+test objects), and a random draw for one purpose rejects the other's sets, so no seed of a
+confirmation run can draw a split that a selection run with any seed draws. The purpose also
+enters the seed of the draws (:func:`purpose_seed`), so the two streams differ from the first draw.
 """
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 from numbers import Integral
 
@@ -29,12 +37,18 @@ from sklearn.utils import check_random_state
 from tzsl.exceptions import SplitError
 
 __all__ = [
+    "PURPOSES",
     "Split",
     "attribute_exclusions",
     "check_attribute_table",
     "duplicate_attribute_groups",
+    "purpose_seed",
     "random_object_splits",
+    "split_purpose",
 ]
+
+#: What a run's splits are for: ``select`` (make a choice) or ``confirm`` (report the chosen).
+PURPOSES: tuple[str, ...] = ("select", "confirm")
 
 @dataclass(frozen=True)
 class Split:
@@ -215,6 +229,56 @@ def check_min_counts(min_train_positives: int, min_train_negatives: int) -> None
             raise SplitError(f"{name} must be a non-negative integer, got {v!r}")
 
 
+# --------------------------------------------------------------------------- selection / confirmation
+
+
+def split_purpose(test_objects) -> str:
+    """The purpose (``"select"`` or ``"confirm"``) a test-object set belongs to.
+
+    A fixed partition of every possible test set: the parity of the first byte of the SHA-256 of
+    the sorted object names, joined by a unit separator. It depends on the set only (not its
+    order, the seed or the dataset's other objects), so the partition is the same for every run.
+
+    Parameters
+    ----------
+    test_objects : iterable of str
+        The split's test objects.
+
+    Returns
+    -------
+    str
+        An element of :data:`PURPOSES`.
+    """
+    key = "\x1f".join(sorted(map(str, test_objects))).encode("utf-8")
+    return PURPOSES[hashlib.sha256(key).digest()[0] & 1]
+
+
+def purpose_seed(seed: int, purpose: str | None) -> int:
+    """The seed of a run's draws and fits for ``purpose``: ``seed`` itself when ``purpose`` is None.
+
+    Parameters
+    ----------
+    seed : int
+        The run's seed, ``0 <= seed < 2**32``.
+    purpose : {"select", "confirm"} or None
+
+    Returns
+    -------
+    int
+        In ``[0, 2**32)``; ``SeedSequence([seed, 1 + PURPOSES.index(purpose)])``'s first word.
+    """
+    if purpose is None:
+        return int(seed)
+    check_purpose(purpose)
+    return int(np.random.SeedSequence([int(seed), 1 + PURPOSES.index(purpose)]).generate_state(1)[0])
+
+
+def check_purpose(purpose) -> None:
+    """Raise :class:`SplitError` unless ``purpose`` is None or one of :data:`PURPOSES`."""
+    if purpose is not None and purpose not in PURPOSES:
+        raise SplitError(f"purpose must be one of {list(PURPOSES)} (or None), got {purpose!r}")
+
+
 # --------------------------------------------------------------------------- random (F5)
 
 
@@ -226,6 +290,7 @@ def random_object_splits(
     min_train_positives: int = 3,
     min_train_negatives: int = 1,
     max_draws: int = 1000,
+    purpose: str | None = None,
 ) -> list[Split]:
     """Random object splits with mutually different test attribute vectors (DAP paper 4.2).
 
@@ -248,12 +313,17 @@ def random_object_splits(
         Exclusion rule (see module docstring).
     max_draws : int, default 1000
         Draws tried per split before giving up.
+    purpose : {"select", "confirm"} or None, default None
+        Draw only test sets of this purpose (:func:`split_purpose`), from the generator seeded
+        with :func:`purpose_seed`; needs an integer ``random_state``. None: every test set, from
+        ``random_state`` itself.
 
     Returns
     -------
     list of Split
         ``kind="random"``, names ``random-1`` .. ``random-<n_splits>``, ``seed`` = the
-        integer ``random_state`` (None otherwise).
+        integer ``random_state`` (None otherwise); with ``purpose``, every split's
+        :func:`split_purpose` is ``purpose``.
 
     Raises
     ------
@@ -279,15 +349,23 @@ def random_object_splits(
             f"cannot draw {n_test} test objects with mutually different attribute vectors: "
             f"the table has only {n_distinct} distinct vectors among {n_objects} objects"
         )
-    rng = check_random_state(random_state)
+    check_purpose(purpose)
     seed = int(random_state) if isinstance(random_state, Integral) else None
+    if purpose is not None and seed is None:
+        raise SplitError(f"purpose={purpose!r} needs an integer random_state, got {random_state!r}")
+    rng = check_random_state(random_state if purpose is None else purpose_seed(seed, purpose))
+    names = np.asarray(objects, dtype=object)
 
     splits = []
     for k in range(n_splits):
-        rejected = {"duplicate test vectors": 0, "every attribute excluded": 0}
+        rejected = {"duplicate test vectors": 0, "every attribute excluded": 0,
+                    f"a test set of the {_other(purpose)} splits": 0}
         for _ in range(max_draws):
             test = np.zeros(n_objects, dtype=bool)
             test[rng.choice(n_objects, size=n_test, replace=False)] = True
+            if purpose is not None and split_purpose(names[test]) != purpose:
+                rejected[f"a test set of the {_other(purpose)} splits"] += 1
+                continue
             excluded = attribute_exclusions(A[~test], attributes, min_train_positives, min_train_negatives)
             kept = kept_mask(attributes, excluded)
             if not kept.any():
@@ -317,3 +395,8 @@ def random_object_splits(
             )
         )
     return splits
+
+
+def _other(purpose: str | None) -> str:
+    """The purpose other than ``purpose`` (a label for messages)."""
+    return "other" if purpose is None else PURPOSES[1 - PURPOSES.index(purpose)]

@@ -103,6 +103,12 @@ from tzsl.models._posterior_calibration import (
     tempered_proba,
 )
 from tzsl.models import _builtin_methods  # noqa: F401,E402  (registers the shipped methods)
+from tzsl.models._choices import (  # noqa: E402
+    INHERITED_CHOICES,
+    NO_SELECTION_SPLITS,
+    InheritedChoice,
+    inherited_choices,
+)
 
 __all__: list[str] = [
     "FITS_FOLDER",
@@ -173,5 +179,6 @@ __all__: list[str] = [
     "suggest_next_ep", "TEMPERINGS", "done_subset_index", "fit_posterior_exponents",
     "expected_information_gain", "outcome_log_likelihoods", "run_policy", "sequential_log_posterior",
     "stop_reasons", "ScoreEnsembleZSL", "zscore_rows",
+    "INHERITED_CHOICES", "NO_SELECTION_SPLITS", "InheritedChoice", "inherited_choices",
     "CALIBRATIONS", "CalibratedZeroShotClassifier", "CalibrationWarning", "fit_temperature", "pseudo_unseen_scores",
     "tempered_proba"]

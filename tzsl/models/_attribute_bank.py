@@ -171,7 +171,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         if not approximate:
             return exact
         # one protocol for both solvers: the approximate model searches the exact model's grid with
-        # its folds and draws
+        # its folds and draws (the splits this was chosen on: INHERITED_CHOICES, "approximate-solver")
         params = exact.get_params(deep=False)
         shared = {k: v for k, v in params.items()
                   if k in ("preprocessor", "platt_weighting", "name", "random_state", "C_range", "gamma_range",

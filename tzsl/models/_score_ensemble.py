@@ -16,7 +16,9 @@ ensemble sees a test object (each member tunes itself on training objects or cla
 How it compares with AVGDAP and with its members on PHAC-2 (accuracy, intervals, paired
 differences on the same trials) is measured by ``experiments/benchmarks/phac2_accuracy.py`` and
 by the method comparison of ``tzsl run phac2-dap`` (``phac2_method_comparison.csv``); no number
-is kept here, so none can describe code that is no longer shipped.
+is kept here, so none can describe code that is no longer shipped. The splits the default members
+were chosen on, and that they are not yet confirmed on other splits, are recorded in
+:data:`tzsl.models.INHERITED_CHOICES` (``ensemble-members``).
 """
 
 from __future__ import annotations

@@ -10,6 +10,8 @@ Markdown file ``TARGET`` between ``<!-- results:begin NAME (...) -->`` and
   paper's number (read from the table, which reads it from the code's paper-value tables);
 * ``phac2-accuracy-benchmark`` (``experiments/benchmarks/README.md``): the ``accuracy.csv`` and
   ``grid_summary.csv`` of ``experiments/benchmarks/phac2_accuracy.py``;
+* ``phac2-best-method`` (``experiments/benchmarks/README.md``): the decision of ``experiments/benchmarks/phac2_best_method.py``
+  (best method on selection splits, its numbers on confirmation splits);
 * ``attribute-search-benchmark`` (``docs/user_guide/performance.md``): the
   ``search_summary_*.csv`` of ``experiments/benchmarks/phac2_search.py``.
 
@@ -31,8 +33,9 @@ import pandas as pd
 
 from tzsl.exceptions import ConfigError
 
-__all__ = ["BEGIN", "BLOCKS", "END", "begin", "benchmark_accuracy_block", "block_spans", "comparison_lines", "end",
-           "main", "results_block", "search_benchmark_block", "update_file"]
+__all__ = ["BEGIN", "BEST_METHOD_FILE", "BLOCKS", "END", "begin", "benchmark_accuracy_block", "best_method_block",
+           "block_spans", "comparison_lines", "end", "main", "results_block", "search_benchmark_block", "update_file"]
+
 
 _MARKER = re.compile(r"<!-- results:(begin|end) ([\w-]+)[^>]*-->")
 
@@ -288,11 +291,47 @@ def search_benchmark_block(results: str | Path) -> str:
                      f"{100 * float(r['same_choice_share']):.0f}% | {float(r['grid_cpu_s']):.1f} | "
                      f"{float(r['halving_cpu_s']):.1f} | {float(r['cpu_ratio']):.2f} |")
     return "\n".join(lines)
+#: The decision CSV of ``experiments/benchmarks/phac2_best_method.py``.
+BEST_METHOD_FILE = "phac2_best_method.csv"
+
+
+def best_method_block(results: str | Path) -> str:
+    """The best-method decision (``phac2_best_method.csv``): chosen on selection splits, shown on confirmation.
+
+    Without the CSV under ``results``, a line saying how to make it (the block then holds no number).
+    """
+    root = Path(results)
+    table = _find(root, BEST_METHOD_FILE) if root.is_dir() else None
+    if table is None:
+        return ("Not generated yet from the shipped code: run `experiments/benchmarks/phac2_best_method.py --out "
+                f"DIR/{BEST_METHOD_FILE}`, then `make numbers BENCH_RESULTS=DIR`.")
+    lines = [f"Generated from `{BEST_METHOD_FILE}` by `make numbers`: the most accurate method on the selection "
+             "splits, then its accuracy [95% interval] and paired difference to the reference [95% interval] on "
+             "the confirmation splits (seed "
+             + ", ".join(str(int(v)) for v in dict.fromkeys(table["seed"])) + ").", "",
+             "| splits | chosen on selection (splits) | selection accuracy | confirmation accuracy "
+             "(splits) | minus reference | beats it |", "|---|---|---|---|---|---|"]
+    for _, r in table.iterrows():
+        diff = "-" if pd.isna(r.get("difference")) else (
+            f"{float(r['difference']):+.3f} [{float(r['difference_ci95_low']):+.3f}, "
+            f"{float(r['difference_ci95_high']):+.3f}] vs `{r['reference']}`")
+        lines.append(f"| {r['kind']} | `{r['chosen']}` ({_num(r.get('selection_n_splits'), 0)}) | "
+                     f"{_num(r['selection_accuracy'])} | {_ours(r, 'accuracy', 'ci95_low', 'ci95_high')} "
+                     f"({_num(r.get('confirmation_n_splits'), 0)}) | {diff} | "
+                     f"{'yes' if bool(r['beats_reference']) else 'no'} |")
+    notes = [f"{r['kind']}: {r['note']}" for _, r in table.iterrows() if isinstance(r.get("note"), str) and r["note"]]
+    winners = table[table["beats_reference"].astype(bool)]
+    verdict = ("The shipped default stays the reference: no chosen method beats it on the confirmation splits "
+               "with an interval excluding 0." if winners.empty else
+               "Beats the reference on the confirmation splits with an interval excluding 0: "
+               + ", ".join(f"`{r['chosen']}` ({r['kind']})" for _, r in winners.iterrows()) + ".")
+    return "\n".join(lines + [""] + [verdict] + ([""] + [f"Note, {n}." for n in notes] if notes else []))
 
 
 #: Block name -> the function that makes its Markdown from a results folder.
 BLOCKS: dict[str, Callable[[Path], str]] = {"readme": results_block, "phac2-accuracy-benchmark": benchmark_accuracy_block,
-                                            "attribute-search-benchmark": search_benchmark_block}
+                                            "attribute-search-benchmark": search_benchmark_block,
+                                            "phac2-best-method": best_method_block}
 
 
 def block_spans(text: str) -> list[tuple[int, int]]:

@@ -3,7 +3,8 @@
 The page is organised by the papers' tables and figures (:data:`SECTIONS`): for each, what
 was run, our tables - each accuracy shown as ``ours (ci95 low-high) [paper]`` where the
 CSV has ``paper_*`` and ``*ci95_low``/``*ci95_high`` columns - with chance and baseline
-columns as written by the study, and the figure beside its table. Results from simulated
+columns as written by the study, and the figure beside its table; the best method per split kind
+with its paired difference as evidence (:mod:`tzsl.reporting.best_method`). Results from simulated
 data (the hand study) carry a SIMULATED banner. Tables and figures the sections do not
 name follow under "Other results", so nothing in the folder is left out. A "Deviations
 from the paper" section is generated from the manifests (features, split rules, tuning,
@@ -34,6 +35,7 @@ import pandas as pd
 from tzsl._io import atomic_write
 from tzsl.exceptions import ConfigError, DataFileError
 from tzsl.evaluation import INTERVAL_DOC
+from tzsl.reporting.best_method import findings
 
 __all__ = ["REPORT_FILE", "SECTIONS", "Section", "collect_results", "render_report", "write_report"]
 
@@ -451,7 +453,8 @@ def render_report(folder: str | os.PathLike, title: str | None = None, exclude: 
             continue
         used.update(csv_by_stem[s] for s in stems)
         used.update(png_by_stem[s] for s in figure_stems)
-        sections.append({"key": section.key, "title": section.title, "what": section.what,
+        best = findings([csv_by_stem[s] for s in stems if s.endswith("method_comparison")])
+        sections.append({"key": section.key, "title": section.title, "what": section.what, "findings": best,
                          "blocks": _blocks(tables, stems, figure_stems, png_by_stem, root),
                          "simulated": _is_simulated_section(section, tables, manifests)})
     other_csv = [p for p in found["csv"] if p not in used]
@@ -488,10 +491,7 @@ def render_report(folder: str | os.PathLike, title: str | None = None, exclude: 
 def write_report(folder: str | os.PathLike, out: str | os.PathLike | None = None, force: bool = False) -> Path:
     """Write the report of ``folder`` to ``out`` (default ``folder/report.html``) atomically.
 
-    Raises
-    ------
-    ConfigError
-        ``out`` exists and ``force`` is false.
+    Raises ConfigError when ``out`` exists and ``force`` is false.
     """
     target = Path(out) if out is not None else Path(folder) / REPORT_FILE
     if target.exists() and not force:

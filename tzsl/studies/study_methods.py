@@ -62,7 +62,7 @@ COMPARISON_FILE = "method_comparison.csv"
 
 #: Columns of every study's method comparison (and of :data:`COMPARISON_FILE`).
 COMPARISON_COLUMNS = [
-    "study", "data", "method", "accuracy", "ci95_low", "ci95_high", "paper_accuracy", "chance", "fit_seconds",
+    "study", "data", "purpose", "method", "accuracy", "ci95_low", "ci95_high", "paper_accuracy", "chance", "fit_seconds",
     "share_at_grid_edge", "difference", "difference_ci95_low", "difference_ci95_high", "reference", "n_splits", "n_trials", "note",
     *CALIBRATION_COLUMNS,
 ]
@@ -193,7 +193,7 @@ def comparison_trials(method: str, split, classes: np.ndarray, correct: np.ndarr
 def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], chance: float, reference: str,
                    *, study: str, data: str = "real", paper: dict[str, float] | None = None,
                    notes: dict[str, str] | None = None,
-                   grid_edge: dict[str, list[float]] | None = None) -> pd.DataFrame:
+                   grid_edge: dict[str, list[float]] | None = None, purpose: str = "") -> pd.DataFrame:
     """One row per method: accuracy with its 95% interval, fit time, paired difference to ``reference``.
 
     Parameters
@@ -218,6 +218,9 @@ def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], ch
     grid_edge : dict, optional
         :func:`grid_edge_share` of every fit, per method; ``share_at_grid_edge`` is their mean
         (NaN: no grid search recorded).
+    purpose : str, optional
+        ``"select"`` or ``"confirm"``: what the splits are for (:data:`tzsl.evaluation.PURPOSES`);
+        empty for studies whose splits have no purpose.
 
     Returns
     -------
@@ -232,7 +235,7 @@ def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], ch
     for method, t in trials.groupby("method", sort=False):
         iv = bootstrap_accuracy(t["correct"].to_numpy(), classes=t["class"].to_numpy(), splits=t["split"].to_numpy())
         seconds = [s for s in fit_seconds.get(method, []) if s is not None]
-        rows.append({"study": study, "data": data, "method": method, "accuracy": iv.mean,
+        rows.append({"study": study, "data": data, "purpose": purpose, "method": method, "accuracy": iv.mean,
                      "ci95_low": iv.ci95_low, "ci95_high": iv.ci95_high, "paper_accuracy": paper.get(method, np.nan),
                      "chance": chance, "fit_seconds": float(np.mean(seconds)) if seconds else np.nan,
                      "share_at_grid_edge": _mean_or_nan(grid_edge.get(method, [])),

@@ -38,7 +38,7 @@ def dap_config(exp: Experiment):
 
     c = exp.config
     return DapStudyConfig(
-        n_splits=c.splits.n_splits, n_test=c.splits.n_test, seed=c.splits.seed,
+        n_splits=c.splits.n_splits, n_test=c.splits.n_test, seed=c.splits.seed, purpose=c.splits.purpose,
         random_min_train_positives=c.splits.random_min_train_positives,
         challenging_min_train_positives=c.splits.challenging_min_train_positives,
         min_train_negatives=c.splits.min_train_negatives,

@@ -318,15 +318,15 @@ def gzsl_split(features: FeatureSet, split: Split, config: DapStudyConfig, gzsl:
 
     Seeds: the attribute classifiers use the same seed as split ``index`` of the classic study
     (:func:`tzsl.studies.zero_shot.study.fit_split`); the held-out trials and the pseudo-unseen
-    draw use ``SeedSequence([config.seed, index, 1])`` and ``[..., 2]``.
+    draw use ``SeedSequence([config.study_seed, index, 1])`` and ``[..., 2]``.
     """
-    seed = int(np.random.SeedSequence([config.seed, index]).generate_state(1)[0])
+    seed = int(np.random.SeedSequence([config.study_seed, index]).generate_state(1)[0])
     problem = gzsl_problem(features, split, gzsl.holdout_fraction,
-                           np.random.default_rng(np.random.SeedSequence([config.seed, index, 1])))
+                           np.random.default_rng(np.random.SeedSequence([config.study_seed, index, 1])))
     pseudo, relaxed = None, ""
     if gzsl.calibrated_stacking:
         pseudo, relaxed = _pseudo_problem(features, problem, config.random_min_train_positives, gzsl.max_draws,
-                                          np.random.default_rng(np.random.SeedSequence([config.seed, index, 2])))
+                                          np.random.default_rng(np.random.SeedSequence([config.study_seed, index, 2])))
     y = problem.trial_class[problem.evaluate]
     seen_classes = np.flatnonzero(problem.seen)
     unseen_classes = np.flatnonzero(~problem.seen)

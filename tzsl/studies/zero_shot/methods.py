@@ -111,7 +111,8 @@ def _is_builtin(spec: dict) -> bool:
 
 def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed: int = 0,
                       methods: tuple[dict, ...] | list[dict] = DEFAULT_METHODS,
-                      labels: StudyLabels | None = None, n_jobs: int = 1) -> dict[str, pd.DataFrame]:
+                      labels: StudyLabels | None = None, purpose: str = "",
+                      n_jobs: int = 1) -> dict[str, pd.DataFrame]:
     """Registry methods and AVGDAP on the same PHAC-2 splits (trial accuracy).
 
     Each method entry ``{"name": ..., **parameters}`` is built from the registry; a method
@@ -119,14 +120,16 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
     into one training class by the methods that merge duplicates (ESZSL, the embedding model).
 
     ``labels`` (:func:`~tzsl.studies.study_labels.study_labels`; default: a generic run on
-    real data) name the tables and say whether the paper's numbers and notes go beside.
-    ``n_jobs``: the (split, method) fits run in that many joblib workers.
+    real data) name the tables and say whether the paper's numbers and notes go beside;
+    ``purpose`` (``"select"`` / ``"confirm"``, :data:`tzsl.evaluation.PURPOSES`) fills the
+    ``purpose`` column of both tables; ``n_jobs``: the (split, method) fits run in that many
+    joblib workers.
 
     Returns
     -------
     dict of DataFrame
         ``labels.methods_table`` (``"phac2_methods"`` for the paper preset): one row per split
-        (dap_avg_uni and one column per method label, e.g. ``eszsl``, ``embedding_lam_0.1``; NaN where that fit failed, the reason in the
+        (purpose, dap_avg_uni and one column per method label, e.g. ``eszsl``, ``embedding_lam_0.1``; NaN where that fit failed, the reason in the
         ``error`` column), then mean and std rows;
         ``labels.comparison_table``: :func:`~tzsl.studies.study_methods.method_summary`
         with ``dap-avg`` as the reference (with ECE and Brier score, calibrated and not);
@@ -141,7 +144,7 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
     for i, r in enumerate(results):
         label = split_label(r.split)
         objects = np.asarray(r.split.test_objects)[r.y]
-        row = {"split": label, "chance": r.split.chance, "dap_avg_uni": r.accuracy("avg", "uni")}
+        row = {"split": label, "purpose": purpose, "chance": r.split.chance, "dap_avg_uni": r.accuracy("avg", "uni")}
         from_posteriors = [(REFERENCE_METHOD, r.predict("avg", "uni")), ("dap-max", r.predict("max", "uni"))]
         if r.P_multilabel is not None:
             from_posteriors.append(("multilabel-dap", r.predict("avg", "uni", multilabel=True)))
@@ -172,13 +175,14 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
             edges.setdefault(name, []).append(grid_edge_share(fit.model))
         rows.append({**row, ERROR_COLUMN: "; ".join(errors)})
     per_split = summarise_over_splits(pd.DataFrame(rows)).reset_index()
+    per_split["purpose"] = purpose  # the mean and std rows are over the same splits
     chance = float(np.mean([r.split.chance for r in results]))
     labels = labels or StudyLabels()
     notes = PAPER_NOTES if labels.paper else GENERIC_NOTES
     trials = pd.concat(trials, ignore_index=True)
     summary = method_summary(trials, seconds, chance, REFERENCE_METHOD,
                              study=labels.study, data=labels.data, paper=PAPER if labels.paper else None,
-                             notes=notes, grid_edge=edges)
+                             notes=notes, grid_edge=edges, purpose=purpose)
     if not labels.paper:  # paper_* headers only beside the paper's dataset and protocol
         summary = summary.drop(columns="paper_accuracy")
     return {labels.methods_table: per_split, labels.comparison_table: summary,

@@ -92,7 +92,7 @@ def _random_draw(A, n_test: int, splits, negatives: int):
     try:
         drawn = random_object_splits(A, n_test=n_test, n_splits=splits.n_splits, random_state=splits.seed,
                                      min_train_positives=splits.random_min_train_positives,
-                                     min_train_negatives=negatives)
+                                     min_train_negatives=negatives, purpose=splits.purpose)
     except SplitError:
         return None
     return drawn if _trainable(A, drawn, MIN_CV_CLASSES) else None

@@ -182,7 +182,8 @@ def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], Non
         if name in tables:
             say(f"\n{title}\n{format_table(tables[name].drop(columns=drop.get(f'{name}.csv', []), errors='ignore'))}")
     shown = {name: t.drop(columns=drop.get(f"{name}.csv", []), errors="ignore") for name, t in tables.items()}
-    record = {"study_kind": study, "phac2_dap": record_config(config), "kinds": list(kinds),
+    record = {"study_kind": study, "purpose": c.splits.purpose, "phac2_dap": record_config(config),
+              "kinds": list(kinds),
               "splits_file": None if split_file is None else str(split_file),
               "method_options": options, "labels": {"study": labels.study, "data": labels.data,
                                                     "paper": labels.paper, "note": labels.note},

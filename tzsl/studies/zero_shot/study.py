@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets import FeatureSet
-from tzsl.evaluation import Split, challenging_splits, random_object_splits
+from tzsl.evaluation import Split, challenging_splits, purpose_seed, random_object_splits
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.studies._failures import ERROR_COLUMN, attempt
 from tzsl.studies.config import DaskCompute, Phac2Methods, Phac2Splits, Phac2Svm
@@ -95,8 +95,9 @@ class DapStudyConfig:
     ----------
     n_splits, n_test : int
         Random splits and test objects per random split (paper: 5 and 10).
-    seed : int
-        Seeds the split draws, the under-sampling draws and the sweep's subsets.
+    seed, purpose : int and {"select", "confirm"}
+        Seed the split draws, the under-sampling draws and the sweep's subsets (:attr:`study_seed`);
+        random splits come from ``purpose``'s test sets only (:data:`tzsl.evaluation.PURPOSES`).
     random_min_train_positives : int
         Random splits leave out an attribute with fewer positive training objects. 2 is the
         least object-grouped cross-validation can work with; the paper states no rule.
@@ -133,6 +134,7 @@ class DapStudyConfig:
     n_splits: int = _SPLITS.n_splits
     n_test: int = _SPLITS.n_test
     seed: int = _SPLITS.seed
+    purpose: str = _SPLITS.purpose
     random_min_train_positives: int = _SPLITS.random_min_train_positives
     challenging_min_train_positives: int = _SPLITS.challenging_min_train_positives
     min_train_negatives: int = _SPLITS.min_train_negatives
@@ -148,6 +150,11 @@ class DapStudyConfig:
     scheduler: str | None = _COMPUTE.scheduler
     progress: bool = _COMPUTE.progress
     cache: bool = _COMPUTE.cache
+
+    @property
+    def study_seed(self) -> int:
+        """The seed of every fit and draw after the splits: ``seed`` and ``purpose`` together."""
+        return purpose_seed(self.seed, self.purpose)
 
 
 @dataclass
@@ -227,6 +234,7 @@ def make_splits(features: FeatureSet, kind: str, config: DapStudyConfig) -> tupl
         splits = random_object_splits(
             features.attributes, n_test=config.n_test, n_splits=config.n_splits, random_state=config.seed,
             min_train_positives=config.random_min_train_positives, min_train_negatives=config.min_train_negatives,
+            purpose=config.purpose,
         )
         return splits, None
     if kind == "challenging":
@@ -279,7 +287,7 @@ def fit_split(features: FeatureSet, split: Split, config: DapStudyConfig, index:
     train, test = split_masks(features, split)
     A = features.attributes.loc[features.objects, list(attributes)].to_numpy(dtype=int)
     groups = features.objects
-    seed = int(np.random.SeedSequence([config.seed, index]).generate_state(1)[0])
+    seed = int(np.random.SeedSequence([config.study_seed, index]).generate_state(1)[0])
     bank = attribute_bank(config, attributes, seed)
     start = time.perf_counter()
     bank.fit(features.X[train], A[train], groups[train])
@@ -446,11 +454,12 @@ def run_dap_study(
             out.write_figure("attribute_accuracy.png", attribute_accuracy_figure(tables["attribute_accuracy"]))
             if sweep:
                 tables["attribute_sweep"] = attribute_sweep(
-                    random_results, config.sweep_min_attributes, config.sweep_max_subsets, seed=config.seed)
+                    random_results, config.sweep_min_attributes, config.sweep_max_subsets, seed=config.study_seed)
                 out.write_figure("attribute_sweep.png", attribute_sweep_figure(tables["attribute_sweep"]))
             if compare_methods:
-                tables.update(method_comparison(features, random_results, seed=config.seed, labels=labels,
-                                                n_jobs=config.n_jobs, **(method_options or {})))
+                tables.update(method_comparison(features, random_results, seed=config.study_seed, labels=labels,
+                                                purpose=config.purpose, n_jobs=config.n_jobs,
+                                                **(method_options or {})))
                 write_reliability_figure(out, tables, labels.reliability_table, labels.comparison_table)
         used = [r.split for r in random_results]
         if splits is None and "challenging" in kinds:

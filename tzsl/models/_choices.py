@@ -1,0 +1,180 @@
+"""Every choice a user inherits, with the splits it was chosen on (issue 23).
+
+A default method, an ensemble's members, a grid, a solver's settings: each was chosen once, by
+someone, on some data. :data:`INHERITED_CHOICES` lists them, one :class:`InheritedChoice` each:
+what it is, its value (read from the code at call time, never typed here), the splits it was
+chosen on, where the numbers shown for it come from, and the command that makes the choice
+again. A choice made on no recorded splits says so. The documentation's page of inherited
+choices is generated from this list (``docs/_ext/tzsl_docgen.py``), so the two cannot drift.
+
+The protocol: a choice is made on *selection* splits and its numbers come from *confirmation*
+splits (``[splits] purpose``, :func:`tzsl.evaluation.split_purpose`); choices made before that
+protocol existed name the splits they were made on and say that they are not yet confirmed.
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from tzsl.models._attribute_svm import AttributeSVM
+from tzsl.models._attribute_training import AUTO_MAX_EXACT_TRIALS
+from tzsl.models._compatibility import ALE, SJE, DeViSE
+from tzsl.models._eszsl import ESZSLCV
+from tzsl.models._registry import get_method
+from tzsl.models._sae import SAECV
+from tzsl.models._scalable_attribute import ScalableAttributeClassifier
+from tzsl.models._score_ensemble import DEFAULT_MEMBERS
+
+__all__ = ["INHERITED_CHOICES", "NO_SELECTION_SPLITS", "InheritedChoice", "inherited_choices"]
+
+#: The selection entry of a choice made on no recorded splits.
+NO_SELECTION_SPLITS = "none recorded"
+
+#: The benchmark that makes the method choice on selection splits and reports it on confirmation splits.
+BEST_METHOD_COMMAND = "python experiments/benchmarks/phac2_best_method.py --out phac2_best_method.csv"
+#: The two-stage accuracy benchmark (DAP posteriors for both gamma grids, then the candidates).
+ACCURACY_COMMAND = ("python experiments/benchmarks/phac2_posteriors.py --out DIR && "
+                    "python experiments/benchmarks/phac2_accuracy.py --cache DIR --out DIR/accuracy.csv")
+
+
+@dataclass(frozen=True)
+class InheritedChoice:
+    """One choice a user inherits.
+
+    Attributes
+    ----------
+    key : str
+        Short unique name (``ensemble-members``).
+    what : str
+        What is chosen, and where it lives in the code.
+    read : callable
+        Returns the value as the code ships it (``read()``; :attr:`value` is its ``repr``).
+    selection : str
+        The splits it was chosen on (data, kind, number, seed, purpose), or
+        :data:`NO_SELECTION_SPLITS` and why.
+    numbers : str
+        Where the numbers shown for it come from (confirmation splits), or that there are none yet.
+    command : str
+        The command that makes the choice again (empty when no command makes it).
+    """
+
+    key: str
+    what: str
+    read: Callable[[], object]
+    selection: str
+    numbers: str
+    command: str = ""
+
+    @property
+    def value(self) -> str:
+        """The shipped value, read from the code now."""
+        return repr(self.read())
+
+    def record(self) -> dict[str, str]:
+        """The choice as a JSON-friendly dict (``value`` read now)."""
+        return {"key": self.key, "what": self.what, "value": self.value, "selection": self.selection,
+                "numbers": self.numbers, "command": self.command}
+
+
+def _default(estimator, *names: str) -> Callable[[], object]:
+    """A reader of ``estimator``'s constructor defaults ``names`` (one value, or a dict of several)."""
+    def read():
+        params = inspect.signature(estimator).parameters
+        values = {name: params[name].default for name in names}
+        return values[names[0]] if len(names) == 1 else values
+    return read
+
+
+_NOT_CONFIRMED = ("not yet confirmed on confirmation splits by a shipped benchmark; "
+                  f"`{BEST_METHOD_COMMAND}` reports it beside dap-avg on confirmation splits")
+_PRE_PROTOCOL = "before selection/confirmation purposes existed, so these splits had no purpose"
+
+#: Every choice a user inherits, in the order a user meets them.
+INHERITED_CHOICES: tuple[InheritedChoice, ...] = (
+    InheritedChoice(
+        "default-method",
+        "the method of `tzsl train-attributes` without --method, and the reference of every comparison: "
+        "registry method `dap-avg` (AVGDAP over sensors) with these fixed settings",
+        lambda: dict(get_method("dap-avg").preset),
+        "none: the DAP paper's method (Abderrahmane et al. 2018), kept as the reference; the uniform prior was "
+        "reasoned from the balanced Platt posteriors and checked on a Platt ablation whose splits were not "
+        "recorded",
+        "the `dap-avg` row of every method_comparison.csv (the run's own splits and purpose)",
+        BEST_METHOD_COMMAND + " (the default changes only if a method beats dap-avg on confirmation splits "
+                              "with an interval excluding 0)"),
+    InheritedChoice(
+        "ensemble-members",
+        "members of the registered `ensemble` (tzsl.models.ScoreEnsembleZSL, DEFAULT_MEMBERS)",
+        lambda: DEFAULT_MEMBERS,
+        "PHAC-2 (Penn features), the accuracy benchmark's 20 random splits of seed 0 and the 5 challenging "
+        "splits, " + _PRE_PROTOCOL + "; the same splits gave the numbers first published for it",
+        _NOT_CONFIRMED,
+        ACCURACY_COMMAND),
+    InheritedChoice(
+        "attribute-svm-grid",
+        "the gamma grid of tzsl.models.AttributeSVM (`grid`; the paper-reproduction studies pin 'paper')",
+        _default(AttributeSVM, "grid", "gamma_range", "n_gamma", "C_range", "n_C"),
+        "`grid`: PHAC-2, the accuracy benchmark's 20 random splits of seed 0 and the 5 challenging splits, "
+        + _PRE_PROTOCOL + ", by where the chosen gammas fell (training-object CV only, not test accuracy); the "
+        "ranges and sizes are the DAP paper's",
+        "grid_summary.csv and accuracy.csv of the accuracy benchmark (the same splits, not confirmation splits)",
+        ACCURACY_COMMAND),
+    InheritedChoice(
+        "attribute-svm-protocol",
+        "tuning protocol of tzsl.models.AttributeSVM: criterion, balanced draws, Platt weighting",
+        _default(AttributeSVM, "scoring", "n_draws", "undersampling", "platt_weighting"),
+        NO_SELECTION_SPLITS + ": reasoned (a proper scoring rule for posteriors; balanced posteriors pair with "
+                              "DAP's uniform prior), no selection splits recorded",
+        "none on confirmation splits",
+        ""),
+    InheritedChoice(
+        "approximate-solver",
+        "settings of the approximate attribute model (tzsl.models.AttributeClassifierBank solver='approximate': "
+        "tzsl.models.ScalableAttributeClassifier with the exact model's grid, folds and draws) and its own defaults",
+        _default(ScalableAttributeClassifier, "n_components", "max_tune_trials"),
+        "sharing the exact model's grid: PHAC-2, 5 random splits of seed 0 (AVGDAP), " + _PRE_PROTOCOL + ", "
+        "partly on TEST accuracy and partly on training-object CV log-loss; n_components and max_tune_trials: "
+        + NO_SELECTION_SPLITS + " for accuracy (chosen for cost on SIMULATED data, make bench-scale)",
+        "none on confirmation splits",
+        "make bench-scale (cost only)"),
+    InheritedChoice(
+        "auto-solver-threshold",
+        "largest training set that solver='auto' fits exactly (tzsl.models.AUTO_MAX_EXACT_TRIALS)",
+        lambda: AUTO_MAX_EXACT_TRIALS,
+        NO_SELECTION_SPLITS + ": chosen for cost (the exact model's time against trials, SIMULATED data), not "
+                              "accuracy",
+        "the cost table of make bench-scale",
+        "make bench-scale"),
+    InheritedChoice(
+        "eszsl-grid",
+        "ridge grids of tzsl.models.ESZSLCV (registry `eszsl`) and the adaptive extension at a selected edge",
+        _default(ESZSLCV, "gammas", "lams", "grid_extensions", "scoring"),
+        "the base grid: that of public ESZSL code, no tactile selection splits; the adaptive extension: PHAC-2, "
+        "the public-ESZSL benchmark's selection splits (20 random splits of seed 0, drawn then without a "
+        "purpose; its confirmation splits were those of seed 1000)",
+        "the same benchmark's confirmation splits (now purpose confirm: disjoint from its selection splits)",
+        "python experiments/benchmarks/phac2_eszsl_public.py --out eszsl_public.csv"),
+    InheritedChoice(
+        "sae-grid",
+        "ridge grid of tzsl.models.SAECV (registry `sae`) and the adaptive extension (the rule ESZSL's grid uses)",
+        _default(SAECV, "lams", "grid_extensions", "n_splits"),
+        NO_SELECTION_SPLITS + ": the grid's values have no recorded selection splits; the extension rule was "
+                              "adopted from ESZSL's without selection splits of its own",
+        "none on confirmation splits",
+        ""),
+    InheritedChoice(
+        "compatibility-sgd",
+        "SGD settings shared by tzsl.models.ALE, SJE and DeViSE (registry `ale`, `sje`, `devise`)",
+        lambda: {cls.__name__: _default(cls, "learning_rate", "n_epochs", "batch_size", "alpha")()
+                 for cls in (ALE, SJE, DeViSE)},
+        NO_SELECTION_SPLITS + ": not tuned on tactile splits",
+        "their rows of method_comparison.csv (the run's own splits and purpose)",
+        BEST_METHOD_COMMAND),
+)
+
+
+def inherited_choices() -> list[dict[str, str]]:
+    """Every inherited choice as a dict (:meth:`InheritedChoice.record`), values read now."""
+    return [choice.record() for choice in INHERITED_CHOICES]
