@@ -166,7 +166,7 @@ def results_folder(exp: Experiment, force: bool) -> ResultsDir:
     folder = Path(exp.config.output.folder)
     if exp.study in ZERO_SHOT_STUDIES:
         results: ResultsDir = study_runners.SelectedColumns(
-            folder, force, study_runners.dropped_columns(exp.config.methods), staging=True)
+            folder, force, study_runners.dropped_columns(exp.config.methods, exp.config.output.prefix), staging=True)
         results.check_free(study_runners.phac2_outputs(exp.config))
     else:
         results = ResultsDir(folder, force=force, staging=True)

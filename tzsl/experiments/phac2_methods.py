@@ -38,7 +38,7 @@ from tzsl.experiments.study_calibration import dap_split_posteriors, posterior_c
 if TYPE_CHECKING:
     from tzsl.experiments.phac2_dap import SplitPosteriors
 
-__all__ = ["COMPARISON_TABLE", "DEFAULT_METHODS", "REFERENCE_METHOD", "STUDY", "method_comparison"]
+__all__ = ["COMPARISON_TABLE", "DEFAULT_METHODS", "REFERENCE_METHOD", "STUDY", "fit_predict_split", "method_comparison"]
 
 #: Methods compared when none are given: ESZSL and the embedding model at lambda 0.1 and 1.
 DEFAULT_METHODS: tuple[dict, ...] = ({"name": "eszsl"}, {"name": "embedding", "lam": 0.1},
@@ -59,8 +59,15 @@ GENERIC_NOTES = {"dap-avg": "reference (AVGDAP, uniform prior)", "dap-max": "sam
                  "multilabel-dap": "classifier chain"}
 
 
-def _fit_predict_split(spec: dict, features: FeatureSet, split: Split, seed: int):
-    """Fit on the split's training objects; (fit, true test rows)."""
+def fit_predict_split(spec: dict, features: FeatureSet, split: Split, seed: int):
+    """Fit the method entry ``spec`` on the split's training objects, seeded with ``seed`` where it is random.
+
+    Returns
+    -------
+    fit : tzsl.experiments.study_methods.MethodFit
+    y : ndarray of shape (n_test_trials,)
+        Row of ``split.test_objects`` of each test trial (the truth of ``fit.predicted``).
+    """
     attributes = list(split.kept_attributes)
     train, test = split_masks(features, split)
     objects = features.objects
@@ -80,12 +87,13 @@ def _dap_posteriors(features: FeatureSet, r: SplitPosteriors, seed: int) -> dict
 
 def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed: int = 0,
                       methods: tuple[dict, ...] | list[dict] = DEFAULT_METHODS,
-                      labels: StudyLabels | None = None) -> dict[str, pd.DataFrame]:
+                      labels: StudyLabels | None = None, split_kind: str = "random") -> dict[str, pd.DataFrame]:
     """Registry methods and AVGDAP on the same PHAC-2 splits (trial accuracy).
 
     Each method entry ``{"name": ..., **parameters}`` is built from the registry; a method
     taking a seed gets ``seed + i`` on split ``i``. Objects sharing an attribute row are merged
     into one training class by the methods that merge duplicates (ESZSL, the embedding model).
+    ``split_kind`` (``random``, ``challenging``) labels every row of the three tables.
 
     ``labels`` (:func:`~tzsl.experiments.study_labels.study_labels`; default: a generic run on
     real data) name the tables and say whether the paper's numbers and notes go beside.
@@ -125,7 +133,7 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
             edges.setdefault(name, []).append(grid_edge_share(r.model))
         for spec in methods:
             name = method_label(spec)
-            done, error = attempt(_fit_predict_split, spec, features, r.split, seed + i)
+            done, error = attempt(fit_predict_split, spec, features, r.split, seed + i)
             if done is None:  # NaN for this (split, method), reported at the end of the run
                 row[name] = np.nan
                 errors.append(f"{name}: {error}")
@@ -139,14 +147,16 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
             edges.setdefault(name, []).append(grid_edge_share(fit.model))
         rows.append({**row, ERROR_COLUMN: "; ".join(errors)})
     per_split = summarise_over_splits(pd.DataFrame(rows)).reset_index()
+    per_split.insert(1, "split_kind", split_kind)
     chance = float(np.mean([r.split.chance for r in results]))
     labels = labels or StudyLabels()
     notes = PAPER_NOTES if labels.paper else GENERIC_NOTES
     trials = pd.concat(trials, ignore_index=True)
     summary = method_summary(trials, seconds, chance, REFERENCE_METHOD,
                              study=labels.study, data=labels.data, paper=PAPER if labels.paper else None,
-                             notes=notes, grid_edge=edges)
+                             notes=notes, grid_edge=edges, split_kind=split_kind)
     if not labels.paper:  # paper_* headers only beside the paper's dataset and protocol
         summary = summary.drop(columns="paper_accuracy")
-    return {labels.methods_table: per_split, labels.comparison_table: summary,
-            labels.reliability_table: reliability_by_method(trials, labels.study)}
+    reliability = reliability_by_method(trials, labels.study)
+    reliability.insert(1, "split_kind", split_kind)
+    return {labels.methods_table: per_split, labels.comparison_table: summary, labels.reliability_table: reliability}
