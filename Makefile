@@ -47,6 +47,12 @@ data: install
 reproduce-tables: install
 	$(BIN)/tzsl reproduce-tables --out $(RESULTS) --n-jobs $(N_JOBS) --force
 
+# Headlines on many splits (issue 23): the built-in phac2-headlines (50 random and every challenging PHAC-2
+# split, the method comparison on both, seed refits) into $(RESULTS)/headlines, where `make numbers` finds
+# it. Tens of minutes cold on two cores (docs/user_guide/reproducing.md); the fit store makes reruns quick.
+headlines: install
+	$(BIN)/tzsl run phac2-headlines --out $(RESULTS)/headlines --n-jobs $(N_JOBS) --force
+
 # Every published number is generated between markers from the CSVs of the shipped code, never
 # typed (tzsl.experiments.readme_results): each target file = the results folder its blocks read.
 NUMBERS := README.md=$(RESULTS) experiments/benchmarks/README.md=$(BENCH_RESULTS)
