@@ -15,7 +15,7 @@ BENCH_RESULTS ?= /tmp/tzsl_accuracy
 SEARCH_RESULTS ?= /tmp/tzsl_search
 N_JOBS ?= 2
 
-.PHONY: install browser test reproduce-tables readme-results numbers numbers-check docs bench bench-fit bench-scale data clean
+.PHONY: install browser test test-wide headlines reproduce-tables readme-results numbers numbers-check docs bench bench-fit bench-scale data clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -36,12 +36,24 @@ browser:
 test: install browser
 	$(BIN)/pytest -q
 
+# The zero-shot property test over issue 20's full range (8-100 classes, 3-40 attributes, 1-3 sensors,
+# merged rows; the 100 x 40 x 3 corner always): opt-in, it takes many minutes on two cores.
+test-wide: install
+	TZSL_WIDE_PROPERTY_TEST=1 $(BIN)/pytest -q -p no:cacheprovider tests/studies/test_zero_shot_study.py \
+	  -k full_range
+
 # The papers' data into the data home (or TZSL_DATA_DIR), downloaded and checked against the registry.
 data: install
 	$(BIN)/tzsl data fetch
 
 reproduce-tables: install
 	$(BIN)/tzsl reproduce-tables --out $(RESULTS) --n-jobs $(N_JOBS) --force
+
+# Headlines on many splits (issue 23): the built-in phac2-headlines (50 random and every challenging PHAC-2
+# split, the method comparison on both, seed refits) into $(RESULTS)/headlines, where `make numbers` finds
+# it. Tens of minutes cold on two cores (docs/user_guide/reproducing.md); the fit store makes reruns quick.
+headlines: install
+	$(BIN)/tzsl run phac2-headlines --out $(RESULTS)/headlines --n-jobs $(N_JOBS) --force
 
 # Every published number is generated between markers from the CSVs of the shipped code, never
 # typed (tzsl.reporting.readme_results): each target file = the results folder its blocks read.

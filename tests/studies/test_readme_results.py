@@ -206,3 +206,46 @@ def test_search_benchmark_block_reads_every_summary(tmp_path):
     assert "| paper | 0 | 10 | 0.300 [0.200, 0.400] | 0.290 [0.200, 0.390] | -0.010 [-0.020, +0.010] | yes | 50% |" in block
     assert "| paper | 1 | 10 |" in block and "-0.020 [-0.040, -0.001] | no |" in block
     assert "| 47.5 | 28.9 | 1.64 |" in block
+def test_headlines_come_from_the_run_with_the_most_random_splits(tmp_path):
+    """The headline block: the fusion x prior table with the most random splits and its comparison (same prefix)."""
+    root = _results(tmp_path / "results")
+
+    def variants(n_random: int, accuracy: float) -> pd.DataFrame:
+        return pd.DataFrame({
+            "study": "phac2", "data": "real", "split_kind": ["random", "random", "challenging"],
+            "method": ["dap-avg", "dap-max", "dap-avg"], "fusion": ["avg", "max", "avg"], "prior": "uni",
+            "accuracy": [accuracy, accuracy + 0.01, 0.2], "ci95_low": [0.25, 0.26, 0.1], "ci95_high": [0.35, 0.36, 0.3],
+            "chance": 0.1, "fit_seconds": 1.0, "difference": [None, 0.01, None],
+            "difference_ci95_low": [None, -0.005, None], "difference_ci95_high": [None, 0.025, None],
+            "reference": "dap-avg", "n_splits": [n_random, n_random, 5], "n_trials": 100,
+            "sd_over_splits": [0.08, 0.081, 0.05], "sd_over_refit_seeds": [0.04, 0.041, 0.03], "note": ""})
+
+    variants(5, 0.31).to_csv(root / "dap_fusion_prior.csv", index=False)
+    variants(50, 0.3).to_csv(root / "headlines_dap_fusion_prior.csv", index=False)
+    pd.DataFrame({"study": "phac2-headlines", "data": "real", "split_kind": ["random", "random", "challenging"],
+                  "method": ["dap-avg", "sae", "sae"], "accuracy": [0.3, 0.37, None], "ci95_low": [0.25, 0.3, None],
+                  "ci95_high": [0.35, 0.44, None], "difference": [None, 0.07, None],
+                  "difference_ci95_low": [None, 0.02, None], "difference_ci95_high": [None, 0.12, None],
+                  "n_splits": [50, 50, 5], "sd_over_splits": [0.08, 0.09, None],
+                  "sd_over_refit_seeds": [0.04, 0.0, None]}).to_csv(
+        root / "headlines_phac2_method_comparison.csv", index=False)
+    block = results_block(root)
+    assert "`headlines_dap_fusion_prior.csv`, `headlines_phac2_method_comparison.csv`" in block
+    assert "| random (50) | `dap-avg` | 0.300 [0.250, 0.350] | reference | 0.080 / 0.040 |" in block
+    assert "| random (50) | `dap-max` | 0.310 [0.260, 0.360] | +0.010 [-0.005, +0.025] | 0.081 / 0.041 |" in block
+    assert "| challenging (5) | `dap-avg` | 0.200 [0.100, 0.300] | reference | 0.050 / 0.030 |" in block
+    assert "| random (50) | `sae` | 0.370 [0.300, 0.440] | +0.070 [+0.020, +0.120] | 0.090 / 0.000 |" in block
+    assert "random (5)" not in block and "challenging (5) | `sae`" not in block  # the 5-split run; a failed row
+
+
+def test_comparison_columns_are_study_and_split_kind(tmp_path):
+    root = _results(tmp_path / "results")
+    pd.DataFrame({"study": ["phac2", "phac2-headlines", "phac2-headlines"], "data": "real",
+                  "split_kind": ["random", "random", "challenging"], "method": "dap-avg",
+                  "accuracy": [0.31, 0.3, 0.2], "ci95_low": [0.2, 0.25, 0.1], "ci95_high": [0.4, 0.35, 0.3],
+                  "chance": [0.1, 0.1, 0.105], "reference": "dap-avg"}).to_csv(root / "method_comparison.csv",
+                                                                              index=False)
+    block = results_block(root)
+    assert ("| method | phac2, random splits, ref. dap-avg, chance 0.10 | phac2-headlines, random splits, ref. dap-avg, "
+            "chance 0.10 | phac2-headlines, challenging splits, ref. dap-avg, chance 0.10 |") in block
+    assert "| `dap-avg` | 0.31 (0.20-0.40) | 0.30 (0.25-0.35) | 0.20 (0.10-0.30) |" in block

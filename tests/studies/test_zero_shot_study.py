@@ -7,6 +7,7 @@ the rows): they exercise the study, they measure nothing.
 from __future__ import annotations
 
 import json
+import os
 import re
 import warnings
 from pathlib import Path
@@ -15,7 +16,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from click.testing import CliRunner
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from tzsl.cli import cli
@@ -53,9 +54,13 @@ def template_for(folder: Path, dataset: Path, out: Path) -> Path:
     return path
 
 
-#: Largest tables the property test draws (CI budget; see the test's docstring).
+#: Largest tables the default property test draws (CI budget; see the test's docstring).
 MAX_CLASSES = 24
 MAX_ATTRIBUTES = 10
+#: The issue's full range, drawn by the wide variant (opt-in: ``TZSL_WIDE_PROPERTY_TEST=1``).
+FULL_MAX_CLASSES = 100
+FULL_MAX_ATTRIBUTES = 40
+WIDE_ENV = "TZSL_WIDE_PROPERTY_TEST"
 
 
 def _run(*args):
@@ -87,6 +92,27 @@ def test_the_template_runs_any_small_dataset_to_the_end(tmp_path_factory, n_clas
     template's full study (every method, attribute SVMs per attribute and sensor, GZSL) takes
     minutes per run on larger tables, more than the CI budget allows for three examples.
     """
+    _check_template_run(tmp_path_factory, n_classes, n_attributes, n_sensors, merged, seed)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not os.environ.get(WIDE_ENV), reason=f"minutes per example; set {WIDE_ENV}=1")
+@settings(max_examples=2, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(n_classes=st.integers(8, FULL_MAX_CLASSES), n_attributes=st.integers(3, FULL_MAX_ATTRIBUTES),
+       n_sensors=st.integers(1, 3), merged=st.integers(0, 3), seed=st.integers(0, 2**16))
+@example(n_classes=FULL_MAX_CLASSES, n_attributes=FULL_MAX_ATTRIBUTES, n_sensors=3, merged=3, seed=1)
+def test_the_template_runs_datasets_of_the_full_range(tmp_path_factory, n_classes, n_attributes, n_sensors,
+                                                      merged, seed):
+    """The issue's full range (8-100 classes, 3-40 attributes, 1-3 sensors, merged rows), the top
+    corner always: the same checks as the default test. One run at 100 x 40 x 3 takes many minutes
+    on two cores, so this variant is opt-in (``TZSL_WIDE_PROPERTY_TEST=1``)."""
+    _check_template_run(tmp_path_factory, n_classes, n_attributes, n_sensors, merged, seed)
+
+
+def _check_template_run(tmp_path_factory, n_classes: int, n_attributes: int, n_sensors: int, merged: int,
+                        seed: int) -> None:
+    """Run the template (paths changed only) on a simulated dataset and check the outcome."""
     root = tmp_path_factory.mktemp("sim")
     dataset = simulated_dataset(root / "data", n_classes, n_attributes, n_sensors, seed=seed)
     classes = pd.read_csv(dataset / "classes.csv", index_col=0)

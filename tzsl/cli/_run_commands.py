@@ -48,7 +48,7 @@ def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, dat
         print_config: bool, profile: bool) -> None:
     """Run a study: an experiment file (TOML) or a built-in study by NAME.
 
-    Built-in studies: phac2-dap, phac2-gzsl, fabric, fabric-deep, hand-simulated (the files
+    Built-in studies: phac2-dap, phac2-gzsl, phac2-headlines, fabric, fabric-deep, hand-simulated (the files
     in tzsl/studies/builtin/; print one with 'tzsl run NAME --print-config'). Every
     unknown key, wrong type or bad value is reported as FILE: key.path: reason. Options
     override the file's settings. See experiments/README.md.

@@ -34,7 +34,8 @@ import pandas as pd
 from tzsl.exceptions import ConfigError
 
 __all__ = ["BEGIN", "BEST_METHOD_FILE", "BLOCKS", "END", "begin", "benchmark_accuracy_block", "best_method_block",
-           "block_spans", "comparison_lines", "end", "main", "results_block", "search_benchmark_block", "update_file"]
+           "block_spans", "comparison_lines", "end", "headline_lines", "main", "results_block", "search_benchmark_block",
+           "update_file"]
 
 
 _MARKER = re.compile(r"<!-- results:(begin|end) ([\w-]+)[^>]*-->")
@@ -168,20 +169,71 @@ def comparison_lines(root: Path) -> list[str]:
     table = _find(root, "method_comparison.csv")
     if table is None or table.empty:
         return []
-    studies = list(dict.fromkeys(table["study"]))
+    kinds = table["split_kind"].fillna("").astype(str) if "split_kind" in table.columns else pd.Series("", table.index)
+    table = table.assign(column=[(s, k) for s, k in zip(table["study"], kinds)])
+    studies = list(dict.fromkeys(table["column"]))
     heads = []
-    for study in studies:
-        sub = table[table["study"] == study]
+    for study, kind in studies:
+        sub = table[table["column"] == (study, kind)]
         chance = sub["chance"].dropna() if "chance" in sub.columns else pd.Series(dtype=float)
-        label = (f"{study}{' (SIMULATED)' if (sub['data'] == 'simulated').any() else ''}, ref. {sub['reference'].iloc[0]}"
+        named = f"{study}, {kind} splits" if kind in SPLIT_KINDS else study
+        label = (f"{named}{' (SIMULATED)' if (sub['data'] == 'simulated').any() else ''}, ref. {sub['reference'].iloc[0]}"
                  + (f", chance {_num(chance.iloc[0], 2)}" if len(chance) else ""))
         heads.append(label)
-    cells = {(r["method"], r["study"]): _cell(r) for _, r in table.iterrows()}
+    cells = {(r["method"], r["column"]): _cell(r) for _, r in table.iterrows()}
     lines = ["", "Every method x study (`method_comparison.csv`): accuracy (95% interval) [paper], "
              "Δ = paired difference to the study's reference method on the same test trials (95% interval).", "",
              "| method | " + " | ".join(heads) + " |", "|---|" + "---|" * len(studies)]
     for method in dict.fromkeys(table["method"]):
         lines.append(f"| `{method}` | " + " | ".join(cells.get((method, s), "") for s in studies) + " |")
+    return lines
+
+
+#: Split kinds named in the comparison's column heads (the PHAC-2 study's).
+SPLIT_KINDS = ("random", "challenging")
+
+
+def _spread(row: pd.Series) -> str:
+    return f"{_num(row.get('sd_over_splits'))} / {_num(row.get('sd_over_refit_seeds'))}"
+
+
+def _difference(row: pd.Series) -> str:
+    if pd.isna(row.get("difference")):
+        return "reference"
+    return (f"{float(row['difference']):+.3f} [{float(row['difference_ci95_low']):+.3f}, "
+            f"{float(row['difference_ci95_high']):+.3f}]")
+
+
+def headline_lines(root: Path) -> list[str]:
+    """The PHAC-2 run with the most random splits: every DAP fusion x prior and every compared method
+    per split kind, paired with ``dap-avg``, with the split spread beside the seed-refit spread.
+
+    Reads ``*dap_fusion_prior.csv`` and the ``*phac2_method_comparison.csv`` beside it (same prefix).
+    """
+    best: tuple[int, Path] | None = None
+    for path in sorted(root.rglob("*dap_fusion_prior.csv")):
+        table = pd.read_csv(path)
+        random = table[table["split_kind"] == "random"]
+        n = int(random["n_splits"].max()) if len(random) else 0
+        if best is None or n > best[0]:
+            best = (n, path)
+    if best is None:
+        return []
+    variants = pd.read_csv(best[1])
+    prefix = best[1].name[: -len("dap_fusion_prior.csv")]
+    comparison = best[1].with_name(f"{prefix}phac2_method_comparison.csv")
+    methods = pd.read_csv(comparison) if comparison.exists() else pd.DataFrame()
+    lines = ["", f"Headlines on many splits (`{best[1].name}`, `{comparison.name}`): accuracy [95% interval], the "
+             "paired difference to `dap-avg` on the same trials [95% interval], and the standard deviation of the "
+             "accuracy over splits / over refits of the same split with other model seeds.", "",
+             "| split kind (splits) | DAP variant or method | accuracy [95% CI] | Δ to dap-avg [95% CI] | "
+             "sd over splits / refit seeds |", "|---|---|---|---|---|"]
+    for part in (variants, methods[methods["accuracy"].notna()] if len(methods) else methods):
+        for _, r in part.iterrows():
+            if part is not variants and str(r["method"]).startswith("dap-"):
+                continue  # already among the DAP variants
+            lines.append(f"| {r['split_kind']} ({int(r['n_splits'])}) | `{r['method']}` | "
+                         f"{_ours(r, 'accuracy', 'ci95_low', 'ci95_high')} | {_difference(r)} | {_spread(r)} |")
     return lines
 
 
@@ -211,6 +263,7 @@ def results_block(results: str | Path) -> str:
         "|---|---|---|---|",
     ]
     lines += [f"| {a} | {b} | {c} | {d} |" for a, b, c, d in rows]
+    lines += headline_lines(root)
     lines += comparison_lines(root)
     return "\n".join(lines)
 

@@ -263,3 +263,39 @@ class ResultsDir:
         if extra:
             manifest.update(extra)
         return self.write_json(name, manifest)
+
+
+def prefixed(prefix: str, name: str) -> str:
+    """File ``name`` of a run with ``[output] prefix``: ``<prefix>_<name>`` (unchanged without one)."""
+    return f"{prefix}_{name}" if prefix else name
+
+
+class PrefixedResults:
+    """A view of a :class:`ResultsDir` that writes every file as ``<prefix>_<name>`` (``[output] prefix``).
+
+    Two runs of one study kind share a results folder this way (``reproduce-tables``: the
+    PHAC-2 paper preset and its many-split headlines). Every other attribute is the folder's.
+    """
+
+    def __init__(self, results: ResultsDir, prefix: str) -> None:
+        self.results, self.prefix = results, prefix
+
+    def name(self, name: str) -> str:
+        """``name`` as written (:func:`prefixed`)."""
+        return prefixed(self.prefix, name)
+
+    def __getattr__(self, attribute: str) -> Any:
+        return getattr(self.results, attribute)
+
+    def check_free(self, names: Iterable[str]) -> None:
+        self.results.check_free(self.name(n) for n in names)
+
+    def write_csv(self, name: str, table: pd.DataFrame, index: bool = False) -> Path:
+        return self.results.write_csv(self.name(name), table, index)
+
+    def write_splits(self, name: str, splits: Iterable[Any]) -> Path:
+        return self.results.write_splits(self.name(name), splits)
+
+    def write_figure(self, name: str, figure: Any, dpi: int = 120) -> Path:
+        return self.results.write_figure(self.name(name), figure, dpi)
+

@@ -233,11 +233,16 @@ def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions=("avg", "
 
 def write_reliability_figure(out, tables: dict[str, pd.DataFrame], stem: str, comparison: str) -> None:
     """Write ``<stem>.png`` from the study's tables: the reliability points ``tables[stem]`` with the
-    ECE labels of ``tables[comparison]`` (the method comparison), if there are points.
+    ECE labels of ``tables[comparison]`` (the method comparison), if there are points. Tables with a
+    ``split_kind`` column (random and challenging splits) are drawn for their first split kind.
 
     ``out``: the study's :class:`~tzsl.studies._outputs.ResultsDir`.
     """
-    table = tables.get(stem)
+    table, summary = tables.get(stem), tables.get(comparison)
     if table is None or table.empty:
         return
-    out.write_figure(f"{stem}.png", reliability_figure(table, tables.get(comparison)))
+    if "split_kind" in table.columns:
+        first = table["split_kind"].iloc[0]
+        table = table[table["split_kind"] == first]
+        summary = None if summary is None else summary[summary["split_kind"] == first]
+    out.write_figure(f"{stem}.png", reliability_figure(table, summary))

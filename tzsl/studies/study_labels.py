@@ -26,7 +26,7 @@ class StudyLabels:
     ----------
     study : str
         ``study`` column of the method comparison: ``"phac2"`` for the paper preset on the paper's
-        data and protocol, else ``"zero-shot"``.
+        data and protocol, else ``"zero-shot"``; with ``[output] prefix``, ``"-<prefix>"`` after it.
     data : str
         ``data`` column: ``"real"`` (a built-in real dataset), ``"simulated"`` or the user's
         dataset name (a plain folder or feature table).
@@ -90,9 +90,12 @@ def study_labels(study: str, config, features: FeatureSet) -> StudyLabels:
     """The labels of a ``zero-shot`` or ``phac2-dap`` run of ``config`` on ``features``.
 
     The paper's numbers apply when the study is the paper preset and its dataset and protocol
-    are the paper's (:func:`paper_protocol`); ``data`` is ``real`` for a built-in dataset, else
+    are the paper's (:func:`paper_protocol`); an ``[output] prefix`` is appended to the study
+    label (``phac2-headlines``), so two runs stack apart in one comparison; ``data`` is ``real`` for a built-in dataset, else
     the dataset's name (which says ``SIMULATED`` for tzsl's simulated datasets).
     """
     data = "real" if config.dataset.builtin is not None else (features.dataset or "user dataset")
     paper, note = paper_protocol(study, config)
-    return StudyLabels(study="phac2" if paper else GENERIC_STUDY, data=data, paper=paper, note=note)
+    prefix = config.output.prefix
+    label = ("phac2" if paper else GENERIC_STUDY) + (f"-{prefix}" if prefix else "")
+    return StudyLabels(study=label, data=data, paper=paper, note=note)

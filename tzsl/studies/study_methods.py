@@ -62,9 +62,9 @@ COMPARISON_FILE = "method_comparison.csv"
 
 #: Columns of every study's method comparison (and of :data:`COMPARISON_FILE`).
 COMPARISON_COLUMNS = [
-    "study", "data", "purpose", "method", "accuracy", "ci95_low", "ci95_high", "paper_accuracy", "chance", "fit_seconds",
-    "share_at_grid_edge", "difference", "difference_ci95_low", "difference_ci95_high", "reference", "n_splits", "n_trials", "note",
-    *CALIBRATION_COLUMNS,
+    "study", "data", "purpose", "split_kind", "method", "accuracy", "ci95_low", "ci95_high", "paper_accuracy",
+    "chance", "fit_seconds", "share_at_grid_edge", "difference", "difference_ci95_low", "difference_ci95_high",
+    "reference", "n_splits", "n_trials", "sd_over_splits", "sd_over_refit_seeds", "note", *CALIBRATION_COLUMNS,
 ]
 
 
@@ -193,7 +193,8 @@ def comparison_trials(method: str, split, classes: np.ndarray, correct: np.ndarr
 def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], chance: float, reference: str,
                    *, study: str, data: str = "real", paper: dict[str, float] | None = None,
                    notes: dict[str, str] | None = None,
-                   grid_edge: dict[str, list[float]] | None = None, purpose: str = "") -> pd.DataFrame:
+                   grid_edge: dict[str, list[float]] | None = None, purpose: str = "",
+                   split_kind: str = "") -> pd.DataFrame:
     """One row per method: accuracy with its 95% interval, fit time, paired difference to ``reference``.
 
     Parameters
@@ -221,6 +222,9 @@ def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], ch
     purpose : str, optional
         ``"select"`` or ``"confirm"``: what the splits are for (:data:`tzsl.evaluation.PURPOSES`);
         empty for studies whose splits have no purpose.
+    split_kind : str
+        How the test classes were chosen (``random``, ``challenging``, ``groups``: held-out fabric
+        groups, ``paper``: the paper's test objects), the ``split_kind`` column.
 
     Returns
     -------
@@ -228,18 +232,24 @@ def method_summary(trials: pd.DataFrame, fit_seconds: dict[str, list[float]], ch
         :data:`COMPARISON_COLUMNS`: accuracy is the mean over splits of the per-split trial
         accuracy; ci95_low/high its two-level bootstrap interval (splits, then classes with
         their trials); difference = method minus ``reference`` on the same trials, with its
-        paired interval; fit_seconds the mean per fit.
+        paired interval; fit_seconds the mean per fit; ``sd_over_splits`` the standard deviation
+        (ddof 1) of the per-split accuracy; ``sd_over_refit_seeds`` NaN here (the PHAC-2 study
+        fills it from its refits: :func:`tzsl.studies.zero_shot.spread.add_refit_spread`).
     """
     paper, notes, grid_edge = paper or {}, notes or {}, grid_edge or {}
     rows = []
     for method, t in trials.groupby("method", sort=False):
         iv = bootstrap_accuracy(t["correct"].to_numpy(), classes=t["class"].to_numpy(), splits=t["split"].to_numpy())
         seconds = [s for s in fit_seconds.get(method, []) if s is not None]
-        rows.append({"study": study, "data": data, "purpose": purpose, "method": method, "accuracy": iv.mean,
+        per_split = t.groupby("split", sort=False)["correct"].mean()
+        rows.append({"study": study, "data": data, "purpose": purpose, "split_kind": split_kind, "method": method,
+                     "accuracy": iv.mean,
                      "ci95_low": iv.ci95_low, "ci95_high": iv.ci95_high, "paper_accuracy": paper.get(method, np.nan),
                      "chance": chance, "fit_seconds": float(np.mean(seconds)) if seconds else np.nan,
                      "share_at_grid_edge": _mean_or_nan(grid_edge.get(method, [])),
-                     "n_splits": t["split"].nunique(), "n_trials": len(t), "note": notes.get(method, "")})
+                     "n_splits": t["split"].nunique(), "n_trials": len(t),
+                     "sd_over_splits": float(per_split.std(ddof=1)) if len(per_split) > 1 else np.nan,
+                     "sd_over_refit_seeds": np.nan, "note": notes.get(method, "")})
     table = pd.DataFrame(rows)
     diffs = _paired_differences(trials, reference).rename(
         columns={"ci95_low": "difference_ci95_low", "ci95_high": "difference_ci95_high"})
@@ -269,18 +279,18 @@ FEW_CLASSES = ("not run: its per-attribute classifiers are tuned by class-groupe
 
 
 def combine_comparisons(tables: list[pd.DataFrame], reasons: dict[str, dict[str, str]] | None = None) -> pd.DataFrame:
-    """Stack study comparisons into one table of every method x study.
+    """Stack study comparisons into one table of every method x study (and split kind).
 
-    A registered method missing from a study gets a row without accuracy whose note says why:
+    A registered method missing from a study (split kind) gets a row without accuracy whose note says why:
     its input kind, ``reasons[study prefix][method]`` (e.g. ``{"fabric": {"dap-avg": ...}}``),
-    or "not run in this study". Studies keep their order; within a study the rows run, then
-    the rows not run.
+    or "not run in this study". Studies (and their split kinds) keep their order; within each, the
+    rows run, then the rows not run.
     """
     reasons = reasons or {}
     parts = []
     for table in tables:
-        parts.append(table)
-        for study, sub in table.groupby("study", sort=False):
+        for (study, split_kind), sub in table.groupby(["study", "split_kind"], sort=False):
+            parts.append(sub)
             kind = _STUDY_INPUT.get(str(study).split("-")[0], "features")
             ran = {str(m).split("_")[0] for m in sub["method"]}
             missing = []
@@ -291,11 +301,11 @@ def combine_comparisons(tables: list[pd.DataFrame], reasons: dict[str, dict[str,
                 usable = own == kind or (kind == "grasps" and own == "features")
                 note = (reasons.get(str(study).split("-")[0], {}).get(name, "not run in this study") if usable
                         else f"not applicable: {_WHY[own]}")
-                missing.append({"study": study, "data": sub["data"].iloc[0], "method": name, "note": note,
-                                "reference": sub["reference"].iloc[0]})
+                missing.append({"study": study, "data": sub["data"].iloc[0], "split_kind": split_kind,
+                                "method": name, "note": note, "reference": sub["reference"].iloc[0]})
             if missing:
                 parts.append(pd.DataFrame(missing))
-    return pd.concat(parts, ignore_index=True)[COMPARISON_COLUMNS] if parts else pd.DataFrame(
+    return pd.concat(parts, ignore_index=True).reindex(columns=COMPARISON_COLUMNS) if parts else pd.DataFrame(
         columns=COMPARISON_COLUMNS)
 
 

@@ -45,6 +45,7 @@ def dap_config(exp: Experiment):
         undersampling=c.svm.undersampling, svm_params=_svm_params(c.svm), multilabel=c.methods.multilabel,
         solver=c.svm.solver, max_exact_trials=c.svm.max_exact_trials,
         sweep_min_attributes=c.methods.sweep_min_attributes, sweep_max_subsets=c.methods.sweep_max_subsets,
+        compare_on=tuple(c.methods.compare_on), refit_seeds=c.splits.refit_seeds, refit_splits=c.splits.refit_splits,
         n_jobs=c.compute.n_jobs, backend=c.compute.backend, scheduler=c.compute.scheduler,
         progress=c.compute.progress, cache=c.compute.cache,
     )

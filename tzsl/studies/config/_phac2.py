@@ -101,8 +101,11 @@ class Phac2Methods(Section):
     embedding_lambdas: list[float] = Field([0.1, 1.0], description="lambdas of the embedding model")
     compare: list[MethodEntry] = Field([], description=COMPARE_DESCRIPTION)
     gzsl: bool = Field(False, description="generalised zero-shot evaluation (gzsl.csv, see [gzsl])")
+    compare_on: list[Literal["random", "challenging"]] = Field(
+        ["random"], description="split kinds the compared methods run on (rows of the method comparison by "
+                                "split_kind); 'challenging' needs it in [splits] kinds")
 
-    _lists = field_validator("fusions", "priors")(lambda v: distinct(non_empty(v)))
+    _lists = field_validator("fusions", "priors", "compare_on")(lambda v: distinct(non_empty(v)))
     _lams = field_validator("embedding_lambdas")(lambdas_ok)
 
     def _from_switches(self) -> list[dict]:
@@ -153,6 +156,12 @@ class Phac2Splits(Section):
     challenging_min_train_positives: int = Field(3, ge=1)
     min_train_negatives: int = Field(1, ge=1, description="a split leaves out an attribute with fewer negative "
                                                           "training objects")
+    refit_seeds: int = Field(0, ge=0, description="refit each of the first refit_splits splits of every kind with "
+                                                  "this many other model seeds (SVM folds, under-sampling draws, "
+                                                  "seeded methods): refit_accuracy.csv and the sd_over_refit_seeds "
+                                                  "columns; 0 = no refits")
+    refit_splits: int | None = Field(None, ge=1, description="splits of each kind refitted (the first ones; "
+                                                             "unset = all)")
 
     @field_validator("kinds")
     @classmethod
@@ -210,6 +219,13 @@ class Phac2Svm(Section):
         return v
 
 
+class Phac2Output(Output):
+    prefix: str = Field("", pattern=r"^([a-z0-9]+([_-][a-z0-9]+)*)?$",
+                        description="written before every file name of the run (``PREFIX_table1_fusion.csv``) "
+                                    "and after its study label in method comparisons, so two runs can share "
+                                    "one folder (reproduce-tables); lower-case letters, digits, '-', '_'")
+
+
 class Phac2Study(Section):
     """``study = "phac2-dap"``."""
 
@@ -222,7 +238,7 @@ class Phac2Study(Section):
     splits: Phac2Splits = Field(default_factory=Phac2Splits)
     svm: Phac2Svm = Field(default_factory=Phac2Svm)
     compute: DaskCompute = Field(default_factory=DaskCompute)
-    output: Output = Field(default_factory=Output)
+    output: Phac2Output = Field(default_factory=Phac2Output)
 
     @model_validator(mode="after")
     def _across_tables(self):
@@ -234,6 +250,8 @@ class Phac2Study(Section):
         if kinds == ["file"] and self.splits.file is None and self.dataset.plain is None:
             problems.append(("splits.kinds", "['file'] needs file = a split CSV (or a plain dataset folder "
                                              "with splits.csv)"))
+        if "challenging" in self.methods.compare_on and "challenging" not in kinds:
+            problems.append(("methods.compare_on", "'challenging' needs 'challenging' in splits.kinds"))
         if self.methods.gzsl and kinds == ["challenging"]:
             problems.append(("methods.gzsl", "runs on the random (or file) splits; kinds has neither"))
         if self.compute.scheduler is not None and self.compute.backend != "dask":

@@ -280,5 +280,5 @@ def fabric_comparison(runs: pd.DataFrame, correct: list[np.ndarray], samples: Se
         # (not zero-shot for config 1), so they stay in fabric_table1.csv's protocol = paper rows
         notes = {reference: "the paper's method (reference); the paper's numbers: fabric_table1.csv, protocol = paper"}
         blocks.append(method_summary(pd.concat(trials, ignore_index=True), seconds, chance, reference,
-                                     study=f"fabric-{s.condition}", notes=notes))
+                                     study=f"fabric-{s.condition}", notes=notes, split_kind="groups"))
     return pd.concat(blocks, ignore_index=True)

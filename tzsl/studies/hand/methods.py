@@ -93,7 +93,7 @@ def hand_comparison(trials: list[pd.DataFrame], per_seed_seconds: list[dict[str,
     notes.update({label: f"{where}; paper: Table 5 (all test objects, Shadow hand)" for label in paper})
     notes[REFERENCE_METHOD] = f"{where}; the paper's method (reference); paper: Table 5"
     return method_summary(trials, seconds, chance, REFERENCE_METHOD, study=STUDY,
-                          data="simulated" if simulated else "real", paper=paper, notes=notes)
+                          data="simulated" if simulated else "real", paper=paper, notes=notes, split_kind="paper")
 
 
 def hand_fusion_trials(pred: dict, y: np.ndarray, seed: int) -> list[pd.DataFrame]:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from tzsl.studies._outputs import ResultsDir
+from tzsl.studies._outputs import PrefixedResults, ResultsDir, prefixed
 from tzsl.studies.config import Experiment
 from tzsl.studies.study_settings import StudyRun, dap_config, format_table, gzsl_config, record_config
 
@@ -32,8 +32,9 @@ class SelectedColumns(ResultsDir):
         return super().write_csv(name, table.drop(columns=self.drop.get(name, []), errors="ignore"), index)
 
 
-def dropped_columns(methods) -> dict[str, list[str]]:
-    """Columns of Tables 1 and 2 that ``[methods] fusions`` / ``priors`` leave out."""
+def dropped_columns(methods, prefix: str = "") -> dict[str, list[str]]:
+    """Columns of Tables 1 and 2 that ``[methods] fusions`` / ``priors`` leave out, by file name
+    (with the run's ``[output] prefix``)."""
     drop: dict[str, list[str]] = {"table1_fusion.csv": [], "table2_priors.csv": []}
     for fusion in sorted({"max", "avg"} - set(methods.fusions)):
         for column in [f"{fusion}dap"] + (["avgdap_per_class_mean"] if fusion == "avg" else []):
@@ -41,16 +42,19 @@ def dropped_columns(methods) -> dict[str, list[str]]:
         drop["table1_fusion.csv"].append(f"paper_{fusion}dap")
     for prior in sorted({"uni", "test", "train"} - set(methods.priors)):
         drop["table2_priors.csv"] += [prior, f"{prior}_ci95_low", f"{prior}_ci95_high", f"paper_{prior}"]
-    return drop
+    return {prefixed(prefix, name): columns for name, columns in drop.items()}
 
 
 def zero_shot_outputs(config) -> list[str]:
     """Files a zero-shot (or phac2-dap) run writes (checked free before any computation)."""
     from tzsl.studies.study_labels import StudyLabels, paper_protocol  # noqa: PLC0415
+    from tzsl.studies.zero_shot.spread import FUSION_PRIOR_TABLE, REFIT_TABLE  # noqa: PLC0415
 
     labels = StudyLabels(paper=paper_protocol(config.study, config)[0])
     kinds, methods = config.splits.kinds, config.methods
-    names = ["manifest.json", "splits.csv", "failed_splits.csv"]
+    names = ["splits.csv", "failed_splits.csv", f"{FUSION_PRIOR_TABLE}.csv"]
+    if config.splits.refit_seeds:
+        names.append(f"{REFIT_TABLE}.csv")
     if "random" in kinds or "file" in kinds:
         names += ["table1_fusion.csv", "table2_priors.csv", "attribute_accuracy.csv",
                   "attribute_accuracy_per_split.csv", "attribute_accuracy.png"]
@@ -65,12 +69,17 @@ def zero_shot_outputs(config) -> list[str]:
             names.append("gzsl.csv")
     if "challenging" in kinds:
         names += ["table3_challenging.csv", "object_map.csv", "object_map.png"]
-    return names
+        if methods.method_specs() and "challenging" in methods.compare_on:
+            names += [f"{labels.methods_table}.csv", f"{labels.comparison_table}.csv",
+                      f"{labels.reliability_table}.csv", f"{labels.reliability_table}.png"]
+    return ["manifest.json", *dict.fromkeys(prefixed(config.output.prefix, n) for n in names)]
 
 
 def zero_shot_results(exp: Experiment, force: bool) -> ResultsDir:
     """The staged results folder of a zero-shot run, leaving unselected fusion / prior columns out."""
-    results = SelectedColumns(Path(exp.config.output.folder), force, dropped_columns(exp.config.methods), staging=True)
+    output = exp.config.output
+    results = SelectedColumns(Path(output.folder), force, dropped_columns(exp.config.methods, output.prefix),
+                              staging=True)
     results.check_free(zero_shot_outputs(exp.config))
     return results
 
@@ -161,7 +170,8 @@ def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], Non
     options = {"methods": methods.method_specs()}
     file_splits = user_splits if split_file is not None else None  # random ones are redrawn identically
     solver_record: dict = {}
-    tables = run_dap_study(features, results, config, kinds=kinds, splits=file_splits, sweep=methods.sweep,
+    out = PrefixedResults(results, c.output.prefix)
+    tables = run_dap_study(features, out, config, kinds=kinds, splits=file_splits, sweep=methods.sweep,
                            compare_methods=bool(options["methods"]), method_options=options,
                            record=solver_record, labels=labels)
     for text in solver_lines(solver_record["attribute_solver"]):
@@ -171,17 +181,17 @@ def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], Non
         gzsl = gzsl_config(exp)
         splits = user_splits if user_splits is not None else make_splits(features, "random", config)[0]
         tables["gzsl"] = run_gzsl(features, splits, config, gzsl, echo=say)
-        results.write_csv(GZSL_FILE, tables["gzsl"])
+        out.write_csv(GZSL_FILE, tables["gzsl"])
         gzsl_record = gzsl_config_record(gzsl)
         if RELAXED_COLUMN in tables["gzsl"].columns:
             gzsl_notes = [t for t in dict.fromkeys(tables["gzsl"][RELAXED_COLUMN].fillna("")) if t and t != "-"]
             for note in gzsl_notes:
                 say(f"note: relaxed gzsl {note}")
     drop = getattr(results, "drop", {})
+    shown = {name: t.drop(columns=drop.get(out.name(f"{name}.csv"), []), errors="ignore") for name, t in tables.items()}
     for name, title in table_titles(labels).items():
         if name in tables:
-            say(f"\n{title}\n{format_table(tables[name].drop(columns=drop.get(f'{name}.csv', []), errors='ignore'))}")
-    shown = {name: t.drop(columns=drop.get(f"{name}.csv", []), errors="ignore") for name, t in tables.items()}
+            say(f"\n{title}\n{format_table(shown[name])}")
     record = {"study_kind": study, "purpose": c.splits.purpose, "phac2_dap": record_config(config),
               "kinds": list(kinds),
               "splits_file": None if split_file is None else str(split_file),

@@ -23,7 +23,8 @@ from tzsl.evaluation import Split, challenging_splits, purpose_seed, random_obje
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.studies._failures import ERROR_COLUMN, attempt
 from tzsl.studies.config import DaskCompute, Phac2Methods, Phac2Splits, Phac2Svm
-from tzsl.studies.zero_shot.methods import method_comparison
+from tzsl.studies.zero_shot.methods import DEFAULT_METHODS
+from tzsl.studies.zero_shot.spread import evidence_tables, model_seed
 from tzsl.studies.study_labels import StudyLabels
 from tzsl.studies.study_methods import split_masks
 from tzsl.studies.study_calibration import write_reliability_figure
@@ -60,30 +61,10 @@ SPLITS_FILE = "splits.csv"
 
 
 __all__ = [
-    "FUSIONS",
-    "SPLITS_FILE",
-    "PRIORS",
-    "DapStudyConfig",
-    "SplitPosteriors",
-    "attribute_accuracy_summary",
-    "attribute_accuracy_table",
-    "attribute_bank",
-    "attribute_estimator",
-    "check_cv_folds",
-    "attribute_subsets",
-    "attribute_sweep",
-    "compute_context",
-    "fit_split",
-    "fit_splits",
-    "make_splits",
-    "method_comparison",
-    "multilabel_table",
-    "object_map_features",
-    "run_dap_study",
-    "solver_lines",
-    "split_masks",
-    "table1_fusion",
-    "table2_priors",
+    "FUSIONS", "SPLITS_FILE", "PRIORS", "DapStudyConfig", "SplitPosteriors", "attribute_accuracy_summary",
+    "attribute_accuracy_table", "attribute_bank", "attribute_estimator", "check_cv_folds", "attribute_subsets",
+    "attribute_sweep", "compute_context", "fit_split", "fit_splits", "make_splits", "multilabel_table",
+    "object_map_features", "run_dap_study", "solver_lines", "split_masks", "table1_fusion", "table2_priors",
     "table3_challenging",
 ]
 
@@ -120,6 +101,11 @@ class DapStudyConfig:
     sweep_min_attributes, sweep_max_subsets : int
         Attribute-count sweep: j from this many to all attributes, at most this many subsets
         per j (paper: 7 and 1000).
+    compare_on : tuple of {"random", "challenging"}
+        Split kinds the compared methods run on (``[methods] compare_on``).
+    refit_seeds, refit_splits : int, int or None
+        The seed-refit spread: the first ``refit_splits`` splits of each kind (None: all) fitted
+        again with ``refit_seeds`` other model seeds (:mod:`tzsl.studies.zero_shot.spread`).
     n_jobs, backend, scheduler
         Parallel fits; ``backend="dask"`` with ``scheduler=None`` starts a local cluster.
     progress : bool
@@ -145,6 +131,9 @@ class DapStudyConfig:
     multilabel: bool = _METHODS.multilabel
     sweep_min_attributes: int = _METHODS.sweep_min_attributes
     sweep_max_subsets: int = _METHODS.sweep_max_subsets
+    compare_on: tuple[str, ...] = tuple(_METHODS.compare_on)
+    refit_seeds: int = _SPLITS.refit_seeds
+    refit_splits: int | None = _SPLITS.refit_splits
     n_jobs: int = _COMPUTE.n_jobs
     backend: str = _COMPUTE.backend
     scheduler: str | None = _COMPUTE.scheduler
@@ -281,13 +270,17 @@ def attribute_bank(config: DapStudyConfig, attributes, seed: int) -> AttributeCl
 
 
 def fit_split(features: FeatureSet, split: Split, config: DapStudyConfig, index: int,
-              multilabel: bool = False) -> SplitPosteriors:
-    """Fit the attribute classifiers on the split's training objects; posteriors of its test trials."""
+              multilabel: bool = False, refit: int = 0) -> SplitPosteriors:
+    """Fit the attribute classifiers on the split's training objects; posteriors of its test trials.
+
+    The model seed is :func:`~tzsl.studies.zero_shot.spread.model_seed` of the study's seed,
+    ``index`` and ``refit`` (0: the study's fit; k > 0: its k-th refit with another seed).
+    """
     attributes = split.kept_attributes
     train, test = split_masks(features, split)
     A = features.attributes.loc[features.objects, list(attributes)].to_numpy(dtype=int)
     groups = features.objects
-    seed = int(np.random.SeedSequence([config.study_seed, index]).generate_state(1)[0])
+    seed = model_seed(config.study_seed, index, refit)
     bank = attribute_bank(config, attributes, seed)
     start = time.perf_counter()
     bank.fit(features.X[train], A[train], groups[train])
@@ -405,13 +398,13 @@ def run_dap_study(
     sweep : bool
         Run the attribute-count sweep on the random splits.
     compare_methods : bool
-        Also fit registry methods on the random splits (``phac2_methods.csv``,
-        ``phac2_method_comparison.csv``).
+        Also fit registry methods on the split kinds of ``config.compare_on`` (``phac2_methods.csv``,
+        ``phac2_method_comparison.csv``; :func:`~tzsl.studies.zero_shot.spread.evidence_tables`).
     echo : callable or None
         Receives human-readable tables (the CLI passes ``click.echo``).
     method_options : dict or None
-        Keyword arguments of :func:`method_comparison` (``methods``: registry entries) when
-        ``compare_methods``; default: ESZSL and embedding lambdas 0.1 and 1.
+        ``{"methods": registry entries}`` compared when ``compare_methods``; default: ESZSL and
+        embedding lambdas 0.1 and 1.
     record : dict or None
         Filled with ``"attribute_solver"``: one :attr:`AttributeClassifierBank.solver_choice_`
         per fitted split (exact or approximate attribute models, and why), for the manifest.
@@ -456,12 +449,8 @@ def run_dap_study(
                 tables["attribute_sweep"] = attribute_sweep(
                     random_results, config.sweep_min_attributes, config.sweep_max_subsets, seed=config.study_seed)
                 out.write_figure("attribute_sweep.png", attribute_sweep_figure(tables["attribute_sweep"]))
-            if compare_methods:
-                tables.update(method_comparison(features, random_results, seed=config.study_seed, labels=labels,
-                                                purpose=config.purpose, n_jobs=config.n_jobs,
-                                                **(method_options or {})))
-                write_reliability_figure(out, tables, labels.reliability_table, labels.comparison_table)
         used = [r.split for r in random_results]
+        results: list[SplitPosteriors] = []
         if splits is None and "challenging" in kinds:
             challenging, map_coords = make_splits(features, "challenging", config)
             results = fit_splits(features, challenging, config, offset=100, failures=failed)
@@ -469,9 +458,17 @@ def run_dap_study(
             tables["table3_challenging"] = table3_challenging(results, map_coords, paper=paper)
             tables["object_map"] = map_coords
             out.write_figure("object_map.png", object_map_figure(map_coords))
+        by_kind = {"file" if splits is not None else "random": (random_results, 0), "challenging": (results, 100)}
+        tables.update(evidence_tables(
+            features, by_kind, seed=config.study_seed, labels=labels, compare_on=config.compare_on,
+            purpose=config.purpose, n_jobs=config.n_jobs,
+            methods=list((method_options or {}).get("methods", DEFAULT_METHODS)) if compare_methods else [],
+            refit_seeds=config.refit_seeds, refit_splits=config.refit_splits,
+            refit=lambda split, index, k: fit_split(features, split, config, index, refit=k)))
+        write_reliability_figure(out, tables, labels.reliability_table, labels.comparison_table)
         if failed:
             tables[FAILED_SPLITS] = pd.DataFrame(failed)
-    _record_solvers(random_results + (results if splits is None and "challenging" in kinds else []), echo, record)
+    _record_solvers(random_results + results, echo, record)
     titles = table_titles(labels)
     if used:  # every split scored, readable by --splits; its classes go into the manifest too
         out.write_splits(SPLITS_FILE, used)
