@@ -34,7 +34,8 @@ import pandas as pd
 from tzsl.reporting.best_method import confirm_choice
 from tzsl.studies.config import every_feature_method
 from tzsl.features import dataset_features
-from tzsl.studies.zero_shot.study import DapStudyConfig, fit_splits, make_splits, method_comparison
+from tzsl.studies.zero_shot.methods import method_comparison
+from tzsl.studies.zero_shot.study import DapStudyConfig, fit_splits, make_splits
 from tzsl.studies.study_labels import StudyLabels
 
 #: Split index offset of the challenging splits' fit seeds (as in run_dap_study).
@@ -65,7 +66,7 @@ def comparison(features, purpose: str, seed: int, n_splits: int, kinds, methods:
         results = fit_splits(features, splits, config, offset=offset)
         labels = StudyLabels(study=f"phac2-{kind}")
         table = method_comparison(features, results, seed=config.study_seed + offset, methods=methods,
-                                  labels=labels, purpose=purpose)[labels.comparison_table]
+                                  labels=labels, purpose=purpose, split_kind=kind)[labels.comparison_table]
         tables.append(table.assign(kind=kind, seed=seed))
         echo(f"{purpose} {kind}: {len(splits)} splits in {time.perf_counter() - start:.0f} s")
     return pd.concat(tables, ignore_index=True)

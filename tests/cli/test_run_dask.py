@@ -11,6 +11,7 @@ from click.testing import CliRunner
 from tzsl.cli import cli
 
 from tzsl.datasets import write_synthetic_dataset
+from tests.csv_compare import csv_bytes
 
 distributed = pytest.importorskip("distributed")
 
@@ -53,7 +54,7 @@ def test_run_on_a_dask_scheduler_equals_the_local_run(tmp_path, solver_size):
     tables = sorted(p.name for p in (tmp_path / "local").glob("*.csv"))
     assert "table1_fusion.csv" in tables
     for name in tables:
-        assert (tmp_path / "dask" / name).read_bytes() == (tmp_path / "local" / name).read_bytes(), name
+        assert csv_bytes(tmp_path / "dask" / name) == csv_bytes(tmp_path / "local" / name), name
     manifest = json.loads(Path(tmp_path / "dask" / "manifest.json").read_text())
     assert manifest["config"]["settings"]["compute"]["scheduler"] == cluster.scheduler_address
     solver = manifest["config"]["attribute_solver"][0]["solver"]

@@ -133,13 +133,13 @@ def test_prefixed_results_write_every_file_under_the_prefix(tmp_path):
 def test_headlines_preset_is_the_paper_study_with_more_splits(tmp_path):
     from tzsl.exceptions import ConfigError  # noqa: PLC0415
     from tzsl.studies.config import load_experiment  # noqa: PLC0415
-    from tzsl.studies.zero_shot.runner import phac2_outputs  # noqa: PLC0415
+    from tzsl.studies.zero_shot.runner import zero_shot_outputs  # noqa: PLC0415
 
     paper, headlines = load_experiment("phac2-dap"), load_experiment("phac2-headlines")
     assert headlines.config.splits.n_splits >= 50 and paper.config.splits.n_splits < headlines.config.splits.n_splits
     assert headlines.config.splits.refit_seeds >= 1 and set(headlines.config.methods.compare_on) == {"random", "challenging"}
     assert headlines.config.svm == paper.config.svm and headlines.config.splits.seed == paper.config.splits.seed
-    assert not set(phac2_outputs(paper.config)) & set(phac2_outputs(headlines.config)) - {"manifest.json"}
+    assert not set(zero_shot_outputs(paper.config)) & set(zero_shot_outputs(headlines.config)) - {"manifest.json"}
     bad = paper.text.replace('[output]', '[output]\nprefix = "Bad Prefix"')
     with pytest.raises(ConfigError, match="prefix"):
         load_experiment(_write(tmp_path / "bad.toml", bad))
