@@ -57,7 +57,8 @@ headlines: install
 
 # Every published number is generated between markers from the CSVs of the shipped code, never
 # typed (tzsl.reporting.readme_results): each target file = the results folder its blocks read.
-NUMBERS := README.md=$(RESULTS) experiments/benchmarks/README.md=$(BENCH_RESULTS) \
+NUMBERS := README.md=$(RESULTS) docs/user_guide/reproducing.md=$(RESULTS) \
+	experiments/benchmarks/README.md=$(BENCH_RESULTS) \
 	docs/user_guide/performance.md=$(SEARCH_RESULTS)
 
 # The README's Results block alone, from the CSVs of reproduce-tables.

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 
 from tzsl.exceptions import ConfigError
-from tzsl.reporting.readme_results import BEGIN, END, begin, end, main, results_block, update_file
+from tzsl.reporting.readme_results import BEGIN, END, begin, end, evidence_block, main, results_block, update_file
 from tzsl.studies.reproduce import reproduce_tables
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -170,7 +170,7 @@ def test_block_tabulates_every_method_by_study_from_the_comparison(tmp_path):
         "difference_ci95_high": [None, 0.16, None, 0.0], "reference": ["dap-avg"] * 3 + ["ldap"],
         "note": ["", "", "not applicable: takes grasps", ""],
     }).to_csv(root / "method_comparison.csv", index=False)
-    block = results_block(root)
+    block = evidence_block(root)
     assert "| method | phac2-random, ref. dap-avg, chance 0.10 | hand (SIMULATED), ref. ldap, chance 0.10 |" in block
     assert "| `dap-avg` | 0.31 (0.19-0.44) [0.39] |  |" in block
     assert "| `sae` | 0.35 (0.24-0.46), Δ +0.04 (-0.07, +0.16) | 0.30 (0.20-0.40), Δ -0.10 (-0.20, +0.00) |" in block
@@ -229,7 +229,7 @@ def test_headlines_come_from_the_run_with_the_most_random_splits(tmp_path):
                   "n_splits": [50, 50, 5], "sd_over_splits": [0.08, 0.09, None],
                   "sd_over_refit_seeds": [0.04, 0.0, None]}).to_csv(
         root / "headlines_phac2_method_comparison.csv", index=False)
-    block = results_block(root)
+    block = evidence_block(root)
     assert "`headlines_dap_fusion_prior.csv`, `headlines_phac2_method_comparison.csv`" in block
     assert "| random (50) | `dap-avg` | 0.300 [0.250, 0.350] | reference | 0.080 / 0.040 |" in block
     assert "| random (50) | `dap-max` | 0.310 [0.260, 0.360] | +0.010 [-0.005, +0.025] | 0.081 / 0.041 |" in block
@@ -245,7 +245,20 @@ def test_comparison_columns_are_study_and_split_kind(tmp_path):
                   "accuracy": [0.31, 0.3, 0.2], "ci95_low": [0.2, 0.25, 0.1], "ci95_high": [0.4, 0.35, 0.3],
                   "chance": [0.1, 0.1, 0.105], "reference": "dap-avg"}).to_csv(root / "method_comparison.csv",
                                                                               index=False)
-    block = results_block(root)
+    block = evidence_block(root)
     assert ("| method | phac2, random splits, ref. dap-avg, chance 0.10 | phac2-headlines, random splits, ref. dap-avg, "
             "chance 0.10 | phac2-headlines, challenging splits, ref. dap-avg, chance 0.10 |") in block
     assert "| `dap-avg` | 0.31 (0.20-0.40) | 0.30 (0.25-0.35) | 0.20 (0.10-0.30) |" in block
+
+
+def test_the_readme_block_holds_the_headlines_and_the_evidence_block_the_rest(tmp_path):
+    """README stays short: the per-split-kind and per-study tables go to the evidence block (docs)."""
+    root = _results(tmp_path / "results")
+    pd.DataFrame({"study": ["phac2"], "data": "real", "split_kind": "random", "method": "dap-avg", "accuracy": [0.3],
+                  "ci95_low": [0.2], "ci95_high": [0.4], "chance": [0.1], "reference": "dap-avg"}).to_csv(
+        root / "method_comparison.csv", index=False)
+    readme, evidence = results_block(root), evidence_block(root)
+    assert "| method | phac2, random splits" in evidence and "| method | phac2" not in readme
+    assert "| result | ours [95% CI]" in readme
+    with pytest.raises(ConfigError, match="neither dap_fusion_prior.csv nor method_comparison.csv"):
+        evidence_block(_results(tmp_path / "bare"))

@@ -8,6 +8,9 @@ Markdown file ``TARGET`` between ``<!-- results:begin NAME (...) -->`` and
 * ``readme`` (README.md, ``make readme-results``): the headline numbers of ``make
   reproduce-tables``, each as ``ours [95% interval]`` beside its chance or baseline and the
   paper's number (read from the table, which reads it from the code's paper-value tables);
+* ``results-evidence`` (``docs/user_guide/reproducing.md``): the evidence behind them from the same
+  folder: DAP variants and methods per split kind with paired differences and the split and
+  seed-refit spreads, and every method x study of ``method_comparison.csv``;
 * ``phac2-accuracy-benchmark`` (``experiments/benchmarks/README.md``): the ``accuracy.csv`` and
   ``grid_summary.csv`` of ``experiments/benchmarks/phac2_accuracy.py``;
 * ``phac2-best-method`` (``experiments/benchmarks/README.md``): the decision of ``experiments/benchmarks/phac2_best_method.py``
@@ -34,8 +37,8 @@ import pandas as pd
 from tzsl.exceptions import ConfigError
 
 __all__ = ["BEGIN", "BEST_METHOD_FILE", "BLOCKS", "END", "begin", "benchmark_accuracy_block", "best_method_block",
-           "block_spans", "comparison_lines", "end", "headline_lines", "main", "results_block", "search_benchmark_block",
-           "update_file"]
+           "block_spans", "comparison_lines", "end", "evidence_block", "headline_lines", "main", "results_block",
+           "search_benchmark_block", "update_file"]
 
 
 _MARKER = re.compile(r"<!-- results:(begin|end) ([\w-]+)[^>]*-->")
@@ -263,9 +266,25 @@ def results_block(results: str | Path) -> str:
         "|---|---|---|---|",
     ]
     lines += [f"| {a} | {b} | {c} | {d} |" for a, b, c, d in rows]
-    lines += headline_lines(root)
-    lines += comparison_lines(root)
     return "\n".join(lines)
+
+
+def evidence_block(results: str | Path) -> str:
+    """The evidence behind the headlines (``docs/user_guide/reproducing.md``): DAP variants and methods
+    per split kind with paired differences and both spreads, and every method x study.
+
+    Raises
+    ------
+    ConfigError
+        ``results`` is not a folder or holds neither ``dap_fusion_prior.csv`` nor ``method_comparison.csv``.
+    """
+    root = Path(results)
+    if not root.is_dir():
+        raise ConfigError(f"{root}: no such results folder; run `make reproduce-tables` first")
+    lines = headline_lines(root) + comparison_lines(root)
+    if not lines:
+        raise ConfigError(f"{root}: neither dap_fusion_prior.csv nor method_comparison.csv found")
+    return "\n".join([f"Generated from `{root.name}/*.csv` by `make numbers`."] + lines)
 
 
 def benchmark_accuracy_block(results: str | Path) -> str:
@@ -382,7 +401,8 @@ def best_method_block(results: str | Path) -> str:
 
 
 #: Block name -> the function that makes its Markdown from a results folder.
-BLOCKS: dict[str, Callable[[Path], str]] = {"readme": results_block, "phac2-accuracy-benchmark": benchmark_accuracy_block,
+BLOCKS: dict[str, Callable[[Path], str]] = {"readme": results_block, "results-evidence": evidence_block,
+                                            "phac2-accuracy-benchmark": benchmark_accuracy_block,
                                             "attribute-search-benchmark": search_benchmark_block,
                                             "phac2-best-method": best_method_block}
 
