@@ -37,16 +37,16 @@ def run_active_touch(exp: Experiment, results: ResultsDir, say: Callable[[str], 
     stop = tables["active_touch_stop"]
     say("\nActive touch: accuracy after 1..4 EPs (95% intervals in active_touch.csv)\n"
         + format_table(tables["active_touch"][["split_kind", "strategy", "acc_1ep", "acc_2ep", "acc_3ep", "acc_4ep",
-                                          "acc_mean_over_seconds"]]))
+                                               "acc_mean_over_seconds"]]))
     say("\nStopping rule vs all four EPs\n" + format_table(stop[["split_kind", "strategy", "threshold", "accuracy",
-                                                             "all_eps_accuracy", "difference", "mean_eps",
-                                                             "mean_seconds"]]))
+                                                                 "all_eps_accuracy", "difference", "mean_eps",
+                                                                 "mean_seconds"]]))
     dec = tables["active_touch_decided"]
     say("\nDoes the stopping rule keep its promise? Accuracy of the trials decided at t (active_touch_decided.csv)\n"
         + format_table(dec[dec["strategy"] == "active"][["split_kind", "posterior", "threshold", "decided_share",
-                                                     "decided_accuracy", "decided_accuracy_ci95_low",
-                                                     "decided_accuracy_ci95_high", "eps_saved", "difference",
-                                                     "active_minus_random"]]))
+                                                         "decided_accuracy", "decided_accuracy_ci95_low",
+                                                         "decided_accuracy_ci95_high", "eps_saved", "difference",
+                                                         "active_minus_random"]]))
     record = {"study_kind": "active-touch", "active_touch": record_config(config), "dataset": features.dataset,
               "orders_chosen_on_training_objects": tables["active_touch_curves"].attrs["chosen"],
               "posterior_exponents_fitted_on_training_objects": tables["active_touch_curves"].attrs["exponents"]}

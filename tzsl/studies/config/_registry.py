@@ -24,6 +24,7 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import get_args
 
 from pydantic import BaseModel
 
@@ -95,9 +96,9 @@ def register_study(name: str, **fields) -> StudyKind:
     if name in _STUDIES:
         raise ValueError(f"study {name!r} is already registered")
     kind = StudyKind(name=name, **fields)
-    annotation = str(kind.schema.model_fields["study"].annotation)
-    if repr(name) not in annotation:
-        raise ValueError(f"study {name!r}: the schema {kind.schema.__name__}.study does not accept it ({annotation})")
+    accepted = get_args(kind.schema.model_fields["study"].annotation)  # the schema's Literal["name", ...]
+    if name not in accepted:
+        raise ValueError(f"study {name!r}: the schema {kind.schema.__name__}.study does not accept it ({accepted})")
     _STUDIES[name] = kind
     return kind
 
