@@ -32,10 +32,10 @@ from pathlib import Path
 import pandas as pd
 
 from tzsl.reporting.best_method import confirm_choice
-from tzsl.studies.config import every_feature_method
+from tzsl.studies.config import DapSettings, every_feature_method
 from tzsl.features import dataset_features
 from tzsl.studies.zero_shot.methods import method_comparison
-from tzsl.studies.zero_shot.study import DapStudyConfig, fit_splits, make_splits
+from tzsl.studies.zero_shot.study import fit_splits, make_splits
 from tzsl.studies.study_labels import StudyLabels
 
 #: Split index offset of the challenging splits' fit seeds (as in run_dap_study).
@@ -51,13 +51,15 @@ SVM_PARAMS = {"cv": 5, "grid": "paper"}
 
 
 def comparison(features, purpose: str, seed: int, n_splits: int, kinds, methods: list[dict], n_jobs: int,
-               echo=print, **config) -> pd.DataFrame:
+               echo=print, **tables) -> pd.DataFrame:
     """The method comparison of every kind in ``kinds`` on ``purpose`` splits of ``seed``.
 
-    ``config``: further :class:`~tzsl.studies.zero_shot.study.DapStudyConfig` fields (tests: a tiny SVM grid).
+    ``tables``: further :class:`~tzsl.studies.config.DapSettings` keys by table, e.g.
+    ``splits={"n_test": 5}, svm={...}`` (tests: a tiny SVM grid); a given table replaces the default's keys.
     """
-    config = DapStudyConfig(**{"n_splits": n_splits, "seed": seed, "purpose": purpose, "n_jobs": n_jobs,
-                               "progress": False, "svm_params": dict(SVM_PARAMS), **config})
+    given = {"splits": {"n_splits": n_splits, "seed": seed, "purpose": purpose}, "svm": dict(SVM_PARAMS),
+             "compute": {"n_jobs": n_jobs, "progress": False}}
+    config = DapSettings(**{t: {**given.get(t, {}), **tables.get(t, {})} for t in {*given, *tables}})
     tables = []
     for kind in kinds:
         start = time.perf_counter()

@@ -29,7 +29,8 @@ import pandas as pd
 
 from tzsl.evaluation import bootstrap_accuracy, paired_difference_interval
 from tzsl.features import dataset_features
-from tzsl.studies.zero_shot.study import DapStudyConfig, make_splits, split_masks
+from tzsl.studies.config import DapSettings
+from tzsl.studies.zero_shot.study import make_splits, split_masks
 from tzsl.models import attribute_rows, build_method
 
 PUBLIC_GRID = 10.0 ** np.arange(-3, 4)
@@ -73,7 +74,8 @@ def tzsl_eszsl(X_tr, objects_tr, rows_tr, X_te, K, **params) -> tuple[np.ndarray
 
 def run(features, purpose: str, seed: int, n_splits: int) -> pd.DataFrame:
     """Per-trial correctness of every method on ``n_splits`` random splits of ``seed``."""
-    splits, _ = make_splits(features, "random", DapStudyConfig(n_splits=n_splits, seed=seed, purpose=purpose))
+    splits, _ = make_splits(features, "random", DapSettings(splits={"n_splits": n_splits, "seed": seed,
+                                                                         "purpose": purpose}))
     objects = features.objects
     X = features.X.reshape(len(objects), -1)
     records = []

@@ -30,7 +30,8 @@ import numpy as np
 from scipy.special import expit
 
 from tzsl.features import dataset_features
-from tzsl.studies.zero_shot.study import DapStudyConfig, fit_split, make_splits, split_masks
+from tzsl.studies.config import DapSettings
+from tzsl.studies.zero_shot.study import fit_split, make_splits, split_masks
 from tzsl.models import GridEdgeWarning
 
 GRIDS = ("paper", "extended")
@@ -40,7 +41,7 @@ CHALLENGING_OFFSET = 100
 
 def study_splits(features, n_random: int, seed: int):
     """``[(kind, index, Split)]``: the random splits then the challenging ones."""
-    config = DapStudyConfig(n_splits=n_random, seed=seed)
+    config = DapSettings(splits={"n_splits": n_random, "seed": seed})
     random_splits, _ = make_splits(features, "random", config)
     challenging, _ = make_splits(features, "challenging", config)
     return ([("random", i, s) for i, s in enumerate(random_splits)]
@@ -71,8 +72,8 @@ def main() -> None:
             path = args.out / f"{grid}_{split.name}.npz"
             if path.exists():
                 continue
-            config = DapStudyConfig(n_splits=args.n_random, seed=args.seed, cache=False, n_jobs=args.n_jobs,
-                                    svm_params={"cv": 5, "grid": grid})
+            config = DapSettings(splits={"n_splits": args.n_random, "seed": args.seed},
+                                 compute={"cache": False, "n_jobs": args.n_jobs}, svm={"cv": 5, "grid": grid})
             start = time.process_time()
             r = fit_split(features, split, config, index)
             cpu = time.process_time() - start

@@ -25,7 +25,6 @@ from __future__ import annotations
 import argparse
 import time
 import warnings
-from dataclasses import replace
 from pathlib import Path
 
 import pandas as pd
@@ -33,7 +32,8 @@ import pandas as pd
 from tzsl._io import atomic_write
 from tzsl.evaluation import bootstrap_accuracy, paired_difference_interval
 from tzsl.features import dataset_features
-from tzsl.studies.zero_shot.study import DapStudyConfig, fit_split, make_splits
+from tzsl.studies.config import DapSettings
+from tzsl.studies.zero_shot.study import fit_split, make_splits
 from tzsl.models import SEARCHES
 
 
@@ -45,14 +45,14 @@ def chosen(bank) -> list[tuple]:
 def run(seed: int, n_splits: int, grid: str) -> tuple[pd.DataFrame, dict]:
     """Per-trial correctness of both searches on every split, and the summary row."""
     features = dataset_features("phac2-penn")
-    base = replace(DapStudyConfig(n_splits=n_splits, seed=seed), cache=False, progress=False, multilabel=False,
-                   n_jobs=1)
+    compute = {"cache": False, "progress": False, "n_jobs": 1}
+    base = DapSettings(splits={"n_splits": n_splits, "seed": seed}, compute=compute)
     splits, _ = make_splits(features, "random", base)
     rows, same, total = [], 0, 0
     for i, split in enumerate(splits):
         fitted = {}
         for search in SEARCHES:
-            config = replace(base, svm_params={**base.svm_params, "grid": grid, "search": search})
+            config = DapSettings(splits=base.splits, compute=compute, svm={"grid": grid, "search": search})
             start, wall = time.process_time(), time.perf_counter()
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")

@@ -80,7 +80,8 @@ def test_plain_folder_from_convert_gives_the_builtin_accuracies(tmp_path, data_d
     """Done when: convert PHAC-2 to a plain folder, validate it, run it from a TOML file -> same accuracies."""
     from tzsl.studies._outputs import ResultsDir
     from tzsl.features import dataset_features
-    from tzsl.studies.zero_shot.study import DapStudyConfig, run_dap_study
+    from tzsl.studies.config import DapSettings
+    from tzsl.studies.zero_shot.study import run_dap_study
 
     folder = tmp_path / "phac2_plain"
     converted = _run("convert", "--dataset", "phac2-penn", "--out", folder, "--data-dir", data_dir)
@@ -94,8 +95,8 @@ def test_plain_folder_from_convert_gives_the_builtin_accuracies(tmp_path, data_d
     assert ran.exit_code == 0, ran.output
     ours = pd.read_csv(tmp_path / "plain_results" / "table1_fusion.csv")
 
-    config = DapStudyConfig(n_splits=2, n_test=10, seed=0, svm_params=dict(TINY), multilabel=False, progress=False,
-                            cache=False)
+    config = DapSettings(splits={"n_splits": 2, "n_test": 10, "seed": 0}, svm=dict(TINY), methods={"multilabel": False},
+                         compute={"progress": False, "cache": False})
     builtin = run_dap_study(dataset_features("phac2-penn", data_dir=data_dir), ResultsDir(tmp_path / "builtin"),
                             config, kinds=("random",), sweep=False)["table1_fusion"]
     assert list(ours["split"].astype(str)) == ["1", "2", "mean", "std", "control"]

@@ -9,7 +9,6 @@ import tzsl.models._attribute_svm as svm_module
 from tzsl.exceptions import ConfigError
 from tzsl.studies.config import load_experiment
 from tzsl.studies.zero_shot.study import attribute_estimator
-from tzsl.studies.study_settings import dap_config
 from tzsl.models import AttributeClassifierBank, AttributeSVM, gamma_grid
 from tzsl.models._attribute_search import halving_rounds, successive_halving
 from tzsl.models._validation import ParameterError
@@ -99,10 +98,10 @@ def _experiment(tmp_path, svm: str):
 
 
 def test_halving_reaches_the_estimator_from_the_experiment_file(tmp_path):
-    config = dap_config(_experiment(tmp_path, "search = 'halving'"))
+    config = _experiment(tmp_path, "search = 'halving'").config
     assert attribute_estimator(config, seed=0).search == "halving"
-    default = dap_config(_experiment(tmp_path, ""))
-    assert "search" not in default.svm_params  # the default is not written out
+    default = _experiment(tmp_path, "").config
+    assert "search" not in default.svm.estimator_params()  # the default is not written out
     assert attribute_estimator(default, seed=0).search == AttributeSVM().search == "halving"
     with pytest.raises(ConfigError, match="svm.search: 'random'"):
         _experiment(tmp_path, "search = 'random'")

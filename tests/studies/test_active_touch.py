@@ -10,7 +10,9 @@ from tzsl.datasets import FeatureSet
 from tzsl.evaluation import random_object_splits
 from tzsl.exceptions import ConfigError
 from tzsl.studies._outputs import ResultsDir
-from tzsl.studies.active_touch.study import ActiveTouchConfig, evaluate_split, run_active_touch_study
+from tests.study_settings import study_settings
+from tzsl.studies.active_touch.study import evaluate_split, run_active_touch_study
+from tzsl.studies.config import ActiveTouchStudy
 from tzsl.studies.active_touch.stopping import DECIDED_COLUMNS, stop_outcomes
 
 EPS = ("squeeze", "hold", "slow_slide", "fast_slide")
@@ -40,8 +42,8 @@ def _feature_set(n_objects=24, n_trials=3, n_attributes=6, seed=0) -> FeatureSet
 def test_study_writes_table_and_figure(tmp_path, monkeypatch):
     monkeypatch.delenv("TZSL_CACHE_DIR", raising=False)
     fs = _feature_set()
-    config = ActiveTouchConfig(kinds=("random",), n_splits=2, thresholds=(0.5, 0.9), decided_thresholds=(0.5, 0.9), cv=3,
-                               n_samples=32, n_boot=200)
+    config = study_settings(ActiveTouchStudy, kinds=("random",), n_splits=2, thresholds=(0.5, 0.9),
+                            decided_thresholds=(0.5, 0.9), **{"methods.cv": 3}, n_samples=32, n_boot=200)
     tables = run_active_touch_study(fs, ResultsDir(tmp_path), config)
     assert {"active_touch.csv", "active_touch_curves.csv", "active_touch_stop.csv", "active_touch_decided.csv",
             "active_touch.png", "active_touch_stopping.png"} == {
@@ -128,7 +130,8 @@ def test_one_real_phac2_split(data_dir, monkeypatch):
     monkeypatch.delenv("TZSL_CACHE_DIR", raising=False)
     fs = dataset_features("phac2-penn", data_dir=data_dir)
     split = random_object_splits(fs.attributes, n_test=10, n_splits=1, random_state=0)[0]
-    res = evaluate_split(fs, split, seed=0, update="dap", cv=3, n_samples=32)
+    res = evaluate_split(fs, split, seed=0, update="dap", cv=3, n_samples=32,
+                         tempering=ActiveTouchStudy().methods.tempering)
     assert res["eps"] == EPS
     n = len(res["objects"])
     assert n == 100 and set(res["objects"]) == set(split.test_objects)

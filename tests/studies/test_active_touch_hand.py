@@ -9,7 +9,9 @@ import pytest
 from tzsl.datasets import load_hand_table4
 from tzsl.exceptions import ConfigError
 from tzsl.studies._outputs import ResultsDir
-from tzsl.studies.active_touch.hand import GRASP_TYPES, HandActiveConfig, grasp_type_of, run_active_hand
+from tests.study_settings import study_settings
+from tzsl.studies.active_touch.hand import GRASP_TYPES, grasp_type_of, run_active_hand
+from tzsl.studies.config import ActiveTouchStudy
 
 
 def test_grasp_type_by_touching_biotacs():
@@ -21,8 +23,8 @@ def test_grasp_type_by_touching_biotacs():
 
 
 def test_simulated_hand_tables(tmp_path):
-    config = HandActiveConfig(seeds=(0,), n_sequences=4, max_grasps=3, cv=2, n_samples=16, thresholds=(0.5, 0.99),
-                              n_boot=50)
+    config = study_settings(ActiveTouchStudy, seeds=(0,), n_sequences=4, max_grasps=3, **{"hand.cv": 2}, n_samples=16,
+                            thresholds=(0.5, 0.99), n_boot=50)
     out = run_active_hand(load_hand_table4(), ResultsDir(tmp_path), config)
     assert {p.name for p in tmp_path.iterdir()} == {"active_touch_hand.csv", "active_touch_hand_stop.csv",
                                                     "active_touch_hand.png"}

@@ -27,7 +27,7 @@ def bench():
 def test_choice_on_selection_numbers_from_confirmation(bench):
     features = synthetic_features(n_objects=24, n_attributes=6)
     run = {"seed": 3, "n_splits": 2, "kinds": bench.KINDS, "methods": [{"name": "eszsl"}], "n_jobs": 1,
-           "echo": lambda _: None, "n_test": 5, "svm_params": dict(TINY_SVM), "cache": False}
+           "echo": lambda _: None, "splits": {"n_test": 5}, "svm": dict(TINY_SVM), "compute": {"cache": False}}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         selection = bench.comparison(features, "select", **run)

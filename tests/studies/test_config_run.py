@@ -15,7 +15,7 @@ from tzsl.datasets import FeatureSet, feature_set_to_plain
 from tzsl.exceptions import ConfigError
 from tzsl.studies.config import builtin_names, study_names, load_experiment, to_toml, validate
 from tzsl.studies.engine import check_experiment, run_experiment
-from tzsl.studies.study_settings import active_config, dap_config, fabric_arguments, gzsl_config, hand_config
+from tzsl.studies.study_settings import fabric_arguments, hand_config
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -41,19 +41,17 @@ def test_builtin_studies_ship_inside_the_package_only():
     assert load_experiment(REPO / "experiments" / "my_dataset_template.toml").study == "zero-shot"  # the generic study, no paper preset
 
 
-def test_study_dataclasses_read_the_schema_defaults():
-    """DapStudyConfig, HandStudyConfig, GzslConfig and ActiveTouchConfig take their defaults from the schema."""
-    from tzsl.studies.active_touch.study import ActiveTouchConfig
-    from tzsl.studies.zero_shot.gzsl import GzslConfig
+def test_studies_read_the_schema_defaults():
+    """A study file is the study's settings: the DAP study's tables are DapSettings' own defaults."""
+    from tzsl.studies.config import DapSettings
     from tzsl.studies.hand.study import HandStudyConfig
-    from tzsl.studies.zero_shot.study import DapStudyConfig
 
     minimal = validate({"study": "phac2-dap", "dataset": {"features": "x.csv"}}, "t", Path("."))
-    assert dap_config(minimal) == DapStudyConfig()
-    assert gzsl_config(minimal) == GzslConfig()
+    assert isinstance(minimal.config, DapSettings)
+    for table in ("methods", "gzsl", "splits", "svm", "compute"):
+        assert getattr(minimal.config, table) == getattr(DapSettings(), table), table
     hand = validate({"study": "hand", "dataset": {"builtin": "hand-simulated"}}, "t", Path("."))
     assert hand_config(hand) == HandStudyConfig()
-    assert active_config(validate({"study": "active-touch"}, "t", Path("."))) == ActiveTouchConfig()
 
 
 def test_svm_defaults_are_read_from_the_estimator():
@@ -194,10 +192,10 @@ def test_binary_and_missing_files(tmp_path):
 def test_svm_settings_keep_only_departures_from_attribute_svm_defaults(tmp_path):
     path = _write(tmp_path, "study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[svm]\ncv = 0\nn_C = 3\n"
                             "n_gamma = 2\nC_range = [1, 10]\n[compute]\nn_jobs = 2\n")
-    config = dap_config(load_experiment(path))
-    assert config.svm_params == {"n_gamma": 2, "C_range": (1.0, 10.0)}  # cv None and n_C 3 are the defaults
-    assert config.n_jobs == 2
-    assert dap_config(load_experiment(path, {"compute.n_jobs": 4})).n_jobs == 4
+    config = load_experiment(path).config
+    assert config.svm.estimator_params() == {"n_gamma": 2, "C_range": (1.0, 10.0)}  # cv None, n_C 3: the defaults
+    assert config.compute.n_jobs == 2
+    assert load_experiment(path, {"compute.n_jobs": 4}).config.compute.n_jobs == 4
 
 
 def test_paths_are_relative_to_the_file(tmp_path):
@@ -316,8 +314,8 @@ def test_run_writes_selected_tables_and_manifest(tmp_path):
     assert set(gzsl["method"]) == {"eszsl"} and not gzsl["calibrated"].any()
     manifest = json.loads((tmp_path / "res" / "manifest.json").read_text())
     assert manifest["experiment_toml"] == RUN_TOML
-    assert manifest["config"]["phac2_dap"]["svm_params"] == {"cv": 3, "n_C": 1, "n_gamma": 1, "n_draws": 1}
-    assert manifest["config"]["gzsl"]["holdout_fraction"] == 0.25
+    assert manifest["config"]["svm_params"] == {"cv": 3, "n_C": 1, "n_gamma": 1, "n_draws": 1}
+    assert manifest["config"]["dap_settings"]["gzsl"]["holdout_fraction"] == 0.25
     solvers = manifest["config"]["attribute_solver"]  # 2 random splits of 80 trials: exact, and why
     assert [c["solver"] for c in solvers] == ["exact", "exact"] and "max_exact_trials" in solvers[0]["reason"]
     assert any(line.startswith("attribute models: exact (solver='auto'") for line in lines)
@@ -363,10 +361,10 @@ def test_grid_passes_through_and_reproduction_studies_pin_the_paper_grid(tmp_pat
     for name in ("phac2-dap", "phac2-gzsl", "phac2-headlines"):
         exp = load_experiment(name)
         assert exp.config.svm.grid == "paper"
-        assert dap_config(exp).svm_params["grid"] == "paper"
+        assert exp.config.svm.estimator_params()["grid"] == "paper"
     path = _write(tmp_path, "study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n")
     assert load_experiment(path).config.svm.grid == "extended"
-    assert "grid" not in dap_config(load_experiment(path)).svm_params  # the estimator's default
+    assert "grid" not in load_experiment(path).config.svm.estimator_params()  # the estimator's default
     bad = _write(tmp_path, "study = 'phac2-dap'\n[dataset]\nbuiltin = 'phac2-penn'\n[svm]\ngrid = 'wide'\n", "bad.toml")
     with pytest.raises(ConfigError, match="svm.grid"):
         load_experiment(bad)

@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from pydantic import ValidationError
 
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, gzsl_scores
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.studies.zero_shot.gzsl import (
-    GzslConfig,
     _pseudo_problem,
     choose_stacking_constant,
     gzsl_problem,
@@ -19,7 +19,9 @@ from tzsl.studies.zero_shot.gzsl import (
     run_gzsl,
     stacked_predict,
 )
-from tzsl.studies.zero_shot.study import DapStudyConfig, make_splits
+from tests.study_settings import study_settings
+from tzsl.studies.config import DapSettings
+from tzsl.studies.zero_shot.study import make_splits
 
 TINY_SVM = {"n_C": 1, "n_gamma": 1, "n_draws": 1, "cv": 3}
 
@@ -48,9 +50,10 @@ def synthetic_features(n_objects: int = 24, n_attributes: int = 6, trials: int =
                       attributes=attrs, dataset="synthetic")
 
 
-def _config(**kw) -> DapStudyConfig:
-    return DapStudyConfig(**{"n_splits": 2, "n_test": 5, "progress": False, "cache": False,
-                             "svm_params": dict(TINY_SVM), "multilabel": False, **kw})
+def _config(**kw) -> DapSettings:
+    """Study settings for the GZSL tests (``[gzsl]`` keys as ``**{"gzsl.key": value}``)."""
+    return study_settings(DapSettings, **{"n_splits": 2, "n_test": 5, "progress": False, "cache": False,
+                                          "svm_params": dict(TINY_SVM), "multilabel": False, **kw})
 
 
 def _split(features: FeatureSet, test: list[str]) -> Split:
@@ -140,7 +143,7 @@ def test_run_gzsl_table_layout_and_scores():
     features = synthetic_features()
     config = _config()
     splits, _ = make_splits(features, "random", config)
-    table = run_gzsl(features, splits, config, GzslConfig())
+    table = run_gzsl(features, splits, config)
     per_split = table[~table["split"].isin(["mean", "std"])]
     assert len(per_split) == 2 * 2 * 2  # splits x methods x calibrated
     assert set(per_split["method"]) == {"dap_avg_uni", "eszsl"}
@@ -167,28 +170,26 @@ def test_stacking_constant_never_depends_on_test_objects():
     features = synthetic_features()
     config = _config()
     split = _split(features, ["obj_003", "obj_020", "obj_021", "obj_015"])
-    gzsl = GzslConfig(methods=("dap", "eszsl"))
-    rows = gzsl_split(features, split, config, gzsl, 0)
+    assert config.gzsl.methods == ["dap", "eszsl"]
+    rows = gzsl_split(features, split, config, 0)
     changed = synthetic_features()
     test = np.isin(changed.objects, split.test_objects)
     changed.X[test] = np.random.default_rng(9).normal(size=changed.X[test].shape) * 5
-    rows2 = gzsl_split(changed, split, config, gzsl, 0)
+    rows2 = gzsl_split(changed, split, config, 0)
     for a, b in zip(rows, rows2):
         assert a["stacking_constant"] == b["stacking_constant"]
         assert a["seen"] == pytest.approx(b["seen"]) or a["calibrated"]  # seen trials unchanged when uncalibrated
     assert [r["unseen"] for r in rows] != [r["unseen"] for r in rows2]
 
 
-def test_bad_settings_are_config_errors():
-    features = synthetic_features()
-    config = _config()
-    splits, _ = make_splits(features, "random", config)
-    for bad in (GzslConfig(holdout_fraction=1.0), GzslConfig(methods=("svm",)), GzslConfig(fusion="min"),
-                GzslConfig(prior="flat")):
-        with pytest.raises(ConfigError):
-            run_gzsl(features, splits, config, bad)
+def test_bad_settings_are_refused():
+    """The schema refuses impossible [gzsl] settings before any fit; no split at all is a ConfigError."""
+    for key, bad in (("holdout_fraction", 1.0), ("methods", ["svm"]), ("fusion", "min"), ("prior", "flat"),
+                     ("max_draws", 0)):
+        with pytest.raises(ValidationError, match=key):
+            _config(**{f"gzsl.{key}": bad})
     with pytest.raises(ConfigError, match="at least one split"):
-        run_gzsl(features, [], config, GzslConfig())
+        run_gzsl(synthetic_features(), [], _config())
 
 
 def test_a_failing_split_is_recorded_and_the_other_splits_complete():
@@ -199,7 +200,7 @@ def test_a_failing_split_is_recorded_and_the_other_splits_complete():
     good = make_splits(features, "random", config)[0][0]
     bad = Split(name="random-9", train_objects=good.train_objects, test_objects=("no_such_object", "obj_003"),
                 attributes=good.attributes)
-    table = run_gzsl(features, [bad, good], config, GzslConfig(calibrated_stacking=False))
+    table = run_gzsl(features, [bad, good], _config(**{"gzsl.calibrated_stacking": False}))
     per_split = table[~table["split"].isin(["mean", "std"])]
     failed = per_split[per_split["error"].fillna("") != ""]
     assert set(failed["method"]) == {"dap_avg_uni", "eszsl"} and failed["harmonic"].isna().all()
@@ -219,7 +220,7 @@ def test_a_split_without_an_unseen_class_is_left_out_with_a_note():
     config = _config()
     good = make_splits(features, "random", config)[0][0]
     bad = _split(features, ["obj_012"])  # its row is a training object's: no unseen class
-    table = run_gzsl(features, [bad, good], config, GzslConfig(calibrated_stacking=False))
+    table = run_gzsl(features, [bad, good], _config(**{"gzsl.calibrated_stacking": False}))
     assert table_failures({"gzsl": table}) == []
     left_out = table[table[RELAXED_COLUMN].fillna("").str.contains("no unseen class")]
     assert set(left_out["split"]) == {"1"} and left_out["harmonic"].isna().all()

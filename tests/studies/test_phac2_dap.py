@@ -8,10 +8,11 @@ import pytest
 
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split
+from tests.study_settings import study_settings
 from tzsl.studies._outputs import ResultsDir
+from tzsl.studies.config import DapSettings
 from tzsl.studies.study_labels import StudyLabels
 from tzsl.studies.zero_shot.study import (
-    DapStudyConfig,
     SplitPosteriors,
     attribute_subsets,
     attribute_sweep,
@@ -46,11 +47,11 @@ def synthetic_features(n_objects: int = 24, n_attributes: int = 6, trials: int =
                       feature_names=tuple(f"f{i}" for i in range(5)), attributes=attrs, dataset="synthetic")
 
 
-def _config(**kw) -> DapStudyConfig:
+def _config(**kw) -> DapSettings:
     base = dict(n_splits=2, n_test=5, progress=False, svm_params=dict(TINY_SVM), multilabel=False,
                 sweep_min_attributes=3, sweep_max_subsets=20)
     base.update(kw)
-    return DapStudyConfig(**base)
+    return study_settings(DapSettings, **base)
 
 
 def test_paper_columns_only_on_the_papers_dataset_and_protocol(tmp_path):

@@ -174,8 +174,8 @@ def test_sections_banner_deviations_and_other_results(tmp_path):
     pd.DataFrame({"x": [1, 2]}).to_csv(root / "my_extra.csv", index=False)
     _figure(root / "fabric_lambda.png", 1.0)
     (root / "manifest.json").write_text(json.dumps({
-        "config": {"phac2_dap": {"svm_params": {"cv": 5}, "random_min_train_positives": 2, "n_splits": 20},
-                   "hand_data": "simulated"},
+        "config": {"svm_params": {"cv": 5}, "hand_data": "simulated",
+                   "dap_settings": {"splits": {"random_min_train_positives": 2, "n_splits": 20}}},
         "data_files": {"/data/phac2.h5": "ab" * 32}, "packages": {"numpy": "2.0"}}))
     page = render_report(root)
     checker = _parse(page)

@@ -9,7 +9,6 @@ import pytest
 
 from tzsl.exceptions import ConfigError
 from tzsl.studies.config import load_experiment
-from tzsl.studies.study_settings import dap_config
 from tzsl.studies.zero_shot.study import attribute_bank
 from tzsl.models import AttributeClassifierBank
 
@@ -37,12 +36,13 @@ def test_schema_offers_exactly_the_banks_solvers():
 
 def test_the_keys_reach_the_estimator(tmp_path):
     exp = _experiment(tmp_path, "solver = 'approximate'\nmax_exact_trials = 123")
-    config = dap_config(exp)
-    assert (config.solver, config.max_exact_trials) == ("approximate", 123)
+    config = exp.config
+    assert (config.svm.solver, config.svm.max_exact_trials) == ("approximate", 123)
     bank = attribute_bank(config, ["a", "b"], seed=0)
     assert bank.get_params()["solver"] == "approximate"
     assert bank.get_params()["max_exact_trials"] == 123
-    assert "solver" not in config.svm_params and "max_exact_trials" not in config.svm_params  # not SVM parameters
+    params = config.svm.estimator_params()
+    assert "solver" not in params and "max_exact_trials" not in params  # not SVM parameters
 
 
 @pytest.mark.parametrize(("svm", "message"), [

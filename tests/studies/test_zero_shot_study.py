@@ -135,7 +135,7 @@ def _check_template_run(tmp_path_factory, n_classes: int, n_attributes: int, n_s
     for table in out.glob("*.csv"):
         assert not [c for c in pd.read_csv(table, nrows=0).columns if c.startswith("paper")], table.name
     manifest = json.loads((out / "manifest.json").read_text())
-    assert manifest["config"]["purpose"] == "confirm" == manifest["config"]["phac2_dap"]["purpose"]
+    assert manifest["config"]["purpose"] == "confirm" == manifest["config"]["dap_settings"]["splits"]["purpose"]
     noted = [line for line in result.output.splitlines() if line.startswith("note: relaxed ")]
     assert len(noted) == len(manifest["config"]["relaxations"])
     # warnings: one line each, no source path, and the same ones in the manifest

@@ -16,7 +16,6 @@ from __future__ import annotations
 import time
 import warnings
 from collections.abc import Callable
-from dataclasses import replace
 
 import numpy as np
 import pandas as pd
@@ -27,7 +26,8 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC
 
 from tzsl.datasets import FeatureSet
-from tzsl.studies.zero_shot.study import DapStudyConfig, SplitPosteriors, fit_split, make_splits, split_masks
+from tzsl.studies.config import DapSettings
+from tzsl.studies.zero_shot.study import SplitPosteriors, fit_split, make_splits, split_masks
 from tzsl.models import attribute_prior
 
 
@@ -56,17 +56,19 @@ def literal_posteriors(features: FeatureSet, train: np.ndarray, test: np.ndarray
     return P
 
 
-def run_bench(features: FeatureSet, config: DapStudyConfig | None = None, split_index: int = 0,
+def run_bench(features: FeatureSet, config: DapSettings | None = None, split_index: int = 0,
               skip_literal: bool = False, echo: Callable[[str], None] | None = None) -> pd.DataFrame:
     """Time and score the three ways on one random split; one row per way."""
-    config = replace(config or DapStudyConfig(), cache=False, progress=False, multilabel=False)
+    config = (config or DapSettings()).model_copy(deep=True)
+    config.compute.cache, config.compute.progress, config.methods.multilabel = False, False, False
     splits, _ = make_splits(features, "random", config)
     split = splits[split_index]
     rows = []
     template: SplitPosteriors | None = None
     for n_jobs in (1, 2):
         start = time.perf_counter()
-        result = fit_split(features, split, replace(config, n_jobs=n_jobs), split_index)
+        config.compute.n_jobs = n_jobs
+        result = fit_split(features, split, config, split_index)
         elapsed = time.perf_counter() - start
         template = result
         rows.append({"method": f"tzsl n_jobs={n_jobs}", "seconds": elapsed,
@@ -76,7 +78,7 @@ def run_bench(features: FeatureSet, config: DapStudyConfig | None = None, split_
     if not skip_literal:
         train, test = split_masks(features, split)
         start = time.perf_counter()
-        P = literal_posteriors(features, train, test, list(split.kept_attributes), seed=config.seed, progress=echo)
+        P = literal_posteriors(features, train, test, list(split.kept_attributes), seed=config.splits.seed, progress=echo)
         elapsed = time.perf_counter() - start
         literal = SplitPosteriors(split=split, attributes=template.attributes, P=P, K=template.K, y=template.y,
                                   train_prior=attribute_prior("uni", class_attributes=template.K))

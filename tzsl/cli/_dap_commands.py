@@ -106,7 +106,6 @@ purpose_option = schema_option(
 def splits(kind, n_splits, n_test, purpose, out, dataset, features_file, plain_dir, path, seed, data_dir, force):
     """Write object splits as CSV (split, object, role), usable with 'tzsl evaluate --splits'."""
     from tzsl.evaluation import write_splits_csv  # noqa: PLC0415
-    from tzsl.studies.study_settings import dap_config  # noqa: PLC0415
     from tzsl.studies.zero_shot.study import make_splits  # noqa: PLC0415
     from tzsl.studies.zero_shot.runner import phac2_features  # noqa: PLC0415
 
@@ -115,7 +114,7 @@ def splits(kind, n_splits, n_test, purpose, out, dataset, features_file, plain_d
     exp = _experiment({**_dataset_values(dataset, features_file, plain_dir, path, data_dir),
                        "splits.n_splits": n_splits, "splits.n_test": n_test, "splits.seed": seed,
                        "splits.purpose": purpose})
-    made, _ = make_splits(phac2_features(exp), kind, dap_config(exp))
+    made, _ = make_splits(phac2_features(exp), kind, exp.config)
     write_splits_csv(made, out)
     for s in made:
         excluded = ", ".join(a for a, _ in s.excluded_attributes) or "none"
@@ -152,7 +151,6 @@ def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep
     with --splits only that split's training objects do.
     """
     from tzsl.studies.engine import check_experiment  # noqa: PLC0415
-    from tzsl.studies.study_settings import dap_config  # noqa: PLC0415
     from tzsl.studies.zero_shot.runner import phac2_features  # noqa: PLC0415
 
     if out.exists() and not force:
@@ -180,20 +178,19 @@ def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep
         return
     from tzsl.inference.model_bundles import train_attribute_bundle  # noqa: PLC0415
 
-    summary = train_attribute_bundle(features, dap_config(exp), out, method=method, splits_file=splits_file,
+    summary = train_attribute_bundle(features, exp.config, out, method=method, splits_file=splits_file,
                                      split_name=split_name, fusion=fusion, prior=prior, force=force)
     click.echo(summary.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
     click.echo(f"fitted {method or 'the attribute classifiers'} in {time.perf_counter() - start:.1f} s; wrote {out}")
 
 
 def _train_per_ep(features, out, splits_file, split_name, exp, force) -> None:
-    from tzsl.studies.study_settings import dap_config  # noqa: PLC0415
     from tzsl.inference.model_bundles import training_subset  # noqa: PLC0415
     from tzsl.inference.predict_active import train_per_ep_bundle  # noqa: PLC0415
 
-    config = dap_config(exp)
-    sub, split = training_subset(features, splits_file, split_name, config.random_min_train_positives)
-    meta = train_per_ep_bundle(sub, out, seed=config.seed, force=force, split=split)
+    config = exp.config
+    sub, split = training_subset(features, splits_file, split_name, config.splits.random_min_train_positives)
+    meta = train_per_ep_bundle(sub, out, seed=config.splits.seed, force=force, split=split)
     click.echo(f"per-EP model: EPs {', '.join(meta['eps'])} ({', '.join(f'{s:g} s' for s in meta['ep_seconds'])}), "
                f"{len(meta['attribute_names'])} attributes, {len(meta['training_objects'])} training objects")
 
@@ -255,13 +252,13 @@ def bench(split_index, skip_literal, out, seed, data_dir, force):
     """Time one random PHAC-2 split: the paper's literal recipe vs tzsl (n_jobs 1 and 2), with accuracies."""
     from tzsl.benchmarks.bench import run_bench  # noqa: PLC0415
     from tzsl.features import dataset_features  # noqa: PLC0415
-    from tzsl.studies.zero_shot.study import DapStudyConfig  # noqa: PLC0415
+    from tzsl.studies.config import DapSettings  # noqa: PLC0415
 
     if out is not None and out.exists() and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite")
     features = dataset_features("phac2-penn", data_dir=data_dir)
-    default = DapStudyConfig(seed=seed)  # timed on the paper's grid, like the literal recipe beside it
-    config = DapStudyConfig(seed=seed, svm_params={**default.svm_params, "grid": "paper"})
+    # timed on the paper's grid, like the literal recipe beside it
+    config = DapSettings(splits={"seed": seed}, svm={"grid": "paper"})
     table = run_bench(features, config, split_index=split_index, skip_literal=skip_literal,
                       echo=click.echo)
     click.echo(table.to_string(index=False, float_format=lambda v: f"{v:.3f}"))

@@ -115,9 +115,13 @@ def schema_option(*decls, study: str, key: str, **kwargs):
 
 
 def _check_n_jobs(ctx, param, value):
-    if value == 0:
-        raise click.BadParameter("0 runs nothing; use 1, 2, ... workers or -1 for every core")
-    return value
+    """``--n-jobs``: the schema's rule for ``[compute] n_jobs`` (:func:`tzsl.studies.config.check_n_jobs`)."""
+    from tzsl.studies.config import check_n_jobs  # noqa: PLC0415
+
+    try:
+        return value if value is None else check_n_jobs(value)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc)) from None
 
 
 def _check_seed(ctx, param, value):

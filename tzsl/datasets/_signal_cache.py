@@ -159,7 +159,7 @@ def _read_all(data, min_rows: int, n_jobs: int | None) -> list[np.ndarray]:
     root = os.path.realpath(data.folder)
     rels = [str(r) for r in data.signal_files.T.reshape(-1)]
     tids = [str(t) for t in data.trials["trial_id"]] * len(data.sensors)
-    workers = effective_n_jobs(n_jobs) if n_jobs is not None else 1
+    workers = effective_n_jobs(n_jobs)  # joblib: None = 1, -1 = every core
     if workers <= 1 or len(rels) < PARALLEL_MIN_FILES:
         results = [_read_chunk(data.folder, root, rels, tids, data.channels, min_rows)]
     else:

@@ -169,12 +169,12 @@ def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | 
     Parameters
     ----------
     features : FeatureSet
-    config : DapStudyConfig
+    config : tzsl.studies.config.DapSettings
         The study's attribute-SVM settings (used when ``method`` is None).
     save : path
     method : str, optional
         A registered attribute model + decision rule method (``tzsl methods``), fitted with its
-        defaults and ``config.seed``. None: the DAP study's tuned per-(attribute, sensor) SVMs
+        defaults and ``config.splits.seed``. None: the DAP study's tuned per-(attribute, sensor) SVMs
         with ``fusion`` and ``prior``.
     splits_file, split_name
         Train on the training objects of this split only.
@@ -193,19 +193,19 @@ def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | 
     from tzsl.studies.study_methods import method_input, study_estimator  # noqa: PLC0415
     from tzsl.models import attribute_rows  # noqa: PLC0415
 
-    sub, split_record = training_subset(features, splits_file, split_name, config.random_min_train_positives)
+    sub, split_record = training_subset(features, splits_file, split_name, config.splits.random_min_train_positives)
     attributes = list(sub.attributes.columns)
     A = sub.trial_attributes()
-    provenance = {"training_objects": sorted(set(sub.objects)), "split": split_record, "seed": config.seed}
+    provenance = {"training_objects": sorted(set(sub.objects)), "split": split_record, "seed": config.splits.seed}
     if method is None:
-        check_cv_folds(config.svm_params.get("cv"), len(set(sub.objects)), "command line")
-        dap = ZeroShotClassifier(attribute_model=attribute_bank(config, attributes, config.seed),
-                                 decision_rule=DAPRule(fusion=fusion, prior=prior), random_state=config.seed)
-        clf = CalibratedZeroShotClassifier(estimator=dap, random_state=config.seed)  # its default calibration
+        check_cv_folds(config.svm.estimator_params().get("cv"), len(set(sub.objects)), "command line")
+        dap = ZeroShotClassifier(attribute_model=attribute_bank(config, attributes, config.splits.seed),
+                                 decision_rule=DAPRule(fusion=fusion, prior=prior), random_state=config.splits.seed)
+        clf = CalibratedZeroShotClassifier(estimator=dap, random_state=config.splits.seed)  # its default calibration
         with compute_context(config):
             clf.fit(sub.X, A, sub.objects)
         save_zero_shot_bundle(save, clf, sub, method=f"dap-{fusion}", ndim=3, force=force,
-                              undersampling=config.undersampling, **provenance)
+                              undersampling=config.svm.undersampling, **provenance)
         rows = [{"attribute": name, "sensor": sensor, "C": getattr(est, "C_", np.nan),
                  "gamma": getattr(est, "gamma_", np.nan), "draw": getattr(est, "draw_", -1),
                  "positive_objects": int(sub.attributes[name].sum())}
@@ -217,7 +217,7 @@ def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | 
     if registered.estimator is not None:
         raise ConfigError(f"method {method!r} is a self-contained estimator; train-attributes saves attribute "
                           "model + decision rule methods (see 'tzsl methods')")
-    clf = study_estimator(spec, config.seed)
+    clf = study_estimator(spec, config.splits.seed)
     objects = sub.objects
     class_rows = sub.attributes.loc[np.unique(objects), attributes].to_numpy(dtype=float)
     clf.fit(method_input(spec, sub.X), attribute_rows(objects, class_rows), objects)

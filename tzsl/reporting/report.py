@@ -318,8 +318,8 @@ def _config_items(manifest: dict) -> dict[str, Any]:
     config = manifest.get("config") if isinstance(manifest.get("config"), dict) else {}
     flat: dict[str, Any] = {}
     for key, value in config.items():
-        if isinstance(value, dict) and key in ("phac2_dap", "fabric", "hand", "gzsl"):
-            flat.update(value)
+        if isinstance(value, dict) and key in ("dap_settings", "fabric", "hand"):  # dap_settings: by table
+            flat.update({k: v for t in value.values() for k, v in t.items()} if key == "dap_settings" else value)
         else:
             flat[key] = value
     return flat
@@ -328,8 +328,8 @@ def _config_items(manifest: dict) -> dict[str, Any]:
 def deviations(manifests: dict[str, dict]) -> list[str]:
     """Sentences saying where the recorded runs differ from the papers' protocols.
 
-    Read from the manifests' configurations (keys of :class:`DapStudyConfig`, the fabric and
-    hand study configs); a key absent from every manifest yields no sentence.
+    Read from the manifests' configurations (the zero-shot study's ``dap_settings`` tables, the
+    fabric and hand study configs); a key absent from every manifest yields no sentence.
     """
     out: list[str] = []
     for name, manifest in manifests.items():

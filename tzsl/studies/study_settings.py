@@ -1,7 +1,8 @@
 """What a study gets and gives: the resolved settings as the study's own arguments, and its result.
 
 One converter per study kind turns a checked experiment (:mod:`tzsl.studies.config`) into the
-call of its study (``dap_config`` ... ``active_config``); :class:`StudyRun` is what every study
+call of its study (``fabric_arguments`` ... ``active_config``; the zero-shot study reads its
+checked tables directly, :class:`~tzsl.studies.config.DapSettings`); :class:`StudyRun` is what every study
 runner returns. Shared by the engine and the runners (so neither imports the other both ways).
 """
 
@@ -15,49 +16,8 @@ import pandas as pd
 from tzsl.studies._failures import table_failures
 from tzsl.studies.config import Experiment
 
-__all__ = ["StudyRun", "active_config", "dap_config", "deep_arguments", "fabric_arguments", "format_table",
-           "gzsl_config", "hand_config", "record_config"]
-
-
-def _svm_params(svm) -> dict:
-    """``[svm]`` -> :class:`~tzsl.models.AttributeSVM` parameters that differ from its defaults."""
-    from tzsl.models import AttributeSVM  # noqa: PLC0415
-
-    defaults = AttributeSVM().get_params()
-    params: dict[str, Any] = {"cv": None if svm.cv == 0 else svm.cv}
-    for key in ("C_range", "gamma_range", "n_C", "n_gamma", "grid", "n_draws", "scoring", "platt_weighting",
-                "search"):
-        value = getattr(svm, key)
-        params[key] = tuple(float(v) for v in value) if key.endswith("_range") else value
-    return {k: v for k, v in params.items() if v != defaults[k]}
-
-
-def dap_config(exp: Experiment):
-    """The :class:`~tzsl.studies.zero_shot.study.DapStudyConfig` of a phac2-dap experiment."""
-    from tzsl.studies.zero_shot.study import DapStudyConfig  # noqa: PLC0415
-
-    c = exp.config
-    return DapStudyConfig(
-        n_splits=c.splits.n_splits, n_test=c.splits.n_test, seed=c.splits.seed, purpose=c.splits.purpose,
-        random_min_train_positives=c.splits.random_min_train_positives,
-        challenging_min_train_positives=c.splits.challenging_min_train_positives,
-        min_train_negatives=c.splits.min_train_negatives,
-        undersampling=c.svm.undersampling, svm_params=_svm_params(c.svm), multilabel=c.methods.multilabel,
-        solver=c.svm.solver, max_exact_trials=c.svm.max_exact_trials,
-        sweep_min_attributes=c.methods.sweep_min_attributes, sweep_max_subsets=c.methods.sweep_max_subsets,
-        compare_on=tuple(c.methods.compare_on), refit_seeds=c.splits.refit_seeds, refit_splits=c.splits.refit_splits,
-        n_jobs=c.compute.n_jobs, backend=c.compute.backend, scheduler=c.compute.scheduler,
-        progress=c.compute.progress, cache=c.compute.cache,
-    )
-
-
-def gzsl_config(exp: Experiment):
-    """The :class:`~tzsl.studies.zero_shot.gzsl.GzslConfig` of a phac2-dap experiment's ``[gzsl]``."""
-    from tzsl.studies.zero_shot.gzsl import GzslConfig  # noqa: PLC0415
-
-    g = exp.config.gzsl
-    return GzslConfig(holdout_fraction=float(g.holdout_fraction), methods=tuple(g.methods), fusion=g.fusion,
-                      prior=g.prior, calibrated_stacking=g.calibrated_stacking, max_draws=g.max_draws)
+__all__ = ["StudyRun", "active_config", "deep_arguments", "fabric_arguments", "format_table", "hand_config",
+           "record_config"]
 
 
 def _fabric_data_arguments(exp: Experiment) -> dict:

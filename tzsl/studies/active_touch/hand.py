@@ -29,7 +29,6 @@ Accuracy is per sequence (``n_sequences`` per test object and seed), with 95% in
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -39,6 +38,7 @@ from sklearn.model_selection import StratifiedKFold
 from tzsl._parallel import reissued, relayed
 from tzsl.datasets import HandTable, simulate_grasps
 from tzsl.evaluation import bootstrap_accuracy_columns, paired_difference_interval
+from tzsl.studies.config import ActiveTouchStudy
 from tzsl.studies.hand.study import HandStudyConfig, fit_hand_model, hand_features
 from tzsl.models import (
     binned_confusion,
@@ -49,27 +49,13 @@ from tzsl.models import (
     outcome_log_likelihoods,
 )
 
-__all__ = ["GRASP_TYPES", "HAND_OUTPUTS", "HandActiveConfig", "grasp_type_of", "run_active_hand"]
+__all__ = ["GRASP_TYPES", "HAND_OUTPUTS", "grasp_type_of", "run_active_hand"]
 
 #: Grasp types by the number of touching BioTacs (inclusive ranges).
 GRASP_TYPES: dict[str, tuple[int, int]] = {"pinch": (1, 2), "tripod": (3, 3), "power": (4, 5)}
 #: Files :func:`run_active_hand` writes.
 HAND_OUTPUTS: tuple[str, ...] = ("active_touch_hand.csv", "active_touch_hand_stop.csv", "active_touch_hand.png")
 _N_BINS, _SMOOTHING = 10, 1.0  # PerEPAttributeModel's defaults
-
-
-@dataclass
-class HandActiveConfig:
-    """Settings of the simulated-hand part (defaults: the active-touch schema's ``[hand]``)."""
-
-    seeds: tuple[int, ...]
-    n_sequences: int
-    max_grasps: int
-    cv: int
-    n_samples: int
-    thresholds: tuple[float, ...]
-    n_boot: int
-    n_jobs: int = 1
 
 
 def grasp_type_of(contact: np.ndarray) -> np.ndarray:
@@ -145,7 +131,7 @@ def _sequences(S: np.ndarray, obj: np.ndarray, types: np.ndarray, L: np.ndarray 
     return pred, top
 
 
-def _evaluate_seed(table: HandTable, study: HandStudyConfig, config: HandActiveConfig, seed: int,
+def _evaluate_seed(table: HandTable, study: HandStudyConfig, config: ActiveTouchStudy, seed: int,
                    strategies: Sequence[str]) -> dict:
     sim = simulate_grasps(table.K, study.n_grasps_per_object, study.noise, study.difficulty, study.shape_miss_rate,
                           random_state=seed)
@@ -159,15 +145,15 @@ def _evaluate_seed(table: HandTable, study: HandStudyConfig, config: HandActiveC
     S = dap_log_scores(_ldap(model, te), K, np.full(K.shape[1], float(model.prior)))
     obj = pd.Index(names).get_indexer(te.objects)
     types = grasp_type_of(te.contact)
-    L = outcome_log_likelihoods(_type_confusion(features, table, study, config.cv, seed, columns), K,
-                                config.n_samples, random_state=seed)
+    L = outcome_log_likelihoods(_type_confusion(features, table, study, config.hand.cv, seed, columns), K,
+                                config.methods.n_samples, random_state=seed)
     out = {}
     for i, s in enumerate(strategies):
         rng = np.random.default_rng([seed, i])
-        pred, top = _sequences(S, obj, types, L, s, config.n_sequences, config.max_grasps, rng)
-        out[s] = {"correct": (pred == np.repeat(np.arange(len(names)), config.n_sequences)[:, None]).astype(float),
+        pred, top = _sequences(S, obj, types, L, s, config.hand.n_sequences, config.hand.max_grasps, rng)
+        out[s] = {"correct": (pred == np.repeat(np.arange(len(names)), config.hand.n_sequences)[:, None]).astype(float),
                   "top": top}
-    return {"strategies": out, "objects": np.repeat(names, config.n_sequences), "n_classes": len(names),
+    return {"strategies": out, "objects": np.repeat(names, config.hand.n_sequences), "n_classes": len(names),
             "type_share": np.bincount(types, minlength=len(GRASP_TYPES)) / len(types)}
 
 
@@ -192,25 +178,25 @@ def _figure(table: pd.DataFrame):
     return fig
 
 
-def run_active_hand(table: HandTable, results_dir, config: HandActiveConfig,
+def run_active_hand(table: HandTable, results_dir, config: ActiveTouchStudy,
                     log: Callable[[str], None] | None = None) -> dict[str, pd.DataFrame]:
     """Run the simulated-hand comparison and write :data:`HAND_OUTPUTS`; returns the two tables."""
     results_dir.check_free(HAND_OUTPUTS)
     log = log or (lambda _msg: None)
     study = HandStudyConfig()
     strategies = ["active", *(f"fixed:{t}" for t in GRASP_TYPES), "random_type", "random_grasp"]
-    runs = [reissued(r) for r in Parallel(n_jobs=config.n_jobs)(
-        delayed(relayed(_evaluate_seed))(table, study, config, seed, strategies) for seed in config.seeds)]
-    for seed, r in zip(config.seeds, runs):
-        log(f"simulated hand, seed {seed}: active after 1..{config.max_grasps} grasps "
+    runs = [reissued(r) for r in Parallel(n_jobs=config.compute.n_jobs)(
+        delayed(relayed(_evaluate_seed))(table, study, config, seed, strategies) for seed in config.hand.seeds)]
+    for seed, r in zip(config.hand.seeds, runs):
+        log(f"simulated hand, seed {seed}: active after 1..{config.hand.max_grasps} grasps "
             f"{np.round(r['strategies']['active']['correct'].mean(axis=0), 3).tolist()}")
     classes = np.concatenate([r["objects"] for r in runs])
     splits = np.concatenate([np.full(len(r["objects"]), i) for i, r in enumerate(runs)])
-    boot = {"classes": classes, "splits": splits, "n_boot": config.n_boot, "random_state": 0}
+    boot = {"classes": classes, "splits": splits, "n_boot": config.methods.n_boot, "random_state": 0}
     C = np.hstack([np.vstack([r["strategies"][s]["correct"] for r in runs]) for s in strategies])
     acc, low, high = bootstrap_accuracy_columns(C, **boot)
     chance = float(np.mean([1.0 / r["n_classes"] for r in runs]))
-    k = config.max_grasps
+    k = config.hand.max_grasps
     curves = pd.DataFrame({"data": "simulated", "strategy": np.repeat(strategies, k),
                            "grasps": np.tile(np.arange(1, k + 1), len(strategies)), "accuracy": acc,
                            "ci95_low": low, "ci95_high": high, "chance": chance, "n_seeds": len(runs)})
@@ -218,7 +204,7 @@ def run_active_hand(table: HandTable, results_dir, config: HandActiveConfig,
     for s in strategies:
         corr = np.vstack([r["strategies"][s]["correct"] for r in runs])
         top = np.vstack([r["strategies"][s]["top"] for r in runs])
-        for t in config.thresholds:
+        for t in config.methods.thresholds:
             hit = top >= t
             stop = np.where(hit.any(axis=1), hit.argmax(axis=1), k - 1)
             at = corr[np.arange(len(stop)), stop]

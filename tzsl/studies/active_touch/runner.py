@@ -9,7 +9,7 @@ from collections.abc import Callable
 
 from tzsl.studies._outputs import ResultsDir
 from tzsl.studies.config import Experiment
-from tzsl.studies.study_settings import StudyRun, active_config, format_table, record_config
+from tzsl.studies.study_settings import StudyRun, format_table
 
 __all__ = ["active_touch_outputs", "run_active_touch"]
 
@@ -26,11 +26,11 @@ def run_active_touch(exp: Experiment, results: ResultsDir, say: Callable[[str], 
     from tzsl.studies.active_touch.study import run_active_touch_study  # noqa: PLC0415
     from tzsl.features import load_features  # noqa: PLC0415
 
-    from tzsl.studies.active_touch.hand import HandActiveConfig, run_active_hand  # noqa: PLC0415
+    from tzsl.studies.active_touch.hand import run_active_hand  # noqa: PLC0415
 
     hand = exp.config.hand
     results.check_free(active_touch_outputs(exp.config))
-    config = active_config(exp)
+    config = exp.config
     ds = exp.config.dataset
     features = load_features(ds.builtin, data_dir=exp.resolve(ds.data_dir))
     tables = run_active_touch_study(features, results, config, log=say if exp.config.compute.progress else None)
@@ -47,20 +47,17 @@ def run_active_touch(exp: Experiment, results: ResultsDir, say: Callable[[str], 
                                                          "decided_accuracy", "decided_accuracy_ci95_low",
                                                          "decided_accuracy_ci95_high", "eps_saved", "difference",
                                                          "active_minus_random"]]))
-    record = {"study_kind": "active-touch", "active_touch": record_config(config), "dataset": features.dataset,
+    record = {"study_kind": "active-touch", "dataset": features.dataset,
               "orders_chosen_on_training_objects": tables["active_touch_curves"].attrs["chosen"],
               "posterior_exponents_fitted_on_training_objects": tables["active_touch_curves"].attrs["exponents"]}
     if hand.simulated:
         from tzsl.datasets import load_hand_table4  # noqa: PLC0415
 
-        hand_config = HandActiveConfig(seeds=tuple(hand.seeds), n_sequences=hand.n_sequences,
-                                       max_grasps=hand.max_grasps, cv=hand.cv, n_samples=config.n_samples,
-                                       thresholds=config.thresholds, n_boot=config.n_boot, n_jobs=config.n_jobs)
-        hand_tables = run_active_hand(load_hand_table4(), results, hand_config,
+        hand_tables = run_active_hand(load_hand_table4(), results, config,
                                       log=say if exp.config.compute.progress else None)
         say("\nActive touch on SIMULATED hand grasps: accuracy vs grasps, stopping rule\n"
             + format_table(hand_tables["active_touch_hand_stop"].drop(columns=["data"])))
         tables.update(hand_tables)
-        record["hand"] = {**record_config(hand_config), "hand_data": "simulated",
+        record["hand"] = {"hand_data": "simulated",
                           "grasp_type_share": hand_tables["active_touch_hand"].attrs["type_share"]}
     return StudyRun(tables, record, features.info.get("data_files", []))

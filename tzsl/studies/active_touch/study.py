@@ -33,7 +33,6 @@ the decided-at-t table of :mod:`tzsl.studies.active_touch.stopping`.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from itertools import permutations
 
 import numpy as np
@@ -53,11 +52,11 @@ from tzsl.evaluation import (
 from tzsl.exceptions import ConfigError
 from tzsl.studies._outputs import ResultsDir
 from tzsl.studies.active_touch.stopping import decided_table, stop_outcomes, stopping_figure
-from tzsl.studies.config import ActiveMethods, ActiveSplits
+from tzsl.studies.config import ActiveTouchStudy
 from tzsl.studies.zero_shot.study import object_map_features
 from tzsl.models import PerEPAttributeModel, count_fits, ep_column_blocks, fit_cached, fit_store_counts, run_policy
 
-__all__ = ["ACTIVE_TOUCH_OUTPUTS", "ActiveTouchConfig", "evaluate_split", "run_active_touch_study", "summarise"]
+__all__ = ["ACTIVE_TOUCH_OUTPUTS", "evaluate_split", "run_active_touch_study", "summarise"]
 
 #: Files :func:`run_active_touch_study` writes.
 ACTIVE_TOUCH_OUTPUTS: tuple[str, ...] = ("active_touch.csv", "active_touch_curves.csv", "active_touch_stop.csv",
@@ -67,51 +66,6 @@ _SHORT = {"squeeze": "sq", "hold": "ho", "slow_slide": "ss", "fast_slide": "fs"}
 _SUMMARY = ("active", "active_per_second", "best_fixed_train", "first:*", "paper", "random",
             "best_fixed_test_optimistic")
 _STOPPED = ("active", "active_per_second", "best_fixed_train", "paper", "random")
-_M, _S = ActiveMethods(), ActiveSplits()
-
-
-@dataclass
-class ActiveTouchConfig:
-    """Settings of the active-touch study; every field is recorded in the manifest.
-
-    Attributes
-    ----------
-    kinds : tuple of {"random", "challenging"}
-    n_splits, n_test : int
-        Random splits and their test objects (the challenging splits are always the 5 partitions).
-    seed : int
-        Seeds the splits, the model fits, the Monte-Carlo outcomes and the bootstrap.
-    thresholds : tuple of float
-        Stopping rule: stop once the top class posterior is >= a threshold.
-    update : {"dap", "confusion"}
-        Per-EP class scores (see :class:`tzsl.models.PerEPAttributeModel`).
-    tempering : {"subset", "count", "none"}
-        Exponents of the sequential posterior, fitted on pseudo-unseen training objects.
-    decided_thresholds : tuple of float
-        Thresholds of the decided-at-t table (:mod:`tzsl.studies.active_touch.stopping`).
-    cv : int
-        Grouped folds of the confusion estimate (training objects only).
-    n_samples : int
-        Monte-Carlo outcomes per class for the expected information gain.
-    n_boot : int
-        Bootstrap replicates.
-    n_jobs : int
-        Splits evaluated in parallel (joblib).
-    """
-
-    # every default is the experiment schema's (tzsl.studies.config), written once there
-    kinds: tuple[str, ...] = tuple(_S.kinds)
-    n_splits: int = _S.n_splits
-    n_test: int = _S.n_test
-    seed: int = _S.seed
-    thresholds: tuple[float, ...] = field(default_factory=lambda: tuple(_M.thresholds))
-    update: str = _M.update
-    tempering: str = _M.tempering
-    decided_thresholds: tuple[float, ...] = field(default_factory=lambda: tuple(_M.decided_thresholds))
-    cv: int = _M.cv
-    n_samples: int = _M.n_samples
-    n_boot: int = _M.n_boot
-    n_jobs: int = 1
 
 
 def _order_name(eps: tuple[str, ...], order: tuple[int, ...]) -> str:
@@ -145,7 +99,7 @@ def _train_order_accuracy(model: PerEPAttributeModel, A_train: np.ndarray, group
 
 
 def evaluate_split(features: FeatureSet, split: Split, *, seed: int, update: str, cv: int, n_samples: int,
-                   tempering: str = _M.tempering) -> dict:
+                   tempering: str) -> dict:
     """Fit on the split's training objects and explore its test trials with every strategy.
 
     Every strategy runs on the tempered posterior (exponents fitted on the training objects);
@@ -342,17 +296,17 @@ def _figure(table: pd.DataFrame):
     return fig
 
 
-def make_active_splits(features: FeatureSet, kind: str, config: ActiveTouchConfig) -> list[Split]:
+def make_active_splits(features: FeatureSet, kind: str, config: ActiveTouchStudy) -> list[Split]:
     """The random or challenging splits of the study."""
     if kind == "random":
-        return random_object_splits(features.attributes, n_test=config.n_test, n_splits=config.n_splits,
-                                    random_state=config.seed)
+        return random_object_splits(features.attributes, n_test=config.splits.n_test, n_splits=config.splits.n_splits,
+                                    random_state=config.splits.seed)
     if kind == "challenging":
         return challenging_splits(object_map_features(features), features.attributes)[0]
     raise ConfigError(f"unknown split kind {kind!r}; choose random or challenging")
 
 
-def run_active_touch_study(features: FeatureSet, results_dir: ResultsDir, config: ActiveTouchConfig,
+def run_active_touch_study(features: FeatureSet, results_dir: ResultsDir, config: ActiveTouchStudy,
                            log: Callable[[str], None] | None = None) -> dict[str, pd.DataFrame]:
     """Run the active-touch evaluation on PHAC-2 features and write its tables and figure.
 
@@ -363,7 +317,9 @@ def run_active_touch_study(features: FeatureSet, results_dir: ResultsDir, config
     results_dir : ResultsDir
         :data:`ACTIVE_TOUCH_OUTPUTS` must be free (checked before computing) unless forced; the
         manifest is the engine's.
-    config : ActiveTouchConfig
+    config : ActiveTouchStudy
+        The checked study file's tables (``[splits]``, ``[methods]``, ``[compute]``); from Python e.g.
+        ``ActiveTouchStudy(splits={"kinds": ["random"], "n_splits": 2})``.
     log : callable, optional
         Receives progress lines.
 
@@ -384,13 +340,13 @@ def run_active_touch_study(features: FeatureSet, results_dir: ResultsDir, config
     results_dir.check_free(ACTIVE_TOUCH_OUTPUTS)
     log = log or (lambda _msg: None)
     tables, stops, decided, chosen, exponents = [], [], [], {}, {}
-    for k, kind in enumerate(config.kinds):
+    for k, kind in enumerate(config.splits.kinds):
         splits = make_active_splits(features, kind, config)
-        seeds = [int(np.random.SeedSequence([config.seed, k, i]).generate_state(1)[0]) for i in range(len(splits))]
+        seeds = [int(np.random.SeedSequence([config.splits.seed, k, i]).generate_state(1)[0]) for i in range(len(splits))]
         with stage("fit"):  # per-EP attribute models and their evaluation, in joblib workers
-            results = [reissued(r) for r in Parallel(n_jobs=config.n_jobs)(
-                delayed(relayed(evaluate_split))(features, split, seed=s, update=config.update, cv=config.cv,
-                                                 n_samples=config.n_samples, tempering=config.tempering)
+            results = [reissued(r) for r in Parallel(n_jobs=config.compute.n_jobs)(
+                delayed(relayed(evaluate_split))(features, split, seed=s, update=config.methods.update, cv=config.methods.cv,
+                                                 n_samples=config.methods.n_samples, tempering=config.methods.tempering)
                 for split, s in zip(splits, seeds))]
         for split, r in zip(splits, results):
             for name, n in r.pop("fit_store").items():  # the workers' fit-store events, into the profile
@@ -399,12 +355,12 @@ def run_active_touch_study(features: FeatureSet, results_dir: ResultsDir, config
             exponents[split.name] = [float(x) for x in r["exponents"]]
             log(f"{split.name}: {len(r['objects'])} test trials, active after 1..4 EPs "
                 f"{np.round(r['correct']['active'].mean(axis=0), 3).tolist()}")
-        table, stop = summarise(results, kind, thresholds=config.thresholds, n_boot=config.n_boot, seed=config.seed)
+        table, stop = summarise(results, kind, thresholds=config.methods.thresholds, n_boot=config.methods.n_boot, seed=config.splits.seed)
         tables.append(table)
-        stops.append(stop.assign(posterior="untempered" if config.tempering == "none" else "tempered",
-                                 tempering=config.tempering))
-        decided.append(decided_table(results, kind, thresholds=config.decided_thresholds, n_boot=config.n_boot,
-                                     seed=config.seed))
+        stops.append(stop.assign(posterior="untempered" if config.methods.tempering == "none" else "tempered",
+                                 tempering=config.methods.tempering))
+        decided.append(decided_table(results, kind, thresholds=config.methods.decided_thresholds, n_boot=config.methods.n_boot,
+                                     seed=config.splits.seed))
     curves = pd.concat(tables, ignore_index=True)
     out = {"active_touch": summary_table(curves), "active_touch_curves": curves,
            "active_touch_stop": pd.concat(stops, ignore_index=True),

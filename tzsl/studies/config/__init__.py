@@ -6,15 +6,15 @@
 ``"active-touch"`` (:class:`ActiveTouchStudy`), each registered with its runner by
 :func:`register_study` (:func:`study_kinds` lists them). Each table of
 an experiment file is a strict pydantic model (unknown keys, wrong types and bad ranges are
-errors, all reported at once as ``FILE: key.path: reason``). The study dataclasses
-(:class:`~tzsl.studies.zero_shot.study.DapStudyConfig`, ...) and the command-line options read
-their defaults from here; where a default is an estimator's, it is read from the estimator.
+errors, all reported at once as ``FILE: key.path: reason``). Each study reads its own
+validated tables (the DAP study: :class:`DapSettings`, which every zero-shot study file is), and the
+command-line options read their defaults from here; where a default is an estimator's, it is read from the estimator.
 
 ``[methods] compare = ["eszsl", {name = "embedding", lam = 0.1}]`` lists registry methods
 (``tzsl methods``) with parameters, checked against the registry at load time.
 """
 
-from tzsl.studies.config._common import SEED_LIMIT, Compute, DaskCompute, Output, method_label
+from tzsl.studies.config._common import SEED_LIMIT, Compute, DaskCompute, Output, check_n_jobs, method_label
 from tzsl.studies.config._load import (
     Experiment,
     builtin_names,
@@ -26,6 +26,7 @@ from tzsl.studies.config._load import (
     validate,
 )
 from tzsl.studies.config._phac2 import (
+    DapSettings,
     Phac2Dataset,
     Phac2Features,
     Phac2Gzsl,
@@ -62,9 +63,10 @@ from tzsl.studies.config._registry import (
 __all__ = [
     "SEED_LIMIT", "StudyKind", "get_study", "register_study", "study_kinds", "study_names", "unregister_study",
     "ActiveMethods", "ActiveSplits", "ActiveTouchStudy", "Compute",
-    "DaskCompute", "Experiment", "FabricDeepStudy",
+    "DapSettings", "DaskCompute", "Experiment", "FabricDeepStudy",
     "FabricStudy", "HandFeatures", "HandMethods", "HandSimulation", "HandStudy", "Output", "Phac2Dataset",
     "Phac2Features", "Phac2Gzsl", "Phac2Methods", "Phac2Splits", "Phac2Study", "Phac2Svm", "builtin_names",
-    "builtin_text", "config_from_options", "defaults", "estimator_parameters", "load_experiment", "to_toml",
+    "builtin_text", "check_n_jobs", "config_from_options", "defaults", "estimator_parameters", "load_experiment",
+    "to_toml",
     "method_label", "validate", "ZeroShotMethods", "ZeroShotSplits", "ZeroShotStudy", "every_feature_method",
 ]

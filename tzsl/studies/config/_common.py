@@ -38,6 +38,7 @@ def non_empty(values: list) -> list:
 
 
 def check_n_jobs(value: int) -> int:
+    """``n_jobs`` in joblib's sense (workers; -1 = every core), refused when 0 (``[compute]`` and ``--n-jobs``)."""
     if value == 0:
         raise ValueError("n_jobs = 0 runs nothing; use 1, 2, ... workers or -1 for every core")
     return value

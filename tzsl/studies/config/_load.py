@@ -238,9 +238,15 @@ def _toml_value(value: Any) -> str:
     raise TypeError(f"cannot write {value!r} as TOML")
 
 
+#: Tables :func:`to_toml` writes before the others, when the study has them.
+_LEADING_TABLES = ("dataset", "features")
+
+
 def to_toml(config: BaseModel) -> str:
     """The resolved experiment as TOML, every key written (unset keys as comments)."""
     data = config.model_dump()
+    # the data first, as study files are written (schemas that extend DapSettings list its tables first)
+    data = {k: data[k] for k in sorted(data, key=lambda k: k not in _LEADING_TABLES)}
     lines = []
     for key, value in data.items():
         if not isinstance(value, dict):

@@ -204,6 +204,20 @@ class Phac2Svm(Section):
     max_exact_trials: int = Field(default_factory=lambda: _bank_default("max_exact_trials"), ge=1,
                                   description="largest training set (trials) that solver = 'auto' fits exactly")
 
+    def estimator_params(self) -> dict:
+        """The :class:`~tzsl.models.AttributeSVM` parameters of this table that differ from the SVM's
+        defaults (``cv = 0`` is its ``cv=None``, leave-one-object-out); ``undersampling``, ``solver`` and
+        ``max_exact_trials`` are passed on their own."""
+        from tzsl.models import AttributeSVM  # noqa: PLC0415
+
+        defaults = AttributeSVM().get_params()
+        params: dict = {"cv": None if self.cv == 0 else self.cv}
+        for key in ("C_range", "gamma_range", "n_C", "n_gamma", "grid", "n_draws", "scoring", "platt_weighting",
+                    "search"):
+            value = getattr(self, key)
+            params[key] = tuple(float(v) for v in value) if key.endswith("_range") else value
+        return {k: v for k, v in params.items() if v != defaults[k]}
+
     @field_validator("cv")
     @classmethod
     def _cv(cls, v):
@@ -226,18 +240,36 @@ class Phac2Output(Output):
                                     "one folder (reproduce-tables); lower-case letters, digits, '-', '_'")
 
 
-class Phac2Study(Section):
+class DapSettings(Section):
+    """What the DAP study reads: the ``[methods]``, ``[gzsl]``, ``[splits]``, ``[svm]`` and ``[compute]`` tables.
+
+    Every study file of the zero-shot kind is one (:class:`Phac2Study` adds the data and the output);
+    from Python, give only what differs from the defaults, e.g.
+    ``DapSettings(splits={"n_splits": 2}, svm={"cv": 3})``
+    (:func:`tzsl.studies.zero_shot.study.run_dap_study`).
+    """
+
+    methods: Phac2Methods = Field(default_factory=Phac2Methods)
+    gzsl: Phac2Gzsl = Field(default_factory=Phac2Gzsl)
+    splits: Phac2Splits = Field(default_factory=Phac2Splits)
+    svm: Phac2Svm = Field(default_factory=Phac2Svm)
+    compute: DaskCompute = Field(default_factory=DaskCompute)
+
+    @property
+    def study_seed(self) -> int:
+        """The seed of every fit and draw after the splits: ``[splits] seed`` and ``purpose`` together."""
+        from tzsl.evaluation import purpose_seed  # noqa: PLC0415
+
+        return purpose_seed(self.splits.seed, self.splits.purpose)
+
+
+class Phac2Study(DapSettings):
     """``study = "phac2-dap"``."""
 
     study: Literal["phac2-dap"] = "phac2-dap"
     description: str = ""
     dataset: Phac2Dataset
     features: Phac2Features = Field(default_factory=Phac2Features)
-    methods: Phac2Methods = Field(default_factory=Phac2Methods)
-    gzsl: Phac2Gzsl = Field(default_factory=Phac2Gzsl)
-    splits: Phac2Splits = Field(default_factory=Phac2Splits)
-    svm: Phac2Svm = Field(default_factory=Phac2Svm)
-    compute: DaskCompute = Field(default_factory=DaskCompute)
     output: Phac2Output = Field(default_factory=Phac2Output)
 
     @model_validator(mode="after")

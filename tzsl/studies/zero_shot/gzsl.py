@@ -39,7 +39,7 @@ Protocol, per object split (:class:`tzsl.evaluation.Split`):
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -57,8 +57,8 @@ from tzsl.evaluation import (
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.studies._failures import ERROR_COLUMN, attempt
 from tzsl.evaluation import Outcomes, add_trust_columns
-from tzsl.studies.config import Phac2Gzsl
-from tzsl.studies.zero_shot.study import DapStudyConfig, attribute_bank, compute_context
+from tzsl.studies.config import DapSettings, Phac2Gzsl
+from tzsl.studies.zero_shot.study import attribute_bank, compute_context
 from tzsl.studies.zero_shot.tables import split_label
 from tzsl.models import attribute_prior, attribute_rows, build_method, dap_log_scores, fuse_attribute_posteriors
 
@@ -68,7 +68,6 @@ RELAXED_COLUMN = "relaxed"
 __all__ = [
     "GZSL_FILE",
     "GZSL_METHODS",
-    "GzslConfig",
     "GzslProblem",
     "choose_stacking_constant",
     "gzsl_problem",
@@ -82,54 +81,8 @@ __all__ = [
 #: Output table of :func:`run_gzsl` in a results folder.
 GZSL_FILE = "gzsl.csv"
 
-#: Methods :class:`GzslConfig` can score.
+#: Methods ``[gzsl] methods`` can score (:class:`~tzsl.studies.config.Phac2Gzsl`).
 GZSL_METHODS: tuple[str, ...] = ("dap", "eszsl")
-
-
-_GZSL = Phac2Gzsl()
-
-
-@dataclass
-class GzslConfig:
-    """Settings of the GZSL evaluation; recorded in the manifest.
-
-    Attributes
-    ----------
-    holdout_fraction : float in (0, 1)
-        Fraction of each training object's trials held out as seen-class test trials.
-    methods : tuple of {"dap", "eszsl"}
-    fusion : {"avg", "max"}
-        DAP sensor fusion.
-    prior : {"uni", "train", "test"}
-        DAP attribute prior ("train": training objects' rows, "test": all candidate classes).
-    calibrated_stacking : bool
-        Also report calibrated stacking with the constant chosen on training data.
-    max_draws : int
-        Draws of pseudo-unseen classes tried before giving up (calibration only).
-    """
-
-    # every default is the experiment schema's (tzsl.studies.config), written once there
-    holdout_fraction: float = _GZSL.holdout_fraction
-    methods: tuple[str, ...] = tuple(_GZSL.methods)
-    fusion: str = _GZSL.fusion
-    prior: str = _GZSL.prior
-    calibrated_stacking: bool = _GZSL.calibrated_stacking
-    max_draws: int = _GZSL.max_draws
-
-    def check(self) -> None:
-        """Raise ConfigError for settings that cannot work."""
-        if not 0.0 < float(self.holdout_fraction) < 1.0:
-            raise ConfigError(f"gzsl holdout_fraction must be in (0, 1), got {self.holdout_fraction!r}")
-        unknown = [m for m in self.methods if m not in GZSL_METHODS]
-        if unknown or not self.methods:
-            raise ConfigError(f"gzsl methods must be a non-empty subset of {list(GZSL_METHODS)}, got "
-                              f"{list(self.methods)}")
-        if self.fusion not in ("avg", "max"):
-            raise ConfigError(f"gzsl fusion must be 'avg' or 'max', got {self.fusion!r}")
-        if self.prior not in ("uni", "train", "test"):
-            raise ConfigError(f"gzsl prior must be 'uni', 'train' or 'test', got {self.prior!r}")
-        if int(self.max_draws) < 1:
-            raise ConfigError(f"gzsl max_draws must be >= 1, got {self.max_draws!r}")
 
 
 @dataclass
@@ -273,7 +226,7 @@ def _pseudo_problem(features: FeatureSet, problem: GzslProblem, min_train_positi
 # --------------------------------------------------------------------------- scores
 
 
-def _dap_scores(features: FeatureSet, problem: GzslProblem, config: DapStudyConfig, gzsl: GzslConfig,
+def _dap_scores(features: FeatureSet, problem: GzslProblem, config: DapSettings, gzsl: Phac2Gzsl,
                 seed: int) -> np.ndarray:
     """DAP log-scores (n_evaluated, n_classes) of the evaluated trials, bank fitted on ``problem.fit``."""
     attrs = list(problem.attributes)
@@ -308,24 +261,24 @@ def _scores(method: str, features, problem, config, gzsl, seed) -> np.ndarray:
 # --------------------------------------------------------------------------- one split, all splits
 
 
-def _method_name(method: str, gzsl: GzslConfig) -> str:
+def _method_name(method: str, gzsl: Phac2Gzsl) -> str:
     return f"dap_{gzsl.fusion}_{gzsl.prior}" if method == "dap" else method
 
 
-def gzsl_split(features: FeatureSet, split: Split, config: DapStudyConfig, gzsl: GzslConfig,
-               index: int) -> list[dict]:
-    """GZSL rows of one split: one per method (and per calibration when enabled).
+def gzsl_split(features: FeatureSet, split: Split, config: DapSettings, index: int) -> list[dict]:
+    """GZSL rows of one split (settings: ``config.gzsl``): one per method (and per calibration when enabled).
 
     Seeds: the attribute classifiers use the same seed as split ``index`` of the classic study
     (:func:`tzsl.studies.zero_shot.study.fit_split`); the held-out trials and the pseudo-unseen
     draw use ``SeedSequence([config.study_seed, index, 1])`` and ``[..., 2]``.
     """
+    gzsl = config.gzsl
     seed = int(np.random.SeedSequence([config.study_seed, index]).generate_state(1)[0])
     problem = gzsl_problem(features, split, gzsl.holdout_fraction,
                            np.random.default_rng(np.random.SeedSequence([config.study_seed, index, 1])))
     pseudo, relaxed = None, ""
     if gzsl.calibrated_stacking:
-        pseudo, relaxed = _pseudo_problem(features, problem, config.random_min_train_positives, gzsl.max_draws,
+        pseudo, relaxed = _pseudo_problem(features, problem, config.splits.random_min_train_positives, gzsl.max_draws,
                                           np.random.default_rng(np.random.SeedSequence([config.study_seed, index, 2])))
     y = problem.trial_class[problem.evaluate]
     seen_classes = np.flatnonzero(problem.seen)
@@ -392,8 +345,8 @@ def gzsl_table(rows: list[dict]) -> pd.DataFrame:
     return add_trust_columns(table, outcomes, baselines=False)
 
 
-def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: DapStudyConfig | None = None,
-             gzsl: GzslConfig | None = None, echo: Callable[[str], None] | None = None) -> pd.DataFrame:
+def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: DapSettings | None = None,
+             echo: Callable[[str], None] | None = None) -> pd.DataFrame:
     """GZSL evaluation of every split (see the module docstring for the protocol).
 
     Parameters
@@ -403,9 +356,9 @@ def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: DapStudyConf
     splits : sequence of Split
         Object splits (e.g. the random splits of the DAP study); split ``i`` uses the seeds of
         the study's split ``i``.
-    config : DapStudyConfig
-        Attribute-classifier settings (grids, under-sampling, cv, n_jobs, cache).
-    gzsl : GzslConfig
+    config : DapSettings or None
+        Attribute-classifier settings (``[svm]``, ``[compute]``) and the GZSL protocol (``[gzsl]``);
+        default: the schema's defaults.
 
     Returns
     -------
@@ -414,9 +367,8 @@ def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: DapStudyConf
         stacking_constant`` and counts (classes, trials, attributes); ``error``: why a split
         failed (its rows NaN; the other splits still run), empty otherwise.
     """
-    config = config or DapStudyConfig()
-    gzsl = gzsl or GzslConfig()
-    gzsl.check()
+    config = config or DapSettings()
+    gzsl = config.gzsl
     if not splits:
         raise ConfigError("GZSL evaluation needs at least one split")
     rows: list[dict] = []
@@ -428,7 +380,7 @@ def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: DapStudyConf
                                           "training object (no unseen class); split left out",
                           ERROR_COLUMN: ""} for m in gzsl.methods]
                 continue
-            part, error = attempt(gzsl_split, features, split, config, gzsl, i)
+            part, error = attempt(gzsl_split, features, split, config, i)
             if part is None:  # NaN rows for this split, reported at the end of the run
                 rows += [{"split": split_label(split), "method": _method_name(m, gzsl), "calibrated": False,
                           "seen": np.nan, "unseen": np.nan, "harmonic": np.nan, "zsl": np.nan,
@@ -443,10 +395,3 @@ def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: DapStudyConf
                                  for r in part)
                 echo(f"GZSL {split.name}: {text}")
     return gzsl_table(rows)
-
-
-def gzsl_config_record(gzsl: GzslConfig) -> dict:
-    """JSON-ready settings for the manifest."""
-    record = asdict(gzsl)
-    record["methods"] = list(gzsl.methods)
-    return record

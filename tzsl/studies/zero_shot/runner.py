@@ -15,7 +15,7 @@ import pandas as pd
 
 from tzsl.studies._outputs import PrefixedResults, ResultsDir, prefixed
 from tzsl.studies.config import Experiment
-from tzsl.studies.study_settings import StudyRun, dap_config, format_table, gzsl_config, record_config
+from tzsl.studies.study_settings import StudyRun, format_table
 
 __all__ = ["SelectedColumns", "dropped_columns", "phac2_features", "prepare_phac2", "relaxation_notes",
            "run_zero_shot", "zero_shot_outputs", "zero_shot_results"]
@@ -134,7 +134,7 @@ def prepare_phac2(exp: Experiment):
         _check_folds(exp, features.n_objects - (c.splits.n_test if "random" in c.splits.kinds else 0))
         if "random" in c.splits.kinds:
             try:
-                user_splits, _ = make_splits(features, "random", dap_config(exp))
+                user_splits, _ = make_splits(features, "random", c)
             except SplitError as exc:
                 raise ConfigError(f"{exp.source}: splits: {exc}") from None
     return exp, features, user_splits, split_file, relaxed
@@ -148,7 +148,7 @@ def relaxation_notes(exp: Experiment) -> list[str]:
 def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
     """``study = "zero-shot"`` and its paper preset ``"phac2-dap"``: one study, labelled by
     :func:`~tzsl.studies.study_labels.study_labels` (the paper's numbers only on its data)."""
-    from tzsl.studies.zero_shot.gzsl import GZSL_FILE, RELAXED_COLUMN, gzsl_config_record, run_gzsl  # noqa: PLC0415
+    from tzsl.studies.zero_shot.gzsl import GZSL_FILE, RELAXED_COLUMN, run_gzsl  # noqa: PLC0415
     from tzsl.studies.zero_shot.study import make_splits, run_dap_study, solver_lines  # noqa: PLC0415
     from tzsl.studies.zero_shot.tables import table_titles  # noqa: PLC0415
     from tzsl.studies.study_labels import study_labels  # noqa: PLC0415
@@ -156,7 +156,6 @@ def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], Non
     study = exp.study
     exp, features, user_splits, split_file, relaxed = prepare_phac2(exp)
     c = exp.config
-    config = dap_config(exp)
     labels = study_labels(study, c, features)
     say(f"{features.dataset}: {features.n_trials} trials, {features.n_objects} objects, "
         f"{len(features.sensors)} sensor(s), {features.X.shape[2]} features per sensor, "
@@ -171,18 +170,16 @@ def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], Non
     file_splits = user_splits if split_file is not None else None  # random ones are redrawn identically
     solver_record: dict = {}
     out = PrefixedResults(results, c.output.prefix)
-    tables = run_dap_study(features, out, config, kinds=kinds, splits=file_splits, sweep=methods.sweep,
+    tables = run_dap_study(features, out, c, kinds=kinds, splits=file_splits, sweep=methods.sweep,
                            compare_methods=bool(options["methods"]), method_options=options,
                            record=solver_record, labels=labels)
     for text in solver_lines(solver_record["attribute_solver"]):
         say(text)
-    gzsl_record, gzsl_notes = None, []
+    gzsl_notes = []
     if methods.gzsl:
-        gzsl = gzsl_config(exp)
-        splits = user_splits if user_splits is not None else make_splits(features, "random", config)[0]
-        tables["gzsl"] = run_gzsl(features, splits, config, gzsl, echo=say)
+        splits = user_splits if user_splits is not None else make_splits(features, "random", c)[0]
+        tables["gzsl"] = run_gzsl(features, splits, c, echo=say)
         out.write_csv(GZSL_FILE, tables["gzsl"])
-        gzsl_record = gzsl_config_record(gzsl)
         if RELAXED_COLUMN in tables["gzsl"].columns:
             gzsl_notes = [t for t in dict.fromkeys(tables["gzsl"][RELAXED_COLUMN].fillna("")) if t and t != "-"]
             for note in gzsl_notes:
@@ -192,12 +189,15 @@ def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], Non
     for name, title in table_titles(labels).items():
         if name in tables:
             say(f"\n{title}\n{format_table(shown[name])}")
-    record = {"study_kind": study, "purpose": c.splits.purpose, "phac2_dap": record_config(config),
+    # what the fits used: the file's settings after any relaxation (manifest "settings" are the file's)
+    used = c.model_dump(mode="json", include={"methods", "gzsl", "splits", "svm", "compute"})
+    record = {"study_kind": study, "purpose": c.splits.purpose, "dap_settings": used,
+              "svm_params": c.svm.estimator_params(),
               "kinds": list(kinds),
               "splits_file": None if split_file is None else str(split_file),
               "method_options": options, "labels": {"study": labels.study, "data": labels.data,
                                                     "paper": labels.paper, "note": labels.note},
               "relaxations": [r.record() for r in relaxed] + [{"setting": "gzsl", "why": n} for n in gzsl_notes],
-              "gzsl": gzsl_record, "dataset": features.dataset, **solver_record}
+              "dataset": features.dataset, **solver_record}
     data_files = list(features.info.get("data_files", [])) + ([] if split_file is None else [split_file])
     return StudyRun(shown, record, data_files)

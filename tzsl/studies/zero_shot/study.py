@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -22,7 +22,7 @@ from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, challenging_splits, purpose_seed, random_object_splits
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.studies._failures import ERROR_COLUMN, attempt
-from tzsl.studies.config import DaskCompute, Phac2Methods, Phac2Splits, Phac2Svm
+from tzsl.studies.config import DapSettings
 from tzsl.studies.zero_shot.methods import DEFAULT_METHODS
 from tzsl.studies.zero_shot.spread import evidence_tables, model_seed
 from tzsl.studies.study_labels import StudyLabels
@@ -54,97 +54,17 @@ from tzsl.models import (
 #: Table (``failed_splits.csv``) of the splits whose DAP fit failed; written only when one did.
 FAILED_SPLITS = "failed_splits"
 
-_SPLITS, _SVM, _METHODS, _COMPUTE = Phac2Splits(), Phac2Svm(), Phac2Methods(), DaskCompute()
-
 #: Every split a study scored, in the format ``tzsl evaluate --splits`` reads back.
 SPLITS_FILE = "splits.csv"
 
 
 __all__ = [
-    "FUSIONS", "SPLITS_FILE", "PRIORS", "DapStudyConfig", "SplitPosteriors", "attribute_accuracy_summary",
+    "FUSIONS", "SPLITS_FILE", "PRIORS", "SplitPosteriors", "attribute_accuracy_summary",
     "attribute_accuracy_table", "attribute_bank", "attribute_estimator", "check_cv_folds", "attribute_subsets",
     "attribute_sweep", "compute_context", "fit_split", "fit_splits", "make_splits", "multilabel_table",
     "object_map_features", "run_dap_study", "solver_lines", "split_masks", "table1_fusion", "table2_priors",
     "table3_challenging",
 ]
-
-@dataclass
-class DapStudyConfig:
-    """Settings of the PHAC-2 DAP study; every field is recorded in the manifest.
-
-    Attributes
-    ----------
-    n_splits, n_test : int
-        Random splits and test objects per random split (paper: 5 and 10).
-    seed, purpose : int and {"select", "confirm"}
-        Seed the split draws, the under-sampling draws and the sweep's subsets (:attr:`study_seed`);
-        random splits come from ``purpose``'s test sets only (:data:`tzsl.evaluation.PURPOSES`).
-    random_min_train_positives : int
-        Random splits leave out an attribute with fewer positive training objects. 2 is the
-        least object-grouped cross-validation can work with; the paper states no rule.
-    challenging_min_train_positives : int
-        The paper's rule for challenging splits: each attribute trained on >= 3 objects.
-    min_train_negatives : int
-        Both split kinds leave out an attribute with fewer negative training objects.
-    undersampling : {"select", "bagging", "none"}
-        Class-0 under-sampling of the attribute SVMs (see :class:`tzsl.models.AttributeSVM`).
-    svm_params : dict
-        Further :class:`~tzsl.models.AttributeSVM` parameters (grids, draws, cv). The default
-        ``cv=5`` tunes on 5 object-grouped stratified folds of the training objects; ``cv=None``
-        is the paper's leave-one-object-out, several times slower per fit (compare the two with
-        ``[svm] cv`` in a study file; ``make bench-fit`` times one split's fits).
-    solver, max_exact_trials
-        Exact SVMs or the approximate model (see :class:`tzsl.models.AttributeClassifierBank`);
-        ``[svm] solver`` and ``max_exact_trials`` of an experiment file.
-    multilabel : bool
-        Also fit the joint (multi-label) attribute model on the random splits (section 4.4).
-    sweep_min_attributes, sweep_max_subsets : int
-        Attribute-count sweep: j from this many to all attributes, at most this many subsets
-        per j (paper: 7 and 1000).
-    compare_on : tuple of {"random", "challenging"}
-        Split kinds the compared methods run on (``[methods] compare_on``).
-    refit_seeds, refit_splits : int, int or None
-        The seed-refit spread: the first ``refit_splits`` splits of each kind (None: all) fitted
-        again with ``refit_seeds`` other model seeds (:mod:`tzsl.studies.zero_shot.spread`).
-    n_jobs, backend, scheduler
-        Parallel fits; ``backend="dask"`` with ``scheduler=None`` starts a local cluster.
-    progress : bool
-        tqdm progress bars over the fits.
-    cache : bool
-        Cache every fitted (attribute, sensor) model with joblib.Memory under
-        :func:`tzsl.datasets.get_cache_dir` (``$TZSL_CACHE_DIR``), keyed on training data and
-        parameters, so an interrupted run resumes and a re-run does not refit.
-    """
-
-    # every default is the experiment schema's (tzsl.studies.config), written once there
-    n_splits: int = _SPLITS.n_splits
-    n_test: int = _SPLITS.n_test
-    seed: int = _SPLITS.seed
-    purpose: str = _SPLITS.purpose
-    random_min_train_positives: int = _SPLITS.random_min_train_positives
-    challenging_min_train_positives: int = _SPLITS.challenging_min_train_positives
-    min_train_negatives: int = _SPLITS.min_train_negatives
-    undersampling: str = _SVM.undersampling
-    svm_params: dict = field(default_factory=lambda: {"cv": _SVM.cv})
-    solver: str = _SVM.solver
-    max_exact_trials: int = _SVM.max_exact_trials
-    multilabel: bool = _METHODS.multilabel
-    sweep_min_attributes: int = _METHODS.sweep_min_attributes
-    sweep_max_subsets: int = _METHODS.sweep_max_subsets
-    compare_on: tuple[str, ...] = tuple(_METHODS.compare_on)
-    refit_seeds: int = _SPLITS.refit_seeds
-    refit_splits: int | None = _SPLITS.refit_splits
-    n_jobs: int = _COMPUTE.n_jobs
-    backend: str = _COMPUTE.backend
-    scheduler: str | None = _COMPUTE.scheduler
-    progress: bool = _COMPUTE.progress
-    cache: bool = _COMPUTE.cache
-
-    @property
-    def study_seed(self) -> int:
-        """The seed of every fit and draw after the splits: ``seed`` and ``purpose`` together."""
-        return purpose_seed(self.seed, self.purpose)
-
 
 @dataclass
 class SplitPosteriors:
@@ -217,19 +137,19 @@ def object_map_features(features: FeatureSet) -> pd.DataFrame:
     return pd.DataFrame(features.X.reshape(n, s * d), index=pd.Index(features.objects, name="object_name"))
 
 
-def make_splits(features: FeatureSet, kind: str, config: DapStudyConfig) -> tuple[list[Split], pd.DataFrame | None]:
+def make_splits(features: FeatureSet, kind: str, config: DapSettings) -> tuple[list[Split], pd.DataFrame | None]:
     """Random (F5) or challenging (F6) object splits of ``features``; the map for challenging."""
     if kind == "random":
         splits = random_object_splits(
-            features.attributes, n_test=config.n_test, n_splits=config.n_splits, random_state=config.seed,
-            min_train_positives=config.random_min_train_positives, min_train_negatives=config.min_train_negatives,
-            purpose=config.purpose,
+            features.attributes, n_test=config.splits.n_test, n_splits=config.splits.n_splits, random_state=config.splits.seed,
+            min_train_positives=config.splits.random_min_train_positives, min_train_negatives=config.splits.min_train_negatives,
+            purpose=config.splits.purpose,
         )
         return splits, None
     if kind == "challenging":
         return challenging_splits(
             object_map_features(features), features.attributes,
-            min_train_positives=config.challenging_min_train_positives, min_train_negatives=config.min_train_negatives,
+            min_train_positives=config.splits.challenging_min_train_positives, min_train_negatives=config.splits.min_train_negatives,
         )
     raise ConfigError(f"unknown split kind {kind!r}; choose random or challenging")
 
@@ -249,27 +169,27 @@ def check_cv_folds(cv, n_train_objects: int, where: str) -> None:
                           "leave-one-object-out)")
 
 
-def attribute_estimator(config: DapStudyConfig, seed: int) -> AttributeSVM:
+def attribute_estimator(config: DapSettings, seed: int) -> AttributeSVM:
     """The per-(attribute, sensor) SVM template of the study."""
-    return AttributeSVM(undersampling=config.undersampling, random_state=seed, **config.svm_params)
+    return AttributeSVM(undersampling=config.svm.undersampling, random_state=seed, **config.svm.estimator_params())
 
 
-def _memory(config: DapStudyConfig) -> str | None:
+def _memory(config: DapSettings) -> str | None:
     from tzsl.datasets import get_cache_dir  # noqa: PLC0415
 
-    return str(get_cache_dir()) if config.cache else None
+    return str(get_cache_dir()) if config.compute.cache else None
 
 
-def attribute_bank(config: DapStudyConfig, attributes, seed: int) -> AttributeClassifierBank:
+def attribute_bank(config: DapSettings, attributes, seed: int) -> AttributeClassifierBank:
     """Independent per-(attribute, sensor) classifiers, parallel and cached."""
     return AttributeClassifierBank(
-        estimator=attribute_estimator(config, seed), attribute_names=list(attributes), n_jobs=config.n_jobs,
-        backend=config.backend, memory=_memory(config), progress=config.progress, random_state=seed,
-        solver=config.solver, max_exact_trials=config.max_exact_trials,
+        estimator=attribute_estimator(config, seed), attribute_names=list(attributes), n_jobs=config.compute.n_jobs,
+        backend=config.compute.backend, memory=_memory(config), progress=config.compute.progress, random_state=seed,
+        solver=config.svm.solver, max_exact_trials=config.svm.max_exact_trials,
     )
 
 
-def fit_split(features: FeatureSet, split: Split, config: DapStudyConfig, index: int,
+def fit_split(features: FeatureSet, split: Split, config: DapSettings, index: int,
               multilabel: bool = False, refit: int = 0) -> SplitPosteriors:
     """Fit the attribute classifiers on the split's training objects; posteriors of its test trials.
 
@@ -289,8 +209,8 @@ def fit_split(features: FeatureSet, split: Split, config: DapStudyConfig, index:
     P_ml = None
     if multilabel:
         joint = MultiLabelAttributeClassifier(
-            estimator=attribute_estimator(config, seed), attribute_names=list(attributes), n_jobs=config.n_jobs,
-            backend=config.backend, memory=_memory(config), progress=config.progress, random_state=seed,
+            estimator=attribute_estimator(config, seed), attribute_names=list(attributes), n_jobs=config.compute.n_jobs,
+            backend=config.compute.backend, memory=_memory(config), progress=config.compute.progress, random_state=seed,
         )
         joint.fit(features.X[train], A[train], groups[train])
         P_ml = joint.predict_proba(features.X[test])
@@ -302,9 +222,9 @@ def fit_split(features: FeatureSet, split: Split, config: DapStudyConfig, index:
 
 
 @contextlib.contextmanager
-def compute_context(config: DapStudyConfig):
+def compute_context(config: DapSettings):
     """A Dask client for ``backend="dask"`` (the scheduler's, or a local cluster); else nothing."""
-    if config.backend != "dask":
+    if config.compute.backend != "dask":
         yield None
         return
     try:
@@ -318,17 +238,19 @@ def compute_context(config: DapStudyConfig):
         return
     except ValueError:
         pass
-    if config.scheduler:
-        with Client(config.scheduler) as client:
+    if config.compute.scheduler:
+        with Client(config.compute.scheduler) as client:
             yield client
     else:
-        workers = max(1, config.n_jobs if config.n_jobs and config.n_jobs > 0 else 2)
+        from joblib import effective_n_jobs  # noqa: PLC0415
+
+        workers = effective_n_jobs(config.compute.n_jobs)  # n_jobs means workers everywhere: -1 = every core
         with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                           dashboard_address=None) as cluster, Client(cluster) as client:
             yield client
 
 
-def fit_splits(features: FeatureSet, splits: list[Split], config: DapStudyConfig,
+def fit_splits(features: FeatureSet, splits: list[Split], config: DapSettings,
                multilabel: bool = False, offset: int = 0, failures: list[dict] | None = None) -> list[SplitPosteriors]:
     """:func:`fit_split` for every split (index ``offset + i`` seeds split ``i``).
 
@@ -371,7 +293,7 @@ def _print(echo, title: str, table: pd.DataFrame) -> None:
 def run_dap_study(
     features: FeatureSet,
     out,
-    config: DapStudyConfig | None = None,
+    config: DapSettings | None = None,
     kinds: tuple[str, ...] = ("random", "challenging"),
     splits: list[Split] | None = None,
     sweep: bool = True,
@@ -389,7 +311,7 @@ def run_dap_study(
         Per-trial, per-sensor features (e.g. ``dataset_features("phac2-penn")``).
     out : tzsl.studies._outputs.ResultsDir
         Where tables (CSV) and figures (PNG) go; existing files need ``force``.
-    config : DapStudyConfig or None
+    config : DapSettings or None
     kinds : tuple of {"random", "challenging"}
         Which split families to run. Ignored when ``splits`` is given.
     splits : list of Split or None
@@ -398,7 +320,7 @@ def run_dap_study(
     sweep : bool
         Run the attribute-count sweep on the random splits.
     compare_methods : bool
-        Also fit registry methods on the split kinds of ``config.compare_on`` (``phac2_methods.csv``,
+        Also fit registry methods on the split kinds of ``config.methods.compare_on`` (``phac2_methods.csv``,
         ``phac2_method_comparison.csv``; :func:`~tzsl.studies.zero_shot.spread.evidence_tables`).
     echo : callable or None
         Receives human-readable tables (the CLI passes ``click.echo``).
@@ -423,7 +345,7 @@ def run_dap_study(
         object_map_figure,
     )
 
-    config = config or DapStudyConfig()
+    config = config or DapSettings()
     labels = labels or StudyLabels()
     paper = labels.paper
     tables: dict[str, pd.DataFrame] = {}
@@ -431,15 +353,15 @@ def run_dap_study(
         random_results: list[SplitPosteriors] = []
         failed: list[dict] = []  # splits whose DAP fit failed: failed_splits.csv, reported at the end
         if splits is not None:
-            random_results = fit_splits(features, splits, config, multilabel=config.multilabel, failures=failed)
+            random_results = fit_splits(features, splits, config, multilabel=config.methods.multilabel, failures=failed)
         elif "random" in kinds:
             random_splits, _ = make_splits(features, "random", config)
-            random_results = fit_splits(features, random_splits, config, multilabel=config.multilabel,
+            random_results = fit_splits(features, random_splits, config, multilabel=config.methods.multilabel,
                                         failures=failed)
         if random_results:
             tables["table1_fusion"] = table1_fusion(random_results, paper=paper)
             tables["table2_priors"] = table2_priors(random_results, paper=paper)
-            if config.multilabel:
+            if config.methods.multilabel:
                 tables["multilabel"] = multilabel_table(random_results, paper=paper)
             per_split = attribute_accuracy_table(random_results, features.sensors)
             tables["attribute_accuracy_per_split"] = per_split
@@ -447,7 +369,7 @@ def run_dap_study(
             out.write_figure("attribute_accuracy.png", attribute_accuracy_figure(tables["attribute_accuracy"]))
             if sweep:
                 tables["attribute_sweep"] = attribute_sweep(
-                    random_results, config.sweep_min_attributes, config.sweep_max_subsets, seed=config.study_seed)
+                    random_results, config.methods.sweep_min_attributes, config.methods.sweep_max_subsets, seed=config.study_seed)
                 out.write_figure("attribute_sweep.png", attribute_sweep_figure(tables["attribute_sweep"]))
         used = [r.split for r in random_results]
         results: list[SplitPosteriors] = []
@@ -460,10 +382,10 @@ def run_dap_study(
             out.write_figure("object_map.png", object_map_figure(map_coords))
         by_kind = {"file" if splits is not None else "random": (random_results, 0), "challenging": (results, 100)}
         tables.update(evidence_tables(
-            features, by_kind, seed=config.study_seed, labels=labels, compare_on=config.compare_on,
-            purpose=config.purpose, n_jobs=config.n_jobs,
+            features, by_kind, seed=config.study_seed, labels=labels, compare_on=config.methods.compare_on,
+            purpose=config.splits.purpose, n_jobs=config.compute.n_jobs,
             methods=list((method_options or {}).get("methods", DEFAULT_METHODS)) if compare_methods else [],
-            refit_seeds=config.refit_seeds, refit_splits=config.refit_splits,
+            refit_seeds=config.splits.refit_seeds, refit_splits=config.splits.refit_splits,
             refit=lambda split, index, k: fit_split(features, split, config, index, refit=k)))
         write_reliability_figure(out, tables, labels.reliability_table, labels.comparison_table)
         if failed:
