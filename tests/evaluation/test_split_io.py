@@ -10,7 +10,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tzsl.evaluation import Split, random_object_splits, read_splits_csv, write_splits_csv
+from tzsl.evaluation import Split, random_object_splits, read_splits_csv, split_purpose, write_splits_csv
 from tzsl.exceptions import DataFileError, SplitError
 
 # 8 objects, 3 attributes, all vectors distinct except o6 == o7
@@ -42,9 +42,23 @@ def test_format_is_long_and_documented_columns(tmp_path):
     path = write_splits_csv([s], tmp_path / "s.csv")
     df = pd.read_csv(path)
     assert list(df.columns) == ["split", "object", "role", "kind", "seed", "min_train_positives",
-                                "min_train_negatives"]
+                                "min_train_negatives", "purpose"]
     assert df["role"].tolist() == ["train"] * 4 + ["test"] * 2
     assert set(df["split"]) == {"mine"} and set(df["seed"]) == {7}
+
+
+def test_purpose_column_says_which_splits_may_choose(tmp_path):
+    """Each split's rows carry its test set's purpose; the column is derived, so reading ignores it."""
+    splits = [Split(f"s{i}", tuple(o for o in TABLE.index if o not in test), test)
+              for i, test in enumerate([("o0", "o1"), ("o1", "o3"), ("o4", "o5"), ("o1", "o5"), ("o3", "o4")])]
+    path = write_splits_csv(splits, tmp_path / "s.csv")
+    df = pd.read_csv(path)
+    by_split = df.groupby("split")["purpose"].agg(set)
+    assert {s.name: {split_purpose(s.test_objects)} for s in splits} == by_split.to_dict()
+    assert set(df["purpose"]) == {"select", "confirm"}  # these five test sets fall in both purposes
+    df.assign(purpose="select").to_csv(path, index=False)  # an edited purpose cell changes nothing
+    assert read_splits_csv(path, TABLE, min_train_positives=0) == read_splits_csv(
+        write_splits_csv(splits, tmp_path / "t.csv"), TABLE, min_train_positives=0)
 
 
 def test_minimal_user_file_reads_and_reports_exclusion(tmp_path):

@@ -20,6 +20,9 @@ Format (UTF-8, comma-separated, one header line)::
   with, so a challenging split (>= 3 positive training objects) keeps exactly the
   attributes it was made with even when the reader's default rule is the random-split one.
   Without them (user-written files, files of tzsl < 0.2) the reader's arguments apply.
+* ``purpose`` - written, never read: ``select`` or ``confirm``, the purpose the split's test set
+  belongs to (:func:`~tzsl.evaluation.split_purpose`, a function of the test objects alone), so a
+  reader of the file sees which splits may choose a method and which may only report one.
 
 Excluded attributes are not stored: reading recomputes them from the attribute table with
 the split's rule, so a user-written file gets the same checks as a generated one, and a
@@ -39,6 +42,7 @@ import pandas as pd
 
 from tzsl._io import atomic_write
 from tzsl.evaluation._splits import (
+    split_purpose,
     Split,
     check_min_counts,
     kept_mask,
@@ -52,6 +56,8 @@ __all__ = ["read_splits_csv", "write_splits_csv"]
 
 REQUIRED_COLUMNS = ("split", "object", "role")
 OPTIONAL_COLUMNS = ("kind", "seed", "min_train_positives", "min_train_negatives")
+#: Written for the reader of the file, ignored when read back (derived from the test objects).
+DERIVED_COLUMNS = ("purpose",)
 ROLES = ("train", "test", "dropped")
 RULE_COLUMNS = ("min_train_positives", "min_train_negatives")
 
@@ -86,13 +92,14 @@ def write_splits_csv(splits: list[Split], path: str | os.PathLike) -> Path:
         raise DataFileError(path, f"folder {path.parent} does not exist")
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(REQUIRED_COLUMNS + OPTIONAL_COLUMNS)
+    writer.writerow(REQUIRED_COLUMNS + OPTIONAL_COLUMNS + DERIVED_COLUMNS)
     for s in splits:
         seed = "" if s.seed is None else str(s.seed)
         rule = tuple("" if v is None else str(int(v)) for v in (s.min_train_positives, s.min_train_negatives))
         dropped = tuple(o for o, _ in s.dropped_objects)
+        purpose = split_purpose(s.test_objects)
         for role, objs in (("train", s.train_objects), ("test", s.test_objects), ("dropped", dropped)):
-            writer.writerows((s.name, o, role, s.kind, seed, *rule) for o in objs)
+            writer.writerows((s.name, o, role, s.kind, seed, *rule, purpose) for o in objs)
     text = buffer.getvalue()
     atomic_write(path, lambda p: p.write_text(text, encoding="utf-8"))
     return path
