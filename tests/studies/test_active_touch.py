@@ -85,15 +85,29 @@ def test_study_writes_table_and_figure(tmp_path, monkeypatch):
     assert list(summary["strategy"][:3]) == ["active", "active_per_second", "best_fixed_train"]
     assert list(summary.columns[:7]) == ["split_kind", "strategy", "acc_1ep", "acc_1ep_ci95_low", "acc_1ep_ci95_high",
                                          "acc_2ep", "acc_2ep_ci95_low"]
-    assert summary.columns[-3:].tolist() == ["acc_mean_over_seconds", "acc_mean_over_seconds_ci95_low",
-                                             "acc_mean_over_seconds_ci95_high"]
+    assert summary.columns[-4:].tolist() == ["acc_mean_over_seconds", "acc_mean_over_seconds_ci95_low",
+                                             "acc_mean_over_seconds_ci95_high", "purpose"]
     assert summary.loc[summary["strategy"] == "chance", "acc_1ep"].iloc[0] == pytest.approx(table["chance"].iloc[0])
     with pytest.raises(ConfigError, match="already exists"):
         run_active_touch_study(fs, ResultsDir(tmp_path), config)
 
 
+def test_random_splits_belong_to_the_purpose_and_seed_nothing_else():
+    """[splits] purpose: the random splits' test sets are that purpose's, and the purposes share none."""
+    from tzsl.evaluation import split_purpose  # noqa: PLC0415
+    from tzsl.studies.active_touch.study import make_active_splits  # noqa: PLC0415
+
+    fs = _feature_set()
+    made = {p: make_active_splits(fs, "random", study_settings(ActiveTouchStudy, n_splits=6, purpose=p))
+            for p in ("select", "confirm")}
+    for purpose, splits in made.items():
+        assert {split_purpose(s.test_objects) for s in splits} == {purpose}
+    assert not {s.test_objects for s in made["select"]} & {s.test_objects for s in made["confirm"]}
+
+
 def _check_decided_table(dec: pd.DataFrame, written: pd.DataFrame) -> None:
-    assert tuple(dec.columns) == DECIDED_COLUMNS and list(written.columns) == list(DECIDED_COLUMNS)
+    assert tuple(dec.columns) == (*DECIDED_COLUMNS, "purpose") and list(written.columns) == list(dec.columns)
+    assert set(dec["purpose"]) == {"confirm"}  # the default: reported on confirmation splits
     assert set(dec["posterior"]) == {"tempered", "untempered"} and set(dec["strategy"]) == {"active", "random"}
     assert len(dec) == 2 * 2 * 2  # posteriors x strategies x thresholds (0.5, 0.9)
     assert dec["decided_share"].between(0, 1).all()

@@ -47,7 +47,7 @@ def run_active_touch(exp: Experiment, results: ResultsDir, say: Callable[[str], 
                                                          "decided_accuracy", "decided_accuracy_ci95_low",
                                                          "decided_accuracy_ci95_high", "eps_saved", "difference",
                                                          "active_minus_random"]]))
-    record = {"study_kind": "active-touch", "dataset": features.dataset,
+    record = {"study_kind": "active-touch", "purpose": exp.config.splits.purpose, "dataset": features.dataset,
               "orders_chosen_on_training_objects": tables["active_touch_curves"].attrs["chosen"],
               "posterior_exponents_fitted_on_training_objects": tables["active_touch_curves"].attrs["exponents"]}
     if hand.simulated:

@@ -47,6 +47,7 @@ from tzsl.evaluation import (
     bootstrap_accuracy_columns,
     challenging_splits,
     paired_difference_interval,
+    purpose_seed,
     random_object_splits,
 )
 from tzsl.exceptions import ConfigError
@@ -297,10 +298,11 @@ def _figure(table: pd.DataFrame):
 
 
 def make_active_splits(features: FeatureSet, kind: str, config: ActiveTouchStudy) -> list[Split]:
-    """The random or challenging splits of the study."""
+    """The random (of ``[splits] purpose``'s test sets only) or challenging splits of the study."""
+    splits = config.splits
     if kind == "random":
-        return random_object_splits(features.attributes, n_test=config.splits.n_test, n_splits=config.splits.n_splits,
-                                    random_state=config.splits.seed)
+        return random_object_splits(features.attributes, n_test=splits.n_test, n_splits=splits.n_splits,
+                                    random_state=splits.seed, purpose=splits.purpose)
     if kind == "challenging":
         return challenging_splits(object_map_features(features), features.attributes)[0]
     raise ConfigError(f"unknown split kind {kind!r}; choose random or challenging")
@@ -340,13 +342,14 @@ def run_active_touch_study(features: FeatureSet, results_dir: ResultsDir, config
     results_dir.check_free(ACTIVE_TOUCH_OUTPUTS)
     log = log or (lambda _msg: None)
     tables, stops, decided, chosen, exponents = [], [], [], {}, {}
+    methods, study_seed = config.methods, purpose_seed(config.splits.seed, config.splits.purpose)
     for k, kind in enumerate(config.splits.kinds):
         splits = make_active_splits(features, kind, config)
-        seeds = [int(np.random.SeedSequence([config.splits.seed, k, i]).generate_state(1)[0]) for i in range(len(splits))]
+        seeds = [int(np.random.SeedSequence([study_seed, k, i]).generate_state(1)[0]) for i in range(len(splits))]
         with stage("fit"):  # per-EP attribute models and their evaluation, in joblib workers
             results = [reissued(r) for r in Parallel(n_jobs=config.compute.n_jobs)(
-                delayed(relayed(evaluate_split))(features, split, seed=s, update=config.methods.update, cv=config.methods.cv,
-                                                 n_samples=config.methods.n_samples, tempering=config.methods.tempering)
+                delayed(relayed(evaluate_split))(features, split, seed=s, update=methods.update, cv=methods.cv,
+                                                 n_samples=methods.n_samples, tempering=methods.tempering)
                 for split, s in zip(splits, seeds))]
         for split, r in zip(splits, results):
             for name, n in r.pop("fit_store").items():  # the workers' fit-store events, into the profile
@@ -355,16 +358,17 @@ def run_active_touch_study(features: FeatureSet, results_dir: ResultsDir, config
             exponents[split.name] = [float(x) for x in r["exponents"]]
             log(f"{split.name}: {len(r['objects'])} test trials, active after 1..4 EPs "
                 f"{np.round(r['correct']['active'].mean(axis=0), 3).tolist()}")
-        table, stop = summarise(results, kind, thresholds=config.methods.thresholds, n_boot=config.methods.n_boot, seed=config.splits.seed)
+        table, stop = summarise(results, kind, thresholds=methods.thresholds, n_boot=methods.n_boot, seed=study_seed)
         tables.append(table)
-        stops.append(stop.assign(posterior="untempered" if config.methods.tempering == "none" else "tempered",
-                                 tempering=config.methods.tempering))
-        decided.append(decided_table(results, kind, thresholds=config.methods.decided_thresholds, n_boot=config.methods.n_boot,
-                                     seed=config.splits.seed))
+        stops.append(stop.assign(posterior="untempered" if methods.tempering == "none" else "tempered",
+                                 tempering=methods.tempering))
+        decided.append(decided_table(results, kind, thresholds=methods.decided_thresholds, n_boot=methods.n_boot,
+                                     seed=study_seed))
     curves = pd.concat(tables, ignore_index=True)
     out = {"active_touch": summary_table(curves), "active_touch_curves": curves,
            "active_touch_stop": pd.concat(stops, ignore_index=True),
            "active_touch_decided": pd.concat(decided, ignore_index=True)}
+    out = {name: table.assign(purpose=config.splits.purpose) for name, table in out.items()}  # random splits' purpose
     for name, table in out.items():
         results_dir.write_csv(f"{name}.csv", table)
     results_dir.write_figure("active_touch.png", _figure(curves))

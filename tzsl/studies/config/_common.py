@@ -22,6 +22,11 @@ class Section(BaseModel):
 
 Seed = Field(0, ge=0, lt=SEED_LIMIT, description="random seed, 0 <= seed < 2**32")
 
+#: ``[splits] purpose`` (tzsl.evaluation.PURPOSES): which random splits a seed draws, and the fits' seed.
+Purpose = Field("confirm", description="'select': splits that make a choice (a method, a grid); 'confirm': splits "
+                                       "that report it. No seed of one purpose draws a random split of the other; "
+                                       "the purpose also seeds the fits")
+
 
 def distinct(values: list) -> list:
     """Refuse lists that name one value twice."""

@@ -24,6 +24,7 @@ from tzsl.studies.config._common import (
     DaskCompute,
     MethodEntry,
     Output,
+    Purpose,
     Section,
     Seed,
     distinct,
@@ -146,10 +147,7 @@ class Phac2Splits(Section):
     n_splits: int = Field(5, ge=1, description="random splits")
     n_test: int = Field(10, ge=1, description="test objects per random split")
     seed: int = Seed
-    purpose: Literal["select", "confirm"] = Field(
-        "confirm", description="'select': splits that make a choice (a method, a grid); 'confirm': splits that "
-                               "report it. No seed of one purpose draws a random split of the other; the purpose "
-                               "also seeds the fits")
+    purpose: Literal["select", "confirm"] = Purpose
     file: str | None = Field(None, description="split CSV for kinds = ['file'] (default: the plain folder's "
                                                "splits.csv)")
     random_min_train_positives: int = Field(2, ge=1)

@@ -16,6 +16,7 @@ from tzsl.studies.config._common import (
     Compute,
     MethodEntry,
     Output,
+    Purpose,
     Section,
     Seed,
     distinct,
@@ -317,6 +318,7 @@ class ActiveSplits(Section):
     n_splits: int = Field(10, ge=1, description="random splits (the challenging splits are always 5)")
     n_test: int = Field(10, ge=2, description="test objects per random split")
     seed: int = Seed
+    purpose: Literal["select", "confirm"] = Purpose
 
     _kinds = field_validator("kinds")(lambda v: distinct(non_empty(v)))
 
