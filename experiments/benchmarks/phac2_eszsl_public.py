@@ -68,7 +68,8 @@ def public_eszsl(X_tr, objects_tr, table, X_te, K, rng) -> tuple[np.ndarray, boo
 
 def tzsl_eszsl(X_tr, objects_tr, rows_tr, X_te, K, **params) -> tuple[np.ndarray, bool]:
     """The registered ``eszsl`` method; (class scores, chosen value at an edge of the final grid)."""
-    model = build_method("eszsl", **params).fit(X_tr, attribute_rows(objects_tr, rows_tr), objects_tr)
+    model = build_method("eszsl", calibration="none", **params)  # a temperature would not move the argmax
+    model.fit(X_tr, attribute_rows(objects_tr, rows_tr), objects_tr)
     return model.decision_function(X_te, K), bool(model.attribute_model_.at_grid_edge_)
 
 

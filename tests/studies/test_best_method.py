@@ -84,9 +84,11 @@ def test_the_report_states_the_best_method_of_the_runs_own_comparison(tmp_path):
 
 def test_the_benchmark_block_shows_the_choice_and_the_verdict(tmp_path):
     """experiments/benchmarks/README.md's generated block, from the benchmark's decision CSV."""
-    from tzsl.reporting.readme_results import BEST_METHOD_FILE, best_method_block, update_file  # noqa: PLC0415
+    from tzsl.reporting.benchmark_blocks import BEST_METHOD_FILE, MissingResults, best_method_block  # noqa: PLC0415
+    from tzsl.reporting.readme_results import update_file  # noqa: PLC0415
 
-    assert "Not generated yet" in best_method_block(tmp_path)  # no CSV: no number
+    with pytest.raises(MissingResults, match="phac2_best_method.py"):  # no CSV: no block
+        best_method_block(tmp_path)
     select = _comparison("select", {"dap-avg": (0.30, 0), "sae": (0.40, 0.10)}, kind="random")
     confirm = _comparison("confirm", {"dap-avg": (0.30, 0), "sae": (0.33, 0.03)}, kind="random")
     decision = confirm_choice(select, confirm)

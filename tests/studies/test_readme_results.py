@@ -154,8 +154,26 @@ def test_benchmark_block_from_the_benchmarks_own_summary(tmp_path, accuracy_benc
             f"{sae.diff_vs_avgdap:+.3f} [{sae.diff_ci95_low:+.3f}, {sae.diff_ci95_high:+.3f}] |") in text
     assert "| `dap-avg[paper]` | " in text and "| paper | 10 | 0.470 | 90% | 10% |" in text
     assert main([str(out), str(readme), "--check"]) == 0
-    with pytest.raises(ConfigError, match="no accuracy.csv"):
-        update_file(readme, tmp_path / "empty")
+    left: list[str] = []  # another benchmark's folder: this block is left as it is, and the run says so
+    assert not update_file(readme, tmp_path / "empty", left=left)
+    assert readme.read_text() == text and any("phac2-accuracy-benchmark left as it is" in line and
+                                              "no accuracy.csv" in line for line in left)
+
+
+def test_eszsl_public_block_from_the_benchmarks_summary(tmp_path):
+    """eszsl_public.csv (the benchmark's summarise columns) -> its block; the public formulation has no difference."""
+    from tzsl.reporting.benchmark_blocks import ESZSL_PUBLIC_FILE, MissingResults, eszsl_public_block  # noqa: PLC0415
+
+    with pytest.raises(MissingResults, match="phac2_eszsl_public.py"):
+        eszsl_public_block(tmp_path)
+    pd.DataFrame({"purpose": ["confirm"] * 2, "seed": 0, "method": ["public-eszsl", "tzsl-eszsl"], "n_splits": 50,
+                  "accuracy": [0.30, 0.33], "ci95_low": [0.25, 0.28], "ci95_high": [0.35, 0.38],
+                  "diff_vs_public": [0.0, 0.03], "diff_ci95_low": [0.0, 0.01], "diff_ci95_high": [0.0, 0.05],
+                  "share_at_grid_edge": [0.5, 0.1]}).to_csv(tmp_path / ESZSL_PUBLIC_FILE, index=False)
+    block = eszsl_public_block(tmp_path)
+    assert "the paired difference to `public-eszsl`" in block
+    assert "| confirm | `public-eszsl` | 50 | 0.300 [0.250, 0.350] | - | 50% |" in block
+    assert "| confirm | `tzsl-eszsl` | 50 | 0.330 [0.280, 0.380] | +0.030 [+0.010, +0.050] | 10% |" in block
 
 
 def test_block_tabulates_every_method_by_study_from_the_comparison(tmp_path):
@@ -191,7 +209,7 @@ def test_one_file_holds_several_named_blocks(tmp_path, monkeypatch):
 
 
 def test_search_benchmark_block_reads_every_summary(tmp_path):
-    from tzsl.reporting.readme_results import search_benchmark_block  # noqa: PLC0415
+    from tzsl.reporting.benchmark_blocks import search_benchmark_block  # noqa: PLC0415
 
     with pytest.raises(ConfigError, match="phac2_search.py"):
         search_benchmark_block(tmp_path)

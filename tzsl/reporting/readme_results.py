@@ -11,12 +11,10 @@ Markdown file ``TARGET`` between ``<!-- results:begin NAME (...) -->`` and
 * ``results-evidence`` (``docs/user_guide/reproducing.md``): the evidence behind them from the same
   folder: DAP variants and methods per split kind with paired differences and the split and
   seed-refit spreads, and every method x study of ``method_comparison.csv``;
-* ``phac2-accuracy-benchmark`` (``experiments/benchmarks/README.md``): the ``accuracy.csv`` and
-  ``grid_summary.csv`` of ``experiments/benchmarks/phac2_accuracy.py``;
-* ``phac2-best-method`` (``experiments/benchmarks/README.md``): the decision of ``experiments/benchmarks/phac2_best_method.py``
-  (best method on selection splits, its numbers on confirmation splits);
-* ``attribute-search-benchmark`` (``docs/user_guide/performance.md``): the
-  ``search_summary_*.csv`` of ``experiments/benchmarks/phac2_search.py``.
+* the benchmarks' blocks (:mod:`tzsl.reporting.benchmark_blocks`), each from its own CSV:
+  ``phac2-accuracy-benchmark``, ``phac2-best-method`` and ``eszsl-public-benchmark``
+  (``experiments/benchmarks/README.md``), ``attribute-search-benchmark``
+  (``docs/user_guide/performance.md``); a block whose CSV is missing is left as it is.
 
 ``make numbers`` runs it on every target; ``--check`` (``make numbers-check``) exits with
 status 1 when a block differs from what the results give. Tables that are missing are left
@@ -35,10 +33,17 @@ from pathlib import Path
 import pandas as pd
 
 from tzsl.exceptions import ConfigError
+from tzsl.reporting.benchmark_blocks import (
+    MissingResults,
+    benchmark_accuracy_block,
+    best_method_block,
+    eszsl_public_block,
+    search_benchmark_block,
+)
+from tzsl.reporting.markdown_cells import find_table, number, ours
 
-__all__ = ["BEGIN", "BEST_METHOD_FILE", "BLOCKS", "END", "begin", "benchmark_accuracy_block", "best_method_block",
-           "block_spans", "comparison_lines", "end", "evidence_block", "headline_lines", "main", "results_block",
-           "search_benchmark_block", "update_file"]
+__all__ = ["BEGIN", "BLOCKS", "END", "begin", "block_spans", "comparison_lines", "end", "evidence_block",
+           "headline_lines", "main", "results_block", "update_file"]
 
 
 _MARKER = re.compile(r"<!-- results:(begin|end) ([\w-]+)[^>]*-->")
@@ -62,23 +67,6 @@ Row = tuple[str, str, str, str]  # result, ours [interval], baseline, paper
 README_FABRIC_METHODS = ("lam_0", "ESZSL")
 
 
-def _num(v, digits: int = 3) -> str:
-    return "-" if v is None or pd.isna(v) else f"{float(v):.{digits}f}"
-
-
-def _ours(row: pd.Series, column: str, low: str | None = None, high: str | None = None) -> str:
-    low, high = low or f"{column}_ci95_low", high or f"{column}_ci95_high"
-    value = _num(row.get(column))
-    if low in row.index and high in row.index and not pd.isna(row[low]):
-        value += f" [{_num(row[low])}, {_num(row[high])}]"
-    return value
-
-
-def _find(root: Path, name: str) -> pd.DataFrame | None:
-    found = sorted(root.rglob(name))
-    return pd.read_csv(found[0]) if found else None
-
-
 def _first(table: pd.DataFrame, column: str, value) -> pd.Series | None:
     hit = table[table[column].astype(str) == str(value)]
     return None if hit.empty else hit.iloc[0]
@@ -86,42 +74,42 @@ def _first(table: pd.DataFrame, column: str, value) -> pd.Series | None:
 
 def _phac2(root: Path) -> list[Row]:
     rows: list[Row] = []
-    t1 = _find(root, "table1_fusion.csv")
+    t1 = find_table(root, "table1_fusion.csv")
     if t1 is not None and (mean := _first(t1, "split", "mean")) is not None:
         n = int((~t1["split"].astype(str).isin(["mean", "std", "control"])).sum())
         control = _first(t1, "split", "control")
         for col, label, paper in (("avgdap", "AVGDAP", "paper_avgdap"), ("maxdap", "MAXDAP", "paper_maxdap")):
             if col not in t1.columns:
                 continue
-            base = f"chance {_num(mean.get('chance'))}"
+            base = f"chance {number(mean.get('chance'))}"
             if control is not None:
-                base += f"; shuffled-rows control {_ours(control, col)}"
-            rows.append((f"PHAC-2 Table 1, {label} (uniform prior), mean of {n} random splits", _ours(mean, col),
-                         base, _num(mean.get(paper), 2)))
-    t2 = _find(root, "table2_priors.csv")
+                base += f"; shuffled-rows control {ours(control, col)}"
+            rows.append((f"PHAC-2 Table 1, {label} (uniform prior), mean of {n} random splits", ours(mean, col),
+                         base, number(mean.get(paper), 2)))
+    t2 = find_table(root, "table2_priors.csv")
     if t2 is not None and (mean := _first(t2, "split", "mean")) is not None:
         for prior in ("test", "train"):
             if prior in t2.columns:
-                rows.append((f"PHAC-2 Table 2, AVGDAP with the {prior} prior", _ours(mean, prior),
-                             f"chance {_num(mean.get('chance'))}", _num(mean.get(f"paper_{prior}"), 2)))
-    t3 = _find(root, "table3_challenging.csv")
+                rows.append((f"PHAC-2 Table 2, AVGDAP with the {prior} prior", ours(mean, prior),
+                             f"chance {number(mean.get('chance'))}", number(mean.get(f"paper_{prior}"), 2)))
+    t3 = find_table(root, "table3_challenging.csv")
     if t3 is not None and (mean := _first(t3, "split", "mean")) is not None:
         for col, label in (("avgdap", "AVGDAP"), ("maxdap", "MAXDAP")):
             if col in t3.columns:
-                rows.append((f"PHAC-2 Table 3, {label}, mean of the challenging splits", _ours(mean, col),
-                             f"chance {_num(mean.get('chance'))}",
-                             _num(mean.get(f"paper_{col}"), 2) if f"paper_{col}" in t3.columns else "-"))
-    att = _find(root, "attribute_accuracy.csv")
+                rows.append((f"PHAC-2 Table 3, {label}, mean of the challenging splits", ours(mean, col),
+                             f"chance {number(mean.get('chance'))}",
+                             number(mean.get(f"paper_{col}"), 2) if f"paper_{col}" in t3.columns else "-"))
+    att = find_table(root, "attribute_accuracy.csv")
     if att is not None and (mean := _first(att, "attribute", "mean")) is not None:
         rows.append(("PHAC-2 attribute balanced accuracy (headline), mean over attributes",
-                     _ours(mean, "balanced_accuracy"), "0.500 (any constant answer)", "-"))
-        rows.append(("PHAC-2 attribute accuracy, mean over attributes", _ours(mean, "accuracy"),
-                     f"per-attribute majority {_num(mean.get('majority'))}", _num(mean.get("paper_accuracy"), 2)))
+                     ours(mean, "balanced_accuracy"), "0.500 (any constant answer)", "-"))
+        rows.append(("PHAC-2 attribute accuracy, mean over attributes", ours(mean, "accuracy"),
+                     f"per-attribute majority {number(mean.get('majority'))}", number(mean.get("paper_accuracy"), 2)))
     return rows
 
 
 def _fabric(root: Path) -> list[Row]:
-    table = _find(root, "fabric_table1.csv")
+    table = find_table(root, "fabric_table1.csv")
     if table is None or "protocol" not in table.columns:
         return []
     rows: list[Row] = []
@@ -130,26 +118,26 @@ def _fabric(root: Path) -> list[Row]:
         for m in methods:
             if r["zero_shot"]:
                 rows.append((f"Fabric {r['condition']}, {m}, zero-shot variant ({r['protocol']}: test groups "
-                             f"{r['test_groups']}), per-class mean accuracy", _ours(r, f"{m}_pcma"),
-                             f"chance {_num(r['chance'])}", "- (other test set)"))
+                             f"{r['test_groups']}), per-class mean accuracy", ours(r, f"{m}_pcma"),
+                             f"chance {number(r['chance'])}", "- (other test set)"))
             else:
-                base = f"chance {_num(r['chance'])}"
+                base = f"chance {number(r['chance'])}"
                 if "majority" in r.index and not pd.isna(r["majority"]):
-                    base += f"; majority {_num(r['majority'])}"
+                    base += f"; majority {number(r['majority'])}"
                 rows.append((f"Fabric {r['condition']}, {m}, paper split (NOT zero-shot: group 5's row is "
-                             "seen in training), accuracy", _ours(r, m), base, _num(r.get(f"paper_{m}"), 4)))
+                             "seen in training), accuracy", ours(r, m), base, number(r.get(f"paper_{m}"), 4)))
     return rows
 
 
 def _hand(root: Path) -> list[Row]:
-    t5 = _find(root, "hand_table5.csv")
+    t5 = find_table(root, "hand_table5.csv")
     if t5 is None:
         return []
     label = "SIMULATED grasps" if "data" in t5.columns and (t5["data"] == "simulated").any() else "grasps"
     rows: list[Row] = []
     for _, r in t5[t5["seed"].astype(str) == "mean"].iterrows():
-        rows.append((f"Hand Table 5 ({label}), {r['method']}, all test objects", _ours(r, "all"),
-                     f"chance {_num(r.get('chance'))}", _num(r.get("paper_all"), 4)))
+        rows.append((f"Hand Table 5 ({label}), {r['method']}, all test objects", ours(r, "all"),
+                     f"chance {number(r.get('chance'))}", number(r.get("paper_all"), 4)))
     return rows
 
 
@@ -158,9 +146,9 @@ def _cell(row: pd.Series) -> str:
     if pd.isna(row.get("accuracy")):
         note = str(row.get("note", ""))
         return "n/a" if note.startswith("not applicable") else "not run"
-    text = f"{_num(row['accuracy'], 2)} ({_num(row['ci95_low'], 2)}-{_num(row['ci95_high'], 2)})"
+    text = f"{number(row['accuracy'], 2)} ({number(row['ci95_low'], 2)}-{number(row['ci95_high'], 2)})"
     if not pd.isna(row.get("paper_accuracy")):
-        text += f" [{_num(row['paper_accuracy'], 2)}]"
+        text += f" [{number(row['paper_accuracy'], 2)}]"
     if not pd.isna(row.get("difference")):
         text += (f", Δ {float(row['difference']):+.2f} ({float(row['difference_ci95_low']):+.2f}, "
                  f"{float(row['difference_ci95_high']):+.2f})")
@@ -169,7 +157,7 @@ def _cell(row: pd.Series) -> str:
 
 def comparison_lines(root: Path) -> list[str]:
     """Markdown table of ``method_comparison.csv``: one row per method, one column per study."""
-    table = _find(root, "method_comparison.csv")
+    table = find_table(root, "method_comparison.csv")
     if table is None or table.empty:
         return []
     kinds = table["split_kind"].fillna("").astype(str) if "split_kind" in table.columns else pd.Series("", table.index)
@@ -181,7 +169,7 @@ def comparison_lines(root: Path) -> list[str]:
         chance = sub["chance"].dropna() if "chance" in sub.columns else pd.Series(dtype=float)
         named = f"{study}, {kind} splits" if kind in SPLIT_KINDS else study
         label = (f"{named}{' (SIMULATED)' if (sub['data'] == 'simulated').any() else ''}, ref. {sub['reference'].iloc[0]}"
-                 + (f", chance {_num(chance.iloc[0], 2)}" if len(chance) else ""))
+                 + (f", chance {number(chance.iloc[0], 2)}" if len(chance) else ""))
         heads.append(label)
     cells = {(r["method"], r["column"]): _cell(r) for _, r in table.iterrows()}
     lines = ["", "Every method x study (`method_comparison.csv`): accuracy (95% interval) [paper], "
@@ -197,7 +185,7 @@ SPLIT_KINDS = ("random", "challenging")
 
 
 def _spread(row: pd.Series) -> str:
-    return f"{_num(row.get('sd_over_splits'))} / {_num(row.get('sd_over_refit_seeds'))}"
+    return f"{number(row.get('sd_over_splits'))} / {number(row.get('sd_over_refit_seeds'))}"
 
 
 def _difference(row: pd.Series) -> str:
@@ -236,7 +224,7 @@ def headline_lines(root: Path) -> list[str]:
             if part is not variants and str(r["method"]).startswith("dap-"):
                 continue  # already among the DAP variants
             lines.append(f"| {r['split_kind']} ({int(r['n_splits'])}) | `{r['method']}` | "
-                         f"{_ours(r, 'accuracy', 'ci95_low', 'ci95_high')} | {_difference(r)} | {_spread(r)} |")
+                         f"{ours(r, 'accuracy', 'ci95_low', 'ci95_high')} | {_difference(r)} | {_spread(r)} |")
     return lines
 
 
@@ -287,124 +275,12 @@ def evidence_block(results: str | Path) -> str:
     return "\n".join([f"Generated from `{root.name}/*.csv` by `make numbers`."] + lines)
 
 
-def benchmark_accuracy_block(results: str | Path) -> str:
-    """The PHAC-2 accuracy benchmark's tables from its ``accuracy.csv`` (and ``grid_summary.csv``).
-
-    Raises
-    ------
-    ConfigError
-        No ``accuracy.csv`` under ``results``.
-    """
-    root = Path(results)
-    table = _find(root, "accuracy.csv") if root.is_dir() else None
-    if table is None:
-        raise ConfigError(f"{root}: no accuracy.csv; run experiments/benchmarks/phac2_accuracy.py --out "
-                          f"{root}/accuracy.csv first")
-    kinds = list(dict.fromkeys(table["kind"]))
-    splits = {k: int(table.loc[table["kind"] == k, "n_splits"].max()) for k in kinds}
-    lines = [f"Generated from `accuracy.csv` by `make numbers`: accuracy [95% interval] and the paired difference "
-             "to `dap-avg[paper]` on the same trials [95% interval].", "",
-             "| method | " + " | ".join(f"{k} ({splits[k]} splits) | diff" for k in kinds) + " |",
-             "|---|" + "---|---|" * len(kinds)]
-    cells = {(r["method"], r["kind"]): r for _, r in table.iterrows()}
-    for method in dict.fromkeys(table["method"]):
-        row = []
-        for kind in kinds:
-            r = cells.get((method, kind))
-            if r is None:
-                row += ["", ""]
-                continue
-            diff = "-" if pd.isna(r["diff_ci95_low"]) or r["method"] == "dap-avg[paper]" else (
-                f"{float(r['diff_vs_avgdap']):+.3f} [{float(r['diff_ci95_low']):+.3f}, {float(r['diff_ci95_high']):+.3f}]")
-            row += [_ours(r, "accuracy", "ci95_low", "ci95_high"), diff]
-        lines.append(f"| `{method}` | " + " | ".join(row) + " |")
-    grid = _find(root, "grid_summary.csv")
-    if grid is not None:
-        gammas = [c for c in grid.columns if c.startswith("gamma=")]
-        lines += ["", "Chosen attribute SVMs per gamma grid (`grid_summary.csv`): mean grouped-CV log-loss and the "
-                  "share of fits at each gamma.", "",
-                  "| grid | fits | mean CV log-loss | " + " | ".join(gammas) + " |",
-                  "|---|---|---|" + "---|" * len(gammas)]
-        lines += [f"| {r['grid']} | {int(r['n_fits'])} | {_num(r['mean_cv_log_loss'])} | "
-                  + " | ".join(f"{100 * float(r[g]):.0f}%" for g in gammas) + " |" for _, r in grid.iterrows()]
-    return "\n".join(lines)
-
-
-def search_benchmark_block(results: str | Path) -> str:
-    """Full grid vs successive halving (``experiments/benchmarks/phac2_search.py``), one row per seed and grid.
-
-    Reads every ``search_summary_seed<S>_<grid>.csv`` under ``results``.
-
-    Raises
-    ------
-    ConfigError
-        No such file under ``results``.
-    """
-    root = Path(results)
-    found = sorted(root.rglob("search_summary_*.csv")) if root.is_dir() else []
-    if not found:
-        raise ConfigError(f"{root}: no search_summary_*.csv; run experiments/benchmarks/phac2_search.py --out {root} "
-                          "first")
-    table = pd.concat([pd.read_csv(f) for f in found]).sort_values(["grid", "seed"])
-    lines = ["Generated from `search_summary_*.csv` by `make numbers`: AVGDAP (uniform prior) trial accuracy "
-             "[95% interval] of each search, the paired difference halving minus grid on the same trials "
-             "[95% interval], the share of (attribute, sensor) models that chose the grid's configuration, and "
-             "the CPU seconds of all attribute fits of each search (one process, one core).", "",
-             "| gamma grid | seed | splits | grid | halving | halving - grid | interval holds 0 or is above it | "
-             "same choice | CPU grid (s) | CPU halving (s) | CPU ratio |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
-    for _, r in table.iterrows():
-        diff = (f"{float(r['difference']):+.3f} [{float(r['difference_ci95_low']):+.3f}, "
-                f"{float(r['difference_ci95_high']):+.3f}]")
-        lines.append(f"| {r['grid']} | {int(r['seed'])} | {int(r['n_splits'])} | "
-                     f"{_ours(r, 'grid_avgdap', 'grid_ci95_low', 'grid_ci95_high')} | "
-                     f"{_ours(r, 'halving_avgdap', 'halving_ci95_low', 'halving_ci95_high')} | {diff} | "
-                     f"{'yes' if float(r['difference_ci95_high']) >= 0 else 'no'} | "
-                     f"{100 * float(r['same_choice_share']):.0f}% | {float(r['grid_cpu_s']):.1f} | "
-                     f"{float(r['halving_cpu_s']):.1f} | {float(r['cpu_ratio']):.2f} |")
-    return "\n".join(lines)
-#: The decision CSV of ``experiments/benchmarks/phac2_best_method.py``.
-BEST_METHOD_FILE = "phac2_best_method.csv"
-
-
-def best_method_block(results: str | Path) -> str:
-    """The best-method decision (``phac2_best_method.csv``): chosen on selection splits, shown on confirmation.
-
-    Without the CSV under ``results``, a line saying how to make it (the block then holds no number).
-    """
-    root = Path(results)
-    table = _find(root, BEST_METHOD_FILE) if root.is_dir() else None
-    if table is None:
-        return ("Not generated yet from the shipped code: run `experiments/benchmarks/phac2_best_method.py --out "
-                f"DIR/{BEST_METHOD_FILE}`, then `make numbers BENCH_RESULTS=DIR`.")
-    lines = [f"Generated from `{BEST_METHOD_FILE}` by `make numbers`: the most accurate method on the selection "
-             "splits, then its accuracy [95% interval] and paired difference to the reference [95% interval] on "
-             "the confirmation splits (seed "
-             + ", ".join(str(int(v)) for v in dict.fromkeys(table["seed"])) + ").", "",
-             "| splits | chosen on selection (splits) | selection accuracy | confirmation accuracy "
-             "(splits) | minus reference | beats it |", "|---|---|---|---|---|---|"]
-    for _, r in table.iterrows():
-        diff = "-" if pd.isna(r.get("difference")) else (
-            f"{float(r['difference']):+.3f} [{float(r['difference_ci95_low']):+.3f}, "
-            f"{float(r['difference_ci95_high']):+.3f}] vs `{r['reference']}`")
-        lines.append(f"| {r['kind']} | `{r['chosen']}` ({_num(r.get('selection_n_splits'), 0)}) | "
-                     f"{_num(r['selection_accuracy'])} | {_ours(r, 'accuracy', 'ci95_low', 'ci95_high')} "
-                     f"({_num(r.get('confirmation_n_splits'), 0)}) | {diff} | "
-                     f"{'yes' if bool(r['beats_reference']) else 'no'} |")
-    notes = [f"{r['kind']}: {r['note']}" for _, r in table.iterrows() if isinstance(r.get("note"), str) and r["note"]]
-    winners = table[table["beats_reference"].astype(bool)]
-    verdict = ("The shipped default stays the reference: no chosen method beats it on the confirmation splits "
-               "with an interval excluding 0." if winners.empty else
-               "Beats the reference on the confirmation splits with an interval excluding 0: "
-               + ", ".join(f"`{r['chosen']}` ({r['kind']})" for _, r in winners.iterrows()) + ".")
-    return "\n".join(lines + [""] + [verdict] + ([""] + [f"Note, {n}." for n in notes] if notes else []))
-
-
 #: Block name -> the function that makes its Markdown from a results folder.
 BLOCKS: dict[str, Callable[[Path], str]] = {"readme": results_block, "results-evidence": evidence_block,
                                             "phac2-accuracy-benchmark": benchmark_accuracy_block,
                                             "attribute-search-benchmark": search_benchmark_block,
-                                            "phac2-best-method": best_method_block}
+                                            "phac2-best-method": best_method_block,
+                                            "eszsl-public-benchmark": eszsl_public_block}
 
 
 def block_spans(text: str) -> list[tuple[int, int]]:
@@ -420,8 +296,13 @@ def block_spans(text: str) -> list[tuple[int, int]]:
     return spans
 
 
-def update_file(target: str | Path, results: str | Path, check: bool = False) -> bool:
+def update_file(target: str | Path, results: str | Path, check: bool = False,
+                left: list[str] | None = None) -> bool:
     """Rewrite every generated block of ``target`` from ``results``.
+
+    A block whose CSV is not under ``results`` (:class:`~tzsl.reporting.benchmark_blocks.MissingResults`)
+    is left as it is, and why is appended to ``left``: one benchmark's numbers are regenerated from its
+    own results folder without the other benchmarks' (nor is a published block ever emptied).
 
     Returns
     -------
@@ -446,7 +327,12 @@ def update_file(target: str | Path, results: str | Path, check: bool = False) ->
         pattern = re.compile(opening + r".*?" + re.escape(end(name)), re.S)
         if text.count(f"results:begin {name} ") != 1 or len(pattern.findall(new)) != 1:
             raise ConfigError(f"{path}: needs exactly one {begin(name)!r} ... {end(name)!r} block")
-        block = f"{begin(name)}\n{BLOCKS[name](Path(results))}\n{end(name)}"
+        try:
+            block = f"{begin(name)}\n{BLOCKS[name](Path(results))}\n{end(name)}"
+        except MissingResults as exc:
+            if left is not None:
+                left.append(f"{path}: block {name} left as it is: {exc}")
+            continue
         new = pattern.sub(lambda _m, b=block: b, new)
     changed = new != text
     if changed and not check:
@@ -463,11 +349,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("target", type=Path, help="Markdown file with generated blocks (README.md, ...)")
     parser.add_argument("--check", action="store_true", help="exit 1 if a block is out of date")
     args = parser.parse_args(argv)
+    left: list[str] = []
     try:
-        changed = update_file(args.target, args.results, check=args.check)
+        changed = update_file(args.target, args.results, check=args.check, left=left)
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 3
+    for line in left:
+        print(f"note: {line}", file=sys.stderr)
     if args.check and changed:
         print(f"{args.target}: a generated block is out of date; run `make numbers`", file=sys.stderr)
         return 1

@@ -1,0 +1,167 @@
+"""The benchmarks' generated blocks (:data:`tzsl.reporting.readme_results.BLOCKS`), one per benchmark CSV.
+
+Each reads its own CSV under the results folder it is given and raises :class:`MissingResults`
+when that CSV is not there; :func:`~tzsl.reporting.readme_results.update_file` then leaves that
+block as it is and says so, so one benchmark's numbers are regenerated without the others' results.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+from tzsl.exceptions import ConfigError
+from tzsl.reporting.markdown_cells import find_table, number, ours
+
+__all__ = ["BEST_METHOD_FILE", "ESZSL_PUBLIC_FILE", "MissingResults", "benchmark_accuracy_block", "best_method_block",
+           "eszsl_public_block", "search_benchmark_block"]
+
+#: The decision CSV of ``experiments/benchmarks/phac2_best_method.py``.
+BEST_METHOD_FILE = "phac2_best_method.csv"
+#: The summary CSV of ``experiments/benchmarks/phac2_eszsl_public.py``.
+ESZSL_PUBLIC_FILE = "eszsl_public.csv"
+
+
+class MissingResults(ConfigError):
+    """A block's CSV is not in the results folder given (the block is left as it is)."""
+
+
+def benchmark_accuracy_block(results: str | Path) -> str:
+    """The PHAC-2 accuracy benchmark's tables from its ``accuracy.csv`` (and ``grid_summary.csv``).
+
+    Raises
+    ------
+    MissingResults
+        No ``accuracy.csv`` under ``results``.
+    """
+    root = Path(results)
+    table = find_table(root, "accuracy.csv")
+    if table is None:
+        raise MissingResults(f"{root}: no accuracy.csv; run experiments/benchmarks/phac2_accuracy.py --out "
+                             f"{root}/accuracy.csv first")
+    kinds = list(dict.fromkeys(table["kind"]))
+    splits = {k: int(table.loc[table["kind"] == k, "n_splits"].max()) for k in kinds}
+    lines = [f"Generated from `accuracy.csv` by `make numbers`: accuracy [95% interval] and the paired difference "
+             "to `dap-avg[paper]` on the same trials [95% interval].", "",
+             "| method | " + " | ".join(f"{k} ({splits[k]} splits) | diff" for k in kinds) + " |",
+             "|---|" + "---|---|" * len(kinds)]
+    cells = {(r["method"], r["kind"]): r for _, r in table.iterrows()}
+    for method in dict.fromkeys(table["method"]):
+        row = []
+        for kind in kinds:
+            r = cells.get((method, kind))
+            if r is None:
+                row += ["", ""]
+                continue
+            diff = "-" if pd.isna(r["diff_ci95_low"]) or r["method"] == "dap-avg[paper]" else (
+                f"{float(r['diff_vs_avgdap']):+.3f} [{float(r['diff_ci95_low']):+.3f}, {float(r['diff_ci95_high']):+.3f}]")
+            row += [ours(r, "accuracy", "ci95_low", "ci95_high"), diff]
+        lines.append(f"| `{method}` | " + " | ".join(row) + " |")
+    grid = find_table(root, "grid_summary.csv")
+    if grid is not None:
+        gammas = [c for c in grid.columns if c.startswith("gamma=")]
+        lines += ["", "Chosen attribute SVMs per gamma grid (`grid_summary.csv`): mean grouped-CV log-loss and the "
+                  "share of fits at each gamma.", "",
+                  "| grid | fits | mean CV log-loss | " + " | ".join(gammas) + " |",
+                  "|---|---|---|" + "---|" * len(gammas)]
+        lines += [f"| {r['grid']} | {int(r['n_fits'])} | {number(r['mean_cv_log_loss'])} | "
+                  + " | ".join(f"{100 * float(r[g]):.0f}%" for g in gammas) + " |" for _, r in grid.iterrows()]
+    return "\n".join(lines)
+
+
+def search_benchmark_block(results: str | Path) -> str:
+    """Full grid vs successive halving (``experiments/benchmarks/phac2_search.py``), one row per seed and grid.
+
+    Reads every ``search_summary_seed<S>_<grid>.csv`` under ``results``.
+
+    Raises
+    ------
+    MissingResults
+        No such file under ``results``.
+    """
+    root = Path(results)
+    found = sorted(root.rglob("search_summary_*.csv")) if root.is_dir() else []
+    if not found:
+        raise MissingResults(f"{root}: no search_summary_*.csv; run experiments/benchmarks/phac2_search.py --out "
+                             f"{root} first")
+    table = pd.concat([pd.read_csv(f) for f in found]).sort_values(["grid", "seed"])
+    lines = ["Generated from `search_summary_*.csv` by `make numbers`: AVGDAP (uniform prior) trial accuracy "
+             "[95% interval] of each search, the paired difference halving minus grid on the same trials "
+             "[95% interval], the share of (attribute, sensor) models that chose the grid's configuration, and "
+             "the CPU seconds of all attribute fits of each search (one process, one core).", "",
+             "| gamma grid | seed | splits | grid | halving | halving - grid | interval holds 0 or is above it | "
+             "same choice | CPU grid (s) | CPU halving (s) | CPU ratio |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for _, r in table.iterrows():
+        diff = (f"{float(r['difference']):+.3f} [{float(r['difference_ci95_low']):+.3f}, "
+                f"{float(r['difference_ci95_high']):+.3f}]")
+        lines.append(f"| {r['grid']} | {int(r['seed'])} | {int(r['n_splits'])} | "
+                     f"{ours(r, 'grid_avgdap', 'grid_ci95_low', 'grid_ci95_high')} | "
+                     f"{ours(r, 'halving_avgdap', 'halving_ci95_low', 'halving_ci95_high')} | {diff} | "
+                     f"{'yes' if float(r['difference_ci95_high']) >= 0 else 'no'} | "
+                     f"{100 * float(r['same_choice_share']):.0f}% | {float(r['grid_cpu_s']):.1f} | "
+                     f"{float(r['halving_cpu_s']):.1f} | {float(r['cpu_ratio']):.2f} |")
+    return "\n".join(lines)
+def best_method_block(results: str | Path) -> str:
+    """The best-method decision (``phac2_best_method.csv``): chosen on selection splits, shown on confirmation.
+
+    Raises
+    ------
+    MissingResults
+        No ``phac2_best_method.csv`` under ``results``.
+    """
+    root = Path(results)
+    table = find_table(root, BEST_METHOD_FILE)
+    if table is None:
+        raise MissingResults(f"{root}: no {BEST_METHOD_FILE}; run experiments/benchmarks/phac2_best_method.py --out "
+                             f"{root}/{BEST_METHOD_FILE} first")
+    lines = [f"Generated from `{BEST_METHOD_FILE}` by `make numbers`: the most accurate method on the selection "
+             "splits, then its accuracy [95% interval] and paired difference to the reference [95% interval] on "
+             "the confirmation splits (seed "
+             + ", ".join(str(int(v)) for v in dict.fromkeys(table["seed"])) + ").", "",
+             "| splits | chosen on selection (splits) | selection accuracy | confirmation accuracy "
+             "(splits) | minus reference | beats it |", "|---|---|---|---|---|---|"]
+    for _, r in table.iterrows():
+        diff = "-" if pd.isna(r.get("difference")) else (
+            f"{float(r['difference']):+.3f} [{float(r['difference_ci95_low']):+.3f}, "
+            f"{float(r['difference_ci95_high']):+.3f}] vs `{r['reference']}`")
+        lines.append(f"| {r['kind']} | `{r['chosen']}` ({number(r.get('selection_n_splits'), 0)}) | "
+                     f"{number(r['selection_accuracy'])} | {ours(r, 'accuracy', 'ci95_low', 'ci95_high')} "
+                     f"({number(r.get('confirmation_n_splits'), 0)}) | {diff} | "
+                     f"{'yes' if bool(r['beats_reference']) else 'no'} |")
+    notes = [f"{r['kind']}: {r['note']}" for _, r in table.iterrows() if isinstance(r.get("note"), str) and r["note"]]
+    winners = table[table["beats_reference"].astype(bool)]
+    verdict = ("The shipped default stays the reference: no chosen method beats it on the confirmation splits "
+               "with an interval excluding 0." if winners.empty else
+               "Beats the reference on the confirmation splits with an interval excluding 0: "
+               + ", ".join(f"`{r['chosen']}` ({r['kind']})" for _, r in winners.iterrows()) + ".")
+    return "\n".join(lines + [""] + [verdict] + ([""] + [f"Note, {n}." for n in notes] if notes else []))
+
+
+def eszsl_public_block(results: str | Path) -> str:
+    """tzsl's ESZSL against the public linear ESZSL (``eszsl_public.csv``), per purpose and method.
+
+    Raises
+    ------
+    MissingResults
+        No ``eszsl_public.csv`` under ``results``.
+    """
+    root = Path(results)
+    table = find_table(root, ESZSL_PUBLIC_FILE)
+    if table is None:
+        raise MissingResults(f"{root}: no {ESZSL_PUBLIC_FILE}; run experiments/benchmarks/phac2_eszsl_public.py "
+                             f"--out {root}/{ESZSL_PUBLIC_FILE} first")
+    reference = table.loc[table["diff_vs_public"].abs() < 1e-12, "method"].iloc[0]
+    lines = [f"Generated from `{ESZSL_PUBLIC_FILE}` by `make numbers`: trial accuracy [95% interval] on the same "
+             f"random PHAC-2 splits, the paired difference to `{reference}` [95% interval], and the share of "
+             "splits whose chosen regulariser sits at a grid edge.", "",
+             "| purpose | method | splits | accuracy | minus public | share at a grid edge |",
+             "|---|---|---|---|---|---|"]
+    for _, r in table.iterrows():
+        diff = "-" if r["method"] == reference else (
+            f"{float(r['diff_vs_public']):+.3f} [{float(r['diff_ci95_low']):+.3f}, {float(r['diff_ci95_high']):+.3f}]")
+        lines.append(f"| {r['purpose']} | `{r['method']}` | {int(r['n_splits'])} | "
+                     f"{ours(r, 'accuracy', 'ci95_low', 'ci95_high')} | {diff} | "
+                     f"{100 * float(r['share_at_grid_edge']):.0f}% |")
+    return "\n".join(lines)

@@ -1,0 +1,29 @@
+"""Cells of the generated Markdown tables: a number, ``ours [interval]``, a results CSV found by name."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+__all__ = ["find_table", "number", "ours"]
+
+
+def number(v, digits: int = 3) -> str:
+    """``v`` with ``digits`` decimals; ``-`` for None or NaN."""
+    return "-" if v is None or pd.isna(v) else f"{float(v):.{digits}f}"
+
+
+def ours(row: pd.Series, column: str, low: str | None = None, high: str | None = None) -> str:
+    """``row[column]`` with its interval ``[low, high]`` when the row has one (default ``<column>_ci95_*``)."""
+    low, high = low or f"{column}_ci95_low", high or f"{column}_ci95_high"
+    value = number(row.get(column))
+    if low in row.index and high in row.index and not pd.isna(row[low]):
+        value += f" [{number(row[low])}, {number(row[high])}]"
+    return value
+
+
+def find_table(root: Path, name: str) -> pd.DataFrame | None:
+    """The first ``name`` under the folder ``root`` (searched recursively, sorted paths), or None."""
+    found = sorted(root.rglob(name)) if root.is_dir() else []
+    return pd.read_csv(found[0]) if found else None
