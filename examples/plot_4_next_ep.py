@@ -5,7 +5,7 @@ Choosing the next exploratory procedure
 A robot pays for every exploratory procedure (EP: squeeze, hold, slow slide, fast slide) in
 seconds. A per-EP model (:class:`tzsl.models.PerEPAttributeModel`) holds one attribute model per
 EP and how much each EP confuses each attribute (estimated by object-grouped cross-validation on
-the training objects only). After each EP, :func:`tzsl.models.suggest_next_ep` updates the
+the training objects only). After each EP, :func:`tzsl.models.active_touch.suggest_next_ep` updates the
 posterior over the candidate classes, says whether it has decided, and which EP to do next: the
 one with the largest expected reduction of the class entropy.
 
@@ -17,7 +17,7 @@ Every number below comes from this simulation.
 # Simulated per-EP features
 # -------------------------
 # Features are named ``<ep>:<feature>``, as tzsl names PHAC-2's (``tzsl extract``);
-# :func:`tzsl.models.ep_column_blocks` finds each EP's columns from the names. Here each EP gets
+# :func:`tzsl.models.active_touch.ep_column_blocks` finds each EP's columns from the names. Here each EP gets
 # its own block of simulated features with its own noise level, so some EPs tell more than others.
 import json
 
@@ -25,7 +25,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from tzsl.datasets import synthetic_dataset_arrays
-from tzsl.models import PHAC2_EP_SECONDS, PerEPAttributeModel, ep_column_blocks, suggest_next_ep
+from tzsl.models import PerEPAttributeModel
+from tzsl.models.active_touch import PHAC2_EP_SECONDS, ep_column_blocks, suggest_next_ep
 
 eps = list(PHAC2_EP_SECONDS)  # the EP names and durations (seconds) of the PHAC-2 robot
 n_classes, n_features = 24, 6

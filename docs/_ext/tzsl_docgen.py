@@ -2,7 +2,7 @@
 
 Nothing here is typed by hand: the API reference lists every public name (``__all__`` of every
 public package and module of tzsl), the command reference is ``tzsl COMMAND --help``, the method
-list is ``tzsl methods --json``, the inherited choices are ``tzsl.models.inherited_choices()``, the plain format is ``tzsl formats`` and the experiment-file
+list is ``tzsl methods --json``, the inherited choices are ``tzsl.models.choices.inherited_choices()``, the plain format is ``tzsl formats`` and the experiment-file
 reference is ``tzsl run NAME --print-config``. Everything is written under ``docs/_generated/``
 (not tracked by git) before Sphinx reads the sources, so the pages follow the code.
 """
@@ -190,7 +190,7 @@ def datasets_page(out: Path) -> None:
     _write(out / "datasets_table.md", "\n".join(lines) + "\n")
 def choices_page(out: Path) -> None:
     """Every choice a user inherits (:data:`tzsl.models.INHERITED_CHOICES`), values read from the code."""
-    from tzsl.models import inherited_choices
+    from tzsl.models.choices import inherited_choices
 
     choices = inherited_choices()
     if not choices:

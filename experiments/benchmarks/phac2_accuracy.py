@@ -36,7 +36,8 @@ import pandas as pd
 from tzsl.evaluation import bootstrap_accuracy, paired_difference_interval
 from tzsl.features import dataset_features
 from tzsl.studies.zero_shot.study import split_masks
-from tzsl.models import attribute_rows, build_method
+from tzsl.models import build_method
+from tzsl.models.protocol import attribute_rows
 
 from phac2_posteriors import study_splits  # noqa: E402  (run from experiments/benchmarks/ or with it on sys.path)
 

@@ -31,7 +31,8 @@ from tzsl.evaluation import bootstrap_accuracy, paired_difference_interval
 from tzsl.features import dataset_features
 from tzsl.studies.config import DapSettings
 from tzsl.studies.zero_shot.study import make_splits, split_masks
-from tzsl.models import attribute_rows, build_method
+from tzsl.models import build_method
+from tzsl.models.protocol import attribute_rows
 
 PUBLIC_GRID = 10.0 ** np.arange(-3, 4)
 REFERENCE = "public-eszsl"

@@ -34,7 +34,7 @@ from tzsl.evaluation import bootstrap_accuracy, paired_difference_interval
 from tzsl.features import dataset_features
 from tzsl.studies.config import DapSettings
 from tzsl.studies.zero_shot.study import fit_split, make_splits
-from tzsl.models import SEARCHES
+from tzsl.models.attribute_training import SEARCHES
 
 
 def chosen(bank) -> list[tuple]:

@@ -16,7 +16,7 @@ from tzsl.cli import cli
 
 from tzsl.datasets import FeatureSet
 from tzsl.inference.predict_active import PER_EP_KIND, load_per_ep_model, train_per_ep_bundle
-from tzsl.models import suggest_next_ep
+from tzsl.models.active_touch import suggest_next_ep
 
 ATTRS = ["hard", "soft", "rough"]
 EP_NAMES = [f"{ep}:{f}" for ep in ("squeeze", "hold") for f in ("a", "b")]

@@ -8,6 +8,8 @@ import pytest
 from tzsl.exceptions import ConfigError
 from tzsl.models import (
     PerEPAttributeModel,
+)
+from tzsl.models.active_touch import (
     done_subset_index,
     ep_column_blocks,
     fit_posterior_exponents,

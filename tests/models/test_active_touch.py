@@ -9,7 +9,8 @@ import pytest
 from sklearn.utils._param_validation import InvalidParameterError
 
 from tzsl.exceptions import ConfigError
-from tzsl.models import binned_confusion, dap_log_scores, fuse_attribute_posteriors
+from tzsl.models.dap import dap_log_scores, fuse_attribute_posteriors
+from tzsl.models.active_touch import binned_confusion
 from tzsl.models._active_touch import (
     LogisticAttribute,
     PerEPAttributeModel,

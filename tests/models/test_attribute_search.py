@@ -9,7 +9,8 @@ import tzsl.models._attribute_svm as svm_module
 from tzsl.exceptions import ConfigError
 from tzsl.studies.config import load_experiment
 from tzsl.studies.zero_shot.study import attribute_estimator
-from tzsl.models import AttributeClassifierBank, AttributeSVM, gamma_grid
+from tzsl.models import AttributeClassifierBank, AttributeSVM
+from tzsl.models.attribute_training import gamma_grid
 from tzsl.models._attribute_search import halving_rounds, successive_halving
 from tzsl.models._validation import ParameterError
 
@@ -127,7 +128,7 @@ def test_halving_leaves_bagging_to_the_grid_and_refuses_unknown_values():
 
 def test_schema_offers_exactly_the_estimators_searches():
     from tzsl.studies.config._phac2 import Phac2Svm  # noqa: PLC0415
-    from tzsl.models import SEARCHES  # noqa: PLC0415
+    from tzsl.models.attribute_training import SEARCHES  # noqa: PLC0415
 
     assert set(Phac2Svm.model_fields["search"].annotation.__args__) == set(SEARCHES)
 

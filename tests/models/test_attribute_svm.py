@@ -7,7 +7,8 @@ import pytest
 
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.models import AttributeClassifierBank, AttributeSVM, AttributeTrainingError
-from tzsl.models import GridEdgeWarning, fit_platt
+from tzsl.models import GridEdgeWarning
+from tzsl.models.attribute_training import fit_platt
 from tzsl._fit_store import spawn_seeds
 
 TINY = dict(n_C=2, n_gamma=2, n_draws=2, cv=3)
@@ -268,7 +269,7 @@ def test_grid_edge_choices_are_recorded_and_warned_once_per_batch():
 
 
 def test_gamma_grids():
-    from tzsl.models import GRIDS, gamma_grid
+    from tzsl.models.attribute_training import GRIDS, gamma_grid
 
     assert GRIDS == ("paper", "extended")
     np.testing.assert_allclose(gamma_grid((0.01, 1.0), 3, "paper"), [0.01, 0.1, 1.0])

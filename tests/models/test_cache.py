@@ -1,4 +1,4 @@
-"""tzsl/_fit_store.py: the fit store (keys, hits, warnings, counts), seed spawning, backends."""
+"""tzsl/_fit_store.py (public: tzsl.fit_store): the fit store (keys, hits, warnings, counts), seed spawning, backends."""
 
 from __future__ import annotations
 
@@ -12,8 +12,9 @@ from sklearn.linear_model import LogisticRegression
 
 from tzsl._profile import profiling
 from tzsl.exceptions import ConfigError
-from tzsl.models import AttributeClassifierBank, AttributeSVM, fit_cached, fit_store_counts, resolve_store
-from tzsl._fit_store import CACHE_ENV, FitStore, FITS_FOLDER, array_digest, fit_clone, parallel_context, spawn_seeds
+from tzsl.models import AttributeClassifierBank, AttributeSVM
+from tzsl.fit_store import FITS_FOLDER, fit_cached, fit_store_counts, resolve_store
+from tzsl._fit_store import CACHE_ENV, FitStore, array_digest, fit_clone, parallel_context, spawn_seeds
 
 
 # ---------------------------------------------------------------------------- resolve_store

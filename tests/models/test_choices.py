@@ -11,12 +11,11 @@ import pytest
 
 from tzsl.models import (
     INHERITED_CHOICES,
-    NO_SELECTION_SPLITS,
     AttributeSVM,
     ScoreEnsembleZSL,
     get_method,
-    inherited_choices,
 )
+from tzsl.models.choices import NO_SELECTION_SPLITS, inherited_choices
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 

@@ -7,7 +7,8 @@ import pytest
 from sklearn.model_selection import GroupKFold
 
 from tzsl.evaluation import select_embedding_alpha
-from tzsl.models import ESZSLCV, SAECV, ZSLInputError, class_grouped_folds
+from tzsl.models import ESZSLCV, SAECV, ZSLInputError
+from tzsl.models.protocol import class_grouped_folds
 
 
 def merged_problem(seed=0, per_class=10, n_classes=20, n_merged=8, n_attributes=12, n_features=20):

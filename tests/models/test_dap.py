@@ -10,6 +10,8 @@ from tzsl.exceptions import ConfigError, DataFileError
 from tzsl.models import (
     DAPRule,
     ZeroShotClassifier,
+)
+from tzsl.models.dap import (
     attribute_prior,
     check_class_attributes,
     dap_accuracy_over_subsets,

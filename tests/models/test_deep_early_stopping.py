@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tzsl.models import DeepAttributeEmbedding, ZSLInputError, class_grouped_folds
+from tzsl.models import DeepAttributeEmbedding, ZSLInputError
+from tzsl.models.protocol import class_grouped_folds
 from tzsl.models._deep_training import best_epoch
 
 # 6 classes with distinct attribute rows: folds of 2 held-out rows

@@ -16,9 +16,8 @@ from tzsl.models import (
     CompatibilityRule,
     ZeroShotClassifier,
     ZSLInputError,
-    attribute_rows,
-    training_classes,
 )
+from tzsl.models.protocol import attribute_rows, training_classes
 
 
 def zsl_problem(n_classes=12, n_attributes=10, n_features=30, per_class=20, noise=0.5, seed=0):

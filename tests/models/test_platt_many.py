@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 from scipy.optimize import minimize
 from scipy.special import expit, log_expit
 
-from tzsl.models import fit_platt, fit_platt_many
+from tzsl.models.attribute_training import fit_platt, fit_platt_many
 
 
 def _targets(y: np.ndarray) -> np.ndarray:

@@ -26,11 +26,9 @@ from tzsl.models import (
     ESZSL,
     ZeroShotClassifier,
     build_method,
-    fit_temperature,
     get_method,
-    pseudo_unseen_scores,
-    tempered_proba,
 )
+from tzsl.models.calibration import fit_temperature, pseudo_unseen_scores, tempered_proba
 
 MU = 0.8
 

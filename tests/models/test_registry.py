@@ -21,9 +21,9 @@ from tzsl.models import (
     build_method,
     get_method,
     register_method,
-    training_classes,
     unregister_method,
 )
+from tzsl.models.protocol import training_classes
 
 
 @pytest.fixture

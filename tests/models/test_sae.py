@@ -12,9 +12,8 @@ from tzsl.models import (
     ZeroShotClassifier,
     ZSLInputError,
     build_method,
-    class_grouped_folds,
-    cosine_similarities,
 )
+from tzsl.models.protocol import class_grouped_folds, cosine_similarities
 from tzsl.models._sae import SAE, SAECV, sylvester_solution
 
 def sylvester_residual(A, X, W, lam):

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from tzsl.exceptions import ConfigError
-from tzsl.models import AttributeSVM, ScoreEnsembleZSL, build_method, get_method, zscore_rows
+from tzsl.models import AttributeSVM, ScoreEnsembleZSL, build_method, get_method
+from tzsl.models.protocol import zscore_rows
 
 FAST_EMBEDDINGS = ({"name": "eszsl"}, {"name": "sae"})
 

@@ -14,11 +14,8 @@ from tzsl.models import (
     DAPRule,
     NearestAttributeRule,
     ZeroShotClassifier,
-    attribute_prior,
-    break_ties,
-    dap_log_scores,
-    fuse_attribute_posteriors,
 )
+from tzsl.models.dap import attribute_prior, break_ties, dap_log_scores, fuse_attribute_posteriors
 
 RNG = np.random.default_rng(0)
 P3 = RNG.uniform(0.02, 0.98, size=(40, 2, 6))  # (trials, sensors, attributes)

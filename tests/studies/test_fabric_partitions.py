@@ -19,7 +19,7 @@ from tzsl.studies.fabric.partitions import (
 )
 from tzsl.studies.fabric.samples import FabricSamples
 from tzsl.studies.study_settings import fabric_arguments
-from tzsl.models import MIN_CV_CLASSES
+from tzsl.models.protocol import MIN_CV_CLASSES
 
 # the structure of a8 (8 groups x 8 attributes; groups 3, 4, 5 share a row), typed as a test fixture
 A8_STRUCTURE = np.array(

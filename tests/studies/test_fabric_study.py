@@ -26,7 +26,8 @@ from tzsl.studies.fabric.study import (
 )
 from tzsl.studies.fabric.tables import fabric_protocols
 from tzsl.studies.paper_numbers import FABRIC_TABLE1
-from tzsl.models import ZSLInputError, attribute_rows, build_method
+from tzsl.models import ZSLInputError, build_method
+from tzsl.models.protocol import attribute_rows
 
 A8_LIKE = np.array(  # 8 groups x 4 attributes; groups 3, 4 and 5 share a row, like a8
     [[1, 0, 1, 0], [1, 0, 0, 1], [0, 1, 0, 0], [0, 1, 1, 1], [0, 1, 1, 1], [0, 1, 1, 1], [0, 0, 1, 0],

@@ -19,7 +19,8 @@ from tzsl.studies.hand.study import (
     hand_features,
     run_hand_study,
 )
-from tzsl.models import HandDAPClassifier, break_ties
+from tzsl.models import HandDAPClassifier
+from tzsl.models.dap import break_ties
 
 TABLE = load_hand_table4()
 CONFIG = HandStudyConfig(n_grasps_per_object=20, max_T=4, max_k=3, sequence_length=8, n_sequences=15,

@@ -21,7 +21,7 @@ from tzsl.studies.zero_shot.study import (
     table1_fusion,
     table2_priors,
 )
-from tzsl.models import dap_log_scores
+from tzsl.models.dap import dap_log_scores
 
 TINY_SVM = {"n_C": 2, "n_gamma": 2, "n_draws": 1, "cv": 3}
 

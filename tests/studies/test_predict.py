@@ -20,12 +20,9 @@ from tzsl.models import (
     AttributeSVM,
     DAPRule,
     ZeroShotClassifier,
-    attribute_prior,
-    dap_log_scores,
-    df_mdap_log_scores,
-    fuse_attribute_posteriors,
-    sc_mdap,
 )
+from tzsl.models.dap import attribute_prior, dap_log_scores, fuse_attribute_posteriors
+from tzsl.models.multigrasp import df_mdap_log_scores, sc_mdap
 
 TABLE = load_hand_table4()
 TABLE4_CSV = TABLE.source  # the shipped Table 4 file works as a class table

@@ -14,7 +14,7 @@ from tzsl.inference.predict import load_predictor, predict_grasps, read_class_ta
 torch = pytest.importorskip("torch", reason="PyTorch is not installed (the optional deep extra)")
 
 from tzsl.models import DeepAttributeEmbedding  # noqa: E402
-from tzsl.models import save_deep_bundle  # noqa: E402
+from tzsl.models.embedding import save_deep_bundle  # noqa: E402
 
 A = np.array([[1, 0, 1], [0, 1, 1], [1, 1, 0]], dtype=float)
 

@@ -45,7 +45,7 @@ def _names(text: str | None) -> list[str] | None:
                                                    "entropy reduction).")
 @click.option("--threshold", type=click.FloatRange(0, 1), default=None,
               help="Per-EP bundles: decided when the top class posterior reaches this [default: that of "
-                   "tzsl.models.suggest_next_ep, printed in the output].")
+                   "tzsl.models.active_touch.suggest_next_ep, printed in the output].")
 @click.option("--max-eps", type=click.IntRange(min=1), default=None, help="Per-EP bundles: EP budget.")
 @click.option("--max-seconds", type=click.FloatRange(min=0), default=None, help="Per-EP bundles: budget in seconds.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as one JSON object (with the posteriors "

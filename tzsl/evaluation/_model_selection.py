@@ -15,7 +15,9 @@ import numpy as np
 from sklearn.exceptions import ConvergenceWarning
 
 from tzsl.exceptions import ConfigError
-from tzsl.models import attribute_rows, build_method, class_grouped_folds, fit_cached
+from tzsl.models import build_method
+from tzsl.models.protocol import attribute_rows, class_grouped_folds
+from tzsl.fit_store import fit_cached
 
 __all__ = ["DEFAULT_ALPHAS", "select_embedding_alpha"]
 
@@ -35,7 +37,7 @@ def select_embedding_alpha(
 ) -> tuple[float, np.ndarray | None]:
     """Weight decay of :class:`EmbeddingZSL` by class-grouped CV on training classes only.
 
-    Classes with identical attribute rows are one CV group. :func:`tzsl.models.class_grouped_folds`
+    Classes with identical attribute rows are one CV group. :func:`tzsl.models.protocol.class_grouped_folds`
     makes ``min(5, n_groups // 2)`` folds holding out whole groups (at least 2 per fold, at
     least 2 trained on; a merged group never alone); each fold
     trains ``EmbeddingZSL(lam, alpha, early_stopping=False)`` on the rest and scores the

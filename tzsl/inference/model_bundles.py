@@ -20,7 +20,7 @@ metadata (JSON)
     plus provenance (``training_objects``, ``seed``, ``dataset``, ...).
 
 The deep CNN + LSTM keeps its own bundle kind ``"deep"`` (its weights are an ``.npz`` payload,
-:func:`tzsl.models.save_deep_bundle`); ``tzsl predict`` composes it with a
+:func:`tzsl.models.embedding.save_deep_bundle`); ``tzsl predict`` composes it with a
 :class:`~tzsl.models.NearestAttributeRule` on loading, so it is predicted the same way.
 """
 
@@ -191,7 +191,7 @@ def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | 
     """
     from tzsl.studies.zero_shot.study import attribute_bank, check_cv_folds, compute_context  # noqa: PLC0415
     from tzsl.studies.study_methods import method_input, study_estimator  # noqa: PLC0415
-    from tzsl.models import attribute_rows  # noqa: PLC0415
+    from tzsl.models.protocol import attribute_rows  # noqa: PLC0415
 
     sub, split_record = training_subset(features, splits_file, split_name, config.splits.random_min_train_positives)
     attributes = list(sub.attributes.columns)

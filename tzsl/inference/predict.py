@@ -38,7 +38,9 @@ from tzsl.bundle import load_bundle, read_bundle_header
 from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
 from tzsl.inference.model_bundles import DEEP_KIND, ZERO_SHOT_KIND
 from tzsl.inference.predict_inputs import INPUT_FORMATS, describe_inputs, read_inputs
-from tzsl.models import DecisionRule, NearestAttributeRule, sc_mdap, tempered_proba
+from tzsl.models import DecisionRule, NearestAttributeRule
+from tzsl.models.multigrasp import sc_mdap
+from tzsl.models.calibration import tempered_proba
 
 __all__ = [
     "PREDICT_KINDS",
@@ -175,7 +177,7 @@ def load_predictor(path: str | Path, *, trust_pickle: bool = False) -> Predictor
     """
     kind = read_bundle_header(path).kind  # verified, nothing deserialised yet
     if kind == DEEP_KIND:
-        from tzsl.models import load_deep_bundle  # noqa: PLC0415 - needs the deep extra
+        from tzsl.models.embedding import load_deep_bundle  # noqa: PLC0415 - needs the deep extra
 
         model = load_deep_bundle(path, trust_pickle=trust_pickle)
         metadata = dict(read_bundle_header(path).metadata)

@@ -9,7 +9,7 @@ feature schema (``{"format": "features", ...}`` with EP-prefixed feature names `
 ``tzsl predict --eps-done squeeze,hold [--suggest-next] [--json]`` reads the done EPs' feature
 columns of one trial (other columns may be absent: only what the robot has measured is read),
 updates the sequential posterior over the candidate classes and, through
-:func:`tzsl.models.suggest_next_ep`, reports the ranking, whether the stopping rule has decided and
+:func:`tzsl.models.active_touch.suggest_next_ep`, reports the ranking, whether the stopping rule has decided and
 the next EP with the largest expected entropy reduction (bits). :func:`active_report` returns it as
 one JSON-serialisable dict (the ``--json`` output).
 """
@@ -28,7 +28,8 @@ from tzsl.datasets import FeatureSet
 from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
 from tzsl.inference.model_bundles import feature_schema
 from tzsl.inference.predict_inputs import read_feature_rows
-from tzsl.models import PerEPAttributeModel, ep_column_blocks, suggest_next_ep
+from tzsl.models import PerEPAttributeModel
+from tzsl.models.active_touch import ep_column_blocks, suggest_next_ep
 
 __all__ = ["PER_EP_KIND", "active_report", "format_active_report", "load_per_ep_model", "train_per_ep_bundle"]
 
@@ -136,14 +137,14 @@ def active_report(model: PerEPAttributeModel, metadata: dict, classes: pd.DataFr
     eps_done : sequence of str
         EPs done so far, e.g. ``["squeeze", "hold"]``.
     threshold : float, optional
-        Stop when the top class posterior reaches it; default :func:`~tzsl.models.suggest_next_ep`'s.
+        Stop when the top class posterior reaches it; default :func:`~tzsl.models.active_touch.suggest_next_ep`'s.
     max_eps, max_seconds, n_samples, random_state
-        As :func:`~tzsl.models.suggest_next_ep`.
+        As :func:`~tzsl.models.active_touch.suggest_next_ep`.
 
     Returns
     -------
     dict (JSON-serialisable)
-        ``bundle``, ``trial``, ``threshold`` and the keys of :func:`~tzsl.models.suggest_next_ep`:
+        ``bundle``, ``trial``, ``threshold`` and the keys of :func:`~tzsl.models.active_touch.suggest_next_ep`:
         ``ranking`` (list of ``{"class", "probability"}``, best first; tempered posterior), ``decided``,
         ``decision``, ``stop_reason``, ``done_eps``, ``seconds_used``, ``next_ep``, ``expected_gain_bits``,
         ``candidates`` (list of ``{"ep", "seconds", "expected_gain_bits"}``, best first), ``posterior``

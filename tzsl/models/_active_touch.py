@@ -16,8 +16,8 @@ Model (all fitted on training objects only):
   :class:`tzsl.models.AttributeSVM` of the DAP study takes seconds per EP and split even with a
   1 x 1 grid, which times 6 fits x 4 EPs x 10 splits is too slow for this evaluation.
 * **Sequential posterior (tempered naive Bayes across EPs).** ``log p(z | D) = tau_D sum_{e in D}
-  s_e(z) + c`` with ``s_e`` the DAP log-scores (:func:`tzsl.models.dap_log_scores`) of EP ``e``'s
-  fused attribute posteriors (:func:`tzsl.models.fuse_attribute_posteriors`) and ``D`` the set of
+  s_e(z) + c`` with ``s_e`` the DAP log-scores (:func:`tzsl.models.dap.dap_log_scores`) of EP ``e``'s
+  fused attribute posteriors (:func:`tzsl.models.dap.fuse_attribute_posteriors`) and ``D`` the set of
   EPs done. With ``tau_D = 1`` this is Bayes' rule under the assumption that the EPs'
   observations are conditionally independent given the class; they are not (the same object is
   felt by every EP) and DAP's product over attributes is itself over-confident, so the plain
@@ -224,7 +224,7 @@ class PerEPAttributeModel(BaseEstimator):
     def _bank(self, seed: int) -> AttributeClassifierBank:
         template = LogisticAttribute() if self.estimator is None else self.estimator
         # the default logistic fits take about as long as reading one back from the fit store: the
-        # store keeps this model's whole fit instead (tzsl.models.fit_cached), not its many small ones
+        # store keeps this model's whole fit instead (tzsl.fit_store.fit_cached), not its many small ones
         memory = False if self.estimator is None else None
         return AttributeClassifierBank(estimator=template, n_jobs=1, backend="sequential", random_state=seed,
                                        memory=memory)

@@ -72,7 +72,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         joblib backend. ``"dask"`` runs the fits on the current ``dask.distributed`` Client.
         Results do not depend on the backend or ``n_jobs``.
     memory : None, False, str, Path or joblib.Memory, default=None
-        Cache folder of the fit store (:func:`tzsl.models.resolve_store`): each per-(attribute,
+        Cache folder of the fit store (:func:`tzsl.fit_store.resolve_store`): each per-(attribute,
         sensor) fit is read from ``<folder>/fits`` when an equal fit (same estimator parameters,
         training arrays and code) was stored before, by this or any other model, table or
         study; only the others are fitted (in parallel) and stored. ``None``:

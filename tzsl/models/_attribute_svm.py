@@ -83,7 +83,7 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
     grid : {"paper", "extended"}, default="extended"
         ``"paper"``: ``gamma`` from ``gamma_range`` and ``n_gamma`` as the DAP paper tuned it.
         ``"extended"``: that grid plus two decades below its low end (0.001, 0.0001 for the
-        paper's range; :func:`tzsl.models.gamma_grid`), because on PHAC-2 most (attribute, sensor)
+        paper's range; :func:`tzsl.models.attribute_training.gamma_grid`), because on PHAC-2 most (attribute, sensor)
         fits chose the paper grid's low edge. The paper-reproduction studies pin ``"paper"``. The
         two grids' accuracy, grouped-CV log-loss and share of fits at each gamma are measured by
         ``experiments/benchmarks/phac2_accuracy.py`` (its generated tables in

@@ -141,7 +141,7 @@ INHERITED_CHOICES: tuple[InheritedChoice, ...] = (
         "make bench-scale (cost only)"),
     InheritedChoice(
         "auto-solver-threshold",
-        "largest training set that solver='auto' fits exactly (tzsl.models.AUTO_MAX_EXACT_TRIALS)",
+        "largest training set that solver='auto' fits exactly (tzsl.models.attribute_training.AUTO_MAX_EXACT_TRIALS)",
         lambda: AUTO_MAX_EXACT_TRIALS,
         NO_SELECTION_SPLITS + ": chosen for cost (the exact model's time against trials, SIMULATED data), not "
                               "accuracy",

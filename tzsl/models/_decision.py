@@ -14,7 +14,7 @@ sensors, attribute priors and tie-breaking live here, once:
   vector ``f(x)`` (the fabric paper's lambda embedding, SAE), squared Euclidean or cosine.
 
 The hand's single-grasp LDAP (:class:`tzsl.models.HandDAPClassifier`) fuses over fingers inside
-its attribute layer (eqs. 7-10, :func:`tzsl.models.fuse_grasp_posteriors`) and then applies DAP
+its attribute layer (eqs. 7-10, :func:`tzsl.models.multigrasp.fuse_grasp_posteriors`) and then applies DAP
 with the uniform prior: ``HandDAPClassifier(prior=0.5).predict_log_scores(X, K)`` equals
 ``DAPRule(prior="uni").fit(A).decision_function(hand.predict_attribute_proba(X), K)``
 (a 2-D posterior is one sensor, so ``fusion`` does not matter).
@@ -22,7 +22,7 @@ with the uniform prior: ``HandDAPClassifier(prior=0.5).predict_log_scores(X, K)`
 Every rule has ``fit(A, groups=None)`` (training attribute rows; only the ``train`` prior uses
 them), ``decision_function(scores, K)``, ``predict_proba(scores, K)`` (softmax over the given
 classes) and ``predict(scores, K, random_state=None)`` (row indices into ``K``; exact ties
-broken uniformly at random, seeded, by :func:`tzsl.models.break_ties`).
+broken uniformly at random, seeded, by :func:`tzsl.models.dap.break_ties`).
 """
 
 from __future__ import annotations

@@ -296,7 +296,7 @@ class EmbeddingZSL(TransformerMixin, AttributeEmbeddingModel):
             Attribute row of each sample's class.
         groups : array-like of shape (n_samples,), optional
             Object or class of each sample; orders the classes (see
-            :func:`tzsl.models.training_classes`), which fixes the early-stopping hold-out.
+            :func:`tzsl.models.protocol.training_classes`), which fixes the early-stopping hold-out.
 
         Returns
         -------

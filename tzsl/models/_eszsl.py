@@ -226,7 +226,7 @@ class ESZSLCV(_ESZSLBase):
         Grids of the feature-side and attribute-side ridges. A single pair is fitted without
         cross-validation (``best_score_`` is then NaN and ``cv_scores_`` has no folds).
     cv : None, int >= 2 or splitter, default=None
-        ``None``: :func:`~tzsl.models.class_grouped_folds` with ``min(5, n_classes // 2)``
+        ``None``: :func:`~tzsl.models.protocol.class_grouped_folds` with ``min(5, n_classes // 2)``
         folds, each validating on >= 2 and training on >= 2 classes (classes sharing an attribute
         row are one class, never alone in a fold). An int: that many such folds (an error if
         more than ``n_classes // 2``). Otherwise any object with ``split(X, y, groups)``; it receives ``groups`` = class (row of

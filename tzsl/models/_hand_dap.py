@@ -16,10 +16,10 @@ Fusion over the touching BioTacs (:func:`fuse_grasp_posteriors`):
 * LDAP, eqs. (9)-(10): shape ``max(0.5, p(a_m=1|x_sh))``; material
   ``1/B sum_b max(0.5, p(a_m=1|x_b,mat))``.
 
-The fused posteriors go into DAP, eq. (3), through :func:`tzsl.models.dap_log_scores`, with
+The fused posteriors go into DAP, eq. (3), through :func:`tzsl.models.dap.dap_log_scores`, with
 ``p(a_m = 0 | x) = 1 - p(a_m = 1 | x)``. Eq. (7) fuses ``p(a_m = 1 | .)`` only; this differs from
 the PHAC-2 MAXDAP of eq. (5), which takes the maximum of the posterior of each class's required
-value (``tzsl.models.fuse_attribute_posteriors(..., "max")``).
+value (``tzsl.models.dap.fuse_attribute_posteriors(..., "max")``).
 
 Calibration: the sigmoid of every SVM is fitted by ``CalibratedClassifierCV(method="sigmoid")``
 with a stratified k-fold over the training grasps (training objects only). The folds are not

@@ -13,7 +13,7 @@ exponent on every attribute factor: a tempered product). ``T`` is fitted honestl
 training trials only, by the zero-shot protocol itself:
 
 1. the training classes (distinct attribute rows) are dealt into ``calibration_folds``
-   class-grouped folds (:func:`tzsl.models.class_grouped_folds`; which class goes to which fold
+   class-grouped folds (:func:`tzsl.models.protocol.class_grouped_folds`; which class goes to which fold
    is seeded by ``random_state``);
 2. for each fold, the method is refitted on the other classes and scores the held-out
    (*pseudo-unseen*) classes' trials among the held-out classes' rows, as a test trial is

@@ -164,7 +164,7 @@ class SAECV(EmbeddingAttributeModel):
     """SAE with ``lam`` chosen by class-held-out cross-validation on the training data.
 
     The training classes (distinct rows of ``A``) are split by
-    :func:`~tzsl.models.class_grouped_folds` (each fold validates on >= 2 and trains on >= 2
+    :func:`~tzsl.models.protocol.class_grouped_folds` (each fold validates on >= 2 and trains on >= 2
     classes; classes sharing a row are one class, never alone in a fold); for every fold and every ``lam`` the encoder is
     fitted on the other classes (one pair of eigendecompositions per fold serves the whole grid)
     and scored by zero-shot accuracy among the fold's held-out classes (cosine to their rows), the

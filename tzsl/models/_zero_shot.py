@@ -115,7 +115,7 @@ class ZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
             as scikit-learn names a multi-output target); 1-D means one attribute.
         groups : array-like of shape (n_trials,), optional
             Object of each trial (grouped tuning, one ``train`` prior row per object, class
-            order; see :func:`tzsl.models.training_classes`).
+            order; see :func:`tzsl.models.protocol.training_classes`).
 
         Returns
         -------

@@ -15,7 +15,7 @@ module adds what calibration needs to that path, and nothing else:
   (``<study>_reliability.csv`` / ``.png``).
 * :func:`dap_split_posteriors`: the PHAC-2 study's DAP rows come from posteriors it has already
   fitted; their temperature is fitted here the same way (pseudo-unseen classes of the split's
-  training objects, :func:`tzsl.models.pseudo_unseen_scores`), never on test objects.
+  training objects, :func:`tzsl.models.calibration.pseudo_unseen_scores`), never on test objects.
 """
 
 from __future__ import annotations
@@ -35,10 +35,8 @@ from tzsl.models import (
     MultiLabelAttributeClassifier,
     ZeroShotClassifier,
     ZSLInputError,
-    fit_temperature,
-    pseudo_unseen_scores,
-    tempered_proba,
 )
+from tzsl.models.calibration import fit_temperature, pseudo_unseen_scores, tempered_proba
 
 __all__ = [
     "CALIBRATION_COLUMNS",
@@ -180,7 +178,7 @@ def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions=("avg", "
     The temperature of each DAP variant (uniform prior) is fitted on pseudo-unseen classes of the
     split's training objects: the study's attribute model (``r.model``, cloned with its settings
     and cache) is refitted on the training objects minus a held-out group of classes, and the
-    held-out trials are scored among the held-out classes (:func:`tzsl.models.pseudo_unseen_scores`).
+    held-out trials are scored among the held-out classes (:func:`tzsl.models.calibration.pseudo_unseen_scores`).
     The multi-label model (when the split has its posteriors) is refitted the same way.
 
     Parameters

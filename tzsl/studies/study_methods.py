@@ -9,7 +9,7 @@ A study lists methods as ``{"name": registry name, **parameters}`` (the experime
   ``(n_trials, n_sensors * n_features)``; a 2-D study input is one sensor for a per-sensor method;
 * seed: a method whose estimator takes ``random_state`` gets the study's seed for that fit,
   unless the entry sets ``random_state`` itself; deterministic methods get none;
-* fit on the training trials with their attribute rows (:func:`tzsl.models.attribute_rows`),
+* fit on the training trials with their attribute rows (:func:`tzsl.models.protocol.attribute_rows`),
   predict the test trials among the test classes' attribute rows (zero-shot).
 
 Every study then scores its methods the same way (:func:`method_summary`): one row per method of
@@ -37,7 +37,9 @@ from tzsl.evaluation import Split, bootstrap_accuracy, paired_differences_table
 from tzsl.exceptions import SplitError
 from tzsl.studies.config import method_label
 from tzsl.studies.study_calibration import CALIBRATION_COLUMNS, add_calibration, method_posteriors
-from tzsl.models import attribute_rows, available_methods, fit_cached, get_method
+from tzsl.models import available_methods, get_method
+from tzsl.models.protocol import attribute_rows
+from tzsl.fit_store import fit_cached
 
 __all__ = [
     "COMPARISON_COLUMNS",

@@ -13,8 +13,8 @@ Grasp types (:data:`GRASP_TYPES`) are defined by how many BioTacs touch: ``pinch
 chosen type is drawn (without replacement) from the test object's grasps of that type.
 
 Policy: the type with the largest expected reduction of class entropy
-(:func:`tzsl.models.expected_information_gain`) under a confusion model per type
-(:func:`tzsl.models.binned_confusion` of out-of-fold LDAP posteriors). Table 4 gives only 6
+(:func:`tzsl.models.active_touch.expected_information_gain`) under a confusion model per type
+(:func:`tzsl.models.active_touch.binned_confusion` of out-of-fold LDAP posteriors). Table 4 gives only 6
 training objects, several attributes carried by a single one, so the folds are stratified over
 the training *grasps* (as the model's own Platt calibration), not grouped by object: the
 confusion is estimated on held-out grasps of seen objects and is therefore optimistic for unseen
@@ -40,14 +40,9 @@ from tzsl.datasets import HandTable, simulate_grasps
 from tzsl.evaluation import bootstrap_accuracy_columns, paired_difference_interval
 from tzsl.studies.config import ActiveTouchStudy
 from tzsl.studies.hand.study import HandStudyConfig, fit_hand_model, hand_features
-from tzsl.models import (
-    binned_confusion,
-    break_ties,
-    dap_log_scores,
-    expected_information_gain,
-    fuse_grasp_posteriors,
-    outcome_log_likelihoods,
-)
+from tzsl.models.dap import break_ties, dap_log_scores
+from tzsl.models.multigrasp import fuse_grasp_posteriors
+from tzsl.models.active_touch import binned_confusion, expected_information_gain, outcome_log_likelihoods
 
 __all__ = ["GRASP_TYPES", "HAND_OUTPUTS", "grasp_type_of", "run_active_hand"]
 

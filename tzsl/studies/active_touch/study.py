@@ -18,7 +18,7 @@ Accuracy is the mean over splits of the per-split trial accuracy with a 95% two-
 interval (:func:`tzsl.evaluation.bootstrap_accuracy_columns`: splits with replacement, then test
 objects with replacement within each drawn split, trials of an object kept together; every
 column on the same replicates). Accuracy vs seconds uses each EP's duration
-(:data:`tzsl.models.PHAC2_EP_SECONDS`): at budget ``t`` a trial counts the prediction after the
+(:data:`tzsl.models.active_touch.PHAC2_EP_SECONDS`): at budget ``t`` a trial counts the prediction after the
 EPs it has completed by ``t`` (before any EP, the chance ``1 / n_classes`` of a guess).
 
 The stopping rule (top class posterior >= a threshold) is evaluated post hoc on each strategy's
@@ -55,7 +55,9 @@ from tzsl.studies._outputs import ResultsDir
 from tzsl.studies.active_touch.stopping import decided_table, stop_outcomes, stopping_figure
 from tzsl.studies.config import ActiveTouchStudy
 from tzsl.studies.zero_shot.study import object_map_features
-from tzsl.models import PerEPAttributeModel, count_fits, ep_column_blocks, fit_cached, fit_store_counts, run_policy
+from tzsl.models import PerEPAttributeModel
+from tzsl.models.active_touch import ep_column_blocks, run_policy
+from tzsl.fit_store import count_fits, fit_cached, fit_store_counts
 
 __all__ = ["ACTIVE_TOUCH_OUTPUTS", "evaluate_split", "run_active_touch_study", "summarise"]
 
@@ -337,7 +339,7 @@ def run_active_touch_study(features: FeatureSet, results_dir: ResultsDir, config
         threshold against it, tempered and untempered, active and random order:
         :func:`tzsl.studies.active_touch.stopping.decided_table`); each with its interval
         columns. ``.attrs["chosen"]`` holds the orders chosen per split, ``.attrs["exponents"]`` the
-        posterior exponents fitted per split (indexed by :func:`tzsl.models.done_subset_index`).
+        posterior exponents fitted per split (indexed by :func:`tzsl.models.active_touch.done_subset_index`).
     """
     results_dir.check_free(ACTIVE_TOUCH_OUTPUTS)
     log = log or (lambda _msg: None)

@@ -39,7 +39,9 @@ from tzsl.studies.study_methods import (
     method_summary,
     study_estimator,
 )
-from tzsl.models import attribute_rows, build_method, fit_cached, fit_store_counts
+from tzsl.models import build_method
+from tzsl.models.protocol import attribute_rows
+from tzsl.fit_store import fit_cached, fit_store_counts
 
 __all__ = ["COMPARISON_TABLE", "REFERENCE_LAMBDA", "ZeroShotRun", "fabric_comparison", "run_job", "zero_shot_run"]
 

@@ -14,7 +14,7 @@ Rules of a valid partition (:func:`group_partitions`)
 3. Distinguishable: the test groups' rows differ pairwise on the attributes that vary among the
    training groups (identical rows, or rows differing only on attributes constant in training,
    cannot be told apart by any model). Such partitions are **excluded**, never merged.
-4. Trainable: at least :data:`~tzsl.models.MIN_CV_CLASSES` distinct training rows (the
+4. Trainable: at least :data:`~tzsl.models.protocol.MIN_CV_CLASSES` distinct training rows (the
    class-grouped cross-validation of every method's model selection needs them).
 
 :func:`partition_census` counts the valid partitions per number of test groups with and
@@ -53,7 +53,7 @@ from tzsl.exceptions import ConfigError
 from tzsl.studies.fabric.methods import run_job
 from tzsl.studies.fabric.samples import FabricSamples
 from tzsl.studies.fabric.tables import ESZSL_METHOD
-from tzsl.models import MIN_CV_CLASSES
+from tzsl.models.protocol import MIN_CV_CLASSES
 
 __all__ = ["PARTITION_COLUMNS", "group_partitions", "partition_census", "partition_outcomes", "partition_summary",
            "run_partitions"]

@@ -124,7 +124,7 @@ from tzsl.studies.fabric.methods import (
 from tzsl.studies.fabric.partitions import run_partitions
 from tzsl.studies.study_methods import method_label, takes_seed
 from tzsl.features import TextureDescriptor
-from tzsl.models import count_fits
+from tzsl.fit_store import count_fits
 
 __all__ = [
     "DEFAULT_ALPHAS",

@@ -19,7 +19,7 @@ from tzsl.evaluation import summarise_over_splits, zero_shot_variant
 from tzsl.evaluation import Outcomes, add_trust_columns
 from tzsl.studies.fabric.samples import FabricSamples
 from tzsl.studies.paper_numbers import FABRIC_TABLE1
-from tzsl.models import loss_weights
+from tzsl.models.embedding import loss_weights
 
 __all__ = [
     "ESZSL_METHOD",

@@ -67,11 +67,10 @@ from tzsl.studies.hand.tables import (
     with_intervals,
 )
 from tzsl.features import GraspFeatures
-from tzsl.models import (
+from tzsl.models.dap import break_ties, dap_log_scores
+from tzsl.models.multigrasp import (
     HAND_FUSIONS,
     attribute_distance_matrix,
-    break_ties,
-    dap_log_scores,
     df_mdap,
     fuse_grasp_posteriors,
     sample_grasp_sequences,

@@ -60,7 +60,9 @@ from tzsl.evaluation import Outcomes, add_trust_columns
 from tzsl.studies.config import DapSettings, Phac2Gzsl
 from tzsl.studies.zero_shot.study import attribute_bank, compute_context
 from tzsl.studies.zero_shot.tables import split_label
-from tzsl.models import attribute_prior, attribute_rows, build_method, dap_log_scores, fuse_attribute_posteriors
+from tzsl.models import build_method
+from tzsl.models.protocol import attribute_rows
+from tzsl.models.dap import attribute_prior, dap_log_scores, fuse_attribute_posteriors
 
 #: Column of gzsl.csv saying what a split relaxed to calibrate stacking (present only when one did).
 RELAXED_COLUMN = "relaxed"

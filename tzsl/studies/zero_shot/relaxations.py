@@ -13,7 +13,7 @@ manifest under ``relaxations``):
    one negative training object (the attribute SVMs' object-grouped CV cannot tune it; the split
    leaves it out instead). If no split can be drawn, ``splits.n_test`` is lowered one by one
    (down to 2). Every split must leave each kept attribute 2 positive and 2 negative training
-   objects, and its training objects :data:`~tzsl.models.MIN_CV_CLASSES` distinct attribute rows
+   objects, and its training objects :data:`~tzsl.models.protocol.MIN_CV_CLASSES` distinct attribute rows
    (the class-grouped CV of ESZSL, SAE and the embedding models, compared on random splits).
 3. ``splits.challenging_min_train_positives``: lowered one by one (down to 2) until the
    challenging partitions can be drawn and each leaves every kept attribute 2 positive and 2
@@ -39,7 +39,7 @@ import numpy as np
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import challenging_splits, random_object_splits
 from tzsl.exceptions import ConfigError, SplitError
-from tzsl.models import MIN_CV_CLASSES
+from tzsl.models.protocol import MIN_CV_CLASSES
 
 __all__ = ["SVM_MIN_OBJECTS", "Relaxation", "relax_to_dataset", "relaxed_n_test"]
 

@@ -46,10 +46,8 @@ from tzsl.models import (
     AttributeClassifierBank,
     AttributeSVM,
     MultiLabelAttributeClassifier,
-    attribute_prior,
-    dap_log_scores,
-    fuse_attribute_posteriors,
 )
+from tzsl.models.dap import attribute_prior, dap_log_scores, fuse_attribute_posteriors
 
 #: Table (``failed_splits.csv``) of the splits whose DAP fit failed; written only when one did.
 FAILED_SPLITS = "failed_splits"

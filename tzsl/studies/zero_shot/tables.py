@@ -23,7 +23,7 @@ from tzsl.evaluation import (
     summarise_over_splits,
 )
 from tzsl.evaluation import Outcomes, add_trust_columns
-from tzsl.models import dap_accuracy_over_subsets
+from tzsl.models.dap import dap_accuracy_over_subsets
 
 if TYPE_CHECKING:
     from tzsl.studies.zero_shot.study import SplitPosteriors

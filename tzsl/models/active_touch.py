@@ -1,0 +1,40 @@
+"""Active touch: which exploratory procedure (EP) to do next, and when to stop.
+
+The fitted model is :class:`tzsl.models.PerEPAttributeModel` (per-EP attribute classifiers,
+:class:`tzsl.models.LogisticAttribute` by default). Here: the EPs' durations and feature blocks
+(:data:`PHAC2_EP_SECONDS`, :func:`ep_column_blocks`), the confusion model
+(:func:`binned_confusion`), the tempered sequential posterior (:data:`TEMPERINGS`,
+:func:`fit_posterior_exponents`, :func:`sequential_log_posterior`, :func:`done_subset_index`),
+the expected information gain of the next EP (:func:`outcome_log_likelihoods`,
+:func:`expected_information_gain`), the policy with its stopping rule (:func:`run_policy`,
+:func:`stop_reasons`) and the next-EP suggestion for one object (:func:`suggest_next_ep`).
+"""
+
+from tzsl.models._active_policy import (
+    TEMPERINGS,
+    binned_confusion,
+    done_subset_index,
+    expected_information_gain,
+    fit_posterior_exponents,
+    outcome_log_likelihoods,
+    run_policy,
+    sequential_log_posterior,
+    stop_reasons,
+)
+from tzsl.models._active_suggest import suggest_next_ep
+from tzsl.models._active_touch import PHAC2_EP_SECONDS, ep_column_blocks
+
+__all__ = [
+    "PHAC2_EP_SECONDS",
+    "TEMPERINGS",
+    "binned_confusion",
+    "done_subset_index",
+    "ep_column_blocks",
+    "expected_information_gain",
+    "fit_posterior_exponents",
+    "outcome_log_likelihoods",
+    "run_policy",
+    "sequential_log_posterior",
+    "stop_reasons",
+    "suggest_next_ep",
+]

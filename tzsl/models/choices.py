@@ -1,0 +1,10 @@
+"""The choices a user inherits (:data:`tzsl.models.INHERITED_CHOICES`), as records and as a table.
+
+One :class:`InheritedChoice` per choice; :func:`inherited_choices` gives them as plain dicts
+(the documentation's page is generated from it); :data:`NO_SELECTION_SPLITS` is what a choice
+made on no recorded splits says.
+"""
+
+from tzsl.models._choices import NO_SELECTION_SPLITS, InheritedChoice, inherited_choices
+
+__all__ = ["NO_SELECTION_SPLITS", "InheritedChoice", "inherited_choices"]
