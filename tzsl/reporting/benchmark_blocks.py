@@ -14,8 +14,8 @@ import pandas as pd
 from tzsl.exceptions import ConfigError
 from tzsl.reporting.markdown_cells import find_table, number, ours
 
-__all__ = ["BEST_METHOD_FILE", "ESZSL_PUBLIC_FILE", "MissingResults", "benchmark_accuracy_block", "best_method_block",
-           "eszsl_public_block", "search_benchmark_block"]
+__all__ = ["BEST_METHOD_FILE", "ESZSL_PUBLIC_FILE", "MissingResults", "benchmark_accuracy_block", "benchmark_table",
+           "best_method_block", "eszsl_public_block", "search_benchmark_block"]
 
 #: The decision CSV of ``experiments/benchmarks/phac2_best_method.py``.
 BEST_METHOD_FILE = "phac2_best_method.csv"
@@ -27,6 +27,14 @@ class MissingResults(ConfigError):
     """A block's CSV is not in the results folder given (the block is left as it is)."""
 
 
+def benchmark_table(root: Path, name: str, script: str) -> pd.DataFrame:
+    """The CSV ``name`` under ``root``; :class:`MissingResults` naming the benchmark ``script`` that writes it."""
+    table = find_table(root, name)
+    if table is None:
+        raise MissingResults(f"{root}: no {name}; run experiments/benchmarks/{script} --out {root}/{name} first")
+    return table
+
+
 def benchmark_accuracy_block(results: str | Path) -> str:
     """The PHAC-2 accuracy benchmark's tables from its ``accuracy.csv`` (and ``grid_summary.csv``).
 
@@ -36,10 +44,7 @@ def benchmark_accuracy_block(results: str | Path) -> str:
         No ``accuracy.csv`` under ``results``.
     """
     root = Path(results)
-    table = find_table(root, "accuracy.csv")
-    if table is None:
-        raise MissingResults(f"{root}: no accuracy.csv; run experiments/benchmarks/phac2_accuracy.py --out "
-                             f"{root}/accuracy.csv first")
+    table = benchmark_table(root, "accuracy.csv", "phac2_accuracy.py")
     kinds = list(dict.fromkeys(table["kind"]))
     splits = {k: int(table.loc[table["kind"] == k, "n_splits"].max()) for k in kinds}
     lines = [f"Generated from `accuracy.csv` by `make numbers`: accuracy [95% interval] and the paired difference "
@@ -103,6 +108,8 @@ def search_benchmark_block(results: str | Path) -> str:
                      f"{100 * float(r['same_choice_share']):.0f}% | {float(r['grid_cpu_s']):.1f} | "
                      f"{float(r['halving_cpu_s']):.1f} | {float(r['cpu_ratio']):.2f} |")
     return "\n".join(lines)
+
+
 def best_method_block(results: str | Path) -> str:
     """The best-method decision (``phac2_best_method.csv``): chosen on selection splits, shown on confirmation.
 
@@ -111,11 +118,7 @@ def best_method_block(results: str | Path) -> str:
     MissingResults
         No ``phac2_best_method.csv`` under ``results``.
     """
-    root = Path(results)
-    table = find_table(root, BEST_METHOD_FILE)
-    if table is None:
-        raise MissingResults(f"{root}: no {BEST_METHOD_FILE}; run experiments/benchmarks/phac2_best_method.py --out "
-                             f"{root}/{BEST_METHOD_FILE} first")
+    table = benchmark_table(Path(results), BEST_METHOD_FILE, "phac2_best_method.py")
     lines = [f"Generated from `{BEST_METHOD_FILE}` by `make numbers`: the most accurate method on the selection "
              "splits, then its accuracy [95% interval] and paired difference to the reference [95% interval] on "
              "the confirmation splits (seed "
@@ -147,11 +150,7 @@ def eszsl_public_block(results: str | Path) -> str:
     MissingResults
         No ``eszsl_public.csv`` under ``results``.
     """
-    root = Path(results)
-    table = find_table(root, ESZSL_PUBLIC_FILE)
-    if table is None:
-        raise MissingResults(f"{root}: no {ESZSL_PUBLIC_FILE}; run experiments/benchmarks/phac2_eszsl_public.py "
-                             f"--out {root}/{ESZSL_PUBLIC_FILE} first")
+    table = benchmark_table(Path(results), ESZSL_PUBLIC_FILE, "phac2_eszsl_public.py")
     reference = table.loc[table["diff_vs_public"].abs() < 1e-12, "method"].iloc[0]
     lines = [f"Generated from `{ESZSL_PUBLIC_FILE}` by `make numbers`: trial accuracy [95% interval] on the same "
              f"random PHAC-2 splits, the paired difference to `{reference}` [95% interval], and the share of "
