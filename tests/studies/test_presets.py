@@ -113,7 +113,7 @@ def test_hand_preset_writes_the_generic_and_the_paper_tables(tmp_path):
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["config"]["study_kind"] == "hand"
     assert manifest["config"]["zero_shot"]["labels"]["data"] == "simulated"
-    assert "zero_shot_table1" in manifest["tables"] and "table5" in manifest["tables"]
+    assert "zero_shot_table1_fusion" in manifest["tables"] and "table5" in manifest["tables"]
     # a second run refuses every file, the generic part's too, before any fit
     again = _run(path)
     assert again.exit_code != 0 and "already exist" in (again.output + str(again.exception))

@@ -30,7 +30,7 @@ def fabric_outputs(config) -> list[str]:
     """Files a ``fabric`` run writes: the generic part's and the paper protocol's."""
     from tzsl.studies.zero_shot.preset import preset_outputs  # noqa: PLC0415
 
-    return ["manifest.json", *preset_outputs(config, _paper_outputs(config))]
+    return preset_outputs(config, _paper_outputs(config))
 
 
 def fabric_results(exp: Experiment, force: bool) -> ResultsDir:

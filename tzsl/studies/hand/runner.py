@@ -27,7 +27,7 @@ def hand_outputs(config) -> list[str]:
     """Files a ``hand`` run writes: the generic part's and the paper protocol's."""
     from tzsl.studies.zero_shot.preset import preset_outputs  # noqa: PLC0415
 
-    return ["manifest.json", *preset_outputs(config, _paper_outputs(config))]
+    return preset_outputs(config, _paper_outputs(config))
 
 
 def hand_results(exp: Experiment, force: bool) -> ResultsDir:

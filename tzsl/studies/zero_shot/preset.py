@@ -66,8 +66,9 @@ def generic_experiment(exp: Experiment) -> Experiment | None:
 
 
 def preset_outputs(exp_config, paper_outputs: list[str]) -> list[str]:
-    """Files a preset run writes: the generic part's (``<dataset>_<name>``) and the paper protocol's."""
-    names = list(paper_outputs)
+    """Files a preset run writes: ``manifest.json``, the generic part's (``<dataset>_<name>``) and the
+    paper protocol's (``paper_outputs``)."""
+    names = ["manifest.json", *paper_outputs]
     if exp_config.zero_shot.enabled and getattr(exp_config.dataset, "grasps", None) is None:
         generic = ZeroShotStudy.model_validate({
             "dataset": {"builtin": PRESET_DATASETS[exp_config.study]}, "methods": exp_config.zero_shot.methods.model_dump(),
@@ -82,7 +83,7 @@ def preset_results(exp: Experiment, force: bool, paper_outputs: list[str]) -> Re
     generic = generic_experiment(exp)
     drop = {} if generic is None else dropped_columns(generic.config.methods, generic.config.output.prefix)
     results = SelectedColumns(Path(exp.config.output.folder), force, drop, staging=True)
-    results.check_free(["manifest.json", *preset_outputs(exp.config, paper_outputs)])
+    results.check_free(preset_outputs(exp.config, paper_outputs))
     return results
 
 
