@@ -342,6 +342,8 @@ n_sequences = 4
 compare = ["toy", "eszsl"]
 [splits]
 seeds = [0]
+[zero_shot]
+enabled = false
 [compute]
 progress = false
 """)

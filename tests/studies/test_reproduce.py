@@ -96,6 +96,15 @@ sequence_length = 4
 n_sequences = 4
 [splits]
 seeds = [0]
+[zero_shot.splits]
+kinds = ["random"]
+n_splits = 1
+[zero_shot.svm]
+cv = 3
+n_C = 1
+n_gamma = 1
+n_draws = 1
+grid = "paper"
 [compute]
 progress = false
 """
@@ -113,7 +122,8 @@ def test_reproduce_csvs_are_byte_identical_to_running_each_file(tmp_path, data_d
     engine.run_experiment(hand, out=tmp_path / "hand")
     together = folder_csvs(tmp_path / "all")  # byte for byte but for the wall-clock fit_seconds
     alone = {**folder_csvs(tmp_path / "phac2"), **folder_csvs(tmp_path / "hand")}
-    assert {"table1_fusion.csv", "table2_priors.csv", "hand_table5.csv"} <= set(together)
+    assert {"table1_fusion.csv", "table2_priors.csv", "hand_table5.csv", "hand-simulated_table1_fusion.csv"} <= set(
+        together)  # the hand preset's generic tables beside phac2-dap's, no name shared
     # method comparisons hold wall-clock fit times: equal but for those
     timed = {"hand_method_comparison.csv", "method_comparison.csv"}
     assert {k: v for k, v in together.items() if k not in timed} == {k: v for k, v in alone.items() if k not in timed}

@@ -36,7 +36,7 @@ def evaluate_fabric_values(model, out, n_seeds, configs, gelsight_root, attribut
               "compute.progress": not no_progress}
     if model == "deep":
         return "fabric-deep", values
-    return "fabric", {**values, "compute.n_jobs": n_jobs}
+    return "fabric", {**values, "compute.n_jobs": n_jobs, "zero_shot.enabled": False}  # the paper protocol only
 
 
 @cli.command("evaluate-fabric")
@@ -69,7 +69,8 @@ def evaluate_fabric(out: Path, n_seeds, configs: tuple[str, ...], gelsight_root:
 
     Rows: the public depth images as sequences (one sample per fabric) and as single images,
     per split config; plus GelSight rows with --gelsight-root. The same as 'tzsl run fabric'
-    (or 'tzsl run fabric-deep' with --model deep) with these settings.
+    (or 'tzsl run fabric-deep' with --model deep) with these settings and [zero_shot] enabled =
+    false: the paper protocol only, not the generic zero-shot tables on fabric-depth.
     """
     from tzsl.studies.config import config_from_options  # noqa: PLC0415
     from tzsl.studies.engine import run_experiment  # noqa: PLC0415

@@ -89,7 +89,8 @@ def evaluate_hand_values(grasps, table, out, seeds, grasps_per_object, noise, di
             "splits.seeds": list(seeds), "simulation.n_grasps_per_object": grasps_per_object,
             "simulation.noise": noise, "simulation.difficulty": difficulty,
             "simulation.shape_miss_rate": shape_miss_rate, "methods.n_sequences": n_sequences,
-            "compute.n_jobs": n_jobs, "compute.progress": not no_progress}
+            "compute.n_jobs": n_jobs, "compute.progress": not no_progress,
+            "zero_shot.enabled": False}  # the paper protocol only
 
 
 @cli.command("evaluate-hand")
@@ -111,8 +112,9 @@ def evaluate_hand(force: bool, **options) -> None:
     """Hand study (DAP paper section 5.8): Table 5, DF-MDAP vs T, SC-MDAP vs k, confusion
     matrices, attribute accuracy and distance matrix S, fitted on training objects only.
 
-    The same as 'tzsl run' on a study = "hand" file with these settings ('tzsl run
-    hand-simulated --print-config' shows every setting).
+    The same as 'tzsl run' on a study = "hand" file with these settings and [zero_shot] enabled
+    = false: the paper protocol only, not the generic zero-shot tables on hand-simulated ('tzsl
+    run hand-simulated --print-config' shows every setting).
     """
     from tzsl.studies.config import config_from_options  # noqa: PLC0415
     from tzsl.studies.engine import run_experiment  # noqa: PLC0415

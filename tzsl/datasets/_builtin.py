@@ -14,11 +14,15 @@ signals), then one :func:`register_dataset` line.
 from __future__ import annotations
 
 import os
+import warnings
 from abc import ABC, abstractmethod
 from typing import ClassVar, Literal
 
 import pandas as pd
 
+from tzsl.datasets._fabric import FabricData, load_fabric
+from tzsl.datasets._grasps import load_hand_table4
+from tzsl.datasets._hand_simulator import SimulatedGrasps, simulate_grasps
 from tzsl.datasets._phac2_h5 import load_phac2_h5
 from tzsl.datasets._phac2_hold_mat import load_phac2_hold_mat, load_phac2_labels
 from tzsl.datasets._phac2_penn import PennStaticData, load_phac2_penn
@@ -41,27 +45,35 @@ class TactileDataset(ABC):
         One line: what it holds (trials, sensors, features).
     source : str
         Where it comes from (publication or release).
-    content : {"static-features", "signals"}
-        ``load`` returns per-trial features as published (:class:`~tzsl.datasets.PennStaticData`)
-        or raw signals (a list of :class:`~tzsl.datasets.RawTrial`, with ``labels``).
+    content : {"static-features", "signals", "depth-images", "simulated-grasps"}
+        ``load`` returns per-trial features as published (:class:`~tzsl.datasets.PennStaticData`),
+        raw signals (a list of :class:`~tzsl.datasets.RawTrial`, with ``labels``), the fabric
+        depth-image table (:class:`~tzsl.datasets.FabricData`; features: texture descriptors) or
+        simulated Shadow-hand grasps (:class:`~tzsl.datasets.SimulatedGrasps`, with ``labels``;
+        features: the packed grasp features).
     eps : tuple of str
         The exploratory procedures its trials hold.
     needs_path : bool
         ``load`` reads a file the user gives (``path``) instead of the data home.
     convertible : bool
         ``tzsl convert --dataset`` can write it as a plain-file folder.
+    simulated : bool
+        Its trials are drawn by tzsl's simulator, not recorded: every result on it says
+        ``data = simulated``.
     """
 
     name: ClassVar[str]
     description: ClassVar[str]
     source: ClassVar[str]
-    content: ClassVar[Literal["static-features", "signals"]]
+    content: ClassVar[Literal["static-features", "signals", "depth-images", "simulated-grasps"]]
     eps: ClassVar[tuple[str, ...]]
     needs_path: ClassVar[bool] = False
     convertible: ClassVar[bool] = True
+    simulated: ClassVar[bool] = False
 
     @abstractmethod
-    def load(self, data_dir: PathLike | None = None, path: PathLike | None = None) -> PennStaticData | list[RawTrial]:
+    def load(self, data_dir: PathLike | None = None,
+             path: PathLike | None = None) -> PennStaticData | list[RawTrial] | FabricData | SimulatedGrasps:
         """The data as published (files read from the data home, or ``path``)."""
 
     def labels(self, data_dir: PathLike | None = None) -> pd.DataFrame:
@@ -118,6 +130,61 @@ class Phac2H5(TactileDataset):
         return load_phac2_labels(data_dir)
 
 
+class FabricDepth(TactileDataset):
+    """The fabric study's public depth images: one trial per image, one object per fabric.
+
+    Classes are the 8 fabric groups and the attribute rows the group x attribute matrix that
+    :func:`~tzsl.datasets.load_fabric` reads by default (a8: 8 attributes, the fabric paper's;
+    groups 3, 4 and 5 share one row, so 6 distinct rows - enough for the zero-shot study's 5
+    test objects per random split, and every attribute holds in >= 3 fabrics). a12, which the
+    fabric study's ``[partitions]`` use, is a partition protocol's matrix, not the paper's.
+    """
+
+    name = "fabric-depth"
+    description = ("the 1300 public depth images of 119 fabrics (8 groups, a8 group attributes), one trial per "
+                   "image, texture-descriptor features")
+    source = "the fabric paper (Fabric Recognition Using Zero-Shot Learning); its public depth images and groups"
+    content = "depth-images"
+    eps = ("press",)
+    convertible = False
+
+    def load(self, data_dir=None, path=None) -> FabricData:
+        with warnings.catch_warnings():  # groups sharing a row are expected (the dataset card lists them)
+            warnings.filterwarnings("ignore", message="fabric attribute matrix", category=UserWarning)
+            return load_fabric(data_dir, images=True)
+
+    def data_files(self, loaded: FabricData) -> list[str]:
+        return sorted(str(p) for p in loaded.images["path"])
+
+
+class HandSimulated(TactileDataset):
+    """Shadow-hand grasps drawn by tzsl's simulator from the DAP paper's Table 4 (no robot data).
+
+    The simulator's default settings (:func:`~tzsl.datasets.simulate_grasps`) and :attr:`seed`;
+    one object per Table 4 row (16), classes = objects.
+    """
+
+    name = "hand-simulated"
+    description = "SIMULATED Shadow-hand grasps (5 BioTacs, 19 joints) of Table 4's 16 objects x 11 attributes"
+    source = "tzsl's grasp simulator over the DAP paper's Table 4 (the paper's recordings are not public)"
+    content = "simulated-grasps"
+    eps = ("grasp",)
+    convertible = False
+    simulated = True
+    #: The simulator's seed (the hand study's first ``[splits] seeds`` value).
+    seed: ClassVar[int] = 0
+
+    def load(self, data_dir=None, path=None) -> SimulatedGrasps:
+        table = load_hand_table4()
+        return simulate_grasps(table.K, material_attributes=table.material_attributes, random_state=self.seed)
+
+    def labels(self, data_dir=None) -> pd.DataFrame:
+        return load_hand_table4().K
+
+    def data_files(self, loaded: SimulatedGrasps) -> list[str]:
+        return []
+
+
 _DATASETS: dict[str, TactileDataset] = {}
 
 
@@ -144,3 +211,5 @@ def dataset_names(*, convertible: bool | None = None) -> tuple[str, ...]:
 register_dataset(Phac2Penn())
 register_dataset(Phac2H5())
 register_dataset(Phac2HoldMat())
+register_dataset(FabricDepth())
+register_dataset(HandSimulated())

@@ -8,6 +8,14 @@ from tzsl.features._baseline import (
     ep_masks,
     remove_baseline,
 )
+from tzsl.features._builtin_feature_sets import (
+    depth_image_descriptors,
+    descriptor_memory,
+    descriptor_params,
+    fabric_depth_feature_set,
+    files_digest,
+    simulated_grasp_feature_set,
+)
 from tzsl.features._dataset_features import DEFAULT_MIN_OBJECTS, dataset_features, load_features
 from tzsl.features._feature_sets import penn_feature_set, raw_feature_set
 from tzsl.features._grasp_features import (
@@ -36,6 +44,12 @@ from tzsl.features._signal_features import load_plain_dataset, plain_feature_set
 
 __all__: list[str] = [
     "DEFAULT_MIN_OBJECTS",
+    "depth_image_descriptors",
+    "descriptor_memory",
+    "descriptor_params",
+    "fabric_depth_feature_set",
+    "files_digest",
+    "simulated_grasp_feature_set",
     "dataset_features",
     "load_features",
     "CLOSING_JOINTS",

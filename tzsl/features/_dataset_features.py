@@ -14,6 +14,7 @@ from pathlib import Path
 from tzsl._profile import timed
 from tzsl.datasets import FeatureSet, get_dataset, read_feature_table
 from tzsl.exceptions import ConfigError
+from tzsl.features._builtin_feature_sets import fabric_depth_feature_set, simulated_grasp_feature_set
 from tzsl.features._feature_sets import penn_feature_set, raw_feature_set
 from tzsl.features._signal_features import load_plain_dataset
 
@@ -32,7 +33,9 @@ def dataset_features(name: str, data_dir: str | os.PathLike | None = None, path:
     name : str
         A registered dataset, e.g. ``"phac2-penn"`` (Penn static features: 600 trials x 2 BioTacs
         x 52), ``"phac2-h5"`` (the raw HDF5 release at ``path``: 2 x 104 with 4 EPs) or
-        ``"phac2-hold-mat"`` (60 raw HOLD-phase trials: 2 x 26).
+        ``"phac2-hold-mat"`` (60 raw HOLD-phase trials: 2 x 26), ``"fabric-depth"`` (1300 depth
+        images: 1 x 99 texture descriptors) or ``"hand-simulated"`` (simulated grasps: 1 x the
+        packed grasp features).
     data_dir : path-like or None
         Data home (see :func:`tzsl.datasets.get_data_home`).
     path : path-like or None
@@ -49,6 +52,10 @@ def dataset_features(name: str, data_dir: str | os.PathLike | None = None, path:
     loaded = dataset.load(data_dir, path)
     if dataset.content == "static-features":
         features = penn_feature_set(loaded, min_objects=min_objects)
+    elif dataset.content == "depth-images":
+        features = fabric_depth_feature_set(loaded, min_objects=min_objects)
+    elif dataset.content == "simulated-grasps":
+        features = simulated_grasp_feature_set(loaded, dataset.labels(data_dir), min_objects=min_objects)
     else:
         features = raw_feature_set(loaded, dataset.labels(data_dir), eps=dataset.eps, min_objects=min_objects,
                                    dataset=dataset.name)

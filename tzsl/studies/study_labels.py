@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from tzsl.datasets import FeatureSet
+from tzsl.datasets import FeatureSet, get_dataset
 
 __all__ = ["GENERIC_STUDY", "PAPER_PRESET", "StudyLabels", "paper_protocol", "study_labels"]
 
@@ -91,10 +91,15 @@ def study_labels(study: str, config, features: FeatureSet) -> StudyLabels:
 
     The paper's numbers apply when the study is the paper preset and its dataset and protocol
     are the paper's (:func:`paper_protocol`); an ``[output] prefix`` is appended to the study
-    label (``phac2-headlines``), so two runs stack apart in one comparison; ``data`` is ``real`` for a built-in dataset, else
-    the dataset's name (which says ``SIMULATED`` for tzsl's simulated datasets).
+    label (``phac2-headlines``), so two runs stack apart in one comparison; ``data`` is ``real`` for a built-in
+    dataset recorded on hardware, ``simulated`` for a built-in dataset tzsl simulates (``hand-simulated``),
+    else the dataset's name (which says ``SIMULATED`` for tzsl's simulated plain datasets).
     """
-    data = "real" if config.dataset.builtin is not None else (features.dataset or "user dataset")
+    builtin = config.dataset.builtin
+    if builtin is not None:
+        data = "simulated" if get_dataset(builtin).simulated else "real"
+    else:
+        data = features.dataset or "user dataset"
     paper, note = paper_protocol(study, config)
     prefix = config.output.prefix
     label = ("phac2" if paper else GENERIC_STUDY) + (f"-{prefix}" if prefix else "")

@@ -338,3 +338,31 @@ class ZeroShotStudy(Phac2Study):
     study: Literal["zero-shot"] = "zero-shot"
     methods: ZeroShotMethods = Field(default_factory=ZeroShotMethods)
     splits: ZeroShotSplits = Field(default_factory=ZeroShotSplits)
+
+
+# --------------------------------------------------------------------------- [zero_shot] of a paper preset
+
+
+class PresetMethods(ZeroShotMethods):
+    """The generic study's methods in a paper preset: DAP and GZSL by default (the paper protocol
+    compares its own methods); switch on more with ``compare``, ``eszsl``, ``sweep``."""
+
+    compare: list[MethodEntry] = Field([], description=COMPARE_DESCRIPTION + " (preset default: none)")
+    sweep: bool = Field(False, description="attribute-count sweep (random splits)")
+
+
+class PresetZeroShot(Section):
+    """``[zero_shot]`` of a paper preset (``fabric``, ``hand``): the generic study on the preset's dataset.
+
+    Its ``methods``, ``gzsl``, ``splits`` and ``svm`` are the ``zero-shot`` study's sections
+    (``[zero_shot.methods]`` ...); the dataset is the preset's built-in one, ``[compute]`` and
+    ``[output] folder`` are the preset's, and every file is written as ``<dataset>_<name>``.
+    """
+
+    enabled: bool = Field(True, description="run the generic zero-shot tables before the paper protocol's")
+    min_objects: int | None = Field(None, ge=1, description="keep attributes present in >= this many objects "
+                                    "(unset: the extractor's default)")
+    methods: PresetMethods = Field(default_factory=PresetMethods)
+    gzsl: Phac2Gzsl = Field(default_factory=Phac2Gzsl)
+    splits: ZeroShotSplits = Field(default_factory=ZeroShotSplits)
+    svm: Phac2Svm = Field(default_factory=Phac2Svm)

@@ -11,6 +11,7 @@ from typing import Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
+from tzsl.studies.config._phac2 import PresetZeroShot
 from tzsl.studies.config._common import (
     COMPARE_DESCRIPTION,
     Compute,
@@ -107,7 +108,9 @@ class FabricPartitions(Section):
 
 
 class FabricStudy(Section):
-    """``study = "fabric"``: texture descriptors + EmbeddingZSL / ESZSL (fabric paper Table 1)."""
+    """``study = "fabric"``, a preset of ``zero-shot``: the generic study's tables on the built-in
+    ``fabric-depth`` dataset (``[zero_shot]``), then the fabric paper's protocol - texture
+    descriptors + EmbeddingZSL / ESZSL (Table 1 analogue), group partitions - with its numbers."""
 
     study: Literal["fabric"] = "fabric"
     description: str = ""
@@ -116,6 +119,7 @@ class FabricStudy(Section):
     methods: FabricMethods = Field(default_factory=FabricMethods)
     splits: FabricSplits = Field(default_factory=FabricSplits)
     partitions: FabricPartitions = Field(default_factory=FabricPartitions)
+    zero_shot: PresetZeroShot = Field(default_factory=PresetZeroShot)
     compute: Compute = Field(default_factory=Compute)
     output: Output = Field(default_factory=Output)
 
@@ -266,7 +270,9 @@ class HandCompute(Compute):
 
 
 class HandStudy(Section):
-    """``study = "hand"``: Shadow hand with 5 BioTacs (DAP paper 5.6-5.8)."""
+    """``study = "hand"``, a preset of ``zero-shot``: the generic study's tables on the built-in
+    ``hand-simulated`` dataset (``[zero_shot]``), then the DAP paper's Shadow-hand protocol (5 BioTacs,
+    Tables 4-5, multi-grasp; sections 5.6-5.8) with its numbers."""
 
     study: Literal["hand"] = "hand"
     description: str = ""
@@ -275,6 +281,7 @@ class HandStudy(Section):
     features: HandFeatures = Field(default_factory=HandFeatures)
     methods: HandMethods = Field(default_factory=HandMethods)
     splits: HandSplits = Field(default_factory=HandSplits)
+    zero_shot: PresetZeroShot = Field(default_factory=PresetZeroShot)
     compute: HandCompute = Field(default_factory=HandCompute)
     output: Output = Field(default_factory=Output)
 

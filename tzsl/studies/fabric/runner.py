@@ -1,6 +1,8 @@
-"""The fabric studies' runners: ``study = "fabric"`` (embedding models) and ``"fabric-deep"`` (CNN + LSTM).
+"""The fabric studies' runners: ``study = "fabric"`` (a preset of ``zero-shot``) and ``"fabric-deep"`` (CNN + LSTM).
 
 Registered in :mod:`tzsl.studies.config` (:func:`~tzsl.studies.config.register_study`).
+``fabric`` runs the generic zero-shot study on the built-in ``fabric-depth`` dataset
+(``[zero_shot]``, :mod:`tzsl.studies.zero_shot.preset`), then the fabric paper's protocol.
 """
 
 from __future__ import annotations
@@ -12,18 +14,50 @@ from tzsl.studies._outputs import ResultsDir
 from tzsl.studies.config import Experiment
 from tzsl.studies.study_settings import StudyRun, deep_arguments, fabric_arguments
 
-__all__ = ["run_fabric", "run_fabric_deep"]
+__all__ = ["fabric_notes", "fabric_outputs", "fabric_results", "run_fabric", "run_fabric_deep"]
+
+
+def _paper_outputs(config) -> list[str]:
+    """Files the fabric paper protocol writes."""
+    from tzsl.studies.fabric.methods import COMPARISON_TABLE  # noqa: PLC0415
+    from tzsl.studies.fabric.study import FIGURE_FILE, MANIFEST_FILE, PARTITIONS_FILE, RUNS_FILE, TABLE_FILE  # noqa: PLC0415
+
+    return [TABLE_FILE, RUNS_FILE, FIGURE_FILE, f"{COMPARISON_TABLE}.csv", MANIFEST_FILE] + (
+        [PARTITIONS_FILE] if config.partitions.enabled else [])
+
+
+def fabric_outputs(config) -> list[str]:
+    """Files a ``fabric`` run writes: the generic part's and the paper protocol's."""
+    from tzsl.studies.zero_shot.preset import preset_outputs  # noqa: PLC0415
+
+    return preset_outputs(config, _paper_outputs(config))
+
+
+def fabric_results(exp: Experiment, force: bool) -> ResultsDir:
+    """The staged results folder of a ``fabric`` run (every file checked free before any fit)."""
+    from tzsl.studies.zero_shot.preset import preset_results  # noqa: PLC0415
+
+    return preset_results(exp, force, _paper_outputs(exp.config))
+
+
+def fabric_notes(exp: Experiment) -> list[str]:
+    """``tzsl run --check``: the settings the generic part relaxes on ``fabric-depth``."""
+    from tzsl.studies.zero_shot.preset import preset_relaxation_notes  # noqa: PLC0415
+
+    return preset_relaxation_notes(exp)
 
 
 def run_fabric(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
     from tzsl.studies.fabric.study import format_fabric_table, run_fabric_study  # noqa: PLC0415
+    from tzsl.studies.zero_shot.preset import run_generic_part, with_generic_part  # noqa: PLC0415
 
+    generic = run_generic_part(exp, results, say)
     kwargs = fabric_arguments(exp)
     tables = run_fabric_study(results, **kwargs)
     say("\nFabric Table 1 analogue - ours beside the paper's\n" + format_fabric_table(tables["table1"]))
     record = {k: (str(v) if isinstance(v, Path) else list(v) if isinstance(v, tuple) else v)
               for k, v in kwargs.items()}
-    return StudyRun(dict(tables), {"study_kind": "fabric", "fabric": record})
+    return with_generic_part(StudyRun(dict(tables), {"study_kind": "fabric", "fabric": record}), generic)
 
 
 def run_fabric_deep(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:

@@ -3,18 +3,17 @@
 See :mod:`tzsl.studies.fabric.study` for the data conditions (``depth-sequence``, ``depth-image``,
 ``gelsight-<condition>``) and why they are built this way. Texture descriptors are cached with
 :class:`joblib.Memory` under :func:`tzsl.datasets.get_cache_dir`, keyed on the sha256 of the
-image (or video) files and the descriptor parameters.
+image (or video) files and the descriptor parameters; the depth images' descriptors are
+:func:`tzsl.features.depth_image_descriptors` (also the ``fabric-depth`` dataset's features).
 """
 
 from __future__ import annotations
 
-import hashlib
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-import joblib
 import numpy as np
 import pandas as pd
 from joblib import Parallel, delayed
@@ -22,9 +21,16 @@ from joblib import Parallel, delayed
 from tzsl._parallel import reissued, relayed
 from tzsl._profile import stage
 from tzsl._io import file_sha256
-from tzsl.datasets import FabricData, get_cache_dir, load_gelsight_fabric_videos, read_depth_images
+from tzsl.datasets import FabricData, load_gelsight_fabric_videos
 from tzsl.exceptions import ConfigError, DataFileError
-from tzsl.features import KeyFrameSelector, TextureDescriptor
+from tzsl.features import (
+    KeyFrameSelector,
+    TextureDescriptor,
+    depth_image_descriptors,
+    descriptor_memory,
+    descriptor_params,
+    files_digest,
+)
 
 __all__ = [
     "N_KEY_FRAMES",
@@ -106,71 +112,6 @@ def depth_sequence_rows(images: pd.DataFrame, n_frames: int = N_KEY_FRAMES) -> n
     frac = np.linspace(0.0, 1.0, n_frames)
     local = np.floor(frac[None, :] * (sizes[:, None] - 1) + 0.5).astype(np.int64)
     return order[starts[:, None] + local]
-
-
-def files_digest(paths: Sequence[str | os.PathLike]) -> str:
-    """sha256 over every file's name and content sha256, in order (the cache key of the data)."""
-    digest = hashlib.sha256()
-    for p in paths:
-        digest.update(Path(p).name.encode())
-        digest.update(file_sha256(p).encode())
-    return digest.hexdigest()
-
-
-def descriptor_params(descriptor: TextureDescriptor) -> dict:
-    return {k: v for k, v in descriptor.get_params().items() if k != "n_jobs"}
-
-
-def _describe_depth_files(digest: str, paths: list[str], params: dict, n_jobs: int | None) -> np.ndarray:
-    """Descriptors of depth PNGs (the cached unit; ``paths`` and ``n_jobs`` are not in the key)."""
-    images = read_depth_images(paths)
-    desc = TextureDescriptor(**params, n_jobs=n_jobs).fit(images[:1])
-    return desc.transform(images)
-
-
-def _memory(cache_dir) -> joblib.Memory:
-    return joblib.Memory(str(get_cache_dir(cache_dir)), verbose=0)
-
-
-def depth_image_descriptors(
-    fabric: FabricData,
-    descriptor: TextureDescriptor | None = None,
-    *,
-    cache_dir=None,
-    n_jobs: int | None = 1,
-    progress: bool = False,
-) -> np.ndarray:
-    """Texture descriptors of every depth image, cached on disk.
-
-    Parameters
-    ----------
-    fabric : FabricData
-        From :func:`tzsl.datasets.load_fabric` (with images).
-    descriptor : TextureDescriptor or None
-        Descriptor parameters (default: ``TextureDescriptor()``); its ``n_jobs`` is ignored.
-    cache_dir : str, path or None
-        Cache folder (default :func:`tzsl.datasets.get_cache_dir`).
-    n_jobs : int or None
-        joblib workers for a cold computation.
-    progress : bool
-        Say on stderr when the descriptors are computed rather than read from the cache.
-
-    Returns
-    -------
-    ndarray of shape (n_images, d), float64
-        Rows in the order of ``fabric.images``; ``d = 99`` for the default descriptor.
-    """
-    params = descriptor_params(descriptor if descriptor is not None else TextureDescriptor())
-    paths = fabric.images["path"].tolist()
-    if not paths:
-        raise ConfigError("the fabric data has no image table; load it with images=True")
-    digest = files_digest(paths)
-    cached = _memory(cache_dir).cache(_describe_depth_files, ignore=["paths", "n_jobs"])
-    if progress and not cached.check_call_in_cache(digest, paths, params, n_jobs):
-        from tqdm.auto import tqdm
-
-        tqdm.write(f"computing texture descriptors of {len(paths)} depth images (cached afterwards)")
-    return cached(digest, paths, params, n_jobs)
 
 
 def depth_samples(
@@ -304,7 +245,7 @@ def gelsight_samples(
     sel = selector if selector is not None else KeyFrameSelector()
     sel_params = {**sel.get_params(), "as_gray": True}
     desc_params = descriptor_params(descriptor if descriptor is not None else TextureDescriptor())
-    cached = _memory(cache_dir).cache(_describe_video, ignore=["path"])
+    cached = descriptor_memory(cache_dir).cache(_describe_video, ignore=["path"])
     paths = videos["path"].tolist()
     if progress:
         from tqdm.auto import tqdm

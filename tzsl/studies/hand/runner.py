@@ -1,6 +1,9 @@
-"""The hand study's runner: ``study = "hand"`` (the DAP paper's Shadow-hand grasps; SIMULATED from Table 4).
+"""The hand study's runner: ``study = "hand"``, a preset of ``zero-shot`` (the DAP paper's Shadow-hand
+grasps; SIMULATED from Table 4).
 
-Registered in :mod:`tzsl.studies.config` (:func:`~tzsl.studies.config.register_study`).
+Registered in :mod:`tzsl.studies.config` (:func:`~tzsl.studies.config.register_study`). It runs
+the generic zero-shot study on the built-in ``hand-simulated`` dataset (``[zero_shot]``,
+:mod:`tzsl.studies.zero_shot.preset`), then the paper's protocol (Tables 4-5, multi-grasp).
 """
 
 from __future__ import annotations
@@ -11,13 +14,42 @@ from tzsl.studies._outputs import ResultsDir
 from tzsl.studies.config import Experiment
 from tzsl.studies.study_settings import StudyRun, hand_config, record_config
 
-__all__ = ["run_hand"]
+__all__ = ["hand_notes", "hand_outputs", "hand_results", "run_hand"]
+
+
+def _paper_outputs(config) -> list[str]:
+    from tzsl.studies.hand.study import HAND_OUTPUTS  # noqa: PLC0415
+
+    return list(HAND_OUTPUTS)
+
+
+def hand_outputs(config) -> list[str]:
+    """Files a ``hand`` run writes: the generic part's and the paper protocol's."""
+    from tzsl.studies.zero_shot.preset import preset_outputs  # noqa: PLC0415
+
+    return preset_outputs(config, _paper_outputs(config))
+
+
+def hand_results(exp: Experiment, force: bool) -> ResultsDir:
+    """The staged results folder of a ``hand`` run (every file checked free before any fit)."""
+    from tzsl.studies.zero_shot.preset import preset_results  # noqa: PLC0415
+
+    return preset_results(exp, force, _paper_outputs(exp.config))
+
+
+def hand_notes(exp: Experiment) -> list[str]:
+    """``tzsl run --check``: the settings the generic part relaxes on ``hand-simulated``."""
+    from tzsl.studies.zero_shot.preset import preset_relaxation_notes  # noqa: PLC0415
+
+    return preset_relaxation_notes(exp)
 
 
 def run_hand(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
     from tzsl.datasets import load_hand_table4  # noqa: PLC0415
     from tzsl.studies.hand.study import format_hand_summary, run_hand_study  # noqa: PLC0415
+    from tzsl.studies.zero_shot.preset import run_generic_part, with_generic_part  # noqa: PLC0415
 
+    generic = run_generic_part(exp, results, say)
     ds = exp.config.dataset
     config = hand_config(exp)
     table = load_hand_table4(exp.resolve(ds.table))
@@ -33,4 +65,4 @@ def run_hand(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -
     tables["hand_method_comparison"] = result.method_comparison
     record = {"study_kind": "hand", "hand": record_config(config), "seeds": list(seeds),
               "grasps": None if grasps is None else str(grasps), "table": ds.table}
-    return StudyRun(tables, record, [] if grasps is None else [grasps / "grasps.csv"])
+    return with_generic_part(StudyRun(tables, record, [] if grasps is None else [grasps / "grasps.csv"]), generic)

@@ -335,9 +335,9 @@ def gzsl_table(rows: list[dict]) -> pd.DataFrame:
     table = pd.DataFrame(rows)
     if RELAXED_COLUMN in table.columns and not table[RELAXED_COLUMN].fillna("").astype(bool).any():
         table = table.drop(columns=RELAXED_COLUMN)
-    for count in ("n_classes", "n_unseen_classes"):  # absent when every split failed
-        if count not in table.columns:
-            table[count] = np.nan
+    for column in ("n_classes", "n_unseen_classes", "seen", "unseen", "harmonic", "zsl", "stacking_constant"):
+        if column not in table.columns:  # absent when every split failed or was left out (no unseen class)
+            table[column] = np.nan
     table["chance"] = 1.0 / table["n_classes"]
     table["zsl_chance"] = 1.0 / table["n_unseen_classes"]
     front = ["split", "method", "calibrated", "seen", "unseen", "harmonic", "zsl", "chance", "zsl_chance",

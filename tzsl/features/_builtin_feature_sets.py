@@ -1,0 +1,176 @@
+"""Features of the built-in datasets tzsl computes itself: fabric depth images and simulated grasps.
+
+``fabric-depth`` (:class:`~tzsl.datasets.FabricData`): one :class:`TextureDescriptor` vector per
+depth image, cached on disk with :class:`joblib.Memory` under
+:func:`tzsl.datasets.get_cache_dir`, keyed on the sha256 of the image files and the descriptor
+parameters (the fabric study reads the same cache, :func:`depth_image_descriptors`).
+``hand-simulated`` (:class:`~tzsl.datasets.SimulatedGrasps`): the packed grasp features of
+:func:`grasp_features` (the hand study's input), one sensor ``"hand"``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import joblib
+import numpy as np
+import pandas as pd
+
+from tzsl._io import file_sha256
+from tzsl.datasets import FabricData, FeatureSet, SimulatedGrasps, get_cache_dir, read_depth_images
+from tzsl.exceptions import ConfigError
+from tzsl.features._attribute_filter import filter_attributes
+from tzsl.features._grasp_features import MATERIAL_FEATURES, grasp_features
+from tzsl.features._texture import TextureDescriptor, texture_feature_names
+
+__all__ = ["depth_image_descriptors", "descriptor_memory", "descriptor_params", "fabric_depth_feature_set",
+           "files_digest", "simulated_grasp_feature_set"]
+
+
+def files_digest(paths: Sequence[str | os.PathLike]) -> str:
+    """sha256 over every file's name and content sha256, in order (the cache key of the data)."""
+    digest = hashlib.sha256()
+    for p in paths:
+        digest.update(Path(p).name.encode())
+        digest.update(file_sha256(p).encode())
+    return digest.hexdigest()
+
+
+def descriptor_params(descriptor: TextureDescriptor) -> dict:
+    """The descriptor's parameters that change its output (all but ``n_jobs``)."""
+    return {k: v for k, v in descriptor.get_params().items() if k != "n_jobs"}
+
+
+def descriptor_memory(cache_dir=None) -> joblib.Memory:
+    """The on-disk cache of texture descriptors (default folder :func:`tzsl.datasets.get_cache_dir`)."""
+    return joblib.Memory(str(get_cache_dir(cache_dir)), verbose=0)
+
+
+def _describe_depth_files(digest: str, paths: list[str], params: dict, n_jobs: int | None) -> np.ndarray:
+    """Descriptors of depth PNGs (the cached unit; ``paths`` and ``n_jobs`` are not in the key)."""
+    images = read_depth_images(paths)
+    desc = TextureDescriptor(**params, n_jobs=n_jobs).fit(images[:1])
+    return desc.transform(images)
+
+
+def depth_image_descriptors(
+    fabric: FabricData,
+    descriptor: TextureDescriptor | None = None,
+    *,
+    cache_dir=None,
+    n_jobs: int | None = 1,
+    progress: bool = False,
+) -> np.ndarray:
+    """Texture descriptors of every depth image, cached on disk.
+
+    Parameters
+    ----------
+    fabric : FabricData
+        From :func:`tzsl.datasets.load_fabric` (with images).
+    descriptor : TextureDescriptor or None
+        Descriptor parameters (default: ``TextureDescriptor()``); its ``n_jobs`` is ignored.
+    cache_dir : str, path or None
+        Cache folder (default :func:`tzsl.datasets.get_cache_dir`).
+    n_jobs : int or None
+        joblib workers for a cold computation.
+    progress : bool
+        Say on stderr when the descriptors are computed rather than read from the cache.
+
+    Returns
+    -------
+    ndarray of shape (n_images, d), float64
+        Rows in the order of ``fabric.images``; ``d = 99`` for the default descriptor.
+    """
+    params = descriptor_params(descriptor if descriptor is not None else TextureDescriptor())
+    paths = fabric.images["path"].tolist()
+    if not paths:
+        raise ConfigError("the fabric data has no image table; load it with images=True")
+    digest = files_digest(paths)
+    cached = descriptor_memory(cache_dir).cache(_describe_depth_files, ignore=["paths", "n_jobs"])
+    if progress and not cached.check_call_in_cache(digest, paths, params, n_jobs):
+        from tqdm.auto import tqdm
+
+        tqdm.write(f"computing texture descriptors of {len(paths)} depth images (cached afterwards)")
+    return cached(digest, paths, params, n_jobs)
+
+
+def _feature_set(X: np.ndarray, trials: pd.DataFrame, object_rows: pd.DataFrame, sensor: str,
+                 feature_names: Sequence[str], dataset: str, min_objects: int, info: dict) -> FeatureSet:
+    """A one-sensor FeatureSet with the attribute table filtered to ``min_objects`` objects."""
+    attributes, dropped = filter_attributes(object_rows, min_objects)
+    return FeatureSet(X=np.asarray(X, dtype=np.float64)[:, None, :], trials=trials.reset_index(drop=True),
+                      sensors=(sensor,), feature_names=tuple(feature_names), attributes=attributes,
+                      dataset=dataset, info={"dropped_attributes": dropped, "min_objects": int(min_objects), **info})
+
+
+def fabric_depth_feature_set(fabric: FabricData, min_objects: int = 3) -> FeatureSet:
+    """The ``fabric-depth`` dataset: one trial per depth image, one object per fabric.
+
+    Parameters
+    ----------
+    fabric : FabricData
+        From :func:`tzsl.datasets.load_fabric` with images.
+    min_objects : int, default 3
+        Keep attributes present in at least this many fabrics.
+
+    Returns
+    -------
+    FeatureSet
+        ``X`` (n_images, 1, 99): the default :class:`TextureDescriptor` of every image
+        (:func:`depth_image_descriptors`, cached); sensor ``"depth"``; trials with
+        ``object_name`` = the fabric, ``class`` = ``group-<g>``; ``attributes`` (n_fabrics,
+        n_attributes): each fabric's group row of the group x attribute matrix.
+    """
+    images = fabric.images
+    X = depth_image_descriptors(fabric)
+    trials = pd.DataFrame({
+        "trial_id": [f"{n}-{i}" for n, i in zip(images["fabric_name"], images["capture_index"])],
+        "object_id": images["fabric_id"].to_numpy(dtype=np.int64),
+        "object_name": images["fabric_name"].astype(str).to_numpy(),
+        "trial_index": images["capture_index"].to_numpy(dtype=np.int64) + 1,
+        "class": [f"group-{g}" for g in images["group"]],
+    })
+    first = images.drop_duplicates("fabric_name")
+    rows = fabric.attributes.loc[first["group"].to_numpy()].astype(np.int64)
+    rows.index = pd.Index(first["fabric_name"].astype(str).to_numpy(), name="object_name")
+    names = texture_feature_names(descriptor_params(TextureDescriptor()))
+    return _feature_set(X, trials, rows, "depth", names, "fabric-depth", min_objects,
+                        {"attribute_set": fabric.attribute_set,
+                         "duplicate_groups": [list(map(int, d)) for d in fabric.duplicate_groups]})
+
+
+def simulated_grasp_feature_set(simulated: SimulatedGrasps, K: pd.DataFrame, min_objects: int = 3) -> FeatureSet:
+    """The ``hand-simulated`` dataset: one trial per simulated grasp, one object per Table 4 row.
+
+    Parameters
+    ----------
+    simulated : SimulatedGrasps
+        From :func:`tzsl.datasets.simulate_grasps`.
+    K : DataFrame of shape (n_objects, n_attributes), 0/1
+        The class-attribute table the grasps were drawn from (indexed by object name).
+    min_objects : int, default 3
+        Keep attributes present in at least this many objects.
+
+    Returns
+    -------
+    FeatureSet
+        ``X`` (n_grasps, 1, F * 22 + F + n_joints): the packed grasp features of
+        :func:`grasp_features` with its default windows (material means per BioTac, contact
+        flags, closing-joint angles; ADC counts, 0/1, radians); sensor ``"hand"``.
+    """
+    features = grasp_features(simulated.grasps)
+    objects = features.objects.astype(str)
+    order = {o: i for i, o in enumerate(K.index)}
+    trials = pd.DataFrame({"trial_id": features.grasp_ids.astype(str), "object_name": objects})
+    trials.insert(1, "object_id", trials["object_name"].map(order).to_numpy(dtype=np.int64))
+    trials["trial_index"] = trials.groupby("object_name", sort=False).cumcount().to_numpy(dtype=np.int64) + 1
+    trials["class"] = objects
+    n_fingers = features.material.shape[1]
+    names = ([f"f{i}_{m}" for i in range(n_fingers) for m in MATERIAL_FEATURES]
+             + [f"f{i}_contact" for i in range(n_fingers)] + list(features.joint_names))
+    rows = K.loc[pd.unique(objects)].astype(np.int64).rename_axis("object_name")
+    return _feature_set(features.to_array(), trials, rows, "hand", names, "hand-simulated", min_objects,
+                        {"simulated": True, "simulation": dict(simulated.params)})
