@@ -300,3 +300,19 @@ def test_extended_grid_leaves_the_low_edge_when_a_wide_kernel_fits_best():
     assert ("gamma", 0.01, "low") in paper.grid_edges_
     assert extended.gamma_ < 0.01
     assert extended.cv_scores_.min() <= paper.cv_scores_.min()
+
+
+def test_undersampling_keeps_two_majority_objects_for_grouped_cv():
+    """Few objects of many trials each (a fabric group's depth images): one majority object could already
+    match the minority's trial count, which would leave object-grouped CV one fold; every draw keeps two."""
+    from tzsl.models.attribute_training import balanced_object_draws  # noqa: PLC0415
+
+    groups = np.repeat(np.arange(5), [400, 400, 400, 100, 100])  # objects 0-2 negative, 3-4 positive
+    yb = groups >= 3
+    draws, _ = balanced_object_draws(yb, groups, 10, np.random.RandomState(0))
+    for keep in draws:
+        assert np.unique(groups[keep & ~yb]).size == 2 and np.unique(groups[keep & yb]).size == 2
+    rng = np.random.default_rng(0)
+    X = rng.normal(size=(groups.size, 3)) + yb[:, None]
+    svm = AttributeSVM(n_C=1, n_gamma=1, n_draws=2, cv=5, random_state=0).fit(X, yb.astype(int), groups)
+    assert svm.predict_proba(X[:5]).shape == (5, 2)

@@ -225,7 +225,7 @@ def test_a_split_without_an_unseen_class_is_left_out_with_a_note():
     left_out = table[table[RELAXED_COLUMN].fillna("").str.contains("no unseen class")]
     assert set(left_out["split"]) == {"1"} and left_out["harmonic"].isna().all()
     # every split left out (fabric-depth: each test fabric's group row is a training fabric's): a table of notes
-    only = run_gzsl(features, [bad], config, GzslConfig(calibrated_stacking=False))
+    only = run_gzsl(features, [bad], _config(**{"gzsl.calibrated_stacking": False}))
     assert table_failures({"gzsl": only}) == [] and only["harmonic"].isna().all()
     assert only[RELAXED_COLUMN].fillna("").str.contains("no unseen class").any()
 

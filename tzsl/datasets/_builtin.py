@@ -131,18 +131,18 @@ class Phac2H5(TactileDataset):
 
 
 class FabricDepth(TactileDataset):
-    """The fabric study's public depth images: one trial per image, one object per fabric.
+    """The fabric study's public depth images: one trial per image, one object (and class) per fabric group.
 
-    Classes are the 8 fabric groups and the attribute rows the group x attribute matrix that
-    :func:`~tzsl.datasets.load_fabric` reads by default (a8: 8 attributes, the fabric paper's;
-    groups 3, 4 and 5 share one row, so 6 distinct rows - enough for the zero-shot study's 5
-    test objects per random split, and every attribute holds in >= 3 fabrics). a12, which the
-    fabric study's ``[partitions]`` use, is a partition protocol's matrix, not the paper's.
+    A split holds out fabric groups, as the fabric paper does (:func:`tzsl.features.fabric_depth_feature_set`).
+    The attribute rows are the group x attribute matrix that :func:`~tzsl.datasets.load_fabric` reads
+    by default (a8: 8 attributes, the fabric paper's; groups 3, 4 and 5 share one row, so 6 distinct
+    rows). a12, which the fabric study's ``[partitions]`` use, is a partition protocol's matrix, not
+    the paper's.
     """
 
     name = "fabric-depth"
-    description = ("the 1300 public depth images of 119 fabrics (8 groups, a8 group attributes), one trial per "
-                   "image, texture-descriptor features")
+    description = ("the 1300 public depth images of 119 fabrics in 8 groups (the objects and classes; a8 group "
+                   "attributes), one trial per image, texture-descriptor features")
     source = "the fabric paper (Fabric Recognition Using Zero-Shot Learning); its public depth images and groups"
     content = "depth-images"
     eps = ("press",)

@@ -260,14 +260,18 @@ def balanced_object_draws(yb: np.ndarray, groups: np.ndarray, n_draws: int,
     size = np.bincount(g_inv, minlength=g_all.size)
     n_minor = int((~major).sum())
     # majority trials inside mixed groups are always kept
-    kept_major_fixed = int(np.bincount(g_inv, weights=major.astype(float), minlength=g_all.size)[has_minor].sum())
+    major_per_group = np.bincount(g_inv, weights=major.astype(float), minlength=g_all.size)
+    kept_major_fixed = int(major_per_group[has_minor].sum())
     need = n_minor - kept_major_fixed
+    # keep majority trials of at least two objects where there are two: with one, object-grouped CV has a
+    # single fold (few objects of many trials each, e.g. the fabric groups' depth images)
+    k_min = max(0, 2 - int(np.count_nonzero(has_minor & (major_per_group > 0))))
     draws = []
     for _ in range(n_draws):
         order = droppable[rng.permutation(droppable.size)]
         csum = np.cumsum(size[order])
         k = int(np.searchsorted(csum, need)) + 1 if need > 0 else 0
-        k = min(k, order.size)
+        k = min(max(k, k_min), order.size)
         keep_group = has_minor.copy()
         keep_group[order[:k]] = True
         draws.append(keep_group[g_inv])

@@ -17,7 +17,8 @@ manifest under ``relaxations``):
    (the class-grouped CV of ESZSL, SAE and the embedding models, compared on random splits).
 3. ``splits.challenging_min_train_positives``: lowered one by one (down to 2) until the
    challenging partitions can be drawn and each leaves every kept attribute 2 positive and 2
-   negative training objects; if never, challenging splits are left out (``splits.kinds``).
+   negative training objects, its training objects :data:`~tzsl.models.protocol.MIN_CV_CLASSES`
+   distinct rows and 2 test classes; if never, challenging splits are left out (``splits.kinds``).
 4. ``svm.cv`` (object-grouped folds): at most the fewest training objects of any split.
 5. GZSL calibrated stacking (in :mod:`tzsl.studies.zero_shot.gzsl`): fewer pseudo-unseen classes;
    where none can be drawn, or a method cannot be fitted on them, that split reports the
@@ -154,15 +155,18 @@ def _relax_challenging(features: FeatureSet, splits, negatives: int,
                                           min_train_positives=positives, min_train_negatives=negatives)
         except SplitError:
             continue
-        if not _trainable(features.attributes, drawn):
+        # as the random splits: trainable attributes, MIN_CV_CLASSES training rows for the class-grouped CV
+        # of the compared methods, and at least 2 test classes (one candidate class is no comparison)
+        if not _trainable(features.attributes, drawn, MIN_CV_CLASSES) or min(s.n_test for s in drawn) < 2:
             continue
         if positives != asked:
             notes.append(Relaxation("splits.challenging_min_train_positives", asked, positives,
                                     "a partition's training objects lack positives of an attribute"))
         return positives, drawn
     notes.append(Relaxation("splits.kinds", "random + challenging", "random",
-                            "no challenging partition of the 2-D feature map leaves every kept attribute 2 "
-                            "positive and 2 negative training objects"))
+                            "no set of challenging partitions of the 2-D feature map leaves every kept attribute 2 "
+                            f"positive and 2 negative training objects, {MIN_CV_CLASSES} distinct training rows and "
+                            "2 test classes"))
     return None, []
 
 
