@@ -15,7 +15,7 @@ from tzsl.datasets import FeatureSet, feature_set_to_plain
 from tzsl.exceptions import ConfigError
 from tzsl.studies.config import builtin_names, study_names, load_experiment, to_toml, validate
 from tzsl.studies.engine import check_experiment, run_experiment
-from tzsl.studies.study_settings import fabric_arguments, hand_config
+from tzsl.studies.study_settings import fabric_arguments
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -43,15 +43,16 @@ def test_builtin_studies_ship_inside_the_package_only():
 
 def test_studies_read_the_schema_defaults():
     """A study file is the study's settings: the DAP study's tables are DapSettings' own defaults."""
-    from tzsl.studies.config import DapSettings
-    from tzsl.studies.hand.study import HandStudyConfig
+    from tzsl.studies.config import DapSettings, HandSettings
 
     minimal = validate({"study": "phac2-dap", "dataset": {"features": "x.csv"}}, "t", Path("."))
     assert isinstance(minimal.config, DapSettings)
     for table in ("methods", "gzsl", "splits", "svm", "compute"):
         assert getattr(minimal.config, table) == getattr(DapSettings(), table), table
     hand = validate({"study": "hand", "dataset": {"builtin": "hand-simulated"}}, "t", Path("."))
-    assert hand_config(hand) == HandStudyConfig()
+    assert isinstance(hand.config, HandSettings)
+    for table in ("simulation", "features", "methods", "compute"):
+        assert getattr(hand.config, table) == getattr(HandSettings(), table), table
 
 
 def test_svm_defaults_are_read_from_the_estimator():

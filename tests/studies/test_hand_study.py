@@ -7,24 +7,26 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
+from pydantic import ValidationError
 
 from tzsl.datasets import load_hand_table4, simulate_grasps
 from tzsl.exceptions import ConfigError, DataFileError
 from tzsl.studies import paper_numbers as paper
 from tzsl.studies.hand.study import (
     HAND_OUTPUTS,
-    HandStudyConfig,
     fit_hand_model,
     format_hand_summary,
     hand_features,
     run_hand_study,
 )
+from tests.study_settings import study_settings
 from tzsl.models import HandDAPClassifier
+from tzsl.studies.config import HandSettings
 from tzsl.models.dap import break_ties
 
 TABLE = load_hand_table4()
-CONFIG = HandStudyConfig(n_grasps_per_object=20, max_T=4, max_k=3, sequence_length=8, n_sequences=15,
-                         confusion_T=3, confusion_k=2)
+CONFIG = study_settings(HandSettings, n_grasps_per_object=20, max_T=4, max_k=3, sequence_length=8, n_sequences=15,
+                        confusion_T=3, confusion_k=2)
 
 
 @pytest.fixture(scope="module")
@@ -113,7 +115,7 @@ def test_multigrasp_curves_are_consistent(study):
         assert k1["accuracy"].item() == pytest.approx(t1)
         assert k1["mean_grasps_used"].item() == 1.0 and k1["decided_fraction"].item() == 1.0
         used = k[k["seed"] == seed]["mean_grasps_used"].to_numpy()
-        assert np.all(np.diff(used) > 0) and used.max() <= CONFIG.sequence_length
+        assert np.all(np.diff(used) > 0) and used.max() <= CONFIG.methods.sequence_length
     assert (T["accuracy"].dropna().between(0, 1)).all()
 
 
@@ -148,8 +150,8 @@ def test_fit_uses_training_objects_only(folder):
 
 @pytest.mark.slow
 def test_simulated_when_no_grasps_and_refuses_overwrite(tmp_path):
-    cfg = HandStudyConfig(n_grasps_per_object=12, max_T=2, max_k=2, sequence_length=4, n_sequences=5,
-                          confusion_T=2, confusion_k=2)
+    cfg = study_settings(HandSettings, n_grasps_per_object=12, max_T=2, max_k=2, sequence_length=4, n_sequences=5,
+                         confusion_T=2, confusion_k=2)
     result = run_hand_study(None, TABLE, tmp_path, seeds=[3], config=cfg)
     assert result.simulated
     assert "SIMULATED" in format_hand_summary(result)
@@ -175,11 +177,11 @@ def test_unknown_object_is_a_clear_error(tmp_path):
         run_hand_study(renamed, TABLE, tmp_path, seeds=[0], config=CONFIG)
 
 
-@pytest.mark.parametrize("bad", [{"max_T": 0}, {"n_sequences": -1}, {"model_params": {"material_attributes": ()}}])
-def test_bad_config(tmp_path, bad):
-    cfg = HandStudyConfig(**bad)
-    with pytest.raises(ConfigError):
-        run_hand_study(None, TABLE, tmp_path, seeds=[0], config=cfg)
+@pytest.mark.parametrize("bad", [{"max_T": 0}, {"n_sequences": -1}, {"model": {"material_attributes": []}}])
+def test_bad_config(bad):
+    """Impossible settings are refused by the schema, before any study runs."""
+    with pytest.raises(ValidationError, match=next(iter(bad))):
+        study_settings(HandSettings, **bad)
 
 
 def test_a_failing_seed_is_recorded_and_the_others_complete(folder, tmp_path, monkeypatch):

@@ -11,7 +11,8 @@ from tzsl.bundle import load_bundle, save_bundle
 from tzsl.datasets import FeatureSet, load_hand_table4, read_grasps, simulate_grasps
 from tzsl.datasets._feature_table import write_feature_table
 from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
-from tzsl.studies.hand.study import HandStudyConfig, feature_params
+from tzsl.studies.config import HandSettings
+from tzsl.studies.hand.study import feature_params
 from tzsl.inference.model_bundles import ZERO_SHOT_KIND, save_model_bundle, save_zero_shot_bundle, train_hand_bundle
 from tzsl.inference.predict import format_prediction, load_predictor, predict_grasps, read_class_table
 from tzsl.features import grasp_features
@@ -72,7 +73,7 @@ def test_missing_class_table(tmp_path):
 def _direct(model, files, K):
     """Per-grasp LDAP posteriors and decisions computed without the predict module."""
     grasps = [g for f in files for g in read_grasps(f.parent, [f.stem])]
-    feats = grasp_features(grasps, **feature_params(HandStudyConfig()))
+    feats = grasp_features(grasps, **feature_params(HandSettings()))
     P = model.predict_attribute_proba(feats.to_array(), "ldap")
     scores = dap_log_scores(P, K.to_numpy(dtype=float), np.full(P.shape[1], 0.5))
     return P, scores

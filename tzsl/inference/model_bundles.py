@@ -240,9 +240,10 @@ def train_hand_bundle(grasps_dir: str | Path, table: HandTable, save: str | Path
     metadata : dict
         As saved, plus ``n_training_grasps`` and ``n_ignored_grasps`` (grasps of other objects).
     """
-    from tzsl.studies.hand.study import HandStudyConfig, feature_params, fit_hand_model, hand_features  # noqa: PLC0415
+    from tzsl.studies.config import HandSettings  # noqa: PLC0415
+    from tzsl.studies.hand.study import feature_params, fit_hand_model, hand_features  # noqa: PLC0415
 
-    config = HandStudyConfig() if config is None else config
+    config = HandSettings() if config is None else config
     save = Path(save)
     if save.exists() and not force:
         raise ConfigError(f"{save} already exists; use --force to overwrite it")

@@ -8,7 +8,7 @@ runner returns. Shared by the engine and the runners (so neither imports the oth
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from typing import Any
 
 import pandas as pd
@@ -16,8 +16,7 @@ import pandas as pd
 from tzsl.studies._failures import table_failures
 from tzsl.studies.config import Experiment
 
-__all__ = ["StudyRun", "active_config", "deep_arguments", "fabric_arguments", "format_table", "hand_config",
-           "record_config"]
+__all__ = ["StudyRun", "deep_arguments", "fabric_arguments", "format_table"]
 
 
 def _fabric_data_arguments(exp: Experiment) -> dict:
@@ -54,30 +53,6 @@ def deep_arguments(exp: Experiment) -> dict:
     }
 
 
-def hand_config(exp: Experiment):
-    """The :class:`~tzsl.studies.hand.study.HandStudyConfig` of a hand experiment."""
-    from tzsl.studies.hand.study import HandStudyConfig  # noqa: PLC0415
-
-    c = exp.config
-    values = {**c.simulation.model_dump(), **c.features.model_dump(),
-              **{k: v for k, v in c.methods.model_dump().items() if k != "model"},
-              "model_params": dict(c.methods.model), "n_jobs": c.compute.n_jobs}
-    return HandStudyConfig(**values)
-
-
-def active_config(exp: Experiment):
-    """The :class:`~tzsl.studies.active_touch.study.ActiveTouchConfig` of an active-touch experiment."""
-    from tzsl.studies.active_touch.study import ActiveTouchConfig  # noqa: PLC0415
-
-    c = exp.config
-    return ActiveTouchConfig(kinds=tuple(c.splits.kinds), n_splits=c.splits.n_splits, n_test=c.splits.n_test,
-                             seed=c.splits.seed, thresholds=tuple(float(t) for t in c.methods.thresholds),
-                             update=c.methods.update, cv=c.methods.cv, n_samples=c.methods.n_samples,
-                             tempering=c.methods.tempering,
-                             decided_thresholds=tuple(float(t) for t in c.methods.decided_thresholds),
-                             n_boot=c.methods.n_boot, n_jobs=c.compute.n_jobs)
-
-
 @dataclass
 class StudyRun:
     """What :func:`execute_study` returns: the tables written and what the manifest records."""
@@ -90,11 +65,6 @@ class StudyRun:
     def failures(self) -> list[str]:
         """One line per failed (split, method) fit, read from the tables' ``error`` columns."""
         return table_failures(self.tables)
-
-
-def record_config(config) -> dict:
-    """A dataclass config as a JSON-friendly dict (tuples as lists)."""
-    return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(config).items()}
 
 
 def format_table(table: pd.DataFrame) -> str:

@@ -38,8 +38,8 @@ from sklearn.model_selection import StratifiedKFold
 from tzsl._parallel import reissued, relayed
 from tzsl.datasets import HandTable, simulate_grasps
 from tzsl.evaluation import bootstrap_accuracy_columns, paired_difference_interval
-from tzsl.studies.config import ActiveTouchStudy
-from tzsl.studies.hand.study import HandStudyConfig, fit_hand_model, hand_features
+from tzsl.studies.config import ActiveTouchStudy, HandSettings
+from tzsl.studies.hand.study import fit_hand_model, hand_features
 from tzsl.models.dap import break_ties, dap_log_scores
 from tzsl.models.multigrasp import fuse_grasp_posteriors
 from tzsl.models.active_touch import binned_confusion, expected_information_gain, outcome_log_likelihoods
@@ -67,7 +67,7 @@ def _ldap(model, features) -> np.ndarray:
     return fuse_grasp_posteriors(P_mat, contact, P_sh, "ldap")
 
 
-def _type_confusion(features, table: HandTable, config: HandStudyConfig, cv: int, seed: int,
+def _type_confusion(features, table: HandTable, config: HandSettings, cv: int, seed: int,
                     columns: list[str]) -> np.ndarray:
     """Confusion (n_types, n_attributes, 2, n_bins) from out-of-fold LDAP posteriors of training grasps."""
     train = np.flatnonzero(np.isin(features.objects, table.train_objects) & features.contact.any(axis=1))
@@ -126,10 +126,9 @@ def _sequences(S: np.ndarray, obj: np.ndarray, types: np.ndarray, L: np.ndarray 
     return pred, top
 
 
-def _evaluate_seed(table: HandTable, study: HandStudyConfig, config: ActiveTouchStudy, seed: int,
+def _evaluate_seed(table: HandTable, study: HandSettings, config: ActiveTouchStudy, seed: int,
                    strategies: Sequence[str]) -> dict:
-    sim = simulate_grasps(table.K, study.n_grasps_per_object, study.noise, study.difficulty, study.shape_miss_rate,
-                          random_state=seed)
+    sim = simulate_grasps(table.K, **study.simulation.model_dump(), random_state=seed)
     features = hand_features(sim.grasps, table, study)
     model = fit_hand_model(features, table, study, seed)
     columns = list(model.K_.columns)
@@ -178,7 +177,7 @@ def run_active_hand(table: HandTable, results_dir, config: ActiveTouchStudy,
     """Run the simulated-hand comparison and write :data:`HAND_OUTPUTS`; returns the two tables."""
     results_dir.check_free(HAND_OUTPUTS)
     log = log or (lambda _msg: None)
-    study = HandStudyConfig()
+    study = HandSettings()  # the hand study's defaults
     strategies = ["active", *(f"fixed:{t}" for t in GRASP_TYPES), "random_type", "random_grasp"]
     runs = [reissued(r) for r in Parallel(n_jobs=config.compute.n_jobs)(
         delayed(relayed(_evaluate_seed))(table, study, config, seed, strategies) for seed in config.hand.seeds)]

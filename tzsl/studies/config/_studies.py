@@ -269,7 +269,21 @@ class HandCompute(Compute):
     pass
 
 
-class HandStudy(Section):
+class HandSettings(Section):
+    """What the hand study reads: ``[simulation]``, ``[features]``, ``[methods]`` and ``[compute]``.
+
+    Every hand study file is one (:class:`HandStudy` adds the data, seeds and output); from Python,
+    give what differs from the defaults, e.g. ``HandSettings(methods={"max_T": 4})``
+    (:func:`tzsl.studies.hand.study.run_hand_study`).
+    """
+
+    simulation: HandSimulation = Field(default_factory=HandSimulation)
+    features: HandFeatures = Field(default_factory=HandFeatures)
+    methods: HandMethods = Field(default_factory=HandMethods)
+    compute: HandCompute = Field(default_factory=HandCompute)
+
+
+class HandStudy(HandSettings):
     """``study = "hand"``, a preset of ``zero-shot``: the generic study's tables on the built-in
     ``hand-simulated`` dataset (``[zero_shot]``), then the DAP paper's Shadow-hand protocol (5 BioTacs,
     Tables 4-5, multi-grasp; sections 5.6-5.8) with its numbers."""
@@ -277,12 +291,8 @@ class HandStudy(Section):
     study: Literal["hand"] = "hand"
     description: str = ""
     dataset: HandDataset
-    simulation: HandSimulation = Field(default_factory=HandSimulation)
-    features: HandFeatures = Field(default_factory=HandFeatures)
-    methods: HandMethods = Field(default_factory=HandMethods)
     splits: HandSplits = Field(default_factory=HandSplits)
     zero_shot: PresetZeroShot = Field(default_factory=PresetZeroShot)
-    compute: HandCompute = Field(default_factory=HandCompute)
     output: Output = Field(default_factory=Output)
 
 

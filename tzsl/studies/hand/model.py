@@ -18,22 +18,22 @@ from tzsl.features import GraspFeatures, grasp_features
 from tzsl.models import HandDAPClassifier
 
 if TYPE_CHECKING:
-    from tzsl.studies.hand.study import HandStudyConfig
+    from tzsl.studies.config import HandSettings
 
 __all__ = ["feature_params", "fit_hand_model", "hand_features"]
 
 
-def feature_params(config: HandStudyConfig) -> dict:
+def feature_params(config: HandSettings) -> dict:
     """Keyword arguments of :func:`tzsl.features.grasp_features` taken from ``config``."""
     return {
-        "contact_threshold": float(config.contact_threshold),
-        "baseline_rows": int(config.baseline_rows),
-        "hold_fraction": float(config.hold_fraction),
-        "end_rows": int(config.end_rows),
+        "contact_threshold": float(config.features.contact_threshold),
+        "baseline_rows": int(config.features.baseline_rows),
+        "hold_fraction": float(config.features.hold_fraction),
+        "end_rows": int(config.features.end_rows),
     }
 
 
-def hand_features(grasps: Sequence[Grasp], table: HandTable, config: HandStudyConfig) -> GraspFeatures:
+def hand_features(grasps: Sequence[Grasp], table: HandTable, config: HandSettings) -> GraspFeatures:
     """Features of labelled grasps, checking every grasp's object is a row of the table.
 
     Raises
@@ -54,7 +54,7 @@ def hand_features(grasps: Sequence[Grasp], table: HandTable, config: HandStudyCo
 
 
 def fit_hand_model(
-    features: GraspFeatures, table: HandTable, config: HandStudyConfig, seed: int, **overrides
+    features: GraspFeatures, table: HandTable, config: HandSettings, seed: int, **overrides
 ) -> HandDAPClassifier:
     """Fit the hand DAP model on the grasps of the table's training objects only.
 
@@ -63,7 +63,7 @@ def fit_hand_model(
     features : GraspFeatures
         Any grasps; only those of ``table.train_objects`` are used.
     table : HandTable
-    config : HandStudyConfig
+    config : HandSettings
     seed : int
         ``random_state`` of the model.
     **overrides
@@ -78,11 +78,11 @@ def fit_hand_model(
     if not train.any():
         raise SplitError(f"no grasp of a training object ({table.train_objects}) to fit the attribute classifiers on")
     tr = features.subset(train)
-    params = {**config.model_params, **overrides}
+    params = {**config.methods.model, **overrides}
     model = HandDAPClassifier(
         material_attributes=tuple(table.material_attributes),
         random_state=seed,
-        n_jobs=config.n_jobs,
+        n_jobs=config.compute.n_jobs,
         **params,
     )
     return model.fit(tr.to_array(), tr.objects, table.K)

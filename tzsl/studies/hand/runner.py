@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 from tzsl.studies._outputs import ResultsDir
 from tzsl.studies.config import Experiment
-from tzsl.studies.study_settings import StudyRun, hand_config, record_config
+from tzsl.studies.study_settings import StudyRun
 
 __all__ = ["hand_notes", "hand_outputs", "hand_results", "run_hand"]
 
@@ -51,7 +51,7 @@ def run_hand(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -
 
     generic = run_generic_part(exp, results, say)
     ds = exp.config.dataset
-    config = hand_config(exp)
+    config = exp.config
     table = load_hand_table4(exp.resolve(ds.table))
     grasps = exp.resolve(ds.grasps)
     seeds = tuple(exp.config.splits.seeds)
@@ -63,6 +63,6 @@ def run_hand(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -
     tables = {name: getattr(result, name) for name in ("table5", "multigrasp_T", "multigrasp_k",
                                                        "attribute_accuracy", "attribute_distance", "confusion")}
     tables["hand_method_comparison"] = result.method_comparison
-    record = {"study_kind": "hand", "hand": record_config(config), "seeds": list(seeds),
+    record = {"study_kind": "hand", "seeds": list(seeds),
               "grasps": None if grasps is None else str(grasps), "table": ds.table}
     return with_generic_part(StudyRun(tables, record, [] if grasps is None else [grasps / "grasps.csv"]), generic)

@@ -29,7 +29,7 @@ empty for a single seed), and the paper's number beside ours where the paper pri
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -41,7 +41,7 @@ from tzsl.exceptions import ConfigError, SplitError
 from tzsl.studies import paper_numbers as paper
 from tzsl.studies._failures import ERROR_COLUMN, attempt
 from tzsl.studies._outputs import ResultsDir
-from tzsl.studies.config import Compute, HandFeatures, HandMethods, HandSimulation
+from tzsl.studies.config import HandSettings
 from tzsl.studies.hand.methods import (
     COMPARISON_TABLE,
     fusion_label,
@@ -79,7 +79,6 @@ from tzsl.models.multigrasp import (
 
 __all__ = [
     "HAND_OUTPUTS",
-    "HandStudyConfig",
     "HandStudyResult",
     "feature_params",
     "fit_hand_model",
@@ -104,69 +103,6 @@ HAND_OUTPUTS: tuple[str, ...] = (
     f"{COMPARISON_TABLE}.csv",
     "hand_manifest.json",
 )
-
-
-_SIM, _FEAT, _METH = HandSimulation(), HandFeatures(), HandMethods()
-
-
-@dataclass
-class HandStudyConfig:
-    """Settings of the hand study; every field is recorded in the manifest.
-
-    Attributes
-    ----------
-    n_grasps_per_object, noise, difficulty, shape_miss_rate : simulator settings
-        Used only when no grasp data are given (see :func:`tzsl.datasets.simulate_grasps`).
-    contact_threshold, baseline_rows, hold_fraction, end_rows : feature settings
-        See :func:`tzsl.features.grasp_features` (ADC counts, rows, fraction, rows).
-    model_params : dict
-        Further :class:`~tzsl.models.HandDAPClassifier` parameters (``material_C``, ``shape_C``,
-        ``n_components``, ...); ``fusion`` is irrelevant here (all three are scored).
-    max_T : int
-        DF-MDAP is scored for T = 1 .. ``max_T`` (capped by the sequence length).
-    max_k : int
-        SC-MDAP is scored for k = 1 .. ``max_k``.
-    sequence_length : int
-        Grasps per random sequence (paper: each test object grasped "up to 15 times"); capped by
-        the fewest grasps any test object has.
-    n_sequences : int
-        Random grasp orders per test object and seed.
-    confusion_T, confusion_k : int
-        DF-MDAP T and SC-MDAP k of the confusion matrices (paper's Fig. 12: 5 and 4).
-    compare : list of dict
-        Registry methods scored on the same test grasps (``hand_method_comparison.csv``).
-    n_jobs : int or None
-        Parallel attribute-classifier fits (joblib).
-    """
-
-    # every default is the experiment schema's (tzsl.studies.config), written once there
-    n_grasps_per_object: int = _SIM.n_grasps_per_object
-    noise: float = _SIM.noise
-    difficulty: float = _SIM.difficulty
-    shape_miss_rate: float = _SIM.shape_miss_rate
-    contact_threshold: float = _FEAT.contact_threshold
-    baseline_rows: int = _FEAT.baseline_rows
-    hold_fraction: float = _FEAT.hold_fraction
-    end_rows: int = _FEAT.end_rows
-    model_params: dict = field(default_factory=dict)
-    max_T: int = _METH.max_T
-    max_k: int = _METH.max_k
-    sequence_length: int = _METH.sequence_length
-    n_sequences: int = _METH.n_sequences
-    confusion_T: int = _METH.confusion_T
-    confusion_k: int = _METH.confusion_k
-    compare: list = field(default_factory=list)
-    n_jobs: int | None = Compute().n_jobs
-
-    def check(self) -> None:
-        """Raise ConfigError for settings that cannot work."""
-        for name in ("max_T", "max_k", "sequence_length", "n_sequences", "confusion_T", "confusion_k",
-                     "n_grasps_per_object"):
-            value = getattr(self, name)
-            if not isinstance(value, int | np.integer) or value < 1:
-                raise ConfigError(f"{name} must be a positive integer, got {value!r}")
-        if "material_attributes" in self.model_params:
-            raise ConfigError("model_params must not set material_attributes (they come from the table)")
 
 
 @dataclass
@@ -212,7 +148,7 @@ def _confusion_rows(label: str, seed: int, true: np.ndarray, pred: np.ndarray, n
     ]
 
 
-def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandStudyConfig, seed: int,
+def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandSettings, seed: int,
                    notes: list[str]) -> dict[str, list]:
     model, fit_seconds = timed(fit_hand_model, features, table, config, seed)
     columns = list(model.K_.columns)
@@ -246,7 +182,7 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandStudyC
     out["trials"] = hand_fusion_trials(pred, y, seed)
     out["seconds"] = [{fusion_label(fusion): fit_seconds for fusion in pred}]
     train = np.isin(features.objects, table.train_objects)
-    trials, seconds = registry_trials(config.compare, features.subset(train).to_array(), features.objects[train],
+    trials, seconds = registry_trials(config.methods.compare, features.subset(train).to_array(), features.objects[train],
                                       table.K[columns], te.to_array(), y, names, seed)
     out["trials"] += trials
     out["seconds"].append({k: v[0] for k, v in seconds.items()})
@@ -268,22 +204,22 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandStudyC
 
     # multi-grasp: the same random orders of each object's grasps for every T and k
     counts = pd.Series(y).value_counts()
-    L = int(min(config.sequence_length, counts.min()))
-    if L < config.sequence_length:
+    L = int(min(config.methods.sequence_length, counts.min()))
+    if L < config.methods.sequence_length:
         notes.append(f"seed {seed}: sequences of {L} grasps (object {counts.idxmin()!r} has only {counts.min()})")
-    idx, own = sample_grasp_sequences(y, L, config.n_sequences, random_state=seed)
+    idx, own = sample_grasp_sequences(y, L, config.methods.n_sequences, random_state=seed)
     P_ldap = fused["ldap"]
-    for T in range(1, min(config.max_T, L) + 1):
+    for T in range(1, min(config.methods.max_T, L) + 1):
         p = names[break_ties(dap_log_scores(df_mdap(P_ldap[idx[:, :T]]), K, prior), ties)]
         all_ok, most_ok = _object_counts(p, own, names)
         out["trust"].append(("T", seed, "accuracy", own, p == own, "trial", {"T": T}))
         out["T"].append({"seed": seed, "T": T, "accuracy": float((p == own).mean()),
                          "objects_all_correct": all_ok, "objects_majority_correct": most_ok,
                          "n_sequences": int(len(own))})
-        if T == min(config.confusion_T, L):
+        if T == min(config.methods.confusion_T, L):
             out["confusion"] += _confusion_rows(f"DF-MDAP (T={T})", seed, own, p, names)
     decisions = break_ties(dap_log_scores(P_ldap, K, prior), ties)  # LDAP per grasp (as the paper)
-    for k in range(1, config.max_k + 1):
+    for k in range(1, config.methods.max_k + 1):
         d, used, decided = sc_mdap(decisions[idx], k)
         p = names[d]
         all_ok, most_ok = _object_counts(p, own, names)
@@ -292,7 +228,7 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandStudyC
                          "mean_grasps_used": float(used.mean()), "decided_fraction": float(decided.mean()),
                          "objects_all_correct": all_ok, "objects_majority_correct": most_ok,
                          "sequence_length": L, "n_sequences": int(len(own))})
-        if k == config.confusion_k:
+        if k == config.methods.confusion_k:
             out["confusion"] += _confusion_rows(f"SC-MDAP (k={k})", seed, own, p, names)
 
     # attributes: per touching BioTac for materials (paper Fig. 8), joint angles for shapes
@@ -327,7 +263,7 @@ def run_hand_study(
     table: HandTable,
     out: str | Path | ResultsDir,
     seeds: Sequence[int] = (0,),
-    config: HandStudyConfig | None = None,
+    config: HandSettings | None = None,
     *,
     force: bool = False,
     log: Callable[[str], None] | None = None,
@@ -346,7 +282,9 @@ def run_hand_study(
         Output folder; existing files are refused unless ``force`` (checked before computing).
     seeds : sequence of int
         One model fit (and, when simulating, one data set) and one set of grasp orders per seed.
-    config : HandStudyConfig, optional
+    config : HandSettings, optional
+        The checked ``[simulation]``, ``[features]``, ``[methods]`` and ``[compute]`` tables; default:
+        the schema's defaults.
     force : bool
         Overwrite existing results.
     log : callable, optional
@@ -356,8 +294,7 @@ def run_hand_study(
     -------
     HandStudyResult
     """
-    config = HandStudyConfig() if config is None else config
-    config.check()
+    config = HandSettings() if config is None else config
     seeds = [int(s) for s in seeds]
     if not seeds or len(set(seeds)) != len(seeds):
         raise ConfigError(f"seeds must be distinct integers, got {seeds}")
@@ -386,10 +323,8 @@ def run_hand_study(
     failed: list[tuple[int, str]] = []
     for seed in seeds:
         if simulated:
-            sim = simulate_grasps(
-                table.K, config.n_grasps_per_object, config.noise, config.difficulty, config.shape_miss_rate,
-                material_attributes=table.material_attributes, random_state=seed,
-            )
+            sim = simulate_grasps(table.K, **config.simulation.model_dump(),
+                                  material_attributes=table.material_attributes, random_state=seed)
             simulation[str(seed)] = sim.params
             features = hand_features(sim.grasps, table, config)
             log(f"seed {seed}: simulated {len(sim.grasps)} grasps of {len(table.K)} objects")
@@ -452,7 +387,7 @@ def run_hand_study(
             "table": table.source,
             "train_objects": table.train_objects,
             "test_objects": table.test_objects,
-            **asdict(config),
+            **config.model_dump(mode="json"),
         },
         data_files=data_files,
         name="hand_manifest.json",
