@@ -158,12 +158,14 @@ def test_deep_fabric_study_table(torch, data_dir, tmp_path):
     """The study behind ``evaluate-fabric --model deep``: runs, table, manifest; refuses overwrites."""
     from tzsl.exceptions import ConfigError
     from tzsl.studies._outputs import ResultsDir
+    from tzsl.studies.config import FabricDeepStudy
     from tzsl.studies.fabric.deep import format_deep_table, run_deep_fabric_study
 
     params = {"backbone": "small-cnn", "image_size": 16, "hidden_size": 8, "epochs": 2, "n_threads": 1}
-    kwargs = dict(data_dir=data_dir, seeds=2, configs=(1,), progress=False, lams=(0.1, "inf"),
-                  model_params=params, cache_dir=tmp_path / "cache")
-    result = run_deep_fabric_study(ResultsDir(tmp_path / "out"), **kwargs)
+    settings = FabricDeepStudy(splits={"n_seeds": 2, "configs": [1]}, compute={"progress": False},
+                               methods={"embedding_lambdas": [0.1, "inf"], "model": params})
+    kwargs = dict(data_dir=data_dir, cache_dir=tmp_path / "cache")
+    result = run_deep_fabric_study(ResultsDir(tmp_path / "out"), settings, **kwargs)
     runs, table = result["runs"], result["table"]
     # the paper's split (not zero-shot for config 1) and its zero-shot variant, 2 lambdas x 2 seeds each
     assert len(runs) == 8 and set(runs["method"]) == {"lam_0.1", "lam_inf"}
@@ -178,7 +180,7 @@ def test_deep_fabric_study_table(torch, data_dir, tmp_path):
         assert (tmp_path / "out" / name).is_file()
     assert "lam_inf" in format_deep_table(table)
     with pytest.raises(ConfigError, match="--force"):
-        run_deep_fabric_study(ResultsDir(tmp_path / "out"), **kwargs)
+        run_deep_fabric_study(ResultsDir(tmp_path / "out"), settings, **kwargs)
 
 
 def test_evaluate_fabric_model_deep_calls_the_deep_study(torch, tmp_path, monkeypatch):
@@ -190,8 +192,8 @@ def test_evaluate_fabric_model_deep_calls_the_deep_study(torch, tmp_path, monkey
 
     seen = {}
 
-    def fake_study(out, **kwargs):
-        seen.update(kwargs, out=out.final_root)  # out.root is the staging folder while running
+    def fake_study(out, settings, **kwargs):
+        seen.update(kwargs, settings=settings, out=out.final_root)  # out.root is the staging folder while running
         table = pd.DataFrame({"condition": ["depth-sequence"], "config": [1], "method": ["lam_0.1"], "n_seeds": [2],
                               **{c: [0.5] for c in ("accuracy", "per_class_mean_accuracy", "train_accuracy")},
                               **{f"{c}_std": [0.0] for c in ("accuracy", "per_class_mean_accuracy", "train_accuracy")},
@@ -203,6 +205,7 @@ def test_evaluate_fabric_model_deep_calls_the_deep_study(torch, tmp_path, monkey
     result = _run("evaluate-fabric", "--model", "deep", "--out", str(tmp_path / "res"), "--n-seeds", "2",
                   "--config", "1", "--no-progress", "--data-dir", str(tmp_path / "data"))
     assert result.exit_code == 0, result.output
-    assert seen["seeds"] == 2 and seen["configs"] == (1,) and seen["progress"] is False
+    settings = seen["settings"]
+    assert settings.splits.n_seeds == 2 and settings.splits.configs == [1] and settings.compute.progress is False
     assert seen["out"] == tmp_path / "res"
     assert "50.00 +- 0.00" in result.output and "manifest.json" in result.output

@@ -18,7 +18,6 @@ from tzsl.studies.fabric.partitions import (
     run_partitions,
 )
 from tzsl.studies.fabric.samples import FabricSamples
-from tzsl.studies.study_settings import fabric_arguments
 from tzsl.models.protocol import MIN_CV_CLASSES
 
 # the structure of a8 (8 groups x 8 attributes; groups 3, 4, 5 share a row), typed as a test fixture
@@ -129,8 +128,8 @@ def test_no_valid_partition_gives_an_empty_table():
 def test_config_option_reaches_the_study():
     on = validate({"study": "fabric", "partitions": {"enabled": True, "attributes": "a12", "both_signs": False}},
                   "t", Path("."))
-    assert fabric_arguments(on)["partitions"] == {"attributes": "a12", "min_test": 4, "both_signs": False,
-                                                  "max_partitions": None}
-    assert fabric_arguments(validate({"study": "fabric"}, "t", Path(".")))["partitions"] is None
+    assert on.config.partitions.model_dump() == {"enabled": True, "attributes": "a12", "min_test": 4,
+                                                 "both_signs": False, "max_partitions": None}
+    assert not validate({"study": "fabric"}, "t", Path(".")).config.partitions.enabled
     with pytest.raises(ConfigError, match="min_test"):
         validate({"study": "fabric", "partitions": {"min_test": 1}}, "t", Path("."))

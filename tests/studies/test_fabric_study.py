@@ -9,11 +9,14 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
+from pydantic import ValidationError
 
 from tzsl.datasets import fabric_zsl_split, load_fabric
 from tzsl.evaluation import seen_test_classes
 from tzsl.exceptions import ConfigError, DataFileError
+from tests.study_settings import study_settings
 from tzsl.studies._outputs import ResultsDir
+from tzsl.studies.config import FabricStudy
 from tzsl.studies.fabric.study import (
     depth_image_descriptors,
     depth_samples,
@@ -144,12 +147,21 @@ def test_select_embedding_alpha_uses_held_out_classes():
 REDUCED = dict(seeds=1, lams=(0, "inf"), alphas=(0.1, 0.01), progress=False, n_jobs=2)
 
 
+def _settings(seeds=None, lams=None, partitions=None, **flat) -> FabricStudy:
+    """A checked fabric study file from the keywords these tests use (``seeds``: ``[splits] n_seeds``,
+    ``lams``: ``[methods] embedding_lambdas``, ``partitions``: an enabled ``[partitions]`` table)."""
+    flat.update({k: v for k, v in (("n_seeds", seeds), ("embedding_lambdas", lams)) if v is not None})
+    if partitions is not None:
+        flat.update({"partitions.enabled": True, **{f"partitions.{k}": v for k, v in partitions.items()}})
+    return study_settings(FabricStudy, **flat)
+
+
 @pytest.fixture(scope="module")
 def real_study(data_dir, tmp_path_factory):
     out = tmp_path_factory.mktemp("fabric_results")
     # a module fixture runs before the autouse cache isolation of conftest: use the same folder
     cache = tmp_path_factory.getbasetemp() / "tzsl-cache"
-    result = run_fabric_study(ResultsDir(out), data_dir=data_dir, configs=(1, 2), cache_dir=cache, **REDUCED)
+    result = run_fabric_study(ResultsDir(out), _settings(configs=(1, 2), **REDUCED), data_dir=data_dir, cache_dir=cache)
     return out, result
 
 
@@ -257,23 +269,19 @@ def test_real_study_refuses_to_overwrite(real_study, data_dir):
     out, _ = real_study
     before = (out / "fabric_table1.csv").read_bytes()
     with pytest.raises(ConfigError, match="already exists; use --force"):
-        run_fabric_study(ResultsDir(out), data_dir=data_dir, configs=(1,), **REDUCED)
+        run_fabric_study(ResultsDir(out), _settings(configs=(1,), **REDUCED), data_dir=data_dir)
     assert (out / "fabric_table1.csv").read_bytes() == before
     manifest = json.loads((out / "fabric_manifest.json").read_text())
     assert manifest["config"]["lams"] == ["0", "inf"] and manifest["config"]["seeds"] == [0]
     assert len(manifest["depth_images_sha256"]) == 64
 
 
-def test_study_argument_errors(tmp_path):
-    out = ResultsDir(tmp_path)
-    with pytest.raises(ConfigError, match="seeds"):
-        run_fabric_study(out, seeds=0)
-    with pytest.raises(ConfigError, match="unknown depth condition"):
-        run_fabric_study(out, conditions=("depth-video",))
-    with pytest.raises(ConfigError, match="nothing to run"):
-        run_fabric_study(out, conditions=())
-    with pytest.raises(ConfigError, match="repeated"):
-        run_fabric_study(out, lams=(0, 0.0))
+def test_impossible_settings_are_refused_by_the_schema():
+    """The study takes a checked file: what cannot run is refused before any data is read."""
+    for bad, match in (({"seeds": 0}, "n_seeds"), ({"conditions": ("depth-video",)}, "conditions"),
+                       ({"conditions": ()}, "conditions"), ({"lams": (0, 0.0)}, "embedding_lambdas")):
+        with pytest.raises(ValidationError, match=match):
+            _settings(**bad)
 
 
 # ------------------------------------------------------------------------------------------
@@ -313,8 +321,9 @@ def gelsight_root(tmp_path_factory):
 @pytest.mark.slow
 def test_gelsight_layout_runs_through_the_study(gelsight_root, data_dir, tmp_path):
     result = run_fabric_study(
-        ResultsDir(tmp_path), data_dir=data_dir, configs=(1,), gelsight_root=gelsight_root,
-        conditions=(), seeds=1, lams=(0,), alphas=(0.1,), progress=False,
+        ResultsDir(tmp_path), _settings(configs=(1,), conditions=(), seeds=1, lams=(0,), alphas=(0.1,), progress=False,
+                                        gelsight_root=str(gelsight_root)),
+        data_dir=data_dir, gelsight_root=gelsight_root,
     )
     assert result["table1"]["protocol"].tolist() == ["paper", "zero-shot-drop"] * 2
     table = result["table1"][result["table1"]["protocol"] == "paper"].reset_index(drop=True)
@@ -334,11 +343,12 @@ def test_gelsight_layout_runs_through_the_study(gelsight_root, data_dir, tmp_pat
 
 @pytest.mark.slow
 def test_partitions_add_a_table_and_leave_the_others_unchanged(gelsight_root, data_dir, tmp_path):
-    kwargs = dict(data_dir=data_dir, configs=(1,), gelsight_root=gelsight_root, gelsight_conditions=["Flat"],
-                  conditions=(), seeds=1, lams=(0,), alphas=(0.1,), progress=False)
-    plain = run_fabric_study(ResultsDir(tmp_path / "plain"), **kwargs)
+    flat = dict(configs=(1,), gelsight_root=str(gelsight_root), gelsight_conditions=["Flat"], conditions=(), seeds=1,
+                lams=(0,), alphas=(0.1,), progress=False)
+    paths = dict(data_dir=data_dir, gelsight_root=gelsight_root)
+    plain = run_fabric_study(ResultsDir(tmp_path / "plain"), _settings(**flat), **paths)
     parts = {"attributes": "a12", "min_test": 4, "both_signs": False, "max_partitions": 3}
-    both = run_fabric_study(ResultsDir(tmp_path / "both"), partitions=parts, **kwargs)
+    both = run_fabric_study(ResultsDir(tmp_path / "both"), _settings(partitions=parts, **flat), **paths)
     assert (tmp_path / "plain" / "fabric_table1.csv").read_bytes() == (tmp_path / "both" / "fabric_table1.csv").read_bytes()
     comparisons = [pd.read_csv(tmp_path / d / "fabric_method_comparison.csv").drop(columns="fit_seconds")
                    for d in ("plain", "both")]  # fit_seconds is a timing
@@ -349,7 +359,7 @@ def test_partitions_add_a_table_and_leave_the_others_unchanged(gelsight_root, da
     assert table["chance"].eq(0.25).all() and set(table["metric"]) == {"class_mean", "trial"}
     assert both["partitions"].shape[0] == 2 and "partitions" not in plain
     with pytest.warns(UserWarning, match="no valid partition of the a8 groups"):
-        run_fabric_study(ResultsDir(tmp_path / "a8"), partitions={"min_test": 4}, **kwargs)
+        run_fabric_study(ResultsDir(tmp_path / "a8"), _settings(partitions={"min_test": 4}, **flat), **paths)
     assert pd.read_csv(tmp_path / "a8" / "fabric_partitions.csv").empty
 
 
@@ -360,8 +370,9 @@ def test_gelsight_groups_must_index_the_attribute_matrix(gelsight_root, data_dir
     table.loc[0, "group"] = 9
     table.to_csv(root / "fabric_groups.csv", index=False)
     with pytest.raises(DataFileError, match=r"groups \[9\] are outside 0..7"):
-        run_fabric_study(ResultsDir(tmp_path / "out"), data_dir=data_dir, gelsight_root=root, conditions=(),
-                         progress=False)
+        run_fabric_study(ResultsDir(tmp_path / "out"), _settings(conditions=(), progress=False,
+                                                                 gelsight_root=str(root)),
+                         data_dir=data_dir, gelsight_root=root)
 
 
 def test_a_failing_fit_is_a_row_with_nan_and_its_error():

@@ -1,9 +1,7 @@
-"""What a study gets and gives: the resolved settings as the study's own arguments, and its result.
+"""What a study gives: :class:`StudyRun`, what every study runner returns, and how runners print a table.
 
-One converter per study kind turns a checked experiment (:mod:`tzsl.studies.config`) into the
-call of its study (``fabric_arguments`` ... ``active_config``; the zero-shot study reads its
-checked tables directly, :class:`~tzsl.studies.config.DapSettings`); :class:`StudyRun` is what every study
-runner returns. Shared by the engine and the runners (so neither imports the other both ways).
+A study reads its settings from its checked experiment file (:mod:`tzsl.studies.config`) itself;
+nothing converts them. Shared by the engine and the runners (so neither imports the other both ways).
 """
 
 from __future__ import annotations
@@ -14,43 +12,8 @@ from typing import Any
 import pandas as pd
 
 from tzsl.studies._failures import table_failures
-from tzsl.studies.config import Experiment
 
-__all__ = ["StudyRun", "deep_arguments", "fabric_arguments", "format_table"]
-
-
-def _fabric_data_arguments(exp: Experiment) -> dict:
-    """The arguments both fabric studies (embedding and deep) take: data, groups, splits, lambdas."""
-    c = exp.config
-    return {
-        "data_dir": exp.resolve(c.dataset.data_dir), "seeds": c.splits.n_seeds, "configs": tuple(c.splits.configs),
-        "gelsight_root": exp.resolve(c.dataset.gelsight_root), "attributes": c.dataset.attributes,
-        "progress": c.compute.progress, "lams": tuple(c.methods.embedding_lambdas),
-        "gelsight_conditions": None if c.features.gelsight_conditions is None
-        else tuple(c.features.gelsight_conditions),
-        "seed": c.splits.seed,
-    }
-
-
-def fabric_arguments(exp: Experiment) -> dict:
-    """Keyword arguments of :func:`tzsl.studies.fabric.study.run_fabric_study` (all but ``out``)."""
-    c = exp.config
-    return {
-        **_fabric_data_arguments(exp),
-        "alphas": tuple(float(a) for a in c.methods.alphas), "conditions": tuple(c.features.conditions),
-        "max_iter": c.methods.max_iter, "n_jobs": c.compute.n_jobs,
-        "methods": tuple(dict(spec) for spec in c.methods.compare),
-        "partitions": c.partitions.model_dump(exclude={"enabled"}) if c.partitions.enabled else None,
-    }
-
-
-def deep_arguments(exp: Experiment) -> dict:
-    """Keyword arguments of :func:`tzsl.studies.fabric.deep.run_deep_fabric_study` (all but ``out``)."""
-    c = exp.config
-    return {
-        **_fabric_data_arguments(exp), "model_params": dict(c.methods.model) or None,
-        "save_model": exp.resolve(c.output.model),
-    }
+__all__ = ["StudyRun", "format_table"]
 
 
 @dataclass

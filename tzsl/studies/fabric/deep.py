@@ -35,6 +35,7 @@ from tzsl.datasets import FabricData, FabricSplit, fabric_zsl_split, load_fabric
 from tzsl.evaluation import per_class_mean_accuracy, summarise_over_splits, trial_accuracy
 from tzsl.exceptions import ConfigError, DataFileError
 from tzsl.evaluation import Outcomes, add_trust_columns
+from tzsl.studies.config import FabricDeepStudy
 from tzsl.studies.fabric.tables import PAPER_LAMBDAS, fabric_protocols, lambda_label
 from tzsl.models import DeepAttributeEmbedding
 
@@ -304,17 +305,10 @@ DEEP_MANIFEST_FILE = "fabric_deep_manifest.json"
 
 def run_deep_fabric_study(
     out,
-    data_dir=None,
-    seeds: int = 1,
-    configs=(1, 2),
-    gelsight_root=None,
-    attributes: str = "a8",
-    progress: bool = True,
+    settings: FabricDeepStudy | None = None,
     *,
-    lams=PAPER_LAMBDAS,
-    gelsight_conditions=None,
-    seed: int = 0,
-    model_params: dict | None = None,
+    data_dir=None,
+    gelsight_root=None,
     cache_dir=None,
     save_model=None,
 ) -> dict[str, pd.DataFrame]:
@@ -324,24 +318,15 @@ def run_deep_fabric_study(
     ----------
     out : tzsl.studies._outputs.ResultsDir
         Output folder; existing outputs are refused unless forced (checked first).
-    data_dir : str, path or None
-        Data home with ``fabric/``.
-    seeds : int
-        Seeds per (condition, config, lambda): ``seed .. seed + seeds - 1``.
-    configs : sequence of {1, 2}
-        Zero-shot splits.
-    gelsight_root : str, path or None
-        User GelSight videos: one ``gelsight-<condition>`` row per condition folder.
-    attributes : str
-        Group x attribute matrix of the fabric data.
-    progress : bool
-        Progress bars (feature extraction, epochs) on stderr.
-    lams : sequence
-        Lambdas (default the paper's five; ``"inf"`` = R only).
-    gelsight_conditions : sequence of str or None
-        Condition folders to use (None: all).
-    model_params : dict or None
-        Further :class:`~tzsl.models.DeepAttributeEmbedding` parameters (backbone, epochs, ...).
+    settings : FabricDeepStudy or None
+        The checked study file (:class:`~tzsl.studies.config.FabricDeepStudy`; default: the schema's
+        defaults): ``[dataset] attributes``, ``[features] gelsight_conditions``, ``[methods]``
+        (``embedding_lambdas``; ``model``: further :class:`~tzsl.models.DeepAttributeEmbedding`
+        parameters), ``[splits]`` (``configs``; ``n_seeds`` seeds per (condition, config, lambda) from
+        ``seed``) and ``[compute] progress``.
+    data_dir, gelsight_root : str, path or None
+        The data home with ``fabric/`` and your GelSight videos (one ``gelsight-<condition>`` row per
+        condition folder), resolved (default: ``[dataset]``'s).
     cache_dir : str, path or None
         Frozen-feature cache (default ``<tzsl cache dir>/deep-features``).
     save_model : str, path or None
@@ -360,15 +345,15 @@ def run_deep_fabric_study(
 
     from tzsl.datasets import get_cache_dir  # noqa: PLC0415
 
-    if isinstance(seeds, bool) or not isinstance(seeds, (int, np.integer)) or seeds < 1:
-        raise ConfigError(f"seeds must be an integer >= 1; got {seeds!r}")
-    configs = [int(c) for c in configs]
-    if not configs:
-        raise ConfigError("configs is empty; choose from 1, 2")
+    settings = FabricDeepStudy() if settings is None else settings
+    seeds, configs, seed = settings.splits.n_seeds, [int(c) for c in settings.splits.configs], settings.splits.seed
+    lams, attributes, progress = list(settings.methods.embedding_lambdas), settings.dataset.attributes, \
+        settings.compute.progress
+    gelsight_conditions, model_params = settings.features.gelsight_conditions, dict(settings.methods.model)
+    data_dir = settings.dataset.data_dir if data_dir is None else data_dir
+    gelsight_root = settings.dataset.gelsight_root if gelsight_root is None else gelsight_root
     labels = [lambda_label(lam) for lam in lams]
-    if not labels or len(set(labels)) != len(labels):
-        raise ConfigError(f"lams must be a non-empty list without repeats; got {list(lams)}")
-    params = dict(model_params or {})
+    params = model_params
     params.setdefault("verbose", progress)
     DeepAttributeEmbedding(**params)._check_params()  # bad settings fail before any work
     out.check_free([DEEP_TABLE_FILE, DEEP_RUNS_FILE, DEEP_MANIFEST_FILE])

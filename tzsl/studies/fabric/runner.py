@@ -8,11 +8,10 @@ Registered in :mod:`tzsl.studies.config` (:func:`~tzsl.studies.config.register_s
 from __future__ import annotations
 
 from collections.abc import Callable
-from pathlib import Path
 
 from tzsl.studies._outputs import ResultsDir
 from tzsl.studies.config import Experiment
-from tzsl.studies.study_settings import StudyRun, deep_arguments, fabric_arguments
+from tzsl.studies.study_settings import StudyRun
 
 __all__ = ["fabric_notes", "fabric_outputs", "fabric_results", "run_fabric", "run_fabric_deep"]
 
@@ -52,20 +51,19 @@ def run_fabric(exp: Experiment, results: ResultsDir, say: Callable[[str], None])
     from tzsl.studies.zero_shot.preset import run_generic_part, with_generic_part  # noqa: PLC0415
 
     generic = run_generic_part(exp, results, say)
-    kwargs = fabric_arguments(exp)
-    tables = run_fabric_study(results, **kwargs)
+    c = exp.config
+    tables = run_fabric_study(results, c, data_dir=exp.resolve(c.dataset.data_dir),
+                              gelsight_root=exp.resolve(c.dataset.gelsight_root))
     say("\nFabric Table 1 analogue - ours beside the paper's\n" + format_fabric_table(tables["table1"]))
-    record = {k: (str(v) if isinstance(v, Path) else list(v) if isinstance(v, tuple) else v)
-              for k, v in kwargs.items()}
-    return with_generic_part(StudyRun(dict(tables), {"study_kind": "fabric", "fabric": record}), generic)
+    return with_generic_part(StudyRun(dict(tables), {"study_kind": "fabric"}), generic)
 
 
 def run_fabric_deep(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
     from tzsl.studies.fabric.deep import format_deep_table, run_deep_fabric_study  # noqa: PLC0415
 
-    kwargs = deep_arguments(exp)
-    tables = run_deep_fabric_study(results, **kwargs)
+    c = exp.config
+    tables = run_deep_fabric_study(results, c, data_dir=exp.resolve(c.dataset.data_dir),
+                                   gelsight_root=exp.resolve(c.dataset.gelsight_root),
+                                   save_model=exp.resolve(c.output.model))
     say("\nFabric, CNN + LSTM over the lambda grid\n" + format_deep_table(tables["table"]))
-    record = {k: (str(v) if isinstance(v, Path) else list(v) if isinstance(v, tuple) else v)
-              for k, v in kwargs.items()}
-    return StudyRun(dict(tables), {"study_kind": "fabric-deep", "fabric_deep": record})
+    return StudyRun(dict(tables), {"study_kind": "fabric-deep"})

@@ -90,8 +90,8 @@ from tzsl._parallel import reissued, relayed
 from tzsl._profile import stage
 from tzsl.datasets import FABRIC_ATTRIBUTE_SETS, load_fabric
 from tzsl.evaluation import DEFAULT_ALPHAS, select_embedding_alpha
-from tzsl.exceptions import ConfigError
 from tzsl.studies._outputs import ResultsDir
+from tzsl.studies.config import FabricStudy
 from tzsl.studies.fabric.samples import (
     N_KEY_FRAMES,
     FabricSamples,
@@ -158,31 +158,13 @@ PARTITIONS_FILE = "fabric_partitions.csv"
 # ---------------------------------------------------------------------------------------------
 # the study
 # ---------------------------------------------------------------------------------------------
-def _check_seeds(seeds) -> int:
-    if isinstance(seeds, bool) or not isinstance(seeds, (int, np.integer)) or seeds < 1:
-        raise ConfigError(f"seeds must be an integer >= 1; got {seeds!r}")
-    return int(seeds)
-
-
 def run_fabric_study(
     out: ResultsDir,
-    data_dir=None,
-    seeds: int = 5,
-    configs: Sequence[int] = (1, 2),
-    gelsight_root=None,
-    attributes: str = "a8",
-    progress: bool = True,
+    settings: FabricStudy | None = None,
     *,
-    lams: Sequence = PAPER_LAMBDAS,
-    alphas: Sequence[float] = DEFAULT_ALPHAS,
-    conditions: Sequence[str] = DEPTH_CONDITIONS,
-    gelsight_conditions: Sequence[str] | None = None,
-    seed: int = 0,
-    max_iter: int = 500,
-    n_jobs: int | None = 1,
+    data_dir=None,
+    gelsight_root=None,
     cache_dir=None,
-    methods: Sequence[dict] = (),
-    partitions: dict | None = None,
 ) -> dict[str, pd.DataFrame]:
     """Run the fabric study and write its table, runs, figure and manifest.
 
@@ -191,43 +173,20 @@ def run_fabric_study(
     out : ResultsDir
         Output folder; existing outputs are refused unless ``out.force`` (checked before
         any computation).
-    data_dir : str, path or None
-        Data home with ``fabric/`` (see :func:`tzsl.datasets.get_data_home`).
-    seeds : int
-        Seeds of the embedding model: ``seed, seed + 1, ..., seed + seeds - 1``.
-    configs : sequence of {1, 2}
-        Zero-shot splits (:func:`tzsl.datasets.fabric_zsl_split`).
-    gelsight_root : str, path or None
-        User GelSight videos (adds ``gelsight-<condition>`` rows).
-    attributes : str
-        Group x attribute matrix (key of :data:`tzsl.datasets.FABRIC_ATTRIBUTE_SETS`).
-    progress : bool
-        Progress bar and messages on stderr.
-    lams : sequence
-        Lambdas of the embedding model (default the paper's five).
-    alphas : sequence of float
-        Weight-decay grid of the embedding model (see :func:`select_embedding_alpha`).
-    conditions : sequence of str
-        Depth conditions to run, a subset of :data:`DEPTH_CONDITIONS` (may be empty with
-        ``gelsight_root``).
-    gelsight_conditions : sequence of str or None
-        Condition folders of ``gelsight_root`` (None: all).
-    seed : int
-        First seed.
-    max_iter : int
-        L-BFGS iterations of each embedding fit.
-    n_jobs : int or None
-        joblib workers (descriptors and fits).
+    settings : FabricStudy or None
+        The checked study file (:class:`~tzsl.studies.config.FabricStudy`; default: the schema's
+        defaults): ``[dataset] attributes``, ``[features] conditions`` / ``gelsight_conditions``,
+        ``[methods]`` (lambda grid ``embedding_lambdas``, weight-decay grid ``alphas`` chosen by
+        :func:`select_embedding_alpha`, ``max_iter``, registry methods ``compare`` run beside ESZSL,
+        one row per seed if random), ``[splits]`` (``configs`` of
+        :func:`tzsl.datasets.fabric_zsl_split`, ``n_seeds`` embedding seeds from ``seed``),
+        ``[partitions]`` (the repeated group partitions of
+        :func:`~tzsl.studies.fabric.partitions.run_partitions`, when ``enabled``) and ``[compute]``.
+        From Python, e.g. ``FabricStudy(splits={"configs": [1]}, methods={"embedding_lambdas": [0]})``.
+    data_dir, gelsight_root : str, path or None
+        The data home with ``fabric/`` and your GelSight videos, resolved (default: ``[dataset]``'s).
     cache_dir : str, path or None
         Descriptor cache (default :func:`tzsl.datasets.get_cache_dir`).
-    methods : sequence of dict
-        Registry methods run beside ESZSL (``{"name": ..., **parameters}``, the experiment's
-        ``methods.compare``); rows of the runs table named by
-        :func:`~tzsl.studies.study_methods.method_label`, one per seed if the method is random.
-    partitions : dict or None
-        Run the repeated group partitions (``attributes`` (None: ``attributes``), ``min_test``,
-        ``both_signs``, ``max_partitions``: :func:`~tzsl.studies.fabric.partitions.run_partitions`)
-        and write ``fabric_partitions.csv``; None: not run.
 
     Returns
     -------
@@ -236,22 +195,16 @@ def run_fabric_study(
         config, method, seed, accuracy, per_class_mean_accuracy, chosen hyper-parameters,
         predicted counts per test group); with ``partitions`` also ``"partitions"``.
     """
-    seeds = _check_seeds(seeds)
-    configs = [int(c) for c in configs]
-    if not configs:
-        raise ConfigError("configs is empty; choose from 1, 2")
-    lams = list(lams)
-    if not lams:
-        raise ConfigError("lams is empty; choose from 0, 0.1, 1, 10, inf")
-    labels = [lambda_label(lam) for lam in lams]  # validates
-    if len(set(labels)) != len(labels):
-        raise ConfigError(f"lams has repeated values: {lams}")
-    conditions = list(conditions)
-    unknown = [c for c in conditions if c not in DEPTH_CONDITIONS]
-    if unknown:
-        raise ConfigError(f"unknown depth condition(s) {unknown}; choose from {list(DEPTH_CONDITIONS)}")
-    if not conditions and gelsight_root is None:
-        raise ConfigError("nothing to run: no depth condition and no --gelsight-root")
+    settings = FabricStudy() if settings is None else settings
+    sp, me, fe = settings.splits, settings.methods, settings.features
+    seeds, configs, seed = sp.n_seeds, [int(c) for c in sp.configs], sp.seed
+    attributes, lams, alphas, max_iter = settings.dataset.attributes, list(me.embedding_lambdas), me.alphas, me.max_iter
+    methods, conditions, gelsight_conditions = me.compare, list(fe.conditions), fe.gelsight_conditions
+    n_jobs, progress = settings.compute.n_jobs, settings.compute.progress
+    partitions = settings.partitions.model_dump(exclude={"enabled"}) if settings.partitions.enabled else None
+    data_dir = settings.dataset.data_dir if data_dir is None else data_dir
+    gelsight_root = settings.dataset.gelsight_root if gelsight_root is None else gelsight_root
+    labels = [lambda_label(lam) for lam in lams]
     out.check_free([TABLE_FILE, RUNS_FILE, FIGURE_FILE, f"{COMPARISON_TABLE}.csv", MANIFEST_FILE]
                    + ([PARTITIONS_FILE] if partitions is not None else []))
 
