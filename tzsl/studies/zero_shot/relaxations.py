@@ -17,8 +17,9 @@ manifest under ``relaxations``):
    (the class-grouped CV of ESZSL, SAE and the embedding models, compared on random splits).
 3. ``splits.challenging_min_train_positives``: lowered one by one (down to 2) until the
    challenging partitions can be drawn and each leaves every kept attribute 2 positive and 2
-   negative training objects, its training objects :data:`~tzsl.models.protocol.MIN_CV_CLASSES`
-   distinct rows and 2 test classes; if never, challenging splits are left out (``splits.kinds``).
+   negative training objects (and, when methods are compared on them, its training objects
+   :data:`~tzsl.models.protocol.MIN_CV_CLASSES` distinct rows for their class-grouped CV); if never,
+   challenging splits are left out (``splits.kinds``).
 4. ``svm.cv`` (object-grouped folds): at most the fewest training objects of any split.
 5. GZSL calibrated stacking (in :mod:`tzsl.studies.zero_shot.gzsl`): fewer pseudo-unseen classes;
    where none can be drawn, or a method cannot be fitted on them, that split reports the
@@ -143,9 +144,13 @@ def relaxed_n_test(object_attributes, splits) -> int:
         return 0
 
 
-def _relax_challenging(features: FeatureSet, splits, negatives: int,
-                       notes: list[Relaxation]) -> tuple[int | None, list]:
-    """(min positives, splits) of the challenging splits, or (None, []) when none can be drawn."""
+def _relax_challenging(features: FeatureSet, splits, negatives: int, notes: list[Relaxation],
+                       min_classes: int = 1) -> tuple[int | None, list]:
+    """(min positives, splits) of the challenging splits, or (None, []) when none can be drawn.
+
+    ``min_classes``: distinct training rows each partition needs (:data:`MIN_CV_CLASSES` when methods
+    with class-grouped CV are compared on the challenging splits).
+    """
     from tzsl.studies.zero_shot.study import object_map_features  # noqa: PLC0415
 
     asked = splits.challenging_min_train_positives
@@ -155,9 +160,8 @@ def _relax_challenging(features: FeatureSet, splits, negatives: int,
                                           min_train_positives=positives, min_train_negatives=negatives)
         except SplitError:
             continue
-        # as the random splits: trainable attributes, MIN_CV_CLASSES training rows for the class-grouped CV
-        # of the compared methods, and at least 2 test classes (one candidate class is no comparison)
-        if not _trainable(features.attributes, drawn, MIN_CV_CLASSES) or min(s.n_test for s in drawn) < 2:
+        # trainable attributes, and the training rows the compared methods' class-grouped CV needs
+        if not _trainable(features.attributes, drawn, min_classes):
             continue
         if positives != asked:
             notes.append(Relaxation("splits.challenging_min_train_positives", asked, positives,
@@ -165,8 +169,7 @@ def _relax_challenging(features: FeatureSet, splits, negatives: int,
         return positives, drawn
     notes.append(Relaxation("splits.kinds", "random + challenging", "random",
                             "no set of challenging partitions of the 2-D feature map leaves every kept attribute 2 "
-                            f"positive and 2 negative training objects, {MIN_CV_CLASSES} distinct training rows and "
-                            "2 test classes"))
+                            f"positive and 2 negative training objects and {min_classes} distinct training row(s)"))
     return None, []
 
 
@@ -201,7 +204,9 @@ def relax_to_dataset(exp, features: FeatureSet):
         split_update.update(n_test=n_test, min_train_negatives=negatives)
         train_sizes += [len(s.train_objects) for s in drawn]
     if "challenging" in splits.kinds:
-        positives, drawn = _relax_challenging(features, splits, negatives, notes)
+        compared = "challenging" in c.methods.compare_on and bool(c.methods.method_specs())
+        positives, drawn = _relax_challenging(features, splits, negatives, notes,
+                                              MIN_CV_CLASSES if compared else 1)
         if positives is None:
             kinds = [k for k in splits.kinds if k != "challenging"]
             if not kinds:
