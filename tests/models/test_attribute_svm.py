@@ -299,3 +299,20 @@ def test_extended_grid_leaves_the_low_edge_when_a_wide_kernel_fits_best():
     assert ("gamma", 0.01, "low") in paper.grid_edges_
     assert extended.gamma_ < 0.01
     assert extended.cv_scores_.min() <= paper.cv_scores_.min()
+
+
+def test_balanced_draws_merge_equal_draws_in_row_order():
+    from tzsl.models import balanced_object_draws
+
+    rng = np.random.default_rng(7)
+    for _ in range(30):
+        groups = rng.integers(0, 12, size=60)
+        yb = np.isin(groups, rng.choice(12, 4, replace=False))
+        seed = int(rng.integers(1000))
+        draws, weights = balanced_object_draws(yb, groups, 6, np.random.RandomState(seed))
+        rows = np.array(draws)
+        assert np.isclose(weights.sum(), 1.0) and len(draws) == weights.size
+        assert np.unique(rows, axis=0).shape[0] == rows.shape[0]  # distinct
+        np.testing.assert_array_equal(np.unique(rows, axis=0), rows)  # in np.unique's (lexicographic) order
+        again, _ = balanced_object_draws(yb, groups, 6, np.random.RandomState(seed))
+        np.testing.assert_array_equal(np.array(again), rows)
