@@ -26,9 +26,10 @@ preprocessor fitted on an array is reused by the next fit on an equal array in t
 block from the kernel (``kernel @ (normalization.T @ coef)``), so predicting holds no
 ``(n, n_components)`` array.
 
-Memory: ``O(n * n_components)`` for the features of one ``gamma`` plus ``O(block_size *
-n_components)`` scratch. Time: ``O(n * n_components * (d + n_components))`` per ``gamma`` for
-the features, plus the solver iterations (each ``O(n * n_components)``).
+Memory: ``O(n * d)`` for the trials and their preprocessed features, plus ``O(m * n_components)``
+for the features of the refit, ``m = min(draw, max_fit_trials)``, and ``O(block_size *
+n_components)`` scratch. Time: the search is a constant; the refit is ``O(m * n_components * (d +
+n_components))`` for its features plus the solver iterations (each ``O(m * n_components)``).
 """
 
 from __future__ import annotations
