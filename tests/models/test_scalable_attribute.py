@@ -155,3 +155,25 @@ def test_bank_predicts_large_inputs_in_parallel_with_the_same_bits(solver, monke
     monkeypatch.setattr(_attribute_bank, "PARALLEL_PREDICT_TRIALS", 10)
     parallel = bank.predict_proba(X)  # on two worker processes
     np.testing.assert_array_equal(parallel, one_by_one)
+
+
+@pytest.mark.slow
+def test_a_fit_inside_a_dask_task_equals_the_local_fit():
+    """In a Dask task joblib's context reaches scikit-learn's n_jobs=None (Nystroem's kernel would be
+    computed in chunks, which rounds differently): the fit must not follow it."""
+    distributed = pytest.importorskip("distributed")
+    import joblib
+    from joblib import Parallel, delayed
+
+    from tzsl._fit_store import fit_clone
+
+    X, A, g = make_problem(n_objects=30, trials=20, n_features=30, seed=5)
+    model = ScalableAttributeClassifier(n_gamma=2, n_C=2, n_components=128, max_tune_trials=300, max_fit_trials=400,
+                                        random_state=0)
+    local = fit_clone(model, X[:, 0], A[:, 1], g)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            distributed.Client(cluster), joblib.parallel_backend("dask"):
+        remote = Parallel(n_jobs=2)(delayed(fit_clone)(model, X[:, 0], A[:, 1], g) for _ in range(2))
+    for fitted in remote:
+        np.testing.assert_array_equal(fitted.oof_scores_, local.oof_scores_)
+        np.testing.assert_array_equal(fitted.coef_, local.coef_)

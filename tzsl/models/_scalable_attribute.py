@@ -305,8 +305,10 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
             splitter = StratifiedGroupKFold(n_splits=min(self.cv, n_min), shuffle=True, random_state=fold_seed)
             folds = list(splitter.split(np.zeros((idx.size, 1)), y_draw, groups[idx]))
             for gi, gamma in enumerate(gammas):
+                # n_jobs=1: inside a Dask task joblib's context would split the kernel into chunks
+                # (n_jobs=None follows it), and other matrix shapes round differently from a local run
                 feature_map = Nystroem(gamma=float(gamma), n_components=min(self.n_components, idx.size),
-                                       random_state=map_seed).fit(Z[idx])
+                                       random_state=map_seed, n_jobs=1).fit(Z[idx])
                 F = self._transform(feature_map, Z)
                 F_draw = F[idx]
                 for tr, te in folds:
