@@ -90,10 +90,13 @@ BENCH_FIT_ARGS ?=
 bench-fit: install
 	$(BIN)/tzsl bench $(BENCH_FIT_ARGS)
 
-# Cost against trials on SIMULATED data (issue 15); e.g. make bench-scale SCALE_SIZES=1000,4000 for a quick run.
+# Cost against trials on SIMULATED data (issue 15); e.g. make bench-scale SCALE_SIZES=1000,4000 for a quick run;
+# make bench-scale SCALE_SIZES=1000000 BACKEND=dask: a million trials on a local Dask cluster of N_JOBS workers
+# (issue 22), with each worker's peak memory.
 SCALE_SIZES ?= 1000,4000,16000,64000,100000
+BACKEND ?= loky
 bench-scale: install
-	$(BIN)/python -m tzsl.benchmarks.bench_scale --sizes $(SCALE_SIZES) --n-jobs $(N_JOBS) --work bench_scale
+	$(BIN)/python -m tzsl.benchmarks.bench_scale --sizes $(SCALE_SIZES) --n-jobs $(N_JOBS) --backend $(BACKEND) --work bench_scale
 
 clean:
 	rm -rf $(VENV) .pytest_cache .hypothesis $(RESULTS) .tzsl_cache bench_scale bench

@@ -316,3 +316,20 @@ def test_undersampling_keeps_two_majority_objects_for_grouped_cv():
     X = rng.normal(size=(groups.size, 3)) + yb[:, None]
     svm = AttributeSVM(n_C=1, n_gamma=1, n_draws=2, cv=5, random_state=0).fit(X, yb.astype(int), groups)
     assert svm.predict_proba(X[:5]).shape == (5, 2)
+
+
+def test_balanced_draws_merge_equal_draws_in_row_order():
+    from tzsl.models.attribute_training import balanced_object_draws
+
+    rng = np.random.default_rng(7)
+    for _ in range(30):
+        groups = rng.integers(0, 12, size=60)
+        yb = np.isin(groups, rng.choice(12, 4, replace=False))
+        seed = int(rng.integers(1000))
+        draws, weights = balanced_object_draws(yb, groups, 6, np.random.RandomState(seed))
+        rows = np.array(draws)
+        assert np.isclose(weights.sum(), 1.0) and len(draws) == weights.size
+        assert np.unique(rows, axis=0).shape[0] == rows.shape[0]  # distinct
+        np.testing.assert_array_equal(np.unique(rows, axis=0), rows)  # in np.unique's (lexicographic) order
+        again, _ = balanced_object_draws(yb, groups, 6, np.random.RandomState(seed))
+        np.testing.assert_array_equal(np.array(again), rows)

@@ -102,3 +102,78 @@ def test_bank_codes_object_names_without_changing_a_fit(solver):
     fitted = bank.estimators_[0][0]
     direct = clone(fitted).fit(X[:, 0], A[:, 0], names)  # same seed, the names themselves
     np.testing.assert_array_equal(fitted.predict_proba(X[:, 0]), direct.predict_proba(X[:, 0]))
+
+
+def test_refit_uses_at_most_about_max_fit_trials_and_nothing_changes_below_it():
+    X, A, g = make_problem(n_objects=40, trials=10, seed=3)
+    tr = g < 28
+    args = (X[tr, 0], A[tr, 2], g[tr])
+    common = dict(**SMALL, max_tune_trials=100, random_state=0)
+    uncapped = ScalableAttributeClassifier(**common, max_fit_trials=None).fit(*args)
+    above = ScalableAttributeClassifier(**common, max_fit_trials=10_000).fit(*args)
+    np.testing.assert_array_equal(uncapped.coef_, above.coef_)  # the draw is below the cap: unchanged
+    assert uncapped.n_fit_trials_ > 40
+    capped = ScalableAttributeClassifier(**common, max_fit_trials=40).fit(*args)
+    assert 25 <= capped.n_fit_trials_ <= 40  # floor(share) per object, at least one each
+    np.testing.assert_array_equal(capped.oof_scores_, uncapped.oof_scores_)  # the same search
+    assert not np.array_equal(capped.coef_, uncapped.coef_)
+    assert balanced_accuracy(capped.predict_proba(X[~tr, 0])[:, 1], A[~tr, 2]) > 0.8  # chance is 0.5
+
+
+def test_scores_fold_the_feature_map_into_the_weights():
+    X, A, g = make_problem(n_objects=20, trials=5, seed=2)
+    m = ScalableAttributeClassifier(**SMALL, block_size=7, random_state=0).fit(X[:, 0], A[:, 1], g)
+    Z = m.preprocessor_.transform(X[:, 0])
+    explicit = m.feature_map_.transform(Z) @ m.coef_ + m.intercept_  # (n, n_components) features first
+    np.testing.assert_allclose(m.svm_score(X[:, 0]), explicit, rtol=0, atol=1e-10)
+
+
+def test_a_reused_preprocessor_gives_the_same_model_as_a_fresh_one():
+    from tzsl.models import _scalable_attribute
+
+    X, A, g = make_problem(n_objects=20, trials=5, seed=4)
+    _scalable_attribute._PREPROCESSOR_MEMO.clear()
+    ScalableAttributeClassifier(**SMALL, random_state=0).fit(X[:, 0], A[:, 0], g)  # fits the preprocessor
+    assert len(_scalable_attribute._PREPROCESSOR_MEMO) == 1
+    reused = ScalableAttributeClassifier(**SMALL, random_state=0).fit(X[:, 0], A[:, 1], g)
+    assert len(_scalable_attribute._PREPROCESSOR_MEMO) == 1  # same features: no second fit
+    _scalable_attribute._PREPROCESSOR_MEMO.clear()
+    fresh = ScalableAttributeClassifier(**SMALL, random_state=0).fit(X[:, 0], A[:, 1], g)
+    np.testing.assert_array_equal(reused.predict_proba(X[:, 0]), fresh.predict_proba(X[:, 0]))
+    ScalableAttributeClassifier(**SMALL, random_state=0).fit(X[:, 1], A[:, 1], g)  # other features: a new fit
+    assert len(_scalable_attribute._PREPROCESSOR_MEMO) == 2
+
+
+@pytest.mark.parametrize("solver", ["exact", "approximate"])
+def test_bank_predicts_large_inputs_in_parallel_with_the_same_bits(solver, monkeypatch):
+    from tzsl.models import _attribute_bank
+
+    X, A, g = make_problem(n_attributes=2, n_sensors=2)
+    bank = AttributeClassifierBank(estimator=AttributeSVM(n_C=2, n_gamma=2, n_draws=1, cv=3), memory=None,
+                                   random_state=0, solver=solver, n_jobs=2).fit(X, A, g)
+    one_by_one = bank.predict_proba(X)  # below PARALLEL_PREDICT_TRIALS: in this process
+    monkeypatch.setattr(_attribute_bank, "PARALLEL_PREDICT_TRIALS", 10)
+    parallel = bank.predict_proba(X)  # on two worker processes
+    np.testing.assert_array_equal(parallel, one_by_one)
+
+
+@pytest.mark.slow
+def test_a_fit_inside_a_dask_task_equals_the_local_fit():
+    """In a Dask task joblib's context reaches scikit-learn's n_jobs=None (Nystroem's kernel would be
+    computed in chunks, which rounds differently): the fit must not follow it."""
+    distributed = pytest.importorskip("distributed")
+    import joblib
+    from joblib import Parallel, delayed
+
+    from tzsl._fit_store import fit_clone
+
+    X, A, g = make_problem(n_objects=30, trials=20, n_features=30, seed=5)
+    model = ScalableAttributeClassifier(n_gamma=2, n_C=2, n_components=128, max_tune_trials=300, max_fit_trials=400,
+                                        random_state=0)
+    local = fit_clone(model, X[:, 0], A[:, 1], g)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            distributed.Client(cluster), joblib.parallel_backend("dask"):
+        remote = Parallel(n_jobs=2)(delayed(fit_clone)(model, X[:, 0], A[:, 1], g) for _ in range(2))
+    for fitted in remote:
+        np.testing.assert_array_equal(fitted.oof_scores_, local.oof_scores_)
+        np.testing.assert_array_equal(fitted.coef_, local.coef_)

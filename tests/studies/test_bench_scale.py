@@ -10,3 +10,14 @@ def test_growth_exponent_is_the_log_log_slope_above_4k():
     assert abs(growth_exponent(sizes, 3.0 * sizes**1.1) - 1.1) < 1e-9
     assert abs(growth_exponent(sizes, np.where(sizes < 4_000, 1e6, sizes**2.0)) - 2.0) < 1e-9  # 1k is left out
     assert np.isnan(growth_exponent([1_000, 4_000], [1.0, 2.0]))
+
+
+def test_goal_line_reads_each_worker_against_the_goals():
+    from tzsl.benchmarks.bench_scale import WALL_GOAL_S, WORKER_MEMORY_GOAL_GB, goal_line
+
+    low, high = WORKER_MEMORY_GOAL_GB / 2, WORKER_MEMORY_GOAL_GB * 2
+    met = goal_line(1_000_000, WALL_GOAL_S / 2, [low, low])
+    assert "NOT" not in met and "wall" in met and "SIMULATED" in met
+    assert "memory per worker" in goal_line(1_000_000, WALL_GOAL_S * 2, [low, high]).split("NOT met")[0]
+    assert goal_line(1_000_000, WALL_GOAL_S * 2, [low, low]).count("NOT met") == 1  # the wall only
+    assert "wall" not in goal_line(100_000, WALL_GOAL_S * 2, [low, low])  # the wall goal is for a million trials

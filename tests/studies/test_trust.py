@@ -112,3 +112,23 @@ def test_splits_written_to_a_results_folder_read_back_exactly_with_their_rule(tm
     assert set(manifest["splits"]) == {s.name for s in splits}
     assert manifest["splits"][splits[-1].name]["test"] == list(splits[-1].test_objects)
     assert "splits.csv" in manifest["outputs"]
+
+
+@pytest.mark.parametrize("scored", [("avg", "uni", False, "trial"), ("max", "test", False, "trial"),
+                                    ("avg", "train", False, "trial")])
+def test_the_control_rescoring_columns_equals_rescoring_each_shuffled_table(scored):
+    from tzsl.evaluation import shuffled_rows_control
+    from tzsl.studies.zero_shot.tables import negative_control
+
+    rng = np.random.default_rng(5)
+    K = np.array([[1, 0, 1], [0, 1, 1], [1, 1, 0], [0, 1, 1], [0, 0, 1]])  # rows 1 and 3 equal
+    y = rng.integers(0, len(K), size=40)
+    split = Split(name="random-1", train_objects=("x",), test_objects=tuple("abcde"), attributes=("h", "s", "t"))
+    r = SplitPosteriors(split=split, attributes=("h", "s", "t"), P=rng.random((40, 2, 3)), K=K, y=y,
+                        train_prior=np.array([0.3, 0.5, 0.6]))
+    fusion, prior, multilabel, _ = scored
+    direct = shuffled_rows_control(lambda t: r.scores(fusion, prior, multilabel, t.to_numpy()),
+                                   pd.DataFrame(K), y, n_permutations=30, random_state=7)
+    correct, classes, splits = negative_control([r], scored, seed=7, n_permutations=30)
+    np.testing.assert_array_equal(correct, direct)
+    assert 0 < correct.mean() < 1

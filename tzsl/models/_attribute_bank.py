@@ -38,6 +38,15 @@ from tzsl.models._validation import ValidatedParamsMixin
 
 __all__ = ["AttributeClassifierBank"]
 
+#: Test trials from which :meth:`AttributeClassifierBank.predict_proba` runs the (attribute, sensor)
+#: models in parallel on the bank's backend (below it, one after another in this process).
+PARALLEL_PREDICT_TRIALS = 20_000
+
+
+def _positive_posterior(estimator, X: np.ndarray) -> np.ndarray:
+    """``estimator.predict_proba(X)[:, 1]`` for X (n_trials, n_features): shape (n_trials,)."""
+    return estimator.predict_proba(X)[:, 1]
+
 
 def _check_attribute_matrix(A, n: int, names) -> np.ndarray:
     A = np.asarray(A)
@@ -337,9 +346,15 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         """
         X = self._check_predict_input(X)
         P = np.empty((X.shape[0], self.n_sensors_, self.n_attributes_))
-        for j, per_sensor in enumerate(self.estimators_):
-            for k, est in enumerate(per_sensor):
-                P[:, k, j] = est.predict_proba(X[:, k, :])[:, 1]
+        pairs = [(j, k) for j in range(self.n_attributes_) for k in range(self.n_sensors_)]
+        if X.shape[0] >= PARALLEL_PREDICT_TRIALS and self.n_jobs not in (None, 1):
+            per_sensor = [np.ascontiguousarray(X[:, k, :]) for k in range(self.n_sensors_)]  # each shipped once
+            tasks = [delayed(_positive_posterior)(self.estimators_[j][k], per_sensor[k]) for j, k in pairs]
+            columns = self._run_fits(tasks, "attribute posteriors")
+        else:
+            columns = (_positive_posterior(self.estimators_[j][k], X[:, k, :]) for j, k in pairs)
+        for (j, k), column in zip(pairs, columns):
+            P[:, k, j] = column
         return P
 
 

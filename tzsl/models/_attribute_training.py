@@ -275,6 +275,11 @@ def balanced_object_draws(yb: np.ndarray, groups: np.ndarray, n_draws: int,
         keep_group = has_minor.copy()
         keep_group[order[:k]] = True
         draws.append(keep_group[g_inv])
-    uniq, inverse = np.unique(np.array(draws), axis=0, return_inverse=True)
-    weights = np.bincount(inverse.ravel(), minlength=len(uniq)).astype(float)
-    return list(uniq), weights / weights.sum()
+    # distinct draws in the row order of np.unique(axis=0) (bool bytes sort like the rows), without
+    # its structured dtype of one field per trial (seconds at a million trials)
+    keys = [d.tobytes() for d in draws]
+    distinct = sorted(set(keys))
+    position = {key: i for i, key in enumerate(distinct)}
+    weights = np.bincount([position[key] for key in keys], minlength=len(distinct)).astype(float)
+    uniq = [np.frombuffer(key, dtype=bool).copy() for key in distinct]
+    return uniq, weights / weights.sum()

@@ -17,17 +17,30 @@ Above ``max_tune_trials`` training trials the search (draw, ``gamma``, ``C`` and
 sigmoid) runs on a random subset of that many trials, taken from every object in proportion to
 its trials, and only the chosen model is refitted on all trials of the chosen draw (``C`` scaled
 by subset / full draw size, so the L2 penalty per trial stays the same), so the search costs a
-constant and the whole fit grows linearly in trials.
+constant and the whole fit grows linearly in trials. Above ``max_fit_trials`` trials in the chosen
+draw, that refit uses about ``max_fit_trials`` of them, again from every object in proportion (with
+``n_components`` features the logistic fit is settled long before a million trials), so the only
+parts of a fit that grow with trials are the preprocessor and the bookkeeping of the draws. A
+preprocessor fitted on an array is reused by the next fit on an equal array in the same process
+(the bank fits every attribute of a sensor on the same features), and scores are computed block by
+block from the kernel (``kernel @ (normalization.T @ coef)``), so predicting holds no
+``(n, n_components)`` array.
 
-Memory: ``O(n * n_components)`` for the features of one ``gamma`` plus ``O(block_size *
-n_components)`` scratch. Time: ``O(n * n_components * (d + n_components))`` per ``gamma`` for
-the features, plus the solver iterations (each ``O(n * n_components)``).
+Memory: ``O(n * d)`` for the trials and their preprocessed features, plus ``O(m * n_components)``
+for the features of the refit, ``m = min(draw, max_fit_trials)``, and ``O(block_size *
+n_components)`` scratch. Time: the search is a constant; the refit is ``O(m * n_components * (d +
+n_components))`` for its features plus the solver iterations (each ``O(m * n_components)``).
 """
 
 from __future__ import annotations
 
+import copy
+import threading
 import warnings
+from collections import OrderedDict
 from numbers import Integral, Real
+
+import joblib
 
 import numpy as np
 from scipy.special import log_expit
@@ -35,6 +48,7 @@ from sklearn.base import BaseEstimator, ClassifierMixin, clone
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.kernel_approximation import Nystroem
 from sklearn.linear_model import LogisticRegression
+from sklearn.metrics.pairwise import rbf_kernel
 from sklearn.model_selection import StratifiedGroupKFold
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval, StrOptions
@@ -42,6 +56,7 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 from threadpoolctl import threadpool_limits
 
+from tzsl._fit_store import array_digest
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_training import (
     AttributeTrainingError,
@@ -53,6 +68,50 @@ from tzsl.models._attribute_training import (
 from tzsl.models._platt_binary import PlattBinaryClassifierMixin
 
 __all__ = ["ScalableAttributeClassifier"]
+
+#: Fitted preprocessors kept per process, keyed by (preprocessor parameters, training array digest).
+_PREPROCESSOR_MEMO: OrderedDict = OrderedDict()
+_PREPROCESSOR_MEMO_SIZE = 4
+_PREPROCESSOR_LOCK = threading.Lock()
+
+
+def _fitted_preprocessor(template, X: np.ndarray):
+    """A fitted clone of ``template`` on ``X`` (n_trials, n_features): ``clone(template).fit(X)``.
+
+    The preprocessor sees no labels, so every attribute of a sensor fits the same one: the last
+    few fits of this process are kept and a copy is returned for an equal (parameters, array)
+    pair instead of fitting again. Deterministic either way (always ``fit`` then ``transform``).
+    """
+    key = (joblib.hash(clone(template)), array_digest(X))
+    with _PREPROCESSOR_LOCK:
+        fitted = _PREPROCESSOR_MEMO.get(key)
+        if fitted is not None:
+            _PREPROCESSOR_MEMO.move_to_end(key)
+    if fitted is None:
+        fitted = clone(template).fit(X)
+        with _PREPROCESSOR_LOCK:
+            _PREPROCESSOR_MEMO[key] = fitted
+            while len(_PREPROCESSOR_MEMO) > _PREPROCESSOR_MEMO_SIZE:
+                _PREPROCESSOR_MEMO.popitem(last=False)
+    return copy.deepcopy(fitted)
+
+
+def _share_of_objects(groups: np.ndarray, cap: int | None, rng) -> np.ndarray:
+    """Sorted indices of about ``cap`` trials taken from every object in proportion (all if ``n <= cap``).
+
+    ``groups`` (n_trials,): object of each trial. Each object keeps ``max(1, floor(count * cap / n))``
+    of its trials, chosen at random (one ``rng.permutation(n)``, drawn only when ``n > cap``).
+    """
+    n = groups.size
+    if cap is None or n <= cap:
+        return np.arange(n)
+    _, codes, counts = np.unique(groups, return_inverse=True, return_counts=True)
+    perm = rng.permutation(n)
+    order = perm[np.argsort(codes[perm], kind="stable")]  # trials by object, random within
+    rank = np.empty(n, dtype=np.int64)
+    rank[order] = np.arange(n) - np.concatenate([[0], np.cumsum(counts)[:-1]])[codes[order]]
+    quota = np.maximum(1, np.floor(counts * cap / n)).astype(np.int64)
+    return np.flatnonzero(rank < quota[codes])
 
 
 def _range_pair(value) -> bool:
@@ -91,6 +150,9 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
     max_tune_trials : int or None, default=8000
         Largest number of training trials the hyper-parameter search uses (see above); ``None``:
         all of them.
+    max_fit_trials : int or None, default=100000
+        Largest number of trials of the chosen draw the final refit uses (see above); ``None``:
+        all of them. Below it the model does not depend on this parameter.
     name : str or None, default=None
         Attribute name used in error messages.
     random_state : int, RandomState or None, default=None
@@ -106,6 +168,8 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
     intercept_ : float
     n_iter_ : int
         L-BFGS iterations of the kept fit (warm-started from the previous ``C`` of the path).
+    n_fit_trials_ : int
+        Training trials the kept logistic fit used (the search's, or the refit's on the draw).
     C_, gamma_ : float
     draw_ : int
     platt_ : (float, float)
@@ -134,14 +198,15 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
         "block_size": [Interval(Integral, 1, None, closed="left")],
         "max_iter": [Interval(Integral, 1, None, closed="left")],
         "max_tune_trials": [None, Interval(Integral, 2, None, closed="left")],
+        "max_fit_trials": [None, Interval(Integral, 2, None, closed="left")],
         "name": [None, str],
         "random_state": ["random_state"],
     }
 
     def __init__(self, *, preprocessor=None, n_components=256, gamma_range=(0.001, 1.0), n_gamma=4,
                  C_range=(0.1, 1000.0), n_C=5, cv=3, undersampling="select", n_draws=1,
-                 platt_weighting="balanced", block_size=8192, max_iter=200, max_tune_trials=8000, name=None,
-                 random_state=None):
+                 platt_weighting="balanced", block_size=8192, max_iter=200, max_tune_trials=8000,
+                 max_fit_trials=100_000, name=None, random_state=None):
         self.preprocessor = preprocessor
         self.n_components = n_components
         self.gamma_range = gamma_range
@@ -155,6 +220,7 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
         self.block_size = block_size
         self.max_iter = max_iter
         self.max_tune_trials = max_tune_trials
+        self.max_fit_trials = max_fit_trials
         self.name = name
         self.random_state = random_state
 
@@ -226,19 +292,6 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
             self._fit(X, yb, groups, rng)
         return self
 
-    def _tune_subset(self, groups: np.ndarray, rng) -> np.ndarray:
-        """Sorted indices of the search trials: all, or about ``max_tune_trials`` from every object in proportion."""
-        n = groups.size
-        if self.max_tune_trials is None or n <= self.max_tune_trials:
-            return np.arange(n)
-        _, codes, counts = np.unique(groups, return_inverse=True, return_counts=True)
-        perm = rng.permutation(n)
-        order = perm[np.argsort(codes[perm], kind="stable")]  # trials by object, random within
-        rank = np.empty(n, dtype=np.int64)
-        rank[order] = np.arange(n) - np.concatenate([[0], np.cumsum(counts)[:-1]])[codes[order]]
-        quota = np.maximum(1, np.floor(counts * self.max_tune_trials / n)).astype(np.int64)
-        return np.flatnonzero(rank < quota[codes])
-
     def _search(self, Z, yb, groups, draws, Cs, gammas, fold_seed: int, map_seed: int):
         """Grouped-CV search over draws x gammas x Cs on ``Z`` (n, d); the chosen setting and its parts."""
         n = yb.size
@@ -252,8 +305,10 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
             splitter = StratifiedGroupKFold(n_splits=min(self.cv, n_min), shuffle=True, random_state=fold_seed)
             folds = list(splitter.split(np.zeros((idx.size, 1)), y_draw, groups[idx]))
             for gi, gamma in enumerate(gammas):
+                # n_jobs=1: inside a Dask task joblib's context would split the kernel into chunks
+                # (n_jobs=None follows it), and other matrix shapes round differently from a local run
                 feature_map = Nystroem(gamma=float(gamma), n_components=min(self.n_components, idx.size),
-                                       random_state=map_seed).fit(Z[idx])
+                                       random_state=map_seed, n_jobs=1).fit(Z[idx])
                 F = self._transform(feature_map, Z)
                 F_draw = F[idx]
                 for tr, te in folds:
@@ -274,21 +329,24 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
 
     def _fit(self, X, yb, groups, rng) -> None:
         n = yb.size
-        pre = clone(self.preprocessor) if self.preprocessor is not None else default_preprocessor()
-        Z = np.asarray(pre.fit_transform(X), dtype=np.float64)
+        pre = _fitted_preprocessor(self.preprocessor if self.preprocessor is not None else default_preprocessor(), X)
+        Z = np.asarray(pre.transform(X), dtype=np.float64)
         Cs = np.geomspace(*self.C_range, self.n_C)
         gammas = np.geomspace(*self.gamma_range, self.n_gamma)
         draws, _ = balanced_object_draws(yb, groups, self.n_draws if self.undersampling == "select" else 0, rng)
         fold_seed = int(rng.randint(np.iinfo(np.int32).max))
         map_seed = int(rng.randint(np.iinfo(np.int32).max))
-        tune = self._tune_subset(groups, rng)
+        tune = _share_of_objects(groups, self.max_tune_trials, rng)
         sub = tune.size < n
         di, gi, ci, crit, oof, w_cal, (feature_map, solutions) = self._search(
             Z[tune] if sub else Z, yb[tune], groups[tune], [d[tune] for d in draws], Cs, gammas, fold_seed, map_seed)
         coef, intercept, n_iter = solutions[ci]
-        if sub:  # refit the chosen setting on the whole draw, from the search's solution
+        self.n_fit_trials_ = int(draws[di][tune].sum())
+        if sub:  # refit the chosen setting on the draw (up to max_fit_trials of it), from the search's solution
             idx = np.flatnonzero(draws[di])
+            idx = idx[_share_of_objects(groups[idx], self.max_fit_trials, rng)]
             F = self._transform(feature_map, Z[idx])
+            self.n_fit_trials_ = int(idx.size)
             scale = draws[di][tune].sum() / idx.size  # same L2 penalty per trial as in the search
             ((coef, intercept, n_iter),) = self._path(F, yb[idx], F[:0], Cs[ci : ci + 1] * scale,
                                                       np.empty((1, 0)), start=(coef, intercept))
@@ -311,4 +369,11 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
         check_is_fitted(self)
         X = validate_data(self, X, dtype=np.float64, reset=False)
         Z = np.asarray(self.preprocessor_.transform(X), dtype=np.float64)
-        return self._transform(self.feature_map_, Z) @ self.coef_ + self.intercept_
+        fm = self.feature_map_
+        out = np.empty(Z.shape[0])
+        with threadpool_limits(limits=1):  # the same bits in every process, whatever its BLAS threads
+            weights = fm.normalization_.T @ self.coef_  # the features' linear map folded into the kernel's
+            for start in range(0, Z.shape[0], self.block_size):
+                block = rbf_kernel(Z[start : start + self.block_size], fm.components_, gamma=fm.gamma)
+                out[start : start + self.block_size] = block @ weights
+        return out + self.intercept_

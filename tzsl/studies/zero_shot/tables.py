@@ -102,11 +102,29 @@ def negative_control(results: list[SplitPosteriors], scored: Scored, seed: int =
     correct, classes, splits = [], [], []
     for i, r in enumerate(results):
         table = pd.DataFrame(r.K, index=pd.RangeIndex(len(r.K)))
-        correct.append(shuffled_rows_control(lambda K, r=r: r.scores(fusion, prior, multilabel, K.to_numpy()),
-                                             table, r.y, n_permutations=n_permutations, random_state=seed + i))
+        correct.append(shuffled_rows_control(_permuted_scores(r, fusion, prior, multilabel), table, r.y,
+                                             n_permutations=n_permutations, random_state=seed + i))
         classes.append(r.y)
         splits.append(np.full(len(r.y), split_label(r.split), dtype=object))
     return np.concatenate(correct), np.concatenate(classes), np.concatenate(splits)
+
+
+def _permuted_scores(r: SplitPosteriors, fusion: str, prior: str, multilabel: bool):
+    """``table -> r.scores(fusion, prior, multilabel, table)`` for tables whose rows are rows of ``r.K``.
+
+    DAP scores each class from its own row (same prior, same order of the per-attribute sum), so
+    the scores against a shuffled table are the true table's scores with their columns shuffled,
+    bit for bit: they are computed once, not once per shuffled table (a row that several test
+    objects share gives the same column whichever of them is taken).
+    """
+    base = r.scores(fusion, prior, multilabel)  # (n_test_trials, n_test_objects)
+    K = np.asarray(r.K, dtype=np.int64)
+    column = {K[j].tobytes(): j for j in range(len(K) - 1, -1, -1)}  # each row's first column
+
+    def score(table: pd.DataFrame) -> np.ndarray:
+        rows = np.asarray(table.to_numpy(), dtype=np.int64)
+        return base[:, [column[row.tobytes()] for row in rows]]
+    return score
 
 
 def _with_trust(table: pd.DataFrame, outcomes: Outcomes, control_row: dict | None) -> pd.DataFrame:
