@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import get_args, get_type_hints
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -85,13 +87,17 @@ def test_plain_dir_is_loaded_and_its_files_recorded(monkeypatch, tmp_path):
     assert got.info["data_files"] == [str(tmp_path / "classes.csv")]
 
 
+#: The kinds of content a dataset may declare: the values of TactileDataset.content's Literal.
+CONTENT_KINDS = get_args(get_args(get_type_hints(TactileDataset)["content"])[0])
+
+
 def test_the_dataset_registry_lists_the_builtin_datasets_once():
     assert set(dataset_names()) >= {"phac2-penn", "phac2-h5", "phac2-hold-mat"}
     assert "phac2-h5" not in dataset_names(convertible=True)  # read from the user's file, never written out
     for name in dataset_names():
         dataset = get_dataset(name)
         assert dataset.name == name and dataset.description and dataset.source and dataset.eps
-        assert dataset.content in ("static-features", "signals")
+        assert dataset.content in CONTENT_KINDS
     with pytest.raises(ConfigError, match=r"unknown dataset 'nope'; choose one of phac2-penn"):
         get_dataset("nope")
     with pytest.raises(ValueError, match="already registered"):

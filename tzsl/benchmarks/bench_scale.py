@@ -13,7 +13,7 @@ one random split of 10 unseen classes, every other setting the schema's default 
 * AVGDAP zero-shot accuracy (uni-prior) on the split's test trials, with chance,
 * with ``--backend dask``: the benchmark starts a Dask ``LocalCluster`` of ``--n-jobs`` worker
   processes (one thread each) and runs ``tzsl run`` on it (``--scheduler``); it also prints the
-  peak resident memory of each worker (sampled every 0.2 s) beside :data:`WORKER_MEMORY_GOAL_GB`,
+  peak resident memory of each worker (sampled like the process tree) beside :data:`WORKER_MEMORY_GOAL_GB`,
   and the peak of the run's own process tree (loading, tables),
 * the growth exponent: the least-squares slope of log(wall), log(CPU) and log(peak memory) against log(N)
   over the sizes >= 4,000.
