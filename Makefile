@@ -14,6 +14,8 @@ BENCH_RESULTS ?= /tmp/tzsl_accuracy
 # output folder of experiments/benchmarks/phac2_search.py (search_summary_*.csv)
 SEARCH_RESULTS ?= /tmp/tzsl_search
 N_JOBS ?= 2
+# pytest-xdist workers of `make test`: the suite is mostly single-threaded, so two workers halve it on CI's 2 cores.
+TEST_WORKERS ?= 2
 
 .PHONY: install browser test test-wide headlines reproduce-tables readme-results numbers numbers-check docs bench bench-fit bench-scale data clean
 
@@ -34,7 +36,7 @@ browser:
 	  || echo "make: chromium is not installed; the report layout test needs it"
 
 test: install browser
-	$(BIN)/pytest -q
+	$(BIN)/pytest -q -n $(TEST_WORKERS)
 
 # The zero-shot property test over issue 20's full range (8-100 classes, 3-40 attributes, 1-3 sensors,
 # merged rows; the 100 x 40 x 3 corner always): opt-in, it takes many minutes on two cores.
