@@ -233,8 +233,12 @@ def expected_information_gain(log_belief, outcome_ll) -> np.ndarray:
     out = np.empty((lb.shape[0], L.shape[0]))
     for e in range(L.shape[0]):  # (n, S, Z, Z') per EP keeps memory at n * S * Z^2
         post = lb[:, None, None, :] + L[e][None]
-        post -= logsumexp(post, axis=3, keepdims=True)
-        H = -(np.exp(post) * post).sum(axis=3) / _LOG2  # (n, S, Z)
+        post -= post.max(axis=3, keepdims=True)  # log-sum-exp in place, each exp computed once
+        weights = np.exp(post)
+        norm = weights.sum(axis=3, keepdims=True)
+        post -= np.log(norm)
+        weights /= norm
+        H = -(weights * post).sum(axis=3) / _LOG2  # (n, S, Z)
         out[:, e] = H0 - (H.mean(axis=1) * pi).sum(axis=1)
     return out
 

@@ -15,6 +15,7 @@ import numpy as np
 from tzsl.datasets import Grasp, HandTable
 from tzsl.exceptions import DataFileError, SplitError
 from tzsl.features import GraspFeatures, grasp_features
+from tzsl.fit_store import fit_cached
 from tzsl.models import HandDAPClassifier
 
 if TYPE_CHECKING:
@@ -56,7 +57,7 @@ def hand_features(grasps: Sequence[Grasp], table: HandTable, config: HandSetting
 def fit_hand_model(
     features: GraspFeatures, table: HandTable, config: HandSettings, seed: int, **overrides
 ) -> HandDAPClassifier:
-    """Fit the hand DAP model on the grasps of the table's training objects only.
+    """Fit the hand DAP model on the grasps of the table's training objects only (through the fit store).
 
     Parameters
     ----------
@@ -85,4 +86,4 @@ def fit_hand_model(
         n_jobs=config.compute.n_jobs,
         **params,
     )
-    return model.fit(tr.to_array(), tr.objects, table.K)
+    return fit_cached(model, tr.to_array(), tr.objects, table.K)
