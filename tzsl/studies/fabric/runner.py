@@ -12,6 +12,7 @@ from collections.abc import Callable
 from tzsl.studies._outputs import ResultsDir
 from tzsl.studies.config import Experiment
 from tzsl.studies.study_settings import StudyRun
+from tzsl.studies.zero_shot.preset import PresetHooks
 
 __all__ = ["fabric_notes", "fabric_outputs", "fabric_results", "run_fabric", "run_fabric_deep"]
 
@@ -25,25 +26,9 @@ def _paper_outputs(config) -> list[str]:
         [PARTITIONS_FILE] if config.partitions.enabled else [])
 
 
-def fabric_outputs(config) -> list[str]:
-    """Files a ``fabric`` run writes: the generic part's and the paper protocol's."""
-    from tzsl.studies.zero_shot.preset import preset_outputs  # noqa: PLC0415
-
-    return preset_outputs(config, _paper_outputs(config))
-
-
-def fabric_results(exp: Experiment, force: bool) -> ResultsDir:
-    """The staged results folder of a ``fabric`` run (every file checked free before any fit)."""
-    from tzsl.studies.zero_shot.preset import preset_results  # noqa: PLC0415
-
-    return preset_results(exp, force, _paper_outputs(exp.config))
-
-
-def fabric_notes(exp: Experiment) -> list[str]:
-    """``tzsl run --check``: the settings the generic part relaxes on ``fabric-depth``."""
-    from tzsl.studies.zero_shot.preset import preset_relaxation_notes  # noqa: PLC0415
-
-    return preset_relaxation_notes(exp)
+#: ``outputs``, ``results`` and ``notes`` of the ``fabric`` preset, as registered.
+_HOOKS = PresetHooks(_paper_outputs)
+fabric_outputs, fabric_results, fabric_notes = _HOOKS.outputs, _HOOKS.results, _HOOKS.notes
 
 
 def run_fabric(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:

@@ -13,6 +13,7 @@ from collections.abc import Callable
 from tzsl.studies._outputs import ResultsDir
 from tzsl.studies.config import Experiment
 from tzsl.studies.study_settings import StudyRun
+from tzsl.studies.zero_shot.preset import PresetHooks
 
 __all__ = ["hand_notes", "hand_outputs", "hand_results", "run_hand"]
 
@@ -23,25 +24,9 @@ def _paper_outputs(config) -> list[str]:
     return list(HAND_OUTPUTS)
 
 
-def hand_outputs(config) -> list[str]:
-    """Files a ``hand`` run writes: the generic part's and the paper protocol's."""
-    from tzsl.studies.zero_shot.preset import preset_outputs  # noqa: PLC0415
-
-    return preset_outputs(config, _paper_outputs(config))
-
-
-def hand_results(exp: Experiment, force: bool) -> ResultsDir:
-    """The staged results folder of a ``hand`` run (every file checked free before any fit)."""
-    from tzsl.studies.zero_shot.preset import preset_results  # noqa: PLC0415
-
-    return preset_results(exp, force, _paper_outputs(exp.config))
-
-
-def hand_notes(exp: Experiment) -> list[str]:
-    """``tzsl run --check``: the settings the generic part relaxes on ``hand-simulated``."""
-    from tzsl.studies.zero_shot.preset import preset_relaxation_notes  # noqa: PLC0415
-
-    return preset_relaxation_notes(exp)
+#: ``outputs``, ``results`` and ``notes`` of the ``hand`` preset, as registered.
+_HOOKS = PresetHooks(_paper_outputs)
+hand_outputs, hand_results, hand_notes = _HOOKS.outputs, _HOOKS.results, _HOOKS.notes
 
 
 def run_hand(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:

@@ -19,7 +19,7 @@ from tzsl.studies.config import Experiment, ZeroShotStudy
 from tzsl.studies.study_settings import StudyRun
 from tzsl.studies.zero_shot.runner import SelectedColumns, dropped_columns, relaxation_notes, run_zero_shot, zero_shot_outputs
 
-__all__ = ["PRESET_DATASETS", "generic_experiment", "preset_outputs", "preset_relaxation_notes", "preset_results",
+__all__ = ["PRESET_DATASETS", "PresetHooks", "generic_experiment", "preset_outputs", "preset_relaxation_notes", "preset_results",
            "run_generic_part", "with_generic_part"]
 
 #: The built-in dataset each paper preset runs the generic study on.
@@ -91,6 +91,32 @@ def preset_relaxation_notes(exp: Experiment) -> list[str]:
     """``tzsl run --check`` lines of the generic part (settings its dataset cannot honour)."""
     generic = generic_experiment(exp)
     return [] if generic is None else [f"[zero_shot] {line}" for line in relaxation_notes(generic)]
+
+
+class PresetHooks:
+    """The engine's hooks of one paper preset (``outputs``, ``results``, ``notes`` of
+    :func:`~tzsl.studies.config.register_study`), from the files its paper protocol writes.
+
+    Parameters
+    ----------
+    paper_outputs : callable
+        ``paper_outputs(config) -> list[str]``: the paper protocol's files for a checked config.
+    """
+
+    def __init__(self, paper_outputs: Callable[[object], list[str]]) -> None:
+        self.paper_outputs = paper_outputs
+
+    def outputs(self, config) -> list[str]:
+        """Files the preset run writes: the generic part's and the paper protocol's."""
+        return preset_outputs(config, self.paper_outputs(config))
+
+    def results(self, exp: Experiment, force: bool) -> ResultsDir:
+        """The staged results folder of the run (every file checked free before any fit)."""
+        return preset_results(exp, force, self.paper_outputs(exp.config))
+
+    def notes(self, exp: Experiment) -> list[str]:
+        """``tzsl run --check``: the settings the generic part relaxes on the preset's dataset."""
+        return preset_relaxation_notes(exp)
 
 
 def run_generic_part(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun | None:
