@@ -19,8 +19,8 @@ from tzsl.studies.config import Experiment, ZeroShotStudy
 from tzsl.studies.study_settings import StudyRun
 from tzsl.studies.zero_shot.runner import SelectedColumns, dropped_columns, relaxation_notes, run_zero_shot, zero_shot_outputs
 
-__all__ = ["PRESET_DATASETS", "PresetHooks", "generic_experiment", "preset_outputs", "preset_relaxation_notes", "preset_results",
-           "run_generic_part", "with_generic_part"]
+__all__ = ["PRESET_DATASETS", "PresetHooks", "generic_experiment", "preset_outputs", "preset_relaxation_notes",
+           "preset_results", "run_generic_part", "with_generic_part"]
 
 #: The built-in dataset each paper preset runs the generic study on.
 PRESET_DATASETS: dict[str, str] = {"fabric": "fabric-depth", "hand": "hand-simulated"}
