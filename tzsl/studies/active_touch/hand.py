@@ -99,6 +99,7 @@ def _sequences(S: np.ndarray, obj: np.ndarray, types: np.ndarray, L: np.ndarray 
     used = np.zeros(mine.shape, dtype=bool)
     total = np.zeros((n, n_cls))
     pred, top = np.empty((n, max_grasps), dtype=int), np.empty((n, max_grasps))
+    lb = total - np.logaddexp.reduce(total, axis=1, keepdims=True)  # normalised log posterior after each step
     fixed = strategy.removeprefix("fixed:")
     for step in range(max_grasps):
         left = mine & ~used
@@ -109,7 +110,6 @@ def _sequences(S: np.ndarray, obj: np.ndarray, types: np.ndarray, L: np.ndarray 
             allowed = left
         else:
             if strategy == "active":
-                lb = total - np.logaddexp.reduce(total, axis=1, keepdims=True)
                 score = expected_information_gain(lb, L)
             elif strategy == "random_type":
                 score = rng.random((n, n_types))
