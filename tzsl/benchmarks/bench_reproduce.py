@@ -4,7 +4,9 @@ Runs ``tzsl reproduce-tables`` twice in a child process, into a temporary result
 
 * **cold**: with ``TZSL_CACHE_DIR`` set to a new, empty temporary folder (no fitted model, no
   extracted feature in any cache);
-* **warm**: the same command again, with the cache the cold run filled.
+* **warm**: the same command again, with the cache the cold run filled: every study is restored
+  from the study cache (:mod:`tzsl.studies.study_cache`); with ``TZSL_STUDY_CACHE=0`` in the
+  environment only the fit store is warm.
 
 For each run it prints (and writes as one CSV, atomically) the run's wall time as the user sees
 it (process start to exit), the CPU seconds of the run and its workers (``getrusage`` of the

@@ -219,6 +219,11 @@ class ResultsDir:
                                    "attributes": list(s.kept_attributes), "file": name}
         return self._record(target)
 
+    def copy_file(self, name: str, source: str | Path) -> Path:
+        """Write a copy of the file ``source`` as ``name`` (a study restored from the study cache)."""
+        target = self._target(name)
+        return self._record(atomic_write(target, lambda p: shutil.copyfile(source, p)))
+
     @timed("figures")
     def write_figure(self, name: str, figure: Any, dpi: int = 120) -> Path:
         """Save a matplotlib figure as PNG and close it."""

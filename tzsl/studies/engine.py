@@ -25,6 +25,7 @@ from tzsl._warnings import recorded_warnings
 from tzsl.exceptions import ConfigError, PartialRunError, problems_error
 from tzsl.studies._outputs import ResultsDir
 from tzsl.studies.config import Experiment, get_study, load_experiment, to_toml
+from tzsl.studies.study_cache import run_cached
 from tzsl.studies.study_settings import StudyRun
 
 #: The option names every front-end shares -> the key of the experiment they override.
@@ -133,10 +134,14 @@ def check_experiment(exp: Experiment) -> None:
 
 
 def execute_study(exp: Experiment, results: ResultsDir, echo: Callable[[str], None] | None = None) -> StudyRun:
-    """Run the study of ``exp`` into ``results`` (no manifest.json; see :func:`run_experiment`)."""
+    """Run the study of ``exp`` into ``results`` (no manifest.json; see :func:`run_experiment`).
+
+    A study run before with the same settings, code and data is restored from the study cache
+    (:mod:`tzsl.studies.study_cache`) when ``TZSL_CACHE_DIR`` is set.
+    """
     check_experiment(exp)
-    say = echo or (lambda _msg: None)
-    return get_study(exp.study).hook("runner")(exp, results, say)
+    runner = get_study(exp.study).hook("runner")
+    return run_cached(exp, results, lambda say: runner(exp, results, say), echo or (lambda _msg: None))
 
 
 def results_folder(exp: Experiment, force: bool) -> ResultsDir:

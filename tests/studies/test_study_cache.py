@@ -1,0 +1,162 @@
+"""The study cache (issue 22): a study run again unchanged is restored, byte for byte; any change recomputes it."""
+
+from __future__ import annotations
+
+import json
+import sys
+import warnings
+from pathlib import Path
+from typing import Literal
+
+import pandas as pd
+import pytest
+from pydantic import Field
+
+from tzsl.studies.config import Compute, Output, register_study, unregister_study
+from tzsl.studies.config._common import Section
+from tzsl.studies.engine import run_experiment
+from tzsl.studies.study_cache import STUDY_CACHE_ENV, study_cache_folder
+from tzsl.studies.study_settings import StudyRun
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_reproduce import TINY_HAND  # noqa: E402
+
+PLUGIN = "cache-test"
+#: How many times the plug-in's runner really ran (a restored study does not run it).
+CALLS: list[int] = []
+
+
+class CacheCompute(Compute):
+    cache: bool = True
+
+
+class CacheData(Section):
+    plain: str | None = None
+
+
+class CacheStudy(Section):
+    """A plug-in study that reads the files of ``dataset.plain`` and writes one table of ``n`` rows."""
+
+    study: Literal["cache-test"] = PLUGIN
+    description: str = ""
+    n: int = Field(3, ge=1)
+    fail: bool = False
+    dataset: CacheData = Field(default_factory=CacheData)
+    compute: CacheCompute = Field(default_factory=CacheCompute)
+    output: Output = Field(default_factory=Output)
+
+
+def run_plugin(exp, results, say) -> StudyRun:
+    CALLS.append(1)
+    folder = Path(exp.config.dataset.plain)
+    total = sum(float(p.read_text()) for p in sorted(folder.glob("*.txt")))
+    table = pd.DataFrame({"row": range(exp.config.n), "value": total / 3.0})
+    if exp.config.fail:
+        table["error"] = ["ValueError: injected"] + [""] * (exp.config.n - 1)
+    results.write_csv("plugin.csv", table)
+    say(f"plugin: {exp.config.n} rows")
+    warnings.warn("the plug-in always warns", UserWarning, stacklevel=1)
+    return StudyRun({"plugin": table}, {"study_kind": PLUGIN}, data_files=sorted(folder.glob("*.txt")))
+
+
+@pytest.fixture
+def plugin(tmp_path, monkeypatch):
+    monkeypatch.setenv("TZSL_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setenv(STUDY_CACHE_ENV, "1")
+    register_study(PLUGIN, schema=CacheStudy, runner=f"{__name__}:run_plugin", main_table="plugin",
+                   description="a test plug-in")
+    data = tmp_path / "data"
+    data.mkdir()
+    (data / "a.txt").write_text("1.5")
+    CALLS.clear()
+    yield tmp_path, data
+    unregister_study(PLUGIN)
+
+
+def _toml(tmp_path: Path, data: Path, body: str = "n = 4") -> Path:
+    path = tmp_path / "plugin.toml"
+    path.write_text(f'study = "{PLUGIN}"\n{body}\n[dataset]\nplain = "{data}"\n')
+    return path
+
+
+def _run(toml: Path, out: Path) -> tuple[Path, dict, list[str]]:
+    lines: list[str] = []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        results, _ = run_experiment(toml, out=out, echo=lines.append)
+    assert [str(w.message) for w in caught] == ["the plug-in always warns"]
+    return results.root, json.loads((results.root / "manifest.json").read_text()), lines
+
+
+def test_a_study_run_again_is_restored_byte_for_byte(plugin):
+    tmp_path, data = plugin
+    toml = _toml(tmp_path, data)
+    first, manifest1, lines1 = _run(toml, tmp_path / "one")
+    second, manifest2, lines2 = _run(toml, tmp_path / "two")
+    assert len(CALLS) == 1
+    assert (first / "plugin.csv").read_bytes() == (second / "plugin.csv").read_bytes()
+    assert manifest1["config"]["study_cache"]["restored"] is False
+    assert manifest2["config"]["study_cache"]["restored"] is True
+    assert manifest2["config"]["study_cache"]["key"] == manifest1["config"]["study_cache"]["key"]
+    assert manifest2["warnings"] == manifest1["warnings"] == ["the plug-in always warns"]
+    assert manifest2["data_files"] == manifest1["data_files"]
+    assert manifest2["outputs"]["plugin.csv"] == manifest1["outputs"]["plugin.csv"]
+    assert "restored from the study cache" in lines2[1] and lines2[2:] == lines1[1:]
+
+
+def test_a_changed_setting_or_data_file_is_computed_again(plugin):
+    tmp_path, data = plugin
+    toml = _toml(tmp_path, data)
+    _run(toml, tmp_path / "one")
+    _run(_toml(tmp_path, data, "n = 5"), tmp_path / "two")
+    assert len(CALLS) == 2
+    (data / "a.txt").write_text("2.5")  # same size, new content and time
+    third, _, _ = _run(_toml(tmp_path, data), tmp_path / "three")
+    assert len(CALLS) == 3 and pd.read_csv(third / "plugin.csv")["value"].iloc[0] == pytest.approx(2.5 / 3)
+    (data / "b.txt").write_text("1")  # a new file in the dataset folder
+    _run(_toml(tmp_path, data), tmp_path / "four")
+    assert len(CALLS) == 4
+
+
+@pytest.mark.parametrize("switch", ["env", "setting", "no-cache-dir"])
+def test_the_study_cache_can_be_turned_off(plugin, monkeypatch, switch):
+    tmp_path, data = plugin
+    body = "n = 4"
+    if switch == "env":
+        monkeypatch.setenv(STUDY_CACHE_ENV, "0")
+    elif switch == "setting":
+        body += "\n[compute]\ncache = false"
+    else:
+        monkeypatch.delenv("TZSL_CACHE_DIR")
+    toml = _toml(tmp_path, data, body)
+    _run(toml, tmp_path / "one")
+    _run(toml, tmp_path / "two")
+    assert len(CALLS) == 2
+    folder = study_cache_folder()
+    assert folder is None or not folder.exists() or not any(folder.iterdir())
+
+
+def test_a_run_with_failed_fits_is_not_stored(plugin):
+    tmp_path, data = plugin
+    toml = _toml(tmp_path, data, "n = 4\nfail = true")
+    for out in ("one", "two"):
+        with pytest.raises(Exception, match="injected"):
+            _run(toml, tmp_path / out)
+    assert len(CALLS) == 2
+
+
+@pytest.mark.slow
+def test_a_real_study_is_restored_with_every_file(tmp_path, monkeypatch):
+    """The hand study writes its own manifest and figures through the results folder: all come back."""
+    monkeypatch.setenv("TZSL_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setenv(STUDY_CACHE_ENV, "1")
+    toml = tmp_path / "hand.toml"
+    toml.write_text(TINY_HAND)
+    first, _ = run_experiment(toml, out=tmp_path / "one", n_jobs=1)
+    second, done = run_experiment(toml, out=tmp_path / "two", n_jobs=1)
+    assert done.record["study_cache"]["restored"] is True
+    names = sorted(p.name for p in first.root.iterdir())
+    assert names == sorted(p.name for p in second.root.iterdir()) and len(names) > 5
+    for name in names:
+        if name != "manifest.json":
+            assert (first.root / name).read_bytes() == (second.root / name).read_bytes(), name
