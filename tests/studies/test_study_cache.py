@@ -160,3 +160,18 @@ def test_a_real_study_is_restored_with_every_file(tmp_path, monkeypatch):
     for name in names:
         if name != "manifest.json":
             assert (first.root / name).read_bytes() == (second.root / name).read_bytes(), name
+
+
+def test_a_broken_entry_is_computed_again_with_one_warning(plugin):
+    tmp_path, data = plugin
+    toml = _toml(tmp_path, data)
+    _run(toml, tmp_path / "one")
+    entry = next(study_cache_folder().iterdir())
+    (entry / "files" / "plugin.csv").unlink()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        results, done = run_experiment(toml, out=tmp_path / "two")
+    messages = [str(w.message) for w in caught]
+    assert any("study cache entry unreadable" in m and "plugin.csv is missing" in m for m in messages)
+    assert len(CALLS) == 2 and done.record["study_cache"]["restored"] is False
+    assert (results.root / "plugin.csv").is_file()

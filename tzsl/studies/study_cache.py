@@ -164,7 +164,9 @@ def run_cached(exp, results, runner: Callable[[Callable[[str], None]], StudyRun]
     entry = folder / key
     if (entry / _RUN_FILE).is_file():
         with stage("restore"):
-            return _restore(entry, key, results, echo)
+            payload = _load(entry)
+            if payload is not None:
+                return _restore(payload, entry, key, results, echo)
     base = _base(results)
     n_written, splits_before, data_before = len(base.written), set(base.splits), set(base.data_files)
     lines: list[str] = []
@@ -206,9 +208,24 @@ def _store(folder: Path, key: str, base: ResultsDir, written: list[Path], payloa
         shutil.rmtree(tmp, ignore_errors=True)
 
 
-def _restore(entry: Path, key: str, results, echo: Callable[[str], None]) -> StudyRun:
+def _load(entry: Path) -> dict[str, Any] | None:
+    """An entry's payload; None, with one warning and the entry removed, when it is unreadable or incomplete."""
+    try:
+        payload = joblib.load(entry / _RUN_FILE)
+        missing = [name for name in payload["files"] if not (entry / _FILES / name).is_file()]
+        if payload.get("format") != _ENTRY_FORMAT or missing:
+            raise ValueError(f"file {missing[0]} is missing" if missing else "another format")
+    except Exception as exc:  # noqa: BLE001 - whatever broke the entry, the study is computed again
+        reason = (str(exc).splitlines() or [""])[0]
+        warnings.warn(f"{entry}: study cache entry unreadable ({type(exc).__name__}: {reason}); "
+                      "computing the study again", UserWarning, stacklevel=3)
+        shutil.rmtree(entry, ignore_errors=True)
+        return None
+    return payload
+
+
+def _restore(payload: dict[str, Any], entry: Path, key: str, results, echo: Callable[[str], None]) -> StudyRun:
     """Copy an entry's files into ``results`` and replay its lines and warnings."""
-    payload = joblib.load(entry / _RUN_FILE)
     base = _base(results)
     for name in payload["files"]:
         base.copy_file(name, entry / _FILES / name)
