@@ -3,8 +3,9 @@
 Reads the per-split posteriors written by :mod:`benchmarks.phac2_posteriors` and scores, on the
 same splits (20 seeded random, 5 challenging):
 
-* ``dap-avg[paper]`` (the reference: AVGDAP, uniform prior, the paper's gamma grid) and
-  ``dap-avg[extended]`` (the extended gamma grid);
+* ``dap-avg[paper]`` (the reference: AVGDAP, uniform prior, the paper's gamma grid),
+  ``dap-avg[extended]`` (the extended gamma grid) and, where stage 1 fitted it,
+  ``dap-avg[adaptive]`` (the extended grid widened at a chosen end of C or gamma);
 * ``eszsl`` and ``sae`` (registry methods, both BioTacs side by side);
 * ``dap-reliab``: DAP with per-attribute weights from the out-of-fold (grouped-CV) balanced
   accuracy of each attribute on the training objects;
@@ -17,7 +18,10 @@ same splits (20 seeded random, 5 challenging):
 Every choice is made on training objects only. Output: one row per method and split kind with
 the mean accuracy, the two-level bootstrap 95% interval (splits, then test objects) and the
 paired difference to AVGDAP[paper] with its interval, and beside it ``grid_summary.csv`` (per
-gamma grid: the chosen SVMs' mean grouped-CV log-loss and the share of fits at each gamma)::
+grid: the chosen SVMs' mean grouped-CV log-loss, the share of fits whose chosen C or gamma sits
+at an end of its final grid, the share of fits at each gamma and the mean fit CPU seconds per
+split) and ``grid_pairs.csv`` (each grid against the previous one, ``extended`` - ``paper`` and
+``adaptive`` - ``extended``: paired AVGDAP difference on the same trials with its interval)::
 
     nice -n 5 python experiments/benchmarks/phac2_accuracy.py --cache /tmp/tzsl_accuracy --out /tmp/tzsl_accuracy/accuracy.csv
 
@@ -39,7 +43,7 @@ from tzsl.studies.zero_shot.study import split_masks
 from tzsl.models import build_method
 from tzsl.models.protocol import attribute_rows
 
-from phac2_posteriors import study_splits  # noqa: E402  (run from experiments/benchmarks/ or with it on sys.path)
+from phac2_posteriors import GRIDS, study_splits  # noqa: E402  (run from experiments/benchmarks/ or with it on sys.path)
 
 EPS = 1e-6
 WEIGHTS = np.linspace(0.0, 1.0, 11)
@@ -81,7 +85,7 @@ def embedding_scores(name: str, X_tr, objects_tr, rows_tr, X_te, K, params=None)
 
 def fixed_params(name: str, model) -> dict:
     """The ridges a CV model chose (on the training objects), to refit it quickly inside pseudo folds."""
-    am = model.attribute_model_
+    am = getattr(model, "estimator_", model).attribute_model_  # the registry's methods wrap it in a calibrator
     if name == "eszsl":
         return {"gammas": (am.best_gamma_,), "lams": (am.best_lam_,)}
     return {"lams": (am.best_lam_,)}
@@ -128,30 +132,32 @@ def base_scores(features, split, index: int, cache: Path) -> dict | None:
     """Test and pseudo-ZSL scores of the base methods on one split (cached in ``cache``)."""
     import pickle  # noqa: PLC0415
 
-    path = cache / f"scores_{split.name}.pkl"
-    if path.exists():
-        return pickle.loads(path.read_bytes())
-    files = {g: cache / f"{g}_{split.name}.npz" for g in ("paper", "extended")}
-    if not all(f.exists() for f in files.values()):
+    files = {g: cache / f"{g}_{split.name}.npz" for g in GRIDS}
+    if not (files["paper"].exists() and files["extended"].exists()):
         return None
-    paper, extended = np.load(files["paper"]), np.load(files["extended"])
+    K = features.attributes.loc[list(split.test_objects), list(split.kept_attributes)].to_numpy(dtype=float)
+    dap = {f"dap-avg[{g}]": dap_scores(np.load(f)["P_test"], K) for g, f in files.items() if f.exists()}
+    path = cache / f"scores_{split.name}.pkl"
+    if path.exists():  # the expensive part; the DAP scores of every grid fitted so far are added each time
+        out = pickle.loads(path.read_bytes())
+        out["S"] = {**dap, **{k: v for k, v in out["S"].items() if k not in dap}}
+        return out
+    paper = np.load(files["paper"])
     attrs = list(split.kept_attributes)
     train, test = split_masks(features, split)
     objects = features.objects
-    K = features.attributes.loc[list(split.test_objects), attrs].to_numpy(dtype=float)
     y = pd.Index(split.test_objects).get_indexer(objects[test])
     A_tr = features.attributes.loc[objects[train], attrs].to_numpy(dtype=float)
     rows_tr = features.attributes.loc[np.unique(objects[train]), attrs].to_numpy(dtype=float)
     X = features.X.reshape(len(objects), -1)
-    S = {"dap-avg[paper]": dap_scores(paper["P_test"], K), "dap-avg[extended]": dap_scores(extended["P_test"], K),
-         "dap-reliab": dap_scores(paper["P_test"], K, reliability(paper["P_oof"], A_tr))}
+    S = {**dap, "dap-reliab": dap_scores(paper["P_test"], K, reliability(paper["P_oof"], A_tr))}
     chosen_params = {}
     for name in ("eszsl", "sae"):
         S[name], model = embedding_scores(name, X[train], objects[train], rows_tr, X[test], K)
         chosen_params[name] = fixed_params(name, model)
     folds = pseudo_zsl(features, split, train, paper["P_oof"], attrs, chosen_params, seed=index)
     out = {"S": S, "y": y, "folds": folds, "test_objects": np.asarray(split.test_objects)}
-    path.write_bytes(pickle.dumps(out))
+    path.write_bytes(pickle.dumps({**out, "S": {k: v for k, v in S.items() if k not in dap}}))
     return out
 
 
@@ -194,24 +200,55 @@ def choose_simplex(folds, step: float = 0.25) -> tuple[float, float, float]:
 
 
 def grid_summary(cache: Path) -> pd.DataFrame:
-    """Per grid: mean grouped-CV log-loss of the chosen SVMs, and where the chosen gamma sits."""
+    """Per grid: the chosen SVMs' mean grouped-CV log-loss, share at a grid edge, where the chosen gamma sits, CPU.
+
+    ``share_at_edge``: fits whose chosen C or gamma is at an end of its final grid (for
+    ``adaptive``, an end whose extensions were exhausted); ``gamma<1e-4`` / ``gamma>1``: fits
+    whose chosen gamma lies outside the extended grid; ``cpu_seconds_per_split``: mean CPU time
+    of a split's attribute fits.
+    """
     rows = []
-    for grid in ("paper", "extended"):
-        ll, gam = [], []
-        for f in sorted(cache.glob(f"{grid}_*.npz")):
-            z = np.load(f)
-            ll.append(z["log_loss"].ravel())
-            gam.append(z["gamma"].ravel())
-        ll, gam = np.concatenate(ll), np.concatenate(gam)
-        rows.append({"grid": grid, "n_fits": ll.size, "mean_cv_log_loss": ll.mean(),
-                     **{f"gamma={g:g}": float(np.mean(np.isclose(gam, g))) for g in (1e-4, 1e-3, 1e-2, 1e-1, 1.0)}})
+    for grid in GRIDS:
+        files = sorted(cache.glob(f"{grid}_*.npz"))
+        if not files:
+            continue
+        z = [np.load(f) for f in files]
+        ll = np.concatenate([f["log_loss"].ravel() for f in z])
+        gam = np.concatenate([f["gamma"].ravel() for f in z])
+        edge = np.concatenate([f["at_edge"].ravel() for f in z]) if all("at_edge" in f for f in z) else None
+        rows.append({"grid": grid, "n_splits": len(z), "n_fits": ll.size, "mean_cv_log_loss": ll.mean(),
+                     "share_at_edge": np.nan if edge is None else float(edge.mean()),
+                     "cpu_seconds_per_split": float(np.mean([f["cpu_seconds"] for f in z])),
+                     "gamma<1e-4": float(np.mean(gam < 1e-4 * (1 - 1e-9))),
+                     **{f"gamma={g:g}": float(np.mean(np.isclose(gam, g))) for g in (1e-4, 1e-3, 1e-2, 1e-1, 1.0)},
+                     "gamma>1": float(np.mean(gam > 1.0 * (1 + 1e-9)))})
     return pd.DataFrame(rows)
 
 
-def run(cache: Path, n_random: int, seed: int) -> pd.DataFrame:
+def grid_pairs(trials: pd.DataFrame) -> pd.DataFrame:
+    """Each grid's ``dap-avg`` minus the previous grid's (``GRIDS`` order), paired on the same trials, per kind."""
+    rows = []
+    for kind in dict.fromkeys(trials["kind"]):
+        t = trials[trials.kind == kind]
+        for before, after in zip(GRIDS, GRIDS[1:]):
+            a, b = t[t.method == f"dap-avg[{after}]"], t[t.method == f"dap-avg[{before}]"]
+            common = np.intersect1d(a.split.unique(), b.split.unique())
+            if not common.size:
+                continue
+            a, b = a[a.split.isin(common)], b[b.split.isin(common)]
+            cluster = {"classes": a["class"].to_numpy(), "splits": a.split.to_numpy()}
+            d = paired_difference_interval(a.correct.to_numpy(), b.correct.to_numpy(), **cluster)
+            rows.append({"kind": kind, "method": f"dap-avg[{after}]", "reference": f"dap-avg[{before}]",
+                         "n_splits": common.size, "accuracy": bootstrap_accuracy(a.correct.to_numpy(), **cluster).mean,
+                         "reference_accuracy": bootstrap_accuracy(b.correct.to_numpy(), **cluster).mean,
+                         "diff": d.mean, "diff_ci95_low": d.ci95_low, "diff_ci95_high": d.ci95_high})
+    return pd.DataFrame(rows)
+
+
+def run(cache: Path, n_random: int, seed: int, purpose: str = "confirm") -> pd.DataFrame:
     features = dataset_features("phac2-penn")
     records = []
-    for kind, index, split in study_splits(features, n_random, seed):
+    for kind, index, split in study_splits(features, n_random, seed, purpose):
         base = base_scores(features, split, index, cache)
         if base is None:
             continue
@@ -246,16 +283,21 @@ def main() -> None:
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--n-random", type=int, default=20)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--purpose", choices=["select", "confirm"], default="confirm",
+                    help="the random splits stage 1 fitted (its --purpose)")
     args = ap.parse_args()
     warnings.simplefilter("ignore")
     grid = grid_summary(args.cache)
     grid.to_csv(args.out.with_name("grid_summary.csv"), index=False, float_format="%.4f")
     print(grid.to_string(index=False, float_format=lambda v: f"{v:.3f}"))
-    trials = run(args.cache, args.n_random, args.seed)
+    trials = run(args.cache, args.n_random, args.seed, args.purpose)
     table = summarise(trials)
     table.to_csv(args.out, index=False, float_format="%.4f")
+    pairs = grid_pairs(trials)
+    pairs.to_csv(args.out.with_name("grid_pairs.csv"), index=False, float_format="%.4f")
     with pd.option_context("display.width", 200):
         print(table.to_string(index=False, float_format=lambda v: f"{v:.3f}"))
+        print(pairs.to_string(index=False, float_format=lambda v: f"{v:.3f}"))
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """Stage 1 of the PHAC-2 accuracy benchmark: DAP attribute posteriors of every split, cached.
 
 For each split (``--n-random`` seeded random splits, seed ``--seed``, and the 5 challenging
-splits) and each gamma grid (``paper``, ``extended``) the per-(attribute, BioTac) SVM bank of
+splits) and each grid (``paper``, ``extended``, ``adaptive``) the per-(attribute, BioTac) SVM bank of
 the PHAC-2 study (:func:`tzsl.studies.zero_shot.study.fit_split`, 5 object-grouped folds,
 ``select`` under-sampling) is fitted on the split's training objects. Saved per split:
 
@@ -9,7 +9,9 @@ the PHAC-2 study (:func:`tzsl.studies.zero_shot.study.fit_split`, 5 object-group
 * ``P_oof`` (n_train_trials, 2, m): out-of-fold posteriors of the training trials (the Platt map
   of each SVM's object-grouped out-of-fold scores: every trial scored by a model that never saw
   its object), which stage 2 uses to choose weights on training objects only;
-* ``log_loss`` (m, 2): grouped-CV criterion of the chosen configuration; ``gamma`` (m, 2).
+* ``log_loss`` (m, 2): grouped-CV criterion of the chosen configuration; ``gamma``, ``C`` (m, 2)
+  the chosen values; ``at_edge`` (m, 2): the choice sits at an end of its (final) grid;
+  ``cpu_seconds``: CPU time of the split's fit.
 
 Expensive (about 10 s CPU per split and grid, more on a loaded machine); run once::
 
@@ -34,14 +36,14 @@ from tzsl.studies.config import DapSettings
 from tzsl.studies.zero_shot.study import fit_split, make_splits, split_masks
 from tzsl.models import GridEdgeWarning
 
-GRIDS = ("paper", "extended")
+GRIDS = ("paper", "extended", "adaptive")
 #: split index offset of the challenging splits (as in run_dap_study)
 CHALLENGING_OFFSET = 100
 
 
-def study_splits(features, n_random: int, seed: int):
-    """``[(kind, index, Split)]``: the random splits then the challenging ones."""
-    config = DapSettings(splits={"n_splits": n_random, "seed": seed})
+def study_splits(features, n_random: int, seed: int, purpose: str = "confirm"):
+    """``[(kind, index, Split)]``: the random splits of ``purpose`` then the challenging ones."""
+    config = DapSettings(splits={"n_splits": n_random, "seed": seed, "purpose": purpose})
     random_splits, _ = make_splits(features, "random", config)
     challenging, _ = make_splits(features, "challenging", config)
     return ([("random", i, s) for i, s in enumerate(random_splits)]
@@ -61,6 +63,9 @@ def main() -> None:
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--n-random", type=int, default=20)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--purpose", choices=["select", "confirm"], default="confirm",
+                    help="random splits that make a choice (select) or report it (confirm; the schema's default)")
+    ap.add_argument("--no-challenging", action="store_true", help="random splits only")
     ap.add_argument("--grids", nargs="+", default=list(GRIDS), choices=GRIDS)
     ap.add_argument("--n-jobs", type=int, default=1)
     args = ap.parse_args()
@@ -68,20 +73,25 @@ def main() -> None:
     features = dataset_features("phac2-penn")
     warnings.simplefilter("ignore", GridEdgeWarning)
     for grid in args.grids:
-        for kind, index, split in study_splits(features, args.n_random, args.seed):
+        for kind, index, split in study_splits(features, args.n_random, args.seed, args.purpose):
+            if args.no_challenging and kind == "challenging":
+                continue
             path = args.out / f"{grid}_{split.name}.npz"
             if path.exists():
                 continue
-            config = DapSettings(splits={"n_splits": args.n_random, "seed": args.seed},
+            config = DapSettings(splits={"n_splits": args.n_random, "seed": args.seed, "purpose": args.purpose},
                                  compute={"cache": False, "n_jobs": args.n_jobs}, svm={"cv": 5, "grid": grid})
             start = time.process_time()
             r = fit_split(features, split, config, index)
             cpu = time.process_time() - start
             bank = r.model
             train, _ = split_masks(features, split)
-            ll = np.array([[est.cv_scores_.min() for est in per] for per in bank.estimators_])
+            ll = np.array([[np.nanmin(est.cv_scores_) for est in per] for per in bank.estimators_])  # NaN: pruned by halving
             gam = np.array([[est.gamma_ for est in per] for per in bank.estimators_])
-            np.savez(path, P_test=r.P, P_oof=oof_posteriors(bank), log_loss=ll, gamma=gam,
+            C = np.array([[est.C_ for est in per] for per in bank.estimators_])
+            # a fit whose chosen C or gamma sits at an end of its (final) grid
+            edge = np.array([[bool(est.grid_edges_) for est in per] for per in bank.estimators_])
+            np.savez(path, P_test=r.P, P_oof=oof_posteriors(bank), log_loss=ll, gamma=gam, C=C, at_edge=edge,
                      train_objects=features.objects[train], attributes=np.array(r.attributes),
                      fit_seconds=r.fit_seconds, cpu_seconds=cpu)
             print(f"{grid} {split.name}: AVGDAP {r.accuracy('avg', 'uni'):.3f}  "

@@ -238,7 +238,7 @@ class ReferenceSVCGrid(AttributeSVM):
 
 @pytest.mark.parametrize("params", [
     dict(TINY, n_gamma=3, n_C=3), dict(TINY, cv=None), dict(TINY, undersampling="bagging"),
-    dict(TINY, undersampling="none"), dict(TINY, scoring="balanced_accuracy", n_draws=3),
+    dict(TINY, undersampling="none"), dict(TINY, scoring="balanced_accuracy", n_draws=3), dict(TINY, grid="adaptive"),
 ])
 def test_fast_grid_equals_svc_reference_bitwise(params):
     """The shared-kernel libsvm grid gives exactly the numbers of one SVC per fit."""
@@ -271,7 +271,7 @@ def test_grid_edge_choices_are_recorded_and_warned_once_per_batch():
 def test_gamma_grids():
     from tzsl.models.attribute_training import GRIDS, gamma_grid
 
-    assert GRIDS == ("paper", "extended")
+    assert GRIDS == ("paper", "extended", "adaptive")
     np.testing.assert_allclose(gamma_grid((0.01, 1.0), 3, "paper"), [0.01, 0.1, 1.0])
     np.testing.assert_allclose(gamma_grid((0.01, 1.0), 3, "extended"), [1e-4, 1e-3, 0.01, 0.1, 1.0])
     X, A, g = make_problem()

@@ -280,3 +280,35 @@ def test_the_readme_block_holds_the_headlines_and_the_evidence_block_the_rest(tm
     assert "| result | ours [95% CI]" in readme
     with pytest.raises(ConfigError, match="neither dap_fusion_prior.csv nor method_comparison.csv"):
         evidence_block(_results(tmp_path / "bare"))
+
+
+def test_grid_summary_and_pairs_report_the_share_at_a_grid_edge(tmp_path, accuracy_benchmark):
+    """Stage 1's per-split files of three grids -> grid_summary.csv (share at an edge, CPU) -> the block; the
+    adaptive grid is compared with the extended one on the same trials (grid_pairs)."""
+    from tzsl.reporting.benchmark_blocks import benchmark_accuracy_block  # noqa: PLC0415
+
+    edges = {"paper": [[1, 1], [1, 0]], "extended": [[1, 0], [0, 0]], "adaptive": [[0, 0], [0, 0]]}
+    gamma = {"paper": 0.01, "extended": 1e-4, "adaptive": 1e-6}
+    for grid, cpu in (("paper", 4.0), ("extended", 6.0), ("adaptive", 15.0)):
+        for split in ("random-1", "random-2"):
+            np.savez(tmp_path / f"{grid}_{split}.npz", log_loss=np.full((2, 2), 0.5), gamma=np.full((2, 2), gamma[grid]),
+                     at_edge=np.array(edges[grid], dtype=bool), cpu_seconds=cpu)
+    summary = accuracy_benchmark.grid_summary(tmp_path).set_index("grid")
+    assert summary.loc["paper", "share_at_edge"] == 0.75 and summary.loc["adaptive", "share_at_edge"] == 0.0
+    assert summary.loc["adaptive", "cpu_seconds_per_split"] == 15.0 and summary.loc["adaptive", "gamma<1e-4"] == 1.0
+    assert summary.loc["extended", "gamma=0.0001"] == 1.0
+    rng = np.random.default_rng(1)
+    classes = np.repeat(np.arange(5), 4)
+    trials = pd.concat([pd.DataFrame({"kind": "random", "split": f"s{s}", "method": f"dap-avg[{g}]", "class": classes,
+                                      "correct": (rng.random(classes.size) < 0.4).astype(float), "weight": np.nan})
+                        for g in ("paper", "extended", "adaptive") for s in range(3)], ignore_index=True)
+    pairs = accuracy_benchmark.grid_pairs(trials).set_index("method")
+    row = pairs.loc["dap-avg[adaptive]"]
+    assert row.reference == "dap-avg[extended]" and row.n_splits == 3
+    ad, ex = (trials[trials.method == m].correct.mean() for m in ("dap-avg[adaptive]", "dap-avg[extended]"))
+    assert np.isclose(row["diff"], ad - ex) and row.diff_ci95_low <= row["diff"] <= row.diff_ci95_high
+    out = tmp_path / "bench"
+    out.mkdir()
+    accuracy_benchmark.summarise(trials).to_csv(out / "accuracy.csv", index=False)
+    summary.reset_index().to_csv(out / "grid_summary.csv", index=False)
+    assert "| adaptive | 8 | 0.500 | 0% | 15.0 | " in benchmark_accuracy_block(out)

@@ -54,9 +54,10 @@ def _study_options(func):
                          help="Object-grouped, stratified CV folds for tuning C, gamma and the under-sampling draw "
                               "on training objects; 0 = leave-one-object-out as in the paper (about 7x slower, same "
                               "accuracy in our measurements).")(func)
-    func = schema_option("--grid", study=STUDY, key="svm.grid", type=click.Choice(["paper", "extended"]),
-                         help="Gamma grid of the attribute SVMs: the paper's, or tzsl's extended one (two decades "
-                              "below the paper's lower edge, where most fits choose the edge).")(func)
+    func = schema_option("--grid", study=STUDY, key="svm.grid", type=click.Choice(["paper", "extended", "adaptive"]),
+                         help="Gamma grid of the attribute SVMs: the paper's, tzsl's extended one (two decades "
+                              "below the paper's lower edge, where most fits choose the edge), or adaptive (the "
+                              "extended grid, widened by log steps at whichever end of C or gamma is chosen).")(func)
     func = no_progress_option(func)
     func = click.option("--no-cache", is_flag=True, help="Do not cache fitted attribute models (default: cache "
                         "under $TZSL_CACHE_DIR or the user cache folder, so interrupted runs resume).")(func)

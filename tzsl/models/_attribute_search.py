@@ -14,6 +14,10 @@ search can only differ where it was pruned.
 
 Rounds use folds of one draw only, so a configuration's partial criterion is computed on the
 trials of the folds seen so far (its Platt sigmoid and the balanced weights fitted on those).
+
+``grid="adaptive"`` (:func:`adaptive_grid_search`) runs either search again on a grown grid while
+the choice sits at an end of the ``C`` or ``gamma`` grid; :func:`fill_grid_lines` lets the grid
+search fit only the lines the grown grid adds.
 """
 
 from __future__ import annotations
@@ -25,9 +29,11 @@ import numpy as np
 from sklearn.svm import _libsvm  # noqa: PLC2701 - see svc_fit_decision
 
 from tzsl.models._attribute_training import AttributeTrainingError
+from tzsl.models._zsl_input import extend_at_edge
 
-__all__ = ["HALVING_FACTOR", "HALVING_KERNEL_BYTES", "SEARCHES", "UNIT_WEIGHT", "balanced_class_weight", "halving_rounds",
-           "successive_halving", "svc_fit_decision"]
+__all__ = ["HALVING_FACTOR", "HALVING_KERNEL_BYTES", "MAX_GRID_EXTENSIONS", "SEARCHES", "UNIT_WEIGHT",
+           "adaptive_grid_search", "balanced_class_weight", "fill_grid_lines", "halving_rounds", "successive_halving",
+           "svc_fit_decision"]
 
 #: ``search`` options of :class:`~tzsl.models.AttributeSVM`.
 SEARCHES = ("grid", "halving")
@@ -38,6 +44,8 @@ HALVING_KERNEL_BYTES = 256 * 2**20
 #: Class weights (class 0, class 1) when classes are not balanced by weight.
 UNIT_WEIGHT = np.ones(2)
 _EMPTY = np.empty(0)
+#: Most log steps ``grid="adaptive"`` adds beyond each end (low, high) of the ``C`` grid and of the ``gamma`` grid.
+MAX_GRID_EXTENSIONS = 3
 
 
 def balanced_class_weight(y: np.ndarray) -> np.ndarray:
@@ -160,3 +168,90 @@ def successive_halving(
         alive[order[:keep]] = True
         alive = alive.reshape(shape)
     return alive
+
+
+def adaptive_grid_search(
+    search: Callable[[np.ndarray, np.ndarray], tuple[object, tuple[int, int]]],
+    Cs: np.ndarray,
+    gammas: np.ndarray,
+    max_extensions: int = MAX_GRID_EXTENSIONS,
+) -> tuple[np.ndarray, np.ndarray, object]:
+    """Search a (gamma, C) grid; while the choice sits at an end of a grid, widen that end and search again.
+
+    The step beyond an end is the ratio of the grid's two outer values there
+    (:func:`~tzsl.models._zsl_input.extend_at_edge`, as ``ESZSLCV`` and ``SAECV`` extend their
+    grids), at most ``max_extensions`` times per end of each grid; a grid of one point, or whose
+    two outer values are equal, is never widened. ``C`` and ``gamma`` at an end in the same
+    search are widened together.
+
+    Parameters
+    ----------
+    search : callable ``search(Cs, gammas) -> (result, (gamma_index, C_index))``
+        One search over the grids (the caller keeps its folds and draws fixed between calls)
+        and the grid position of its choice.
+    Cs, gammas : ndarray of shape (n_C,), (n_gammas,)
+        Increasing starting grids (> 0).
+    max_extensions : int, default MAX_GRID_EXTENSIONS
+        0 searches the starting grids once.
+
+    Returns
+    -------
+    Cs, gammas : ndarray of shape (n_C + k_C,), (n_gammas + k_gamma,)
+        The final grids: the starting ones with the points added at their ends.
+    result
+        What the last ``search`` returned.
+    """
+    left = dict.fromkeys([("C", "low"), ("C", "high"), ("gamma", "low"), ("gamma", "high")], int(max_extensions))
+    while True:
+        result, (gi, ci) = search(Cs, gammas)
+        grown = {}
+        for name, grid, i in (("C", Cs, ci), ("gamma", gammas, gi)):
+            wider = extend_at_edge(grid, i)
+            side = "low" if i == 0 else "high"
+            if wider is None or left[name, side] == 0 or not (wider[0] < grid[0] or wider[-1] > grid[-1]):
+                continue
+            grown[name] = wider
+            left[name, side] -= 1
+        if not grown:
+            return Cs, gammas, result
+        Cs, gammas = grown.get("C", Cs), grown.get("gamma", gammas)
+
+
+def fill_grid_lines(
+    oof: np.ndarray,
+    Cs: np.ndarray,
+    gammas: np.ndarray,
+    previous: tuple[np.ndarray, np.ndarray, np.ndarray] | None,
+    compute: Callable[[np.ndarray, np.ndarray, np.ndarray], None],
+) -> None:
+    """Out-of-fold scores of a grid that may have grown at its ends: copy the known lines, fit the new ones.
+
+    Parameters
+    ----------
+    oof : ndarray of shape (n_draws, n_gammas, n_C, n_train)
+        Filled in place.
+    Cs, gammas : ndarray of shape (n_C,), (n_gammas,)
+        Increasing grids.
+    previous : (Cs, gammas, oof) or None
+        An earlier search of the same fit (same draws and folds): its grids, each the new grid
+        without points added beyond its ends, and its ``oof``. None: every line is new.
+    compute : callable ``compute(gammas, Cs, out)``
+        Fills ``out`` of shape (n_draws, len(gammas), len(Cs), n_train) for those values.
+    """
+    if previous is None:
+        compute(gammas, Cs, oof)
+        return
+    C_old, g_old, oof_old = previous
+    g0, c0 = int(np.sum(gammas < g_old[0])), int(np.sum(Cs < C_old[0]))  # points added below each grid
+    g_in, c_in = slice(g0, g0 + g_old.size), slice(c0, c0 + C_old.size)
+    oof[:, g_in, c_in] = oof_old
+    new_g = np.setdiff1d(np.arange(gammas.size), np.arange(gammas.size)[g_in])
+    new_c = np.setdiff1d(np.arange(Cs.size), np.arange(Cs.size)[c_in])
+    if new_g.size:  # new gamma lines, every C
+        block = np.empty((oof.shape[0], new_g.size, Cs.size, oof.shape[3]))
+        compute(gammas[new_g], Cs, block)
+        oof[:, new_g] = block
+    if new_c.size:  # new C lines of the known gammas
+        block = np.empty((oof.shape[0], g_old.size, new_c.size, oof.shape[3]))
+        compute(g_old, Cs[new_c], block)
+        oof[:, g_in, new_c] = block

@@ -26,7 +26,6 @@ from __future__ import annotations
 from numbers import Integral, Real
 
 import numpy as np
-from scipy.special import log_expit
 from sklearn import config_context
 from sklearn.base import BaseEstimator, ClassifierMixin, clone
 from sklearn.metrics.pairwise import euclidean_distances, rbf_kernel
@@ -48,16 +47,19 @@ from tzsl.models._attribute_training import (
     AttributeTrainingError,
     balanced_object_draws,
     balanced_sample_weights,
+    cv_criteria,
     default_preprocessor,
-    fit_platt_many,
     gamma_grid,
     grid_edges,
 )
 from tzsl.models._attribute_search import (
     HALVING_KERNEL_BYTES,
+    MAX_GRID_EXTENSIONS,
     SEARCHES,
     UNIT_WEIGHT,
+    adaptive_grid_search,
     balanced_class_weight,
+    fill_grid_lines,
     successive_halving,
     svc_fit_decision,
 )
@@ -80,13 +82,17 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
         Ends of the log-spaced grid of RBF ``gamma`` (in units of squared preprocessed features^-1).
     n_C, n_gamma : int, default=3
         Grid sizes (3 gives the decades 1, 10, 100 and 0.01, 0.1, 1).
-    grid : {"paper", "extended"}, default="extended"
+    grid : {"paper", "extended", "adaptive"}, default="extended"
         ``"paper"``: ``gamma`` from ``gamma_range`` and ``n_gamma`` as the DAP paper tuned it.
         ``"extended"``: that grid plus two decades below its low end (0.001, 0.0001 for the
         paper's range; :func:`tzsl.models.attribute_training.gamma_grid`), because on PHAC-2 most (attribute, sensor)
-        fits chose the paper grid's low edge. The paper-reproduction studies pin ``"paper"``. The
-        two grids' accuracy, grouped-CV log-loss and share of fits at each gamma are measured by
-        ``experiments/benchmarks/phac2_accuracy.py`` (its generated tables in
+        fits chose the paper grid's low edge. ``"adaptive"``: start from ``"extended"``; while
+        the chosen ``C`` or ``gamma`` is at an end of its grid, add one log step beyond that end
+        (the ratio of its two outer values) and search again on the same draws and folds, at
+        most ``MAX_GRID_EXTENSIONS`` steps per end (:mod:`tzsl.models.attribute_training`); only
+        the new configurations are fitted. The paper-reproduction studies pin ``"paper"``. The
+        grids' accuracy, grouped-CV log-loss, share of fits at a grid edge and fit time are
+        measured by ``experiments/benchmarks/phac2_accuracy.py`` (its generated tables in
         ``experiments/benchmarks/README.md``).
     cv : None, int or splitter, default=None
         Object-grouped cross-validation on the training trials. ``None``: leave-one-object-out
@@ -135,6 +141,8 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
     preprocessor_ : fitted transformer
     C_, gamma_ : float
         Chosen hyper-parameters.
+    C_grid_, gamma_grid_ : ndarray of shape (n_C_searched,), (n_gammas_searched,)
+        The grids searched, increasing (with ``grid="adaptive"`` the final, possibly widened, ones).
     draw_ : int
         Index of the kept draw (``"select"``), -1 otherwise.
     estimators_ : list of SVC
@@ -146,12 +154,13 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
         Sigmoid ``p = expit(a * s + b)`` on the SVM score ``s``.
     oof_scores_ : ndarray of shape (n_train,)
         Out-of-fold SVM scores of the training trials for the chosen configuration.
-    cv_scores_ : ndarray of shape (n_draws_or_1, n_gammas, n_C)
+    cv_scores_ : ndarray of shape (n_draws_or_1, n_gammas_searched, n_C_searched)
         Grouped-CV criterion of every configuration (lower is better; balanced accuracy is
         stored negated); NaN where ``search="halving"`` pruned the configuration.
     grid_edges_ : list of (str, float, str)
         ``(parameter, value, "low" | "high")`` for each chosen ``C`` / ``gamma`` at an end of its
-        grid (the grouped-CV optimum may lie outside the grid); empty when none is.
+        grid (the grouped-CV optimum may lie outside the grid); empty when none is. With
+        ``grid="adaptive"`` only ends whose extensions were exhausted.
     """
 
     _parameter_constraints: dict = {
@@ -237,38 +246,6 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
     def _draws(self, yb, groups, rng) -> tuple[list[np.ndarray], np.ndarray]:
         return balanced_object_draws(yb, groups, self.n_draws if self.undersampling != "none" else 0, rng)
 
-    def _criteria(self, oof: np.ndarray, yb: np.ndarray, w_cal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Grouped-CV criterion and Platt sigmoid of every configuration, all at once.
-
-        Parameters
-        ----------
-        oof : ndarray of shape (..., n_train)
-            Out-of-fold SVM scores of each configuration.
-        yb : bool ndarray of shape (n_train,)
-        w_cal : ndarray of shape (n_train,)
-            Platt sample weights.
-
-        Returns
-        -------
-        crit : ndarray of shape (..., 2)
-            (criterion, tie-break): class-weighted log-loss of the Platt posteriors and 0, or
-            minus the balanced accuracy of the score's sign and the log-loss.
-        platt : ndarray of shape (..., 2)
-            Each configuration's ``(a, b)`` (:func:`fit_platt_many`).
-        """
-        O = oof.reshape(-1, oof.shape[-1])
-        a, b = fit_platt_many(O, yb, w_cal)
-        z = a[:, None] * O + b[:, None]
-        ll = -(w_cal * np.where(yb, log_expit(z), log_expit(-z))).sum(axis=1) / w_cal.sum()
-        if self.scoring == "log_loss":
-            crit = np.stack([ll, np.zeros_like(ll)], axis=1)
-        else:
-            pred = O > 0
-            bacc = 0.5 * (pred[:, yb].mean(axis=1) + (~pred[:, ~yb]).mean(axis=1))
-            crit = np.stack([-bacc, ll], axis=1)
-        shape = oof.shape[:-1] + (2,)
-        return crit.reshape(shape), np.stack([a, b], axis=1).reshape(shape)
-
     def _grid_oof(self, D, yb, groups, draws, fold_seed, Cs, gammas, cw, oof) -> None:
         """Fill ``oof[draw, gamma, C]`` with out-of-fold SVM scores of every training trial.
 
@@ -320,8 +297,12 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
         w_full = balanced_class_weight(y_draw) if cw else UNIT_WEIGHT
         return idx, out, y_draw, D_draw, fold_index, fold_w, w_full
 
-    def _halving_oof(self, D, yb, groups, draws, fold_seed, Cs, gammas, cw, oof) -> np.ndarray:
-        """:func:`successive_halving` over the grid; fills ``oof`` of the survivors, returns them (bool)."""
+    def _halving_oof(self, D, yb, groups, draws, fold_seed, Cs, gammas, cw, oof, fits: dict) -> np.ndarray:
+        """:func:`successive_halving` over the grid; fills ``oof`` of the survivors, returns them (bool).
+
+        ``fits`` holds every fit's decision values by ``(draw, gamma, C, fold)`` (fold -1: the
+        trials outside the draw); a fit already in it (an earlier search on a smaller grid) is reused.
+        """
         _libsvm.set_verbosity_wrap(0)
         parts = [self._draw_parts(D, yb, groups, keep, fold_seed, cw) for keep in draws]
         kernels: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
@@ -340,24 +321,56 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
 
         def fit(di: int, gi: int, cis: np.ndarray, folds: range, outside: bool) -> None:
             idx, out, y_draw, _, fold_index, fold_w, w_full = parts[di]
-            Kd, K_out = kernel(di, gi)
-            if outside and out.size:
-                for ci in cis:
-                    oof[di, gi, ci, out] = svc_fit_decision(Kd, y_draw, Cs[ci], w_full, K_out)
-            for f in folds:
-                tr, te = fold_index[f]
-                Ktr, Kte = Kd[np.ix_(tr, tr)], Kd[np.ix_(te, tr)]
-                for ci in cis:
-                    oof[di, gi, ci, idx[te]] = svc_fit_decision(Ktr, y_draw[tr], Cs[ci], fold_w[f], Kte)
+            for f in ([-1] if outside and out.size else []) + list(folds):
+                keys = [(di, float(gammas[gi]), float(Cs[ci]), f) for ci in cis]
+                todo = [(ci, key) for ci, key in zip(cis, keys) if key not in fits]
+                if todo:
+                    Kd, K_out = kernel(di, gi)
+                    tr, te = fold_index[f] if f >= 0 else (None, None)
+                    K_fit, K_eval = (Kd, K_out) if f < 0 else (Kd[np.ix_(tr, tr)], Kd[np.ix_(te, tr)])
+                    y_fit, w = (y_draw, w_full) if f < 0 else (y_draw[tr], fold_w[f])
+                    for ci, key in todo:
+                        fits[key] = svc_fit_decision(K_fit, y_fit, Cs[ci], w, K_eval)
+                rows = out if f < 0 else idx[fold_index[f][1]]
+                for ci, key in zip(cis, keys):
+                    oof[di, gi, ci, rows] = fits[key]
 
         def score(di: int, gi: int, cis: np.ndarray, n_seen: int) -> np.ndarray:
             idx, fold_index = parts[di][0], parts[di][4]
             rows = idx[np.concatenate([te for _, te in fold_index[:n_seen]])]
             y_seen = yb[rows]
             w = balanced_sample_weights(y_seen) if self.platt_weighting == "balanced" else np.ones(rows.size)
-            return self._criteria(oof[di, gi][np.ix_(cis, rows)], y_seen, w)[0]
+            return cv_criteria(oof[di, gi][np.ix_(cis, rows)], y_seen, w, self.scoring)[0]
 
         return successive_halving(oof.shape[:3], [len(p[4]) for p in parts], fit, score)
+
+    def _search_oof(self, D, yb, groups, draws, fold_seed, Cs, gammas, cw, known: dict) -> tuple[np.ndarray, np.ndarray]:
+        """Out-of-fold scores (n_draws, n_gammas, n_C, n_train) and the configurations searched to the end (bool).
+
+        ``known`` carries an earlier search of this fit on a smaller grid (``grid="adaptive"``): the
+        grid search then fits only the new grid lines, successive halving only the new fits.
+        """
+        oof = np.empty((len(draws), gammas.size, Cs.size, yb.size))
+        if self.search == "halving" and self.undersampling != "bagging":
+            fits = known.setdefault("fits", {})
+            return oof, self._halving_oof(D, yb, groups, draws, fold_seed, Cs, gammas, cw, oof, fits)
+        fill_grid_lines(oof, Cs, gammas, known.get("grid"),
+                        lambda g, c, out: self._grid_oof(D, yb, groups, draws, fold_seed, c, g, cw, out))
+        known["grid"] = (Cs, gammas, oof)
+        return oof, np.ones(oof.shape[:3], dtype=bool)
+
+    def _choose(self, oof, alive, yb, w_cal, draw_w) -> tuple:
+        """Criteria of the searched configurations and the best: ``(crit, platt, oof, (draw, gamma, C))``.
+
+        ``crit`` and ``platt`` (n_draws_or_1, n_gammas, n_C, 2) are NaN where pruned; ``oof`` is
+        averaged over the draws (weights ``draw_w``) when bagging.
+        """
+        if self.undersampling == "bagging":
+            oof, alive = np.tensordot(draw_w, oof, axes=(0, 0))[None], alive[:1]
+        crit, platt = np.full(oof.shape[:3] + (2,), np.nan), np.full(oof.shape[:3] + (2,), np.nan)
+        crit[alive], platt[alive] = cv_criteria(oof[alive], yb, w_cal, self.scoring)
+        flat = np.lexsort((crit[..., 1].ravel(), crit[..., 0].ravel()))[0]  # NaN (pruned) sorts last
+        return crit, platt, oof, tuple(int(i) for i in np.unravel_index(flat, oof.shape[:3]))
 
     def _final_svc(self, D, keep, yb, C, gamma, cw) -> SVC:
         """The ``SVC`` of one draw on all its trials for the chosen ``(C, gamma)`` (used at predict time)."""
@@ -410,30 +423,26 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
             pre = clone(self.preprocessor) if self.preprocessor is not None else default_preprocessor()
             Z = np.asarray(pre.fit_transform(X), dtype=np.float64)
             D = euclidean_distances(Z, squared=True)
-            Cs = np.geomspace(*self.C_range, self.n_C)
-            gammas = gamma_grid(self.gamma_range, self.n_gamma, self.grid)
             draws, draw_w = self._draws(yb, groups, rng)
             fold_seed = int(rng.randint(np.iinfo(np.int32).max))
             cw = None if self.undersampling == "none" else "balanced"
-
-            oof = np.empty((len(draws), gammas.size, Cs.size, n))
-            if self.search == "halving" and self.undersampling != "bagging":
-                alive = self._halving_oof(D, yb, groups, draws, fold_seed, Cs, gammas, cw, oof)
-            else:
-                alive = np.ones(oof.shape[:3], dtype=bool)
-                self._grid_oof(D, yb, groups, draws, fold_seed, Cs, gammas, cw, oof)
             w_cal = balanced_sample_weights(yb) if self.platt_weighting == "balanced" else np.ones(n)
-            if self.undersampling == "bagging":
-                oof, alive = np.tensordot(draw_w, oof, axes=(0, 0))[None], alive[:1]
-            crit, platt = np.full(oof.shape[:3] + (2,), np.nan), np.full(oof.shape[:3] + (2,), np.nan)
-            crit[alive], platt[alive] = self._criteria(oof[alive], yb, w_cal)
-            flat = np.lexsort((crit[..., 1].ravel(), crit[..., 0].ravel()))[0]  # NaN (pruned) sorts last
-            di, gi, ci = np.unravel_index(flat, oof.shape[:3])
+            known: dict = {}  # what earlier searches of this fit computed (grid="adaptive" searches again)
+
+            def search(Cs: np.ndarray, gammas: np.ndarray) -> tuple[tuple, tuple[int, int]]:
+                oof, alive = self._search_oof(D, yb, groups, draws, fold_seed, Cs, gammas, cw, known)
+                chosen = self._choose(oof, alive, yb, w_cal, draw_w)
+                return chosen, chosen[-1][1:]
+
+            Cs, gammas, (crit, platt, oof, (di, gi, ci)) = adaptive_grid_search(
+                search, np.geomspace(*self.C_range, self.n_C), gamma_grid(self.gamma_range, self.n_gamma, self.grid),
+                MAX_GRID_EXTENSIONS if self.grid == "adaptive" else 0)
+            self.C_grid_, self.gamma_grid_ = Cs, gammas
             self.cv_scores_ = crit[..., 0]
             self.C_, self.gamma_ = float(Cs[ci]), float(gammas[gi])
             self.oof_scores_ = oof[di, gi, ci].copy()
             self.platt_ = (float(platt[di, gi, ci, 0]), float(platt[di, gi, ci, 1]))
-        self.grid_edges_ = grid_edges({"C": (Cs, int(ci)), "gamma": (gammas, int(gi))})
+        self.grid_edges_ = grid_edges({"C": (Cs, ci), "gamma": (gammas, gi)})
         if self.undersampling == "bagging":
             chosen = range(len(draws))
             self.draw_ = -1

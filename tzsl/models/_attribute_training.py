@@ -26,6 +26,7 @@ __all__ = [
     "GridEdgeWarning",
     "balanced_object_draws",
     "balanced_sample_weights",
+    "cv_criteria",
     "default_preprocessor",
     "fit_platt",
     "fit_platt_many",
@@ -38,8 +39,9 @@ SOLVERS = ("exact", "approximate", "auto")
 AUTO_MAX_EXACT_TRIALS = 3000
 SCORING = ("log_loss", "balanced_accuracy")
 PLATT_WEIGHTING = ("balanced", "empirical")
-#: ``grid`` options: the paper's log-spaced ``gamma`` grid, or that grid with lower decades added.
-GRIDS = ("paper", "extended")
+#: ``grid`` options: the paper's log-spaced ``gamma`` grid, that grid with lower decades added, or
+#: the extended grid widened at whichever end of the ``C`` or ``gamma`` grid the search chose.
+GRIDS = ("paper", "extended", "adaptive")
 #: Decades of ``gamma`` that ``grid="extended"`` adds below the low end of ``gamma_range``.
 EXTENDED_GAMMA_DECADES = 2
 
@@ -57,6 +59,40 @@ def grid_edges(chosen: dict[str, tuple[np.ndarray, int]]) -> list[tuple[str, flo
     return edges
 
 
+def cv_criteria(oof: np.ndarray, yb: np.ndarray, w_cal: np.ndarray, scoring: str) -> tuple[np.ndarray, np.ndarray]:
+    """Grouped-CV criterion and Platt sigmoid of every configuration of an attribute SVM search, all at once.
+
+    Parameters
+    ----------
+    oof : ndarray of shape (..., n_train)
+        Out-of-fold SVM scores (unitless) of each configuration.
+    yb : bool ndarray of shape (n_train,)
+    w_cal : ndarray of shape (n_train,)
+        Platt sample weights.
+    scoring : {"log_loss", "balanced_accuracy"}
+
+    Returns
+    -------
+    crit : ndarray of shape (..., 2)
+        (criterion, tie-break), lower is better: class-weighted log-loss of the Platt posteriors
+        (nats) and 0, or minus the balanced accuracy of the score's sign and the log-loss.
+    platt : ndarray of shape (..., 2)
+        Each configuration's ``(a, b)`` (:func:`fit_platt_many`).
+    """
+    O = oof.reshape(-1, oof.shape[-1])
+    a, b = fit_platt_many(O, yb, w_cal)
+    z = a[:, None] * O + b[:, None]
+    ll = -(w_cal * np.where(yb, log_expit(z), log_expit(-z))).sum(axis=1) / w_cal.sum()
+    if scoring == "log_loss":
+        crit = np.stack([ll, np.zeros_like(ll)], axis=1)
+    else:
+        pred = O > 0
+        bacc = 0.5 * (pred[:, yb].mean(axis=1) + (~pred[:, ~yb]).mean(axis=1))
+        crit = np.stack([-bacc, ll], axis=1)
+    shape = oof.shape[:-1] + (2,)
+    return crit.reshape(shape), np.stack([a, b], axis=1).reshape(shape)
+
+
 def gamma_grid(gamma_range, n_gamma: int, grid: str) -> np.ndarray:
     """The ``gamma`` values an RBF attribute classifier tunes over, ascending.
 
@@ -66,8 +102,9 @@ def gamma_grid(gamma_range, n_gamma: int, grid: str) -> np.ndarray:
         Ends of the paper's log-spaced grid (``(0.01, 1.0)``: DAP paper section 4.4).
     n_gamma : int
         Points of that grid.
-    grid : {"paper", "extended"}
-        ``"paper"``: ``np.geomspace(*gamma_range, n_gamma)``. ``"extended"``: the same points
+    grid : {"paper", "extended", "adaptive"}
+        ``"paper"``: ``np.geomspace(*gamma_range, n_gamma)``. ``"extended"`` (and ``"adaptive"``,
+        which starts from it and widens it during the search): the same points
         plus ``gamma_range[0] * 10**-k`` for ``k = 1 .. EXTENDED_GAMMA_DECADES`` (0.001 and
         0.0001 for the paper's range): on PHAC-2 most grouped-CV choices sit on the paper's low
         edge 0.01, and with about 25 z-scored PCA components (squared distances of order 50)

@@ -2,12 +2,12 @@
 
 Used by :class:`tzsl.models.AttributeSVM`, :class:`tzsl.models.ScalableAttributeClassifier`
 and :class:`tzsl.models.AttributeClassifierBank`: the option values (:data:`GRIDS`,
-:data:`SOLVERS`, :data:`SEARCHES`, :data:`AUTO_MAX_EXACT_TRIALS`), the gamma grid
+:data:`SOLVERS`, :data:`SEARCHES`, :data:`AUTO_MAX_EXACT_TRIALS`, :data:`MAX_GRID_EXTENSIONS`), the gamma grid
 (:func:`gamma_grid`), the default preprocessor, class-balanced draws of whole objects
 (:func:`balanced_object_draws`) and Platt scaling (:func:`fit_platt`, :func:`fit_platt_many`).
 """
 
-from tzsl.models._attribute_search import SEARCHES
+from tzsl.models._attribute_search import MAX_GRID_EXTENSIONS, SEARCHES
 from tzsl.models._attribute_training import (
     AUTO_MAX_EXACT_TRIALS,
     GRIDS,
@@ -22,6 +22,7 @@ from tzsl.models._attribute_training import (
 __all__ = [
     "AUTO_MAX_EXACT_TRIALS",
     "GRIDS",
+    "MAX_GRID_EXTENSIONS",
     "SEARCHES",
     "SOLVERS",
     "balanced_object_draws",

@@ -65,12 +65,17 @@ def benchmark_accuracy_block(results: str | Path) -> str:
         lines.append(f"| `{method}` | " + " | ".join(row) + " |")
     grid = find_table(root, "grid_summary.csv")
     if grid is not None:
-        gammas = [c for c in grid.columns if c.startswith("gamma=")]
-        lines += ["", "Chosen attribute SVMs per gamma grid (`grid_summary.csv`): mean grouped-CV log-loss and the "
-                  "share of fits at each gamma.", "",
-                  "| grid | fits | mean CV log-loss | " + " | ".join(gammas) + " |",
-                  "|---|---|---|" + "---|" * len(gammas)]
+        gammas = [c for c in grid.columns if c.startswith("gamma")]
+        edge = "share_at_edge" in grid.columns  # written since grid="adaptive" (issue 23 item 4)
+        lines += ["", "Chosen attribute SVMs per grid (`grid_summary.csv`): mean grouped-CV log-loss"
+                  + (", the share of fits whose chosen C or gamma sits at an end of the final grid, the mean "
+                     "CPU seconds of a split's fits" if edge else "") + " and the share of fits at each gamma.", "",
+                  "| grid | fits | mean CV log-loss | " + ("at a grid edge | CPU s / split | " if edge else "")
+                  + " | ".join(gammas) + " |",
+                  "|---|---|---|" + ("---|---|" if edge else "") + "---|" * len(gammas)]
         lines += [f"| {r['grid']} | {int(r['n_fits'])} | {number(r['mean_cv_log_loss'])} | "
+                  + (f"{100 * float(r['share_at_edge']):.0f}% | {float(r['cpu_seconds_per_split']):.1f} | "
+                     if edge else "")
                   + " | ".join(f"{100 * float(r[g]):.0f}%" for g in gammas) + " |" for _, r in grid.iterrows()]
     return "\n".join(lines)
 

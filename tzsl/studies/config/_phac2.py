@@ -185,9 +185,11 @@ class Phac2Svm(Section):
     gamma_range: list[float] = Field(default_factory=lambda: _svm_default("gamma_range"))
     n_C: int = Field(default_factory=lambda: _svm_default("n_C"), ge=1)
     n_gamma: int = Field(default_factory=lambda: _svm_default("n_gamma"), ge=1)
-    grid: Literal["paper", "extended"] = Field(
+    grid: Literal["paper", "extended", "adaptive"] = Field(
         default_factory=lambda: _svm_default("grid"),
-        description="gamma grid: 'paper' (gamma_range, n_gamma) or 'extended' (two decades below it added)")
+        description="gamma grid: 'paper' (gamma_range, n_gamma), 'extended' (two decades below it added) or "
+                    "'adaptive' (the extended grid, widened one log step at a chosen end of the C or gamma grid, "
+                    "at most tzsl.models.attribute_training.MAX_GRID_EXTENSIONS steps per end)")
     n_draws: int = Field(default_factory=lambda: _svm_default("n_draws"), ge=1)
     scoring: Literal["log_loss", "balanced_accuracy"] = Field(default_factory=lambda: _svm_default("scoring"))
     platt_weighting: Literal["balanced", "empirical"] = Field(
