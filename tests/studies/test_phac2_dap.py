@@ -14,6 +14,7 @@ from tzsl.studies.config import DapSettings
 from tzsl.studies.study_labels import StudyLabels
 from tzsl.studies.zero_shot.study import (
     SplitPosteriors,
+    attribute_bank,
     attribute_subsets,
     attribute_sweep,
     fit_split,
@@ -203,3 +204,9 @@ def test_dask_cluster_gives_the_local_results():
     on_loky = fit_splits(features, splits, local)
     np.testing.assert_array_equal(on_dask[0].P, on_loky[0].P)
     assert on_dask[0].accuracy("avg", "uni") == on_loky[0].accuracy("avg", "uni")
+
+
+def test_cache_false_turns_the_fit_store_off_even_with_a_cache_folder_set(tmp_path, monkeypatch):
+    monkeypatch.setenv("TZSL_CACHE_DIR", str(tmp_path / "cache"))
+    assert attribute_bank(_config(cache=False), ["hard"], 0).memory is False
+    assert attribute_bank(_config(), ["hard"], 0).memory == str(tmp_path / "cache")

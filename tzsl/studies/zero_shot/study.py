@@ -172,10 +172,12 @@ def attribute_estimator(config: DapSettings, seed: int) -> AttributeSVM:
     return AttributeSVM(undersampling=config.svm.undersampling, random_state=seed, **config.svm.estimator_params())
 
 
-def _memory(config: DapSettings) -> str | None:
+def _memory(config: DapSettings) -> str | bool:
+    """The fit store of the study's attribute banks: the cache folder, or False (``compute.cache = false``:
+    no store, even with ``TZSL_CACHE_DIR`` set)."""
     from tzsl.datasets import get_cache_dir  # noqa: PLC0415
 
-    return str(get_cache_dir()) if config.compute.cache else None
+    return str(get_cache_dir()) if config.compute.cache else False
 
 
 def attribute_bank(config: DapSettings, attributes, seed: int) -> AttributeClassifierBank:
