@@ -292,6 +292,10 @@ def main() -> None:
     print(grid.to_string(index=False, float_format=lambda v: f"{v:.3f}"))
     trials = run(args.cache, args.n_random, args.seed, args.purpose)
     table = summarise(trials)
+    # which random splits these are (the challenging partitions have no seed and no purpose)
+    random = table["kind"] == "random"
+    table.insert(1, "purpose", np.where(random, args.purpose, ""))
+    table.insert(2, "seed", np.where(random, str(args.seed), ""))
     table.to_csv(args.out, index=False, float_format="%.4f")
     pairs = grid_pairs(trials)
     pairs.to_csv(args.out.with_name("grid_pairs.csv"), index=False, float_format="%.4f")

@@ -312,3 +312,11 @@ def test_grid_summary_and_pairs_report_the_share_at_a_grid_edge(tmp_path, accura
     accuracy_benchmark.summarise(trials).to_csv(out / "accuracy.csv", index=False)
     summary.reset_index().to_csv(out / "grid_summary.csv", index=False)
     assert "| adaptive | 8 | 0.500 | 0% | 15.0 | " in benchmark_accuracy_block(out)
+    table = accuracy_benchmark.summarise(trials)
+    table.insert(1, "purpose", "confirm")
+    table.insert(2, "seed", "1")
+    table.to_csv(out / "accuracy.csv", index=False)
+    pairs.reset_index().to_csv(out / "grid_pairs.csv", index=False)
+    block = benchmark_accuracy_block(out)
+    assert "| method | random (3 splits, confirm, seed 1) | diff |" in block
+    assert f"| `dap-avg[adaptive]` | `dap-avg[extended]` | 3 | {row['diff']:+.3f} [" in block

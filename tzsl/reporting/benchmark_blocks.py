@@ -46,10 +46,10 @@ def benchmark_accuracy_block(results: str | Path) -> str:
     root = Path(results)
     table = benchmark_table(root, "accuracy.csv", "phac2_accuracy.py")
     kinds = list(dict.fromkeys(table["kind"]))
-    splits = {k: int(table.loc[table["kind"] == k, "n_splits"].max()) for k in kinds}
+    splits = {k: f"{int(table.loc[table['kind'] == k, 'n_splits'].max())} splits{_purpose(table, k)}" for k in kinds}
     lines = [f"Generated from `accuracy.csv` by `make numbers`: accuracy [95% interval] and the paired difference "
              "to `dap-avg[paper]` on the same trials [95% interval].", "",
-             "| method | " + " | ".join(f"{k} ({splits[k]} splits) | diff" for k in kinds) + " |",
+             "| method | " + " | ".join(f"{k} ({splits[k]}) | diff" for k in kinds) + " |",
              "|---|" + "---|---|" * len(kinds)]
     cells = {(r["method"], r["kind"]): r for _, r in table.iterrows()}
     for method in dict.fromkeys(table["method"]):
@@ -77,7 +77,24 @@ def benchmark_accuracy_block(results: str | Path) -> str:
                   + (f"{100 * float(r['share_at_edge']):.0f}% | {float(r['cpu_seconds_per_split']):.1f} | "
                      if edge else "")
                   + " | ".join(f"{100 * float(r[g]):.0f}%" for g in gammas) + " |" for _, r in grid.iterrows()]
+    pairs = find_table(root, "grid_pairs.csv")
+    if pairs is not None:
+        lines += ["", "Each grid against the previous one on the same trials (`grid_pairs.csv`):", "",
+                  "| grid | minus | splits | difference [95% interval] |", "|---|---|---|---|"]
+        lines += [f"| `{r['method']}` | `{r['reference']}` | {int(r['n_splits'])} | {float(r['diff']):+.3f} "
+                  f"[{float(r['diff_ci95_low']):+.3f}, {float(r['diff_ci95_high']):+.3f}] |" for _, r in pairs.iterrows()]
     return "\n".join(lines)
+
+
+def _purpose(table: pd.DataFrame, kind: str) -> str:
+    """``", confirm, seed 1"``: which random splits the rows of ``kind`` in ``accuracy.csv`` are ("" when it does not say)."""
+    if "purpose" not in table.columns:
+        return ""
+    rows = table[table["kind"] == kind]
+    purpose, seed = rows["purpose"].dropna().astype(str), rows["seed"].dropna()
+    if purpose.empty or not purpose.iloc[0]:
+        return ""
+    return f", {purpose.iloc[0]}" + (f", seed {int(float(seed.iloc[0]))}" if len(seed) else "")
 
 
 def search_benchmark_block(results: str | Path) -> str:
