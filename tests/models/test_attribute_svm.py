@@ -192,7 +192,7 @@ def test_cache_dir_from_environment(tmp_path, monkeypatch):
     monkeypatch.setenv("TZSL_CACHE_DIR", str(tmp_path / "envcache"))
     X, A, g = make_problem(n_attributes=1, n_sensors=1)
     AttributeClassifierBank(estimator=AttributeSVM(**TINY), random_state=0).fit(X, A, g)
-    assert any((tmp_path / "envcache" / "fits").rglob("*.joblib"))
+    assert any((tmp_path / "envcache" / "fits").rglob("*.pkl"))
 
 
 def test_dask_backend_needs_a_client():

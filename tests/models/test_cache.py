@@ -98,7 +98,7 @@ def test_a_stored_fit_is_identical_to_a_fresh_one_and_is_not_refitted(tmp_path, 
     np.testing.assert_array_equal(again.coef_, fresh.coef_)
     np.testing.assert_array_equal(again.predict_proba(X), fresh.predict_proba(X))
     assert not hasattr(estimator, "coef_")  # the template stays unfitted
-    assert len(list(tmp_path.rglob("*.joblib"))) == 1
+    assert len(list(tmp_path.rglob("*.pkl"))) == 1
 
 
 def test_the_key_is_parameters_data_and_code_not_labels_or_parallelism(tmp_path, data):
@@ -127,7 +127,7 @@ def test_a_generator_instance_is_never_stored(tmp_path, data):
     before = fit_store_counts().get("unstorable", 0)
     fit_cached(LogisticRegression(random_state=np.random.RandomState(0)), X, y, store=store)
     assert fit_store_counts()["unstorable"] == before + 1
-    assert not list(tmp_path.rglob("*.joblib"))
+    assert not list(tmp_path.rglob("*.pkl"))
 
 
 class WarningLR(LogisticRegression):
@@ -161,7 +161,7 @@ def test_a_damaged_entry_is_refitted_loudly(tmp_path, data):
     X, y = data
     store = FitStore(tmp_path)
     fit_cached(LogisticRegression(), X, y, store=store)
-    (entry,) = tmp_path.rglob("*.joblib")
+    (entry,) = tmp_path.rglob("*.pkl")
     entry.write_bytes(b"not a pickle")
     with pytest.warns(UserWarning, match="unreadable fit-store entry"):
         model = fit_cached(LogisticRegression(), X, y, store=store)
