@@ -17,8 +17,8 @@ How it compares with AVGDAP and with its members on PHAC-2 (accuracy, intervals,
 differences on the same trials) is measured by ``experiments/benchmarks/phac2_accuracy.py`` and
 by the method comparison of ``tzsl run phac2-dap`` (``phac2_method_comparison.csv``); no number
 is kept here, so none can describe code that is no longer shipped. The splits the default members
-were chosen on, and that they are not yet confirmed on other splits, are recorded in
-:data:`tzsl.models.INHERITED_CHOICES` (``ensemble-members``).
+were chosen on, and the confirmation splits of ``experiments/benchmarks/phac2_best_method.py`` that
+report the method, are recorded in :data:`tzsl.models.INHERITED_CHOICES` (``ensemble-members``).
 """
 
 from __future__ import annotations
