@@ -24,7 +24,7 @@ from tzsl._profile import profiling
 from tzsl._warnings import recorded_warnings
 from tzsl.exceptions import ConfigError, PartialRunError, problems_error
 from tzsl.studies._outputs import ResultsDir
-from tzsl.studies.config import Experiment, get_study, load_experiment, to_toml
+from tzsl.studies.config import DATASET_PATHS, Experiment, get_study, load_experiment, to_toml
 from tzsl.studies.study_cache import run_cached
 from tzsl.studies.study_settings import StudyRun
 
@@ -93,9 +93,8 @@ def _path_problems(exp: Experiment) -> list[str]:
     c = exp.config
     wanted: list[tuple[str, str | None, str]] = []
     ds = getattr(c, "dataset", None)  # a registered study may read no dataset
-    for key in ("plain", "features", "path", "data_dir", "grasps", "table", "gelsight_root"):
-        value = getattr(ds, key, None)
-        wanted.append((f"dataset.{key}", value, "file" if key in ("features", "path", "table") else "folder"))
+    for key, kind in DATASET_PATHS.items():
+        wanted.append((f"dataset.{key}", getattr(ds, key, None), kind))
     if "file" in getattr(getattr(c, "splits", None), "kinds", ()):
         split_file = c.splits.file if c.splits.file is not None else os.path.join(ds.plain, "splits.csv")
         wanted.append(("splits.file" if c.splits.file else "splits.kinds", split_file, "file"))

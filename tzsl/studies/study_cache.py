@@ -46,7 +46,8 @@ from tzsl._io import ensure_folder
 from tzsl._profile import stage
 from tzsl._warnings import recorded_warnings
 from tzsl.datasets import CACHE_DIR_ENV, get_data_home
-from tzsl.studies._outputs import PrefixedResults, ResultsDir, package_versions
+from tzsl.studies._outputs import ResultsDir, package_versions
+from tzsl.studies.config import DATASET_PATHS
 from tzsl.studies.study_settings import StudyRun
 
 __all__ = ["NEUTRAL_SETTINGS", "STUDIES_FOLDER", "STUDY_CACHE_ENV", "run_cached", "study_cache_folder",
@@ -58,8 +59,6 @@ STUDIES_FOLDER = "studies"
 STUDY_CACHE_ENV = "TZSL_STUDY_CACHE"
 #: Settings (``table.key``) that cannot change what a study writes, left out of its key.
 NEUTRAL_SETTINGS = frozenset({"output.folder", "compute.progress"})
-#: The dataset settings naming files or folders a study reads.
-_DATA_KEYS = ("plain", "features", "path", "data_dir", "grasps", "table", "gelsight_root")
 _ENTRY_FORMAT = 1
 _RUN_FILE = "run.joblib"
 _FILES = "files"
@@ -106,7 +105,7 @@ def _listing(path: Path) -> list[str]:
 def _data_paths(exp) -> list[Path]:
     """The files and folders a study's settings point its dataset (and split file) at."""
     dataset = getattr(exp.config, "dataset", None)
-    paths = [exp.resolve(value) for key in _DATA_KEYS if (value := getattr(dataset, key, None)) is not None]
+    paths = [exp.resolve(value) for key in DATASET_PATHS if (value := getattr(dataset, key, None)) is not None]
     if getattr(dataset, "builtin", None) is not None and getattr(dataset, "data_dir", None) is None:
         paths.append(get_data_home())
     split_file = getattr(getattr(exp.config, "splits", None), "file", None)
@@ -133,11 +132,7 @@ def _cacheable(exp) -> bool:
     return getattr(getattr(exp.config, "compute", None), "cache", True) is not False
 
 
-def _base(results) -> ResultsDir:
-    return results.results if isinstance(results, PrefixedResults) else results
-
-
-def run_cached(exp, results, runner: Callable[[Callable[[str], None]], StudyRun],
+def run_cached(exp, results: ResultsDir, runner: Callable[[Callable[[str], None]], StudyRun],
                echo: Callable[[str], None]) -> StudyRun:
     """Restore the study of ``exp`` from the cache into ``results``, or run it and store what it wrote.
 
@@ -145,7 +140,7 @@ def run_cached(exp, results, runner: Callable[[Callable[[str], None]], StudyRun]
     ----------
     exp : Experiment
         The checked experiment.
-    results : ResultsDir or PrefixedResults
+    results : ResultsDir
         Where the study writes (staged or not).
     runner : callable
         ``runner(say)`` runs the study, printing through ``say``, and returns its :class:`StudyRun`.
@@ -167,8 +162,7 @@ def run_cached(exp, results, runner: Callable[[Callable[[str], None]], StudyRun]
             payload = _load(entry)
             if payload is not None:
                 return _restore(payload, entry, key, results, echo)
-    base = _base(results)
-    n_written, splits_before, data_before = len(base.written), set(base.splits), set(base.data_files)
+    n_written, splits_before, data_before = len(results.written), set(results.splits), set(results.data_files)
     lines: list[str] = []
 
     def say(message: str) -> None:
@@ -180,16 +174,16 @@ def run_cached(exp, results, runner: Callable[[Callable[[str], None]], StudyRun]
         run = runner(say)
     if not run.failures:
         with stage("write"):
-            _store(folder, key, base, base.written[n_written:], {
+            _store(folder, key, results, results.written[n_written:], {
                 "run": run, "lines": lines, "warnings": shown.lines, "seconds": time.perf_counter() - start,
                 "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-                "splits": {k: v for k, v in base.splits.items() if k not in splits_before},
-                "data_files": {k: v for k, v in base.data_files.items() if k not in data_before}})
+                "splits": {k: v for k, v in results.splits.items() if k not in splits_before},
+                "data_files": {k: v for k, v in results.data_files.items() if k not in data_before}})
     run.record["study_cache"] = {"key": key, "restored": False}
     return run
 
 
-def _store(folder: Path, key: str, base: ResultsDir, written: list[Path], payload: dict[str, Any]) -> None:
+def _store(folder: Path, key: str, results: ResultsDir, written: list[Path], payload: dict[str, Any]) -> None:
     """Write the entry into a temporary folder beside it, then move it into place in one step."""
     ensure_folder(folder, "study cache folder")
     tmp = folder / f".{key}.{os.getpid()}.tmp"
@@ -197,7 +191,7 @@ def _store(folder: Path, key: str, base: ResultsDir, written: list[Path], payloa
     names = []
     for path in written:
         if path.exists():
-            name = str(path.relative_to(base.root))
+            name = str(path.relative_to(results.root))
             (tmp / _FILES / name).parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(path, tmp / _FILES / name)
             names.append(name)
@@ -224,13 +218,13 @@ def _load(entry: Path) -> dict[str, Any] | None:
     return payload
 
 
-def _restore(payload: dict[str, Any], entry: Path, key: str, results, echo: Callable[[str], None]) -> StudyRun:
+def _restore(payload: dict[str, Any], entry: Path, key: str, results: ResultsDir,
+             echo: Callable[[str], None]) -> StudyRun:
     """Copy an entry's files into ``results`` and replay its lines and warnings."""
-    base = _base(results)
     for name in payload["files"]:
-        base.copy_file(name, entry / _FILES / name)
-    base.splits.update(payload["splits"])
-    base.data_files.update(payload["data_files"])
+        results.copy_file(name, entry / _FILES / name)
+    results.splits.update(payload["splits"])
+    results.data_files.update(payload["data_files"])
     echo(f"(restored from the study cache: the run of {payload['created']}, {payload['seconds']:.1f} s; "
          f"unset {CACHE_DIR_ENV} or set {STUDY_CACHE_ENV}=0 to recompute)")
     for line in payload["lines"]:

@@ -14,7 +14,15 @@ command-line options read their defaults from here; where a default is an estima
 (``tzsl methods``) with parameters, checked against the registry at load time.
 """
 
-from tzsl.studies.config._common import SEED_LIMIT, Compute, DaskCompute, Output, check_n_jobs, method_label
+from tzsl.studies.config._common import (
+    DATASET_PATHS,
+    SEED_LIMIT,
+    Compute,
+    DaskCompute,
+    Output,
+    check_n_jobs,
+    method_label,
+)
 from tzsl.studies.config._load import (
     Experiment,
     builtin_names,
@@ -62,7 +70,8 @@ from tzsl.studies.config._registry import (
 )
 
 __all__ = [
-    "SEED_LIMIT", "StudyKind", "get_study", "register_study", "study_kinds", "study_names", "unregister_study",
+    "DATASET_PATHS", "SEED_LIMIT", "StudyKind", "get_study", "register_study", "study_kinds", "study_names",
+    "unregister_study",
     "ActiveMethods", "ActiveSplits", "ActiveTouchStudy", "Compute",
     "DapSettings", "DaskCompute", "Experiment", "FabricDeepStudy",
     "FabricStudy", "HandFeatures", "HandMethods", "HandSettings", "HandSimulation", "HandStudy", "Output", "Phac2Dataset",

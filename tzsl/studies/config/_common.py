@@ -9,6 +9,13 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 #: Largest seed numpy's legacy RandomState and scikit-learn accept (exclusive).
 SEED_LIMIT = 2**32
 
+#: ``[dataset]`` settings that name what a study reads, and whether each is a file or a folder (checked
+#: before a run by the engine, listed in the study cache's key).
+DATASET_PATHS: dict[str, Literal["file", "folder"]] = {
+    "plain": "folder", "features": "file", "path": "file", "data_dir": "folder", "grasps": "folder",
+    "table": "file", "gelsight_root": "folder",
+}
+
 
 class Section(BaseModel):
     """A table of an experiment file: unknown keys and wrong types are errors.
