@@ -37,13 +37,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from tzsl.evaluation import bootstrap_accuracy, paired_difference_interval
+from tzsl.evaluation import PURPOSES, bootstrap_accuracy, paired_difference_interval
 from tzsl.features import dataset_features
 from tzsl.studies.zero_shot.study import split_masks
 from tzsl.models import build_method
 from tzsl.models.protocol import attribute_rows
 
-from phac2_posteriors import GRIDS, study_splits  # noqa: E402  (run from experiments/benchmarks/ or with it on sys.path)
+from phac2_posteriors import DEFAULT_PURPOSE, GRIDS, study_splits  # noqa: E402  (run from experiments/benchmarks/ or with it on sys.path)
 
 EPS = 1e-6
 WEIGHTS = np.linspace(0.0, 1.0, 11)
@@ -245,7 +245,7 @@ def grid_pairs(trials: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def run(cache: Path, n_random: int, seed: int, purpose: str = "confirm") -> pd.DataFrame:
+def run(cache: Path, n_random: int, seed: int, purpose: str = DEFAULT_PURPOSE) -> pd.DataFrame:
     features = dataset_features("phac2-penn")
     records = []
     for kind, index, split in study_splits(features, n_random, seed, purpose):
@@ -283,7 +283,7 @@ def main() -> None:
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--n-random", type=int, default=20)
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--purpose", choices=["select", "confirm"], default="confirm",
+    ap.add_argument("--purpose", choices=PURPOSES, default=DEFAULT_PURPOSE,
                     help="the random splits stage 1 fitted (its --purpose)")
     args = ap.parse_args()
     warnings.simplefilter("ignore")

@@ -32,16 +32,19 @@ import numpy as np
 from scipy.special import expit
 
 from tzsl.features import dataset_features
+from tzsl.evaluation import PURPOSES
 from tzsl.studies.config import DapSettings
 from tzsl.studies.zero_shot.study import fit_split, make_splits, split_masks
 from tzsl.models import GridEdgeWarning
 
 GRIDS = ("paper", "extended", "adaptive")
+#: ``--purpose`` when not given: the study schema's default ``[splits] purpose``.
+DEFAULT_PURPOSE = DapSettings().splits.purpose
 #: split index offset of the challenging splits (as in run_dap_study)
 CHALLENGING_OFFSET = 100
 
 
-def study_splits(features, n_random: int, seed: int, purpose: str = "confirm"):
+def study_splits(features, n_random: int, seed: int, purpose: str = DEFAULT_PURPOSE):
     """``[(kind, index, Split)]``: the random splits of ``purpose`` then the challenging ones."""
     config = DapSettings(splits={"n_splits": n_random, "seed": seed, "purpose": purpose})
     random_splits, _ = make_splits(features, "random", config)
@@ -63,8 +66,8 @@ def main() -> None:
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--n-random", type=int, default=20)
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--purpose", choices=["select", "confirm"], default="confirm",
-                    help="random splits that make a choice (select) or report it (confirm; the schema's default)")
+    ap.add_argument("--purpose", choices=PURPOSES, default=DEFAULT_PURPOSE,
+                    help="random splits that make a choice (select) or report it (confirm); default: the schema's")
     ap.add_argument("--no-challenging", action="store_true", help="random splits only")
     ap.add_argument("--grids", nargs="+", default=list(GRIDS), choices=GRIDS)
     ap.add_argument("--n-jobs", type=int, default=1)
