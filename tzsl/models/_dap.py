@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from tzsl.exceptions import ConfigError, DataFileError
+from tzsl.models._probabilities import valid_probabilities
 
 __all__ = [
     "attribute_prior",
@@ -88,7 +89,8 @@ def check_class_attributes(K, n_attributes: int | None = None, what: str = "clas
 
 
 def check_attribute_posteriors(P, ndim: tuple[int, ...] = (2, 3)) -> np.ndarray:
-    """Attribute posteriors ``p(a_m = 1 | x)`` as float64 in [0, 1].
+    """Attribute posteriors ``p(a_m = 1 | x)`` as float64 in [0, 1] (values a rounding error
+    outside it are clipped into it).
 
     Parameters
     ----------
@@ -99,15 +101,13 @@ def check_attribute_posteriors(P, ndim: tuple[int, ...] = (2, 3)) -> np.ndarray:
     Raises
     ------
     ConfigError
-        Wrong dimensionality, or a value outside [0, 1] or NaN (naming its index).
+        Wrong dimensionality, or NaN or a value further than rounding outside [0, 1] (naming its
+        trial, sensor and attribute and the value in plain numbers).
     """
     P = np.asarray(P, dtype=np.float64)
     if P.ndim not in ndim:
         raise ConfigError(f"attribute posteriors must have {' or '.join(map(str, ndim))} dimensions, got {P.shape}")
-    if not np.all((P >= 0) & (P <= 1)):  # also rejects NaN
-        idx = tuple(np.argwhere(~((P >= 0) & (P <= 1)))[0])
-        raise ConfigError(f"attribute posteriors must lie in [0, 1]; found {P[idx]!r} at index {idx}")
-    return P
+    return valid_probabilities(P)
 
 
 def fuse_attribute_posteriors(P, fusion: str = "avg") -> tuple[np.ndarray, np.ndarray]:

@@ -30,7 +30,6 @@ from __future__ import annotations
 from numbers import Real
 
 import numpy as np
-from scipy.special import softmax
 from sklearn.base import BaseEstimator
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
@@ -45,6 +44,7 @@ from tzsl.models._dap import (
     dap_log_scores,
     fuse_attribute_posteriors,
 )
+from tzsl.models._probabilities import class_posteriors
 from tzsl.models._validation import ValidatedParamsMixin
 
 __all__ = [
@@ -179,7 +179,7 @@ class DecisionRule(ValidatedParamsMixin, BaseEstimator):
 
     def predict_proba(self, scores, class_attributes) -> np.ndarray:
         """Softmax of :meth:`decision_function` over the given classes; rows sum to 1."""
-        return softmax(self.decision_function(scores, class_attributes), axis=1)
+        return class_posteriors(self.decision_function(scores, class_attributes))
 
     def predict(self, scores, class_attributes, random_state=None) -> np.ndarray:
         """Best class per trial as a row index into ``class_attributes``; ties broken at random.

@@ -47,7 +47,6 @@ from numbers import Integral, Real
 from pathlib import Path
 
 import numpy as np
-from scipy.special import softmax
 from sklearn.base import BaseEstimator
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval, StrOptions
@@ -65,6 +64,7 @@ from tzsl.models._deep_input import (
 )
 from tzsl.models._deep_training import DeepTrainingMixin
 from tzsl.models._embedding import loss_weights
+from tzsl.models._probabilities import class_posteriors
 from tzsl.models._zsl_input import (
     ZSLInputError,
     check_int,
@@ -442,7 +442,7 @@ class DeepAttributeEmbedding(DeepTrainingMixin, ValidatedParamsMixin, BaseEstima
 
     def predict_proba(self, X, class_attributes) -> np.ndarray:
         """``softmax_c(-||f - a_c||^2)`` over the given classes, shape (n_samples, n_classes)."""
-        return softmax(self.decision_function(X, class_attributes), axis=1)
+        return class_posteriors(self.decision_function(X, class_attributes))
 
     def __getstate__(self):
         state = self.__dict__.copy()

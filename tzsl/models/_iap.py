@@ -23,6 +23,7 @@ from sklearn.utils._param_validation import HasMethods
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from tzsl.models._attribute_model_base import attribute_model_tags
+from tzsl.models._probabilities import valid_probabilities
 from tzsl.models._zsl_input import training_classes, validate_features_and_rows
 
 __all__ = ["IAP", "default_iap_classifier"]
@@ -117,14 +118,17 @@ class IAP(BaseEstimator):
         Returns
         -------
         P : ndarray of shape (n_trials, n_attributes)
-            ``P = p(z | x) @ class_attributes_``; in [0, 1] for attributes in [0, 1] (no
-            clipping: keeping posteriors away from 0 and 1 is the decision rule's job).
+            ``P = p(z | x) @ class_attributes_``; in [0, 1] for attributes in [0, 1] (the product's
+            rounding, e.g. ``1.0000000000000002``, clipped back; keeping posteriors away from 0 and 1
+            is the decision rule's job).
         """
         check_is_fitted(self)
         X = validate_data(self, X, reset=False, dtype=np.float64)
         class_posteriors = self.classifier_.predict_proba(X)  # (n, K), columns in classes_ order
         rows = self.class_attributes_[np.asarray(self.classifier_.classes_, dtype=int)]
-        return class_posteriors @ rows
+        if ((rows >= 0) & (rows <= 1)).all():
+            return valid_probabilities(class_posteriors @ rows)
+        return class_posteriors @ rows  # real-valued attributes: a posterior mean, not a probability
 
     def predict(self, X) -> np.ndarray:
         """Attribute decisions ``p(a_m = 1 | x) >= 0.5`` as an (n_trials, n_attributes) 0/1 int array."""

@@ -46,7 +46,7 @@ from numbers import Integral
 
 import numpy as np
 from scipy.optimize import minimize_scalar
-from scipy.special import log_softmax, softmax
+from scipy.special import log_softmax
 from sklearn.base import BaseEstimator, clone
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
@@ -55,6 +55,7 @@ from sklearn.utils.validation import check_is_fitted
 from tzsl.models._attribute_model_base import attribute_table_tags
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_training import GridEdgeWarning
+from tzsl.models._probabilities import class_posteriors
 from tzsl.models._validation import ValidatedParamsMixin
 from tzsl.models._zsl_input import ZSLInputError, class_grouped_folds
 
@@ -95,7 +96,7 @@ def tempered_proba(scores, temperature: float) -> np.ndarray:
     ndarray of shape (n_trials, n_classes)
         Rows sum to 1.
     """
-    return softmax(np.asarray(scores, dtype=np.float64) / float(temperature), axis=1)
+    return class_posteriors(scores, temperature)
 
 
 def fit_temperature(scores: list[np.ndarray], y_true: list[np.ndarray], *,

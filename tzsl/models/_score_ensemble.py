@@ -26,7 +26,6 @@ from __future__ import annotations
 from numbers import Real
 
 import numpy as np
-from scipy.special import softmax
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_array, check_is_fitted
 
@@ -35,6 +34,7 @@ from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_svm import AttributeSVM
 from tzsl._fit_store import fit_cached
 from tzsl.models._dap import break_ties
+from tzsl.models._probabilities import class_posteriors
 from tzsl.models._registry import get_method
 from tzsl.models._validation import ValidatedParamsMixin
 
@@ -212,7 +212,7 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
 
     def predict_proba(self, X, class_attributes=None) -> np.ndarray:
         """Softmax of :meth:`decision_function` over the candidate classes; (n_trials, n_classes)."""
-        return softmax(self.decision_function(X, class_attributes), axis=1)
+        return class_posteriors(self.decision_function(X, class_attributes))
 
     def predict(self, X, class_attributes=None) -> np.ndarray:
         """Best candidate class per trial (row index into ``class_attributes``); ties broken by ``random_state``."""

@@ -29,6 +29,7 @@ from sklearn.utils.validation import check_is_fitted
 from tzsl.models._attribute_model_base import attribute_table_tags
 from tzsl.exceptions import ConfigError
 from tzsl.models._decision import SCORE_KINDS
+from tzsl.models._probabilities import valid_probabilities
 from tzsl.models._validation import ValidatedParamsMixin
 
 __all__ = ["ZeroShotClassifier", "score_kind"]
@@ -150,7 +151,7 @@ class ZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
         """
         check_is_fitted(self)
         if score_kind(self.attribute_model_) == "probability":
-            return self.attribute_model_.predict_proba(X)
+            return valid_probabilities(self.attribute_model_.predict_proba(X))
         return self.attribute_model_.decision_function(X)
 
     def _rule(self, decision_rule):
