@@ -1,16 +1,23 @@
-"""Warnings a run shows and records: one line each, never a source path.
+"""Warnings a run shows and records: one line per kind on the terminal, every one in the manifest.
 
-Python users get :func:`warnings.warn` as usual. The command line prints each warning as one
-line, ``tzsl: warning: MESSAGE`` (:func:`one_line`), and a run records the warnings raised while
-it ran in its manifest (:class:`recorded_warnings`).
+Python users get :func:`warnings.warn` as usual. The command line prints the first warning of each
+kind as one line, ``tzsl: warning: MESSAGE`` (:func:`one_line`, no source path), and at the end one
+line counting the repeats it did not print (:class:`TerminalWarnings`); a run records every warning
+raised while it ran, with its count, in its manifest (:class:`recorded_warnings`).
 """
 
 from __future__ import annotations
 
+import re
 import warnings
 from types import TracebackType
 
-__all__ = ["one_line", "recorded_warnings"]
+__all__ = ["TerminalWarnings", "one_line", "recorded_warnings", "warning_kind"]
+
+#: Categories too general to be a kind by themselves: their kind is the message's wording.
+_GENERIC = (UserWarning, RuntimeWarning, Warning)
+_NUMBER = re.compile(r"[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?")
+_QUOTED = re.compile(r"'[^']*'|\"[^\"]*\"")
 
 
 def one_line(message: Warning | str, category: type[Warning]) -> str:
@@ -53,3 +60,48 @@ class recorded_warnings:  # noqa: N801 - used as a context manager, like warning
     def lines(self) -> list[str]:
         """The warnings shown, one line each, in first-seen order."""
         return [text if n == 1 else f"{text} (x{n})" for text, n in self._counts.items()]
+
+
+def warning_kind(message: Warning | str, category: type[Warning]) -> str:
+    """What makes two warnings "the same kind": the category, or for a plain ``UserWarning`` /
+    ``RuntimeWarning`` the first line's wording with numbers and quoted names blanked
+    (``"attribute 'hard' ... 3 objects"`` and ``"attribute 'soft' ... 2 objects"`` are one kind)."""
+    if category not in _GENERIC:
+        return category.__name__
+    text = (str(message).strip().splitlines() or [""])[0]
+    return f"{category.__name__}: {_NUMBER.sub('#', _QUOTED.sub('…', text))}"
+
+
+class TerminalWarnings:
+    """The command line's warning printer: the first warning of each kind, one line each.
+
+    ``show`` has the signature of :func:`warnings.showwarning`; ``summary()`` is the closing line
+    (None when nothing was held back), e.g. ``tzsl: warning: 22 more warnings of the kinds above
+    (GridEdgeWarning: 21, CalibrationWarning: 1); a run lists every one in its manifest.json``.
+
+    Parameters
+    ----------
+    echo : callable
+        Prints one line (the command line's stderr).
+    """
+
+    def __init__(self, echo) -> None:
+        self._echo = echo
+        self._held: dict[str, int] = {}
+
+    def show(self, message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ARG002
+        kind = warning_kind(message, category)
+        if kind in self._held:
+            self._held[kind] += 1
+            return
+        self._held[kind] = 0
+        self._echo(one_line(message, category))
+
+    def summary(self) -> str | None:
+        """One line counting the warnings held back, per kind; None when none were."""
+        repeats = {kind: n for kind, n in self._held.items() if n}
+        if not repeats:
+            return None
+        names = ", ".join(f"{kind.split(': ')[0] if ': ' in kind else kind}: {n}" for kind, n in repeats.items())
+        return (f"tzsl: warning: {sum(repeats.values())} more warnings of the kinds above ({names}); a run lists "
+                "every one in its manifest.json")

@@ -138,11 +138,17 @@ def _check_template_run(tmp_path_factory, n_classes: int, n_attributes: int, n_s
     assert manifest["config"]["purpose"] == "confirm" == manifest["config"]["dap_settings"]["splits"]["purpose"]
     noted = [line for line in result.output.splitlines() if line.startswith("note: relaxed ")]
     assert len(noted) == len(manifest["config"]["relaxations"])
-    # warnings: one line each, no source path, and the same ones in the manifest
+    # warnings: one line per kind, no source path, each one in the manifest; repeats counted in one closing line
     stderr = result.stderr.splitlines()
     assert not [line for line in stderr if ".py:" in line or not line.startswith("tzsl: ")], result.stderr
-    shown = {line[len("tzsl: warning: "):] for line in stderr if line.startswith("tzsl: warning: ")}
-    assert shown == {re.sub(r" \(x\d+\)$", "", line) for line in manifest["warnings"]}
+    shown = [line[len("tzsl: warning: "):] for line in stderr if line.startswith("tzsl: warning: ")]
+    recorded = {re.sub(r" \(x\d+\)$", "", line) for line in manifest["warnings"]}
+    closing = [line for line in shown if " more warnings of the kinds above " in line]
+    assert set(shown) - set(closing) <= recorded and len(closing) <= 1
+    from tzsl._warnings import warning_kind  # noqa: PLC0415
+
+    kinds = {warning_kind(line.split(" (")[0], UserWarning) for line in recorded}
+    assert len(shown) <= len(recorded) and len(shown) - len(closing) <= max(len(kinds), 1) + 3, shown
 
 
 def test_paper_preset_on_another_dataset_says_what_it_maps_to(tmp_path):
@@ -204,6 +210,25 @@ def test_recorded_warnings_are_one_line_and_counted():
                 warnings.warn("edge of the grid", UserWarning, stacklevel=1)
             warnings.warn("other", RuntimeWarning, stacklevel=1)
     assert log.lines == ["edge of the grid (x3)", "other"]
+
+
+def test_the_terminal_shows_each_kind_of_warning_once_then_counts_the_repeats():
+    from tzsl._warnings import TerminalWarnings, warning_kind  # noqa: PLC0415
+    from tzsl.models import GridEdgeWarning  # noqa: PLC0415
+
+    printed: list[str] = []
+    terminal = TerminalWarnings(printed.append)
+    for n in range(20):  # one per attribute bank, each with its own numbers
+        terminal.show(GridEdgeWarning(f"{n} hyper-parameter choices sit on a grid edge"), GridEdgeWarning, "x.py", 1)
+    for name in ("hard", "soft"):
+        terminal.show(UserWarning(f"attribute '{name}' is rare: 2 objects"), UserWarning, "x.py", 1)
+    terminal.show(RuntimeWarning("overflow"), RuntimeWarning, "x.py", 1)
+    assert printed == ["tzsl: warning: 0 hyper-parameter choices sit on a grid edge (GridEdgeWarning)",
+                       "tzsl: warning: attribute 'hard' is rare: 2 objects", "tzsl: warning: overflow"]
+    assert terminal.summary() == ("tzsl: warning: 20 more warnings of the kinds above (GridEdgeWarning: 19, "
+                                  "UserWarning: 1); a run lists every one in its manifest.json")
+    assert warning_kind("a 'x' 3", UserWarning) == warning_kind("a 'yy' 4.5", UserWarning)
+    assert TerminalWarnings(printed.append).summary() is None
 
 
 def test_the_command_line_prints_warnings_on_one_line(tmp_path, monkeypatch):

@@ -25,7 +25,7 @@ from pathlib import Path
 import click
 
 from tzsl import __version__
-from tzsl._warnings import one_line
+from tzsl._warnings import TerminalWarnings
 from tzsl.exceptions import PartialRunError, TzslError
 
 #: Exit code of a usage error (click's own code).
@@ -36,20 +36,26 @@ EXIT_TZSL_ERROR = 3
 SEED_LIMIT = 2**32
 
 
-def _show_one_line(message, category, filename, lineno, file=None, line=None) -> None:
-    """Show a Python warning as ``tzsl: warning: ...`` on stderr: one line, no source path."""
-    click.echo(one_line(message, category), err=True)
+def _echo_error_stream(text: str) -> None:
+    click.echo(text, err=True)
 
 
 class TzslGroup(click.Group):
     """A click group: TzslError -> one message, exit 3; usage errors -> one line, exit 2;
-    every warning -> one line ``tzsl: warning: ...``."""
+    warnings -> one line ``tzsl: warning: ...`` per kind, then one line counting the repeats
+    (:class:`tzsl._warnings.TerminalWarnings`)."""
 
     def invoke(self, ctx: click.Context):  # noqa: D401 - click API
+        printer = TerminalWarnings(_echo_error_stream)
         try:
             with warnings.catch_warnings():
-                warnings.showwarning = _show_one_line
-                return super().invoke(ctx)
+                warnings.showwarning = printer.show
+                try:
+                    return super().invoke(ctx)
+                finally:
+                    closing = printer.summary()
+                    if closing is not None:
+                        click.echo(closing, err=True)
         except TzslError as exc:
             click.echo(f"tzsl: error: {exc}", err=True)
             ctx.exit(EXIT_TZSL_ERROR)
