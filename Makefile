@@ -38,11 +38,13 @@ browser:
 test: install browser
 	$(BIN)/pytest -q -n $(TEST_WORKERS)
 
-# The zero-shot property test over issue 20's full range (8-100 classes, 3-40 attributes, 1-3 sensors,
-# merged rows; the 100 x 40 x 3 corner always): opt-in, it takes many minutes on two cores.
+# The property tests over their full range (opt-in, many minutes on two cores): the template on datasets of
+# 8-100 classes, 3-40 attributes, 1-3 sensors, merged rows and real-data pathologies (the 100 x 40 x 3 corner
+# always), and every registered method on lab-like data (constant channels, huge/tiny scales, separable
+# attributes, one trial per class, identical rows) with more examples than CI draws.
 test-wide: install
 	TZSL_WIDE_PROPERTY_TEST=1 $(BIN)/pytest -q -p no:cacheprovider tests/studies/test_zero_shot_study.py \
-	  -k full_range
+	  tests/models/test_methods_on_lab_data.py -k "full_range or lab_like"
 
 # The papers' data into the data home (or TZSL_DATA_DIR), downloaded and checked against the registry.
 data: install

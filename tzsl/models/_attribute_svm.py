@@ -412,8 +412,9 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
         for cls, mask in ((self.classes_[1], yb), (self.classes_[0], ~yb)):
             n_obj = np.unique(groups[mask]).size
             if n_obj < 2:
+                label = cls.item() if isinstance(cls, np.generic) else cls  # 1, not np.int64(1)
                 raise AttributeTrainingError(
-                    f"{self._label()}: only {n_obj} training object(s) with label {cls!r}; "
+                    f"{self._label()}: only {n_obj} training object(s) with label {label!r}; "
                     "need at least 2 (one class present in a single object cannot be cross-validated)"
                 )
         rng = check_random_state(self.random_state)

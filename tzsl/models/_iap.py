@@ -119,7 +119,7 @@ class IAP(BaseEstimator):
         -------
         P : ndarray of shape (n_trials, n_attributes)
             ``P = p(z | x) @ class_attributes_``; in [0, 1] for attributes in [0, 1] (the product's
-            rounding, e.g. ``1.0000000000000002``, clipped back; keeping posteriors away from 0 and 1
+            rounding past 1 in the last bit clipped back; keeping posteriors away from 0 and 1
             is the decision rule's job).
         """
         check_is_fitted(self)

@@ -1,8 +1,8 @@
 """Probabilities that cannot break a run: the one place posteriors are made valid.
 
 Floating-point arithmetic can push a probability a hair outside [0, 1]: IAP's
-``p(z | x) @ A`` gives ``1.0000000000000002`` for a trial sure of a class whose row is all ones,
-and a float32 network's softmax sums to ``1 + 1e-7``. Such rounding is not an error: every
+``p(z | x) @ A`` exceeds 1 in the last bit when an attribute is present in every likely class,
+and a float32 network's softmax sums to 1 within float32's epsilon. Such rounding is not an error: every
 producer of attribute posteriors and every decision rule passes its output through
 :func:`valid_probabilities` (values within :data:`ROUNDING_TOLERANCE` of [0, 1] are clipped into it),
 and class posteriors come from :func:`class_posteriors` (a softmax whose rows are checked and
