@@ -177,7 +177,9 @@ def read_checked_signal(folder: Path, rel: str, trial_id: str, channels: Sequenc
     found, values = read_signal_file(path)
     absent = [c for c in channels if c not in found]
     if absent:
-        raise DataFileError(path, f"channel(s) {absent} missing (has {list(found)})", trial=trial_id)
+        raise DataFileError(path, f"channel(s) {absent} missing (has {list(found)}); every trial and sensor of a "
+                            "dataset records the same channels (those of the first signal file, or dataset.toml's "
+                            "[signals] channels)", trial=trial_id)
     values = values[:, [found.index(c) for c in channels]]
     problems = check_signal_values(rel, channels, values, path.suffix.lower() == ".csv", min_rows)
     if problems:
