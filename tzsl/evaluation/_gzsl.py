@@ -14,14 +14,14 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from tzsl.exceptions import SplitError
-
 __all__ = ["choose_stacking_constant", "holdout_trials", "stacked_predict"]
 
 
 def holdout_trials(objects: np.ndarray, holdout_objects: Sequence[str], fraction: float,
                    rng: np.random.Generator) -> np.ndarray:
-    """Hold out ``round(fraction * n)`` random trials (1 .. n-1) of every object in ``holdout_objects``.
+    """Hold out ``round(fraction * n)`` random trials (1 .. n-1) of every object in ``holdout_objects``
+    that has two trials or more (an object with one trial is kept whole: holding it out would leave
+    its class no training trial from it).
 
     Parameters
     ----------
@@ -34,15 +34,12 @@ def holdout_trials(objects: np.ndarray, holdout_objects: Sequence[str], fraction
     Returns
     -------
     ndarray of shape (n_trials,), bool
-        True for held-out trials.
+        True for held-out trials; none of an object with a single trial.
     """
     objects = np.asarray(objects)
     member = np.isin(objects, list(holdout_objects))
-    names, inverse, counts = np.unique(objects[member], return_inverse=True, return_counts=True)
-    if counts.size and counts.min() < 2:
-        raise SplitError(f"GZSL needs at least 2 trials per training object to hold one out; "
-                         f"{names[counts < 2][:5].tolist()} have 1")
-    n_hold = np.clip(np.rint(fraction * counts).astype(int), 1, counts - 1)
+    _names, inverse, counts = np.unique(objects[member], return_inverse=True, return_counts=True)
+    n_hold = np.clip(np.rint(fraction * counts).astype(int), 1, counts - 1)  # 0 for a single trial
     # random rank of every trial within its object: sort by (object, random key)
     keys = rng.random(inverse.size)
     order = np.lexsort((keys, inverse))

@@ -140,6 +140,18 @@ def has_unseen_class(features: FeatureSet, split: Split) -> bool:
     return any(tuple(r) not in train for r in A.loc[list(split.test_objects)].to_numpy(dtype=int))
 
 
+def single_trial_objects(objects: np.ndarray, train_objects) -> list[str]:
+    """Training objects with a single trial (GZSL holds none of their trials out), sorted."""
+    names, counts = np.unique(np.asarray(objects)[np.isin(objects, list(train_objects))], return_counts=True)
+    return sorted(names[counts < 2].tolist())
+
+
+def has_holdout_trials(features: FeatureSet, split: Split) -> bool:
+    """Whether some training object of ``split`` has two trials, so one can be held out as seen-class test."""
+    kept_whole = set(single_trial_objects(features.objects, split.train_objects))
+    return any(o not in kept_whole for o in split.train_objects if o in set(features.objects))
+
+
 def gzsl_problem(features: FeatureSet, split: Split, fraction: float, rng: np.random.Generator) -> GzslProblem:
     """Classes (unique attribute rows), seen mask and trial masks of one split."""
     attributes = split.kept_attributes
@@ -161,6 +173,9 @@ def gzsl_problem(features: FeatureSet, split: Split, fraction: float, rng: np.ra
     trial_class = object_class.reindex(objects).fillna(-1).to_numpy(dtype=int)
     train = np.isin(objects, split.train_objects)
     heldout = holdout_trials(objects, split.train_objects, fraction, rng)
+    if not heldout.any():
+        raise SplitError(f"split {split.name}: no training object has 2 trials, so no seen-class trial can be held "
+                         "out for GZSL")
     test = np.isin(objects, split.test_objects)
     in_seen = [o for o in split.test_objects if seen[object_class[o]]]
     info = {"n_test_objects_in_seen_classes": len(in_seen)}
@@ -282,6 +297,10 @@ def gzsl_split(features: FeatureSet, split: Split, config: DapSettings, index: i
     if gzsl.calibrated_stacking:
         pseudo, relaxed = _pseudo_problem(features, problem, config.splits.random_min_train_positives, gzsl.max_draws,
                                           np.random.default_rng(np.random.SeedSequence([config.study_seed, index, 2])))
+    kept_whole = single_trial_objects(features.objects, split.train_objects)
+    if kept_whole:  # the same words on every split: one note for the run
+        relaxed = "; ".join(filter(None, [relaxed, "training objects with a single trial are kept whole for fitting "
+                                                   "(seen-class trials are held out of the others only)"]))
     y = problem.trial_class[problem.evaluate]
     seen_classes = np.flatnonzero(problem.seen)
     unseen_classes = np.flatnonzero(~problem.seen)
@@ -376,10 +395,13 @@ def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: DapSettings 
     rows: list[dict] = []
     with compute_context(config):
         for i, split in enumerate(splits):
-            if not has_unseen_class(features, split):  # nothing to evaluate: left out, said why (no failure)
+            why = ("" if has_unseen_class(features, split) else
+                   "every test object shares its attribute row with a training object (no unseen class)")
+            if not why and not has_holdout_trials(features, split):
+                why = "no training object has 2 trials (no seen-class trial to hold out)"
+            if why:  # nothing to evaluate: left out, said why (no failure)
                 rows += [{"split": split_label(split), "method": _method_name(m, gzsl), "calibrated": False,
-                          RELAXED_COLUMN: f"split {split.name}: every test object shares its attribute row with a "
-                                          "training object (no unseen class); split left out",
+                          RELAXED_COLUMN: f"split {split.name}: {why}; split left out",
                           ERROR_COLUMN: ""} for m in gzsl.methods]
                 continue
             part, error = attempt(gzsl_split, features, split, config, i)
