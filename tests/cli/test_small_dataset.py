@@ -207,3 +207,19 @@ def test_predict_distinct_candidates_give_no_identical_rows_note(lab_dataset, es
     assert result.exit_code == 0, result.output + result.stderr
     notes = json.loads(result.output)["notes"]
     assert len(notes) == 1 and "['solid', 'paper'] ignored" in notes[0]
+
+
+def test_a_split_leaves_out_what_its_training_objects_cannot_teach(lab_dataset, tmp_path):
+    """--splits: with stone and mug unseen, cold keeps one positive training object (can): left out too."""
+    splits = tmp_path / "splits.csv"
+    pd.DataFrame({"split": "held_out", "object": list(ROWS),
+                  "role": ["test" if o in ("stone", "mug") else "train" for o in ROWS]}).to_csv(splits, index=False)
+    model = tmp_path / "split.tzsl"
+    out = _ok("train-attributes", "--plain", lab_dataset, "--splits", splits, "--method", "eszsl", "--out", model)
+    assert "note: attribute 'cold' left out of the model: 1 positive training object(s) < 2" in out
+    meta = read_bundle_header(model).metadata
+    assert meta["split"] == "held_out" and meta["attribute_names"] == ["hard", "rough", "soft"]
+    assert set(_left_out(model)) == {"cold", "solid", "paper"}
+    text = _ok("predict", "--model", model, "--classes", lab_dataset, "--candidates", "stone,mug",
+               _grasp_file(lab_dataset, tmp_path, "stone_0"))
+    assert "['cold', 'solid', 'paper'] ignored" in text and "identical rows" not in text
