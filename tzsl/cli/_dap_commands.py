@@ -200,13 +200,13 @@ def _train_per_ep(features, out, splits_file, split_name, exp, force) -> None:
     from tzsl.inference.model_bundles import (  # noqa: PLC0415
         left_out_notes,
         training_record,
-        training_rule,
         training_subset,
     )
     from tzsl.inference.predict_active import train_per_ep_bundle  # noqa: PLC0415
+    from tzsl.studies.zero_shot.relaxations import trainable_attribute_rule  # noqa: PLC0415
 
     config = exp.config
-    sub, split, left_out = training_subset(features, splits_file, split_name, **training_rule(config.splits))
+    sub, split, left_out = training_subset(features, splits_file, split_name, **trainable_attribute_rule(config.splits))
     for note in left_out_notes(left_out):
         click.echo(f"note: {note}")
     meta = train_per_ep_bundle(sub, out, seed=config.splits.seed, force=force, split=split,

@@ -56,7 +56,6 @@ __all__ = [
     "train_attribute_bundle",
     "train_hand_bundle",
     "training_record",
-    "training_rule",
     "training_subset",
 ]
 
@@ -142,25 +141,6 @@ def save_zero_shot_bundle(path: str | Path, classifier: ZeroShotClassifier | Cal
 
 
 # ---------------------------------------------------------------------------- training commands
-def training_rule(splits) -> dict:
-    """Least positive and negative training objects of an attribute a model command learns.
-
-    The zero-shot study's rule for its random splits (``random_min_train_positives`` and
-    ``min_train_negatives`` of ``splits``, the ``[splits]`` section of a study's settings), each
-    raised to the :data:`~tzsl.studies.zero_shot.relaxations.SVM_MIN_OBJECTS` objects the attribute
-    SVMs' object-grouped CV needs (the study's relaxation step 2): an attribute with fewer is left out.
-
-    Returns
-    -------
-    dict
-        ``min_train_positives`` and ``min_train_negatives`` (keywords of :func:`training_subset`).
-    """
-    from tzsl.studies.zero_shot.relaxations import SVM_MIN_OBJECTS  # noqa: PLC0415
-
-    return {"min_train_positives": max(splits.random_min_train_positives, SVM_MIN_OBJECTS),
-            "min_train_negatives": max(splits.min_train_negatives, SVM_MIN_OBJECTS)}
-
-
 def training_subset(features: FeatureSet, splits_file=None, split_name: str | None = None, *,
                     min_train_positives: int = 1, min_train_negatives: int = 1
                     ) -> tuple[FeatureSet, str | None, list[dict]]:
@@ -168,7 +148,8 @@ def training_subset(features: FeatureSet, splits_file=None, split_name: str | No
 
     An attribute with fewer than ``min_train_positives`` positive or ``min_train_negatives``
     negative training objects is left out, as a zero-shot split leaves it out
-    (:func:`tzsl.evaluation.attribute_exclusions`, the rule :func:`training_rule` gives); so is an
+    (:func:`tzsl.evaluation.attribute_exclusions`, with the study's rule:
+    :func:`~tzsl.studies.zero_shot.relaxations.trainable_attribute_rule`); so is an
     attribute the dataset's ``min_objects`` filter dropped (``features.info["dropped_attributes"]``).
 
     Parameters
@@ -261,8 +242,8 @@ def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | 
     prior : {"uni", "train", "test"}
     force : bool
     echo : callable, optional
-        Called with a ``note: ...`` line for each attribute left out (:func:`training_subset` with
-        :func:`training_rule`; the bundle records them as ``left_out_attributes``), before the fit.
+        Called with a ``note: ...`` line for each attribute left out (:func:`training_subset` with the
+        study's rule; the bundle records them as ``left_out_attributes``), before the fit.
 
     Returns
     -------
@@ -271,11 +252,13 @@ def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | 
         draw and positive training objects; other methods: one row per attribute with its
         positive training objects.
     """
+    from tzsl.studies.zero_shot.relaxations import trainable_attribute_rule  # noqa: PLC0415
     from tzsl.studies.zero_shot.study import attribute_bank, check_cv_folds, compute_context  # noqa: PLC0415
     from tzsl.studies.study_methods import method_input, study_estimator  # noqa: PLC0415
     from tzsl.models.protocol import attribute_rows  # noqa: PLC0415
 
-    sub, split_record, left_out = training_subset(features, splits_file, split_name, **training_rule(config.splits))
+    sub, split_record, left_out = training_subset(features, splits_file, split_name,
+                                                  **trainable_attribute_rule(config.splits))
     for note in left_out_notes(left_out) if echo is not None else []:
         echo(f"note: {note}")
     attributes = list(sub.attributes.columns)
