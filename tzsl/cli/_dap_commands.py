@@ -140,16 +140,26 @@ def splits(kind, n_splits, n_test, purpose, out, dataset, features_file, plain_d
 @click.option("--per-ep", is_flag=True,
               help="Fit one attribute model per exploratory procedure (PHAC-2 features '<ep>:<name>') and the EPs' "
                    "confusion, for 'tzsl predict --eps-done ... --suggest-next' (active touch).")
+@click.option("--min-objects", type=click.IntRange(min=1), default=None,
+              help="Keep only attributes present in at least this many objects ([dataset] min_objects of a study) "
+                   "[default: the study's: the extractor's filter for built-in datasets, every attribute of a "
+                   "plain folder]. Whatever the filter, an attribute with too few positive or negative training "
+                   "objects to learn (the zero-shot study's rule for a split) is left out, with a 'note:' line, "
+                   "and the bundle records it.")
 @_source_options
 @_study_options
 @data_dir_option
 @force_option
-def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep, dataset, features_file, plain_dir,
-                     path, undersampling, cv, grid, no_progress, no_cache, seed, n_jobs, backend, scheduler, data_dir, force):
+def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep, min_objects, dataset, features_file,
+                     plain_dir, path, undersampling, cv, grid, no_progress, no_cache, seed, n_jobs, backend, scheduler,
+                     data_dir, force):
     """Fit a zero-shot model and save it as a model bundle for 'tzsl predict'.
 
     Without --splits every object trains the model (a model for recognising new objects);
-    with --splits only that split's training objects do.
+    with --splits only that split's training objects do. An attribute too rare to learn (too few
+    positive or negative training objects, the zero-shot study's rule for a split) is left out
+    with a 'note:' line and recorded in the bundle; 'tzsl predict' then ranks classes on the
+    attributes kept.
     """
     from tzsl.studies.engine import check_experiment  # noqa: PLC0415
     from tzsl.studies.zero_shot.runner import phac2_features  # noqa: PLC0415
@@ -169,6 +179,7 @@ def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep
 
         get_method(method)  # an unknown name fails before any data is read
     exp = _experiment({**_dataset_values(dataset, features_file, plain_dir, path, data_dir),
+                       **({} if min_objects is None else {"dataset.min_objects": min_objects}),
                        **_study_values(seed, n_jobs, backend, scheduler, undersampling, cv, grid, no_progress, no_cache)})
     check_experiment(exp)  # paths and the Dask scheduler, before any data is read
     features = phac2_features(exp)
@@ -180,18 +191,26 @@ def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep
     from tzsl.inference.model_bundles import train_attribute_bundle  # noqa: PLC0415
 
     summary = train_attribute_bundle(features, exp.config, out, method=method, splits_file=splits_file,
-                                     split_name=split_name, fusion=fusion, prior=prior, force=force)
+                                     split_name=split_name, fusion=fusion, prior=prior, force=force, echo=click.echo)
     click.echo(summary.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
     click.echo(f"fitted {method or 'the attribute classifiers'} in {time.perf_counter() - start:.1f} s; wrote {out}")
 
 
 def _train_per_ep(features, out, splits_file, split_name, exp, force) -> None:
-    from tzsl.inference.model_bundles import training_subset  # noqa: PLC0415
+    from tzsl.inference.model_bundles import (  # noqa: PLC0415
+        left_out_notes,
+        training_record,
+        training_subset,
+    )
     from tzsl.inference.predict_active import train_per_ep_bundle  # noqa: PLC0415
+    from tzsl.studies.zero_shot.relaxations import trainable_attribute_rule  # noqa: PLC0415
 
     config = exp.config
-    sub, split = training_subset(features, splits_file, split_name, config.splits.random_min_train_positives)
-    meta = train_per_ep_bundle(sub, out, seed=config.splits.seed, force=force, split=split)
+    sub, split, left_out = training_subset(features, splits_file, split_name, **trainable_attribute_rule(config.splits))
+    for note in left_out_notes(left_out):
+        click.echo(f"note: {note}")
+    meta = train_per_ep_bundle(sub, out, seed=config.splits.seed, force=force, split=split,
+                               **training_record(sub, left_out))
     click.echo(f"per-EP model: EPs {', '.join(meta['eps'])} ({', '.join(f'{s:g} s' for s in meta['ep_seconds'])}), "
                f"{len(meta['attribute_names'])} attributes, {len(meta['training_objects'])} training objects")
 

@@ -150,14 +150,13 @@ def _card(data) -> dict:
     """The dataset card read against the generic study's default split (its schema defaults)."""
     from tzsl.datasets import dataset_card  # noqa: PLC0415
     from tzsl.studies.config import ZeroShotSplits  # noqa: PLC0415
-    from tzsl.studies.zero_shot.relaxations import SVM_MIN_OBJECTS, relaxed_n_test  # noqa: PLC0415
+    from tzsl.studies.zero_shot.relaxations import relaxed_n_test, trainable_attribute_rule  # noqa: PLC0415
 
     splits = ZeroShotSplits()
     trials = data.trials.drop_duplicates("trial_id") if "trial_id" in data.trials.columns else data.trials
     n_test = relaxed_n_test(data.object_attributes, splits)  # as the template's run will draw them
     return dataset_card(data.classes, trials["class"].astype(str).tolist(), n_test=n_test,
-                        min_train_positives=max(splits.random_min_train_positives, SVM_MIN_OBJECTS),
-                        min_train_negatives=SVM_MIN_OBJECTS)
+                        **trainable_attribute_rule(splits))
 
 
 @cli.command()

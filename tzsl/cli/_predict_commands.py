@@ -85,8 +85,11 @@ def predict(model_path: Path, classes: Path, candidates: str | None, mode: str, 
         read_class_table,
     )
 
+    from tzsl.inference.model_bundles import left_out_attributes  # noqa: PLC0415
+
     predictor = load_predictor(model_path, trust_pickle=trust_pickle)
-    table = read_class_table(classes, predictor.attribute_names, candidates=_names(candidates))
+    table = read_class_table(classes, predictor.attribute_names, candidates=_names(candidates),
+                             left_out=left_out_attributes(predictor.metadata))
     result = predict_grasps(predictor, table, list(grasp), mode=mode, k=k)
     if as_json:
         click.echo(json.dumps(prediction_report(result, predictor, top=top), sort_keys=False))
@@ -105,13 +108,18 @@ def _predict_active(model_path, classes, candidates, grasp, eps_done, suggest_ne
         raise ConfigError(f"{model_path}: a per-EP bundle needs --eps-done (the EPs done so far, e.g. squeeze,hold)")
     if len(grasp) != 1:
         raise ConfigError(f"a per-EP bundle reads one feature file (one trial), got {len(grasp)} files")
+    from tzsl.inference.model_bundles import left_out_attributes  # noqa: PLC0415
+
     model, metadata = load_per_ep_model(model_path, trust_pickle=trust_pickle)
-    table = read_class_table(classes, metadata["attribute_names"], candidates=candidates)
+    table = read_class_table(classes, metadata["attribute_names"], candidates=candidates,
+                             left_out=left_out_attributes(metadata))
     report = active_report(model, metadata, table, grasp[0], eps_done, threshold=threshold, max_eps=max_eps,
                            max_seconds=max_seconds)
     if as_json:
         click.echo(json.dumps(report, sort_keys=False))
         return
+    for note in table.attrs["notes"]:
+        click.echo(f"note: {note}")
     click.echo(f"model: per-EP attribute model, EPs {', '.join(metadata['eps'])}, "
                f"{len(metadata['attribute_names'])} attributes")
     click.echo(f"classes: {len(table)} from {classes}")

@@ -26,7 +26,7 @@ The deep CNN + LSTM keeps its own bundle kind ``"deep"`` (its weights are an ``.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -49,10 +49,13 @@ __all__ = [
     "DEEP_KIND",
     "ZERO_SHOT_KIND",
     "feature_schema",
+    "left_out_attributes",
+    "left_out_notes",
     "save_model_bundle",
     "save_zero_shot_bundle",
     "train_attribute_bundle",
     "train_hand_bundle",
+    "training_record",
     "training_subset",
 ]
 
@@ -138,32 +141,89 @@ def save_zero_shot_bundle(path: str | Path, classifier: ZeroShotClassifier | Cal
 
 
 # ---------------------------------------------------------------------------- training commands
-def training_subset(features: FeatureSet, splits_file=None, split_name: str | None = None,
-                    min_train_positives: int = 1) -> tuple[FeatureSet, str | None]:
-    """Features of one split's training objects (with the split's kept attributes), or of every object.
+def training_subset(features: FeatureSet, splits_file=None, split_name: str | None = None, *,
+                    min_train_positives: int = 1, min_train_negatives: int = 1
+                    ) -> tuple[FeatureSet, str | None, list[dict]]:
+    """Features of the training objects (one split's, or every object) with the attributes they can teach.
+
+    An attribute with fewer than ``min_train_positives`` positive or ``min_train_negatives``
+    negative training objects is left out, as a zero-shot split leaves it out
+    (:func:`tzsl.evaluation.attribute_exclusions`, with the study's rule:
+    :func:`~tzsl.studies.zero_shot.relaxations.trainable_attribute_rule`); so is an
+    attribute the dataset's ``min_objects`` filter dropped (``features.info["dropped_attributes"]``).
+
+    Parameters
+    ----------
+    features : FeatureSet
+    splits_file, split_name
+        Train on the training objects of this split of a split CSV (default: its first split);
+        None: on every object.
+    min_train_positives, min_train_negatives : int
+        Least positive / negative training objects of a kept attribute.
 
     Returns
     -------
     features : FeatureSet
+        The training objects' trials, attribute columns: the kept ones, in table order.
     split : str or None
         The split's name (None without ``splits_file``).
-    """
-    from tzsl.evaluation import read_splits_csv  # noqa: PLC0415
+    left_out : list of dict
+        ``{"attribute": name, "reason": why}`` of every attribute left out, the filter's first
+        (recorded in the bundle's metadata as ``left_out_attributes``).
 
+    Raises
+    ------
+    ConfigError
+        No such split, or every attribute is left out.
+    """
+    from tzsl.evaluation import Split, attribute_exclusions, read_splits_csv  # noqa: PLC0415
+
+    rule = {"min_train_positives": min_train_positives, "min_train_negatives": min_train_negatives}
+    A = features.attributes
     if splits_file is None:
-        return features, None
-    splits = read_splits_csv(splits_file, features.attributes, min_train_positives=min_train_positives)
-    chosen = splits[0] if split_name is None else next((s for s in splits if s.name == split_name), None)
-    if chosen is None:
-        raise ConfigError(f"{splits_file}: no split named {split_name!r}; have {[s.name for s in splits]}")
+        with_trials = set(features.objects)
+        objects = tuple(str(o) for o in A.index if o in with_trials)
+        chosen = Split("all objects", objects, (), tuple(map(str, A.columns)),
+                       attribute_exclusions(A.loc[list(objects)].to_numpy(dtype=bool), list(A.columns), **rule))
+    else:
+        splits = read_splits_csv(splits_file, A, **rule)
+        chosen = splits[0] if split_name is None else next((s for s in splits if s.name == split_name), None)
+        if chosen is None:
+            raise ConfigError(f"{splits_file}: no split named {split_name!r}; have {[s.name for s in splits]}")
+    info = features.info or {}
+    filtered = (f"present in fewer than {info['min_objects']} objects (min_objects = {info['min_objects']})"
+                if "min_objects" in info else "dropped by the dataset's attribute filter")
+    left_out = [{"attribute": str(a), "reason": filtered} for a in info.get("dropped_attributes", [])]
+    left_out += [{"attribute": a, "reason": why} for a, why in chosen.excluded_attributes]
+    if not chosen.kept_attributes:
+        raise ConfigError(f"{features.dataset}: no attribute can be learned from {len(chosen.train_objects)} training "
+                          f"objects: each has fewer than {min_train_positives} positive or {min_train_negatives} "
+                          "negative training objects")
     sub = features.subset(np.isin(features.objects, chosen.train_objects))
     sub.attributes = sub.attributes[list(chosen.kept_attributes)]
-    return sub, chosen.name
+    return sub, None if splits_file is None else chosen.name, left_out
+
+
+def left_out_notes(left_out: Sequence[dict]) -> list[str]:
+    """``note:`` lines (without the prefix) of the attributes a training command left out, one per attribute."""
+    return [f"attribute {r['attribute']!r} left out of the model: {r['reason']}" for r in left_out]
+
+
+def training_record(features: FeatureSet, left_out: list[dict]) -> dict:
+    """What a bundle records of its attributes: the dataset filter's ``min_objects`` (None: none applied)
+    and ``left_out_attributes`` (from :func:`training_subset`)."""
+    min_objects = (features.info or {}).get("min_objects")
+    return {"min_objects": None if min_objects is None else int(min_objects), "left_out_attributes": list(left_out)}
+
+
+def left_out_attributes(metadata: dict) -> list[str]:
+    """Names of the attributes a bundle's model left out (its ``left_out_attributes``; [] for older bundles)."""
+    return [str(r["attribute"]) for r in metadata.get("left_out_attributes", []) if isinstance(r, dict)]
 
 
 def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | None = None, splits_file=None,
                            split_name: str | None = None, fusion: str = "avg", prior: str = "uni",
-                           force: bool = False) -> pd.DataFrame:
+                           force: bool = False, echo: Callable[[str], None] | None = None) -> pd.DataFrame:
     """Fit a zero-shot model (all objects, or one split's training objects) and save a bundle.
 
     Parameters
@@ -181,6 +241,9 @@ def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | 
     fusion : {"avg", "max"}
     prior : {"uni", "train", "test"}
     force : bool
+    echo : callable, optional
+        Called with a ``note: ...`` line for each attribute left out (:func:`training_subset` with the
+        study's rule; the bundle records them as ``left_out_attributes``), before the fit.
 
     Returns
     -------
@@ -189,14 +252,19 @@ def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | 
         draw and positive training objects; other methods: one row per attribute with its
         positive training objects.
     """
+    from tzsl.studies.zero_shot.relaxations import trainable_attribute_rule  # noqa: PLC0415
     from tzsl.studies.zero_shot.study import attribute_bank, check_cv_folds, compute_context  # noqa: PLC0415
     from tzsl.studies.study_methods import method_input, study_estimator  # noqa: PLC0415
     from tzsl.models.protocol import attribute_rows  # noqa: PLC0415
 
-    sub, split_record = training_subset(features, splits_file, split_name, config.splits.random_min_train_positives)
+    sub, split_record, left_out = training_subset(features, splits_file, split_name,
+                                                  **trainable_attribute_rule(config.splits))
+    for note in left_out_notes(left_out) if echo is not None else []:
+        echo(f"note: {note}")
     attributes = list(sub.attributes.columns)
     A = sub.trial_attributes()
-    provenance = {"training_objects": sorted(set(sub.objects)), "split": split_record, "seed": config.splits.seed}
+    provenance = {"training_objects": sorted(set(sub.objects)), "split": split_record, "seed": config.splits.seed,
+                  **training_record(sub, left_out)}
     if method is None:
         check_cv_folds(config.svm.estimator_params().get("cv"), len(set(sub.objects)), "command line")
         dap = ZeroShotClassifier(attribute_model=attribute_bank(config, attributes, config.splits.seed),

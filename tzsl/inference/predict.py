@@ -196,7 +196,7 @@ def load_predictor(path: str | Path, *, trust_pickle: bool = False) -> Predictor
 
 # ---------------------------------------------------------------------------- class table
 def read_class_table(path: str | Path, attribute_names: Sequence[str], *,
-                     candidates: Sequence[str] | None = None) -> pd.DataFrame:
+                     candidates: Sequence[str] | None = None, left_out: Sequence[str] = ()) -> pd.DataFrame:
     """Read candidate classes and check their attributes against the model's.
 
     Parameters
@@ -209,11 +209,17 @@ def read_class_table(path: str | Path, attribute_names: Sequence[str], *,
         The model's attributes, in the model's order.
     candidates : sequence of str, optional
         Keep only these classes, in this order (e.g. the unseen ones of a dataset's table).
+    left_out : sequence of str
+        Attributes the model left out (too rare to learn: the bundle's ``left_out_attributes``,
+        :func:`tzsl.inference.model_bundles.left_out_attributes`): their columns are ignored, in a
+        file too, and a note says so once.
 
     Returns
     -------
     DataFrame of shape (n_classes, n_attributes), int 0/1
-        Indexed by class name, columns in ``attribute_names`` order.
+        Indexed by class name, columns in ``attribute_names`` order. ``attrs["notes"]``: what to tell
+        the user (attributes ignored because the model left them out; classes whose rows over the
+        model's attributes are identical, which no ranking can tell apart), one line each.
 
     Raises
     ------
@@ -244,8 +250,9 @@ def read_class_table(path: str | Path, attribute_names: Sequence[str], *,
         raise DataFileError(path, f"empty class name on row(s) {list(np.flatnonzero(names == '') + 2)}")
     if names.duplicated().any():
         raise DataFileError(path, f"duplicate class name(s) {sorted(set(names[names.duplicated()]))}")
-    given = [c for c in table.columns[1:] if c not in _DESCRIPTIVE]
     wanted = [str(a) for a in attribute_names]
+    ignored = [c for c in table.columns[1:] if c in set(left_out) - set(wanted)]
+    given = [c for c in table.columns[1:] if c not in _DESCRIPTIVE and c not in ignored]
     missing = [a for a in wanted if a not in given]
     unknown = [a for a in given if a not in wanted]
     if missing or (unknown and not extra_ok):
@@ -254,7 +261,8 @@ def read_class_table(path: str | Path, attribute_names: Sequence[str], *,
             parts.append(f"missing attribute column(s) {missing}")
         if unknown:
             parts.append(f"unknown attribute column(s) {unknown}")
-        raise DataFileError(path, "; ".join(parts) + f"; the model's attributes are {wanted}")
+        dropped = f" (it left out {list(left_out)})" if len(left_out) else ""
+        raise DataFileError(path, "; ".join(parts) + f"; the model's attributes are {wanted}{dropped}")
     values = table[wanted].apply(lambda c: c.str.strip())
     bad = ~values.isin(["0", "1"])
     if bad.any().any():
@@ -263,12 +271,29 @@ def read_class_table(path: str | Path, attribute_names: Sequence[str], *,
             path, f"class {names.iloc[r]!r}, attribute {wanted[c]!r}: value {values.iat[r, c]!r} is not 0 or 1"
         )
     table = pd.DataFrame(values.to_numpy(dtype=int), index=pd.Index(names, name="class"), columns=wanted)
-    if candidates is None:
-        return table
-    absent = [c for c in candidates if c not in table.index]
-    if absent or not candidates:
-        raise DataFileError(path, f"candidate class(es) {absent} not in the table; it has {list(table.index)}")
-    return table.loc[list(candidates)]
+    if candidates is not None:
+        absent = [c for c in candidates if c not in table.index]
+        if absent or not candidates:
+            raise DataFileError(path, f"candidate class(es) {absent} not in the table; it has {list(table.index)}")
+        table = table.loc[list(candidates)]
+    table.attrs["notes"] = _class_table_notes(path, table, ignored)
+    return table
+
+
+def _class_table_notes(path: Path, table: pd.DataFrame, ignored: list[str]) -> list[str]:
+    """The notes of :func:`read_class_table` (``ignored``: its columns the model left out)."""
+    from tzsl.evaluation import duplicate_attribute_groups  # noqa: PLC0415
+
+    notes = []
+    if ignored:
+        notes.append(f"{path}: attribute(s) {ignored} ignored: the model left them out (its bundle's "
+                     f"left_out_attributes say why); classes are ranked on its {table.shape[1]} attributes")
+    groups = duplicate_attribute_groups(table.to_numpy())
+    if groups:
+        same = "; ".join(" = ".join(str(table.index[i]) for i in g) for g in groups)
+        notes.append(f"{path}: classes {same} have identical rows over the model's {table.shape[1]} attributes: "
+                     "no ranking can tell them apart (they tie)")
+    return notes
 
 
 # ---------------------------------------------------------------------------- prediction
@@ -363,7 +388,7 @@ def predict_grasps(
         classes=[str(c) for c in classes.index], grasp_ids=list(grasps.grasp_ids), sources=list(grasps.sources),
         info=list(grasps.info), grasp_posteriors=predictor.posteriors(scores), decisions=decisions, mode=mode, k=int(k),
         decided=decided, n_used=n_used, final=final, final_posteriors=final_p, running=running,
-        notes=list(grasps.notes),
+        notes=list(classes.attrs.get("notes", [])) + list(grasps.notes),
     )
 
 

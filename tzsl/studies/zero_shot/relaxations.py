@@ -43,7 +43,7 @@ from tzsl.evaluation import challenging_splits, random_object_splits
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.models.protocol import MIN_CV_CLASSES
 
-__all__ = ["SVM_MIN_OBJECTS", "Relaxation", "relax_to_dataset", "relaxed_n_test"]
+__all__ = ["SVM_MIN_OBJECTS", "Relaxation", "relax_to_dataset", "relaxed_n_test", "trainable_attribute_rule"]
 
 
 @dataclass(frozen=True)
@@ -75,6 +75,25 @@ class Relaxation:
 
 #: The attribute SVMs' object-grouped CV needs this many positive and negative training objects.
 SVM_MIN_OBJECTS = 2
+
+
+def trainable_attribute_rule(splits) -> dict:
+    """Least positive and negative training objects of an attribute the study keeps in a split.
+
+    ``splits``: a ``[splits]`` section of the schema. Its ``random_min_train_positives`` and
+    ``min_train_negatives``, each raised to :data:`SVM_MIN_OBJECTS` (every split the study draws
+    leaves each kept attribute that many of both, steps 1-3). ``tzsl validate``'s dataset card and
+    the model commands (:func:`tzsl.inference.model_bundles.training_subset`) leave out the same
+    attributes.
+
+    Returns
+    -------
+    dict
+        ``min_train_positives`` and ``min_train_negatives`` (keywords of
+        :func:`tzsl.evaluation.attribute_exclusions`).
+    """
+    return {"min_train_positives": max(splits.random_min_train_positives, SVM_MIN_OBJECTS),
+            "min_train_negatives": max(splits.min_train_negatives, SVM_MIN_OBJECTS)}
 
 
 def _trainable(A, drawn, min_classes: int = 1) -> bool:
