@@ -29,14 +29,27 @@ REPO = Path(__file__).resolve().parents[2]
 TEMPLATE = REPO / "experiments" / "my_dataset_template.toml"
 
 
+#: Pathologies of real recordings a drawn dataset may have (see :func:`simulated_dataset`).
+PATHOLOGIES = ("none", "constant-channel", "huge-scale", "tiny-scale", "separable")
+
+
 def simulated_dataset(folder: Path, n_classes: int, n_attributes: int, n_sensors: int, *, seed: int,
-                      positive_rate: float = 0.4, trials_per_class: int = 3, n_features: int = 3) -> Path:
-    """A SIMULATED plain dataset; classes may share attribute rows (allowed in its dataset.toml)."""
+                      positive_rate: float = 0.4, trials_per_class: int = 3, n_features: int = 3,
+                      pathology: str = "none") -> Path:
+    """A SIMULATED plain dataset; classes may share attribute rows (allowed in its dataset.toml).
+
+    ``pathology`` (one of :data:`PATHOLOGIES`): a constant first feature, every feature times 1e6 or
+    1e-6, or noise-free features (each attribute perfectly separable: posteriors of exactly 0 and 1).
+    """
     rng = np.random.default_rng(seed)
     K = (rng.random((n_classes, n_attributes)) < positive_rate).astype(int)
     W = rng.normal(size=(n_sensors, n_attributes, n_features))
     cls = np.repeat(np.arange(n_classes), trials_per_class)
-    X = np.einsum("na,saf->nsf", K[cls], W) + 0.5 * rng.normal(size=(len(cls), n_sensors, n_features))
+    noise = 0.0 if pathology == "separable" else 0.5
+    X = np.einsum("na,saf->nsf", K[cls], W) + noise * rng.normal(size=(len(cls), n_sensors, n_features))
+    X = X * {"huge-scale": 1e6, "tiny-scale": 1e-6}.get(pathology, 1.0)
+    if pathology == "constant-channel":
+        X[:, :, 0] = 5.0
     names = np.array([f"c{c:03d}" for c in range(n_classes)], dtype=object)
     classes = pd.DataFrame(K, index=pd.Index(names, name="class"), columns=[f"a{j:02d}" for j in range(n_attributes)])
     trials = pd.DataFrame({"trial_id": [f"t{i}" for i in range(len(cls))], "class": names[cls]})
@@ -81,18 +94,21 @@ def test_template_is_the_generic_study_with_every_feature_method():
 @settings(max_examples=3, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 @given(n_classes=st.integers(8, MAX_CLASSES), n_attributes=st.integers(3, MAX_ATTRIBUTES), n_sensors=st.integers(1, 3),
-       merged=st.integers(0, 3), seed=st.integers(0, 2**16))
+       merged=st.integers(0, 3), seed=st.integers(0, 2**16), trials=st.integers(1, 3),
+       pathology=st.sampled_from(PATHOLOGIES))
+@example(n_classes=9, n_attributes=4, n_sensors=2, merged=1, seed=3, trials=1, pathology="separable")
 def test_the_template_runs_any_small_dataset_to_the_end(tmp_path_factory, n_classes, n_attributes, n_sensors,
-                                                         merged, seed):
+                                                         merged, seed, trials, pathology):
     """Issue 20: the template, paths changed only, exits 0 on a dataset of >= 8 classes and >= 3
     attributes (merged rows allowed), relaxing what it cannot honour; or, where no sound split
     exists, it fails with one line naming the file.
 
     The drawn sizes stop at :data:`MAX_CLASSES` classes and :data:`MAX_ATTRIBUTES` attributes: the
     template's full study (every method, attribute SVMs per attribute and sensor, GZSL) takes
-    minutes per run on larger tables, more than the CI budget allows for three examples.
+    minutes per run on larger tables, more than the CI budget allows for three examples. Datasets may
+    have one trial per class and a pathology of real recordings (:data:`PATHOLOGIES`).
     """
-    _check_template_run(tmp_path_factory, n_classes, n_attributes, n_sensors, merged, seed)
+    _check_template_run(tmp_path_factory, n_classes, n_attributes, n_sensors, merged, seed, trials, pathology)
 
 
 @pytest.mark.slow
@@ -100,21 +116,24 @@ def test_the_template_runs_any_small_dataset_to_the_end(tmp_path_factory, n_clas
 @settings(max_examples=2, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 @given(n_classes=st.integers(8, FULL_MAX_CLASSES), n_attributes=st.integers(3, FULL_MAX_ATTRIBUTES),
-       n_sensors=st.integers(1, 3), merged=st.integers(0, 3), seed=st.integers(0, 2**16))
-@example(n_classes=FULL_MAX_CLASSES, n_attributes=FULL_MAX_ATTRIBUTES, n_sensors=3, merged=3, seed=1)
+       n_sensors=st.integers(1, 3), merged=st.integers(0, 3), seed=st.integers(0, 2**16), trials=st.integers(1, 3),
+       pathology=st.sampled_from(PATHOLOGIES))
+@example(n_classes=FULL_MAX_CLASSES, n_attributes=FULL_MAX_ATTRIBUTES, n_sensors=3, merged=3, seed=1, trials=3,
+         pathology="none")
 def test_the_template_runs_datasets_of_the_full_range(tmp_path_factory, n_classes, n_attributes, n_sensors,
-                                                      merged, seed):
+                                                      merged, seed, trials, pathology):
     """The issue's full range (8-100 classes, 3-40 attributes, 1-3 sensors, merged rows), the top
     corner always: the same checks as the default test. One run at 100 x 40 x 3 takes many minutes
     on two cores, so this variant is opt-in (``TZSL_WIDE_PROPERTY_TEST=1``)."""
-    _check_template_run(tmp_path_factory, n_classes, n_attributes, n_sensors, merged, seed)
+    _check_template_run(tmp_path_factory, n_classes, n_attributes, n_sensors, merged, seed, trials, pathology)
 
 
 def _check_template_run(tmp_path_factory, n_classes: int, n_attributes: int, n_sensors: int, merged: int,
-                        seed: int) -> None:
+                        seed: int, trials: int = 3, pathology: str = "none") -> None:
     """Run the template (paths changed only) on a simulated dataset and check the outcome."""
     root = tmp_path_factory.mktemp("sim")
-    dataset = simulated_dataset(root / "data", n_classes, n_attributes, n_sensors, seed=seed)
+    dataset = simulated_dataset(root / "data", n_classes, n_attributes, n_sensors, seed=seed,
+                                trials_per_class=trials, pathology=pathology)
     classes = pd.read_csv(dataset / "classes.csv", index_col=0)
     classes.iloc[:merged] = classes.iloc[merged:2 * merged].to_numpy()  # merged rows
     classes.to_csv(dataset / "classes.csv")
