@@ -378,12 +378,19 @@ def test_the_command_prints_one_line_per_failure(tmp_path, server, kind, progres
 
 
 def test_leftovers_of_a_killed_download_are_removed_by_the_next_fetch(tmp_path, server):
+    """pooch's temporaries and tzsl's own (a build killed mid-write) go; files merely named alike stay."""
+    from tzsl._io import atomic_write  # noqa: PLC0415
+
     base, _ = server
     pup = _registry(tmp_path, base)
     home = tmp_path / "home"
-    leftovers = [home / "alpha/tmpab_12cd3", home / "alpha/sub/tmp9x8y7z6w"]
-    kept = [home / "alpha/tmp_notes.txt", home / "alpha/tmpfile", home / "alpha/TMPABCDEFGH", home / "alpha/tmpab12cd3e.csv",
-            home / "gamma/tmpab12cd3e", home / "alpha/sub/deeper/tmpab12cd3e"]
+    atomic: list[Path] = []  # the temporary name tzsl's atomic write gives a registered file
+    atomic_write(home / "alpha/one.csv", lambda tmp: atomic.append(tmp) or tmp.write_bytes(b"a,"))
+    (home / "alpha/one.csv").unlink()
+    leftovers = [home / "alpha/tmpab_12cd3", home / "alpha/sub/tmp9x8y7z6w", *atomic]
+    kept = [home / "alpha/tmp_notes.txt", home / "alpha/tmpfile", home / "alpha/TMPABCDEFGH",
+            home / "alpha/tmpab12cd3e.csv", home / "gamma/tmpab12cd3e", home / "alpha/sub/deeper/tmpab12cd3e",
+            home / "alpha/.notes.txt.ab12cd3e.tmp", home / "alpha/.one.csv.ab12cd3e.tmp.bak"]
     for path in leftovers + kept:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(b"half a download")
@@ -392,7 +399,7 @@ def test_leftovers_of_a_killed_download_are_removed_by_the_next_fetch(tmp_path, 
     [report] = fetch_datasets(["alpha"], home, pup=pup, progress=False, echo=lines.append)
     assert sorted(report.leftovers) == sorted(leftovers) and not any(p.exists() for p in leftovers)
     assert all(p.read_bytes() == b"half a download" for p in kept) and (home / "alpha/tmpabcdefgh").is_dir()
-    assert lines == ["alpha: 0 present, 2 downloaded, 2 temporary file(s) of an interrupted download removed"]
+    assert lines == ["alpha: 0 present, 2 downloaded, 3 temporary file(s) of an interrupted download removed"]
 
 
 _FETCH_SCRIPT = """
@@ -463,3 +470,23 @@ def test_a_second_fetch_into_the_same_data_home_waits_for_the_first(tmp_path, se
     second.join(timeout=10)
     assert done.is_set() and lines[1] == "beta: 0 present, 1 downloaded, 1 not downloadable (no public URL; " \
                                          "see data/README.md)"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("args", [["--timeout", "1"], ["--no-progress"]])
+def test_the_installed_command_prints_one_line_on_a_real_stderr(tmp_path, server, args):
+    """In a process of its own (pooch's log handler writes to the stderr of the process), one line:
+    the deadline with a progress bar (erased), three HTTP 500 answers without one."""
+    base, _ = server
+    kind = "drip" if "--timeout" in args else "status/500"
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+    env.pop("TZSL_FETCH_TIMEOUT", None)
+    done = subprocess.run([sys.executable, "-c", "from tzsl.cli import main; main()", "data", "fetch", "gelsight_press",
+                           "--mirror", f"{base}/{kind}", "--data-dir", str(tmp_path / "home"), *args],
+                          env=env, capture_output=True, timeout=120)  # bytes: text mode turns \r into \n
+    assert done.returncode == 3 and done.stdout == b""
+    [line] = _visible_lines(done.stderr.decode())
+    assert line.startswith("tzsl: error: gelsight_press file foam_brick_1.avi: "
+                           + ("no complete download within 1 s" if kind == "drip" else "cannot download"))
+    assert kind == "drip" or "(3 attempts, the last: HTTP 500 Internal Server Error)" in line
+    assert _files_under(tmp_path / "home") == []

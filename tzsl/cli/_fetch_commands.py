@@ -9,12 +9,18 @@ from tzsl.cli._root import cli, data_dir_option, no_progress_option
 
 class TimeoutOption(click.Option):
     """``--timeout``: its default (``$TZSL_FETCH_TIMEOUT``, else tzsl's) is resolved by
-    :func:`tzsl.datasets.fetch_datasets`; the help reads both names from :mod:`tzsl.datasets`
-    only when shown (``--help`` of the other commands stays fast)."""
+    :func:`tzsl.datasets.fetch_datasets`; the help reads the default, the stall limit and the
+    attempts from :mod:`tzsl.datasets` only when shown (``--help`` of other commands stays fast)."""
 
     def get_help_record(self, ctx):
-        from tzsl.datasets import DEFAULT_FETCH_TIMEOUT_S, FETCH_TIMEOUT_ENV  # noqa: PLC0415
+        from tzsl.datasets import (  # noqa: PLC0415
+            DEFAULT_FETCH_TIMEOUT_S,
+            FETCH_ATTEMPTS,
+            FETCH_STALL_S,
+            FETCH_TIMEOUT_ENV,
+        )
 
+        self.help = self.help.format(stall=f"{FETCH_STALL_S:g}", attempts=FETCH_ATTEMPTS)
         self.show_default = f"${FETCH_TIMEOUT_ENV}, else {DEFAULT_FETCH_TIMEOUT_S:g}"
         return super().get_help_record(ctx)
 
@@ -32,7 +38,8 @@ def data() -> None:
 @click.option("--timeout", cls=TimeoutOption, type=click.FloatRange(min=0, min_open=True), default=None,
               metavar="SECONDS",
               help="Deadline per file: a file not completely downloaded within SECONDS (retries included) "
-                   "stops the fetch with one line; an attempt that stalls is retried within it.")
+                   "stops the fetch with one line. Within it, an attempt that receives no byte for {stall} s, "
+                   "is cut short or gets an HTTP 5xx answer is retried ({attempts} attempts at most).")
 @data_dir_option
 @no_progress_option
 def fetch(names: tuple[str, ...], mirror: str | None, timeout: float | None, data_dir, no_progress: bool) -> None:

@@ -7,17 +7,18 @@ bytes come through :class:`DeadlineDownloader`, which gives up on a file
 
 - when it is not complete within its deadline (``timeout`` seconds from the first attempt,
   retries and waits between them included; :func:`fetch_timeout`), however the server
-  sends it (1 byte every 2 s, headers included), and
-- for this attempt, when no byte arrives for :data:`STALL_S` seconds (a stall; retried while the
+  sends it (a byte now and then, headers included), and
+- for this attempt, when no byte arrives for :data:`FETCH_STALL_S` seconds (a stall; retried while the
   deadline allows).
 
-Failed attempts are retried silently (:data:`ATTEMPTS`), except a refusal (HTTP 4xx) and a
+Failed attempts are retried silently (:data:`FETCH_ATTEMPTS`), except a refusal (HTTP 4xx) and a
 hash mismatch, and counted in the one line that reports the file. pooch's own log lines
 (``Downloading file ...``) never reach the terminal: :func:`quiet_pooch_logger` drops them and
 turns pooch's warnings, if any, into Python warnings (one ``tzsl: warning:`` line on the command
 line). A download killed outright (SIGKILL, power cut) leaves pooch's temporary file
-(``tmp`` + 8 characters) behind; :func:`remove_leftovers` deletes those in the folders the next
-fetch writes to, under :func:`fetch_lock` so that no running fetch loses its file.
+(``tmp`` + 8 characters) behind, a build tzsl's own (``.<name>.<8 characters>.tmp``);
+:func:`remove_leftovers` deletes those in the folders the next fetch writes to, under
+:func:`fetch_lock` so that no running fetch loses its file.
 """
 
 from __future__ import annotations
@@ -45,8 +46,8 @@ try:  # POSIX: an advisory lock on the data home, released by the system when it
 except ImportError:  # pragma: no cover - Windows: a file in use cannot be deleted there anyway
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["ATTEMPTS", "DEFAULT_FETCH_TIMEOUT_S", "FETCH_TIMEOUT_ENV", "STALL_S", "DeadlineDownloader",
-           "DownloadFailed", "download", "fetch_lock", "fetch_timeout", "first_line", "is_pooch_temporary",
+__all__ = ["FETCH_ATTEMPTS", "DEFAULT_FETCH_TIMEOUT_S", "FETCH_TIMEOUT_ENV", "FETCH_STALL_S", "DeadlineDownloader",
+           "DownloadFailed", "download", "fetch_lock", "fetch_timeout", "first_line", "is_leftover",
            "quiet_pooch_logger", "remove_leftovers"]
 
 #: Environment variable: the deadline per file, in seconds (``tzsl data fetch --timeout`` wins).
@@ -55,15 +56,18 @@ FETCH_TIMEOUT_ENV = "TZSL_FETCH_TIMEOUT"
 #: file is a few MB, so this allows for a connection of some 10 kB/s.
 DEFAULT_FETCH_TIMEOUT_S = 300.0
 #: An attempt that receives no byte for this long (s) is abandoned (and retried within the deadline).
-STALL_S = 30.0
+FETCH_STALL_S = 30.0
 #: Attempts per file, within its deadline (network failures, HTTP 5xx, stalls and truncations are
 #: retried; an HTTP 4xx or a hash mismatch is not).
-ATTEMPTS = 3
+FETCH_ATTEMPTS = 3
 #: Bytes asked for per read (one read returns what has arrived, up to this).
 CHUNK_BYTES = 1 << 16
 #: The name of pooch's temporary download files: :func:`tempfile.NamedTemporaryFile`'s ``tmp``
 #: followed by 8 characters of ``[a-z0-9_]`` (pooch 1.x, ``pooch.utils.temporary_file``).
 POOCH_TEMPORARY = re.compile(r"tmp[a-z0-9_]{8}")
+#: The name of tzsl's own temporary files (:func:`tzsl._io.atomic_write`, which writes the files a
+#: fetch builds): ``.<final name>.`` + 8 characters of ``[a-z0-9_]`` + ``.tmp``, beside the final file.
+ATOMIC_TEMPORARY = re.compile(r"\.(?P<target>.+)\.[a-z0-9_]{8}\.tmp")
 
 
 def fetch_timeout(timeout: float | None = None) -> float:
@@ -121,7 +125,7 @@ class DeadlineDownloader:
     """
 
     deadline: float
-    stall: float = STALL_S
+    stall: float = FETCH_STALL_S
     progress: bool = False
     label: str = ""
 
@@ -244,7 +248,7 @@ def quiet_pooch_logger() -> Iterator[None]:
         logger.removeFilter(relay)
 
 
-def download(pup: pooch.Pooch, relpath: str, url: str, *, timeout: float, stall: float = STALL_S,
+def download(pup: pooch.Pooch, relpath: str, url: str, *, timeout: float, stall: float = FETCH_STALL_S,
              progress: bool = False, downloader: Callable | None = None) -> tuple[Path, int]:
     """Download ``relpath`` of ``pup`` (a one-file Pooch whose path is the data home) from ``url``.
 
@@ -281,7 +285,7 @@ def download(pup: pooch.Pooch, relpath: str, url: str, *, timeout: float, stall:
     start = time.monotonic()
     deadline = start + timeout
     http = downloader is None and url.startswith(("http://", "https://"))
-    tries = ATTEMPTS if http else 1
+    tries = FETCH_ATTEMPTS if http else 1
     for attempt in range(1, tries + 1):
         get = DeadlineDownloader(deadline, stall, progress, Path(relpath).name) if http else downloader
         try:
@@ -300,30 +304,35 @@ def download(pup: pooch.Pooch, relpath: str, url: str, *, timeout: float, stall:
     raise AssertionError("unreachable")  # pragma: no cover
 
 
-def is_pooch_temporary(path: Path) -> bool:
-    """Whether ``path`` is named like pooch's temporary download files (:data:`POOCH_TEMPORARY`)."""
-    return POOCH_TEMPORARY.fullmatch(path.name) is not None
+def is_leftover(path: Path, registered: set[Path]) -> bool:
+    """Whether ``path`` is a temporary file of a download or build of ``registered`` files: named
+    like pooch's temporaries (:data:`POOCH_TEMPORARY`, and not registered itself) or like tzsl's
+    atomic writes of a registered file (:data:`ATOMIC_TEMPORARY`)."""
+    if POOCH_TEMPORARY.fullmatch(path.name):
+        return path not in registered
+    atomic = ATOMIC_TEMPORARY.fullmatch(path.name)
+    return atomic is not None and path.with_name(atomic["target"]) in registered
 
 
-def remove_leftovers(folders: Iterable[Path], keep: Iterable[Path] = ()) -> list[Path]:
-    """Delete the temporary files a killed download left in ``folders`` (not their subfolders).
+def remove_leftovers(registered: Iterable[Path]) -> list[Path]:
+    """Delete the temporary files a killed fetch left beside the ``registered`` files.
 
-    Only regular files named like pooch's temporaries (:func:`is_pooch_temporary`) and not in
-    ``keep`` (the registered files) are deleted. Call it under :func:`fetch_lock`: a running
-    fetch's temporary file has the same name.
+    Only regular files :func:`is_leftover` recognises are deleted, in the folders of the
+    registered files (not in their subfolders). Call it under
+    :func:`fetch_lock`: a running fetch's temporary file has the same kind of name.
 
     Returns
     -------
     list of Path
         The files deleted.
     """
-    kept = {Path(p) for p in keep}
+    registered = {Path(p) for p in registered}
     removed = []
-    for folder in sorted(set(folders)):
+    for folder in sorted({p.parent for p in registered}):
         if not folder.is_dir():
             continue
         for path in sorted(folder.iterdir()):
-            if is_pooch_temporary(path) and path not in kept and path.is_file() and not path.is_symlink():
+            if is_leftover(path, registered) and path.is_file() and not path.is_symlink():
                 with contextlib.suppress(FileNotFoundError, PermissionError):
                     path.unlink()
                     removed.append(path)

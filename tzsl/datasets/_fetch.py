@@ -4,10 +4,11 @@ The registry (``registry.txt``: path, sha256, public URL) says what to get; pooc
 each missing file to a temporary name, checks its sha256 and only then moves it into place, so
 an interrupted fetch leaves no half file and a rerun goes on where it stopped (files present and
 verified are skipped). Every file has a deadline (``timeout``, ``$TZSL_FETCH_TIMEOUT``, else
-:data:`~tzsl.datasets._download.DEFAULT_FETCH_TIMEOUT_S`), failed attempts are retried silently within
-it, pooch prints nothing, and the temporary files a killed fetch left in the dataset's folders are
-removed first (:mod:`tzsl.datasets._download`). One fetch at a time writes to a data home. ``mirror`` (or ``$TZSL_DATA_MIRROR``) is a base URL laid out like the data
-home (``MIRROR/phac2/...``): every file is taken from there instead, the locally built ones too.
+:data:`~tzsl.datasets._download.DEFAULT_FETCH_TIMEOUT_S`), failed attempts are retried silently
+within it, pooch prints nothing, and the temporary files a killed fetch left in the dataset's
+folders are removed first (:mod:`tzsl.datasets._download`). One fetch at a time writes to a data
+home. ``mirror`` (or ``$TZSL_DATA_MIRROR``) is a base URL laid out like the data home
+(``MIRROR/phac2/...``): every file is taken from there instead, the locally built ones too.
 Files the registry lists without a URL are built from downloaded ones where tzsl can
 (``phac2/derived/phac2_labels_60x24.csv`` from the Penn pickles, ``fabric/fabric_groups.csv`` from
 the fabric paper's ``Data2.py``); derived reference copies that no study reads
@@ -24,7 +25,7 @@ from pathlib import Path
 import pooch
 
 from tzsl._io import atomic_write_bytes
-from tzsl.datasets._download import STALL_S, fetch_lock, fetch_timeout, remove_leftovers
+from tzsl.datasets._download import FETCH_STALL_S, fetch_lock, fetch_timeout, remove_leftovers
 from tzsl.datasets._fabric import FABRIC_GROUPS_SOURCE, fabric_groups_csv_bytes
 from tzsl.datasets._home import get_data_home
 from tzsl.datasets._registry import download_file, registry, source_of, verify_file
@@ -154,7 +155,7 @@ def fetch_datasets(
     mirror: str | None = None,
     progress: bool = True,
     timeout: float | None = None,
-    stall: float = STALL_S,
+    stall: float = FETCH_STALL_S,
     pup: pooch.Pooch | None = None,
     echo: Callable[[str], None] | None = None,
     build_sources: dict[str, dict[str, tuple[str, str]]] | None = None,
@@ -233,9 +234,8 @@ def _fetch_dataset(report: FetchReport, home: Path, pup: pooch.Pooch, *, mirror:
     """Fill ``report`` (its dataset's files: present, downloaded, built, missing, left out)."""
     files = [f for f in sorted(pup.registry) if f.split("/", 1)[0] == report.name]
     report.total = len(files)
-    folders = {(home / f).parent for f in files}
-    folders |= {(home / source).parent for f in files for source in build_sources.get(f, {})}
-    report.leftovers = remove_leftovers(folders, keep=[home / f for f in files])
+    sources = [home / source for f in files for source in build_sources.get(f, {})]
+    report.leftovers = remove_leftovers([home / f for f in files] + sources)
     for relpath in files:
         if _present(home / relpath, relpath, pup):
             report.present.append(relpath)

@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import pooch
 
-from tzsl.datasets._download import STALL_S, DownloadFailed, download, fetch_timeout, first_line
+from tzsl.datasets._download import FETCH_STALL_S, DownloadFailed, download, fetch_timeout, first_line
 from tzsl.datasets._home import DATA_DIR_ENV, get_data_home
 from tzsl.exceptions import ChecksumError, DataMissingError
 
@@ -222,7 +222,7 @@ class Downloaded(NamedTuple):
 
 def download_file(relpath: str, home: Path, *, url: str | None = None, pup: pooch.Pooch | None = None,
                   downloader=None, progress: bool = False, timeout: float | None = None,
-                  stall: float = STALL_S) -> Downloaded:
+                  stall: float = FETCH_STALL_S) -> Downloaded:
     """Download one registered file into the data home with pooch, hash-checked before it is moved
     into place (an interrupted, abandoned or corrupt download leaves no file).
 
@@ -242,7 +242,8 @@ def download_file(relpath: str, home: Path, *, url: str | None = None, pup: pooc
     progress : bool, default False
     timeout : float, optional
         Deadline (s) for the whole file, retries included; default
-        :func:`~tzsl.datasets._download.fetch_timeout` (``$TZSL_FETCH_TIMEOUT``, else 300 s).
+        :func:`~tzsl.datasets._download.fetch_timeout` (``$TZSL_FETCH_TIMEOUT``, else
+        :data:`~tzsl.datasets._download.DEFAULT_FETCH_TIMEOUT_S`).
     stall : float
         Seconds without a byte after which an attempt is abandoned.
 
