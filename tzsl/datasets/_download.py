@@ -182,7 +182,9 @@ class DeadlineDownloader:
         """
         response = self._get(url)
         raw = response.raw  # urllib3's response: read1() returns what has arrived
-        sock = getattr(raw.connection, "sock", None)
+        # the socket's timeout is set before each read; without a socket to reach (not seen with
+        # requests and urllib3 2) the deadline is checked between reads, at most one stall limit late
+        settimeout = getattr(getattr(raw.connection, "sock", None), "settimeout", None)
         expected = response.headers.get("content-length")
         total = int(expected) if expected and expected.isdigit() else None
         of = f" of {total}" if total is not None else ""
@@ -199,8 +201,8 @@ class DeadlineDownloader:
                                                       desc=self.label, disable=not self.progress) as bar:
                 while True:
                     remaining = on_time()
-                    if sock is not None:  # wake up at the deadline or after a stall, whichever comes first
-                        sock.settimeout(min(self.stall, remaining))
+                    if settimeout is not None:  # wake up at the deadline or after a stall, whichever is first
+                        settimeout(min(self.stall, remaining))
                     try:
                         chunk = raw.read1(CHUNK_BYTES, decode_content=True)
                     except (ReadTimeoutError, TimeoutError):
