@@ -7,6 +7,7 @@ import hashlib
 import http.server
 import logging
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -490,3 +491,17 @@ def test_the_installed_command_prints_one_line_on_a_real_stderr(tmp_path, server
                            + ("no complete download within 1 s" if kind == "drip" else "cannot download"))
     assert kind == "drip" or "(3 attempts, the last: HTTP 500 Internal Server Error)" in line
     assert _files_under(tmp_path / "home") == []
+
+
+def test_a_refused_connection_is_named_in_a_few_words(tmp_path):
+    import socket  # noqa: PLC0415
+
+    with socket.socket() as probe:  # a loopback port nobody listens on
+        probe.bind(("127.0.0.1", 0))
+        url = f"http://127.0.0.1:{probe.getsockname()[1]}/alpha/one.csv"
+    with pytest.raises(DataMissingError) as info:
+        fetch_datasets(["alpha"], tmp_path / "home", pup=_pup(tmp_path, {"alpha/one.csv": url}), progress=False,
+                       timeout=2)
+    assert re.match(re.escape(f"alpha file one.csv: no complete download within 2 s from {url} (2 attempts, the last: "
+                              "ConnectionError: Failed to establish a new connection: [Errno ") + r"\d+\] Connection "
+                    r"refused\);", str(info.value)), str(info.value)

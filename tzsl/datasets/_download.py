@@ -162,7 +162,7 @@ class DeadlineDownloader:
         if isinstance(error, requests.Timeout):
             raise DownloadFailed(f"no response for {wait:g} s", retry=True)
         if isinstance(error, requests.RequestException):
-            raise DownloadFailed(f"{type(error).__name__}: {first_line(error)}", retry=True)
+            raise DownloadFailed(_connection_reason(error), retry=True)
         if error is not None:
             raise error  # type: ignore[misc]
         response: requests.Response = box["response"]  # type: ignore[assignment]
@@ -221,6 +221,14 @@ class DeadlineDownloader:
             response.close()
         if total is not None and raw.tell() < total:
             raise DownloadFailed(f"connection ended after {raw.tell()}{of} bytes", retry=True)
+
+
+def _connection_reason(error: requests.RequestException) -> str:
+    """Why a request failed, in a few words: urllib3's innermost reason without the pool and
+    connection reprs (``Failed to establish a new connection: [Errno 111] Connection refused``)."""
+    reason = getattr(error.args[0], "reason", None) if error.args else None
+    text = first_line(reason) if isinstance(reason, BaseException) else first_line(error)
+    return f"{type(error).__name__}: {text.split('): ', 1)[-1]}"
 
 
 def first_line(exc: BaseException) -> str:
