@@ -270,7 +270,7 @@ def test_a_slow_drip_is_abandoned_at_the_deadline_and_leaves_nothing(tmp_path, s
     with pytest.raises(DataMissingError) as info:
         fetch_datasets(["alpha"], home, pup=pup, progress=False, timeout=2)
     elapsed = time.monotonic() - start
-    assert 2 <= elapsed < 2 + 1.5, elapsed
+    assert 2 <= elapsed < 2 + 3, elapsed  # at the deadline (with room for a busy machine), not at the drip's end
     message = str(info.value)
     assert message.startswith(f"alpha file one.csv: no complete download within 2 s from {url} (1 attempt: ")
     assert ("of 1000 bytes received" if kind == "drip" else "status and headers not received") in message
@@ -307,10 +307,8 @@ def test_retries_are_silent_and_counted_and_a_refusal_is_not_retried(tmp_path, s
         fetch_datasets(["beta"], tmp_path / "home", pup=pup, progress=False)
     assert "(3 attempts, the last: connection ended after 10 of 1000 bytes" in str(info.value)
     refused = _pup(tmp_path, {"alpha/one.csv": f"{base}/status/404/alpha/one.csv"})
-    start = time.monotonic()
     with pytest.raises(DataMissingError, match=r"\(1 attempt: HTTP 404 Not Found\)"):
         fetch_datasets(["alpha"], tmp_path / "elsewhere", pup=refused, progress=False)
-    assert time.monotonic() - start < 1
 
 
 def test_the_failure_of_one_file_of_several_says_where_the_fetch_stopped(tmp_path, server):
@@ -466,7 +464,10 @@ def test_a_second_fetch_into_the_same_data_home_waits_for_the_first(tmp_path, se
         second = threading.Thread(target=lambda: fetch_datasets(["beta"], home, pup=pup, progress=False,
                                                                 echo=lines.append) and done.set(), daemon=True)
         second.start()
-        time.sleep(0.5)
+        end = time.monotonic() + 10
+        while not lines and time.monotonic() < end:
+            time.sleep(0.05)
+        time.sleep(0.2)
         assert not done.is_set() and lines == [f"another fetch is writing to {home}: waiting for it to end"]
     second.join(timeout=10)
     assert done.is_set() and lines[1] == "beta: 0 present, 1 downloaded, 1 not downloadable (no public URL; " \
