@@ -200,7 +200,7 @@ def fetch_datasets(
     DataMissingError
         A file with no complete download (the deadline passed, the server refused, the
         attempts failed). One line: the dataset and file, the URL, why, then what this fetch
-        did before it (files present and downloaded, files not tried, datasets complete).
+        did before it (the dataset's files in place of its registered ones, the datasets complete).
     ChecksumError
         A downloaded file whose sha256 differs from the registry's (it is not kept); the same
         one line.
