@@ -5,7 +5,14 @@ from __future__ import annotations
 import functools
 import hashlib
 import http.server
+import logging
+import os
+import re
+import signal
+import subprocess
+import sys
 import threading
+import time
 from pathlib import Path
 
 import pooch
@@ -15,24 +22,88 @@ from click.testing import CliRunner
 from tzsl.cli import cli
 
 from tzsl.datasets import fetch_datasets, registered_datasets
-from tzsl.exceptions import ChecksumError, ConfigError
+from tzsl.exceptions import ChecksumError, ConfigError, DataMissingError
 
 FILES = {"alpha/one.csv": b"a,b\n1,2\n", "alpha/sub/two.bin": bytes(range(200)) * 50, "beta/three.txt": b"three\n"}
 
 
+#: How long a misbehaving handler of the test server goes on at most (s): every test stays bounded.
+HANDLER_LIMIT_S = 20.0
+#: Seconds between two bytes of the slow-drip paths.
+DRIP_S = 0.25
+
+
+class MisbehavingHandler(http.server.SimpleHTTPRequestHandler):
+    """Serves a folder, except under these prefixes (the rest of the path is ignored):
+
+    /drip/...        headers (Content-Length 1000), then 1 byte every DRIP_S
+    /header-drip/... the status line and headers themselves, 1 byte every DRIP_S
+    /stall/...       headers, then nothing
+    /truncate/...    headers (Content-Length 1000), 10 bytes, then the connection closes
+    /status/CODE/... that HTTP status
+    /flaky/...       HTTP 500 on the first request of a path, then the file (the rest of the path)
+    """
+
+    stop: threading.Event
+    seen: dict[str, int]
+
+    def log_message(self, *args) -> None:
+        pass
+
+    def _slowly(self, data: bytes) -> None:
+        end = time.monotonic() + HANDLER_LIMIT_S
+        for i in range(len(data)):
+            if self.stop.wait(DRIP_S) or time.monotonic() > end:
+                return
+            try:
+                self.wfile.write(data[i:i + 1])
+                self.wfile.flush()
+            except OSError:  # the client gave up
+                return
+
+    def do_GET(self) -> None:
+        kind, _, rest = self.path.lstrip("/").partition("/")
+        if kind in ("drip", "stall", "truncate"):
+            self.send_response(200)
+            self.send_header("Content-Length", "1000")
+            self.end_headers()
+            if kind == "drip":
+                self._slowly(b"x" * 1000)
+            elif kind == "stall":
+                self.stop.wait(HANDLER_LIMIT_S)
+            else:
+                self.wfile.write(b"x" * 10)
+        elif kind == "header-drip":
+            self._slowly(b"HTTP/1.0 200 OK\r\nContent-Length: 1000\r\n\r\n" + b"x" * 1000)
+        elif kind == "status":
+            code = int(rest.split("/", 1)[0])
+            self.send_error(code)
+        elif kind == "flaky":
+            self.seen[rest] = self.seen.get(rest, 0) + 1
+            if self.seen[rest] == 1:
+                self.send_error(500)
+            else:
+                self.path = "/" + rest
+                super().do_GET()
+        else:
+            super().do_GET()
+
+
 @pytest.fixture
 def server(tmp_path):
-    """A loopback HTTP server over a folder; yields (base URL, folder). Stops by itself."""
+    """A loopback HTTP server over a folder (:class:`MisbehavingHandler`); yields (base URL, folder).
+    Stops by itself, its slow handlers too."""
     root = tmp_path / "served"
     for name, content in FILES.items():
         (root / name).parent.mkdir(parents=True, exist_ok=True)
         (root / name).write_bytes(content)
-    handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(root))
-    handler.log_message = lambda *args: None
-    httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    stop = threading.Event()
+    handler = type("Handler", (MisbehavingHandler,), {"stop": stop, "seen": {}})
+    httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), functools.partial(handler, directory=str(root)))
     thread = threading.Thread(target=httpd.serve_forever, daemon=True)
     thread.start()
     yield f"http://127.0.0.1:{httpd.server_address[1]}", root
+    stop.set()
     httpd.shutdown()
     httpd.server_close()
 
@@ -169,3 +240,269 @@ def test_fetch_builds_fabric_groups_and_leaves_reference_copies_out(tmp_path):
     assert (home / "fabric/fabric_groups.csv").read_bytes() == GROUPS_CSV
     assert phac2.reference == [reference] and phac2.missing == []
     assert "no study reads them" in phac2.line()
+
+
+# --------------------------------------------------------------------------- deadline, retries, one line
+
+
+def _pup(tmp_path: Path, urls: dict[str, str]) -> pooch.Pooch:
+    """A registry of FILES' hashes with the given URLs (written as a registry file, as tzsl's is)."""
+    lines = [f"{name} sha256:{hashlib.sha256(FILES[name]).hexdigest()} {url}" for name, url in urls.items()]
+    path = tmp_path / "registry.txt"
+    path.write_text("\n".join(lines) + "\n")
+    pup = pooch.create(path=".", base_url="", registry=None)
+    pup.load_registry(str(path))
+    return pup
+
+
+def _files_under(folder: Path) -> list[str]:
+    return sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file()) if folder.exists() else []
+
+
+@pytest.mark.parametrize("kind", ["drip", "header-drip"])
+def test_a_slow_drip_is_abandoned_at_the_deadline_and_leaves_nothing(tmp_path, server, kind):
+    """1 byte every DRIP_S never stalls a read, body or headers: the deadline ends it, in one line."""
+    base, _ = server
+    url = f"{base}/{kind}/alpha/one.csv"
+    pup = _pup(tmp_path, {"alpha/one.csv": url})
+    home = tmp_path / "home"
+    start = time.monotonic()
+    with pytest.raises(DataMissingError) as info:
+        fetch_datasets(["alpha"], home, pup=pup, progress=False, timeout=2)
+    elapsed = time.monotonic() - start
+    assert 2 <= elapsed < 2 + 3, elapsed  # at the deadline (with room for a busy machine), not at the drip's end
+    message = str(info.value)
+    assert message.startswith(f"alpha file one.csv: no complete download within 2 s from {url} (1 attempt: ")
+    assert ("of 1000 bytes received" if kind == "drip" else "status and headers not received") in message
+    assert len(message.splitlines()) == 1 and message.endswith("alpha: 0 of 1 files in place (0 present, "
+                                                               "0 downloaded); a rerun goes on from there")
+    assert _files_under(home) == []  # no partial file, no temporary file
+
+
+def test_a_stall_is_retried_within_the_deadline_then_reported(tmp_path, server):
+    base, _ = server
+    url = f"{base}/stall/alpha/one.csv"
+    pup = _pup(tmp_path, {"alpha/one.csv": url})
+    start = time.monotonic()
+    with pytest.raises(DataMissingError) as info:
+        fetch_datasets(["alpha"], tmp_path / "home", pup=pup, progress=False, timeout=30, stall=0.5)
+    assert time.monotonic() - start < 10  # 3 stalls of 0.5 s and waits of 1 + 2 s, far from the deadline
+    assert str(info.value).startswith(f"alpha file one.csv: cannot download from {url} (3 attempts, the last: "
+                                      "no byte for 0.5 s after 0 of 1000 bytes);")
+    # a stall close to the deadline is reported as the deadline
+    with pytest.raises(DataMissingError, match=r"no complete download within 1 s .*\(1 attempt: 0 of 1000 bytes "):
+        fetch_datasets(["alpha"], tmp_path / "home", pup=pup, progress=False, timeout=1, stall=5)
+    assert _files_under(tmp_path / "home") == []
+
+
+def test_retries_are_silent_and_counted_and_a_refusal_is_not_retried(tmp_path, server):
+    base, _ = server
+    pup = _pup(tmp_path, {"alpha/one.csv": f"{base}/flaky/alpha/one.csv",
+                          "alpha/sub/two.bin": f"{base}/alpha/sub/two.bin",
+                          "beta/three.txt": f"{base}/truncate/beta/three.txt"})
+    lines: list[str] = []
+    [alpha] = fetch_datasets(["alpha"], tmp_path / "home", pup=pup, progress=False, echo=lines.append)
+    assert alpha.retried == ["alpha/one.csv"] and lines == ["alpha: 0 present, 2 downloaded (1 after a retry)"]
+    with pytest.raises(DataMissingError) as info:  # a truncation is retried, within the deadline
+        fetch_datasets(["beta"], tmp_path / "home", pup=pup, progress=False)
+    assert "(3 attempts, the last: connection ended after 10 of 1000 bytes" in str(info.value)
+    refused = _pup(tmp_path, {"alpha/one.csv": f"{base}/status/404/alpha/one.csv"})
+    with pytest.raises(DataMissingError, match=r"\(1 attempt: HTTP 404 Not Found\)"):
+        fetch_datasets(["alpha"], tmp_path / "elsewhere", pup=refused, progress=False)
+
+
+def test_the_failure_of_one_file_of_several_says_where_the_fetch_stopped(tmp_path, server):
+    base, _ = server
+    bad = f"{base}/status/404/alpha/sub/two.bin"
+    pup = _pup(tmp_path, {"alpha/one.csv": f"{base}/alpha/one.csv", "alpha/sub/two.bin": bad,
+                          "beta/three.txt": f"{base}/beta/three.txt"})
+    home = tmp_path / "home"
+    with pytest.raises(DataMissingError) as info:
+        fetch_datasets(["beta", "alpha"], home, pup=pup, progress=False)
+    assert str(info.value) == (f"alpha file sub/two.bin: cannot download from {bad} (1 attempt: HTTP 404 Not "
+                               "Found); alpha: 1 of 2 files in place (0 present, 1 downloaded); beta complete; "
+                               "a rerun goes on from there")
+    assert _files_under(home) == ["alpha/one.csv", "beta/three.txt"]
+
+
+def test_the_deadline_setting_is_read_once_and_checked(monkeypatch):
+    from tzsl.datasets import DEFAULT_FETCH_TIMEOUT_S, FETCH_TIMEOUT_ENV  # noqa: PLC0415
+    from tzsl.datasets._download import fetch_timeout  # noqa: PLC0415
+
+    monkeypatch.delenv(FETCH_TIMEOUT_ENV, raising=False)
+    assert fetch_timeout() == DEFAULT_FETCH_TIMEOUT_S and fetch_timeout(7) == 7
+    monkeypatch.setenv(FETCH_TIMEOUT_ENV, "12.5")
+    assert fetch_timeout() == 12.5 and fetch_timeout(3) == 3
+    for bad in ("soon", "0", "-1", "inf"):
+        monkeypatch.setenv(FETCH_TIMEOUT_ENV, bad)
+        with pytest.raises(ConfigError, match=rf"^\$TZSL_FETCH_TIMEOUT={bad!r}|^\$TZSL_FETCH_TIMEOUT=-?[0-9a-z]+:"):
+            fetch_timeout()
+    result = CliRunner().invoke(cli, ["data", "fetch", "--timeout", "0", "--no-progress"])
+    assert result.exit_code == 2 and "--timeout" in result.stderr
+
+
+def _visible_lines(stderr: str) -> list[str]:
+    """What a terminal shows of ``stderr``: each line as its last carriage return left it."""
+    return [shown for line in stderr.split("\n") if (shown := line.split("\r")[-1].strip())]
+
+
+@pytest.mark.parametrize("progress", [True, False])
+@pytest.mark.parametrize("kind", ["drip", "status/404", "status/500"])
+def test_the_command_prints_one_line_per_failure(tmp_path, server, kind, progress):
+    """stderr holds the error line only (a progress bar is erased), and pooch logs nothing."""
+    base, _ = server
+    records: list[logging.LogRecord] = []
+    catcher = logging.Handler()
+    catcher.emit = records.append  # type: ignore[method-assign]
+    pooch.get_logger().addHandler(catcher)
+    try:
+        result = CliRunner().invoke(cli, ["data", "fetch", "gelsight_press", "--mirror", f"{base}/{kind}",
+                                          "--timeout", "1", "--data-dir", str(tmp_path / "home")]
+                                    + ([] if progress else ["--no-progress"]))
+    finally:
+        pooch.get_logger().removeHandler(catcher)
+    assert result.exit_code == 3, result.output
+    [line] = _visible_lines(result.stderr)
+    url = f"{base}/{kind}/gelsight_press/foam_brick_1.avi"
+    assert line.startswith(f"tzsl: error: gelsight_press file foam_brick_1.avi: "
+                           + (f"no complete download within 1 s from {url} (1 attempt: " if kind == "drip" else
+                              f"cannot download from {url} (1 attempt: HTTP 404" if kind.endswith("404") else
+                              f"no complete download within 1 s from {url} (1 attempt: HTTP 500"))
+    assert line.endswith("gelsight_press: 0 of 45 files in place (0 present, 0 downloaded); a rerun goes on from there")
+    assert records == [] and result.stdout == ""
+    assert _files_under(tmp_path / "home") == []
+
+
+# --------------------------------------------------------------------------- a killed fetch, another fetch
+
+
+def test_leftovers_of_a_killed_download_are_removed_by_the_next_fetch(tmp_path, server):
+    """pooch's temporaries and tzsl's own (a build killed mid-write) go; files merely named alike stay."""
+    from tzsl._io import atomic_write  # noqa: PLC0415
+
+    base, _ = server
+    pup = _registry(tmp_path, base)
+    home = tmp_path / "home"
+    atomic: list[Path] = []  # the temporary name tzsl's atomic write gives a registered file
+    atomic_write(home / "alpha/one.csv", lambda tmp: atomic.append(tmp) or tmp.write_bytes(b"a,"))
+    (home / "alpha/one.csv").unlink()
+    leftovers = [home / "alpha/tmpab_12cd3", home / "alpha/sub/tmp9x8y7z6w", *atomic]
+    kept = [home / "alpha/tmp_notes.txt", home / "alpha/tmpfile", home / "alpha/TMPABCDEFGH",
+            home / "alpha/tmpab12cd3e.csv", home / "gamma/tmpab12cd3e", home / "alpha/sub/deeper/tmpab12cd3e",
+            home / "alpha/.notes.txt.ab12cd3e.tmp", home / "alpha/.one.csv.ab12cd3e.tmp.bak"]
+    for path in leftovers + kept:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(b"half a download")
+    (home / "alpha/tmpabcdefgh").mkdir()  # a folder: not a temporary file
+    lines: list[str] = []
+    [report] = fetch_datasets(["alpha"], home, pup=pup, progress=False, echo=lines.append)
+    assert sorted(report.leftovers) == sorted(leftovers) and not any(p.exists() for p in leftovers)
+    assert all(p.read_bytes() == b"half a download" for p in kept) and (home / "alpha/tmpabcdefgh").is_dir()
+    assert lines == ["alpha: 0 present, 2 downloaded, 3 temporary file(s) of an interrupted download removed"]
+
+
+_FETCH_SCRIPT = """
+import sys, pooch
+from tzsl.datasets import fetch_datasets
+pup = pooch.create(path=".", base_url="", registry=None)
+pup.load_registry(sys.argv[1])
+fetch_datasets(["alpha"], sys.argv[2], pup=pup, progress=False, timeout=60)
+"""
+
+
+def _fetch_until_downloading(tmp_path: Path, pup_file: Path, home: Path) -> tuple[subprocess.Popen, Path]:
+    """A fetch in a child process, once its temporary file exists in the data home (bounded wait)."""
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+    child = subprocess.Popen([sys.executable, "-c", _FETCH_SCRIPT, str(pup_file), str(home)], env=env,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    end = time.monotonic() + 60
+    while time.monotonic() < end and child.poll() is None:
+        found = [p for p in (home / "alpha").glob("tmp*")] if (home / "alpha").is_dir() else []
+        if found:
+            time.sleep(2 * DRIP_S)  # a few bytes in
+            return child, found[0]
+        time.sleep(0.05)
+    child.kill()
+    pytest.fail(f"the child fetch never started downloading: {child.communicate()[1].decode()[-500:]}")
+
+
+@pytest.mark.slow
+def test_a_sigkill_mid_download_leaves_a_leftover_the_next_fetch_removes(tmp_path, server):
+    base, _ = server
+    _pup(tmp_path, {"alpha/one.csv": f"{base}/drip/alpha/one.csv"})
+    home = tmp_path / "home"
+    child, leftover = _fetch_until_downloading(tmp_path, tmp_path / "registry.txt", home)
+    child.send_signal(signal.SIGKILL)
+    child.communicate(timeout=10)
+    assert leftover.is_file()  # what the tester saw
+    [report] = fetch_datasets(["alpha"], home, pup=_pup(tmp_path, {"alpha/one.csv": f"{base}/alpha/one.csv"}),
+                              progress=False)
+    assert report.leftovers == [leftover] and _files_under(home) == ["alpha/one.csv"]
+
+
+@pytest.mark.slow
+def test_ctrl_c_mid_download_leaves_no_file(tmp_path, server):
+    base, _ = server
+    _pup(tmp_path, {"alpha/one.csv": f"{base}/drip/alpha/one.csv"})
+    home = tmp_path / "home"
+    child, _ = _fetch_until_downloading(tmp_path, tmp_path / "registry.txt", home)
+    child.send_signal(signal.SIGINT)
+    _, err = child.communicate(timeout=10)
+    assert child.returncode != 0 and b"KeyboardInterrupt" in err
+    assert _files_under(home) == []
+
+
+def test_a_second_fetch_into_the_same_data_home_waits_for_the_first(tmp_path, server):
+    from tzsl.datasets._download import fetch_lock  # noqa: PLC0415
+
+    base, _ = server
+    pup = _registry(tmp_path, base)
+    home = tmp_path / "home"
+    lines: list[str] = []
+    done = threading.Event()
+    with fetch_lock(home):
+        second = threading.Thread(target=lambda: fetch_datasets(["beta"], home, pup=pup, progress=False,
+                                                                echo=lines.append) and done.set(), daemon=True)
+        second.start()
+        end = time.monotonic() + 10
+        while not lines and time.monotonic() < end:
+            time.sleep(0.05)
+        time.sleep(0.2)
+        assert not done.is_set() and lines == [f"another fetch is writing to {home}: waiting for it to end"]
+    second.join(timeout=10)
+    assert done.is_set() and lines[1] == "beta: 0 present, 1 downloaded, 1 not downloadable (no public URL; " \
+                                         "see data/README.md)"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("args", [["--timeout", "1"], ["--no-progress"]])
+def test_the_installed_command_prints_one_line_on_a_real_stderr(tmp_path, server, args):
+    """In a process of its own (pooch's log handler writes to the stderr of the process), one line:
+    the deadline with a progress bar (erased), three HTTP 500 answers without one."""
+    base, _ = server
+    kind = "drip" if "--timeout" in args else "status/500"
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+    env.pop("TZSL_FETCH_TIMEOUT", None)
+    done = subprocess.run([sys.executable, "-c", "from tzsl.cli import main; main()", "data", "fetch", "gelsight_press",
+                           "--mirror", f"{base}/{kind}", "--data-dir", str(tmp_path / "home"), *args],
+                          env=env, capture_output=True, timeout=120)  # bytes: text mode turns \r into \n
+    assert done.returncode == 3 and done.stdout == b""
+    [line] = _visible_lines(done.stderr.decode())
+    assert line.startswith("tzsl: error: gelsight_press file foam_brick_1.avi: "
+                           + ("no complete download within 1 s" if kind == "drip" else "cannot download"))
+    assert kind == "drip" or "(3 attempts, the last: HTTP 500 Internal Server Error)" in line
+    assert _files_under(tmp_path / "home") == []
+
+
+def test_a_refused_connection_is_named_in_a_few_words(tmp_path):
+    import socket  # noqa: PLC0415
+
+    with socket.socket() as probe:  # a loopback port nobody listens on
+        probe.bind(("127.0.0.1", 0))
+        url = f"http://127.0.0.1:{probe.getsockname()[1]}/alpha/one.csv"
+    with pytest.raises(DataMissingError) as info:
+        fetch_datasets(["alpha"], tmp_path / "home", pup=_pup(tmp_path, {"alpha/one.csv": url}), progress=False,
+                       timeout=2)
+    assert re.match(re.escape(f"alpha file one.csv: no complete download within 2 s from {url} (2 attempts, the last: "
+                              "ConnectionError: Failed to establish a new connection: [Errno ") + r"\d+\] Connection "
+                    r"refused\);", str(info.value)), str(info.value)

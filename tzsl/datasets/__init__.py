@@ -59,6 +59,7 @@ from tzsl.datasets._synthetic import synthetic_dataset_arrays, write_synthetic_d
 from tzsl.datasets._card import card_lines, dataset_card
 from tzsl.datasets._lab_formats import LAB_FORMATS, LAB_READERS, convert_lab_dataset
 from tzsl.datasets._lab_mapping import BagMapping, Hdf5Mapping, SeriesMapping, load_lab_mapping
+from tzsl.datasets._download import DEFAULT_FETCH_TIMEOUT_S, FETCH_ATTEMPTS, FETCH_STALL_S, FETCH_TIMEOUT_ENV
 from tzsl.datasets._fetch import MIRROR_ENV, REFERENCE_ONLY, FetchReport, fetch_datasets, registered_datasets
 from tzsl.datasets._signal_cache import SignalTable, read_signal_table
 from tzsl.datasets._signal_files import signal_from_arrays
@@ -143,6 +144,10 @@ __all__ = [
     "SeriesMapping",
     "load_lab_mapping",
     "MIRROR_ENV",
+    "DEFAULT_FETCH_TIMEOUT_S",
+    "FETCH_ATTEMPTS",
+    "FETCH_STALL_S",
+    "FETCH_TIMEOUT_ENV",
     "REFERENCE_ONLY",
     "FetchReport",
     "fetch_datasets",

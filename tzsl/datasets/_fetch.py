@@ -3,8 +3,12 @@
 The registry (``registry.txt``: path, sha256, public URL) says what to get; pooch downloads
 each missing file to a temporary name, checks its sha256 and only then moves it into place, so
 an interrupted fetch leaves no half file and a rerun goes on where it stopped (files present and
-verified are skipped). ``mirror`` (or ``$TZSL_DATA_MIRROR``) is a base URL laid out like the data
-home (``MIRROR/phac2/...``): every file is taken from there instead, the locally built ones too.
+verified are skipped). Every file has a deadline (``timeout``, ``$TZSL_FETCH_TIMEOUT``, else
+:data:`~tzsl.datasets._download.DEFAULT_FETCH_TIMEOUT_S`), failed attempts are retried silently
+within it, pooch prints nothing, and the temporary files a killed fetch left in the dataset's
+folders are removed first (:mod:`tzsl.datasets._download`). One fetch at a time writes to a data
+home. ``mirror`` (or ``$TZSL_DATA_MIRROR``) is a base URL laid out like the data home
+(``MIRROR/phac2/...``): every file is taken from there instead, the locally built ones too.
 Files the registry lists without a URL are built from downloaded ones where tzsl can
 (``phac2/derived/phac2_labels_60x24.csv`` from the Penn pickles, ``fabric/fabric_groups.csv`` from
 the fabric paper's ``Data2.py``); derived reference copies that no study reads
@@ -21,10 +25,11 @@ from pathlib import Path
 import pooch
 
 from tzsl._io import atomic_write_bytes
+from tzsl.datasets._download import FETCH_STALL_S, fetch_lock, fetch_timeout, remove_leftovers
 from tzsl.datasets._fabric import FABRIC_GROUPS_SOURCE, fabric_groups_csv_bytes
 from tzsl.datasets._home import get_data_home
 from tzsl.datasets._registry import download_file, registry, source_of, verify_file
-from tzsl.exceptions import ChecksumError, ConfigError, DataMissingError
+from tzsl.exceptions import ChecksumError, ConfigError, DataFileError, DataMissingError
 
 __all__ = ["MIRROR_ENV", "REFERENCE_ONLY", "FetchReport", "fetch_datasets", "registered_datasets"]
 
@@ -42,9 +47,16 @@ class FetchReport:
     built: list[str] = field(default_factory=list)
     missing: list[str] = field(default_factory=list)
     reference: list[str] = field(default_factory=list)
+    #: Downloaded files that took more than one attempt.
+    retried: list[str] = field(default_factory=list)
+    #: Temporary files of an earlier, killed download removed before this one.
+    leftovers: list[Path] = field(default_factory=list)
+    #: Registered files of the dataset.
+    total: int = 0
 
     def line(self) -> str:
-        parts = [f"{len(self.present)} present", f"{len(self.downloaded)} downloaded"]
+        retried = f" ({len(self.retried)} after a retry)" if self.retried else ""
+        parts = [f"{len(self.present)} present", f"{len(self.downloaded)} downloaded{retried}"]
         if self.built:
             parts.append(f"{len(self.built)} built from them")
         if self.missing:
@@ -52,7 +64,17 @@ class FetchReport:
         if self.reference:
             parts.append(f"{len(self.reference)} reference cop{'y' if len(self.reference) == 1 else 'ies'} without "
                          "a public URL left out (no study reads them)")
+        if self.leftovers:
+            parts.append(f"{len(self.leftovers)} temporary file(s) of an interrupted download removed")
         return f"{self.name}: " + ", ".join(parts)
+
+    def stopped_at(self, done: Sequence[str]) -> str:
+        """Where a fetch that failed on one file of this dataset stopped (``done``: the datasets
+        fetched before it), for the end of its error line."""
+        finished = f"; {', '.join(done)} complete" if done else ""
+        in_place = len(self.present) + len(self.downloaded) + len(self.built)
+        return (f"{self.name}: {in_place} of {self.total} files in place ({len(self.present)} present, "
+                f"{len(self.downloaded)} downloaded){finished}; a rerun goes on from there")
 
 
 def registered_datasets(pup: pooch.Pooch | None = None) -> list[str]:
@@ -93,7 +115,7 @@ BUILD_SOURCES: dict[str, dict[str, tuple[str, str]]] = {
 
 
 def _fetch_build_sources(relpath: str, home: Path, mirror: str | None, progress: bool,
-                         sources: dict[str, dict[str, tuple[str, str]]]) -> None:
+                         sources: dict[str, dict[str, tuple[str, str]]], timeout: float, stall: float) -> None:
     """Download (hash-checked, kept for reruns) the public files the builder of ``relpath`` reads."""
     needed = sources.get(relpath, {})
     if not needed:
@@ -103,7 +125,7 @@ def _fetch_build_sources(relpath: str, home: Path, mirror: str | None, progress:
     for source in needed:
         if not _present(home / source, source, pup):
             download_file(source, home, url=f"{mirror.rstrip('/')}/{source}" if mirror else None, pup=pup,
-                     progress=progress)
+                          progress=progress, timeout=timeout, stall=stall)
 
 #: Registered files no study reads: derived reference copies of ``../shared/data`` (no public URL)
 #: that the test suite compares tzsl's own readers with. A fetch reports them, and does not fail.
@@ -132,11 +154,16 @@ def fetch_datasets(
     *,
     mirror: str | None = None,
     progress: bool = True,
+    timeout: float | None = None,
+    stall: float = FETCH_STALL_S,
     pup: pooch.Pooch | None = None,
     echo: Callable[[str], None] | None = None,
     build_sources: dict[str, dict[str, tuple[str, str]]] | None = None,
 ) -> list[FetchReport]:
     """Download and verify every registered file of ``names`` (all datasets when empty).
+
+    The temporary files a killed fetch left in a dataset's folders are removed first; one fetch
+    at a time writes to a data home (another one waits); pooch prints nothing.
 
     Parameters
     ----------
@@ -148,20 +175,35 @@ def fetch_datasets(
         Base URL laid out like the data home; default ``$TZSL_DATA_MIRROR``, else the
         registry's public URLs.
     progress : bool
-        A tqdm progress bar per download.
+        A tqdm progress bar (bytes, on stderr) while each file downloads, erased when it ends.
+    timeout : float, optional
+        Deadline per file in seconds, every attempt included; default ``$TZSL_FETCH_TIMEOUT``,
+        else :data:`~tzsl.datasets._download.DEFAULT_FETCH_TIMEOUT_S`.
+    stall : float
+        Seconds without a byte after which an attempt is abandoned (then retried within the deadline).
     pup : pooch.Pooch, optional
         The registry (default tzsl's own; tests pass a small one).
     echo : callable, optional
-        Receives one line per dataset.
+        Receives one line per dataset (and one if another fetch holds the data home).
     build_sources : dict, optional
         The public files builders read (default :data:`BUILD_SOURCES`; tests pass their own).
+
+    Returns
+    -------
+    list of FetchReport
+        One per dataset, in the order fetched.
 
     Raises
     ------
     ConfigError
-        An unknown dataset name.
+        An unknown dataset name, or a deadline that is not a number of seconds above 0.
+    DataMissingError
+        A file with no complete download (the deadline passed, the server refused, the
+        attempts failed). One line: the dataset and file, the URL, why, then what this fetch
+        did before it (the dataset's files in place of its registered ones, the datasets complete).
     ChecksumError
-        A downloaded file whose sha256 differs from the registry's (it is not kept).
+        A downloaded file whose sha256 differs from the registry's (it is not kept); the same
+        one line.
     """
     pup = pup or registry()
     build_sources = BUILD_SOURCES if build_sources is None else build_sources
@@ -170,40 +212,57 @@ def fetch_datasets(
     if unknown:
         raise ConfigError(f"unknown dataset(s) {unknown}; known: {', '.join(known)}")
     mirror = mirror if mirror is not None else os.environ.get(MIRROR_ENV) or None
+    timeout = fetch_timeout(timeout)
     home = get_data_home(data_dir)
-    reports = []
-    for name in names or known:
-        report = FetchReport(name)
-        files = [f for f in sorted(pup.registry) if f.split("/", 1)[0] == name]
-        for relpath in files:
-            path = home / relpath
-            if _present(path, relpath, pup):
-                report.present.append(relpath)
-                continue
-            url = f"{mirror.rstrip('/')}/{relpath}" if mirror else pup.urls.get(relpath)
-            if url is None:
-                continue  # built below, or missing
+    reports: list[FetchReport] = []
+    with fetch_lock(home, on_wait=echo):
+        for name in names or known:
+            report = FetchReport(name)
             try:
-                download_file(relpath, home, url=url, pup=pup, progress=progress)
-            except DataMissingError:
-                if relpath in pup.urls:
-                    raise
-                continue  # a locally built file the mirror does not hold: built below, or missing
-            report.downloaded.append(relpath)
-        for relpath in files:
-            if relpath in report.present or relpath in report.downloaded:
-                continue
-            if relpath in BUILDERS and relpath in pup.registry:
-                _fetch_build_sources(relpath, home, mirror, progress, build_sources)
-                path = home / relpath
-                atomic_write_bytes(path, BUILDERS[relpath](home, pup))
-                verify_file(path, relpath, pup.registry[relpath])
-                report.built.append(relpath)
-            elif relpath in REFERENCE_ONLY:
-                report.reference.append(relpath)
-            else:
-                report.missing.append(relpath)
-        reports.append(report)
-        if echo is not None:
-            echo(report.line())
+                _fetch_dataset(report, home, pup, mirror=mirror, progress=progress, timeout=timeout, stall=stall,
+                               build_sources=build_sources)
+            except DataFileError as exc:  # one line: the file's failure, then where this fetch stopped
+                raise type(exc)(None, f"{exc}; {report.stopped_at([r.name for r in reports])}") from None
+            reports.append(report)
+            if echo is not None:
+                echo(report.line())
     return reports
+
+
+def _fetch_dataset(report: FetchReport, home: Path, pup: pooch.Pooch, *, mirror: str | None, progress: bool,
+                   timeout: float, stall: float, build_sources: dict[str, dict[str, tuple[str, str]]]) -> None:
+    """Fill ``report`` (its dataset's files: present, downloaded, built, missing, left out)."""
+    files = [f for f in sorted(pup.registry) if f.split("/", 1)[0] == report.name]
+    report.total = len(files)
+    sources = [home / source for f in files for source in build_sources.get(f, {})]
+    report.leftovers = remove_leftovers([home / f for f in files] + sources)
+    for relpath in files:
+        if _present(home / relpath, relpath, pup):
+            report.present.append(relpath)
+            continue
+        url = f"{mirror.rstrip('/')}/{relpath}" if mirror else pup.urls.get(relpath)
+        if url is None:
+            continue  # built below, or missing
+        try:
+            attempts = download_file(relpath, home, url=url, pup=pup, progress=progress, timeout=timeout,
+                                     stall=stall).attempts
+        except DataMissingError:
+            if relpath in pup.urls:
+                raise
+            continue  # a locally built file the mirror does not hold: built below, or missing
+        report.downloaded.append(relpath)
+        if attempts > 1:
+            report.retried.append(relpath)
+    for relpath in files:
+        if relpath in report.present or relpath in report.downloaded:
+            continue
+        if relpath in BUILDERS:
+            _fetch_build_sources(relpath, home, mirror, progress, build_sources, timeout, stall)
+            path = home / relpath
+            atomic_write_bytes(path, BUILDERS[relpath](home, pup))
+            verify_file(path, relpath, pup.registry[relpath])
+            report.built.append(relpath)
+        elif relpath in REFERENCE_ONLY:
+            report.reference.append(relpath)
+        else:
+            report.missing.append(relpath)

@@ -7,8 +7,8 @@ under the data home, checks that it exists and that its sha256 matches (once per
 process and file state), and returns its absolute path.
 
 Nothing here touches the network unless :func:`fetch` is called with
-``download=True`` (then pooch downloads the file from its public URL, when the registry
-has one, and checks its hash).
+``download=True`` (then :func:`download_file` gets the file from its public URL, when the
+registry has one, within a deadline, and pooch checks its hash).
 """
 
 from __future__ import annotations
@@ -18,9 +18,11 @@ import threading
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
+from typing import NamedTuple
 
 import pooch
 
+from tzsl.datasets._download import FETCH_STALL_S, DownloadFailed, download, fetch_timeout, first_line
 from tzsl.datasets._home import DATA_DIR_ENV, get_data_home
 from tzsl.exceptions import ChecksumError, DataMissingError
 
@@ -182,7 +184,7 @@ def fetch(
     path = home / relpath
     if not path.is_file():
         if download and relpath in pup.urls:
-            return download_file(relpath, home, downloader=downloader)
+            return download_file(relpath, home, downloader=downloader).path
         raise DataMissingError(path, missing_message(relpath, home))
     stat = path.stat()
     key = (str(path.resolve()), stat.st_size, stat.st_mtime_ns)
@@ -211,10 +213,18 @@ def verify_file(path: Path, relpath: str, expected: str) -> None:
         )
 
 
+class Downloaded(NamedTuple):
+    """A file :func:`download_file` put in place, and the attempts it took."""
+
+    path: Path
+    attempts: int
+
+
 def download_file(relpath: str, home: Path, *, url: str | None = None, pup: pooch.Pooch | None = None,
-             downloader=None, progress: bool = False) -> Path:
+                  downloader=None, progress: bool = False, timeout: float | None = None,
+                  stall: float = FETCH_STALL_S) -> Downloaded:
     """Download one registered file into the data home with pooch, hash-checked before it is moved
-    into place (an interrupted or corrupt download leaves no file).
+    into place (an interrupted, abandoned or corrupt download leaves no file).
 
     Parameters
     ----------
@@ -227,45 +237,55 @@ def download_file(relpath: str, home: Path, *, url: str | None = None, pup: pooc
     pup : pooch.Pooch, optional
         The registry (default tzsl's own; tests pass a small one).
     downloader : callable, optional
-        A pooch downloader; default pooch's HTTP downloader (with a tqdm bar when ``progress``).
+        A pooch downloader, tried once; default :class:`~tzsl.datasets._download.DeadlineDownloader`
+        for HTTP(S) (retried within the deadline, with a tqdm bar when ``progress``).
     progress : bool, default False
+    timeout : float, optional
+        Deadline (s) for the whole file, retries included; default
+        :func:`~tzsl.datasets._download.fetch_timeout` (``$TZSL_FETCH_TIMEOUT``, else
+        :data:`~tzsl.datasets._download.DEFAULT_FETCH_TIMEOUT_S`).
+    stall : float
+        Seconds without a byte after which an attempt is abandoned.
 
     Returns
     -------
-    Path
-        ``home / relpath``.
+    Downloaded
+        ``home / relpath`` and the number of attempts.
 
     Raises
     ------
     ChecksumError
         The download's hash differs from the registry's (nothing is kept).
     DataMissingError
-        No URL, or the download failed (one line naming the URL).
+        No URL, or no complete download (one line: ``<dataset> file <name>: ...``, naming the URL,
+        the deadline when it passed, the attempts and the last one's failure).
     """
     pup = pup or registry()
     url = url or pup.urls.get(relpath)
     if url is None:
         raise DataMissingError(home / relpath, missing_message(relpath, home))
+    timeout = fetch_timeout(timeout)
     known = pup.registry[relpath]
     single = pooch.create(path=home, base_url="", registry={relpath: None if known == NO_HASH else known},
-                          urls={relpath: url},
-                          # network downloads are retried; a caller-supplied downloader handles its own failures
-                          retry_if_failed=2 if downloader is None else 0)
-    if downloader is None and url.startswith("http"):
-        downloader = pooch.HTTPDownloader(progressbar=progress)
+                          urls={relpath: url}, retry_if_failed=0)
+    dataset, _, name = relpath.partition("/")
+    what = f"{dataset} file {name}"
     try:
-        path = Path(single.fetch(relpath, downloader=downloader))
+        path, attempts = download(single, relpath, url, timeout=timeout, stall=stall, progress=progress,
+                                  downloader=downloader)
+    except DownloadFailed as exc:
+        tries = f"{exc.attempts} attempt{'s, the last' if exc.attempts > 1 else ''}: {exc.reason}"
+        raise DataMissingError(None, f"{what}: no complete download within {timeout:g} s from {url} ({tries})"
+                               if exc.deadline else f"{what}: cannot download from {url} ({tries})") from None
     except ValueError as exc:  # pooch's hash mismatch: the file is not kept
-        raise ChecksumError(home / relpath, f"{str(exc).splitlines()[0]} (downloaded from {url})") from None
-    except OSError as exc:
-        raise DataMissingError(home / relpath, f"cannot download {url}: {str(exc).splitlines()[0]}") from None
-    except Exception as exc:  # noqa: BLE001 - requests' HTTP errors: one line naming the URL
-        raise DataMissingError(home / relpath, f"cannot download {url}: {type(exc).__name__}: "
-                                               f"{str(exc).splitlines()[0] if str(exc) else ''}") from None
+        raise ChecksumError(None, f"{what}: {first_line(exc)} (downloaded from {url}; not kept)") from None
+    except Exception as exc:  # noqa: BLE001 - a caller's or pooch's other downloaders: one line naming the URL
+        raise DataMissingError(None, f"{what}: cannot download from {url}: {type(exc).__name__}: "
+                                     f"{first_line(exc)}") from None
     stat = path.stat()
     with _LOCK:
         _VERIFIED.add((str(path.resolve()), stat.st_size, stat.st_mtime_ns))
-    return path
+    return Downloaded(path, attempts)
 
 
 def clear_verification_cache() -> None:
