@@ -114,3 +114,26 @@ def test_evaluate_hand_says_it_simulates(tmp_path):
     result = CliRunner().invoke(cli, ["evaluate-hand", "--out", str(tmp_path), "--seeds", "0"], catch_exceptions=False)
     assert "no --grasps given: simulating grasps with seed(s) [0]" in result.output
     assert result.exit_code == EXIT_TZSL_ERROR and "hand_table5.csv already exists" in result.output
+
+
+def test_train_hand_on_few_grasps_leaves_out_what_it_cannot_learn_and_predicts(tmp_path):
+    """Issue 31: a small grasp folder (3 grasps per object) trains as a study would relax it: attributes
+    a BioTac sees fewer than 2 grasps of a label for are left out (a note each, recorded in the bundle),
+    calibration folds and PCA components shrink to what the grasps allow (notes), and predict ranks."""
+    from tzsl.bundle import read_bundle_header  # noqa: PLC0415
+
+    assert _run("simulate-grasps", "--out", tmp_path / "g", "--grasps-per-object", 3, "--seed", 2).exit_code == 0
+    train = _run("train-hand", "--grasps", tmp_path / "g", "--out", tmp_path / "m.tzsl", "--seed", 0)
+    assert train.exit_code == 0, train.output
+    notes = [line for line in train.output.splitlines() if line.startswith("note: ")]
+    left_out = [line for line in notes if " left out of the model: " in line]
+    assert left_out and any("PCA components 8 -> " in line for line in notes)
+    metadata = read_bundle_header(tmp_path / "m.tzsl").metadata
+    recorded = {r["attribute"] for r in metadata["left_out_attributes"]}
+    assert recorded == {line.split("'")[1] for line in left_out}
+    assert not recorded & set(metadata["attribute_names"])
+    classes = tmp_path / "classes.csv"
+    TABLE.K.loc[TABLE.test_objects].rename_axis("object").to_csv(classes)
+    out = _run("predict", "--model", tmp_path / "m.tzsl", "--classes", classes, tmp_path / "g" / "bowl_000.npz")
+    assert out.exit_code == 0, out.output
+    assert "grasp " in out.output

@@ -146,9 +146,12 @@ def test_fit_and_predict_errors(hand_data, fitted):
         HandDAPClassifier(fusion="best").fit(X, y, TABLE.K)
     with pytest.raises(ConfigError, match="not columns of K"):
         HandDAPClassifier(material_attributes=["wood"]).fit(X, y, TABLE.K)
-    one_class = TABLE.K.assign(steel=0)
-    with pytest.raises(SplitError, match="'steel'"):
-        HandDAPClassifier().fit(X, y, one_class)
+    one_class = TABLE.K.assign(steel=0)  # an attribute with no positive training grasp: left out, said why
+    relaxed = HandDAPClassifier(random_state=0).fit(X, y, one_class)
+    assert "steel" not in relaxed.material_attributes_ and "steel" not in relaxed.K_.columns
+    assert "0 positive" in relaxed.left_out_attributes_["steel"]
+    with pytest.raises(SplitError, match="no attribute can be learned"):
+        HandDAPClassifier().fit(X, y, TABLE.K.assign(**{a: 0 for a in TABLE.K.columns}))
     with pytest.raises(ConfigError, match="packed grasp-feature"):
         HandDAPClassifier().fit(X[:, :100], y, TABLE.K)
     with pytest.raises(ConfigError, match="lacks the attribute"):

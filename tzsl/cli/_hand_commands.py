@@ -144,7 +144,11 @@ def train_hand(grasps: Path, table: Path | None, out: Path, fusion: str, seed: i
     from tzsl.inference.model_bundles import train_hand_bundle  # noqa: PLC0415
 
     start = time.perf_counter()
+    from tzsl.inference.model_bundles import left_out_notes  # noqa: PLC0415
+
     model, meta = train_hand_bundle(grasps, _table(table), out, fusion=fusion, seed=seed, force=force)
+    for line in left_out_notes(meta["left_out_attributes"]) + [f"relaxed {r}" for r in meta["relaxations"]]:
+        click.echo(f"note: {line}")
     click.echo(f"fitted on {meta['n_training_grasps']} grasps of training objects {meta['training_objects']} "
                f"({meta['n_ignored_grasps']} grasps of other objects ignored) in {time.perf_counter() - start:.1f} s")
     click.echo(f"saved {out} (method hand-dap, {len(meta['attribute_names'])} attributes, fusion {fusion})")

@@ -306,7 +306,9 @@ def train_hand_bundle(grasps_dir: str | Path, table: HandTable, save: str | Path
     -------
     model : HandDAPClassifier
     metadata : dict
-        As saved, plus ``n_training_grasps`` and ``n_ignored_grasps`` (grasps of other objects).
+        As saved, plus ``n_training_grasps`` and ``n_ignored_grasps`` (grasps of other objects);
+        ``left_out_attributes`` (attributes the grasps cannot teach, with the reason) and
+        ``relaxations`` (calibrations with fewer folds), as the model found them.
     """
     from tzsl.studies.config import HandSettings  # noqa: PLC0415
     from tzsl.studies.hand.study import feature_params, fit_hand_model, hand_features  # noqa: PLC0415
@@ -320,11 +322,13 @@ def train_hand_bundle(grasps_dir: str | Path, table: HandTable, save: str | Path
     n_train = int(np.isin(features.objects, table.train_objects).sum())
     names = [str(a) for a in model.K_.columns]
     rule = DAPRule(prior=[float(model.prior)] * len(names)).fit(model.K_.to_numpy(dtype=int))
+    left_out = [{"attribute": a, "reason": why} for a, why in model.left_out_attributes_.items()]
     metadata = {
         "material_attributes": list(model.material_attributes_), "shape_attributes": list(model.shape_attributes_),
         "training_objects": [str(c) for c in model.classes_], "fusion": model.fusion, "prior": float(model.prior),
         "class_table": table.source, "grasps": str(grasps_dir), "seed": int(seed),
         "n_training_grasps": n_train, "n_ignored_grasps": len(features) - n_train,
+        "left_out_attributes": left_out, "relaxations": list(model.relaxations_),
     }
     schema = {"format": "hand-grasps", "feature_params": dict(feature_params(config))}
     save_model_bundle(save, model, rule, method="hand-dap", attribute_names=names, input_schema=schema, force=force,

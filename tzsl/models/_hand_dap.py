@@ -171,6 +171,11 @@ class HandDAPClassifier(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
     material_attributes_, shape_attributes_ : list of str
     material_models_ : list (per BioTac, or one) of list (per material attribute) of Pipeline
     shape_models_ : list of Pipeline
+    left_out_attributes_ : dict of str to str
+        Attributes the training grasps cannot teach (a label with fewer than 2 grasps on some BioTac,
+        or on the joint angles), left out of the model, with the reason; empty when none.
+    relaxations_ : list of str
+        Calibrations given fewer folds than ``calibration_cv`` (a label with fewer grasps), one line each.
     n_features_in_ : int
 
     Notes
@@ -239,17 +244,42 @@ class HandDAPClassifier(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         except ValueError as exc:
             raise ConfigError(f"X is not a packed grasp-feature array: {exc}") from None
 
-    def _calibrated(self, base, seed: int) -> CalibratedClassifierCV:
-        cv = StratifiedKFold(self.calibration_cv, shuffle=True, random_state=seed)
+    def _calibrated(self, base, seed: int, folds: int) -> CalibratedClassifierCV:
+        cv = StratifiedKFold(folds, shuffle=True, random_state=seed)
         return CalibratedClassifierCV(base, method="sigmoid", cv=cv)
 
-    def _check_labels(self, y: np.ndarray, name: str, where: str) -> None:
+    def _calibration_folds(self, y: np.ndarray, name: str, where: str) -> int:
+        """Folds of one attribute's calibration: ``calibration_cv``, or fewer (>= 2) when a label has
+        fewer grasps (recorded in ``relaxations_``); 0 when a label has fewer than 2 (not learnable)."""
         counts = np.bincount(y, minlength=2)
-        if counts.min() < self.calibration_cv:
-            raise SplitError(
-                f"attribute {name!r} ({where}): {counts[1]} positive and {counts[0]} negative training "
-                f"grasps; need at least calibration_cv={self.calibration_cv} of each"
-            )
+        fewest = int(counts.min())
+        if fewest >= self.calibration_cv:
+            return self.calibration_cv
+        why = f"{int(counts[1])} positive and {int(counts[0])} negative training grasps ({where})"
+        if fewest < 2:
+            self.left_out_attributes_.setdefault(name, f"{why}; its calibration needs 2 of each")
+            return 0
+        self.relaxations_.append(f"attribute {name!r}: calibration folds {self.calibration_cv} -> {fewest} ({why})")
+        return fewest
+
+    def _pca_components(self, n_grasps: int, folds: int, where: str) -> int:
+        """``n_components``, or fewer when a calibration fold's training grasps cannot carry it (recorded)."""
+        fitted_on = n_grasps - -(-n_grasps // folds)  # grasps in the smallest calibration training fold
+        if fitted_on >= self.n_components:
+            return self.n_components
+        if fitted_on < 1:
+            raise SplitError(f"{where}: {n_grasps} touching training grasps cannot fit the material attributes")
+        line = (f"PCA components {self.n_components} -> as many as a calibration fold's grasps allow ({where}: "
+                f"{n_grasps} touching training grasps)")
+        if line not in self.relaxations_:
+            self.relaxations_.append(line)
+        return fitted_on
+
+    def _material_labels(self, labels: np.ndarray, contact: np.ndarray, groups) -> list[tuple[np.ndarray, str]]:
+        """One material attribute's labels on the touching grasps of each BioTac (or pooled), with its name."""
+        if groups == [None]:
+            return [(np.repeat(labels, self.n_fingers)[contact.reshape(-1)], "all BioTacs pooled")]
+        return [(labels[contact[:, b]], f"BioTac {b}") for b in groups]
 
     # ------------------------------------------------------------------ fit
     def fit(self, X, y, K: pd.DataFrame):
@@ -284,19 +314,33 @@ class HandDAPClassifier(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         if unknown:
             raise ConfigError(f"material attribute(s) {unknown} are not columns of K")
         shape_attrs = [a for a in K.columns if a not in mat_attrs]
+        self.classes_ = np.array(pd.unique(y), dtype=object)
+        F, d = self.n_fingers, self.n_material_features
+        groups = range(F) if self.per_finger else [None]
+        # what the training grasps can teach: an attribute a label of which has < 2 grasps somewhere is left out
+        self.left_out_attributes_, self.relaxations_ = {}, []
+        rows = K.loc[self.classes_, mat_attrs + shape_attrs].astype(int)
+        A = rows.loc[y].to_numpy()
+        folds = {name: [self._calibration_folds(labels, name, where)
+                        for labels, where in self._material_labels(A[:, j], contact, groups)]
+                 for j, name in enumerate(mat_attrs)}
+        folds.update({name: [self._calibration_folds(A[:, len(mat_attrs) + j], name, "joint angles")]
+                      for j, name in enumerate(shape_attrs)})
+        mat_attrs = [a for a in mat_attrs if a not in self.left_out_attributes_]
+        shape_attrs = [a for a in shape_attrs if a not in self.left_out_attributes_]
+        if not mat_attrs + shape_attrs:
+            raise SplitError("no attribute can be learned from these training grasps: "
+                             + "; ".join(f"{a!r}: {why}" for a, why in self.left_out_attributes_.items()))
         self.material_attributes_ = mat_attrs
         self.shape_attributes_ = shape_attrs
-        self.classes_ = np.array(pd.unique(y), dtype=object)
-        self.K_ = K.loc[self.classes_, mat_attrs + shape_attrs].astype(int)
+        self.K_ = rows[mat_attrs + shape_attrs]
         A = self.K_.loc[y].to_numpy()  # (n, m) labels of every grasp
         rng = check_random_state(self.random_state)
         seeds = rng.randint(np.iinfo(np.int32).max, size=4)
 
         # material: one PCA + calibrated linear SVM per attribute, per finger (or pooled)
-        F, d = self.n_fingers, self.n_material_features
-        groups = range(F) if self.per_finger else [None]
         jobs, self._material_keys = [], []
-        for b in groups:
+        for g, b in enumerate(groups):
             if b is None:
                 sel = contact.reshape(-1)
                 Xb = material.reshape(-1, d)[sel]
@@ -306,24 +350,20 @@ class HandDAPClassifier(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
                 sel = contact[:, b]
                 Xb, Ab = material[sel, b], A[sel, : len(mat_attrs)]
                 where = f"BioTac {b}"
-            if Xb.shape[0] <= self.n_components:
-                raise SplitError(
-                    f"{where}: only {Xb.shape[0]} touching training grasps for a {self.n_components}-d PCA"
-                )
             for j, name in enumerate(mat_attrs):
-                self._check_labels(Ab[:, j], name, where)
                 svm = LinearSVC(C=self.material_C, class_weight="balanced", random_state=int(seeds[0]))
                 pipe = make_pipeline(
                     StandardScaler(),
-                    PCA(n_components=self.n_components, random_state=int(seeds[1])),
-                    self._calibrated(svm, int(seeds[2])),
+                    PCA(n_components=self._pca_components(Xb.shape[0], folds[name][g], where),
+                        random_state=int(seeds[1])),
+                    self._calibrated(svm, int(seeds[2]), folds[name][g]),
                 )
                 jobs.append((pipe, Xb, Ab[:, j]))
         for j, name in enumerate(shape_attrs):
             labels = A[:, len(mat_attrs) + j]
-            self._check_labels(labels, name, "joint angles")
             svm = SVC(kernel="rbf", C=self.shape_C, gamma=self.shape_gamma, class_weight="balanced")
-            jobs.append((make_pipeline(StandardScaler(), self._calibrated(svm, int(seeds[3]))), shape, labels))
+            calibrated = self._calibrated(svm, int(seeds[3]), folds[name][0])
+            jobs.append((make_pipeline(StandardScaler(), calibrated), shape, labels))
         fitted = [reissued(r) for r in Parallel(n_jobs=self.n_jobs)(delayed(relayed(_fit_one))(est, Xj, yj)
                                                                      for est, Xj, yj in jobs)]
         n_mat_models = len(groups) * len(mat_attrs)
