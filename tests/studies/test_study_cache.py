@@ -6,6 +6,7 @@ import json
 import os
 import sys
 import time
+import types
 import warnings
 from pathlib import Path
 from typing import Literal
@@ -180,6 +181,23 @@ def test_a_changed_plug_in_source_is_computed_again(plugin, monkeypatch):
     assert before is not None and study_key(exp) == before
     module.write_text("from test_study_cache import run_plugin  # v2\n")
     assert study_key(exp) != before
+
+
+def test_a_plug_in_without_a_source_file_is_not_cached(plugin, monkeypatch):
+    """Code defined in a notebook has no file to key on: the study is computed each time, and says why."""
+    tmp_path, data = plugin
+    notebook = types.ModuleType("notebook_plugin")  # no __file__, like a notebook's __main__
+    notebook.run_plugin = run_plugin
+    monkeypatch.setitem(sys.modules, "notebook_plugin", notebook)
+    unregister_study(PLUGIN)
+    register_study(PLUGIN, schema=CacheStudy, runner="notebook_plugin:run_plugin", main_table="plugin",
+                   description="a test plug-in")
+    toml = _toml(tmp_path, data)
+    _, _, lines = _run(toml, tmp_path / "one")
+    _, manifest, _ = _run(toml, tmp_path / "two")
+    assert len(CALLS) == 2 and "study_cache" not in manifest["config"]
+    assert "note: not kept in the study cache: the plug-in module notebook_plugin has no source file" in lines[1]
+    assert not (tmp_path / "cache" / "studies").exists()
 
 
 def test_the_size_cap_evicts_the_least_recently_used_entries_of_both_caches(plugin, monkeypatch):

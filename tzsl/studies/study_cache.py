@@ -86,9 +86,9 @@ def _code_digest() -> str:
     return digest.hexdigest()
 
 
-def _plugin_digest(exp) -> str | None:
+def _plugin_digest(exp) -> tuple[str | None, str]:
     """Digest of the source files outside tzsl that ``exp`` may run (its study kind's hooks, every registered
-    method's classes); None when one of them has no readable source file."""
+    method's classes), and ``""``; or None and the name of a module without a readable source file."""
     from tzsl.models import available_methods, get_method  # noqa: PLC0415 (the registry, read when a study runs)
 
     kind = get_study(exp.study)
@@ -104,8 +104,8 @@ def _plugin_digest(exp) -> str | None:
             source = loaded.__file__ if loaded is not None else importlib.util.find_spec(module).origin
             digest.update(f"{module}\0".encode() + Path(source).read_bytes())
         except (AttributeError, ImportError, OSError, TypeError, ValueError):  # no source file (a notebook)
-            return None
-    return digest.hexdigest()
+            return None, module
+    return digest.hexdigest(), ""
 
 
 def _listing(path: Path) -> list[str]:
@@ -142,7 +142,7 @@ def study_key(exp) -> str | None:
 
     None when the study cannot be keyed (a plug-in without a source file): it is then not cached.
     """
-    plugins = _plugin_digest(exp)
+    plugins, _ = _plugin_digest(exp)
     if plugins is None:
         return None
     settings = exp.config.model_dump(mode="json")
@@ -187,6 +187,8 @@ def run_cached(exp, results: ResultsDir, runner: Callable[[Callable[[str], None]
     size_cap_gb()  # a bad $TZSL_CACHE_MAX_GB fails now, not after the study has run
     key = study_key(exp)
     if key is None:
+        echo(f"note: not kept in the study cache: the plug-in module {_plugin_digest(exp)[1]} has no source file, "
+             "so a change to it could not be seen")
         return runner(echo)
     entry = folder / key
     if (entry / _RUN_FILE).is_file():
@@ -212,7 +214,7 @@ def run_cached(exp, results: ResultsDir, runner: Callable[[Callable[[str], None]
                 "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
                 "splits": {k: v for k, v in results.splits.items() if k not in splits_before},
                 "data_files": {k: v for k, v in results.data_files.items() if k not in data_before}})
-            pruned = enforce_size_cap(folder.parent).removed
+            pruned = [e for e in enforce_size_cap(folder.parent).removed if not e.temporary]
         if pruned:
             echo(f"note: the study cache and fit store were over their size cap ({size_cap_gb():g} GB): "
                  f"removed the {len(pruned)} least recently used entries ({format_size(sum(e.size for e in pruned))}); "
