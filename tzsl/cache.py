@@ -179,8 +179,8 @@ class CacheEntry:
     ----------
     part : str
         ``"studies"`` or ``"fits"`` (:data:`CACHE_PARTS`).
-    path : Path
-        The entry's folder (study cache) or file (fit store).
+    location : str
+        The entry's folder (study cache) or file (fit store); :attr:`path` as a Path.
     size : int
         Bytes on disk (the sum of its files' sizes).
     used : float
@@ -190,10 +190,15 @@ class CacheEntry:
     """
 
     part: str
-    path: Path
+    location: str
     size: int
     used: float
     temporary: bool
+
+    @property
+    def path(self) -> Path:
+        """The entry's folder or file."""
+        return Path(self.location)
 
 
 @dataclass(frozen=True)
@@ -229,7 +234,7 @@ class PruneReport:
     now: float
 
 
-def _folder_size(path: Path) -> int:
+def _folder_size(path: str | os.PathLike) -> int:
     total = 0
     for folder, _dirs, files in os.walk(path):
         for name in files:
@@ -241,26 +246,28 @@ def _folder_size(path: Path) -> int:
 
 
 def _scan_part(root: Path, part: str) -> list[CacheEntry]:
-    """The entries of one part (a missing folder has none)."""
+    """The entries of one part (a missing folder has none): one ``stat`` per fit-store file."""
     folder = root / part
     if part == STUDIES_FOLDER:
-        candidates = _listdir(folder)
+        found = _scandir(folder)
     else:
-        candidates = [path for sub in _listdir(folder) if sub.is_dir() for path in _listdir(sub)]
+        found = [item for sub in _scandir(folder) if sub.is_dir(follow_symlinks=False) for item in _scandir(sub.path)]
     entries = []
-    for path in candidates:
+    for item in found:
         try:
-            st = path.stat()
+            st = item.stat(follow_symlinks=False)
+            is_folder = item.is_dir(follow_symlinks=False)
         except OSError:  # removed meanwhile
             continue
-        size = _folder_size(path) if path.is_dir() else st.st_size
-        entries.append(CacheEntry(part, path, size, st.st_mtime, path.name.startswith(".")))
+        size = _folder_size(item.path) if is_folder else st.st_size
+        entries.append(CacheEntry(part, item.path, size, st.st_mtime, item.name.startswith(".")))
     return entries
 
 
-def _listdir(folder: Path) -> list[Path]:
+def _scandir(folder: str | os.PathLike) -> list[os.DirEntry]:
     try:
-        return sorted(folder.iterdir())
+        with os.scandir(folder) as items:
+            return list(items)
     except (FileNotFoundError, NotADirectoryError):
         return []
 
@@ -279,7 +286,7 @@ def cache_entries(root: str | os.PathLike | None = None) -> list[CacheEntry]:
         Least recently used first.
     """
     root = get_cache_dir(root)
-    return sorted((e for part in CACHE_PARTS for e in _scan_part(root, part)), key=lambda e: (e.used, str(e.path)))
+    return sorted((e for part in CACHE_PARTS for e in _scan_part(root, part)), key=lambda e: (e.used, e.location))
 
 
 def cache_info(root: str | os.PathLike | None = None, now: float | None = None) -> list[CachePartInfo]:
