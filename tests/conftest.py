@@ -40,6 +40,8 @@ def data_dir() -> Path:
 @pytest.fixture(autouse=True)
 def _isolated_cache(tmp_path_factory, monkeypatch):
     """Keep joblib caches of tests out of the user's cache directory; the study cache is off (tests run
-    a study again after changing what it does; tests/studies/test_study_cache.py turns it on)."""
+    a study again after changing what it does; tests/studies/test_study_cache.py turns it on). The
+    platform's user cache folder is a temporary one too, for the tests that unset TZSL_CACHE_DIR."""
     monkeypatch.setenv("TZSL_CACHE_DIR", str(tmp_path_factory.getbasetemp() / "tzsl-cache"))
     monkeypatch.setenv("TZSL_STUDY_CACHE", "0")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "user-cache"))

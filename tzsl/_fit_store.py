@@ -1,6 +1,7 @@
 """The fit store, and the seeding and parallel-execution helpers shared by the attribute models.
 
-The fit store keeps fitted estimators on disk, one file per fit, under ``<cache folder>/fits/``.
+The fit store keeps fitted estimators on disk, one file per fit, under ``<cache folder>/fits/``
+(:data:`tzsl.cache.FITS_FOLDER`; its size is capped and pruned with the study cache's, see :mod:`tzsl.cache`).
 The key of a fit is what determines its result and nothing else:
 
 * the estimator's class and its parameters, recursively through nested estimators, leaving out
@@ -39,10 +40,10 @@ from sklearn.utils import check_random_state
 
 from tzsl._io import atomic_write
 from tzsl._profile import count, timed
+from tzsl.cache import FITS_FOLDER, env_cache_dir, mark_used
 from tzsl.exceptions import ConfigError
 
 __all__ = [
-    "CACHE_ENV",
     "FITS_FOLDER",
     "NEUTRAL_PARAMS",
     "FitStore",
@@ -58,9 +59,6 @@ __all__ = [
     "stored_fit",
 ]
 
-CACHE_ENV = "TZSL_CACHE_DIR"
-#: Sub-folder of the cache folder holding the fit store.
-FITS_FOLDER = "fits"
 #: Parameters that do not change a fit's result, left out of its key.
 NEUTRAL_PARAMS = frozenset({"name", "n_jobs", "backend", "memory", "progress", "verbose"})
 _BACKENDS = ("loky", "dask", "threading", "multiprocessing", "sequential")
@@ -201,6 +199,7 @@ class FitStore:
         except Exception as exc:  # noqa: BLE001 - a damaged entry is refitted and overwritten, loudly
             warnings.warn(f"{path}: unreadable fit-store entry ({type(exc).__name__}); fitting again", stacklevel=2)
             return None
+        mark_used(path)  # pruning (tzsl.cache) removes the least recently used fits first
         _replay(entry["warnings"])
         fitted = entry["estimator"]
         if template is not None:
@@ -235,7 +234,7 @@ def resolve_store(memory=None) -> FitStore:
     elif isinstance(memory, joblib.Memory):
         location = memory.location
     elif memory is None:
-        location = os.environ.get(CACHE_ENV) or None
+        location = env_cache_dir()
     elif isinstance(memory, (str, os.PathLike)):
         location = os.fspath(memory)
     else:

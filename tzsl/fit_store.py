@@ -2,8 +2,10 @@
 
 A fit's key is what determines its result (the estimator's class and parameters, the training
 arrays, the code); nothing about the study or command that asks is in it, so the same fit asked
-for by several tables, studies or runs is computed once. ``$TZSL_CACHE_DIR`` (or an estimator's
-``memory`` parameter) names the cache folder; the store is its :data:`FITS_FOLDER` sub-folder.
+for by several tables, studies or runs is computed once. An estimator's ``memory`` parameter names
+the cache folder (``memory=None``: ``$TZSL_CACHE_DIR`` when set, else no store; the PHAC-2 studies'
+attribute banks: the cache folder of :func:`tzsl.cache.get_cache_dir`); the store is its
+:data:`FITS_FOLDER` sub-folder, pruned with the study cache to one size cap (:mod:`tzsl.cache`).
 The implementation, with the seeding and parallel helpers the attribute models share, is the
 private ``tzsl._fit_store``.
 """

@@ -11,25 +11,26 @@ from sklearn.exceptions import ConvergenceWarning
 from sklearn.linear_model import LogisticRegression
 
 from tzsl._profile import profiling
+from tzsl.cache import CACHE_DIR_ENV
 from tzsl.exceptions import ConfigError
 from tzsl.models import AttributeClassifierBank, AttributeSVM
 from tzsl.fit_store import FITS_FOLDER, fit_cached, fit_store_counts, resolve_store
-from tzsl._fit_store import CACHE_ENV, FitStore, array_digest, fit_clone, parallel_context, spawn_seeds
+from tzsl._fit_store import FitStore, array_digest, fit_clone, parallel_context, spawn_seeds
 
 
 # ---------------------------------------------------------------------------- resolve_store
 def test_resolve_store_none_without_env_does_not_store(monkeypatch):
-    monkeypatch.delenv(CACHE_ENV, raising=False)
+    monkeypatch.delenv(CACHE_DIR_ENV, raising=False)
     assert not resolve_store(None).enabled
 
 
 def test_resolve_store_none_uses_the_env_folder(monkeypatch, tmp_path):
-    monkeypatch.setenv(CACHE_ENV, str(tmp_path / "cache"))
+    monkeypatch.setenv(CACHE_DIR_ENV, str(tmp_path / "cache"))
     assert resolve_store(None).folder == tmp_path / "cache" / FITS_FOLDER
 
 
 def test_resolve_store_empty_env_means_no_store(monkeypatch):
-    monkeypatch.setenv(CACHE_ENV, "")
+    monkeypatch.setenv(CACHE_DIR_ENV, "")
     assert not resolve_store(None).enabled
 
 

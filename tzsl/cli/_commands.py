@@ -1,5 +1,6 @@
 """Imports every command module so each registers its commands on the root group."""
 
+from tzsl.cli import _cache_commands  # noqa: F401
 from tzsl.cli import _data_commands  # noqa: F401
 from tzsl.cli import _dap_commands  # noqa: F401
 from tzsl.cli import _dataset_commands  # noqa: F401

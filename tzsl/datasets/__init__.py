@@ -13,7 +13,8 @@ from tzsl.datasets._grasps import (
     write_grasps,
 )
 from tzsl.datasets._hand_simulator import SimulatedGrasps, simulate_grasps
-from tzsl.datasets._home import CACHE_DIR_ENV, get_cache_dir, get_data_home
+from tzsl.cache import CACHE_DIR_ENV, get_cache_dir  # the cache folder, decided in tzsl.cache
+from tzsl.datasets._home import get_data_home
 from tzsl.datasets._phac2_h5 import (
     iter_phac2_h5,
     list_phac2_h5_trials,

@@ -1,4 +1,4 @@
-"""Where tzsl looks for datasets and keeps its caches.
+"""Where tzsl looks for datasets.
 
 One place decides the data home, in this order:
 
@@ -8,7 +8,8 @@ One place decides the data home, in this order:
    ``platformdirs.user_cache_dir("tzsl") / "data"`` (e.g. ``~/.cache/tzsl/data`` on Linux).
 
 Under the data home the layout is the same as the shared data folder:
-``phac2/...``, ``fabric/...``, ``gelsight_press/...`` (see ``data/README.md``).
+``phac2/...``, ``fabric/...``, ``gelsight_press/...`` (see ``data/README.md``). The cache folder
+(:func:`tzsl.cache.get_cache_dir`, re-exported by :mod:`tzsl.datasets`) is decided in :mod:`tzsl.cache`.
 """
 
 from __future__ import annotations
@@ -16,13 +17,10 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import platformdirs
+from tzsl.cache import user_cache_folder
 
 #: Environment variable naming the data home.
 DATA_DIR_ENV = "TZSL_DATA_DIR"
-#: Environment variable naming the cache directory (joblib.Memory and similar).
-CACHE_DIR_ENV = "TZSL_CACHE_DIR"
-_APP = "tzsl"
 
 
 def get_data_home(data_dir: str | os.PathLike | None = None) -> Path:
@@ -46,26 +44,4 @@ def get_data_home(data_dir: str | os.PathLike | None = None) -> Path:
     env = os.environ.get(DATA_DIR_ENV)
     if env:
         return Path(env).expanduser().resolve()
-    return (Path(platformdirs.user_cache_dir(_APP)) / "data").resolve()
-
-
-def get_cache_dir(cache_dir: str | os.PathLike | None = None) -> Path:
-    """The folder for on-disk caches (e.g. ``joblib.Memory``).
-
-    Parameters
-    ----------
-    cache_dir : str or path-like or None
-        Explicit folder; wins over everything else.
-
-    Returns
-    -------
-    Path
-        ``cache_dir``, else ``$TZSL_CACHE_DIR``, else
-        ``platformdirs.user_cache_dir("tzsl") / "joblib"``. Not created here.
-    """
-    if cache_dir is not None and str(cache_dir) != "":
-        return Path(cache_dir).expanduser().resolve()
-    env = os.environ.get(CACHE_DIR_ENV)
-    if env:
-        return Path(env).expanduser().resolve()
-    return (Path(platformdirs.user_cache_dir(_APP)) / "joblib").resolve()
+    return user_cache_folder() / "data"

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from tzsl._io import atomic_write, ensure_folder
-from tzsl.datasets._home import CACHE_DIR_ENV, get_cache_dir
+from tzsl.cache import env_cache_dir, get_cache_dir
 from tzsl.datasets._signal_files import check_signal_values, read_checked_signal
 from tzsl.exceptions import ConfigError, DataFileError
 
@@ -81,7 +81,7 @@ def signal_cache_folder(folder: str | os.PathLike, cache_dir: str | os.PathLike)
 def _cache_root(cache: bool | str | os.PathLike | None) -> Path | None:
     """``cache`` -> the cache folder or None (off). None: ``$TZSL_CACHE_DIR`` if set; True: the default folder."""
     if cache is None:
-        return get_cache_dir() if os.environ.get(CACHE_DIR_ENV) else None
+        return env_cache_dir()
     if cache is False:
         return None
     return get_cache_dir(None if cache is True else cache)

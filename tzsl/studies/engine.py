@@ -136,7 +136,7 @@ def execute_study(exp: Experiment, results: ResultsDir, echo: Callable[[str], No
     """Run the study of ``exp`` into ``results`` (no manifest.json; see :func:`run_experiment`).
 
     A study run before with the same settings, code and data is restored from the study cache
-    (:mod:`tzsl.studies.study_cache`) when ``TZSL_CACHE_DIR`` is set.
+    (:mod:`tzsl.studies.study_cache`; on unless ``TZSL_STUDY_CACHE=0`` or ``[compute] cache = false``).
     """
     check_experiment(exp)
     runner = get_study(exp.study).hook("runner")

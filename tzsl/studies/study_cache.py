@@ -15,19 +15,26 @@ The key is everything that decides a study's output:
   output folder and the progress bar (:data:`NEUTRAL_SETTINGS`);
 * the code: a digest of every file of the installed ``tzsl`` package and the versions of the
   packages every manifest records (:data:`tzsl.studies._outputs.RECORDED_PACKAGES`) and of Python;
+  and the source files of plug-ins outside the package that a study may run: its study kind's
+  hooks and the classes of every registered method. A study whose plug-in source cannot be read
+  (code defined in a notebook) is not cached;
 * the data: the path, size and modification time of every file under the dataset folders the
   settings name (for a built-in dataset: the data home), so an edited, added or removed data
   file is a new key.
 
-It lives in ``$TZSL_CACHE_DIR/studies/<key>/`` and, like the fit store, only when
-``TZSL_CACHE_DIR`` is set; ``TZSL_STUDY_CACHE=0`` turns it off while keeping the fit store, and a
-study whose settings say ``compute.cache = false`` is never cached. A run that failed, or whose
-tables hold failed (split, method) fits, is not stored.
+It lives in ``<cache folder>/studies/<key>/``, the cache folder of :func:`tzsl.cache.get_cache_dir`
+(``$TZSL_CACHE_DIR``, else the user cache folder), and is on by default: ``TZSL_STUDY_CACHE=0``
+turns it off while keeping the fit store, and a study whose settings say ``compute.cache =
+false`` is never cached. A run that failed, or whose tables hold failed (split, method) fits, is
+not stored. After an entry is stored, the study cache and the fit store are pruned to the size
+cap, least recently used first (:func:`tzsl.cache.enforce_size_cap`); a restored entry is marked
+used before it is read, so a concurrent prune keeps it (see :mod:`tzsl.cache`).
 """
 
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import json
 import os
 import shutil
@@ -45,18 +52,15 @@ import joblib
 from tzsl._io import ensure_folder
 from tzsl._profile import stage
 from tzsl._warnings import recorded_warnings
-from tzsl.datasets import CACHE_DIR_ENV, get_data_home
+from tzsl.cache import (STUDIES_FOLDER, STUDY_CACHE_ENV, enforce_size_cap, format_size, get_cache_dir, mark_used,
+                        size_cap_gb, study_cache_on)
+from tzsl.datasets import get_data_home
 from tzsl.studies._outputs import ResultsDir, package_versions
-from tzsl.studies.config import DATASET_PATHS
+from tzsl.studies.config import DATASET_PATHS, get_study
 from tzsl.studies.study_settings import StudyRun
 
-__all__ = ["NEUTRAL_SETTINGS", "STUDIES_FOLDER", "STUDY_CACHE_ENV", "run_cached", "study_cache_folder",
-           "study_key"]
+__all__ = ["NEUTRAL_SETTINGS", "run_cached", "study_cache_folder", "study_key"]
 
-#: Sub-folder of ``$TZSL_CACHE_DIR`` holding the study cache.
-STUDIES_FOLDER = "studies"
-#: Environment variable: ``0`` (or ``off``, ``false``, ``no``) turns the study cache off.
-STUDY_CACHE_ENV = "TZSL_STUDY_CACHE"
 #: Settings (``table.key``) that cannot change what a study writes, left out of its key.
 NEUTRAL_SETTINGS = frozenset({"output.folder", "compute.progress"})
 _ENTRY_FORMAT = 1
@@ -65,11 +69,8 @@ _FILES = "files"
 
 
 def study_cache_folder() -> Path | None:
-    """``$TZSL_CACHE_DIR/studies``, or None when the study cache is off (see the module docstring)."""
-    root = os.environ.get(CACHE_DIR_ENV) or None
-    if root is None or os.environ.get(STUDY_CACHE_ENV, "1").strip().lower() in {"0", "off", "false", "no"}:
-        return None
-    return Path(root).expanduser() / STUDIES_FOLDER
+    """``<cache folder>/studies`` (:func:`tzsl.cache.get_cache_dir`), or None when ``TZSL_STUDY_CACHE`` turns it off."""
+    return get_cache_dir() / STUDIES_FOLDER if study_cache_on() else None
 
 
 @cache
@@ -83,6 +84,28 @@ def _code_digest() -> str:
             digest.update(str(path.relative_to(package)).encode() + b"\0")
             digest.update(path.read_bytes())
     return digest.hexdigest()
+
+
+def _plugin_digest(exp) -> tuple[str | None, str]:
+    """Digest of the source files outside tzsl that ``exp`` may run (its study kind's hooks, every registered
+    method's classes), and ``""``; or None and the name of a module without a readable source file."""
+    from tzsl.models import available_methods, get_method  # noqa: PLC0415 (the registry, read when a study runs)
+
+    kind = get_study(exp.study)
+    modules = {hook.partition(":")[0] for hook in (kind.runner, kind.results, kind.outputs, kind.notes) if hook}
+    for name in available_methods():
+        method = get_method(name)
+        modules.update(cls.__module__ for cls in (method.attribute_model, method.decision_rule, method.estimator)
+                       if cls is not None)
+    digest = hashlib.sha256()
+    for module in sorted(m for m in modules if m != "tzsl" and not m.startswith("tzsl.")):
+        try:
+            loaded = sys.modules.get(module)
+            source = loaded.__file__ if loaded is not None else importlib.util.find_spec(module).origin
+            digest.update(f"{module}\0".encode() + Path(source).read_bytes())
+        except (AttributeError, ImportError, OSError, TypeError, ValueError):  # no source file (a notebook)
+            return None, module
+    return digest.hexdigest(), ""
 
 
 def _listing(path: Path) -> list[str]:
@@ -114,14 +137,20 @@ def _data_paths(exp) -> list[Path]:
     return paths
 
 
-def study_key(exp) -> str:
-    """The cache key of a checked experiment: hex sha256 of its settings, the code and its data files."""
+def study_key(exp) -> str | None:
+    """The cache key of a checked experiment: hex sha256 of its settings, the code and its data files.
+
+    None when the study cannot be keyed (a plug-in without a source file): it is then not cached.
+    """
+    plugins, _ = _plugin_digest(exp)
+    if plugins is None:
+        return None
     settings = exp.config.model_dump(mode="json")
     for neutral in NEUTRAL_SETTINGS:
         table, name = neutral.split(".")
         if isinstance(settings.get(table), dict):
             settings[table].pop(name, None)
-    digest = hashlib.sha256(_code_digest().encode())
+    digest = hashlib.sha256(f"{_code_digest()} {plugins}".encode())
     digest.update(json.dumps({"study": exp.study, "settings": settings}, sort_keys=True, default=str).encode())
     for path in _data_paths(exp):
         digest.update("\n".join(_listing(path)).encode())
@@ -155,9 +184,15 @@ def run_cached(exp, results: ResultsDir, runner: Callable[[Callable[[str], None]
     folder = study_cache_folder()
     if folder is None or not _cacheable(exp):
         return runner(echo)
+    size_cap_gb()  # a bad $TZSL_CACHE_MAX_GB fails now, not after the study has run
     key = study_key(exp)
+    if key is None:
+        echo(f"note: not kept in the study cache: the plug-in module {_plugin_digest(exp)[1]} has no source file, "
+             "so a change to it could not be seen")
+        return runner(echo)
     entry = folder / key
     if (entry / _RUN_FILE).is_file():
+        mark_used(entry)  # before reading it: a prune running now keeps the entry (tzsl.cache)
         with stage("restore"):
             payload = _load(entry)
             if payload is not None:
@@ -179,23 +214,36 @@ def run_cached(exp, results: ResultsDir, runner: Callable[[Callable[[str], None]
                 "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
                 "splits": {k: v for k, v in results.splits.items() if k not in splits_before},
                 "data_files": {k: v for k, v in results.data_files.items() if k not in data_before}})
+            pruned = [e for e in enforce_size_cap(folder.parent).removed if not e.temporary]
+        if pruned:
+            echo(f"note: the study cache and fit store were over their size cap ({size_cap_gb():g} GB): "
+                 f"removed the {len(pruned)} least recently used entries ({format_size(sum(e.size for e in pruned))}); "
+                 "'tzsl cache info' shows what is left")
     run.record["study_cache"] = {"key": key, "restored": False}
     return run
 
 
 def _store(folder: Path, key: str, results: ResultsDir, written: list[Path], payload: dict[str, Any]) -> None:
-    """Write the entry into a temporary folder beside it, then move it into place in one step."""
+    """Write the entry into a temporary folder beside it (a name starting with ``.``, which pruning leaves
+    alone while it is new), then move it into place in one step. A failed write leaves the results as they
+    are, with one warning."""
     ensure_folder(folder, "study cache folder")
     tmp = folder / f".{key}.{os.getpid()}.tmp"
     shutil.rmtree(tmp, ignore_errors=True)
-    names = []
-    for path in written:
-        if path.exists():
-            name = str(path.relative_to(results.root))
-            (tmp / _FILES / name).parent.mkdir(parents=True, exist_ok=True)
-            shutil.copyfile(path, tmp / _FILES / name)
-            names.append(name)
-    joblib.dump({**payload, "files": names, "format": _ENTRY_FORMAT}, tmp / _RUN_FILE)
+    try:
+        names = []
+        for path in written:
+            if path.exists():
+                name = str(path.relative_to(results.root))
+                (tmp / _FILES / name).parent.mkdir(parents=True, exist_ok=True)
+                shutil.copyfile(path, tmp / _FILES / name)
+                names.append(name)
+        joblib.dump({**payload, "files": names, "format": _ENTRY_FORMAT}, tmp / _RUN_FILE)
+    except OSError as exc:  # a full disk, a removed folder: the study's results stand, only the entry is lost
+        shutil.rmtree(tmp, ignore_errors=True)
+        warnings.warn(f"{folder / key}: study not stored in the study cache ({type(exc).__name__}: {exc})",
+                      UserWarning, stacklevel=3)
+        return
     try:
         os.replace(tmp, folder / key)
     except OSError:  # another run stored the same key meanwhile: keep theirs
@@ -225,8 +273,8 @@ def _restore(payload: dict[str, Any], entry: Path, key: str, results: ResultsDir
         results.copy_file(name, entry / _FILES / name)
     results.splits.update(payload["splits"])
     results.data_files.update(payload["data_files"])
-    echo(f"(restored from the study cache: the run of {payload['created']}, {payload['seconds']:.1f} s; "
-         f"unset {CACHE_DIR_ENV} or set {STUDY_CACHE_ENV}=0 to recompute)")
+    echo(f"note: restored from the study cache (the run of {payload['created']}, computed in "
+         f"{payload['seconds']:.1f} s); {STUDY_CACHE_ENV}=0 computes it again")
     for line in payload["lines"]:
         echo(line)
     for line in payload["warnings"]:
