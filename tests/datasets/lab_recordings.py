@@ -125,8 +125,8 @@ def bag_lab(folder: Path, *, ros1: bool = True, n_messages: int = 6, seed: int =
 def reading_lab(folder: Path, readings: list[list[tuple[float, list[float]]]], *, ros1: bool = True) -> Path:
     """One bag per trial of lab_msgs/msg/Reading messages on /reading (a float sensor); returns the mapping."""
     store = biotac_store(ros1)
-    (folder / "bags").mkdir(parents=True)
-    (folder / "msg").mkdir()
+    (folder / "bags").mkdir(parents=True, exist_ok=True)
+    (folder / "msg").mkdir(exist_ok=True)
     (folder / "msg" / "Reading.msg").write_text(READING_MSG)
     rows = []
     for i, messages in enumerate(readings):

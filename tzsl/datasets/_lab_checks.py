@@ -10,6 +10,7 @@ bag message, HDF5 group).
 
 from __future__ import annotations
 
+import csv
 import functools
 import glob as globbing
 import os
@@ -131,12 +132,20 @@ class LabelRow:
 
 def _table(path: Path, what: str) -> pd.DataFrame:
     """A CSV table as text, its shape checked (data lines longer or shorter than the header)."""
+    width = None
+    try:  # pandas reads a short line as empty cells and a long one as an index: count the fields first
+        with open(path, encoding="utf-8", newline="") as fh:
+            records = csv.reader(fh)
+            for record in records:
+                if record and width is None:
+                    width = len(record)
+                elif record and len(record) != width:
+                    raise lab_error(path, f"line has {len(record)} fields; the header has {width}", records.line_num)
+    except (OSError, UnicodeDecodeError, csv.Error):
+        pass  # read_csv_table names the problem
     table = read_csv_table(path, text=True)
     if not table.index.equals(pd.RangeIndex(len(table))):
         raise lab_error(path, f"data lines have more fields than the header of the {what}", 2)
-    short = np.flatnonzero(table.isna().any(axis=1).to_numpy())
-    if short.size:
-        raise lab_error(path, "line has fewer fields than the header", int(short[0]) + 2)
     return table
 
 
@@ -302,7 +311,7 @@ class ChannelCheck:
             raise lab_error(path, f"{record}: channel name(s) {twice} occur twice; every channel needs its own name",
                             line)
         if self.first is None:
-            self.first = (channels, f"{one_line(path)}{'' if line is None else f':{line}'} {record}")
+            self.first = (channels, f"{one_line(path)}{'' if line is None else f':{line}'} ({record})")
             return
         if channels != self.first[0]:
             raise lab_error(path, f"{record}: channels {channels} differ from {self.first[0]} of {self.first[1]}; "

@@ -75,14 +75,15 @@ def read_series(source: LabSource) -> tuple[Trials, pd.DataFrame]:
         trial, sensor = row.cells["trial_id"], row.cells.get("sensor", UNNAMED_SENSOR)
         if "sensor" in row.cells and not sensor.strip():
             raise lab_error(labels_path, "empty sensor (the table has a sensor column)", row.line)
-        ids.add((trial, sensor), f"trial {trial!r}, sensor {sensor!r}", labels_path, "", row.line)
+        which = f"trial {trial!r}" + (f", sensor {sensor!r}" if sensor != UNNAMED_SENSOR else "")
+        ids.add((trial, sensor), which, labels_path, "", row.line)
         if trial in first and first[trial].cells["class"] != row.cells["class"]:
             raise lab_error(labels_path, f"trial {trial!r} has class {row.cells['class']!r} here and "
                                          f"{first[trial].cells['class']!r} on line {first[trial].line}", row.line)
         first.setdefault(trial, row)
         path = source.path(row.cells["file"], "file", labels_path, row.line)
         names, values = _read(path, source, labels_path, row)
-        channels(names, path, f"(line {row.line} of {labels_path.name}, trial {trial!r}, sensor {sensor!r})")
+        channels(names, path, f"{labels_path.name} line {row.line}, {which}")
         trials.setdefault(trial, {})[sensor] = (names, values)
     sensors = list(dict.fromkeys(s for per in trials.values() for s in per))
     for trial, per in trials.items():
