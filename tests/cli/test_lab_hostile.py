@@ -189,6 +189,20 @@ def _ros2_db_outside(lab: Path) -> None:
     os.symlink(target, db)
 
 
+def _fifo(relative: str) -> Callable[[Path], None]:
+    def breaks(lab: Path) -> None:
+        (lab / relative).unlink()
+        os.mkfifo(lab / relative)
+    return breaks
+
+
+def _link_loops(lab: Path) -> None:
+    """Two links to the lab folder inside it: a glob following them would never end."""
+    for name in ("a", "b"):
+        os.symlink(lab, lab / "bags" / name)
+    _replace('bags = ["bags/*.bag"]', 'bags = ["bags/**/*.bag"]')(lab)
+
+
 def _npz(lab: Path) -> None:
     np.savez(lab / "series" / "t1.npz", ch0=np.array([1.0, np.nan]), ch1=np.array([0.0, 1.0]))
     _set(1, "file", "series/t1.npz")(lab)
@@ -265,6 +279,10 @@ CASES = {
     "bag2-database-linked-outside": Case("ros2-bag", _ros2_db_outside, ("bags/mug", "symbolic link", "outside")),
     "bag2-metadata-zero-bytes": Case("ros2-bag", lambda lab: (lab / "bags" / "mug" / "metadata.yaml").write_text(""),
                                      ("bags/mug", "not a readable ROS bag")),
+    "bag-labels-is-a-pipe": Case("ros-bag", _fifo("labels.csv"), ("mapping.toml", "labels", "pipe")),
+    "bag-is-a-pipe": Case("ros-bag", _fifo("bags/mug.bag"), ("mapping.toml", "mug.bag", "pipe")),
+    "bag-mapping-nested-deeply": Case("ros-bag", lambda lab: (lab / "mapping.toml").write_text(
+        "bags = " + "[" * 5000 + "]" * 5000 + "\n"), ("mapping.toml", "nested")),
     "bag-out-is-the-input": Case("ros-bag", lambda lab: None, ("--out", "inside"), ("--out", "{lab}", "--force")),
     # ------------------------------------------------------------------ HDF5
     "h5-dataset-is-a-group": Case("hdf5", _h5(lambda f: (f.__delitem__("trial_001/f0/pressure"),
@@ -363,6 +381,8 @@ CASES = {
     "series-labels-long-lines": Case("series", _replace("series/t0.csv,t0,mug", "series/t0.csv,t0,mug,extra",
                                                         "labels.csv"), ("labels.csv:2", "4 fields; the header has 3")),
     "series-out-inside-input": Case("series", lambda lab: None, ("--out", "inside"), ("--out", "{lab}/series/out")),
+    "series-file-is-a-pipe": Case("series", _fifo("series/t0.csv"), ("labels.csv:2", "pipe")),
+    "series-hidden-file": Case("series", _set(0, "file", ".hidden/t0.csv"), ("labels.csv:2", "not found")),
     "series-npz-nan": Case("series", _npz, ("t1.npz", "NaN", "row 1")),
     "series-channels-twice": Case("series", lambda lab: (lab / "mapping.toml").write_text(
         (lab / "mapping.toml").read_text() + 'channels = ["a", "a"]\n'), ("mapping.toml", "channels")),
@@ -412,3 +432,14 @@ def test_allow_outside_reads_an_absolute_path_and_a_link(tmp_path):
     result = _convert(case, lab, tmp_path, "--allow-outside")
     assert result.exit_code == 0, result.output
     assert "4 trials" in result.output
+
+
+def test_a_glob_does_not_follow_links_to_folders(tmp_path):
+    """Two links back to the lab folder: ``**`` following them would never end (2**depth paths)."""
+    lab = tmp_path / "lab"
+    lab.mkdir()
+    bag_lab(lab)
+    _link_loops(lab)
+    result = _convert(Case("ros-bag", lambda _: None, ()), lab, tmp_path)
+    assert result.exit_code == 0, result.output
+    assert "8 trials" in result.output

@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from tqdm.auto import tqdm
 
 from tzsl.datasets._lab_checks import (
     ChannelCheck,
@@ -25,6 +24,7 @@ from tzsl.datasets._lab_checks import (
     check_signal,
     check_size,
     lab_error,
+    progress_bar,
     read_label_table,
     seconds,
     to_float,
@@ -182,6 +182,29 @@ def _bag_messages(bag: Path, source: LabSource, store) -> tuple[int, dict[str, _
     return first, rows
 
 
+def _cut(bag: Path, rows: list, read: tuple[int, dict[str, _SensorRows]], source: LabSource, labels_path: Path,
+         channels: ChannelCheck) -> Trials:
+    """The trials of one bag: each label row's time window (start, end) of every sensor's messages."""
+    first, messages = read
+    for sensor, sensor_rows in messages.items():
+        channels(sensor_rows.channels(), bag, f"sensor {sensor!r}")
+    stacked = {name: ((np.asarray(r.stamps, dtype=np.int64) - first) / 1e9, np.stack(r.values), r.channels())
+               for name, r in messages.items()}
+    trials: Trials = {}
+    for row, (start, end) in rows:
+        per_sensor = {}
+        for sensor in source.mapping.sensors:
+            elapsed, values, names = stacked[sensor.name]
+            keep = (elapsed >= start) & (elapsed < end)
+            if not keep.any():
+                raise lab_error(labels_path, f"trial {row.cells['trial_id']!r}: no {sensor.topic} message of {bag} "
+                                             f"between {start:g} and {end:g} s (it has {elapsed.min():g} to "
+                                             f"{elapsed.max():g} s)", row.line)
+            per_sensor[sensor.name] = (names, values[keep])
+        trials[row.cells["trial_id"]] = per_sensor
+    return trials
+
+
 def read_bags(source: LabSource) -> tuple[Trials, pd.DataFrame]:
     """Trials (trial -> sensor -> (channels, values (n_messages, n_channels))) and their labels, in label order."""
     mapping: BagMapping = source.mapping
@@ -207,22 +230,8 @@ def read_bags(source: LabSource) -> tuple[Trials, pd.DataFrame]:
                                              f"{labels_path} names it; name it there or narrow the pattern")
     trials: Trials = {}
     channels = ChannelCheck()
-    for bag in tqdm(list(per_bag), desc="bags", disable=not source.progress):
-        first, messages = _bag_messages(bag, source, store)
-        for sensor, rows in messages.items():
-            channels(rows.channels(), bag, f"sensor {sensor!r}")
-        stacked = {name: ((np.asarray(rows.stamps, dtype=np.int64) - first) / 1e9, np.stack(rows.values),
-                          rows.channels()) for name, rows in messages.items()}
-        for row, (start, end) in per_bag[bag]:
-            per_sensor = {}
-            for sensor in mapping.sensors:
-                elapsed, values, names = stacked[sensor.name]
-                keep = (elapsed >= start) & (elapsed < end)
-                if not keep.any():
-                    raise lab_error(labels_path, f"trial {row.cells['trial_id']!r}: no {sensor.topic} message of "
-                                                 f"{bag} between {start:g} and {end:g} s (it has "
-                                                 f"{elapsed.min():g} to {elapsed.max():g} s)", row.line)
-                per_sensor[sensor.name] = (names, values[keep])
-            trials[row.cells["trial_id"]] = per_sensor
+    with progress_bar(list(per_bag), "bags", source.progress) as bar:
+        for bag in bar:
+            trials.update(_cut(bag, per_bag[bag], _bag_messages(bag, source, store), source, labels_path, channels))
     table = pd.DataFrame([{"trial_id": r.cells["trial_id"], "class": r.cells["class"]} for r in labels])
     return trials, table

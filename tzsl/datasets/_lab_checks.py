@@ -10,17 +10,20 @@ bag message, HDF5 group).
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import functools
-import glob as globbing
 import os
 import re
-from collections.abc import Sequence
+import stat
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 import pandas as pd
+from tqdm.auto import tqdm
 
 from tzsl._io import MAX_NPZ_BYTES_ENV
 from tzsl.datasets._feature_table import read_csv_table
@@ -28,12 +31,25 @@ from tzsl.datasets._paths import resolve_inside
 from tzsl.exceptions import DataFileError
 
 __all__ = ["ChannelCheck", "LabSource", "LabelRow", "TrialIds", "Trials", "channel_names", "check_signal",
-           "check_size", "lab_error", "one_line", "read_class_table", "read_label_table", "seconds", "to_float"]
+           "check_size", "lab_error", "one_line", "progress_bar", "read_class_table", "read_label_table",
+           "seconds", "to_float"]
 
 #: trial id -> sensor -> (channel names (n_channels,), values (n_rows, n_channels) float64)
 Trials = dict[str, dict[str, tuple[list[str], np.ndarray]]]
 
+T = TypeVar("T")
 _CONTROL = re.compile(r"[\x00-\x1f\x7f]")
+
+
+@contextlib.contextmanager
+def progress_bar(items: Sequence[T], desc: str, show: bool) -> Iterator[Iterable[T]]:
+    """``items`` with a progress bar on stderr when ``show`` and stderr is a terminal.
+
+    A context manager: the bar is closed when an error leaves the block, so the error line
+    stands on a line of its own.
+    """
+    with tqdm(items, desc=desc, disable=None if show else True) as bar:
+        yield bar
 
 
 def one_line(text: object) -> str:
@@ -81,45 +97,59 @@ class LabSource:
         """The file ``text`` (a mapping value or a label-table cell) names, refused when outside the folder.
 
         ``what`` names the key or column for the message; ``named_in`` and ``line`` the file
-        (and line) holding ``text``.
+        (and line) holding ``text``. A pipe or device is refused too (reading it could block).
         """
         if self.allow_outside:
             path = Path(os.path.expanduser(text))
-            return path if path.is_absolute() else self.mapping_file.parent / path
-        resolved, reason = resolve_inside(self.root, text, what, self.root)
-        if reason is not None:
-            raise lab_error(named_in, f"{reason}; the mapping reads only inside {self.root} "
-                                      "(pass --allow-outside to read it)", line)
-        return resolved
+            path = path if path.is_absolute() else self.mapping_file.parent / path
+        else:
+            path, reason = resolve_inside(self.root, text, what, self.root)
+            if reason is not None:
+                raise lab_error(named_in, f"{reason}; the mapping reads only inside {self.root} "
+                                          "(pass --allow-outside to read it)", line)
+        try:
+            mode = os.stat(path).st_mode
+        except OSError:
+            return path  # missing or unreadable: its reader says so
+        if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+            raise lab_error(named_in, f"{what} {text!r} is not a regular file or folder (a pipe or device?)", line)
+        return path
 
     def glob(self, patterns: Sequence[str], key: str) -> list[Path]:
         """Files and folders matching the mapping's ``key`` globs, sorted; each checked to be inside.
 
-        Names starting with a dot are not matched (shell rules); ``**`` spans folders.
+        ``*`` stays in one folder, ``**`` spans folders (not following links to folders), names
+        starting with a dot are not matched.
         """
         found = set()
         for pattern in patterns:
             if not self.allow_outside:
                 self.path(pattern, f"{key} pattern", self.mapping_file)  # no '..', not absolute
-            base = os.path.expanduser(pattern) if self.allow_outside else pattern
-            for match in globbing.glob(os.path.join(globbing.escape(str(self.mapping_file.parent)), base),
-                                        recursive=True):
-                if not self.allow_outside:
-                    rel = os.path.relpath(match, self.mapping_file.parent)
-                    self.path(rel, f"{key} match", self.mapping_file)  # a link pointing outside
-                found.add(Path(match))
+            text = os.path.expanduser(pattern) if self.allow_outside else pattern
+            anchor = Path(Path(text).anchor) if Path(text).is_absolute() else self.mapping_file.parent
+            relative = os.path.relpath(text, anchor) if Path(text).is_absolute() else text
+            try:
+                matches = list(anchor.glob(relative))
+            except (ValueError, NotImplementedError, OSError) as exc:
+                raise lab_error(self.mapping_file, f"{key}: pattern {pattern!r} is not a usable glob ({exc})") from None
+            for match in matches:
+                parts = match.relative_to(anchor).parts
+                if any(p.startswith(".") and p not in (".", "..") for p in parts):
+                    continue
+                self.path(os.path.join(*parts) if not self.allow_outside else str(match), f"{key} match",
+                          self.mapping_file)  # a link pointing outside, a pipe
+                found.add(match)
         if not found:
             raise lab_error(self.mapping_file, f"{key}: no file matches {list(patterns)}")
         return sorted(found)
 
     def files_inside(self, folder: Path) -> None:
-        """Refuse a link inside ``folder`` (a ROS 2 bag) that points outside the mapping's folder."""
+        """Refuse a link inside ``folder`` (a ROS 2 bag) pointing outside the mapping's folder, and a pipe."""
         if self.allow_outside:
             return
         for here, dirs, files in os.walk(folder):
             for name in dirs + files:
-                rel = os.path.relpath(os.path.join(here, name), self.mapping_file.parent)
-                self.path(rel, "file", folder)
+                self.path(os.path.relpath(os.path.join(here, name), self.mapping_file.parent), "file", folder)
 
 
 @dataclass(frozen=True)

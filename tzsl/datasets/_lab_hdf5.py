@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from tqdm.auto import tqdm
 
 from tzsl.datasets._lab_checks import (
     ChannelCheck,
@@ -25,6 +24,7 @@ from tzsl.datasets._lab_checks import (
     check_signal,
     check_size,
     lab_error,
+    progress_bar,
     one_line,
     to_float,
 )
@@ -178,41 +178,49 @@ def _groups(handle, path: Path, pattern: str) -> list[str]:
     return matching
 
 
-def read_hdf5(source: LabSource) -> tuple[Trials, pd.DataFrame]:
-    """Trials (trial -> sensor -> (channels, values (time, n_channels))) and their classes, file by file."""
+def _file_trials(path: Path, source: LabSource, ids: TrialIds, channels: ChannelCheck) -> list[tuple]:
+    """[(trial id, class, sensor -> (channels, values))] of one HDF5 file, every group checked."""
     import h5py  # noqa: PLC0415
 
     mapping: Hdf5Mapping = source.mapping
+    if path.is_dir():
+        raise lab_error(path, "is a folder, not an HDF5 file (it matches the mapping's files)")
+    try:
+        handle = h5py.File(path, "r")
+    except Exception as exc:  # noqa: BLE001 - h5py raises OSError, ValueError... for a bad file
+        raise lab_error(path, f"not a readable HDF5 file: {_first_line(exc)}") from None
+    found = []
+    with handle:
+        for group_name in _groups(handle, path, mapping.trials):
+            record = f"group {one_line(group_name)}"
+            try:
+                group = handle[group_name]
+                trial_id = f"{path.stem}{group_name.replace('/', '_')}"
+                ids.add(trial_id, f"trial id {trial_id!r}", path, record)
+                label = _label(handle, group, mapping.label, path, record)
+                if label not in source.classes:
+                    raise lab_error(path, f"{record}: class {label!r} is not in the class table ({mapping.classes})")
+                per_sensor = {}
+                for sensor in mapping.sensors:
+                    names, values = _sensor(handle, group, sensor, path, record, source.limit)
+                    channels(names, path, f"{record}, sensor {sensor.name!r}")
+                    per_sensor[sensor.name] = (names, values)
+            except DataFileError:
+                raise
+            except Exception as exc:  # noqa: BLE001 - a corrupt object found while reading the group
+                raise lab_error(path, f"{record}: cannot read it: {_first_line(exc)}") from None
+            found.append((trial_id, label, per_sensor))
+    return found
+
+
+def read_hdf5(source: LabSource) -> tuple[Trials, pd.DataFrame]:
+    """Trials (trial -> sensor -> (channels, values (time, n_channels))) and their classes, file by file."""
     trials: Trials = {}
     rows = []
     ids, channels = TrialIds(), ChannelCheck()
-    for path in tqdm(source.glob(mapping.files, "files"), desc="HDF5 files", disable=not source.progress):
-        if path.is_dir():
-            raise lab_error(path, "is a folder, not an HDF5 file (it matches the mapping's files)")
-        try:
-            handle = h5py.File(path, "r")
-        except Exception as exc:  # noqa: BLE001 - h5py raises OSError, ValueError... for a bad file
-            raise lab_error(path, f"not a readable HDF5 file: {_first_line(exc)}") from None
-        with handle:
-            for group_name in _groups(handle, path, mapping.trials):
-                record = f"group {one_line(group_name)}"
-                try:
-                    group = handle[group_name]
-                    trial_id = f"{path.stem}{group_name.replace('/', '_')}"
-                    ids.add(trial_id, f"trial id {trial_id!r}", path, record)
-                    label = _label(handle, group, mapping.label, path, record)
-                    if label not in source.classes:
-                        raise lab_error(path, f"{record}: class {label!r} is not in the class table "
-                                              f"({mapping.classes})")
-                    per_sensor = {}
-                    for sensor in mapping.sensors:
-                        names, values = _sensor(handle, group, sensor, path, record, source.limit)
-                        channels(names, path, f"{record}, sensor {sensor.name!r}")
-                        per_sensor[sensor.name] = (names, values)
-                except DataFileError:
-                    raise
-                except Exception as exc:  # noqa: BLE001 - a corrupt object found while reading the group
-                    raise lab_error(path, f"{record}: cannot read it: {_first_line(exc)}") from None
+    with progress_bar(source.glob(source.mapping.files, "files"), "HDF5 files", source.progress) as bar:
+        for path in bar:
+            for trial_id, label, per_sensor in _file_trials(path, source, ids, channels):
                 trials[trial_id] = per_sensor
                 rows.append({"trial_id": trial_id, "class": label})
     return trials, pd.DataFrame(rows)

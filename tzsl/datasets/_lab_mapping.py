@@ -167,6 +167,8 @@ def load_lab_mapping(path: str | os.PathLike, kind: str, model: type[BaseModel])
         raise DataFileError(path, f"cannot read the mapping: {exc.strerror or exc}") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise DataFileError(path, f"not a TOML file: {str(exc).splitlines()[0]}") from None
+    except RecursionError:
+        raise DataFileError(path, "not a TOML file for tzsl: values nested too deeply") from None
     raw.setdefault("kind", kind)
     if raw["kind"] != kind:
         raise ConfigError(f"{path}: kind: the mapping is for {raw['kind']!r}, not --from {kind}")

@@ -11,7 +11,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from tqdm.auto import tqdm
 
 from tzsl._io import read_npy
 from tzsl.datasets._lab_checks import (
@@ -23,6 +22,7 @@ from tzsl.datasets._lab_checks import (
     check_signal,
     check_size,
     lab_error,
+    progress_bar,
     read_label_table,
     to_float,
 )
@@ -71,20 +71,21 @@ def read_series(source: LabSource) -> tuple[Trials, pd.DataFrame]:
     trials: Trials = {}
     first: dict[str, LabelRow] = {}  # trial -> its first line
     ids, channels = TrialIds(), ChannelCheck()
-    for row in tqdm(labels, desc="series", disable=not source.progress):
-        trial, sensor = row.cells["trial_id"], row.cells.get("sensor", UNNAMED_SENSOR)
-        if "sensor" in row.cells and not sensor.strip():
-            raise lab_error(labels_path, "empty sensor (the table has a sensor column)", row.line)
-        which = f"trial {trial!r}" + (f", sensor {sensor!r}" if sensor != UNNAMED_SENSOR else "")
-        ids.add((trial, sensor), which, labels_path, "", row.line)
-        if trial in first and first[trial].cells["class"] != row.cells["class"]:
-            raise lab_error(labels_path, f"trial {trial!r} has class {row.cells['class']!r} here and "
-                                         f"{first[trial].cells['class']!r} on line {first[trial].line}", row.line)
-        first.setdefault(trial, row)
-        path = source.path(row.cells["file"], "file", labels_path, row.line)
-        names, values = _read(path, source, labels_path, row)
-        channels(names, path, f"{labels_path.name} line {row.line}, {which}")
-        trials.setdefault(trial, {})[sensor] = (names, values)
+    with progress_bar(labels, "series", source.progress) as bar:
+        for row in bar:
+            trial, sensor = row.cells["trial_id"], row.cells.get("sensor", UNNAMED_SENSOR)
+            if "sensor" in row.cells and not sensor.strip():
+                raise lab_error(labels_path, "empty sensor (the table has a sensor column)", row.line)
+            which = f"trial {trial!r}" + (f", sensor {sensor!r}" if sensor != UNNAMED_SENSOR else "")
+            ids.add((trial, sensor), which, labels_path, "", row.line)
+            if trial in first and first[trial].cells["class"] != row.cells["class"]:
+                raise lab_error(labels_path, f"trial {trial!r} has class {row.cells['class']!r} here and "
+                                             f"{first[trial].cells['class']!r} on line {first[trial].line}", row.line)
+            first.setdefault(trial, row)
+            path = source.path(row.cells["file"], "file", labels_path, row.line)
+            names, values = _read(path, source, labels_path, row)
+            channels(names, path, f"{labels_path.name} line {row.line}, {which}")
+            trials.setdefault(trial, {})[sensor] = (names, values)
     sensors = list(dict.fromkeys(s for per in trials.values() for s in per))
     for trial, per in trials.items():
         lacking = [s for s in sensors if s not in per]
