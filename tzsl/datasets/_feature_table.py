@@ -79,18 +79,11 @@ def write_feature_table(features: FeatureSet, path: str | Path) -> list[Path]:
     return feature_table_paths(path)
 
 
-def read_csv_table(path: Path, *, text: bool = False) -> pd.DataFrame:
-    """A CSV table, or one line naming the file and what is wrong with it.
-
-    ``text``: every cell as its text (``"001"`` stays ``"001"``, an empty cell is ``""``) and
-    blank lines kept as rows of empty cells, so that row ``i`` is line ``i + 2`` of the file
-    (while no quoted cell spans lines); a line shorter than the header has NaN cells.
-    """
+def read_csv_table(path: Path) -> pd.DataFrame:
+    """A CSV table, or one line naming the file and what is wrong with it."""
     try:
         if looks_binary(path):
             raise UnicodeDecodeError("utf-8", b"", 0, 1, "binary")
-        if text:
-            return pd.read_csv(path, dtype=str, keep_default_na=False, skip_blank_lines=False)
         return pd.read_csv(path)
     except UnicodeDecodeError:
         raise DataFileError(path, "not a UTF-8 text file (a binary file given as CSV?)") from None

@@ -11,7 +11,6 @@ bag message, HDF5 group).
 from __future__ import annotations
 
 import contextlib
-import csv
 import functools
 import os
 import re
@@ -26,8 +25,9 @@ import pandas as pd
 from tqdm.auto import tqdm
 
 from tzsl._io import MAX_NPZ_BYTES_ENV
-from tzsl.datasets._feature_table import read_csv_table
 from tzsl.datasets._paths import resolve_inside
+from tzsl.datasets._tables import Problem, read_rows
+from tzsl.datasets._validate import ScannedDataset, scan_classes
 from tzsl.exceptions import DataFileError
 
 __all__ = ["ChannelCheck", "LabSource", "LabelRow", "TrialIds", "Trials", "channel_names", "check_signal",
@@ -160,58 +160,41 @@ class LabelRow:
     cells: dict[str, str] = field(default_factory=dict)
 
 
-def _table(path: Path, what: str) -> pd.DataFrame:
-    """A CSV table as text, its shape checked (data lines longer or shorter than the header)."""
-    width = None
-    try:  # pandas reads a short line as empty cells and a long one as an index: count the fields first
-        with open(path, encoding="utf-8", newline="") as fh:
-            records = csv.reader(fh)
-            for record in records:
-                if record and width is None:
-                    width = len(record)
-                elif record and len(record) != width:
-                    raise lab_error(path, f"line has {len(record)} fields; the header has {width}", records.line_num)
-    except (OSError, UnicodeDecodeError, csv.Error):
-        pass  # read_csv_table names the problem
-    table = read_csv_table(path, text=True)
-    if not table.index.equals(pd.RangeIndex(len(table))):
-        raise lab_error(path, f"data lines have more fields than the header of the {what}", 2)
-    return table
-
-
-def _cell_problem(text: str) -> str | None:
-    if _CONTROL.search(text):
-        return f"{one_line(repr(text))} holds a control character (a line break or tab inside a cell?)"
-    return None
+def _first_problem(path: Path, problems: list[Problem]) -> DataFileError:
+    """The first of ``problems`` found in ``path`` as one line (how many more it has, when more)."""
+    first = problems[0]
+    more = f" (and {len(problems) - 1} more problem(s) in this file)" if len(problems) > 1 else ""
+    return lab_error(path, first.message + more, first.line)
 
 
 def read_label_table(source: LabSource, key: str, required: tuple[str, ...],
                      optional: tuple[str, ...] = ()) -> tuple[Path, list[LabelRow]]:
     """The rows of the label table named by the mapping's ``key``, every cell checked.
 
-    Columns: ``required`` (each cell non-empty) and ``optional`` ones, no others; a ``class``
-    must be in ``classes.csv``; blank lines are skipped (their line numbers kept).
+    Columns: ``required`` (each cell non-empty) and ``optional`` ones, no others; every line has
+    the header's number of fields; a ``class`` must be in ``classes.csv``; cells are read as text
+    (spaces around them removed); blank lines are skipped.
     """
     path = source.path(getattr(source.mapping, key), key, source.mapping_file)
-    table = _table(path, key)
-    columns = [str(c) for c in table.columns]
-    missing = [c for c in required if c not in columns]
-    unknown = [c for c in columns if c not in required + optional]
+    problems: list[Problem] = []
+    parsed = read_rows(path.parent, path.name, problems)
+    if problems:
+        raise _first_problem(path, problems)
+    header, lines = parsed
+    missing = [c for c in required if c not in header]
+    unknown = [c for c in header if c not in required + optional]
     if missing or unknown:
         hint = f"missing column(s) {missing}" if missing else f"unknown column(s) {[one_line(c) for c in unknown]}"
         raise lab_error(path, f"{hint}; expected {', '.join(required)}"
                               + (f"[, {', '.join(optional)}]" if optional else ""), 1)
     rows = []
-    for i, values in enumerate(table.itertuples(index=False, name=None)):
-        cells = dict(zip(columns, (str(v) for v in values), strict=True))
-        line = i + 2
-        if not any(v.strip() for v in cells.values()):
-            continue
+    for line, values in lines:
+        cells = dict(zip(header, values, strict=True))
         for column, text in cells.items():
-            problem = _cell_problem(text)
-            if problem:
-                raise lab_error(path, f"{column}: {problem}", line)
-        empty = [c for c in required if not cells[c].strip()]
+            if _CONTROL.search(text):
+                raise lab_error(path, f"{column}: {one_line(repr(text))} holds a control character (a line break "
+                                      "or tab inside a cell?)", line)
+        empty = [c for c in required if not cells[c]]
         if empty:
             raise lab_error(path, f"empty {', '.join(empty)}", line)
         if cells["class"] not in source.classes:
@@ -224,35 +207,19 @@ def read_label_table(source: LabSource, key: str, required: tuple[str, ...],
 
 
 def read_class_table(source: LabSource) -> pd.DataFrame:
-    """``classes.csv``: class names (distinct, non-empty) and 0/1 attribute cells, as int (n_classes, n_attributes)."""
+    """``classes.csv`` checked as ``tzsl validate`` checks a dataset's: (n_classes, n_attributes) int 0/1."""
     path = source.path(source.mapping.classes, "classes", source.mapping_file)
-    table = _table(path, "class table")
-    if table.shape[1] < 2:
-        raise lab_error(path, "expected class,<attribute>,... (at least one attribute column)", 1)
-    for column in table.columns:
-        if _cell_problem(str(column)) or str(column).startswith("Unnamed:"):
-            raise lab_error(path, f"column name {one_line(repr(str(column)))} is empty or holds a control character", 1)
-    names = table.iloc[:, 0].astype(str)
-    seen: dict[str, int] = {}
-    values = np.zeros((len(table), table.shape[1] - 1), dtype=np.int64)
-    for i, name in enumerate(names):
-        line = i + 2
-        problem = _cell_problem(name) or (None if name.strip() else "empty class name")
-        if problem:
-            raise lab_error(path, problem, line)
-        if name in seen:
-            raise lab_error(path, f"class {name!r} is listed twice (also line {seen[name]})", line)
-        seen[name] = line
-        for j, cell in enumerate(table.iloc[i, 1:]):
-            try:
-                number = float(cell)
-            except ValueError:
-                number = -1.0
-            if number not in (0.0, 1.0):
-                raise lab_error(path, f"class {name!r}, attribute {one_line(repr(str(table.columns[j + 1])))}: "
-                                      f"{one_line(repr(cell))} is not 0 or 1", line)
-            values[i, j] = int(number)
-    return pd.DataFrame(values, index=pd.Index(list(names), name="class"), columns=[str(c) for c in table.columns[1:]])
+    problems: list[Problem] = []
+    scan = ScannedDataset(path.parent)
+    scan_classes(path.parent, {"classes": {"allow_identical_rows": bool(source.mapping.allow_identical_rows)}},
+                 problems, scan, path.name, source.mapping_file.name)
+    if problems:
+        raise _first_problem(path, problems)
+    table = scan.classes
+    for name in (*table.index, *table.columns):
+        if _CONTROL.search(name):
+            raise lab_error(path, f"{one_line(repr(name))} holds a control character", 1)
+    return table.rename_axis(columns=None)
 
 
 def seconds(row: LabelRow, path: Path) -> tuple[float, float]:
