@@ -343,6 +343,10 @@ CASES = {
     "h5-file-without-trials": Case("hdf5", _no_groups, ("other.h5", "no group matches")),
     "h5-symlink-outside": Case("hdf5", _link_outside("session.h5"), ("mapping.toml", "session.h5", "outside")),
     "h5-folder-matches": Case("hdf5", lambda lab: (lab / "dir.h5").mkdir(), ("dir.h5", "folder")),
+    "h5-same-file-twice": Case("hdf5", lambda lab: os.symlink(lab / "session.h5", lab / "alias.h5"),
+                               ("mapping.toml", "alias.h5", "same file")),
+    "h5-group-name-with-line-break": Case("hdf5", _h5(lambda f: f.move("trial_001", "trial_\n1")),
+                                          ("session.h5", "group /trial_\\n1", "control character")),
     "h5-label-dataset-missing": Case("hdf5", _replace('label = "attrs:material"', 'label = "dataset:meta/class"'),
                                      ("session.h5", "group /trial_000", "'meta/class'")),
     # ------------------------------------------------------------------ folders of series

@@ -31,7 +31,7 @@ from tzsl.datasets._validate import ScannedDataset, scan_classes
 from tzsl.exceptions import DataFileError
 
 __all__ = ["ChannelCheck", "LabSource", "LabelRow", "TrialIds", "Trials", "channel_names", "check_signal",
-           "check_size", "lab_error", "one_line", "progress_bar", "read_class_table", "read_label_table",
+           "check_size", "has_control", "lab_error", "one_line", "progress_bar", "read_class_table", "read_label_table",
            "seconds", "to_float"]
 
 #: trial id -> sensor -> (channel names (n_channels,), values (n_rows, n_channels) float64)
@@ -55,6 +55,11 @@ def progress_bar(items: Sequence[T], desc: str, show: bool) -> Iterator[Iterable
 def one_line(text: object) -> str:
     """``text`` with control characters (newlines, tabs, NUL) written as escapes: one line."""
     return _CONTROL.sub(lambda m: repr(m.group())[1:-1], str(text))
+
+
+def has_control(text: str) -> bool:
+    """Whether ``text`` holds a control character (a line break, tab, NUL)."""
+    return _CONTROL.search(text) is not None
 
 
 def lab_error(path: str | os.PathLike, problem: str, line: int | None = None) -> DataFileError:
@@ -121,7 +126,7 @@ class LabSource:
         ``*`` stays in one folder, ``**`` spans folders (not following links to folders), names
         starting with a dot are not matched.
         """
-        found = set()
+        found: dict[str, Path] = {}  # resolved path -> the match naming it
         for pattern in patterns:
             if not self.allow_outside:
                 self.path(pattern, f"{key} pattern", self.mapping_file)  # no '..', not absolute
@@ -138,10 +143,14 @@ class LabSource:
                     continue
                 self.path(os.path.join(*parts) if not self.allow_outside else str(match), f"{key} match",
                           self.mapping_file)  # a link pointing outside, a pipe
-                found.add(match)
+                real = os.path.realpath(match)
+                if real in found and found[real] != match:
+                    raise lab_error(self.mapping_file, f"{key}: {found[real]} and {match} are the same file (a link); "
+                                                       "its recordings would be read twice")
+                found[real] = match
         if not found:
             raise lab_error(self.mapping_file, f"{key}: no file matches {list(patterns)}")
-        return sorted(found)
+        return sorted(found.values())
 
     def files_inside(self, folder: Path) -> None:
         """Refuse a link inside ``folder`` (a ROS 2 bag) pointing outside the mapping's folder, and a pipe."""

@@ -23,6 +23,7 @@ from tzsl.datasets._lab_checks import (
     channel_names,
     check_signal,
     check_size,
+    has_control,
     lab_error,
     progress_bar,
     one_line,
@@ -193,6 +194,8 @@ def _file_trials(path: Path, source: LabSource, ids: TrialIds, channels: Channel
     with handle:
         for group_name in _groups(handle, path, mapping.trials):
             record = f"group {one_line(group_name)}"
+            if has_control(group_name):
+                raise lab_error(path, f"{record}: the group name holds a control character; it would be the trial id")
             try:
                 group = handle[group_name]
                 trial_id = f"{path.stem}{group_name.replace('/', '_')}"
