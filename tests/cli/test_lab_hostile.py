@@ -347,6 +347,8 @@ CASES = {
                                ("mapping.toml", "alias.h5", "same file")),
     "h5-group-name-with-line-break": Case("hdf5", _h5(lambda f: f.move("trial_001", "trial_\n1")),
                                           ("session.h5", "group /trial_\\n1", "control character")),
+    "h5-dataset-from-the-root": Case("hdf5", _replace('"f1/pressure"', '"/trial_000/f1/pressure"'),
+                                     ("mapping.toml", "sensors", "root")),
     "h5-label-dataset-missing": Case("hdf5", _replace('label = "attrs:material"', 'label = "dataset:meta/class"'),
                                      ("session.h5", "group /trial_000", "'meta/class'")),
     # ------------------------------------------------------------------ folders of series

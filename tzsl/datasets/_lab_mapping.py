@@ -119,6 +119,8 @@ class Hdf5Mapping(_Common):
     def _label(cls, v):
         if not v.startswith(("attrs:", "dataset:")) or v.partition(":")[2] == "":
             raise ValueError("use 'attrs:NAME' or 'dataset:PATH'")
+        if v.startswith("dataset:/"):
+            raise ValueError("the label dataset is a path inside the trial group, not from the file's root")
         return v
 
     @field_validator("sensors")
@@ -127,6 +129,10 @@ class Hdf5Mapping(_Common):
         missing = [s.name for s in v if not s.datasets]
         if missing:
             raise ValueError(f"sensor(s) {missing} need datasets")
+        rooted = [d for s in v for d in s.datasets if d.startswith("/")]
+        if rooted:
+            raise ValueError(f"dataset(s) {rooted} start at the file's root; every trial would read the same data: "
+                             "name them relative to the trial group")
         return _distinct_sensors(v)
 
 
