@@ -125,7 +125,7 @@ class _SensorRows:
             raise lab_error(bag, f"{record}: sensor {self.sensor.name!r}: fields give {shape} values (None: a "
                                  f"scalar); earlier messages gave {self.shape}")
         values = np.concatenate(arrays)
-        check_signal(values[None, :], self.channels(), bag, f"{record}: sensor {self.sensor.name!r}")
+        check_signal(values[None, :], self.channels(), bag, f"{record}: sensor {self.sensor.name!r}", name_row=False)
         self.stamps.append(timestamp)
         self.values.append(values)
         return values.size

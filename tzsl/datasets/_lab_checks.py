@@ -279,10 +279,11 @@ def to_float(values: np.ndarray, path: Path, record: str) -> np.ndarray:
 
 
 def check_signal(values: np.ndarray, channels: Sequence[str], path: Path, record: str,
-                 line_of_row: int | None = None) -> None:
+                 line_of_row: int | None = None, *, name_row: bool = True) -> None:
     """Refuse a signal (n_rows, n_channels) with no row or a NaN/inf value (the first one named).
 
-    ``line_of_row``: the file line of row 0 (a CSV file: 2); None names the row index instead.
+    ``line_of_row``: the file line of row 0 (a CSV file: 2); None names the row index instead
+    (unless not ``name_row``: one message, named by ``record``).
     """
     prefix = f"{record}: " if record else ""
     if values.shape[0] == 0 or values.shape[1] == 0:
@@ -291,7 +292,7 @@ def check_signal(values: np.ndarray, channels: Sequence[str], path: Path, record
     if bad.any():
         row, col = (int(v) for v in np.argwhere(bad)[0])
         what = "NaN or empty" if np.isnan(values[row, col]) else "infinite"
-        where = "" if line_of_row is not None else f" at row {row}"
+        where = "" if line_of_row is not None or not name_row else f" at row {row}"
         raise lab_error(path, f"{prefix}channel {one_line(repr(channels[col]))} is {what}{where} "
                               f"({int(bad.sum())} non-finite value(s)); fix or drop it before converting",
                         None if line_of_row is None else line_of_row + row)
