@@ -30,6 +30,7 @@ from tzsl.datasets._lab_hdf5 import read_hdf5
 from tzsl.datasets._lab_mapping import BagMapping, Hdf5Mapping, SeriesMapping, load_lab_mapping
 from tzsl.datasets._lab_series import UNNAMED_SENSOR, read_series
 from tzsl.datasets._plain_write import write_plain_dataset
+from tzsl.datasets._tables import DEFAULT_SENSOR
 from tzsl.exceptions import ConfigError
 
 __all__ = ["LAB_FORMATS", "LAB_READERS", "convert_lab_dataset"]
@@ -101,8 +102,9 @@ def convert_lab_dataset(kind: str, mapping_file: str | os.PathLike, out: str | o
     settings = {"name": mapping.name or Path(out).name,
                 "classes": {"allow_identical_rows": bool(mapping.allow_identical_rows)}}
     frame = pd.DataFrame({"trial_id": order, "class": table["class"].astype(str).to_numpy()})
-    folder = write_plain_dataset(out, classes, frame, sensors=None if sensors == [UNNAMED_SENSOR] else sensors,
-                                 signals=signals, channels=channels, settings=settings, force=force)
-    summary = {"classes": len(classes), "attributes": classes.shape[1], "trials": len(order), "sensors": sensors,
-               "channels": list(channels)}
+    unnamed = sensors == [UNNAMED_SENSOR]  # written without a sensor column: read back as DEFAULT_SENSOR
+    folder = write_plain_dataset(out, classes, frame, sensors=None if unnamed else sensors, signals=signals,
+                                 channels=channels, settings=settings, force=force)
+    summary = {"classes": len(classes), "attributes": classes.shape[1], "trials": len(order),
+               "sensors": [DEFAULT_SENSOR] if unnamed else sensors, "channels": list(channels)}
     return folder, summary
