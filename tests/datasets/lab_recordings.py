@@ -138,7 +138,8 @@ def reading_lab(folder: Path, readings: list[list[tuple[float, list[float]]]], *
     CLASSES.to_csv(folder / "classes.csv")
     path = folder / "mapping.toml"
     path.write_text(f'kind = "ros-bag"\nbags = ["bags/*"]\nclasses = "classes.csv"\nlabels = "labels.csv"\n'
-                    f'ros_distro = "{"ros1" if ros1 else "ros2"}"\n[messages]\n"lab_msgs/msg/Reading" = "msg/Reading.msg"\n'
+                    f'ros_distro = "{"ros1" if ros1 else "ros2"}"\n'
+                    '[messages]\n"lab_msgs/msg/Reading" = "msg/Reading.msg"\n'
                     '[[sensors]]\nname = "pad"\ntopic = "/reading"\nfields = ["pressure"]\n')
     return path
 

@@ -23,6 +23,7 @@ from tzsl.datasets._lab_checks import (
     channel_names,
     check_signal,
     check_size,
+    error_text,
     lab_error,
     progress_bar,
     read_label_table,
@@ -33,11 +34,6 @@ from tzsl.datasets._lab_mapping import BagMapping, SensorFields
 from tzsl.exceptions import ConfigError, DataFileError
 
 __all__ = ["read_bags"]
-
-
-def _first_line(exc: BaseException) -> str:
-    text = str(exc).strip().splitlines()
-    return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
 
 
 def _field(message: object, path: str) -> object:
@@ -86,11 +82,11 @@ def _typestore(source: LabSource):
         except OSError as exc:
             raise lab_error(path, f"cannot read the message definition: {exc.strerror or exc}") from None
         except Exception as exc:  # noqa: BLE001 - rosbags' parser errors: one line naming the file
-            raise lab_error(path, f"not a .msg definition of {msgtype}: {_first_line(exc)}") from None
+            raise lab_error(path, f"not a .msg definition of {msgtype}: {error_text(exc)}") from None
     try:
         store.register(types)
     except Exception as exc:  # noqa: BLE001 - conflicting definitions
-        raise lab_error(source.mapping_file, f"messages: cannot register the definitions: {_first_line(exc)}") from None
+        raise lab_error(source.mapping_file, f"messages: cannot register the definitions: {error_text(exc)}") from None
     return store
 
 
@@ -148,7 +144,7 @@ def _bag_messages(bag: Path, source: LabSource, store) -> tuple[int, dict[str, _
         reader = AnyReader([bag], default_typestore=store)
         reader.open()
     except Exception as exc:  # noqa: BLE001 - rosbags' own errors: one line naming the bag
-        raise lab_error(bag, f"not a readable ROS bag: {_first_line(exc)}") from None
+        raise lab_error(bag, f"not a readable ROS bag: {error_text(exc)}") from None
     try:
         found = {c.topic for c in reader.connections}
         absent = sorted(topics - found)
@@ -161,14 +157,14 @@ def _bag_messages(bag: Path, source: LabSource, store) -> tuple[int, dict[str, _
             try:
                 message = reader.deserialize(raw, connection.msgtype)
             except Exception as exc:  # noqa: BLE001 - a corrupt record
-                raise lab_error(bag, f"{record}: cannot deserialise {connection.msgtype}: {_first_line(exc)}") from None
+                raise lab_error(bag, f"{record}: cannot deserialise {connection.msgtype}: {error_text(exc)}") from None
             for sensor in (s for s in mapping.sensors if s.topic == connection.topic):
                 total += rows[sensor.name].add(message, timestamp, bag, record)
                 check_size(total, bag, f"{record}: the mapped messages so far", source.limit)
     except DataFileError:
         raise
     except Exception as exc:  # noqa: BLE001 - a truncated or corrupt bag, found while reading
-        raise lab_error(bag, f"message {index + 1}: cannot read the bag: {_first_line(exc)}") from None
+        raise lab_error(bag, f"message {index + 1}: cannot read the bag: {error_text(exc)}") from None
     finally:
         try:
             reader.close()

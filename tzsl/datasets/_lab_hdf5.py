@@ -23,6 +23,7 @@ from tzsl.datasets._lab_checks import (
     channel_names,
     check_signal,
     check_size,
+    error_text,
     has_control,
     lab_error,
     progress_bar,
@@ -36,11 +37,6 @@ __all__ = ["read_hdf5"]
 
 #: Soft links followed in a row before a path is refused as a loop.
 _MAX_SOFT_LINKS = 16
-
-
-def _first_line(exc: BaseException) -> str:
-    text = str(exc).strip().splitlines()
-    return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
 
 
 def _matches(group: str, pattern: str) -> bool:
@@ -144,7 +140,7 @@ def _values(dataset, name: str, path: Path, record: str, limit: int) -> np.ndarr
     try:
         values = dataset[()]
     except Exception as exc:  # noqa: BLE001 - corrupt data, a missing filter: one line
-        raise lab_error(path, f"{where}: cannot read it: {_first_line(exc)}") from None
+        raise lab_error(path, f"{where}: cannot read it: {error_text(exc)}") from None
     return to_float(values, path, where)
 
 
@@ -171,7 +167,7 @@ def _groups(handle, path: Path, pattern: str) -> list[str]:
     try:
         handle.visititems(lambda name, obj: groups.append("/" + name) if isinstance(obj, h5py.Group) else None)
     except Exception as exc:  # noqa: BLE001 - a corrupt file found while listing its groups
-        raise lab_error(path, f"cannot list its groups: {_first_line(exc)}") from None
+        raise lab_error(path, f"cannot list its groups: {error_text(exc)}") from None
     matching = [g for g in groups if _matches(g, pattern)]
     if not matching:
         raise lab_error(path, f"no group matches trials = {pattern!r}; narrow the mapping's files or fix the "
@@ -189,7 +185,7 @@ def _file_trials(path: Path, source: LabSource, ids: TrialIds, channels: Channel
     try:
         handle = h5py.File(path, "r")
     except Exception as exc:  # noqa: BLE001 - h5py raises OSError, ValueError... for a bad file
-        raise lab_error(path, f"not a readable HDF5 file: {_first_line(exc)}") from None
+        raise lab_error(path, f"not a readable HDF5 file: {error_text(exc)}") from None
     found = []
     with handle:
         for group_name in _groups(handle, path, mapping.trials):
@@ -211,7 +207,7 @@ def _file_trials(path: Path, source: LabSource, ids: TrialIds, channels: Channel
             except DataFileError:
                 raise
             except Exception as exc:  # noqa: BLE001 - a corrupt object found while reading the group
-                raise lab_error(path, f"{record}: cannot read it: {_first_line(exc)}") from None
+                raise lab_error(path, f"{record}: cannot read it: {error_text(exc)}") from None
             found.append((trial_id, label, per_sensor))
     return found
 
