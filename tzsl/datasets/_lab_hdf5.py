@@ -133,10 +133,16 @@ def _values(dataset, name: str, path: Path, record: str, limit: int) -> np.ndarr
         raise lab_error(path, f"{where} has shape {dataset.shape}; expected (time,) or (time, k)")
     check_size(int(dataset.size), path, where, limit)
     declared = int(dataset.size) * dataset.dtype.itemsize
-    stored = dataset.id.get_storage_size()
-    if dataset.id.get_create_plist().get_nfilters() == 0 and stored < declared:
-        raise lab_error(path, f"{where} declares shape {dataset.shape} ({declared:,} bytes) but stores {stored:,}: "
-                              "truncated, or never written (reading it would give fill values)")
+    if dataset.chunks is not None:  # every chunk the shape needs is stored (filtered or not)
+        needed = int(np.prod([-(-n // c) for n, c in zip(dataset.shape, dataset.chunks, strict=True)], dtype=object))
+        stored = dataset.id.get_num_chunks()
+        if stored < needed:
+            raise lab_error(path, f"{where} declares shape {dataset.shape} in {needed:,} chunks but stores {stored:,}: "
+                                  "never written in part (reading it would give fill values)")
+    elif dataset.id.get_storage_size() < declared:
+        raise lab_error(path, f"{where} declares shape {dataset.shape} ({declared:,} bytes) but stores "
+                              f"{dataset.id.get_storage_size():,}: truncated, or never written (reading it would give "
+                              "fill values)")
     try:
         values = dataset[()]
     except Exception as exc:  # noqa: BLE001 - corrupt data, a missing filter: one line
