@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 from tzsl.cli import EXIT_TZSL_ERROR, cli
 from tzsl.datasets import read_signal_file
 
-from tests.datasets.lab_recordings import CLASSES, hdf5_mapping, reading_lab
+from tests.datasets.lab_recordings import CLASSES, bag_lab, hdf5_lab, hdf5_mapping, reading_lab, series_lab
 
 SETTINGS = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
@@ -276,3 +276,33 @@ def test_bags_broken_is_one_line(drawn, breakage, data):
             where = f"bags/t{i}"
         labels.to_csv(mapping.parent / "labels.csv", index=False)
         _refused(_convert("ros-bag", mapping, Path(tmp) / "out"), where)
+
+
+# --------------------------------------------------------------------------- any file damaged
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.sampled_from(["ros-bag", "ros2-bag", "hdf5", "series"]), st.sampled_from(["bytes", "truncate", "flip"]),
+       st.data())
+def test_any_damaged_file_is_exit_0_or_one_line(kind, damage, data):
+    """Whatever file of a lab is damaged (mapping, tables, recordings), never a traceback: it converts, or one line."""
+    build = {"ros-bag": bag_lab, "ros2-bag": lambda lab: bag_lab(lab, ros1=False), "hdf5": hdf5_lab,
+             "series": series_lab}[kind]
+    with tempfile.TemporaryDirectory() as tmp:
+        mapping = build(Path(tmp) / "lab")
+        files = sorted(p for p in mapping.parent.rglob("*") if p.is_file())
+        path = data.draw(st.sampled_from(files), label="file")
+        raw = path.read_bytes()
+        if damage == "bytes":
+            path.write_bytes(data.draw(st.binary(max_size=200), label="bytes"))
+        elif damage == "truncate":
+            path.write_bytes(raw[: data.draw(st.integers(0, max(0, len(raw) - 1)), label="cut")])
+        elif raw:
+            at = data.draw(st.integers(0, len(raw) - 1), label="at")
+            path.write_bytes(raw[:at] + bytes([raw[at] ^ data.draw(st.integers(1, 255), label="xor")]) + raw[at + 1:])
+        result = _convert("ros-bag" if kind == "ros2-bag" else kind, mapping, Path(tmp) / "out")
+        assert result.exit_code in (0, EXIT_TZSL_ERROR), (result.output, result.exception)
+        assert result.exception is None or isinstance(result.exception, SystemExit), result.exception
+        if result.exit_code:
+            lines = result.stderr.strip().splitlines()
+            assert len(lines) == 1 and lines[0].startswith("tzsl: error: "), result.stderr
