@@ -203,6 +203,11 @@ def _link_loops(lab: Path) -> None:
     _replace('bags = ["bags/*.bag"]', 'bags = ["bags/**/*.bag"]')(lab)
 
 
+def _npz_big_int(lab: Path) -> None:
+    np.savez(lab / "series" / "t1.npz", ch0=np.array([1.0, 2.0]), ch1=np.array([0, 2**60]))
+    _set(1, "file", "series/t1.npz")(lab)
+
+
 def _npz(lab: Path) -> None:
     np.savez(lab / "series" / "t1.npz", ch0=np.array([1.0, np.nan]), ch1=np.array([0.0, 1.0]))
     _set(1, "file", "series/t1.npz")(lab)
@@ -403,6 +408,7 @@ CASES = {
     "series-file-is-a-pipe": Case("series", _fifo("series/t0.csv"), ("labels.csv:2", "pipe")),
     "series-hidden-file": Case("series", _set(0, "file", ".hidden/t0.csv"), ("labels.csv:2", "not found")),
     "series-npz-nan": Case("series", _npz, ("t1.npz", "NaN", "row 1")),
+    "series-npz-int-beyond-float64": Case("series", _npz_big_int, ("t1.npz", "channel 'ch1'", "2**53")),
     "series-channels-twice": Case("series", lambda lab: (lab / "mapping.toml").write_text(
         (lab / "mapping.toml").read_text() + 'channels = ["a", "a"]\n'), ("mapping.toml", "channels")),
 }

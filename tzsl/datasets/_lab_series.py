@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from tzsl._io import read_npy
+from tzsl._io import read_npy, read_npz
 from tzsl.datasets._lab_checks import (
     ChannelCheck,
     LabelRow,
@@ -27,7 +27,7 @@ from tzsl.datasets._lab_checks import (
     to_float,
 )
 from tzsl.datasets._lab_mapping import SeriesMapping
-from tzsl.datasets._signal_files import read_signal_file
+from tzsl.datasets._signal_files import read_signal_file, signal_from_arrays
 
 __all__ = ["SERIES_SUFFIXES", "UNNAMED_SENSOR", "read_series"]
 
@@ -47,9 +47,17 @@ def _read(path: Path, source: LabSource, labels_path: Path, row: LabelRow) -> tu
     if not path.is_file():
         what = "is a folder, not a file" if path.is_dir() else "not found"
         raise lab_error(labels_path, f"file {row.cells['file']!r} {what}", row.line)
-    if suffix != ".npy":
+    if suffix == ".npz":  # each channel checked to fit float64 exactly before it is converted
+        arrays = read_npz(path, limit=source.limit)
+        for name, array in arrays.items():
+            if array.dtype.kind in "iu":
+                to_float(array, path, f"channel {name!r}")
+        names, values = signal_from_arrays(path, arrays)
+        check_signal(values, names, path, "")
+        return list(names), values
+    if suffix == ".csv":
         names, values = read_signal_file(path)
-        check_signal(values, names, path, "", 2 if suffix == ".csv" else None)
+        check_signal(values, names, path, "", 2)
         return list(names), values
     array = read_npy(path, limit=source.limit)
     check_size(int(array.size), path, "array", source.limit)
