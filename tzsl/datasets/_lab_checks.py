@@ -110,6 +110,8 @@ class LabSource:
         ``what`` names the key or column for the message; ``named_in`` and ``line`` the file
         (and line) holding ``text``. A pipe or device is refused too (reading it could block).
         """
+        if has_control(text):
+            raise lab_error(named_in, f"{what} {text!r} holds a control character; not a file name", line)
         if self.allow_outside:
             path = Path(os.path.expanduser(text))
             path = path if path.is_absolute() else self.mapping_file.parent / path
