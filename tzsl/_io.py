@@ -217,3 +217,35 @@ def read_npz(source: str | Path | IO[bytes], *, name: str | Path | None = None,
         raise DataFileError(where, f"not a readable .npz archive (truncated or not a zip file: {exc})") from None
     except (OSError, ValueError, EOFError, KeyError, zipfile.LargeZipFile, NotImplementedError) as exc:
         raise DataFileError(where, f"not a readable .npz archive ({type(exc).__name__}: {exc})") from None
+
+
+def read_npy(path: str | Path, *, limit: int | None = None) -> np.ndarray:
+    """The array of one ``.npy`` file, its header checked before anything large is allocated.
+
+    The same checks as one member of :func:`read_npz`: the declared shape and dtype must come to
+    at most ``limit`` bytes (default :func:`max_npz_bytes`, environment variable
+    ``TZSL_MAX_NPZ_BYTES``), the file must hold as many bytes as its header declares (a
+    zero-byte, truncated or lying file is refused before numpy allocates the array), and object
+    arrays (pickles) are refused.
+
+    Raises
+    ------
+    DataFileError
+        Missing, not an ``.npy`` file, truncated, pickled or too large (one line).
+    """
+    limit = max_npz_bytes() if limit is None else limit
+    try:
+        info = zipfile.ZipInfo(Path(path).name)  # the name and size _read_member reports
+        info.file_size = os.path.getsize(path)
+        with open(path, "rb") as fh:
+            return _read_member(fh, info, path, 0, limit)[1]
+    except DataFileError:
+        raise
+    except FileNotFoundError:
+        raise DataFileError(path, "file not found") from None
+    except IsADirectoryError:
+        raise DataFileError(path, "is a folder, not an .npy file") from None
+    except (OSError, ValueError, EOFError) as exc:
+        text = str(exc).strip().splitlines()
+        raise DataFileError(path, f"not a readable .npy array ({type(exc).__name__}: "
+                            f"{text[0] if text else 'empty or truncated'})") from None

@@ -163,8 +163,11 @@ def _card(data) -> dict:
 @click.option("--from", "source", type=RegistryName("lab-format"), default=None,
               help="A lab's own recordings, read as --mapping says: ros-bag (ROS 1/2 bags), hdf5 (your HDF5 "
                    "layout), series (a folder of per-trial .csv/.npy time series).")
-@click.option("--mapping", type=click.Path(dir_okay=False, path_type=Path), default=None,
+@click.option("--mapping", type=click.Path(path_type=Path), default=None,
               help="The TOML mapping of --from: topics/groups/files to trials, sensors, channels and classes.")
+@click.option("--allow-outside", is_flag=True, default=False,
+              help="Let --mapping read files outside its folder (absolute paths, '..', links pointing out); "
+                   "without it they are refused.")
 @click.option("--dataset", type=RegistryName("convertible"), default=None,
               help="A built-in dataset ('tzsl datasets' lists them): published features are written as feature "
                    "columns, raw signals as one signal file per trial and sensor.")
@@ -177,8 +180,8 @@ def _card(data) -> dict:
               help="Signal file type of a dataset of raw signals.")
 @data_dir_option
 @force_option
-def convert(source: str | None, mapping: Path | None, dataset: str | None, out: Path, no_progress: bool,
-            min_objects: int, signal_format: str, data_dir: Path | None, force: bool) -> None:
+def convert(source: str | None, mapping: Path | None, allow_outside: bool, dataset: str | None, out: Path,
+            no_progress: bool, min_objects: int, signal_format: str, data_dir: Path | None, force: bool) -> None:
     """Write a lab's recordings (--from KIND --mapping FILE) or a built-in dataset (--dataset) as a
     plain-file dataset folder (see 'tzsl formats'); check it with 'tzsl validate OUT'.
 
@@ -187,6 +190,8 @@ def convert(source: str | None, mapping: Path | None, dataset: str | None, out: 
     """
     if (source is None) == (dataset is None):
         raise click.UsageError("give --from KIND --mapping FILE, or --dataset NAME")
+    if allow_outside and source is None:
+        raise click.UsageError("--allow-outside goes with --from KIND --mapping FILE")
     if source is not None:
         from tzsl.datasets import convert_lab_dataset  # noqa: PLC0415
 
@@ -194,7 +199,8 @@ def convert(source: str | None, mapping: Path | None, dataset: str | None, out: 
             raise click.UsageError("--from needs --mapping FILE")
         if out.exists() and (not out.is_dir() or any(out.iterdir())) and not force:
             raise ConfigError(f"{out} already exists; use --force to overwrite")
-        folder, done = convert_lab_dataset(source, mapping, out, force=force, progress=not no_progress)
+        folder, done = convert_lab_dataset(source, mapping, out, force=force, progress=not no_progress,
+                                           allow_outside=allow_outside)
         click.echo(f"wrote {folder}: {done['classes']} classes x {done['attributes']} attributes, {done['trials']} "
                    f"trials, {len(done['sensors'])} sensor(s), {len(done['channels'])} channels per signal file; "
                    f"next: tzsl validate {folder}")

@@ -104,26 +104,29 @@ class ScannedDataset:
 # --------------------------------------------------------------------------- the scan
 
 
-def _scan_classes(folder: Path, settings: dict, problems: list[Problem], scan: ScannedDataset) -> None:
-    parsed = read_rows(folder, CLASSES_FILE, problems)
+def scan_classes(folder: Path, settings: dict, problems: list[Problem], scan: ScannedDataset,
+                 file: str = CLASSES_FILE, settings_file: str = SETTINGS_FILE) -> None:
+    """Check the class table ``folder/file`` into ``scan.classes`` (None if unparsable), adding to ``problems``;
+    ``settings``: ``{"classes": {"allow_identical_rows": bool}}``, set in ``settings_file``."""
+    parsed = read_rows(folder, file, problems)
     if parsed is None:
         return
     header, rows = parsed
     if header[0] != CLASS_COLUMN:
-        problems.append(Problem(CLASSES_FILE, 1, f"first column must be {CLASS_COLUMN!r}, got {header[0]!r}"))
+        problems.append(Problem(file, 1, f"first column must be {CLASS_COLUMN!r}, got {header[0]!r}"))
         return
     attributes = header[1:]
     if not attributes:
-        problems.append(Problem(CLASSES_FILE, 1, "no attribute columns after 'class'"))
+        problems.append(Problem(file, 1, "no attribute columns after 'class'"))
         return
     names, values, lines = [], [], []
     for line, cells in rows:
         name = cells[0]
         if not name:
-            problems.append(Problem(CLASSES_FILE, line, "class name is empty"))
+            problems.append(Problem(file, line, "class name is empty"))
             continue
         if name in scan.class_lines:
-            problems.append(Problem(CLASSES_FILE, line, f"class {name!r} is defined twice (also line "
+            problems.append(Problem(file, line, f"class {name!r} is defined twice (also line "
                                     f"{scan.class_lines[name]})"))
             continue
         scan.class_lines[name] = line
@@ -131,7 +134,7 @@ def _scan_classes(folder: Path, settings: dict, problems: list[Problem], scan: S
         for attr, text in zip(attributes, cells[1:]):
             if text not in BINARY_TEXT:
                 shown = "empty" if not text else repr(text)
-                problems.append(Problem(CLASSES_FILE, line, f"class {name!r}, attribute {attr!r}: entry is "
+                problems.append(Problem(file, line, f"class {name!r}, attribute {attr!r}: entry is "
                                         f"{shown}; expected 0 or 1"))
                 row.append(-1)
             else:
@@ -142,7 +145,7 @@ def _scan_classes(folder: Path, settings: dict, problems: list[Problem], scan: S
     if not names:
         if rows:
             return
-        problems.append(Problem(CLASSES_FILE, None, "no class rows"))
+        problems.append(Problem(file, None, "no class rows"))
         return
     table = pd.DataFrame(np.array(values, dtype=np.int64), index=pd.Index(names, name=CLASS_COLUMN),
                          columns=pd.Index(attributes, name="attribute"))
@@ -150,7 +153,7 @@ def _scan_classes(folder: Path, settings: dict, problems: list[Problem], scan: S
     if valid.all() and len(valid) >= 2:  # judged only on a table without bad entries
         rows = table.to_numpy()
         for j in np.flatnonzero((rows == rows[0]).all(axis=0)):
-            problems.append(Problem(CLASSES_FILE, 1, f"attribute {attributes[j]!r} is {rows[0, j]} for every class; "
+            problems.append(Problem(file, 1, f"attribute {attributes[j]!r} is {rows[0, j]} for every class; "
                                     "no attribute classifier can be trained on one value: remove the column "
                                     "(or add a class that has the other value)"))
     if not settings.get("classes", {}).get("allow_identical_rows", False):
@@ -159,9 +162,9 @@ def _scan_classes(folder: Path, settings: dict, problems: list[Problem], scan: S
             key = tuple(table.iloc[i])
             if key in first:
                 j = first[key]
-                problems.append(Problem(CLASSES_FILE, lines[i], f"class {names[i]!r} has the same attribute row "
+                problems.append(Problem(file, lines[i], f"class {names[i]!r} has the same attribute row "
                                         f"as class {names[j]!r} (line {lines[j]}); zero-shot learning cannot tell "
-                                        "them apart (set [classes] allow_identical_rows = true in dataset.toml "
+                                        f"them apart (set [classes] allow_identical_rows = true in {settings_file} "
                                         "if this is intended)"))
             else:
                 first[key] = i
@@ -447,7 +450,7 @@ def scan_dataset(folder: str | os.PathLike, *, check_signals: bool = True) -> tu
     if not folder.is_dir():
         return scan, [Problem(str(folder), None, "dataset folder not found")]
     scan.settings = read_settings(folder, problems)
-    _scan_classes(folder, scan.settings, problems, scan)
+    scan_classes(folder, scan.settings, problems, scan)
     _scan_groups(folder, problems, scan)
     _scan_trials(folder, scan.settings, problems, scan, check_signals)
     if scan.kind == "columns" and "signals" in scan.settings:
