@@ -261,3 +261,16 @@ def test_pseudo_problem_relaxes_then_skips_with_a_note():
     rows = features.attributes.loc[list(split.train_objects)].drop_duplicates()
     pseudo, note = _pseudo_problem(features, problem, len(rows), 10, np.random.default_rng(0))
     assert pseudo is None and "calibrated stacking skipped" in note and split.name in note
+
+
+def test_relaxation_notes_say_each_reason_once_with_its_splits():
+    """A 9-class run printed the same GZSL relaxation once per split and once more inside a joined cell."""
+    from tzsl.studies.zero_shot.gzsl import relaxation_notes  # noqa: PLC0415
+
+    cells = pd.Series(["split random-3: stacking of dap skipped: E: absent in 1 object(s); need 2",
+                       "split random-3: stacking of dap skipped: E: absent in 1 object(s); need 2; "
+                       "split random-3: stacking of eszsl skipped: Z", None, "-",
+                       "split random-4: stacking of dap skipped: E: absent in 1 object(s); need 2"])
+    assert relaxation_notes(cells) == [
+        "splits random-3, random-4: stacking of dap skipped: E: absent in 1 object(s); need 2",
+        "split random-3: stacking of eszsl skipped: Z"]

@@ -38,6 +38,7 @@ Protocol, per object split (:class:`tzsl.evaluation.Split`):
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -76,6 +77,7 @@ __all__ = [
     "gzsl_split",
     "gzsl_table",
     "holdout_trials",
+    "relaxation_notes",
     "run_gzsl",
     "stacked_predict",
 ]
@@ -298,9 +300,10 @@ def gzsl_split(features: FeatureSet, split: Split, config: DapSettings, index: i
         pseudo, relaxed = _pseudo_problem(features, problem, config.splits.random_min_train_positives, gzsl.max_draws,
                                           np.random.default_rng(np.random.SeedSequence([config.study_seed, index, 2])))
     kept_whole = single_trial_objects(features.objects, split.train_objects)
-    if kept_whole:  # the same words on every split: one note for the run
-        relaxed = "; ".join(filter(None, [relaxed, "training objects with a single trial are kept whole for fitting "
-                                                   "(seen-class trials are held out of the others only)"]))
+    if kept_whole:  # the same words on every split: one note for the run (relaxation_notes)
+        relaxed = "; ".join(filter(None, [relaxed, f"split {split.name}: training objects with a single trial are "
+                                                   "kept whole for fitting (seen-class trials are held out of the "
+                                                   "others only)"]))
     y = problem.trial_class[problem.evaluate]
     seen_classes = np.flatnonzero(problem.seen)
     unseen_classes = np.flatnonzero(~problem.seen)
@@ -335,6 +338,28 @@ def gzsl_split(features: FeatureSet, split: Split, config: DapSettings, index: i
                                        ("unseen", y[is_unseen], pred[is_unseen] == y[is_unseen]),
                                        ("zsl", y[is_unseen], zsl_pred == y[is_unseen])]})
     return rows
+
+
+def relaxation_notes(cells: pd.Series) -> list[str]:
+    """The GZSL table's ``relaxed`` cells as notes, each reason once with the splits it applies to.
+
+    A cell holds ``"; "``-joined parts, each ``"split NAME: reason"`` (a reason may hold ``"; "`` itself);
+    ``"split random-3: x"`` and ``"split random-4: x"`` become ``"splits random-3, random-4: x"``.
+    """
+    by_reason: dict[str, list[str]] = {}
+    for cell in cells.fillna("").astype(str):
+        for part in filter(None, (p.strip() for p in re.split(r"; (?=split )", cell))):
+            if part == "-":
+                continue
+            name, sep, reason = part.partition(": ") if part.startswith("split ") else ("", "", part)
+            splits = by_reason.setdefault(reason, [])
+            if sep and name[len("split "):] not in splits:
+                splits.append(name[len("split "):])
+    notes = []
+    for reason, splits in by_reason.items():
+        where = f"split {splits[0]}: " if len(splits) == 1 else f"splits {', '.join(splits)}: " if splits else ""
+        notes.append(f"{where}{reason}")
+    return notes
 
 
 def gzsl_table(rows: list[dict]) -> pd.DataFrame:

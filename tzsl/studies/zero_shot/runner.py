@@ -148,7 +148,7 @@ def relaxation_notes(exp: Experiment) -> list[str]:
 def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
     """``study = "zero-shot"`` and its paper preset ``"phac2-dap"``: one study, labelled by
     :func:`~tzsl.studies.study_labels.study_labels` (the paper's numbers only on its data)."""
-    from tzsl.studies.zero_shot.gzsl import GZSL_FILE, RELAXED_COLUMN, run_gzsl  # noqa: PLC0415
+    from tzsl.studies.zero_shot.gzsl import GZSL_FILE, RELAXED_COLUMN, relaxation_notes, run_gzsl  # noqa: PLC0415
     from tzsl.studies.zero_shot.study import make_splits, run_dap_study, solver_lines  # noqa: PLC0415
     from tzsl.studies.zero_shot.tables import table_titles  # noqa: PLC0415
     from tzsl.studies.study_labels import study_labels  # noqa: PLC0415
@@ -181,7 +181,7 @@ def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], Non
         tables["gzsl"] = run_gzsl(features, splits, c, echo=say)
         out.write_csv(GZSL_FILE, tables["gzsl"])
         if RELAXED_COLUMN in tables["gzsl"].columns:
-            gzsl_notes = [t for t in dict.fromkeys(tables["gzsl"][RELAXED_COLUMN].fillna("")) if t and t != "-"]
+            gzsl_notes = relaxation_notes(tables["gzsl"][RELAXED_COLUMN])
             for note in gzsl_notes:
                 say(f"note: relaxed gzsl {note}")
     drop = getattr(results, "drop", {})
