@@ -5,6 +5,8 @@ whatever the method (any of ``tzsl methods`` that is an attribute model + decisi
 hand's :class:`~tzsl.models.HandDAPClassifier`):
 
 payload (skops, see :mod:`tzsl.bundle`: loading it runs no code)
+    Linear models (ESZSL, SAE, ALE, SJE, DeViSE with their rule) are stored as arrays instead,
+    read with numpy alone (:mod:`tzsl.inference.linear_bundles`). Every other model:
     ``{"model": fitted estimator, "decision_rule": fitted DecisionRule}``, plus ``"calibration"``
     (a plain dict: the temperature and how it was fitted,
     :attr:`tzsl.models.CalibratedZeroShotClassifier.calibration_info_`) when the model was saved
@@ -36,6 +38,8 @@ import pandas as pd
 from tzsl.bundle import save_bundle
 from tzsl.datasets import FeatureSet, HandTable, read_grasps
 from tzsl.exceptions import ConfigError
+from tzsl.inference.bundle_kinds import DEEP_KIND, ZERO_SHOT_KIND
+from tzsl.inference.linear_bundles import linear_payload
 from tzsl.models import (
     CalibratedZeroShotClassifier,
     DAPRule,
@@ -56,10 +60,6 @@ __all__ = [
     "training_subset",
 ]
 
-#: Bundle kind of every skops-stored zero-shot model.
-ZERO_SHOT_KIND = "zero-shot"
-#: Bundle kind of the deep CNN + LSTM (npz weights).
-DEEP_KIND = "deep"
 
 
 def feature_schema(features: FeatureSet, ndim: int) -> dict:
@@ -115,9 +115,13 @@ def save_model_bundle(path: str | Path, model: Any, decision_rule: DecisionRule,
     if len(names) != decision_rule.n_attributes_:
         raise ConfigError(f"{len(names)} attribute names for a rule over {decision_rule.n_attributes_} attributes")
     metadata = {"method": method, "attribute_names": names, "input": dict(input_schema), **extra}
-    payload = {"model": model, "decision_rule": decision_rule}
     if calibration is not None:
-        payload["calibration"] = {k: (v if isinstance(v, str | int) else float(v)) for k, v in calibration.items()}
+        calibration = {k: (v if isinstance(v, str | int) else float(v)) for k, v in calibration.items()}
+    payload = linear_payload(model, decision_rule, calibration)  # linear models: arrays, read with numpy alone
+    if payload is None:
+        payload = {"model": model, "decision_rule": decision_rule}
+        if calibration is not None:
+            payload["calibration"] = calibration
     return save_bundle(path, payload, kind=ZERO_SHOT_KIND, metadata=metadata, force=force)
 
 

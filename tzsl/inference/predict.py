@@ -34,13 +34,12 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from tzsl._scoring import sc_mdap, tempered_proba
 from tzsl.bundle import load_bundle, read_bundle_header
 from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
-from tzsl.inference.model_bundles import DEEP_KIND, ZERO_SHOT_KIND
+from tzsl.inference.bundle_kinds import DEEP_KIND, ZERO_SHOT_KIND
+from tzsl.inference.linear_bundles import LinearAttributeModel, LinearRule, read_linear_payload
 from tzsl.inference.predict_inputs import INPUT_FORMATS, describe_inputs, read_inputs
-from tzsl.models import DecisionRule, NearestAttributeRule
-from tzsl.models.multigrasp import sc_mdap
-from tzsl.models.calibration import tempered_proba
 
 __all__ = [
     "PREDICT_KINDS",
@@ -69,7 +68,9 @@ class Predictor:
     Attributes
     ----------
     model : fitted estimator with ``attribute_scores(X)``
+        Or, for a linear bundle, a :class:`~tzsl.inference.linear_bundles.LinearAttributeModel`.
     rule : fitted DecisionRule
+        Or, for a linear bundle, a :class:`~tzsl.inference.linear_bundles.LinearRule`.
     attribute_names : list of str, length m
     input : dict
         Feature schema (:mod:`tzsl.inference.predict_inputs`).
@@ -81,7 +82,7 @@ class Predictor:
     """
 
     model: Any
-    rule: DecisionRule
+    rule: Any
     attribute_names: list[str]
     input: dict
     metadata: dict
@@ -102,7 +103,9 @@ class Predictor:
         fitted = self.calibration_report()
         calibrated = (f"calibrated (temperature {fitted['temperature']:.3g})" if fitted["calibrated"]
                       else "uncalibrated")
-        return (f"{self.metadata.get('method', self.kind)} ({type(inner).__name__} + {type(self.rule).__name__}), "
+        parts = (f"{self.model.name} + {self.rule.name} rule, as arrays" if isinstance(self.model, LinearAttributeModel)
+                 else f"{type(inner).__name__} + {type(self.rule).__name__}")
+        return (f"{self.metadata.get('method', self.kind)} ({parts}), "
                 f"{len(self.attribute_names)} attributes, {calibrated} posteriors; input: {self.inputs}")
 
     @property
@@ -143,8 +146,11 @@ def _checked(payload: Any, metadata: dict) -> Predictor:
             raise ModelBundleError(f"{where}: the calibration is not a dict with a positive temperature ({calibration!r})")
     if not callable(getattr(model, "attribute_scores", None)):
         raise ModelBundleError(f"{where}: the model ({type(model).__name__}) has no attribute_scores(X)")
-    if not isinstance(rule, DecisionRule) or not hasattr(rule, "n_attributes_"):
-        raise ModelBundleError(f"{where}: the decision rule is not a fitted DecisionRule ({type(rule).__name__})")
+    if not isinstance(rule, LinearRule):
+        from tzsl.models import DecisionRule  # noqa: PLC0415 - estimator payloads import scikit-learn anyway
+
+        if not isinstance(rule, DecisionRule) or not hasattr(rule, "n_attributes_"):
+            raise ModelBundleError(f"{where}: the decision rule is not a fitted DecisionRule ({type(rule).__name__})")
     missing = [k for k in ("attribute_names", "input") if k not in metadata]
     if missing:
         raise ModelBundleError(f"{where}: zero-shot bundle metadata lacks {missing}")
@@ -177,6 +183,7 @@ def load_predictor(path: str | Path, *, trust_pickle: bool = False) -> Predictor
     """
     kind = read_bundle_header(path).kind  # verified, nothing deserialised yet
     if kind == DEEP_KIND:
+        from tzsl.models import NearestAttributeRule  # noqa: PLC0415
         from tzsl.models.embedding import load_deep_bundle  # noqa: PLC0415 - needs the deep extra
 
         model = load_deep_bundle(path, trust_pickle=trust_pickle)
@@ -191,6 +198,12 @@ def load_predictor(path: str | Path, *, trust_pickle: bool = False) -> Predictor
         raise ModelBundleError(f"{path}: no predictor for bundles of kind {kind!r}{hint} (known: {list(PREDICT_KINDS)}); "
                                "re-save models of older tzsl versions with this one")
     payload, metadata = load_bundle(path, expected_kind=kind, trust_pickle=trust_pickle)
+    if metadata["bundle"]["payload_format"] == "npz":  # a linear model's arrays: numpy alone
+        names = metadata.get("attribute_names")
+        if not isinstance(names, list):
+            raise ModelBundleError(f"{path}: zero-shot bundle metadata lacks ['attribute_names']")
+        model, rule, calibration = read_linear_payload(payload, len(names), str(path))
+        payload = {"model": model, "decision_rule": rule, **({} if calibration is None else {"calibration": calibration})}
     return _checked(payload, metadata)
 
 

@@ -26,6 +26,7 @@ import pandas as pd
 from tzsl.bundle import load_bundle, save_bundle
 from tzsl.datasets import FeatureSet
 from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
+from tzsl.inference.bundle_kinds import PER_EP_KIND
 from tzsl.inference.model_bundles import feature_schema
 from tzsl.inference.predict_inputs import read_feature_rows
 from tzsl.models import PerEPAttributeModel
@@ -33,8 +34,6 @@ from tzsl.models.active_touch import ep_column_blocks, suggest_next_ep
 
 __all__ = ["PER_EP_KIND", "active_report", "format_active_report", "load_per_ep_model", "train_per_ep_bundle"]
 
-#: Bundle kind of a saved :class:`~tzsl.models.PerEPAttributeModel`.
-PER_EP_KIND = "per-ep"
 
 
 def train_per_ep_bundle(features: FeatureSet, save, *, seed: int = 0, cv: int | None = None,
