@@ -1,7 +1,7 @@
 """Classify new grasps with a saved model bundle, grasp by grasp, with multi-grasp fusion.
 
-This is the engine of ``tzsl predict``. Every model is predicted the same way, whatever the
-method: a bundle (:mod:`tzsl.inference.model_bundles`) holds a fitted model whose
+This is the engine of ``tzsl predict`` and of :class:`tzsl.inference.Recogniser`. Every model is
+predicted the same way, whatever the method: a bundle (:mod:`tzsl.inference.model_bundles`) holds a fitted model whose
 ``attribute_scores(X)`` gives attribute scores, a fitted decision rule
 (:class:`tzsl.models.DecisionRule`), the attribute names and a feature schema. The input files
 are read into the model's input by that schema (:mod:`tzsl.inference.predict_inputs`), the
@@ -34,12 +34,12 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from tzsl._scoring import sc_mdap, tempered_proba
+from tzsl._scoring import tempered_proba
 from tzsl.bundle import load_bundle, read_bundle_header
-from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
+from tzsl.exceptions import DataFileError, ModelBundleError
 from tzsl.inference.bundle_kinds import DEEP_KIND, ZERO_SHOT_KIND
 from tzsl.inference.linear_bundles import LinearAttributeModel, LinearRule, read_linear_payload
-from tzsl.inference.predict_inputs import INPUT_FORMATS, describe_inputs, read_inputs
+from tzsl.inference.predict_inputs import INPUT_FORMATS, describe_inputs
 
 __all__ = [
     "PREDICT_KINDS",
@@ -47,7 +47,6 @@ __all__ = [
     "Predictor",
     "format_prediction",
     "load_predictor",
-    "predict_grasps",
     "prediction_report",
     "read_class_table",
     "top_ties",
@@ -287,7 +286,7 @@ def read_class_table(path: str | Path, attribute_names: Sequence[str], *,
 # ---------------------------------------------------------------------------- prediction
 @dataclass
 class Prediction:
-    """Result of :func:`predict_grasps`.
+    """Result of :meth:`tzsl.inference.Recogniser.add` (and ``tzsl predict``): grasps and their fused decision.
 
     Attributes
     ----------
@@ -328,56 +327,6 @@ class Prediction:
     final_posteriors: np.ndarray | None = None
     running: np.ndarray | None = None
     notes: list[str] = field(default_factory=list)
-
-
-def predict_grasps(
-    predictor: Predictor, classes: pd.DataFrame, inputs: Sequence[str | Path], *, mode: str = "sc", k: int = 3
-) -> Prediction:
-    """Classify the grasps in ``inputs`` among ``classes`` and fuse them (SC-MDAP or DF-MDAP).
-
-    Parameters
-    ----------
-    predictor : Predictor
-        From :func:`load_predictor`.
-    classes : DataFrame of shape (c, m)
-        From :func:`read_class_table` (columns in the model's attribute order).
-    inputs : sequence of paths
-        In arrival order, read by the predictor's feature schema.
-    mode : {"sc", "df"}
-    k : int
-        Equal classifications SC-MDAP needs.
-    """
-    if mode not in ("sc", "df"):
-        raise ConfigError(f"fusion mode must be 'sc' (SC-MDAP) or 'df' (DF-MDAP), got {mode!r}")
-    if not isinstance(k, int | np.integer) or k < 1:
-        raise ConfigError(f"k must be a positive integer, got {k!r}")
-    if list(classes.columns) != predictor.attribute_names:
-        raise ConfigError("class table columns are not in the model's attribute order; read it with read_class_table")
-    K = classes.to_numpy(dtype=float)
-    grasps = read_inputs(predictor.input, inputs)
-    S = np.asarray(predictor.model.attribute_scores(grasps.X), dtype=float)
-    n = grasps.X.shape[0]
-    if S.shape[0] != n or S.shape[-1] != len(predictor.attribute_names):
-        raise ModelBundleError(f"{_where(predictor.metadata)}: the model returned attribute scores of shape "
-                               f"{S.shape} for {n} grasps and {len(predictor.attribute_names)} attributes")
-    scores = predictor.class_scores(S, K)
-    decisions = scores.argmax(axis=1)
-    final_p = running = None
-    if mode == "sc":
-        d, used, ok = sc_mdap(decisions[None, :], int(k))
-        final, n_used, decided = int(d[0]), int(used[0]), bool(ok[0])
-    else:
-        steps = np.arange(1, n + 1).reshape((n,) + (1,) * (S.ndim - 1))
-        run_scores = predictor.class_scores(np.cumsum(S, axis=0) / steps, K)  # super grasp of the first t grasps
-        running = run_scores.argmax(axis=1)
-        final_p = predictor.posteriors(run_scores[-1])
-        final, n_used, decided = int(running[-1]), n, True
-    return Prediction(
-        classes=[str(c) for c in classes.index], grasp_ids=list(grasps.grasp_ids), sources=list(grasps.sources),
-        info=list(grasps.info), grasp_posteriors=predictor.posteriors(scores), decisions=decisions, mode=mode, k=int(k),
-        decided=decided, n_used=n_used, final=final, final_posteriors=final_p, running=running,
-        notes=list(grasps.notes),
-    )
 
 
 def top_ties(p: np.ndarray) -> np.ndarray:
