@@ -32,7 +32,7 @@ _PANDAS = "__tzsl_pandas__"
 #: Optional array libraries that importing skops would import for nothing: skops lists every
 #: scikit-learn estimator when it is first imported (``sklearn.utils.all_estimators``), which walks
 #: every scikit-learn package, ``sklearn.externals.array_api_compat.torch`` and ``.dask`` included,
-#: and so imports torch and dask when they are installed (about 2 s). A model payload never holds
+#: and so imports torch and dask when they are installed (seconds). A model payload never holds
 #: their arrays, so :func:`skops_io` hides them while skops builds its list.
 SKOPS_SKIPPED_LIBRARIES: tuple[str, ...] = ("torch", "dask")
 

@@ -218,3 +218,25 @@ def test_suggest_next_ep_equals_the_command_line(tmp_path):
         recogniser.rank(test.X[0])
     with pytest.raises(ConfigError, match=r"EP 'hold': features of shape \(2, 3\)"):
         recogniser.suggest_next_ep({"hold": np.zeros((2, 3))})
+
+
+def test_the_user_guide_example_runs(tmp_path, monkeypatch, capsys):
+    """The Python example of docs/user_guide/predict.md, on a SIMULATED feature dataset named as it says."""
+    text = (REPO / "docs" / "user_guide" / "predict.md").read_text(encoding="utf-8")
+    example = text.split("## On a robot", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    rng = np.random.default_rng(3)
+    names = ["mug", "sponge", "cup", "brick", "towel", "can", "ball", "box"]
+    classes = pd.DataFrame(list(itertools.product([0, 1], repeat=3)), columns=["hard", "soft", "round"],
+                           index=pd.Index(names, name="class"))
+    objects = ["sponge"] * 4 + names  # the first grasps are of a sponge
+    trials = pd.DataFrame({"trial_id": [f"t{i}" for i in range(len(objects))], "class": objects})
+    A = classes.loc[trials["class"]].to_numpy(dtype=float)
+    mix = rng.normal(0, 1, (3, 5))
+    X = np.stack([A @ mix * 2 + rng.normal(0, 0.2, (len(A), 5)) for _ in range(2)], axis=1)
+    write_plain_dataset(tmp_path / "my_dataset", classes, trials, sensors=("left", "right"), X=X,
+                        feature_names=[f"f{i}" for i in range(5)])
+    monkeypatch.chdir(tmp_path)
+    _ok("train-attributes", "--plain", "my_dataset", "--method", "eszsl", "--out", "model.tzsl")
+    exec(compile(example, "predict.md", "exec"), {})
+    out = capsys.readouterr().out
+    assert "decided sponge after 3 grasps" in out, out

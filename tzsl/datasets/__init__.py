@@ -2,7 +2,7 @@
 
 Every public name is imported from its module on first use (PEP 562 ``__getattr__``), so code that
 needs one reader (``tzsl predict`` reading a feature table) does not import the HDF5, MATLAB,
-video and lab-format readers and their libraries (h5py, scipy.io, pydantic: about 0.5 s).
+video and lab-format readers and their libraries (h5py, scipy.io, pydantic).
 """
 
 from __future__ import annotations

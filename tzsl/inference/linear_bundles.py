@@ -15,7 +15,7 @@ an ``.npz`` payload instead of a skops one::
 Loading it builds a :class:`LinearAttributeModel` and a :class:`LinearRule`, which compute with
 the same functions as the estimators (:mod:`tzsl.models.protocol`: ``linear_embedding``,
 ``compatibility_scores``, ``squared_distances``, ``cosine_similarities``), so the ranking is the
-estimator's, without importing scikit-learn (about 1.5 s of a cold ``tzsl predict``). Like every
+estimator's, without importing scikit-learn (most of a cold ``tzsl predict``). Like every
 bundle payload, it runs no code when read (``allow_pickle=False``).
 """
 
