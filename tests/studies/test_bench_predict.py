@@ -11,8 +11,7 @@ from tzsl.benchmarks.bench_predict import BENCH_COLUMNS, GOAL_COLD_S, GOAL_GRASP
 def test_bench_writes_every_measure_and_what_a_cold_process_imported(tmp_path, capsys):
     out = tmp_path / "predict_bench.csv"
     main(["--methods", "eszsl", "--repeats", "1", "--grasps", "3", "--out", str(out)])
-    table = pd.read_csv(out)
-    table["imports"] = table["imports"].fillna("")
+    table = pd.read_csv(out, dtype={"imports": str}).fillna({"imports": ""})
     assert tuple(table.columns) == BENCH_COLUMNS
     rows = table.set_index("measure")
     assert list(rows.index) == ["cold_help", "cold_predict", "api_load", "api_rank", "api_add"]
