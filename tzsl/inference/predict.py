@@ -1,8 +1,8 @@
 """Classify new grasps with a saved model bundle, grasp by grasp, with multi-grasp fusion.
 
 This is the engine of ``tzsl predict`` and of :class:`tzsl.inference.Recogniser`. Every model is
-predicted the same way, whatever the method: a bundle (:mod:`tzsl.inference.model_bundles`) holds a fitted model whose
-``attribute_scores(X)`` gives attribute scores, a fitted decision rule
+predicted the same way, whatever the method: a bundle (:mod:`tzsl.inference.model_bundles`) holds a
+fitted model whose ``attribute_scores(X)`` gives attribute scores, a fitted decision rule
 (:class:`tzsl.models.DecisionRule`), the attribute names and a feature schema. The input files
 are read into the model's input by that schema (:mod:`tzsl.inference.predict_inputs`), the
 candidate classes arrive as a *class table* (their attribute rows; the grasped object's own row
@@ -202,7 +202,9 @@ def load_predictor(path: str | Path, *, trust_pickle: bool = False) -> Predictor
         if not isinstance(names, list):
             raise ModelBundleError(f"{path}: zero-shot bundle metadata lacks ['attribute_names']")
         model, rule, calibration = read_linear_payload(payload, len(names), str(path))
-        payload = {"model": model, "decision_rule": rule, **({} if calibration is None else {"calibration": calibration})}
+        payload = {"model": model, "decision_rule": rule}
+        if calibration is not None:
+            payload["calibration"] = calibration
     return _checked(payload, metadata)
 
 
