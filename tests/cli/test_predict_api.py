@@ -240,3 +240,12 @@ def test_the_user_guide_example_runs(tmp_path, monkeypatch, capsys):
     exec(compile(example, "predict.md", "exec"), {})
     out = capsys.readouterr().out
     assert "decided sponge after 3 grasps" in out, out
+
+
+def test_command_line_defaults_are_the_apis():
+    """``tzsl predict`` types its defaults in its options (its module stays light for ``tzsl --help``)."""
+    from tzsl.inference.recogniser import DEFAULT_FUSION, DEFAULT_K, FUSION_MODES  # noqa: PLC0415
+
+    options = {p.name: p for p in cli.commands["predict"].params}
+    assert options["mode"].default == DEFAULT_FUSION and list(options["mode"].type.choices) == list(FUSION_MODES)
+    assert options["k"].default == DEFAULT_K

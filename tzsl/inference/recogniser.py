@@ -28,10 +28,14 @@ from tzsl.inference.bundle_kinds import PER_EP_KIND
 from tzsl.inference.predict import Prediction, Predictor, load_predictor, read_class_table
 from tzsl.inference.predict_inputs import grasp_model_input, read_inputs
 
-__all__ = ["FUSION_MODES", "Recogniser", "predict_grasps"]
+__all__ = ["DEFAULT_FUSION", "DEFAULT_K", "FUSION_MODES", "Recogniser", "predict_grasps"]
 
 #: Multi-grasp fusion modes: SC-MDAP (stop at ``k`` equal decisions) and DF-MDAP (average the grasps).
 FUSION_MODES = ("sc", "df")
+#: Default multi-grasp fusion mode (``tzsl predict --multi-grasp`` shows the same, checked by a test).
+DEFAULT_FUSION = "sc"
+#: Default number of equal classifications SC-MDAP needs (``tzsl predict --k``, the same).
+DEFAULT_K = 3
 
 
 class Recogniser:
@@ -51,22 +55,30 @@ class Recogniser:
         A loaded zero-shot / hand / deep bundle (:func:`~tzsl.inference.predict.load_predictor`).
     per_ep : tuple (model, metadata), optional
         A loaded per-EP bundle (:func:`~tzsl.inference.predict_active.load_per_ep_model`).
-    mode : {"sc", "df"}, default "sc"
+    mode : {"sc", "df"}, default DEFAULT_FUSION ("sc")
         Multi-grasp fusion of :meth:`add`: SC-MDAP (decided once ``k`` grasps agree) or DF-MDAP
         (the grasps' attribute scores averaged into one "super grasp").
-    k : int >= 1, default 3
+    k : int >= 1, default DEFAULT_K (3)
         Equal classifications SC-MDAP needs.
 
     Attributes
     ----------
+    classes : DataFrame of shape (n_classes, n_attributes)
     class_names : list of str, length n_classes
     attribute_names : list of str, length n_attributes
     kind : str
         The bundle's kind (``"zero-shot"``, ``"deep"``, ``"per-ep"``).
+    predictor : Predictor or None
+        The loaded model (None for a per-EP bundle); ``predictor.input`` is its feature schema
+        (``sensors``, ``feature_names``: the order of a grasp's rows and columns).
+    per_ep : tuple (PerEPAttributeModel, dict) or None
+        The loaded per-EP model and its metadata (None for other bundles).
+    mode, k
+        As given.
     """
 
     def __init__(self, classes: pd.DataFrame, *, predictor: Predictor | None = None,
-                 per_ep: tuple[Any, dict] | None = None, mode: str = "sc", k: int = 3) -> None:
+                 per_ep: tuple[Any, dict] | None = None, mode: str = DEFAULT_FUSION, k: int = DEFAULT_K) -> None:
         if (predictor is None) == (per_ep is None):
             raise ConfigError("a Recogniser needs one loaded bundle: a predictor or a per-EP model")
         if mode not in FUSION_MODES:
@@ -87,7 +99,7 @@ class Recogniser:
 
     @classmethod
     def load(cls, model: str | Path, classes: str | Path, *, candidates: Sequence[str] | None = None,
-             mode: str = "sc", k: int = 3, trust_pickle: bool = False) -> Recogniser:
+             mode: str = DEFAULT_FUSION, k: int = DEFAULT_K, trust_pickle: bool = False) -> Recogniser:
         """Load a bundle and its candidate classes (``tzsl predict --model --classes --candidates``).
 
         Parameters
@@ -311,7 +323,8 @@ class Recogniser:
 
 
 def predict_grasps(
-    predictor: Predictor, classes: pd.DataFrame, inputs: Sequence[str | Path], *, mode: str = "sc", k: int = 3
+    predictor: Predictor, classes: pd.DataFrame, inputs: Sequence[str | Path], *, mode: str = DEFAULT_FUSION,
+    k: int = DEFAULT_K,
 ) -> Prediction:
     """Classify the grasps in ``inputs`` among ``classes`` and fuse them (SC-MDAP or DF-MDAP).
 
