@@ -58,6 +58,7 @@ def five_fingers(tmp_path_factory):
     common = ("train-attributes", "--plain", folder, "--splits", folder / "splits.csv", "--no-progress")
     _ok(*common, "--method", "eszsl", "--out", root / "eszsl.tzsl")
     _ok(*common, "--method", "sae", "--out", root / "sae.tzsl")
+    _ok(*common, "--method", "ale", "--out", root / "ale.tzsl")
     _ok(*common, "--cv", 2, "--no-cache", "--out", root / "dap.tzsl")
     new = trials[trials["class"].isin(UNSEEN)].index
     rows = [{"trial_id": trials.at[i, "trial_id"], "sensor": s, **dict(zip(FEATURES, X[i, j], strict=True))}
@@ -91,28 +92,28 @@ def test_api_grasp_by_grasp_equals_the_command_line(five_fingers, bundle, mode):
             assert probs[r["class"]] == pytest.approx(r["probability"], rel=1e-12, abs=1e-15)
 
 
-def test_linear_bundles_are_arrays_and_rank_as_their_estimator(five_fingers):
+@pytest.mark.parametrize("method, rule", [("eszsl", "compatibility"), ("sae", "nearest-cosine"),
+                                          ("ale", "compatibility")])
+def test_linear_bundles_are_arrays_and_rank_as_their_estimator(five_fingers, method, rule):
     root, candidates, X = five_fingers
-    for bundle, rule in (("eszsl", "compatibility"), ("sae", "nearest-cosine")):
-        header = read_bundle_header(root / f"{bundle}.tzsl")
-        assert header.payload_format == "npz", bundle
-        predictor = load_predictor(root / f"{bundle}.tzsl")
-        assert predictor.rule.name == rule and "as arrays" in predictor.describe()
+    path = root / f"{method}.tzsl"
+    assert read_bundle_header(path).payload_format == "npz"
+    predictor = load_predictor(path)
+    assert predictor.rule.name == rule and "as arrays" in predictor.describe()
     assert read_bundle_header(root / "dap.tzsl").payload_format == "skops"
-    # the arrays rank as the fitted estimator does: refit ESZSL in memory the way train-attributes does
+    # the arrays rank as the fitted estimator does: refit it in memory the way train-attributes does
     from tzsl.features import load_features  # noqa: PLC0415
     from tzsl.inference.model_bundles import training_subset  # noqa: PLC0415
     from tzsl.models.protocol import attribute_rows  # noqa: PLC0415
     from tzsl.studies.study_methods import method_input, study_estimator  # noqa: PLC0415
 
-    features = load_features(plain=root / "five")
-    sub, _ = training_subset(features, root / "five" / "splits.csv")
+    sub, _ = training_subset(load_features(plain=root / "five"), root / "five" / "splits.csv")
     attributes = list(sub.attributes.columns)
-    clf = study_estimator({"name": "eszsl"}, read_bundle_header(root / "eszsl.tzsl").metadata["seed"])
+    clf = study_estimator({"name": method}, read_bundle_header(path).metadata["seed"])
     class_rows = sub.attributes.loc[np.unique(sub.objects), attributes].to_numpy(dtype=float)
-    clf.fit(method_input({"name": "eszsl"}, sub.X), attribute_rows(sub.objects, class_rows), sub.objects)
+    clf.fit(method_input({"name": method}, sub.X), attribute_rows(sub.objects, class_rows), sub.objects)
     K = CLASSES.loc[UNSEEN, attributes].to_numpy(dtype=float)
-    recogniser = Recogniser.load(root / "eszsl.tzsl", candidates, candidates=UNSEEN)
+    recogniser = Recogniser.load(path, candidates, candidates=UNSEEN)
     expected = clf.predict_proba(X.reshape(len(X), -1), K)
     got = np.array([[p for _, p in sorted(recogniser.rank(x), key=lambda cp: UNSEEN.index(cp[0]))] for x in X])
     np.testing.assert_allclose(got, expected, rtol=1e-10, atol=1e-14)
