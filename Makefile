@@ -17,7 +17,7 @@ N_JOBS ?= 2
 # pytest-xdist workers of `make test`: the suite is mostly single-threaded, so two workers halve it on CI's 2 cores.
 TEST_WORKERS ?= 2
 
-.PHONY: install browser test test-wide headlines reproduce-tables readme-results numbers numbers-check docs bench bench-fit bench-scale data clean
+.PHONY: install browser test test-wide headlines reproduce-tables readme-results numbers numbers-check docs bench bench-fit bench-predict bench-scale data clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -84,9 +84,16 @@ docs: install
 
 # Speed of the whole (issue 22): reproduce-tables cold (an empty TZSL_CACHE_DIR) and warm (run again), per
 # study and stage, with the ratio to the issue's numbers; the table also goes to $(BENCH_CSV).
+# Then a robot's side (issue 33): tzsl predict of one grasp cold and per grasp through the Python API
+# (tzsl.inference.Recogniser), on simulated data, into $(BENCH_PREDICT_CSV).
 BENCH_CSV ?= bench/reproduce_bench.csv
+BENCH_PREDICT_CSV ?= bench/predict_bench.csv
 bench: install
 	$(BIN)/python -m tzsl.benchmarks.bench_reproduce --n-jobs $(N_JOBS) --out $(BENCH_CSV) --force
+	$(BIN)/python -m tzsl.benchmarks.bench_predict --out $(BENCH_PREDICT_CSV) --force
+
+bench-predict: install
+	$(BIN)/python -m tzsl.benchmarks.bench_predict --out $(BENCH_PREDICT_CSV) --force
 
 # One PHAC-2 split's attribute fits (issue 15): the paper's literal recipe vs tzsl; the literal recipe
 # takes tens of minutes (BENCH_FIT_ARGS=--skip-literal times tzsl only).

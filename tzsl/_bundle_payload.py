@@ -11,8 +11,9 @@ from __future__ import annotations
 import copy
 import importlib
 import io
+import sys
 import zipfile
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +29,12 @@ TRUSTED_MODULE_PREFIXES: tuple[str, ...] = ("sklearn.", "tzsl.models.", "tzsl.fe
 EXTRA_TRUSTED_TYPES: frozenset[str] = frozenset({"numpy.dtype"})
 
 _PANDAS = "__tzsl_pandas__"
+#: Optional array libraries that importing skops would import for nothing: skops lists every
+#: scikit-learn estimator when it is first imported (``sklearn.utils.all_estimators``), which walks
+#: every scikit-learn package, ``sklearn.externals.array_api_compat.torch`` and ``.dask`` included,
+#: and so imports torch and dask when they are installed (seconds). A model payload never holds
+#: their arrays, so :func:`skops_io` hides them while skops builds its list.
+SKOPS_SKIPPED_LIBRARIES: tuple[str, ...] = ("torch", "dask")
 
 
 # ----------------------------------------------------------------------------- trusted types
@@ -66,6 +73,37 @@ def is_trusted_type(name: str) -> bool:
         return False
     obj = _resolve(name)
     return isinstance(obj, type) and f"{obj.__module__}.{obj.__qualname__}" == name
+
+
+# ----------------------------------------------------------------------------- skops
+class _HiddenLibraries:
+    """An import finder under which the top-level packages ``names`` are not installed."""
+
+    def __init__(self, names: Sequence[str]) -> None:
+        self.names = frozenset(names)
+
+    def find_spec(self, fullname: str, path: Any = None, target: Any = None) -> None:
+        if fullname.partition(".")[0] in self.names:
+            raise ModuleNotFoundError(f"No module named {fullname!r} (hidden while skops is imported)", name=fullname)
+
+
+def skops_io() -> Any:
+    """The module :mod:`skops.io`, imported without importing :data:`SKOPS_SKIPPED_LIBRARIES`.
+
+    While skops is first imported, the libraries of :data:`SKOPS_SKIPPED_LIBRARIES` that are not
+    imported yet cannot be imported (an import finder placed first raises ImportError, which the
+    package walk of ``all_estimators`` skips); the finder is removed afterwards, so they import
+    normally later. Already imported libraries are left alone.
+    """
+    if "skops.io" in sys.modules:
+        return sys.modules["skops.io"]
+    finder = _HiddenLibraries([name for name in SKOPS_SKIPPED_LIBRARIES if name not in sys.modules])
+    sys.meta_path.insert(0, finder)
+    try:
+        import skops.io as sio  # noqa: PLC0415 - imported when a model is saved or loaded
+    finally:
+        sys.meta_path.remove(finder)
+    return sio
 
 
 # ----------------------------------------------------------------------------- payloads
@@ -158,9 +196,7 @@ def serialise(model: Any) -> tuple[str, bytes]:
     if _is_array_tree(model) and not isinstance(model, np.ndarray):
         np.savez_compressed(buffer, **_flatten(model))
         return "npz", buffer.getvalue()
-    import skops.io as sio  # noqa: PLC0415 - imported when a model is saved or loaded
-
-    return "skops", sio.dumps(_encode(model), compression=zipfile.ZIP_DEFLATED)
+    return "skops", skops_io().dumps(_encode(model), compression=zipfile.ZIP_DEFLATED)
 
 
 def deserialise(path: Path, payload_format: str, payload: bytes) -> Any:
@@ -169,8 +205,7 @@ def deserialise(path: Path, payload_format: str, payload: bytes) -> Any:
             return _unflatten(read_npz(io.BytesIO(payload), name=path))
         except DataFileError as exc:
             raise ModelBundleError(f"{path}: model arrays unreadable: {exc.problem}") from None
-    import skops.io as sio  # noqa: PLC0415
-
+    sio = skops_io()
     try:
         untrusted = sio.get_untrusted_types(data=payload)
     except Exception as exc:  # noqa: BLE001 - a corrupt skops archive raises many types

@@ -14,7 +14,8 @@ from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
 from tzsl.studies.config import HandSettings
 from tzsl.studies.hand.study import feature_params
 from tzsl.inference.model_bundles import ZERO_SHOT_KIND, save_model_bundle, save_zero_shot_bundle, train_hand_bundle
-from tzsl.inference.predict import format_prediction, load_predictor, predict_grasps, read_class_table
+from tzsl.inference.predict import format_prediction, load_predictor, read_class_table
+from tzsl.inference.recogniser import predict_grasps
 from tzsl.features import grasp_features
 from tzsl.models import (
     AttributeClassifierBank,

@@ -16,7 +16,8 @@ from tzsl.datasets import FeatureSet
 from tzsl.datasets import write_feature_table
 from tzsl.exceptions import ModelBundleError
 from tzsl.inference.model_bundles import ZERO_SHOT_KIND, save_model_bundle, save_zero_shot_bundle
-from tzsl.inference.predict import load_predictor, predict_grasps, read_class_table
+from tzsl.inference.predict import load_predictor, read_class_table
+from tzsl.inference.recogniser import predict_grasps
 from tzsl.models import CalibratedZeroShotClassifier, build_method
 
 ATTRIBUTES = ["hard", "soft", "rough", "cold"]
@@ -73,9 +74,8 @@ def test_bundle_stores_the_calibrator_and_predict_uses_it(bundle):
 
 def test_old_bundle_without_calibrator_loads_and_says_uncalibrated(bundle, tmp_path):
     root, clf, test, path, classes = bundle
-    payload, meta = load_bundle(path)
-    meta.pop("bundle")
-    old = save_model_bundle(tmp_path / "old.tzsl", payload["model"], payload["decision_rule"], method="eszsl",
+    _, meta = load_bundle(path)
+    old = save_model_bundle(tmp_path / "old.tzsl", clf.estimator_, clf.estimator_.decision_rule_, method="eszsl",
                             attribute_names=meta["attribute_names"], input_schema=meta["input"])
     predictor = load_predictor(old)
     assert predictor.calibration is None and not predictor.calibration_report()["calibrated"]
@@ -85,12 +85,18 @@ def test_old_bundle_without_calibrator_loads_and_says_uncalibrated(bundle, tmp_p
     np.testing.assert_allclose(pred.grasp_posteriors, softmax(clf.decision_function(test.X[:, 0], K.to_numpy(float)), axis=1))
 
 
-def test_bad_calibration_payload_is_refused(bundle, tmp_path):
-    _, _, _, path, _ = bundle
+@pytest.mark.parametrize("stored", ["arrays", "estimator"])
+def test_bad_calibration_payload_is_refused(bundle, tmp_path, stored):
+    _, clf, _, path, _ = bundle
     payload, meta = load_bundle(path)
     meta.pop("bundle")
-    save_bundle(tmp_path / "bad.tzsl", {**payload, "calibration": {"temperature": -1.0}}, kind=ZERO_SHOT_KIND,
-                metadata=meta)
+    assert meta and set(payload) == {"linear", "rule", "estimator", "calibration"}  # ESZSL: stored as arrays
+    if stored == "arrays":
+        bad = {**payload, "calibration": {"temperature": np.asarray(-1.0)}}
+    else:  # the skops layout of every other model
+        bad = {"model": clf.estimator_, "decision_rule": clf.estimator_.decision_rule_,
+               "calibration": {"temperature": -1.0}}
+    save_bundle(tmp_path / "bad.tzsl", bad, kind=ZERO_SHOT_KIND, metadata=meta)
     with pytest.raises(ModelBundleError, match="positive temperature"):
         load_predictor(tmp_path / "bad.tzsl")
 

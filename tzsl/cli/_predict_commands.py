@@ -68,59 +68,48 @@ def predict(model_path: Path, classes: Path, candidates: str | None, mode: str, 
     environment variable TZSL_MAX_NPZ_BYTES.
     """
     from tzsl.bundle import read_bundle_header  # noqa: PLC0415
+    from tzsl.inference import Recogniser  # noqa: PLC0415 - the Python API: the same result from Python
+    from tzsl.inference.bundle_kinds import PER_EP_KIND  # noqa: PLC0415
 
-    active = read_bundle_header(model_path).kind == "per-ep"
+    active = read_bundle_header(model_path).kind == PER_EP_KIND
     if not active and (eps_done or suggest_next or threshold is not None or max_eps or max_seconds):
         raise ConfigError(f"{model_path}: --eps-done, --suggest-next, --threshold, --max-eps and --max-seconds "
                           "need a per-EP bundle (tzsl train-attributes --per-ep)")
     if active:
-        _predict_active(model_path, classes, _names(candidates), grasp, _names(eps_done), suggest_next,
-                        threshold, max_eps, max_seconds, as_json, top, trust_pickle)
+        if not _names(eps_done):
+            raise ConfigError(f"{model_path}: a per-EP bundle needs --eps-done (the EPs done so far, e.g. squeeze,hold)")
+        if len(grasp) != 1:
+            raise ConfigError(f"a per-EP bundle reads one feature file (one trial), got {len(grasp)} files")
+    recogniser = Recogniser.load(model_path, classes, candidates=_names(candidates), mode=mode, k=k,
+                                 trust_pickle=trust_pickle)
+    if active:
+        _print_active(recogniser, classes, grasp[0], _names(eps_done), suggest_next, threshold, max_eps,
+                      max_seconds, as_json, top)
         return
-    from tzsl.inference.predict import (  # noqa: PLC0415
-        format_prediction,
-        load_predictor,
-        predict_grasps,
-        prediction_report,
-        read_class_table,
-    )
+    from tzsl.inference.predict import format_prediction, prediction_report  # noqa: PLC0415
 
-    from tzsl.inference.model_bundles import left_out_attributes  # noqa: PLC0415
-
-    predictor = load_predictor(model_path, trust_pickle=trust_pickle)
-    table = read_class_table(classes, predictor.attribute_names, candidates=_names(candidates),
-                             left_out=left_out_attributes(predictor.metadata))
-    result = predict_grasps(predictor, table, list(grasp), mode=mode, k=k)
+    result = recogniser.classify(list(grasp))
     if as_json:
-        click.echo(json.dumps(prediction_report(result, predictor, top=top), sort_keys=False))
+        click.echo(json.dumps(prediction_report(result, recogniser.predictor, top=top), sort_keys=False))
         return
-    click.echo(f"model: {predictor.describe()}")
-    click.echo(f"classes: {len(table)} from {classes}")
+    click.echo(f"model: {recogniser.predictor.describe()}")
+    click.echo(f"classes: {len(recogniser.classes)} from {classes}")
     click.echo(format_prediction(result, top=top))
 
 
-def _predict_active(model_path, classes, candidates, grasp, eps_done, suggest_next, threshold, max_eps,
-                    max_seconds, as_json, top, trust_pickle) -> None:
-    from tzsl.inference.predict import read_class_table  # noqa: PLC0415
-    from tzsl.inference.predict_active import active_report, format_active_report, load_per_ep_model  # noqa: PLC0415
+def _print_active(recogniser, classes, features_file, eps_done, suggest_next, threshold, max_eps, max_seconds,
+                  as_json, top) -> None:
+    from tzsl.inference.predict_active import format_active_report  # noqa: PLC0415
 
-    if not eps_done:
-        raise ConfigError(f"{model_path}: a per-EP bundle needs --eps-done (the EPs done so far, e.g. squeeze,hold)")
-    if len(grasp) != 1:
-        raise ConfigError(f"a per-EP bundle reads one feature file (one trial), got {len(grasp)} files")
-    from tzsl.inference.model_bundles import left_out_attributes  # noqa: PLC0415
-
-    model, metadata = load_per_ep_model(model_path, trust_pickle=trust_pickle)
-    table = read_class_table(classes, metadata["attribute_names"], candidates=candidates,
-                             left_out=left_out_attributes(metadata))
-    report = active_report(model, metadata, table, grasp[0], eps_done, threshold=threshold, max_eps=max_eps,
-                           max_seconds=max_seconds)
+    report = recogniser.suggest_next_ep_from_file(features_file, eps_done, threshold=threshold, max_eps=max_eps,
+                                                  max_seconds=max_seconds)
     if as_json:
         click.echo(json.dumps(report, sort_keys=False))
         return
-    for note in table.attrs["notes"]:
+    metadata = recogniser.per_ep[1]
+    for note in recogniser.classes.attrs.get("notes", []):
         click.echo(f"note: {note}")
     click.echo(f"model: per-EP attribute model, EPs {', '.join(metadata['eps'])}, "
                f"{len(metadata['attribute_names'])} attributes")
-    click.echo(f"classes: {len(table)} from {classes}")
+    click.echo(f"classes: {len(recogniser.classes)} from {classes}")
     click.echo(format_active_report(report, top=top, suggest=suggest_next))

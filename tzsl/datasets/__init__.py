@@ -1,70 +1,68 @@
-"""Dataset registry, data home and loaders (files -> arrays + a trial table)."""
+"""Dataset registry, data home and loaders (files -> arrays + a trial table).
 
-from tzsl.datasets._builtin import TactileDataset, dataset_names, get_dataset, register_dataset
+Every public name is imported from its module on first use (PEP 562 ``__getattr__``), so code that
+needs one reader (``tzsl predict`` reading a feature table) does not import the HDF5, MATLAB,
+video and lab-format readers and their libraries (h5py, scipy.io, pydantic).
+"""
 
-from tzsl.datasets._grasps import (
-    FINGER_NAMES,
-    JOINT_NAMES,
-    Grasp,
-    HandTable,
-    grasp_from_arrays,
-    load_hand_table4,
-    read_grasps,
-    write_grasps,
-)
-from tzsl.datasets._hand_simulator import SimulatedGrasps, simulate_grasps
-from tzsl.cache import CACHE_DIR_ENV, get_cache_dir  # the cache folder, decided in tzsl.cache
-from tzsl.datasets._home import get_data_home
-from tzsl.datasets._phac2_h5 import (
-    iter_phac2_h5,
-    list_phac2_h5_trials,
-    load_phac2_h5,
-    require_eps,
-    write_phac2_h5,
-)
-from tzsl.datasets._phac2_hold_mat import (
-    load_phac2_hold_mat,
-    load_phac2_labels,
-    parse_trial_id,
-    read_hold_mat,
-    read_phac2_labels_csv,
-)
-from tzsl.datasets._phac2_penn import (
-    PENN_FEATURE_NAMES,
-    PennStaticData,
-    load_phac2_penn,
-    read_penn_static_pickles,
-)
-from tzsl.datasets._registry import fetch, registered_files
-from tzsl.datasets._safe_pickle import safe_load_pickle
-from tzsl.datasets._types import PHAC2_EPS, TRIAL_COLUMNS, BiotacSignals, FeatureSet, RawTrial
-from tzsl.datasets._feature_table import feature_table_paths, read_csv_table, read_feature_table, write_feature_table
-from tzsl.datasets._plain import PLAIN_FORMAT_HELP
-from tzsl.datasets._tables import SPLITS_FILE
-from tzsl.datasets._fabric import (
-    FABRIC_ATTRIBUTE_SETS,
-    FABRIC_ZSL_CONFIGS,
-    PAPER_ATTRIBUTE_NAMES,
-    FabricData,
-    FabricSplit,
-    fabric_zsl_split,
-    load_fabric,
-    read_depth_images,
-    read_fabric_groups,
-)
-from tzsl.datasets._fabric_videos import load_gelsight_fabric_videos
-from tzsl.datasets._gelsight_press import PressRecord, load_gelsight_press
-from tzsl.datasets._video import avi_frame_count, read_video
-from tzsl.datasets._plain import PlainDataset, feature_set_to_plain, read_plain_dataset, write_plain_dataset
-from tzsl.datasets._synthetic import synthetic_dataset_arrays, write_synthetic_dataset
-from tzsl.datasets._card import card_lines, dataset_card
-from tzsl.datasets._lab_formats import LAB_FORMATS, LAB_READERS, convert_lab_dataset
-from tzsl.datasets._lab_mapping import BagMapping, Hdf5Mapping, SeriesMapping, load_lab_mapping
-from tzsl.datasets._download import DEFAULT_FETCH_TIMEOUT_S, FETCH_ATTEMPTS, FETCH_STALL_S, FETCH_TIMEOUT_ENV
-from tzsl.datasets._fetch import MIRROR_ENV, REFERENCE_ONLY, FetchReport, fetch_datasets, registered_datasets
-from tzsl.datasets._signal_cache import SignalTable, read_signal_table
-from tzsl.datasets._signal_files import signal_from_arrays
-from tzsl.datasets._validate import Problem, read_signal_file, validate_dataset
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+#: Public name -> the module of this package that defines it.
+_EXPORTS: dict[str, str] = {
+    **dict.fromkeys(["TactileDataset", "dataset_names", "get_dataset", "register_dataset"], "_builtin"),
+    **dict.fromkeys(["FINGER_NAMES", "Grasp", "HandTable", "JOINT_NAMES", "grasp_from_arrays", "load_hand_table4",
+        "read_grasps", "write_grasps"], "_grasps"),
+    **dict.fromkeys(["SimulatedGrasps", "simulate_grasps"], "_hand_simulator"),
+    **dict.fromkeys(["CACHE_DIR_ENV", "get_cache_dir"], "tzsl.cache"),  # the cache folder, decided in tzsl.cache
+    **dict.fromkeys(["get_data_home"], "_home"),
+    **dict.fromkeys(["iter_phac2_h5", "list_phac2_h5_trials", "load_phac2_h5",
+        "require_eps", "write_phac2_h5"], "_phac2_h5"),
+    **dict.fromkeys(["load_phac2_hold_mat", "load_phac2_labels", "parse_trial_id", "read_hold_mat",
+        "read_phac2_labels_csv"], "_phac2_hold_mat"),
+    **dict.fromkeys(["PENN_FEATURE_NAMES", "PennStaticData", "load_phac2_penn",
+        "read_penn_static_pickles"], "_phac2_penn"),
+    **dict.fromkeys(["fetch", "registered_files"], "_registry"),
+    **dict.fromkeys(["safe_load_pickle"], "_safe_pickle"),
+    **dict.fromkeys(["BiotacSignals", "FeatureSet", "PHAC2_EPS", "RawTrial", "TRIAL_COLUMNS"], "_types"),
+    **dict.fromkeys(["feature_table_paths", "read_csv_table", "read_feature_table",
+        "write_feature_table"], "_feature_table"),
+    **dict.fromkeys(["PLAIN_FORMAT_HELP", "PlainDataset", "feature_set_to_plain", "read_plain_dataset",
+        "write_plain_dataset"], "_plain"),
+    **dict.fromkeys(["SPLITS_FILE"], "_tables"),
+    **dict.fromkeys(["FABRIC_ATTRIBUTE_SETS", "FABRIC_ZSL_CONFIGS", "FabricData", "FabricSplit",
+        "PAPER_ATTRIBUTE_NAMES", "fabric_zsl_split",
+        "load_fabric", "read_depth_images", "read_fabric_groups"], "_fabric"),
+    **dict.fromkeys(["load_gelsight_fabric_videos"], "_fabric_videos"),
+    **dict.fromkeys(["PressRecord", "load_gelsight_press"], "_gelsight_press"),
+    **dict.fromkeys(["avi_frame_count", "read_video"], "_video"),
+    **dict.fromkeys(["synthetic_dataset_arrays", "write_synthetic_dataset"], "_synthetic"),
+    **dict.fromkeys(["card_lines", "dataset_card"], "_card"),
+    **dict.fromkeys(["LAB_FORMATS", "LAB_READERS", "convert_lab_dataset"], "_lab_formats"),
+    **dict.fromkeys(["BagMapping", "Hdf5Mapping", "SeriesMapping", "load_lab_mapping"], "_lab_mapping"),
+    **dict.fromkeys(["DEFAULT_FETCH_TIMEOUT_S", "FETCH_ATTEMPTS", "FETCH_STALL_S", "FETCH_TIMEOUT_ENV"], "_download"),
+    **dict.fromkeys(["FetchReport", "MIRROR_ENV", "REFERENCE_ONLY",
+        "fetch_datasets", "registered_datasets"], "_fetch"),
+    **dict.fromkeys(["SignalTable", "read_signal_table"], "_signal_cache"),
+    **dict.fromkeys(["signal_from_arrays"], "_signal_files"),
+    **dict.fromkeys(["Problem", "read_signal_file", "validate_dataset"], "_validate"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module if module.startswith("tzsl.") else f"{__name__}.{module}"), name)
+    globals()[name] = value  # imported once
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
+
 
 __all__ = [
     "TactileDataset",

@@ -49,7 +49,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from sklearn.utils import check_random_state
 
 from tzsl.datasets._grasps import (
     FINGER_NAMES,
@@ -194,6 +193,8 @@ def simulate_grasps(
     no_material = list(K.index[mat.sum(axis=1) == 0])
     if no_material:
         raise ConfigError(f"object(s) {no_material} have no material attribute; a BioTac must touch something")
+
+    from sklearn.utils import check_random_state  # noqa: PLC0415 - scikit-learn only when simulating (tzsl predict reads datasets)
 
     rng = check_random_state(random_state)
     n_obj, n_g, F, R = len(K), int(n_grasps_per_object), len(FINGER_NAMES), int(n_rows)

@@ -34,6 +34,7 @@ import numpy as np
 import pandas as pd
 from sklearn.utils import check_random_state
 
+from tzsl._scoring import duplicate_attribute_groups  # noqa: F401 - numpy alone, shared with tzsl predict
 from tzsl.exceptions import SplitError
 
 __all__ = [
@@ -192,30 +193,6 @@ def attribute_exclusions(
             reasons.append(f"{neg[j]} negative training object(s) < {min_train_negatives}")
         out.append((str(attributes[j]), "; ".join(reasons)))
     return tuple(out)
-
-
-def duplicate_attribute_groups(A: np.ndarray) -> list[np.ndarray]:
-    """Groups of rows sharing an attribute vector.
-
-    Parameters
-    ----------
-    A : ndarray of shape (n, n_attributes)
-
-    Returns
-    -------
-    list of int ndarray
-        Row indices (ascending) of each vector that occurs more than once, ordered by first
-        occurrence. Empty when all rows differ.
-    """
-    A = np.asarray(A)
-    if A.shape[0] < 2:
-        return []
-    _, first, inverse, counts = np.unique(
-        A.reshape(A.shape[0], -1), axis=0, return_index=True, return_inverse=True, return_counts=True
-    )
-    inverse = inverse.reshape(-1)
-    groups = [np.flatnonzero(inverse == g) for g in np.flatnonzero(counts > 1)]
-    return sorted(groups, key=lambda g: g[0])
 
 
 def kept_mask(attributes: tuple[str, ...], excluded: tuple[tuple[str, str], ...]) -> np.ndarray:

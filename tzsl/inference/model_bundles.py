@@ -5,6 +5,8 @@ whatever the method (any of ``tzsl methods`` that is an attribute model + decisi
 hand's :class:`~tzsl.models.HandDAPClassifier`):
 
 payload (skops, see :mod:`tzsl.bundle`: loading it runs no code)
+    Linear models (ESZSL, SAE, ALE, SJE, DeViSE with their rule) are stored as arrays instead,
+    read with numpy alone (:mod:`tzsl.inference.linear_bundles`). Every other model:
     ``{"model": fitted estimator, "decision_rule": fitted DecisionRule}``, plus ``"calibration"``
     (a plain dict: the temperature and how it was fitted,
     :attr:`tzsl.models.CalibratedZeroShotClassifier.calibration_info_`) when the model was saved
@@ -36,6 +38,8 @@ import pandas as pd
 from tzsl.bundle import save_bundle
 from tzsl.datasets import FeatureSet, HandTable, read_grasps
 from tzsl.exceptions import ConfigError
+from tzsl.inference.bundle_kinds import DEEP_KIND, ZERO_SHOT_KIND, left_out_attributes  # noqa: F401 - re-exported
+from tzsl.inference.linear_bundles import linear_payload
 from tzsl.models import (
     CalibratedZeroShotClassifier,
     DAPRule,
@@ -59,10 +63,6 @@ __all__ = [
     "training_subset",
 ]
 
-#: Bundle kind of every skops-stored zero-shot model.
-ZERO_SHOT_KIND = "zero-shot"
-#: Bundle kind of the deep CNN + LSTM (npz weights).
-DEEP_KIND = "deep"
 
 
 def feature_schema(features: FeatureSet, ndim: int) -> dict:
@@ -118,9 +118,13 @@ def save_model_bundle(path: str | Path, model: Any, decision_rule: DecisionRule,
     if len(names) != decision_rule.n_attributes_:
         raise ConfigError(f"{len(names)} attribute names for a rule over {decision_rule.n_attributes_} attributes")
     metadata = {"method": method, "attribute_names": names, "input": dict(input_schema), **extra}
-    payload = {"model": model, "decision_rule": decision_rule}
     if calibration is not None:
-        payload["calibration"] = {k: (v if isinstance(v, str | int) else float(v)) for k, v in calibration.items()}
+        calibration = {k: (v if isinstance(v, str | int) else float(v)) for k, v in calibration.items()}
+    payload = linear_payload(model, decision_rule, calibration)  # linear models: arrays, read with numpy alone
+    if payload is None:
+        payload = {"model": model, "decision_rule": decision_rule}
+        if calibration is not None:
+            payload["calibration"] = calibration
     return save_bundle(path, payload, kind=ZERO_SHOT_KIND, metadata=metadata, force=force)
 
 
@@ -214,11 +218,6 @@ def training_record(features: FeatureSet, left_out: list[dict]) -> dict:
     and ``left_out_attributes`` (from :func:`training_subset`)."""
     min_objects = (features.info or {}).get("min_objects")
     return {"min_objects": None if min_objects is None else int(min_objects), "left_out_attributes": list(left_out)}
-
-
-def left_out_attributes(metadata: dict) -> list[str]:
-    """Names of the attributes a bundle's model left out (its ``left_out_attributes``; [] for older bundles)."""
-    return [str(r["attribute"]) for r in metadata.get("left_out_attributes", []) if isinstance(r, dict)]
 
 
 def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | None = None, splits_file=None,

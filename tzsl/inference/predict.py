@@ -1,8 +1,8 @@
 """Classify new grasps with a saved model bundle, grasp by grasp, with multi-grasp fusion.
 
-This is the engine of ``tzsl predict``. Every model is predicted the same way, whatever the
-method: a bundle (:mod:`tzsl.inference.model_bundles`) holds a fitted model whose
-``attribute_scores(X)`` gives attribute scores, a fitted decision rule
+This is the engine of ``tzsl predict`` and of :class:`tzsl.inference.Recogniser`. Every model is
+predicted the same way, whatever the method: a bundle (:mod:`tzsl.inference.model_bundles`) holds a
+fitted model whose ``attribute_scores(X)`` gives attribute scores, a fitted decision rule
 (:class:`tzsl.models.DecisionRule`), the attribute names and a feature schema. The input files
 are read into the model's input by that schema (:mod:`tzsl.inference.predict_inputs`), the
 candidate classes arrive as a *class table* (their attribute rows; the grasped object's own row
@@ -34,13 +34,12 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from tzsl._scoring import duplicate_attribute_groups, tempered_proba
 from tzsl.bundle import load_bundle, read_bundle_header
-from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
-from tzsl.inference.model_bundles import DEEP_KIND, ZERO_SHOT_KIND
-from tzsl.inference.predict_inputs import INPUT_FORMATS, describe_inputs, read_inputs
-from tzsl.models import DecisionRule, NearestAttributeRule
-from tzsl.models.multigrasp import sc_mdap
-from tzsl.models.calibration import tempered_proba
+from tzsl.exceptions import DataFileError, ModelBundleError
+from tzsl.inference.bundle_kinds import DEEP_KIND, ZERO_SHOT_KIND
+from tzsl.inference.linear_bundles import LinearAttributeModel, LinearRule, read_linear_payload
+from tzsl.inference.predict_inputs import INPUT_FORMATS, describe_inputs
 
 __all__ = [
     "PREDICT_KINDS",
@@ -48,7 +47,6 @@ __all__ = [
     "Predictor",
     "format_prediction",
     "load_predictor",
-    "predict_grasps",
     "prediction_report",
     "read_class_table",
     "top_ties",
@@ -69,7 +67,9 @@ class Predictor:
     Attributes
     ----------
     model : fitted estimator with ``attribute_scores(X)``
+        Or, for a linear bundle, a :class:`~tzsl.inference.linear_bundles.LinearAttributeModel`.
     rule : fitted DecisionRule
+        Or, for a linear bundle, a :class:`~tzsl.inference.linear_bundles.LinearRule`.
     attribute_names : list of str, length m
     input : dict
         Feature schema (:mod:`tzsl.inference.predict_inputs`).
@@ -81,7 +81,7 @@ class Predictor:
     """
 
     model: Any
-    rule: DecisionRule
+    rule: Any
     attribute_names: list[str]
     input: dict
     metadata: dict
@@ -102,7 +102,9 @@ class Predictor:
         fitted = self.calibration_report()
         calibrated = (f"calibrated (temperature {fitted['temperature']:.3g})" if fitted["calibrated"]
                       else "uncalibrated")
-        return (f"{self.metadata.get('method', self.kind)} ({type(inner).__name__} + {type(self.rule).__name__}), "
+        parts = (f"{self.model.name} + {self.rule.name} rule, as arrays" if isinstance(self.model, LinearAttributeModel)
+                 else f"{type(inner).__name__} + {type(self.rule).__name__}")
+        return (f"{self.metadata.get('method', self.kind)} ({parts}), "
                 f"{len(self.attribute_names)} attributes, {calibrated} posteriors; input: {self.inputs}")
 
     @property
@@ -143,8 +145,11 @@ def _checked(payload: Any, metadata: dict) -> Predictor:
             raise ModelBundleError(f"{where}: the calibration is not a dict with a positive temperature ({calibration!r})")
     if not callable(getattr(model, "attribute_scores", None)):
         raise ModelBundleError(f"{where}: the model ({type(model).__name__}) has no attribute_scores(X)")
-    if not isinstance(rule, DecisionRule) or not hasattr(rule, "n_attributes_"):
-        raise ModelBundleError(f"{where}: the decision rule is not a fitted DecisionRule ({type(rule).__name__})")
+    if not isinstance(rule, LinearRule):
+        from tzsl.models import DecisionRule  # noqa: PLC0415 - estimator payloads import scikit-learn anyway
+
+        if not isinstance(rule, DecisionRule) or not hasattr(rule, "n_attributes_"):
+            raise ModelBundleError(f"{where}: the decision rule is not a fitted DecisionRule ({type(rule).__name__})")
     missing = [k for k in ("attribute_names", "input") if k not in metadata]
     if missing:
         raise ModelBundleError(f"{where}: zero-shot bundle metadata lacks {missing}")
@@ -177,6 +182,7 @@ def load_predictor(path: str | Path, *, trust_pickle: bool = False) -> Predictor
     """
     kind = read_bundle_header(path).kind  # verified, nothing deserialised yet
     if kind == DEEP_KIND:
+        from tzsl.models import NearestAttributeRule  # noqa: PLC0415
         from tzsl.models.embedding import load_deep_bundle  # noqa: PLC0415 - needs the deep extra
 
         model = load_deep_bundle(path, trust_pickle=trust_pickle)
@@ -191,6 +197,14 @@ def load_predictor(path: str | Path, *, trust_pickle: bool = False) -> Predictor
         raise ModelBundleError(f"{path}: no predictor for bundles of kind {kind!r}{hint} (known: {list(PREDICT_KINDS)}); "
                                "re-save models of older tzsl versions with this one")
     payload, metadata = load_bundle(path, expected_kind=kind, trust_pickle=trust_pickle)
+    if metadata["bundle"]["payload_format"] == "npz":  # a linear model's arrays: numpy alone
+        names = metadata.get("attribute_names")
+        if not isinstance(names, list):
+            raise ModelBundleError(f"{path}: zero-shot bundle metadata lacks ['attribute_names']")
+        model, rule, calibration = read_linear_payload(payload, len(names), str(path))
+        payload = {"model": model, "decision_rule": rule}
+        if calibration is not None:
+            payload["calibration"] = calibration
     return _checked(payload, metadata)
 
 
@@ -282,8 +296,6 @@ def read_class_table(path: str | Path, attribute_names: Sequence[str], *,
 
 def _class_table_notes(path: Path, table: pd.DataFrame, ignored: list[str]) -> list[str]:
     """The notes of :func:`read_class_table` (``ignored``: its columns the model left out)."""
-    from tzsl.evaluation import duplicate_attribute_groups  # noqa: PLC0415
-
     notes = []
     if ignored:
         notes.append(f"{path}: attribute(s) {ignored} ignored: the model left them out (its bundle's "
@@ -299,7 +311,7 @@ def _class_table_notes(path: Path, table: pd.DataFrame, ignored: list[str]) -> l
 # ---------------------------------------------------------------------------- prediction
 @dataclass
 class Prediction:
-    """Result of :func:`predict_grasps`.
+    """Result of :meth:`tzsl.inference.Recogniser.add` (and ``tzsl predict``): grasps and their fused decision.
 
     Attributes
     ----------
@@ -340,56 +352,6 @@ class Prediction:
     final_posteriors: np.ndarray | None = None
     running: np.ndarray | None = None
     notes: list[str] = field(default_factory=list)
-
-
-def predict_grasps(
-    predictor: Predictor, classes: pd.DataFrame, inputs: Sequence[str | Path], *, mode: str = "sc", k: int = 3
-) -> Prediction:
-    """Classify the grasps in ``inputs`` among ``classes`` and fuse them (SC-MDAP or DF-MDAP).
-
-    Parameters
-    ----------
-    predictor : Predictor
-        From :func:`load_predictor`.
-    classes : DataFrame of shape (c, m)
-        From :func:`read_class_table` (columns in the model's attribute order).
-    inputs : sequence of paths
-        In arrival order, read by the predictor's feature schema.
-    mode : {"sc", "df"}
-    k : int
-        Equal classifications SC-MDAP needs.
-    """
-    if mode not in ("sc", "df"):
-        raise ConfigError(f"fusion mode must be 'sc' (SC-MDAP) or 'df' (DF-MDAP), got {mode!r}")
-    if not isinstance(k, int | np.integer) or k < 1:
-        raise ConfigError(f"k must be a positive integer, got {k!r}")
-    if list(classes.columns) != predictor.attribute_names:
-        raise ConfigError("class table columns are not in the model's attribute order; read it with read_class_table")
-    K = classes.to_numpy(dtype=float)
-    grasps = read_inputs(predictor.input, inputs)
-    S = np.asarray(predictor.model.attribute_scores(grasps.X), dtype=float)
-    n = grasps.X.shape[0]
-    if S.shape[0] != n or S.shape[-1] != len(predictor.attribute_names):
-        raise ModelBundleError(f"{_where(predictor.metadata)}: the model returned attribute scores of shape "
-                               f"{S.shape} for {n} grasps and {len(predictor.attribute_names)} attributes")
-    scores = predictor.class_scores(S, K)
-    decisions = scores.argmax(axis=1)
-    final_p = running = None
-    if mode == "sc":
-        d, used, ok = sc_mdap(decisions[None, :], int(k))
-        final, n_used, decided = int(d[0]), int(used[0]), bool(ok[0])
-    else:
-        steps = np.arange(1, n + 1).reshape((n,) + (1,) * (S.ndim - 1))
-        run_scores = predictor.class_scores(np.cumsum(S, axis=0) / steps, K)  # super grasp of the first t grasps
-        running = run_scores.argmax(axis=1)
-        final_p = predictor.posteriors(run_scores[-1])
-        final, n_used, decided = int(running[-1]), n, True
-    return Prediction(
-        classes=[str(c) for c in classes.index], grasp_ids=list(grasps.grasp_ids), sources=list(grasps.sources),
-        info=list(grasps.info), grasp_posteriors=predictor.posteriors(scores), decisions=decisions, mode=mode, k=int(k),
-        decided=decided, n_used=n_used, final=final, final_posteriors=final_p, running=running,
-        notes=list(classes.attrs.get("notes", [])) + list(grasps.notes),
-    )
 
 
 def top_ties(p: np.ndarray) -> np.ndarray:

@@ -17,7 +17,7 @@ one JSON-serialisable dict (the ``--json`` output).
 from __future__ import annotations
 
 import inspect
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -26,15 +26,15 @@ import pandas as pd
 from tzsl.bundle import load_bundle, save_bundle
 from tzsl.datasets import FeatureSet
 from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
+from tzsl.inference.bundle_kinds import PER_EP_KIND
 from tzsl.inference.model_bundles import feature_schema
 from tzsl.inference.predict_inputs import read_feature_rows
 from tzsl.models import PerEPAttributeModel
 from tzsl.models.active_touch import ep_column_blocks, suggest_next_ep
 
-__all__ = ["PER_EP_KIND", "active_report", "format_active_report", "load_per_ep_model", "train_per_ep_bundle"]
+__all__ = ["PER_EP_KIND", "active_report", "active_report_from_features", "format_active_report", "load_per_ep_model",
+           "train_per_ep_bundle"]
 
-#: Bundle kind of a saved :class:`~tzsl.models.PerEPAttributeModel`.
-PER_EP_KIND = "per-ep"
 
 
 def train_per_ep_bundle(features: FeatureSet, save, *, seed: int = 0, cv: int | None = None,
@@ -150,9 +150,42 @@ def active_report(model: PerEPAttributeModel, metadata: dict, classes: pd.DataFr
         ``candidates`` (list of ``{"ep", "seconds", "expected_gain_bits"}``, best first), ``posterior``
         (``{"tempering", "exponent", "untempered_top_probability", "fitted_on"}``).
     """
+    done, trial = _done_rows(Path(features_file), model, metadata["input"], list(eps_done))
+    return active_report_from_features(model, metadata, classes, done, trial, threshold=threshold, max_eps=max_eps,
+                                       max_seconds=max_seconds, n_samples=n_samples, random_state=random_state)
+
+
+def active_report_from_features(model: PerEPAttributeModel, metadata: dict, classes: pd.DataFrame,
+                                done: Mapping[str, np.ndarray], trial: str, *, threshold: float | None = None,
+                                max_eps: int | None = None, max_seconds: float | None = None, n_samples: int = 256,
+                                random_state=0) -> dict:
+    """:func:`active_report` of feature arrays already read.
+
+    Parameters
+    ----------
+    done : mapping of str -> ndarray of shape (n_sensors, n_ep_features)
+        Each EP done so far -> its features on this object (that EP's columns, in the bundle's
+        feature order, units of training).
+    trial : str
+        Name of the object being explored (the report's ``trial``).
+    model, metadata, classes, threshold, max_eps, max_seconds, n_samples, random_state
+        As :func:`active_report`.
+
+    Raises
+    ------
+    ConfigError
+        An unknown EP, none done, or an array of the wrong shape.
+    """
     if threshold is None:
         threshold = float(inspect.signature(suggest_next_ep).parameters["threshold"].default)
-    done, trial = _done_rows(Path(features_file), model, metadata["input"], list(eps_done))
+    unknown = [ep for ep in done if ep not in model.eps_]
+    if unknown or not done:
+        raise ConfigError(f"EPs done: unknown EP(s) {unknown}; the model knows {list(model.eps_)}")
+    for ep, features in done.items():
+        shape = (model.n_sensors_, len(model.ep_columns[ep]))
+        if np.shape(features) != shape:
+            raise ConfigError(f"EP {ep!r}: features of shape {np.shape(features)}; the model needs {shape} "
+                              "(sensors x that EP's features)")
     report = suggest_next_ep(model, classes.to_numpy(dtype=int), done, class_names=list(classes.index),
                              threshold=threshold, max_eps=max_eps, max_seconds=max_seconds, n_samples=n_samples,
                              random_state=random_state)

@@ -38,9 +38,9 @@ import pandas as pd
 
 from tzsl._io import read_npz
 from tzsl.datasets import read_csv_table, read_grasps, read_signal_file, signal_from_arrays
-from tzsl.exceptions import DataFileError, ModelBundleError
+from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
 
-__all__ = ["INPUT_FORMATS", "Grasps", "describe_inputs", "read_feature_rows", "read_inputs"]
+__all__ = ["INPUT_FORMATS", "Grasps", "describe_inputs", "grasp_model_input", "read_feature_rows", "read_inputs"]
 
 #: Feature-schema formats :func:`read_inputs` reads.
 INPUT_FORMATS: tuple[str, ...] = ("features", "hand-grasps", "frames")
@@ -103,9 +103,49 @@ def read_inputs(schema: dict, inputs: Sequence[str | Path]) -> Grasps:
     ids = [i for _, trial_ids in parts for i in trial_ids]
     sources = [str(p) for p, (_, trial_ids) in zip(inputs, parts, strict=True) for _ in trial_ids]
     info = [f"{X.shape[1]} sensor{'s' if X.shape[1] > 1 else ''}"] * X.shape[0]
-    if int(schema.get("ndim", 3)) == 2:
-        X = X.reshape(X.shape[0], -1)
-    return Grasps(X, ids, sources, info)
+    return Grasps(_model_layout(X, schema), ids, sources, info)
+
+
+def _model_layout(X: np.ndarray, schema: dict) -> np.ndarray:
+    """Feature rows (n, s, d) in the model's layout: as they are (``ndim`` 3) or sensors side by side (2)."""
+    return X.reshape(X.shape[0], -1) if int(schema.get("ndim", 3)) == 2 else X
+
+
+def grasp_model_input(schema: dict, features: np.ndarray) -> np.ndarray:
+    """One grasp's feature array as the model input of a ``"features"`` schema.
+
+    Parameters
+    ----------
+    schema : dict
+        The bundle's feature schema (``format`` ``"features"``).
+    features : array-like of shape (n_sensors, n_features)
+        The grasp's features, rows in the schema's ``sensors`` order, columns in its
+        ``feature_names`` order, in the units of the training features (a one-sensor model also
+        takes shape (n_features,)).
+
+    Returns
+    -------
+    ndarray of shape (1, n_sensors, n_features) or (1, n_sensors * n_features)
+        As :func:`read_inputs` gives one grasp (``ndim`` 3 or 2).
+
+    Raises
+    ------
+    ConfigError
+        Another input format, a wrong shape, or NaN / infinite values.
+    """
+    if schema.get("format") != "features":
+        raise ConfigError(f"this model reads {describe_inputs(schema)}: give the grasp's file, not an array")
+    shape = (len(schema["sensors"]), len(schema["feature_names"]))
+    try:
+        X = np.asarray(features, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ConfigError(f"grasp features must be numbers of shape {shape} (sensors x features)") from None
+    if X.shape != shape and not (shape[0] == 1 and X.shape == shape[1:]):
+        raise ConfigError(f"grasp features have shape {X.shape}; the model needs {shape} "
+                          f"(sensors {list(schema['sensors'])} x {shape[1]} features)")
+    if not np.isfinite(X).all():
+        raise ConfigError("grasp features hold NaN or infinite values")
+    return _model_layout(X.reshape((1, *shape)), schema)
 
 
 # ---------------------------------------------------------------------------- feature rows

@@ -26,6 +26,8 @@ from sklearn.base import BaseEstimator
 from sklearn.preprocessing import StandardScaler
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from tzsl._scoring import linear_embedding
+
 
 __all__ = ["EmbeddingAttributeModel", "attribute_model_tags", "attribute_table_tags"]
 
@@ -76,10 +78,20 @@ class EmbeddingAttributeModel(BaseEstimator):
             Real scores, compared with class attribute rows by the method's decision rule.
         """
         check_is_fitted(self)
-        X = validate_data(self, X, reset=False, dtype=np.float64)
-        if self.scaler_ is not None:
-            X = self.scaler_.transform(X)
-        return X @ self.coef_.T
+        return linear_embedding(validate_data(self, X, reset=False, dtype=np.float64), **self.linear_map())
+
+    def linear_map(self) -> dict[str, np.ndarray]:
+        """The fitted map as arrays, so that ``decision_function(X) == linear_embedding(X, **linear_map())``.
+
+        Returns
+        -------
+        dict
+            ``weights`` (n_features, n_attributes) (``coef_.T``) and, when standardised, the
+            scaler's ``mean`` and ``scale`` (n_features,).
+        """
+        check_is_fitted(self)
+        scaler = {} if self.scaler_ is None else {"mean": self.scaler_.mean_, "scale": self.scaler_.scale_}
+        return {"weights": self.coef_.T, **scaler}
 
     def predict(self, X) -> np.ndarray:
         """Same as :meth:`decision_function`: (n_trials, n_attributes) real scores."""

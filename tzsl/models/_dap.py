@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from tzsl.exceptions import ConfigError, DataFileError
-from tzsl.models._probabilities import valid_probabilities
+from tzsl._scoring import valid_probabilities
 
 __all__ = [
     "attribute_prior",

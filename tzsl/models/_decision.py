@@ -34,6 +34,7 @@ from sklearn.base import BaseEstimator
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
+from tzsl._scoring import class_posteriors, compatibility_scores, cosine_similarities, squared_distances
 from tzsl.exceptions import ConfigError, DataFileError
 from tzsl.models._dap import (
     DEFAULT_EPS,
@@ -44,7 +45,6 @@ from tzsl.models._dap import (
     dap_log_scores,
     fuse_attribute_posteriors,
 )
-from tzsl.models._probabilities import class_posteriors
 from tzsl.models._validation import ValidatedParamsMixin
 
 __all__ = [
@@ -59,21 +59,6 @@ __all__ = [
 
 #: Kinds of attribute scores an attribute model can give (its ``score_kind`` class attribute).
 SCORE_KINDS = ("probability", "embedding")
-
-
-def squared_distances(F: np.ndarray, L: np.ndarray) -> np.ndarray:
-    """Squared Euclidean distances between rows, ``||f_i - l_c||^2``.
-
-    Parameters
-    ----------
-    F : ndarray of shape (n, m)
-    L : ndarray of shape (k, m)
-
-    Returns
-    -------
-    ndarray of shape (n, k)
-    """
-    return (F**2).sum(axis=1)[:, None] - 2.0 * F @ L.T + (L**2).sum(axis=1)[None, :]
 
 
 def check_real_class_attributes(K, n_attributes: int | None = None, what: str = "class-attribute table"):
@@ -264,7 +249,7 @@ class CompatibilityRule(DecisionRule):
     _parameter_constraints: dict = {}
 
     def _class_scores(self, scores, K) -> np.ndarray:
-        return self._check_scores(scores) @ K.T
+        return compatibility_scores(self._check_scores(scores), K)
 
 
 class NearestAttributeRule(DecisionRule):
@@ -288,21 +273,3 @@ class NearestAttributeRule(DecisionRule):
         if self.metric == "sqeuclidean":
             return -squared_distances(F, K)
         return cosine_similarities(F, K)
-
-
-def cosine_similarities(F: np.ndarray, K: np.ndarray) -> np.ndarray:
-    """Cosine similarity of estimated attribute vectors with class rows.
-
-    Parameters
-    ----------
-    F : ndarray of shape (n_trials, n_attributes)
-    K : ndarray of shape (n_classes, n_attributes)
-
-    Returns
-    -------
-    ndarray of shape (n_trials, n_classes), values in [-1, 1]
-        An all-zero vector (either side) has similarity 0 to everything.
-    """
-    nf = np.linalg.norm(F, axis=1, keepdims=True)
-    nk = np.linalg.norm(K, axis=1, keepdims=True)
-    return (F / np.where(nf > 0, nf, 1.0)) @ (K / np.where(nk > 0, nk, 1.0)).T

@@ -64,7 +64,7 @@ from tzsl.models._deep_input import (
 )
 from tzsl.models._deep_training import DeepTrainingMixin
 from tzsl.models._embedding import loss_weights
-from tzsl.models._probabilities import class_posteriors
+from tzsl._scoring import class_posteriors
 from tzsl.models._zsl_input import (
     ZSLInputError,
     check_int,

@@ -38,6 +38,7 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
+from tzsl._scoring import linear_embedding
 from tzsl.models._attribute_model_base import attribute_table_tags
 from tzsl.models._validation import ParameterError, ValidatedParamsMixin
 from tzsl.models._zsl_input import (
@@ -137,6 +138,34 @@ _COMMON_CONSTRAINTS: dict = {"standardize": ["boolean"]}
 class _ESZSLBase(AttributeEmbeddingModel):
     def _embed(self, X):
         return X @ self.coef_
+
+    def decision_function(self, X) -> np.ndarray:
+        """Attribute-space scores ``standardise(X) @ coef_`` (:func:`tzsl.models.protocol.linear_embedding`).
+
+        Parameters
+        ----------
+        X : array-like of shape (n_samples, n_features)
+            Features, in the units they were fitted with.
+
+        Returns
+        -------
+        ndarray of shape (n_samples, n_attributes)
+        """
+        check_is_fitted(self)
+        return linear_embedding(validate_features(self, X, reset=False), **self.linear_map())
+
+    def linear_map(self) -> dict[str, np.ndarray]:
+        """The fitted map as arrays, so that ``decision_function(X) == linear_embedding(X, **linear_map())``.
+
+        Returns
+        -------
+        dict
+            ``weights`` (n_features, n_attributes) and, when standardised, the scaler's ``mean``
+            and ``scale`` (n_features,).
+        """
+        check_is_fitted(self)
+        scaler = {} if self.scaler_ is None else {"mean": self.scaler_.mean_, "scale": self.scaler_.scale_}
+        return {"weights": self.coef_, **scaler}
 
     def _start_fit(self, X, Y, groups):
         X, Y = validate_features_and_rows(self, X, Y)

@@ -27,6 +27,7 @@ import pandas as pd
 from sklearn.utils import check_random_state
 
 from tzsl.exceptions import ConfigError
+from tzsl._scoring import sc_mdap
 from tzsl.models._dap import dap_log_scores
 
 __all__ = [
@@ -78,61 +79,6 @@ def df_mdap_log_scores(P_ldap: np.ndarray, K: np.ndarray | pd.DataFrame, prior: 
         raise ConfigError(f"P_ldap must have shape (n_sequences, T, m), got {P.shape}")
     K = np.asarray(K, dtype=float)
     return dap_log_scores(df_mdap(P), K, np.full(P.shape[-1], float(prior)))
-
-
-def sc_mdap(decisions: np.ndarray, k_equal: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """SC-MDAP: stop at the first class decided ``k_equal`` times.
-
-    Parameters
-    ----------
-    decisions : array-like of int, shape (..., T)
-        Per-grasp class decisions (class indices >= 0, e.g. LDAP argmax), in grasp order.
-    k_equal : int
-        Number of equal classifications required (``k`` in the paper); ``k_equal = 1`` returns
-        the first grasp's decision.
-
-    Returns
-    -------
-    decision : ndarray of int, shape (...,)
-        The class that first reached ``k_equal`` decisions; for undecided sequences the most
-        frequent class (ties: the class reaching that count earliest).
-    n_used : ndarray of int, shape (...,)
-        Grasps used: position (1-based) of the grasp that completed ``k_equal`` decisions, or
-        ``T`` when undecided.
-    decided : ndarray of bool, shape (...,)
-        Whether some class reached ``k_equal`` within the ``T`` grasps.
-    """
-    d = np.asarray(decisions)
-    if d.ndim < 1 or d.shape[-1] < 1:
-        raise ConfigError(f"decisions must have shape (..., T) with T >= 1, got {d.shape}")
-    if not np.issubdtype(d.dtype, np.integer) or (d < 0).any():
-        raise ConfigError("decisions must be non-negative integer class indices")
-    if not isinstance(k_equal, Integral) or k_equal < 1:
-        raise ConfigError(f"k_equal must be a positive integer, got {k_equal!r}")
-    lead, T = d.shape[:-1], d.shape[-1]
-    flat = d.reshape(-1, T)
-    n = flat.shape[0]
-    n_classes = int(flat.max()) + 1
-    counts = np.zeros((n, T, n_classes), dtype=np.int64)
-    counts[np.arange(n)[:, None], np.arange(T)[None, :], flat] = 1
-    counts = counts.cumsum(axis=1)  # votes of every class after grasp t
-    own = np.take_along_axis(counts, flat[..., None], axis=2)[..., 0]  # votes of the grasp's class
-    hit = own == k_equal  # grasp t gives its class its k-th vote
-    decided = hit.any(axis=1)
-    first = np.argmax(hit, axis=1)
-    decision = flat[np.arange(n), first]
-    n_used = first + 1
-    if not decided.all():
-        und = ~decided
-        final = counts[und, -1]  # (n_und, n_classes)
-        top = final.max(axis=1)
-        # grasp at which each class reached the top count (T if never)
-        reached = counts[und] == top[:, None, None]
-        when = np.where(reached.any(axis=1), np.argmax(reached, axis=1), T)
-        when = np.where(final == top[:, None], when, T + 1)
-        decision[und] = np.argmin(when, axis=1)
-        n_used[und] = T
-    return decision.reshape(lead), n_used.reshape(lead), decided.reshape(lead)
 
 
 def sample_grasp_sequences(

@@ -52,10 +52,10 @@ from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
+from tzsl._scoring import tempered_proba
 from tzsl.models._attribute_model_base import attribute_table_tags
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_training import GridEdgeWarning
-from tzsl.models._probabilities import class_posteriors
 from tzsl.models._validation import ValidatedParamsMixin
 from tzsl.models._zsl_input import ZSLInputError, class_grouped_folds
 
@@ -80,23 +80,6 @@ LOG_T_BOUNDS = (-5.0, 5.0)
 
 class CalibrationWarning(UserWarning):
     """The calibrator could not be fitted (too few training classes): ``T = 1`` was kept."""
-
-
-def tempered_proba(scores, temperature: float) -> np.ndarray:
-    """``softmax(scores / temperature)`` over the classes.
-
-    Parameters
-    ----------
-    scores : array-like of shape (n_trials, n_classes)
-        Class scores (larger is better; DAP: log-posteriors up to a per-trial constant).
-    temperature : float > 0
-
-    Returns
-    -------
-    ndarray of shape (n_trials, n_classes)
-        Rows sum to 1.
-    """
-    return class_posteriors(scores, temperature)
 
 
 def fit_temperature(scores: list[np.ndarray], y_true: list[np.ndarray], *,

@@ -34,7 +34,7 @@ from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_svm import AttributeSVM
 from tzsl._fit_store import fit_cached
 from tzsl.models._dap import break_ties
-from tzsl.models._probabilities import class_posteriors
+from tzsl._scoring import class_posteriors
 from tzsl.models._registry import get_method
 from tzsl.models._validation import ValidatedParamsMixin
 

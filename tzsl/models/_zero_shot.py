@@ -29,7 +29,7 @@ from sklearn.utils.validation import check_is_fitted
 from tzsl.models._attribute_model_base import attribute_table_tags
 from tzsl.exceptions import ConfigError
 from tzsl.models._decision import SCORE_KINDS
-from tzsl.models._probabilities import valid_probabilities
+from tzsl._scoring import valid_probabilities
 from tzsl.models._validation import ValidatedParamsMixin
 
 __all__ = ["ZeroShotClassifier", "score_kind"]

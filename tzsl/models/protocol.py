@@ -5,11 +5,11 @@ Every zero-shot estimator of :mod:`tzsl.models` fits ``fit(X, A, groups)`` on at
 classes are the distinct rows (:func:`training_classes`), and its internal cross-validation
 deals whole classes into folds (:func:`class_grouped_folds`, at least :data:`MIN_CV_CLASSES`
 classes). An attribute model declares what its scores are (:func:`score_kind`); the decision
-rules compare them with class rows (:func:`squared_distances`, :func:`cosine_similarities`) and
-the score ensemble puts its members on one scale (:func:`zscore_rows`).
+rules compare them with class rows (:func:`compatibility_scores`, :func:`squared_distances`,
+:func:`cosine_similarities`; the linear models' scores are :func:`linear_embedding`) and the score ensemble puts its members on one scale (:func:`zscore_rows`).
 """
 
-from tzsl.models._decision import cosine_similarities, squared_distances
+from tzsl._scoring import compatibility_scores, cosine_similarities, linear_embedding, squared_distances
 from tzsl.models._score_ensemble import zscore_rows
 from tzsl.models._zero_shot import score_kind
 from tzsl.models._zsl_input import MIN_CV_CLASSES, attribute_rows, class_grouped_folds, training_classes
@@ -18,7 +18,9 @@ __all__ = [
     "MIN_CV_CLASSES",
     "attribute_rows",
     "class_grouped_folds",
+    "compatibility_scores",
     "cosine_similarities",
+    "linear_embedding",
     "score_kind",
     "squared_distances",
     "training_classes",
