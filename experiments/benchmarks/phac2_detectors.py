@@ -14,7 +14,7 @@ uniform prior:
 
 Per split and detector: trial accuracy, mean attribute balanced accuracy on the test objects,
 the within-object correlation of attribute errors (:func:`tzsl.evaluation.within_object_error_correlation`,
-0/1 errors of the sensor-averaged posterior), the share of (attribute, sensor) fits whose ``C``
+0/1 errors of the sensor-averaged posterior; over objects and, ``_trial``, over trials), the share of (attribute, sensor) fits whose ``C``
 sits at an end of the final grid, CPU seconds of the fits, and for ``auto`` the family chosen.
 Output: ``detectors.csv`` (one row per split and detector) and ``detectors_summary.csv`` (mean
 per split kind and detector, with the paired difference to ``rbf-svm`` and its two-level
@@ -61,8 +61,11 @@ DETECTORS = (
 )
 
 
-def score_split(features, split, config: DapSettings, index: int, labels: list[str]) -> list[dict]:
-    """Fit every detector of ``labels`` on the split's training objects; one result row each."""
+def score_split(features, split, config: DapSettings, index: int, labels: list[str], out: Path) -> list[dict]:
+    """Fit every detector of ``labels`` on the split's training objects; one result row each.
+
+    The test posteriors go to ``out / "<split>_<detector>.npz"`` (``P`` (n, s, m), ``A``, ``groups``, ``y``, ``K``).
+    """
     attributes = list(split.kept_attributes)
     train, test = split_masks(features, split)
     A = features.attributes.loc[features.objects, attributes].to_numpy(dtype=int)
@@ -80,6 +83,7 @@ def score_split(features, split, config: DapSettings, index: int, labels: list[s
         bank.fit(features.X[train], A[train], groups[train])
         cpu = time.process_time() - start
         P = bank.predict_proba(features.X[test])
+        np.savez(out / f"{split.name}_{label}.npz", P=P, A=A[test], groups=groups[test], y=y, K=K)
         present, absent = fuse_attribute_posteriors(P, "avg")
         scores = dap_log_scores(present, K, np.full(K.shape[1], 0.5), P_absent=absent)
         correct = break_ties(scores, random_state=seed) == y
@@ -89,6 +93,7 @@ def score_split(features, split, config: DapSettings, index: int, labels: list[s
             "split": split.name, "detector": label, "fitted": bank.detector_, "accuracy": correct.mean(),
             "attribute_bacc": np.nanmean(per_attribute_balanced_accuracy(A[test], hard)),
             "error_correlation": within_object_error_correlation(A[test], hard, groups[test]),
+            "error_correlation_trial": within_object_error_correlation(A[test], hard, groups[test], level="trial"),
             "at_grid_edge": np.mean(edges), "cpu_seconds": cpu,
             "auto_scores": str(bank.detector_choice_.get("scores", "")),
             "correct": correct, "classes": groups[test],
@@ -116,6 +121,7 @@ def summary(rows: pd.DataFrame) -> pd.DataFrame:
                         "ci95_low": acc[1], "ci95_high": acc[2], f"minus_{reference}": diff[0],
                         "diff_low": diff[1], "diff_high": diff[2], "attribute_bacc": part["attribute_bacc"].mean(),
                         "error_correlation": part["error_correlation"].mean(),
+                        "error_correlation_trial": part["error_correlation_trial"].mean(),
                         "at_grid_edge": part["at_grid_edge"].mean(), "cpu_seconds": part["cpu_seconds"].mean(),
                         "fitted": ",".join(sorted(set(part["fitted"])))})
     return pd.DataFrame(out)
@@ -140,10 +146,10 @@ def main() -> None:
         if args.no_challenging and kind == "challenging":
             continue
         config = DapSettings(splits={"n_splits": args.n_random, "seed": args.seed, "purpose": args.purpose},
-                             compute={"cache": False, "n_jobs": 1}, svm={"cv": 5})
-        rows += [{"kind": kind, **r} for r in score_split(features, split, config, index, args.detectors)]
-    table = pd.DataFrame(rows)
-    table.drop(columns=["correct", "classes"]).to_csv(args.out / "detectors.csv", index=False)
+                             compute={"cache": False, "n_jobs": 1, "progress": False}, svm={"cv": 5})
+        rows += [{"kind": kind, **r} for r in score_split(features, split, config, index, args.detectors, args.out)]
+        table = pd.DataFrame(rows)
+        table.drop(columns=["correct", "classes"]).to_csv(args.out / "detectors.csv", index=False)  # after each split
     result = summary(table)
     result.to_csv(args.out / "detectors_summary.csv", index=False)
     with pd.option_context("display.width", 200, "display.max_columns", 20):

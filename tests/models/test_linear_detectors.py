@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from sklearn.preprocessing import StandardScaler
+from sklearn.utils.estimator_checks import parametrize_with_checks
 
 import tzsl.models._linear_attribute as linear_module
 from tzsl.exceptions import ConfigError
@@ -185,3 +186,9 @@ def test_classifier_chain_takes_a_linear_detector():
     assert isinstance(link, LinearAttribute)
     assert isinstance(link.preprocessor.transformers[0][1], StandardScaler)  # z-score, not the SVM's PCA
     assert np.mean((chain.predict_proba(X).mean(axis=1) >= 0.5) == A) > 0.8
+
+
+@parametrize_with_checks([LinearAttribute(loss="squared_hinge", cv=3, random_state=0)])
+def test_linear_svm_detector_passes_check_estimator(estimator, check):
+    """The estimator-check list holds the robust logistic detector; the linear SVM's own fit path here."""
+    check(estimator)

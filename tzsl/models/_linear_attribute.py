@@ -130,7 +130,7 @@ class LinearAttribute(PlattBinaryClassifierMixin, ValidatedParamsMixin, Classifi
         Ends of the starting log-spaced grid of ``C`` (inverse L2 strength on z-scored features,
         with trial weights summing to the number of trials).
     n_C : int, default=5
-        Points of the starting grid (5: the decades 0.001 .. 10).
+        Points of the starting grid (by default one per decade of ``C_range``).
     max_grid_extensions : int, default=MAX_GRID_EXTENSIONS
         While the chosen ``C`` is at an end of the grid, one log step is added beyond that end and
         the grid searched again (same folds; only the new points are fitted), at most this many
