@@ -12,7 +12,8 @@ uniform prior:
   (``C`` by object-grouped CV with the grid widened at its ends, Platt posteriors);
 * ``auto``: ``detector="auto"`` (RBF-SVM or logistic, chosen on pseudo-unseen training classes).
 
-Per split and detector: trial accuracy, mean attribute balanced accuracy on the test objects,
+Per split and detector: trial accuracy, the accuracy with each attribute's errors made independent
+of the other attributes' (:func:`accuracy_if_independent`), mean attribute balanced accuracy on the test objects,
 the within-object correlation of attribute errors (:func:`tzsl.evaluation.within_object_error_correlation`,
 0/1 errors of the sensor-averaged posterior; over objects and, ``_trial``, over trials), the share of (attribute, sensor) fits whose ``C``
 sits at an end of the final grid, CPU seconds of the fits, and for ``auto`` the family chosen.
@@ -61,6 +62,34 @@ DETECTORS = (
 )
 
 
+def avgdap_correct(P: np.ndarray, K: np.ndarray, y: np.ndarray, seed: int) -> np.ndarray:
+    """Per-trial correctness (n,) of AVGDAP with the uniform prior on posteriors P (n, s, m) among classes K (k, m)."""
+    present, absent = fuse_attribute_posteriors(P, "avg")
+    scores = dap_log_scores(present, K, np.full(K.shape[1], 0.5), P_absent=absent)
+    return break_ties(scores, random_state=seed) == y
+
+
+def accuracy_if_independent(P: np.ndarray, A: np.ndarray, K: np.ndarray, y: np.ndarray, seed: int,
+                            n_shuffles: int = 20) -> float:
+    """AVGDAP accuracy with the attributes' errors made independent of each other.
+
+    Each attribute's posteriors (all sensors together) are permuted among the test trials that
+    share its true value, separately per attribute: every attribute keeps its error distribution
+    given the truth, but which trial gets which error no longer depends on the other attributes.
+    Above the actual accuracy: the errors fall together on the same trials and objects.
+    """
+    rng = np.random.default_rng(seed)
+    hits = []
+    for _ in range(n_shuffles):
+        Q = P.copy()
+        for m in range(A.shape[1]):
+            for value in (0, 1):
+                rows = np.flatnonzero(A[:, m] == value)
+                Q[rows, :, m] = P[rng.permutation(rows), :, m]
+        hits.append(avgdap_correct(Q, K, y, seed).mean())
+    return float(np.mean(hits))
+
+
 def score_split(features, split, config: DapSettings, index: int, labels: list[str], out: Path) -> list[dict]:
     """Fit every detector of ``labels`` on the split's training objects; one result row each.
 
@@ -84,14 +113,13 @@ def score_split(features, split, config: DapSettings, index: int, labels: list[s
         cpu = time.process_time() - start
         P = bank.predict_proba(features.X[test])
         np.savez(out / f"{split.name}_{label}.npz", P=P, A=A[test], groups=groups[test], y=y, K=K)
-        present, absent = fuse_attribute_posteriors(P, "avg")
-        scores = dap_log_scores(present, K, np.full(K.shape[1], 0.5), P_absent=absent)
-        correct = break_ties(scores, random_state=seed) == y
+        correct = avgdap_correct(P, K, y, seed)
         hard = (P.mean(axis=1) >= 0.5).astype(int)
         edges = [bool(getattr(est, "grid_edges_", ())) for per in bank.estimators_ for est in per]
         rows.append({
             "split": split.name, "detector": label, "fitted": bank.detector_, "accuracy": correct.mean(),
             "attribute_bacc": np.nanmean(per_attribute_balanced_accuracy(A[test], hard)),
+            "accuracy_if_independent": accuracy_if_independent(P, A[test], K, y, seed),
             "error_correlation": within_object_error_correlation(A[test], hard, groups[test]),
             "error_correlation_trial": within_object_error_correlation(A[test], hard, groups[test], level="trial"),
             "at_grid_edge": np.mean(edges), "cpu_seconds": cpu,
@@ -120,6 +148,7 @@ def summary(rows: pd.DataFrame) -> pd.DataFrame:
             out.append({"kind": kind, "detector": label, "splits": len(part), "accuracy": acc[0],
                         "ci95_low": acc[1], "ci95_high": acc[2], f"minus_{reference}": diff[0],
                         "diff_low": diff[1], "diff_high": diff[2], "attribute_bacc": part["attribute_bacc"].mean(),
+                        "accuracy_if_independent": part["accuracy_if_independent"].mean(),
                         "error_correlation": part["error_correlation"].mean(),
                         "error_correlation_trial": part["error_correlation_trial"].mean(),
                         "at_grid_edge": part["at_grid_edge"].mean(), "cpu_seconds": part["cpu_seconds"].mean(),

@@ -110,7 +110,8 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         regression, linear in trials) with ``estimator``'s preprocessor, under-sampling and Platt
         weighting. ``"auto"``: exact up to ``max_exact_trials`` training trials, approximate above
         (the exact model's time grows as trials^2). The choice and its reason are in
-        ``solver_choice_`` and printed when ``progress`` is on.
+        ``solver_choice_`` and printed when ``progress`` is on. Only ``detector="rbf-svm"`` has an
+        approximate solver: the linear detectors are fitted exactly (their time is linear in trials).
     max_exact_trials : int, default=3000
         Largest training set fitted exactly by ``solver="auto"`` (the exact model's cost against
         trials is measured by ``make bench-scale``).

@@ -5,8 +5,8 @@ cross-validation on the training objects (the class-balanced log-loss of Platt-m
 scores, as the SVM's grid is scored), the grid is widened at whichever end the choice sits
 (:func:`~tzsl.models._attribute_search.adaptive_grid_search`, as ``grid="adaptive"``) so that it
 contains its optimum, and the posterior is Platt's sigmoid of the linear score fitted on the
-out-of-fold scores of training objects. No kernel and no under-sampling: a fit is linear in trials
-(a PHAC-2 (attribute, sensor) fit takes milliseconds; 100k trials take seconds).
+out-of-fold scores of training objects. No kernel and no under-sampling: a fit's time is linear in
+trials (``weighting="robust"`` multiplies it by ``robust_rounds + 1``).
 
 A flexible RBF kernel can recognise which training object a test trial resembles and then
 predicts that object's attributes together; a linear detector is pushed toward the attribute's
