@@ -152,6 +152,12 @@ def test_auto_records_its_choice_and_pins_it():
     assert bank.selected_params() == {"detector": best, "estimator": None}
 
 
+def test_auto_refuses_too_few_training_classes_with_its_own_message():
+    X, A, g, _ = bank_problem(n_obj=6, m=1)  # 2 distinct rows, each held by 3 objects
+    with pytest.raises(ValueError, match="detector='auto' cannot choose"):
+        AttributeClassifierBank(detector="auto", detector_candidates=("logistic",), memory=False).fit(X, A, g)
+
+
 def test_auto_with_a_given_svm_template_can_choose_a_linear_family():
     """The estimator is the rbf-svm candidate's template: a linear choice fits without it (it once raised)."""
     X, A, g, _ = bank_problem(n_obj=12)

@@ -26,6 +26,7 @@ from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_svm import AttributeSVM
 from tzsl.models._attribute_training import GridEdgeWarning, default_preprocessor
 from tzsl.models._linear_attribute import LinearAttribute
+from tzsl.models._zsl_input import ZSLInputError
 
 __all__ = ["AUTO_CANDIDATES", "AUTO_FOLDS", "DETECTORS", "LINEAR_DETECTORS", "choose_detector",
            "detector_preprocessor", "detector_template"]
@@ -122,6 +123,11 @@ def choose_detector(bank, X: np.ndarray, A: np.ndarray, groups, candidates=AUTO_
     random_state : int or None
         Seeds the fold dealing (and the candidates' fits).
 
+    Raises
+    ------
+    ZSLInputError
+        Fewer than 4 training classes (no pseudo-unseen fold can be formed).
+
     Returns
     -------
     dict
@@ -144,8 +150,12 @@ def choose_detector(bank, X: np.ndarray, A: np.ndarray, groups, candidates=AUTO_
                                  random_state=random_state)
         with warnings.catch_warnings():  # the folds' grid edges are not the final fit's
             warnings.simplefilter("ignore", GridEdgeWarning)
-            folds = pseudo_unseen_scores(zsl, X, A, groups, n_folds=n_folds, random_state=random_state,
-                                         score=lambda fitted, Xh, Kh: (*_held_out_terms(fitted, Xh, Kh), Kh))
+            try:
+                folds = pseudo_unseen_scores(zsl, X, A, groups, n_folds=n_folds, random_state=random_state,
+                                             score=lambda fitted, Xh, Kh: (*_held_out_terms(fitted, Xh, Kh), Kh))
+            except ZSLInputError as exc:
+                raise ZSLInputError(f"detector='auto' cannot choose on pseudo-unseen training classes ({exc}); "
+                                    "give the detector family") from None
         hits, losses, n_held = 0, [], 0
         for (class_scores, P, K), y, _ in folds:
             hits += int(np.sum(np.argmax(class_scores, axis=1) == y))
