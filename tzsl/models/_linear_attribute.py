@@ -6,7 +6,7 @@ scores, as the SVM's grid is scored), the grid is widened at whichever end the c
 (:func:`~tzsl.models._attribute_search.adaptive_grid_search`, as ``grid="adaptive"``) so that it
 contains its optimum, and the posterior is Platt's sigmoid of the linear score fitted on the
 out-of-fold scores of training objects. No kernel and no under-sampling: a fit's time is linear in
-trials (``weighting="robust"`` multiplies it by ``robust_rounds + 1``).
+trials (``weighting="robust"`` adds ``(robust_rounds + 1) * (folds + 1)`` fits at the chosen ``C``).
 
 A flexible RBF kernel can recognise which training object a test trial resembles and then
 predicts that object's attributes together; a linear detector is pushed toward the attribute's
@@ -165,13 +165,16 @@ class LinearAttribute(PlattBinaryClassifierMixin, ValidatedParamsMixin, Classifi
     C_grid_ : ndarray of shape (n_C_searched,)
         The final, possibly widened, grid (increasing).
     cv_scores_ : ndarray of shape (n_C_searched,)
-        Grouped-CV class-balanced log-loss (nats) of each ``C`` (lower is better).
+        Grouped-CV class-balanced log-loss (nats) of each ``C`` (lower is better); with
+        ``weighting="robust"``, of the object-weighted fits (``C`` is chosen without the robust
+        rounds, which then run at that ``C`` only: the search costs no more than ``"object"``).
     grid_edges_ : list of (str, float, str)
         ``("C", value, "low" | "high")`` if the choice is still at an end after every extension.
     platt_ : (float, float)
         Sigmoid ``p = expit(a * s + b)`` on the linear score ``s``.
     oof_scores_ : ndarray of shape (n_train,)
-        Out-of-fold linear scores of the training trials for the chosen ``C``.
+        Out-of-fold linear scores of the training trials for the chosen ``C`` (of the robust fits
+        with ``weighting="robust"``); ``platt_`` is fitted on them.
     sample_weight_ : ndarray of shape (n_train,)
         Trial weights of the final fit.
     """
@@ -211,16 +214,25 @@ class LinearAttribute(PlattBinaryClassifierMixin, ValidatedParamsMixin, Classifi
             raise ParameterError(f"The 'C_range' parameter of {type(self).__name__} must be (low, high) with "
                                  f"0 < low <= high. Got {self.C_range!r} instead.")
 
-    def _weights(self, C: float, Z: np.ndarray, yb: np.ndarray, groups: np.ndarray, seed: int) -> np.ndarray:
-        """Trial weights of one fit (``weighting``); shape (n,)."""
+    def _weights(self, C: float, Z: np.ndarray, yb: np.ndarray, groups: np.ndarray, seed: int,
+                 robust: bool) -> np.ndarray:
+        """Trial weights of one fit (``weighting``; the robust rounds only if ``robust``); shape (n,)."""
         if self.weighting == "class":
             return balanced_sample_weights(yb)
-        rounds = self.robust_rounds if self.weighting == "robust" else 0
+        rounds = self.robust_rounds if robust and self.weighting == "robust" else 0
         return robust_object_weights(self.loss, C, Z, yb, groups, rounds, self.robust_step, seed)
 
-    def _fit_weighted(self, C: float, Z, yb, groups, seed: int) -> tuple[object, np.ndarray]:
-        w = self._weights(C, Z, yb, groups, seed)
+    def _fit_weighted(self, C: float, Z, yb, groups, seed: int, robust: bool = True) -> tuple[object, np.ndarray]:
+        w = self._weights(C, Z, yb, groups, seed, robust)
         return _linear_fit(self.loss, C, Z, yb, w, seed), w
+
+    def _oof(self, C: float, Z, yb, groups, folds, seed: int, robust: bool) -> np.ndarray:
+        """Out-of-fold linear scores (n,) of the training trials for one ``C``."""
+        scores = np.empty(yb.size)
+        for fold in folds:
+            model, _ = self._fit_weighted(C, Z[~fold], yb[~fold], groups[~fold], seed, robust)
+            scores[fold] = model.decision_function(Z[fold])
+        return scores
 
     def fit(self, X, y, groups=None):
         """Fit on the training trials of one attribute and one sensor.
@@ -256,14 +268,10 @@ class LinearAttribute(PlattBinaryClassifierMixin, ValidatedParamsMixin, Classifi
                      else object_balanced_weights(yb, groups))
             oof: dict[float, np.ndarray] = {}
 
-            def search(Cs: np.ndarray, _gammas: np.ndarray):
+            def search(Cs: np.ndarray, _gammas: np.ndarray):  # C is chosen without the robust rounds
                 for C in Cs:
                     if float(C) not in oof:
-                        scores = np.empty(yb.size)
-                        for fold in folds:
-                            model, _ = self._fit_weighted(float(C), Z[~fold], yb[~fold], groups[~fold], fit_seed)
-                            scores[fold] = model.decision_function(Z[fold])
-                        oof[float(C)] = scores
+                        oof[float(C)] = self._oof(float(C), Z, yb, groups, folds, fit_seed, robust=False)
                 crit, platt = cv_criteria(np.stack([oof[float(C)] for C in Cs]), yb, w_cal, "log_loss")
                 best = int(np.argmin(crit[:, 0]))  # ties: the smallest C (strongest regularisation)
                 return (crit[:, 0], platt, best), (0, best)
@@ -273,7 +281,11 @@ class LinearAttribute(PlattBinaryClassifierMixin, ValidatedParamsMixin, Classifi
             self.C_grid_, self.cv_scores_ = Cs, crit
             self.C_ = float(Cs[best])
             self.oof_scores_ = oof[self.C_].copy()
-            self.platt_ = (float(platt[best, 0]), float(platt[best, 1]))
+            a, b = platt[best]
+            if self.weighting == "robust":  # the robust model's own out-of-fold scores calibrate it
+                self.oof_scores_ = self._oof(self.C_, Z, yb, groups, folds, fit_seed, robust=True)
+                a, b = cv_criteria(self.oof_scores_[None], yb, w_cal, "log_loss")[1][0]
+            self.platt_ = (float(a), float(b))
             self.estimator_, self.sample_weight_ = self._fit_weighted(self.C_, Z, yb, groups, fit_seed)
         self.grid_edges_ = grid_edges({"C": (Cs, best)})
         self.preprocessor_ = pre
