@@ -18,8 +18,8 @@ from tzsl.models import (
     build_method,
     get_method,
 )
-from tzsl.models._attribute_training import balanced_sample_weights, object_balanced_weights
-from tzsl.models._detectors import DETECTORS, detector_template
+from tzsl.models._attribute_training import balanced_sample_weights
+from tzsl.models.attribute_training import DETECTORS, detector_template, object_balanced_weights
 from tzsl.models._linear_attribute import robust_object_weights
 
 
