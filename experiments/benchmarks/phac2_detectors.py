@@ -116,8 +116,9 @@ def score_split(features, split, config: DapSettings, index: int, labels: list[s
         correct = avgdap_correct(P, K, y, seed)
         hard = (P.mean(axis=1) >= 0.5).astype(int)
         edges = [bool(getattr(est, "grid_edges_", ())) for per in bank.estimators_ for est in per]
+        fitted = f"{bank.detector_} ({type(bank.estimators_[0][0]).__name__})"
         rows.append({
-            "split": split.name, "detector": label, "fitted": bank.detector_, "accuracy": correct.mean(),
+            "split": split.name, "detector": label, "fitted": fitted, "accuracy": correct.mean(),
             "attribute_bacc": np.nanmean(per_attribute_balanced_accuracy(A[test], hard)),
             "accuracy_if_independent": accuracy_if_independent(P, A[test], K, y, seed),
             "error_correlation": within_object_error_correlation(A[test], hard, groups[test]),
@@ -152,7 +153,7 @@ def summary(rows: pd.DataFrame) -> pd.DataFrame:
                         "error_correlation": part["error_correlation"].mean(),
                         "error_correlation_trial": part["error_correlation_trial"].mean(),
                         "at_grid_edge": part["at_grid_edge"].mean(), "cpu_seconds": part["cpu_seconds"].mean(),
-                        "fitted": ",".join(sorted(set(part["fitted"])))})
+                        "fitted": "; ".join(sorted(set(part["fitted"])))})
     return pd.DataFrame(out)
 
 
@@ -163,6 +164,7 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--purpose", choices=PURPOSES, default="select")
     ap.add_argument("--no-challenging", action="store_true", help="random splits only")
+    ap.add_argument("--no-random", action="store_true", help="challenging splits only")
     ap.add_argument("--detectors", nargs="+", default=[d for d, _ in DETECTORS], choices=[d for d, _ in DETECTORS])
     args = ap.parse_args()
     if DETECTORS[0][0] not in args.detectors:
@@ -172,7 +174,7 @@ def main() -> None:
     warnings.simplefilter("ignore", GridEdgeWarning)
     rows = []
     for kind, index, split in study_splits(features, args.n_random, args.seed, args.purpose):
-        if args.no_challenging and kind == "challenging":
+        if (args.no_challenging and kind == "challenging") or (args.no_random and kind == "random"):
             continue
         config = DapSettings(splits={"n_splits": args.n_random, "seed": args.seed, "purpose": args.purpose},
                              compute={"cache": False, "n_jobs": 1, "progress": False}, svm={"cv": 5})
