@@ -111,7 +111,7 @@ def test_robust_weights_move_toward_the_worst_fitted_object_and_keep_class_total
 def test_linear_detector_refuses_a_single_object_class_and_bad_ranges():
     X, y, g = linear_objects(n_obj=6)
     y = (g == 0).astype(int)
-    with pytest.raises(ValueError, match="only 1 training object"):
+    with pytest.raises(ValueError, match="only 1 training object.s. with label 1;"):  # 1, not np.int64(1)
         LinearAttribute().fit(X, y, g)
     with pytest.raises(ValueError, match="C_range"):
         LinearAttribute(C_range=(10.0, 1.0)).fit(X, y)

@@ -176,8 +176,9 @@ def binary_training_targets(y: np.ndarray, groups, label: str) -> tuple[np.ndarr
     for cls, mask in ((classes[1], yb), (classes[0], ~yb)):
         n_obj = np.unique(groups[mask]).size
         if n_obj < 2:
+            value = cls.item() if isinstance(cls, np.generic) else cls  # 1, not np.int64(1)
             raise AttributeTrainingError(
-                f"{label}: only {n_obj} training object(s) with label {cls!r}; "
+                f"{label}: only {n_obj} training object(s) with label {value!r}; "
                 "need at least 2 (one class present in a single object cannot be cross-validated)"
             )
     return classes, yb, groups
