@@ -3,7 +3,8 @@
 Object splits for zero-shot evaluation (random and challenging, DAP paper 4.2 and 4.6),
 their CSV files, and the metrics reported per split (trial accuracy, per-class mean
 accuracy, per-attribute balanced accuracy, generalised-ZSL scores), the calibration of class posteriors
-(expected calibration error, Brier score, reliability table); mean and std rows over
+(expected calibration error, Brier score, reliability table), the within-object correlation of
+attribute errors; mean and std rows over
 splits or seeds (:func:`summarise_over_splits`, the one place studies average); the GZSL
 protocol's held-out trials and calibrated stacking; hyper-parameter selection on training
 classes only (:func:`select_embedding_alpha`). The studies in :mod:`tzsl.studies` import
@@ -142,3 +143,8 @@ from tzsl.evaluation._trust import (  # noqa: E402
 )
 
 __all__ += ["INTERVAL_DOC", "Outcomes", "add_trust_columns", "attribute_intervals", "interval_columns"]
+
+# Whether an object's attributes are mispredicted together (what DAP's product is sensitive to).
+from tzsl.evaluation._attribute_errors import within_object_error_correlation  # noqa: E402
+
+__all__ += ["within_object_error_correlation"]

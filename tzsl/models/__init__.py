@@ -18,6 +18,7 @@ The fit store the estimators share is :mod:`tzsl.fit_store`.
 """
 
 from tzsl.models._attribute_svm import AttributeSVM
+from tzsl.models._linear_attribute import LinearAttribute
 from tzsl.models._attribute_bank import AttributeClassifierBank
 from tzsl.models._attribute_training import AttributeTrainingError, GridEdgeWarning
 from tzsl.models._scalable_attribute import ScalableAttributeClassifier
@@ -59,6 +60,7 @@ __all__: list[str] = [
     "NearestAttributeRule",
     # attribute models
     "AttributeSVM",
+    "LinearAttribute",
     "AttributeClassifierBank",
     "ScalableAttributeClassifier",
     "MultiLabelAttributeClassifier",

@@ -3,7 +3,9 @@
 :class:`AttributeClassifierBank` fits a clone of an attribute classifier (by default
 :class:`~tzsl.models.AttributeSVM`, or above ``max_exact_trials`` training trials the
 :class:`~tzsl.models.ScalableAttributeClassifier`) for every attribute and sensor, in parallel
-(joblib, locally or on Dask) and cached, and gives ``predict_proba(X) -> (n, s, m)``.
+(joblib, locally or on Dask) and cached, and gives ``predict_proba(X) -> (n, s, m)``. The
+classifier's family (``detector``: RBF-SVM, linear, or chosen on the training objects) is
+:mod:`tzsl.models._detectors`.
 """
 
 from __future__ import annotations
@@ -21,8 +23,8 @@ from tqdm.auto import tqdm
 
 from tzsl._profile import timed
 from tzsl.exceptions import ConfigError
-from tzsl.models._attribute_svm import AttributeSVM
 from tzsl.models._attribute_training import AUTO_MAX_EXACT_TRIALS, SOLVERS, AttributeTrainingError, GridEdgeWarning
+from tzsl.models._detectors import AUTO_CANDIDATES, DETECTORS, choose_detector, detector_template
 from tzsl.models._scalable_attribute import ScalableAttributeClassifier
 from tzsl._fit_store import (
     array_digest,
@@ -71,8 +73,20 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
     Parameters
     ----------
     estimator : classifier or None, default=None
-        Template cloned for every (attribute, sensor); must accept ``fit(X, y, groups)`` and give
-        ``predict_proba``. ``None``: :class:`AttributeSVM` with default parameters.
+        Template of ``detector="rbf-svm"``, cloned for every (attribute, sensor); must accept
+        ``fit(X, y, groups)`` and give ``predict_proba``. ``None``: :class:`AttributeSVM` with
+        default parameters. Must be None with a linear ``detector``.
+    detector : {"rbf-svm", "logistic", "linear-svm", "robust-logistic", "auto"}, default="rbf-svm"
+        Family of the per-(attribute, sensor) classifier (:mod:`tzsl.models._detectors`):
+        ``"rbf-svm"``: ``estimator``; ``"logistic"`` / ``"linear-svm"``:
+        :class:`~tzsl.models.LinearAttribute` (L2 logistic regression / linear SVM on z-scored
+        features, ``C`` by object-grouped CV, Platt posteriors); ``"robust-logistic"``: the
+        logistic detector trained group-robustly over training objects; ``"auto"``: the family
+        of ``detector_candidates`` with the best AVGDAP accuracy on pseudo-unseen training
+        classes (class-grouped folds of the training objects only), recorded in
+        ``detector_choice_``; it costs ``AUTO_FOLDS`` refits of every candidate.
+    detector_candidates : sequence of str, default=("rbf-svm", "logistic")
+        The families ``detector="auto"`` chooses between.
     attribute_names : sequence of str or None, default=None
         Names used in error messages (default ``"0"``, ``"1"``, ...).
     n_jobs : int or None, default=None
@@ -96,7 +110,8 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         regression, linear in trials) with ``estimator``'s preprocessor, under-sampling and Platt
         weighting. ``"auto"``: exact up to ``max_exact_trials`` training trials, approximate above
         (the exact model's time grows as trials^2). The choice and its reason are in
-        ``solver_choice_`` and printed when ``progress`` is on.
+        ``solver_choice_`` and printed when ``progress`` is on. Only ``detector="rbf-svm"`` has an
+        approximate solver: the linear detectors are fitted exactly (their time is linear in trials).
     max_exact_trials : int, default=3000
         Largest training set fitted exactly by ``solver="auto"`` (the exact model's cost against
         trials is measured by ``make bench-scale``).
@@ -112,6 +127,12 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
     n_sensors_, n_attributes_, n_features_in_ : int
     solver_choice_ : dict
         ``{"solver": "exact" | "approximate", "reason": str, "n_trials": int}``.
+    detector_ : str
+        The family fitted (the choice of ``detector="auto"``, else ``detector``).
+    detector_choice_ : dict
+        ``{"detector": detector_, "criterion": str, ...}``; with ``"auto"`` also ``"n_folds"``,
+        ``"n_held_out_trials"`` and ``"scores"`` (each candidate's pseudo-unseen ``accuracy`` and
+        ``attribute_log_loss``), for a study to write beside its results.
     """
 
     #: Attribute-model protocol: ``predict_proba`` gives ``p(a_m = 1 | x_s)`` (read by DAPRule).
@@ -119,6 +140,8 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
 
     _parameter_constraints: dict = {
         "estimator": [None, HasMethods(["fit", "predict_proba"])],
+        "detector": [StrOptions(set(DETECTORS))],
+        "detector_candidates": ["array-like"],
         "attribute_names": [None, "array-like"],
         "n_jobs": [None, Integral],
         "backend": [StrOptions({"loky", "dask", "threading", "sequential", "multiprocessing"})],
@@ -133,6 +156,8 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         self,
         *,
         estimator=None,
+        detector="rbf-svm",
+        detector_candidates=AUTO_CANDIDATES,
         attribute_names=None,
         n_jobs=None,
         backend="loky",
@@ -143,6 +168,8 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         max_exact_trials=AUTO_MAX_EXACT_TRIALS,
     ):
         self.estimator = estimator
+        self.detector = detector
+        self.detector_candidates = detector_candidates
         self.attribute_names = attribute_names
         self.n_jobs = n_jobs
         self.backend = backend
@@ -161,11 +188,37 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         return names
 
     def _template(self):
-        return AttributeSVM() if self.estimator is None else self.estimator
+        """The per-(attribute, sensor) classifier template of ``detector_`` (``detector`` before a fit)."""
+        family = getattr(self, "detector_", self.detector)
+        auto_linear = self.detector == "auto" and family != "rbf-svm"  # estimator is the rbf-svm candidate's
+        return detector_template(family, None if auto_linear else self.estimator)
+
+    def _choose_detector(self, X: np.ndarray, A: np.ndarray, groups) -> None:
+        """Set ``detector_`` and ``detector_choice_`` (with ``"auto"``: :func:`choose_detector`)."""
+        if self.detector != "auto":
+            self.detector_ = self.detector
+            self.detector_choice_ = {"detector": self.detector, "criterion": "given"}
+            return
+        self.detector_choice_ = choose_detector(self, X, A, groups, tuple(self.detector_candidates),
+                                                random_state=spawn_seeds(self.random_state, 1)[0])
+        self.detector_ = self.detector_choice_["detector"]
+        if self.progress:
+            tqdm.write(f"attribute detector: {self.detector_} (detector='auto', {self.detector_choice_['scores']})")
+
+    def selected_params(self) -> dict:
+        """The family ``detector="auto"`` chose, to pin in refits on the same training objects ({} otherwise)."""
+        check_is_fitted(self)
+        if self.detector != "auto":
+            return {}
+        return {"detector": self.detector_, **({} if self.detector_ == "rbf-svm" else {"estimator": None})}
 
     def _choose_template(self, n_trials: int):
         """The estimator template for ``n_trials`` training trials; sets ``solver_choice_``."""
         exact = self._template()
+        if self.detector_ != "rbf-svm":
+            self.solver_choice_ = {"solver": "exact", "n_trials": int(n_trials),
+                                   "reason": f"detector={self.detector_!r} is linear in trials"}
+            return exact
         if self.solver == "auto":
             approximate = n_trials > self.max_exact_trials
             relation = ">" if approximate else "<="
@@ -286,6 +339,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
                         f"attribute {nm!r}: {label} in only {k} training object(s); need at least 2 "
                         "(leave the attribute out of this split)"
                     )
+        self._choose_detector(X, A, groups)
         template = self._choose_template(n)
         seeds = spawn_seeds(self.random_state, A.shape[1] * s)
         # one array per sensor, shared by every attribute's task: the Dask backend scatters each once

@@ -29,7 +29,6 @@ import numpy as np
 from sklearn import config_context
 from sklearn.base import BaseEstimator, ClassifierMixin, clone
 from sklearn.metrics.pairwise import euclidean_distances, rbf_kernel
-from sklearn.model_selection import LeaveOneGroupOut, StratifiedGroupKFold
 from sklearn.svm import SVC
 from sklearn.svm import _libsvm  # noqa: PLC2701 - see svc_fit_decision
 from sklearn.utils import check_random_state
@@ -38,7 +37,6 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 from threadpoolctl import threadpool_limits
 
-from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_training import (
     PLATT_WEIGHTING,
     SCORING,
@@ -47,10 +45,12 @@ from tzsl.models._attribute_training import (
     AttributeTrainingError,
     balanced_object_draws,
     balanced_sample_weights,
+    binary_training_targets,
     cv_criteria,
     default_preprocessor,
     gamma_grid,
     grid_edges,
+    object_grouped_folds,
 )
 from tzsl.models._attribute_search import (
     HALVING_KERNEL_BYTES,
@@ -225,23 +225,7 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
                 )
 
     def _folds(self, yb, groups, seed: int) -> list[np.ndarray]:
-        if self.cv is None:
-            splitter = LeaveOneGroupOut()
-        elif isinstance(self.cv, Integral):
-            # never more folds than objects of the rarer class, so each fold keeps both classes
-            n_min = min(np.unique(groups[yb]).size, np.unique(groups[~yb]).size)
-            splitter = StratifiedGroupKFold(n_splits=min(int(self.cv), n_min), shuffle=True, random_state=seed)
-        else:
-            splitter = self.cv
-        masks = []
-        for _, test in splitter.split(np.zeros((yb.size, 1)), yb, groups):
-            m = np.zeros(yb.size, dtype=bool)
-            m[test] = True
-            masks.append(m)
-        counts = np.sum(masks, axis=0) if masks else np.zeros(yb.size)
-        if not np.all(counts == 1):
-            raise ConfigError("cv: the test folds must partition the training trials (each trial exactly once)")
-        return masks
+        return object_grouped_folds(self.cv, yb, groups, seed)
 
     def _draws(self, yb, groups, rng) -> tuple[list[np.ndarray], np.ndarray]:
         return balanced_object_draws(yb, groups, self.n_draws if self.undersampling != "none" else 0, rng)
@@ -398,25 +382,8 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
         self._validate_params()
         X, y = validate_data(self, X, y, dtype=np.float64)
         check_classification_targets(y)
-        self.classes_ = np.unique(y)
-        if self.classes_.size != 2:
-            raise AttributeTrainingError(
-                f"{self._label()}: training labels hold {self.classes_.size} class(es); need exactly 2 "
-                "(absent and present). Only binary classification is supported."
-            )
-        yb = y == self.classes_[1]
+        self.classes_, yb, groups = binary_training_targets(y, groups, self._label())
         n = yb.size
-        groups = np.arange(n) if groups is None else np.asarray(groups)
-        if groups.shape != (n,):
-            raise ConfigError(f"groups must have shape ({n},), got {groups.shape}")
-        for cls, mask in ((self.classes_[1], yb), (self.classes_[0], ~yb)):
-            n_obj = np.unique(groups[mask]).size
-            if n_obj < 2:
-                label = cls.item() if isinstance(cls, np.generic) else cls  # 1, not np.int64(1)
-                raise AttributeTrainingError(
-                    f"{self._label()}: only {n_obj} training object(s) with label {label!r}; "
-                    "need at least 2 (one class present in a single object cannot be cross-validated)"
-                )
         rng = check_random_state(self.random_state)
 
         # many small dense problems: more BLAS threads than one only spin (and do not change results)

@@ -10,9 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.special import expit, log_expit
-from sklearn.base import BaseEstimator
+from numbers import Integral
 
-from tzsl.exceptions import SplitError
+from sklearn.base import BaseEstimator
+from sklearn.model_selection import LeaveOneGroupOut, StratifiedGroupKFold
+
+from tzsl.exceptions import ConfigError, SplitError
 from tzsl.features import VariancePCA
 
 __all__ = [
@@ -26,12 +29,15 @@ __all__ = [
     "GridEdgeWarning",
     "balanced_object_draws",
     "balanced_sample_weights",
+    "binary_training_targets",
     "cv_criteria",
     "default_preprocessor",
     "fit_platt",
     "fit_platt_many",
     "gamma_grid",
     "grid_edges",
+    "object_balanced_weights",
+    "object_grouped_folds",
 ]
 
 UNDERSAMPLING = ("select", "bagging", "none")
@@ -128,6 +134,54 @@ class AttributeTrainingError(SplitError, ValueError):
     A :class:`tzsl.exceptions.SplitError` (and a ``ValueError``, as scikit-learn expects of
     estimators given unusable targets).
     """
+
+
+def binary_training_targets(y: np.ndarray, groups, label: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Classes, "present" mask and object groups of one attribute's training trials, checked.
+
+    Parameters
+    ----------
+    y : ndarray of shape (n_trials,)
+        Two class labels; the larger (``np.unique`` order) is "present".
+    groups : array-like of shape (n_trials,) or None
+        Object of each trial; ``None``: every trial is its own object.
+    label : str
+        Names the attribute in messages.
+
+    Returns
+    -------
+    classes : ndarray of shape (2,)
+    yb : ndarray of bool, shape (n_trials,)
+    groups : ndarray of shape (n_trials,)
+
+    Raises
+    ------
+    AttributeTrainingError
+        Not exactly two classes, or a class held by fewer than 2 objects (it cannot be
+        cross-validated over objects).
+    ConfigError
+        ``groups`` of the wrong shape.
+    """
+    classes = np.unique(y)
+    if classes.size != 2:
+        raise AttributeTrainingError(
+            f"{label}: training labels hold {classes.size} class(es); need exactly 2 "
+            "(absent and present). Only binary classification is supported."
+        )
+    yb = y == classes[1]
+    n = yb.size
+    groups = np.arange(n) if groups is None else np.asarray(groups)
+    if groups.shape != (n,):
+        raise ConfigError(f"groups must have shape ({n},), got {groups.shape}")
+    for cls, mask in ((classes[1], yb), (classes[0], ~yb)):
+        n_obj = np.unique(groups[mask]).size
+        if n_obj < 2:
+            value = cls.item() if isinstance(cls, np.generic) else cls  # 1, not np.int64(1)
+            raise AttributeTrainingError(
+                f"{label}: only {n_obj} training object(s) with label {value!r}; "
+                "need at least 2 (one class present in a single object cannot be cross-validated)"
+            )
+    return classes, yb, groups
 
 
 def default_preprocessor() -> BaseEstimator:
@@ -263,6 +317,77 @@ def balanced_sample_weights(y: np.ndarray) -> np.ndarray:
     w[y] = 0.5 / max(int(y.sum()), 1)
     w[~y] = 0.5 / max(int((~y).sum()), 1)
     return w * y.size
+
+
+def object_balanced_weights(yb: np.ndarray, groups: np.ndarray) -> np.ndarray:
+    """Trial weights under which every object counts equally within its class and the classes equally.
+
+    Parameters
+    ----------
+    yb : ndarray of bool, shape (n_trials,)
+        Attribute present in each trial's object.
+    groups : ndarray of shape (n_trials,)
+        Object of each trial.
+
+    Returns
+    -------
+    ndarray of shape (n_trials,)
+        ``n / (2 * n_objects_of_class * n_trials_of_object)``: sums to ``n / 2`` per class (as
+        :func:`balanced_sample_weights`, which it equals when every object has as many trials).
+    """
+    yb = np.asarray(yb).astype(bool)
+    _, g = np.unique(np.asarray(groups), return_inverse=True)
+    g = g.ravel()
+    trials_of = np.bincount(g)[g].astype(float)
+    w = np.empty(yb.size, dtype=float)
+    for cls in (True, False):
+        mask = yb == cls
+        n_objects = max(np.unique(g[mask]).size, 1)
+        w[mask] = yb.size / (2.0 * n_objects * trials_of[mask])
+    return w
+
+
+def object_grouped_folds(cv, yb: np.ndarray, groups: np.ndarray, seed: int) -> list[np.ndarray]:
+    """Object-grouped cross-validation folds of an attribute classifier's training trials.
+
+    Parameters
+    ----------
+    cv : None, int or splitter
+        ``None``: leave-one-object-out. int: ``StratifiedGroupKFold(min(cv, n), shuffle=True)``
+        with ``n`` the number of objects of the rarer class (so every fold keeps both classes).
+        A splitter: its ``split(X, y, groups)``.
+    yb : ndarray of bool, shape (n_trials,)
+    groups : ndarray of shape (n_trials,)
+        Object of each trial.
+    seed : int
+        Seeds the shuffled ``StratifiedGroupKFold``.
+
+    Returns
+    -------
+    list of ndarray of bool, shape (n_trials,)
+        Each fold's held-out trials.
+
+    Raises
+    ------
+    ConfigError
+        The test folds do not partition the trials.
+    """
+    if cv is None:
+        splitter = LeaveOneGroupOut()
+    elif isinstance(cv, Integral):
+        n_min = min(np.unique(groups[yb]).size, np.unique(groups[~yb]).size)
+        splitter = StratifiedGroupKFold(n_splits=min(int(cv), n_min), shuffle=True, random_state=seed)
+    else:
+        splitter = cv
+    masks = []
+    for _, test in splitter.split(np.zeros((yb.size, 1)), yb, groups):
+        m = np.zeros(yb.size, dtype=bool)
+        m[test] = True
+        masks.append(m)
+    counts = np.sum(masks, axis=0) if masks else np.zeros(yb.size)
+    if not np.all(counts == 1):
+        raise ConfigError("cv: the test folds must partition the training trials (each trial exactly once)")
+    return masks
 
 
 def balanced_object_draws(yb: np.ndarray, groups: np.ndarray, n_draws: int,

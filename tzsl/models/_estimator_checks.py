@@ -51,6 +51,8 @@ def check_instance(name: str, cls: type) -> BaseEstimator:
 
     if name == "AttributeSVM":
         return cls(**_SMALL_SVM, random_state=0)
+    if name == "LinearAttribute":  # robust weighting exercises every fit path the other options use
+        return cls(weighting="robust", robust_rounds=2, cv=3, random_state=0)
     if name == "EmbeddingZSL":  # the checks' data have 2-3 classes: too few to hold one out
         return cls(early_stopping=False, max_iter=50, random_state=0)
     if name == "ESZSLCV":  # class-grouped CV needs >= 4 classes, the checks' data have 2-3:

@@ -12,8 +12,9 @@ the same idea as :class:`sklearn.multioutput.ClassifierChain`) per sensor:
 * at prediction the previous attributes' *posteriors* are fed in, so ``p(a_t | x, a_<t)`` depends
   on the other attributes.
 
-Each link is the same :class:`AttributeSVM` as the independent model (under-sampling, grouped
-tuning, Platt), whose preprocessor z-scores and reduces the sensor features and passes the chained
+Each link is the same detector as the independent model (``detector``; by default the
+:class:`AttributeSVM`: under-sampling, grouped tuning, Platt), whose preprocessor (z-score and PCA
+for the SVM, z-score for a linear detector) transforms the sensor features and passes the chained
 attribute columns through unchanged. Training links are independent (true labels are inputs), so
 they run in parallel and are cached exactly like :class:`AttributeClassifierBank`; only prediction
 walks the chain. Output has the same (n_trials, n_sensors, n_attributes) layout, so DAP uses it
@@ -30,7 +31,7 @@ from sklearn.utils._param_validation import StrOptions
 
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_bank import AttributeClassifierBank
-from tzsl.models._attribute_training import default_preprocessor
+from tzsl.models._detectors import AUTO_CANDIDATES, detector_preprocessor
 from tzsl._fit_store import array_digest, resolve_store, spawn_seeds
 
 __all__ = ["MultiLabelAttributeClassifier"]
@@ -49,9 +50,12 @@ class MultiLabelAttributeClassifier(AttributeClassifierBank):
     Parameters
     ----------
     estimator : AttributeSVM-like or None, default=None
-        Link template (``fit(X, y, groups)``, ``predict_proba``, a ``preprocessor`` parameter).
-        ``None``: :class:`AttributeSVM` defaults. Its preprocessor is applied to the sensor
-        columns only.
+        Link template of ``detector="rbf-svm"`` (``fit(X, y, groups)``, ``predict_proba``, a
+        ``preprocessor`` parameter). ``None``: :class:`AttributeSVM` defaults. Its preprocessor is
+        applied to the sensor columns only.
+    detector, detector_candidates
+        The links' family, as in :class:`AttributeClassifierBank` (``"auto"`` scores the chain
+        itself on pseudo-unseen training classes).
     order : None, "random" or sequence of int, default=None
         Chain order. ``None`` or ``"random"``: a random permutation from ``random_state``.
     attribute_names, n_jobs, backend, memory, progress, random_state
@@ -74,6 +78,8 @@ class MultiLabelAttributeClassifier(AttributeClassifierBank):
         self,
         *,
         estimator=None,
+        detector="rbf-svm",
+        detector_candidates=AUTO_CANDIDATES,
         order=None,
         attribute_names=None,
         n_jobs=None,
@@ -84,6 +90,8 @@ class MultiLabelAttributeClassifier(AttributeClassifierBank):
     ):
         super().__init__(
             estimator=estimator,
+            detector=detector,
+            detector_candidates=detector_candidates,
             attribute_names=attribute_names,
             n_jobs=n_jobs,
             backend=backend,
@@ -119,8 +127,9 @@ class MultiLabelAttributeClassifier(AttributeClassifierBank):
             order = np.asarray(self.order, dtype=int)
             if sorted(order.tolist()) != list(range(m)):
                 raise ConfigError(f"order must be a permutation of 0..{m - 1}, got {self.order!r}")
+        self._choose_detector(X, A, groups)
         template = self._template()
-        base_pre = template.get_params().get("preprocessor") or default_preprocessor()
+        base_pre = detector_preprocessor(template)
         storing = resolve_store(self.memory).enabled
         groups_digest = array_digest(np.zeros(0) if groups is None else groups) if storing else None
         targets = [np.ascontiguousarray(A[:, j]) for j in range(m)]
