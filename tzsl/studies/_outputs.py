@@ -16,6 +16,7 @@ back or averaged as floats) as integers (``10``, not ``10.0``; missing values st
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import platform
@@ -50,11 +51,14 @@ RECORDED_PACKAGES: tuple[str, ...] = (
 )
 
 
+@functools.lru_cache(maxsize=1)
 def source_commit() -> str | None:
     """The git commit of the tzsl source that runs (``<sha>-dirty`` when tracked files differ from it).
 
-    None when tzsl does not run from a git checkout (an installed wheel) or git is missing: the
-    manifest then says so instead of naming a commit.
+    Read once per process, when the first results folder is opened (:class:`ResultsDir`): the code a
+    run imported, even if the checkout moves on while it runs. None when tzsl does not run from a
+    git checkout (an installed wheel) or git is missing: the manifest then says so instead of
+    naming a commit.
     """
     source = Path(__file__).resolve().parents[2]
 
@@ -141,6 +145,7 @@ class ResultsDir:
         self.splits: dict[str, dict[str, Any]] = {}  # every split written, for the manifest
         self.data_files: dict[str, str] = {}  # every data file a manifest recorded: path -> sha256
         self._locked = False
+        self.code_commit = source_commit()  # the git commit of the code that runs, read before it runs
 
     def path(self, name: str) -> Path:
         """Where to write ``name`` (in the staging folder when staging), checked against overwriting."""
@@ -278,7 +283,7 @@ class ResultsDir:
         manifest = {
             "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
             "command": " ".join(sys.argv),
-            "commit": source_commit(),
+            "commit": self.code_commit,
             "python": sys.version.split()[0],
             "platform": platform.platform(),
             "packages": package_versions(),
