@@ -9,6 +9,8 @@ ifneq ($(wildcard $(SHARED_DATA)),)
 export TZSL_DATA_DIR ?= $(SHARED_DATA)
 endif
 RESULTS ?= results
+# output folder of `make evidence` (what goes beyond the papers)
+EVIDENCE ?= $(RESULTS)/evidence
 # stage-2 output folder of experiments/benchmarks/phac2_accuracy.py (accuracy.csv, grid_summary.csv)
 BENCH_RESULTS ?= /tmp/tzsl_accuracy
 # output folder of experiments/benchmarks/phac2_search.py (search_summary_*.csv)
@@ -17,14 +19,23 @@ N_JOBS ?= 2
 # pytest-xdist workers of `make test`: the suite is mostly single-threaded, so two workers halve it on CI's 2 cores.
 TEST_WORKERS ?= 2
 
-.PHONY: install browser test test-wide headlines reproduce-tables readme-results numbers numbers-check docs bench bench-fit bench-predict bench-scale data clean
+.PHONY: install install-core browser test test-wide evidence reproduce-tables readme-results numbers numbers-check docs bench bench-fit bench-predict bench-scale data clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
 
-$(VENV)/.installed: pyproject.toml $(BIN)/activate
+# The core package alone: all that reproduce-tables, evidence and the number blocks need (no torch,
+# no test extras).
+$(VENV)/.installed-core: pyproject.toml $(BIN)/activate
+	$(BIN)/pip install --quiet -e .
+	touch $@
+
+# Everything: the test, Dask and deep (torch) extras, for the test suite and the documentation.
+$(VENV)/.installed: $(VENV)/.installed-core
 	$(BIN)/pip install --quiet -e '.[test,dask,deep]'
 	touch $@
+
+install-core: $(VENV)/.installed-core
 
 install: $(VENV)/.installed
 
@@ -47,35 +58,44 @@ test-wide: install
 	  tests/models/test_methods_on_lab_data.py -k "full_range or lab_like"
 
 # The papers' data into the data home (or TZSL_DATA_DIR), downloaded and checked against the registry.
-data: install
+data: install-core
 	$(BIN)/tzsl data fetch
 
-reproduce-tables: install
+# What the two papers report, with our intervals, chance, baselines and controls, and nothing else
+# (the built-in phac2-dap, fabric, hand-simulated): the core package only.
+reproduce-tables: install-core
 	$(BIN)/tzsl reproduce-tables --out $(RESULTS) --n-jobs $(N_JOBS) --force
 
-# Headlines on many splits (issue 23): the built-in phac2-headlines (50 random and every challenging PHAC-2
-# split, the method comparison on both, seed refits) into $(RESULTS)/headlines, where `make numbers` finds
-# it. Tens of minutes cold on two cores (docs/user_guide/reproducing.md); the fit store makes reruns quick.
-headlines: install
-	$(BIN)/tzsl run phac2-headlines --out $(RESULTS)/headlines --n-jobs $(N_JOBS) --force
+# What goes beyond the papers (tzsl.studies.reproduce.EVIDENCE_STUDIES): every method on random and
+# challenging splits of every dataset (method_comparison.csv), the generic zero-shot presets, GZSL,
+# calibration, active touch and PHAC-2 on 50 random splits. Tens of minutes cold on two cores
+# (docs/user_guide/reproducing.md); the fit store makes reruns quick.
+evidence: install-core
+	$(BIN)/tzsl evidence --out $(EVIDENCE) --n-jobs $(N_JOBS) --force
 
 # Every published number is generated between markers from the CSVs of the shipped code, never
-# typed (tzsl.reporting.readme_results): each target file = the results folder its blocks read.
-NUMBERS := README.md=$(RESULTS) docs/user_guide/reproducing.md=$(RESULTS) \
+# typed (tzsl.reporting.readme_results): each entry is FILE[:BLOCK]=FOLDER, the results folder that
+# block (default: every block of the file) reads. The evidence blocks are left as they are (with a
+# note) while $(EVIDENCE) does not exist.
+NUMBERS := README.md:readme=$(RESULTS) README.md:evidence=$(EVIDENCE) \
+	docs/user_guide/reproducing.md:results-evidence=$(EVIDENCE) \
 	experiments/benchmarks/README.md=$(BENCH_RESULTS) \
 	docs/user_guide/performance.md=$(SEARCH_RESULTS)
+# readme_results arguments of one NUMBERS entry (in $$pair): FOLDER FILE [--block BLOCK]
+NUMBERS_ARGS = $${pair\#*=} $${target%%:*} $$([ "$${target\#*:}" = "$$target" ] || echo --block $${target\#*:})
 
-# The README's Results block alone, from the CSVs of reproduce-tables.
-readme-results: install
-	$(BIN)/python -m tzsl.reporting.readme_results $(RESULTS) README.md
+# The README's papers block alone, from the CSVs of reproduce-tables.
+readme-results: install-core
+	$(BIN)/python -m tzsl.reporting.readme_results $(RESULTS) README.md --block readme
 
-numbers: install
-	@for pair in $(NUMBERS); do $(BIN)/python -m tzsl.reporting.readme_results $${pair#*=} $${pair%%=*} || exit 1; done
+numbers: install-core
+	@for pair in $(NUMBERS); do target=$${pair%%=*}; \
+	  $(BIN)/python -m tzsl.reporting.readme_results $(NUMBERS_ARGS) || exit 1; done
 
 # Fails when a generated block drifts from its CSVs or a measured number is typed outside the blocks.
-numbers-check: install
-	@status=0; for pair in $(NUMBERS); do \
-	  $(BIN)/python -m tzsl.reporting.readme_results $${pair#*=} $${pair%%=*} --check || status=1; done; \
+numbers-check: install-core
+	@status=0; for pair in $(NUMBERS); do target=$${pair%%=*}; \
+	  $(BIN)/python -m tzsl.reporting.readme_results $(NUMBERS_ARGS) --check || status=1; done; \
 	$(BIN)/python -m tzsl.reporting.typed_numbers . || status=1; exit $$status
 
 # The documentation site (Sphinx): docs/_build/html, offline; runs every gallery example.
@@ -88,11 +108,11 @@ docs: install
 # (tzsl.inference.Recogniser), on simulated data, into $(BENCH_PREDICT_CSV).
 BENCH_CSV ?= bench/reproduce_bench.csv
 BENCH_PREDICT_CSV ?= bench/predict_bench.csv
-bench: install
+bench: install-core
 	$(BIN)/python -m tzsl.benchmarks.bench_reproduce --n-jobs $(N_JOBS) --out $(BENCH_CSV) --force
 	$(BIN)/python -m tzsl.benchmarks.bench_predict --out $(BENCH_PREDICT_CSV) --force
 
-bench-predict: install
+bench-predict: install-core
 	$(BIN)/python -m tzsl.benchmarks.bench_predict --out $(BENCH_PREDICT_CSV) --force
 
 # One PHAC-2 split's attribute fits (issue 15): the paper's literal recipe vs tzsl; the literal recipe

@@ -28,8 +28,8 @@ def _write(tmp_path: Path, text: str, name: str = "exp.toml") -> Path:
 
 
 def test_builtin_studies_ship_inside_the_package_only():
-    assert builtin_names() == ["active-touch", "fabric", "fabric-deep", "hand-simulated", "phac2-dap", "phac2-gzsl",
-                               "phac2-headlines"]
+    assert builtin_names() == ["active-touch", "fabric", "fabric-deep", "fabric-evidence", "hand-evidence",
+                               "hand-simulated", "phac2-dap", "phac2-evidence", "phac2-gzsl", "phac2-headlines"]
     for name in builtin_names():
         assert load_experiment(name).study in study_names()
     # one copy: the top-level folder holds the README, the user template and the benchmark scripts, no study file
@@ -359,7 +359,7 @@ def test_grid_passes_through_and_reproduction_studies_pin_the_paper_grid(tmp_pat
     from tzsl.models import AttributeSVM
 
     assert AttributeSVM().grid == "extended"
-    for name in ("phac2-dap", "phac2-gzsl", "phac2-headlines"):
+    for name in ("phac2-dap", "phac2-evidence", "phac2-gzsl", "phac2-headlines"):
         exp = load_experiment(name)
         assert exp.config.svm.grid == "paper"
         assert exp.config.svm.estimator_params()["grid"] == "paper"

@@ -159,3 +159,19 @@ def test_commit_refuses_a_file_that_appeared_meanwhile(tmp_path):
         out.commit()
     assert (tmp_path / "res" / "a.csv").read_text() == "another run's table\n"
     assert (tmp_path / "res" / STAGING_FOLDER / "a.csv").exists()
+
+
+def test_manifest_names_the_commit_read_when_the_folder_opened(tmp_path, monkeypatch):
+    """The commit of the code that ran, read before the run: a checkout moving on meanwhile changes nothing."""
+    import json  # noqa: PLC0415
+    import re  # noqa: PLC0415
+
+    from tzsl.studies import _outputs  # noqa: PLC0415
+
+    commit = _outputs.source_commit()  # this checkout: a short sha (maybe -dirty), or None outside git
+    assert commit is None or re.fullmatch(r"[0-9a-f]{12}(-dirty)?", commit), commit
+    monkeypatch.setattr(_outputs, "source_commit", lambda: "0123abcd4567")
+    results = _outputs.ResultsDir(tmp_path)
+    monkeypatch.setattr(_outputs, "source_commit", lambda: "89abcdef0123")
+    results.write_manifest({})
+    assert json.loads((tmp_path / "manifest.json").read_text())["commit"] == "0123abcd4567"

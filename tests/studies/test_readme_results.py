@@ -10,7 +10,19 @@ import pandas as pd
 import pytest
 
 from tzsl.exceptions import ConfigError
-from tzsl.reporting.readme_results import BEGIN, END, begin, end, evidence_block, main, results_block, update_file
+from tzsl.reporting.benchmark_blocks import MissingResults
+from tzsl.reporting.readme_results import (
+    BEGIN,
+    END,
+    begin,
+    end,
+    evidence_block,
+    evidence_summary_block,
+    main,
+    produced_by,
+    results_block,
+    update_file,
+)
 from tzsl.studies.reproduce import reproduce_tables
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -93,6 +105,10 @@ def test_errors(tmp_path):
 def test_repository_readme_has_the_block():
     text = (REPO / "README.md").read_text()
     assert text.count(BEGIN) == 1 and text.count(END) == 1
+    assert text.count(begin("evidence")) == 1 and text.count(end("evidence")) == 1  # the papers', then the evidence
+    assert text.index(END) < text.index(begin("evidence"))
+    docs = (REPO / "docs" / "user_guide" / "reproducing.md").read_text()
+    assert docs.count(begin("results-evidence")) == 1
     bench = (REPO / "experiments" / "benchmarks" / "README.md").read_text()
     assert bench.count(begin("phac2-accuracy-benchmark")) == 1 and bench.count(end("phac2-accuracy-benchmark")) == 1
 
@@ -107,8 +123,12 @@ def test_check_on_a_tiny_reproduce_run_passes_then_fails_on_drift(tmp_path):
     readme = tmp_path / "README.md"
     readme.write_text((REPO / "README.md").read_text())
     assert main([str(tmp_path / "results"), str(readme), "--check"]) == 1  # the repository's block is another run's
+    evidence_before = readme.read_text().split(begin("evidence"))[1]
     assert main([str(tmp_path / "results"), str(readme)]) == 0
     assert main([str(tmp_path / "results"), str(readme), "--check"]) == 0
+    assert readme.read_text().split(begin("evidence"))[1] == evidence_before  # not the evidence folder: left as is
+    assert "written by `tzsl reproduce-tables` at commit `" in readme.read_text() or \
+        "written by `tzsl reproduce-tables`, commit not recorded" in readme.read_text()
     table = pd.read_csv(tmp_path / "results" / "hand_table5.csv")
     mean = table["seed"].astype(str) == "mean"
     assert f"{table.loc[mean, 'all'].iloc[0]:.3f} [" in readme.read_text()
@@ -278,7 +298,7 @@ def test_the_readme_block_holds_the_headlines_and_the_evidence_block_the_rest(tm
     readme, evidence = results_block(root), evidence_block(root)
     assert "| method | phac2, random splits" in evidence and "| method | phac2" not in readme
     assert "| result | ours [95% CI]" in readme
-    with pytest.raises(ConfigError, match="neither dap_fusion_prior.csv nor method_comparison.csv"):
+    with pytest.raises(MissingResults, match="neither dap_fusion_prior.csv nor method_comparison.csv"):
         evidence_block(_results(tmp_path / "bare"))
 
 
@@ -320,3 +340,66 @@ def test_grid_summary_and_pairs_report_the_share_at_a_grid_edge(tmp_path, accura
     block = benchmark_accuracy_block(out)
     assert "| method | random (3 splits, confirm, seed 1) | diff |" in block
     assert f"| `dap-avg[adaptive]` | `dap-avg[extended]` | 3 | {row['diff']:+.3f} [" in block
+
+
+def _comparison(root: Path) -> Path:
+    """A stacked method_comparison.csv as ``tzsl evidence`` writes it (two studies, one split kind each)."""
+    pd.DataFrame({
+        "study": ["phac2", "phac2", "phac2", "hand", "hand"], "data": ["real"] * 3 + ["simulated"] * 2,
+        "split_kind": ["random", "random", "random", "paper", "paper"],
+        "method": ["dap-avg", "sae", "ale", "ldap", "sae"],
+        "accuracy": [0.3, 0.36, 0.25, 0.44, None], "ci95_low": [0.2, 0.25, 0.15, 0.37, None],
+        "ci95_high": [0.4, 0.47, 0.35, 0.51, None], "chance": [0.1, 0.1, 0.1, 0.1, 0.1],
+        "difference": [None, 0.06, -0.05, None, None], "difference_ci95_low": [None, 0.01, -0.1, None, None],
+        "difference_ci95_high": [None, 0.11, 0.0, None, None], "reference": ["dap-avg"] * 3 + ["ldap"] * 2,
+        "note": ["", "", "", "", "not run"]}).to_csv(root / "method_comparison.csv", index=False)
+    return root
+
+
+def test_evidence_summary_pairs_each_study_reference_with_its_most_accurate_method(tmp_path):
+    root = tmp_path / "evidence"
+    root.mkdir()
+    (root / "manifest.json").write_text('{"study_list": "evidence", "commit": "0123abcd4567"}')
+    block = evidence_summary_block(_comparison(root))
+    assert "written by `tzsl evidence` at commit `0123abcd4567`" in block
+    assert ("| phac2 (random) | `dap-avg` 0.300 [0.200, 0.400] | `sae` 0.360 [0.250, 0.470] | "
+            "+0.060 [+0.010, +0.110] | 0.100 |") in block
+    assert "hand" not in block.split("| chance |")[1]  # no other method with an accuracy: no row
+    with pytest.raises(MissingResults, match="run `make evidence` first"):
+        evidence_summary_block(tmp_path / "missing")
+    with pytest.raises(MissingResults, match="no method_comparison.csv"):
+        evidence_summary_block(_results(tmp_path / "papers"))
+
+
+def test_produced_by_names_the_command_and_commit_or_says_what_is_missing(tmp_path):
+    assert produced_by(tmp_path) == "no manifest.json: command and commit not recorded"
+    (tmp_path / "manifest.json").write_text('{"study_list": "reproduce-tables", "commit": null}')
+    assert produced_by(tmp_path) == "`tzsl reproduce-tables`, commit not recorded"
+    (tmp_path / "manifest.json").write_text('{"commit": "abc-dirty"}')
+    assert produced_by(tmp_path) == "a command not recorded at commit `abc-dirty`"
+
+
+def test_each_block_reads_its_own_folder(tmp_path):
+    """--block: the README's papers block from the papers' folder, its evidence block from the evidence
+    folder; the evidence block is left as it is while that folder is missing, and says so."""
+    papers = _results(tmp_path / "results")
+    readme = tmp_path / "README.md"
+    readme.write_text(f"{BEGIN}\nold\n{END}\n{begin('evidence')}\nnot yet\n{end('evidence')}\n")
+    left: list[str] = []
+    assert not update_file(readme, tmp_path / "results" / "evidence", blocks=["evidence"], left=left)
+    assert "not yet" in readme.read_text() and any("block evidence left as it is" in line for line in left)
+    assert main([str(papers), str(readme), "--block", "readme"]) == 0
+    assert "old" not in readme.read_text() and "not yet" in readme.read_text()
+    (papers / "evidence").mkdir()
+    evidence = _comparison(papers / "evidence")
+    assert main([str(evidence), str(readme), "--block", "evidence", "--check"]) == 1
+    assert main([str(evidence), str(readme), "--block", "evidence"]) == 0
+    assert "not yet" not in readme.read_text() and "| phac2 (random) | `dap-avg`" in readme.read_text()
+    assert main([str(papers), str(readme), "--block", "readme", "--check"]) == 0  # the papers' block still reads
+    # results/table1_fusion.csv, not the evidence folder's copy beneath it
+    moved = (papers / "table1_fusion.csv").read_text().replace("0.31,", "0.91,")
+    assert moved != (papers / "table1_fusion.csv").read_text()
+    (evidence / "table1_fusion.csv").write_text(moved)
+    assert main([str(papers), str(readme), "--block", "readme", "--check"]) == 0
+    with pytest.raises(ConfigError, match="has no block 'nope'"):
+        update_file(readme, papers, blocks=["nope"])

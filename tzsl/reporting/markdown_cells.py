@@ -24,6 +24,8 @@ def ours(row: pd.Series, column: str, low: str | None = None, high: str | None =
 
 
 def find_table(root: Path, name: str) -> pd.DataFrame | None:
-    """The first ``name`` under the folder ``root`` (searched recursively, sorted paths), or None."""
-    found = sorted(root.rglob(name)) if root.is_dir() else []
+    """The ``name`` nearest the top of the folder ``root`` (searched recursively; among equally deep
+    ones the first sorted path), or None: ``results/table1_fusion.csv`` wins over
+    ``results/evidence/table1_fusion.csv``."""
+    found = sorted(root.rglob(name), key=lambda p: (len(p.relative_to(root).parts), p)) if root.is_dir() else []
     return pd.read_csv(found[0]) if found else None

@@ -1,30 +1,39 @@
 """Generated number blocks: every number the README, the docs and the benchmark READMEs publish.
 
-``python -m tzsl.reporting.readme_results SOURCE TARGET [--check]`` rewrites each block of the
-Markdown file ``TARGET`` between ``<!-- results:begin NAME (...) -->`` and
-``<!-- results:end NAME -->`` (:func:`begin`, :func:`end`) with the Markdown that :data:`BLOCKS`
-``[NAME]`` makes from the CSVs under the folder ``SOURCE``, written by the shipped code:
+``python -m tzsl.reporting.readme_results SOURCE TARGET [--check] [--block NAME ...]`` rewrites each
+block (or only the blocks named) of the Markdown file ``TARGET`` between
+``<!-- results:begin NAME (...) -->`` and ``<!-- results:end NAME -->`` (:func:`begin`, :func:`end`)
+with the Markdown that :data:`BLOCKS` ``[NAME]`` makes from the CSVs under the folder ``SOURCE``,
+written by the shipped code:
 
-* ``readme`` (README.md, ``make readme-results``): the headline numbers of ``make
-  reproduce-tables``, each as ``ours [95% interval]`` beside its chance or baseline and the
-  paper's number (read from the table, which reads it from the code's paper-value tables);
-* ``results-evidence`` (``docs/user_guide/reproducing.md``): the evidence behind them from the same
-  folder: DAP variants and methods per split kind with paired differences and the split and
-  seed-refit spreads, and every method x study of ``method_comparison.csv``;
+* ``readme`` (README.md): the papers' numbers, from the folder of ``make reproduce-tables``, each
+  as ``ours [95% interval]`` beside its chance or baseline and the paper's number (read from the
+  table, which reads it from the code's paper-value tables);
+* ``evidence`` (README.md): the evidence beyond the papers, from the folder of ``make evidence``:
+  per study and split kind, the paper's method and the most accurate other method with their
+  paired difference (``method_comparison.csv``);
+* ``results-evidence`` (``docs/user_guide/reproducing.md``): the same folder in full: DAP variants
+  and methods per split kind on many splits with paired differences and the split and seed-refit
+  spreads, and every method x study of ``method_comparison.csv``;
 * the benchmarks' blocks (:mod:`tzsl.reporting.benchmark_blocks`), each from its own CSV:
   ``phac2-accuracy-benchmark``, ``phac2-best-method`` and ``eszsl-public-benchmark``
   (``experiments/benchmarks/README.md``), ``attribute-search-benchmark``
-  (``docs/user_guide/performance.md``); a block whose CSV is missing is left as it is.
+  (``docs/user_guide/performance.md``).
 
-``make numbers`` runs it on every target; ``--check`` (``make numbers-check``) exits with
-status 1 when a block differs from what the results give. Tables that are missing are left
-out; nothing is typed by hand (:mod:`tzsl.reporting.typed_numbers` finds numbers typed
-outside the blocks).
+A block whose CSVs are missing (the benchmarks', the evidence blocks') is left as it is and the run
+says so; the ``readme`` block needs its folder. The papers' and the evidence blocks name the
+command and the commit that wrote their folder (its ``manifest.json``).
+
+``make numbers`` runs it on every (target, blocks, folder) of the Makefile's ``NUMBERS``;
+``--check`` (``make numbers-check``) exits with status 1 when a block differs from what the
+results give. Tables that are missing are left out; nothing is typed by hand
+(:mod:`tzsl.reporting.typed_numbers` finds numbers typed outside the blocks).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import re
 import sys
 from collections.abc import Callable
@@ -43,7 +52,7 @@ from tzsl.reporting.benchmark_blocks import (
 from tzsl.reporting.markdown_cells import find_table, number, ours
 
 __all__ = ["BEGIN", "BLOCKS", "END", "begin", "block_spans", "comparison_lines", "end", "evidence_block",
-           "headline_lines", "main", "results_block", "update_file"]
+           "evidence_summary_block", "headline_lines", "main", "produced_by", "results_block", "update_file"]
 
 
 _MARKER = re.compile(r"<!-- results:(begin|end) ([\w-]+)[^>]*-->")
@@ -65,6 +74,23 @@ Row = tuple[str, str, str, str]  # result, ours [interval], baseline, paper
 
 #: Fabric methods shown in the README (every lambda is in fabric_table1.csv and the report).
 README_FABRIC_METHODS = ("lam_0", "ESZSL")
+
+
+def produced_by(root: Path) -> str:
+    """Which command and commit wrote the results folder ``root``, from its ``manifest.json``.
+
+    ``"`tzsl reproduce-tables` at commit `0123abcd4567`"``; says what is not recorded (no
+    manifest, a manifest of a single study, a run outside a git checkout).
+    """
+    path = root / "manifest.json"
+    try:
+        manifest = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return "no manifest.json: command and commit not recorded"
+    command = manifest.get("study_list")
+    commit = manifest.get("commit")
+    text = f"`tzsl {command}`" if command else "a command not recorded"
+    return text + (f" at commit `{commit}`" if commit else ", commit not recorded")
 
 
 def _first(table: pd.DataFrame, column: str, value) -> pd.Series | None:
@@ -247,7 +273,7 @@ def results_block(results: str | Path) -> str:
         raise ConfigError(f"{root}: none of the result tables (table1_fusion.csv, fabric_table1.csv, "
                           "hand_table5.csv) found")
     lines = [
-        f"Generated from `{root.name}/*.csv` by `make numbers`. Ours: point value "
+        f"Generated by `make numbers` from `{root.name}/*.csv`, written by {produced_by(root)}. Ours: point value "
         "[95% bootstrap interval over splits (seeds) and test classes]; baselines and the paper's number beside.",
         "",
         "| result | ours [95% CI] | chance / baseline | paper |",
@@ -257,26 +283,74 @@ def results_block(results: str | Path) -> str:
     return "\n".join(lines)
 
 
+def _evidence_folder(results: str | Path) -> Path:
+    """``results`` as the folder of ``make evidence``; :class:`MissingResults` when it is not there."""
+    root = Path(results)
+    if not root.is_dir():
+        raise MissingResults(f"{root}: no such results folder; run `make evidence` first")
+    return root
+
+
 def evidence_block(results: str | Path) -> str:
-    """The evidence behind the headlines (``docs/user_guide/reproducing.md``): DAP variants and methods
-    per split kind with paired differences and both spreads, and every method x study.
+    """The evidence in full (``docs/user_guide/reproducing.md``): DAP variants and methods per split kind
+    on many splits with paired differences and both spreads, and every method x study.
 
     Raises
     ------
-    ConfigError
+    MissingResults
         ``results`` is not a folder or holds neither ``dap_fusion_prior.csv`` nor ``method_comparison.csv``.
     """
-    root = Path(results)
-    if not root.is_dir():
-        raise ConfigError(f"{root}: no such results folder; run `make reproduce-tables` first")
+    root = _evidence_folder(results)
     lines = headline_lines(root) + comparison_lines(root)
     if not lines:
-        raise ConfigError(f"{root}: neither dap_fusion_prior.csv nor method_comparison.csv found")
-    return "\n".join([f"Generated from `{root.name}/*.csv` by `make numbers`."] + lines)
+        raise MissingResults(f"{root}: neither dap_fusion_prior.csv nor method_comparison.csv found; "
+                             "run `make evidence` first")
+    return "\n".join([f"Generated by `make numbers` from `{root.name}/*.csv`, written by {produced_by(root)}."]
+                     + lines)
+
+
+def evidence_summary_block(results: str | Path) -> str:
+    """The evidence in short (README): per study and split kind of ``method_comparison.csv``, the
+    reference (the paper's method), the most accurate other method and their paired difference.
+
+    Raises
+    ------
+    MissingResults
+        ``results`` is not a folder or has no ``method_comparison.csv`` with an accuracy.
+    """
+    root = _evidence_folder(results)
+    table = find_table(root, "method_comparison.csv")
+    if table is None or "accuracy" not in table or table["accuracy"].isna().all():
+        raise MissingResults(f"{root}: no method_comparison.csv; run `make evidence` first")
+    kinds = table["split_kind"].fillna("").astype(str) if "split_kind" in table.columns else pd.Series("", table.index)
+    table = table.assign(column=list(zip(table["study"], kinds)))
+    lines = [f"Generated by `make numbers` from `{root.name}/method_comparison.csv`, written by {produced_by(root)}. "
+             "Per study and split kind: the paper's method (reference), the most accurate of the other methods "
+             "there (picked on these same splits, so optimistic) and their paired difference on the same test "
+             "trials, each with its 95% interval ([every method x study](docs/user_guide/reproducing.md"
+             "#the-evidence-beyond-the-papers)).", "",
+             "| study (split kind) | reference [95% CI] | most accurate other method [95% CI] | Δ to reference "
+             "[95% CI] | chance |", "|---|---|---|---|---|"]
+    for (study, kind), sub in table.groupby("column", sort=False):
+        reference = str(sub["reference"].iloc[0])
+        ref = sub[sub["method"] == reference]
+        others = sub[(sub["method"] != reference) & sub["accuracy"].notna()]
+        if ref.empty or others.empty:
+            continue
+        best = others.loc[others["accuracy"].idxmax()]
+        named = f"{study} ({kind})" if kind else study
+        if "data" in sub.columns and (sub["data"] == "simulated").any():
+            named += ", SIMULATED"
+        chance = sub["chance"].dropna() if "chance" in sub.columns else pd.Series(dtype=float)
+        lines.append(f"| {named} | `{reference}` {ours(ref.iloc[0], 'accuracy', 'ci95_low', 'ci95_high')} | "
+                     f"`{best['method']}` {ours(best, 'accuracy', 'ci95_low', 'ci95_high')} | {_difference(best)} | "
+                     f"{number(chance.iloc[0]) if len(chance) else '-'} |")
+    return "\n".join(lines)
 
 
 #: Block name -> the function that makes its Markdown from a results folder.
-BLOCKS: dict[str, Callable[[Path], str]] = {"readme": results_block, "results-evidence": evidence_block,
+BLOCKS: dict[str, Callable[[Path], str]] = {"readme": results_block, "evidence": evidence_summary_block,
+                                            "results-evidence": evidence_block,
                                             "phac2-accuracy-benchmark": benchmark_accuracy_block,
                                             "attribute-search-benchmark": search_benchmark_block,
                                             "phac2-best-method": best_method_block,
@@ -297,8 +371,8 @@ def block_spans(text: str) -> list[tuple[int, int]]:
 
 
 def update_file(target: str | Path, results: str | Path, check: bool = False,
-                left: list[str] | None = None) -> bool:
-    """Rewrite every generated block of ``target`` from ``results``.
+                left: list[str] | None = None, blocks: list[str] | None = None) -> bool:
+    """Rewrite every generated block of ``target`` (or only those named in ``blocks``) from ``results``.
 
     A block whose CSV is not under ``results`` (:class:`~tzsl.reporting.benchmark_blocks.MissingResults`)
     is left as it is, and why is appended to ``left``: one benchmark's numbers are regenerated from its
@@ -312,13 +386,18 @@ def update_file(target: str | Path, results: str | Path, check: bool = False,
     Raises
     ------
     ConfigError
-        ``target`` has no block, a block without its end, or a name not in :data:`BLOCKS`.
+        ``target`` has no block, a block without its end, a name not in :data:`BLOCKS`, or is asked
+        for a block it does not have.
     """
     path = Path(target)
     text = path.read_text(encoding="utf-8")
     names = [m.group(2) for m in _MARKER.finditer(text) if m.group(1) == "begin"]
     if not names:
         raise ConfigError(f"{path}: needs a {begin('NAME')!r} ... {end('NAME')!r} block")
+    if blocks:
+        if missing := [b for b in blocks if b not in names]:
+            raise ConfigError(f"{path}: has no block {', '.join(map(repr, missing))} (it has: {', '.join(names)})")
+        names = [n for n in names if n in blocks]
     new = text
     for name in names:
         if name not in BLOCKS:
@@ -348,10 +427,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("results", type=Path, help="folder of the result CSVs")
     parser.add_argument("target", type=Path, help="Markdown file with generated blocks (README.md, ...)")
     parser.add_argument("--check", action="store_true", help="exit 1 if a block is out of date")
+    parser.add_argument("--block", action="append", default=None, metavar="NAME",
+                        help="only this block (repeatable; default: every block of TARGET)")
     args = parser.parse_args(argv)
     left: list[str] = []
     try:
-        changed = update_file(args.target, args.results, check=args.check, left=left)
+        changed = update_file(args.target, args.results, check=args.check, left=left, blocks=args.block)
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 3

@@ -16,10 +16,12 @@ back or averaged as floats) as integers (``10``, not ``10.0``; missing values st
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import platform
 import shutil
+import subprocess
 import sys
 from collections.abc import Iterable
 from datetime import datetime, timezone
@@ -47,6 +49,31 @@ RECORDED_PACKAGES: tuple[str, ...] = (
     "tzsl", "numpy", "scipy", "scikit-learn", "pandas", "joblib", "pydantic", "skops",
     "h5py", "matplotlib", "scikit-image", "imageio", "jinja2", "dask", "distributed", "torch",
 )
+
+
+@functools.lru_cache(maxsize=1)
+def source_commit() -> str | None:
+    """The git commit of the tzsl source that runs (``<sha>-dirty`` when tracked files differ from it).
+
+    Read once per process, when the first results folder is opened (:class:`ResultsDir`): the code a
+    run imported, even if the checkout moves on while it runs. None when tzsl does not run from a
+    git checkout (an installed wheel) or git is missing: the manifest then says so instead of
+    naming a commit.
+    """
+    source = Path(__file__).resolve().parents[2]
+
+    def git(*args: str) -> str | None:
+        try:
+            done = subprocess.run(["git", "-C", str(source), *args], capture_output=True, text=True, check=False,
+                                  timeout=30)
+        except (OSError, subprocess.SubprocessError):
+            return None
+        return done.stdout.strip() if done.returncode == 0 else None
+
+    if not (source / ".git").exists() or (sha := git("rev-parse", "--short=12", "HEAD")) is None:
+        return None
+    changed = git("status", "--porcelain", "--untracked-files=no")
+    return f"{sha}-dirty" if changed else sha
 
 
 def package_versions(names: Iterable[str] = RECORDED_PACKAGES) -> dict[str, str | None]:
@@ -118,6 +145,7 @@ class ResultsDir:
         self.splits: dict[str, dict[str, Any]] = {}  # every split written, for the manifest
         self.data_files: dict[str, str] = {}  # every data file a manifest recorded: path -> sha256
         self._locked = False
+        self.code_commit = source_commit()  # the git commit of the code that runs, read before it runs
 
     def path(self, name: str) -> Path:
         """Where to write ``name`` (in the staging folder when staging), checked against overwriting."""
@@ -255,6 +283,7 @@ class ResultsDir:
         manifest = {
             "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
             "command": " ".join(sys.argv),
+            "commit": self.code_commit,
             "python": sys.version.split()[0],
             "platform": platform.platform(),
             "packages": package_versions(),
@@ -278,8 +307,8 @@ def prefixed(prefix: str, name: str) -> str:
 class PrefixedResults:
     """A view of a :class:`ResultsDir` that writes every file as ``<prefix>_<name>`` (``[output] prefix``).
 
-    Two runs of one study kind share a results folder this way (``reproduce-tables``: the
-    PHAC-2 paper preset and its many-split headlines). Every other attribute is the folder's.
+    Two runs of one study kind share a results folder this way (``evidence``: the PHAC-2
+    method comparison and its many-split headlines). Every other attribute is the folder's.
     """
 
     def __init__(self, results: ResultsDir, prefix: str) -> None:

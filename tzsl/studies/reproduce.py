@@ -1,18 +1,33 @@
-"""``tzsl reproduce-tables`` / ``make reproduce-tables``: the built-in studies of both papers, in order.
+"""``tzsl reproduce-tables`` and ``tzsl evidence``: two lists of built-in studies, one engine loop.
 
 Not a second code path: each study is the built-in experiment file of the same name
 (``tzsl/studies/builtin/``), run by :func:`tzsl.studies.engine.execute_study` exactly as
-``tzsl run NAME`` runs it, into one results folder with one ``manifest.json``:
+``tzsl run NAME`` runs it, into one results folder with one ``manifest.json``
+(:func:`run_studies`, which both commands call with their list).
+
+``reproduce-tables`` (:data:`REPRODUCE_STUDIES`, ``make reproduce-tables``): what the two papers
+report, with our intervals, chance, baselines and controls beside each number, and nothing else:
 
 * ``phac2-dap``: ``table1_fusion.csv``, ``table2_priors.csv``, ``table3_challenging.csv``,
-  ``multilabel.csv``, ``attribute_accuracy.csv``, ``attribute_sweep.csv``, ``phac2_methods.csv``
+  ``multilabel.csv``, ``attribute_accuracy.csv``, ``attribute_sweep.csv``, ``dap_fusion_prior.csv``
   and the figures ``attribute_accuracy.png``, ``object_map.png``, ``attribute_sweep.png``; every split
   scored in ``splits.csv`` (readable by ``--splits``);
-* ``fabric``: ``fabric_table1.csv``, ``fabric_runs.csv``, ``fabric_lambda.png`` (+ its own manifest);
+* ``fabric``: ``fabric_table1.csv``, ``fabric_runs.csv``, ``fabric_lambda.png``,
+  ``fabric_method_comparison.csv`` (the lambda grid and ESZSL paired on the same samples) and its manifest;
 * ``hand-simulated``: ``hand_table5.csv`` and its curves, on **simulated** grasps (the
-  Shadow-hand data of the paper are not public);
+  Shadow-hand data of the paper are not public).
+
+``evidence`` (:data:`EVIDENCE_STUDIES`, ``make evidence``): what goes beyond the papers:
+
+* ``phac2-evidence``: every registered method beside DAP on the random and challenging PHAC-2
+  splits (``phac2_methods.csv``, ``phac2_method_comparison.csv`` with ECE and Brier score,
+  ``phac2_reliability.csv`` / ``.png``) and GZSL (``gzsl.csv``);
+* ``fabric-evidence``, ``hand-evidence``: the generic zero-shot study on the preset's dataset
+  (``fabric-depth_*``, ``hand-simulated_*``), every registry method beside the paper's protocol,
+  the fabric group partitions (``fabric_partitions.csv``);
 * ``active-touch``: ``active_touch.csv``, ``active_touch_curves.csv``, ``active_touch_stop.csv``
-  and ``active_touch.png`` (choosing the next EP on PHAC-2 vs every fixed and a random order).
+  and ``active_touch.png`` (choosing the next EP on PHAC-2 vs every fixed and a random order);
+* ``phac2-headlines``: 50 random and every challenging PHAC-2 split, seed refits (``headlines_*``);
 * ``method_comparison.csv``: the studies' ``*_method_comparison.csv`` stacked (every registered
   method x study: accuracy with its interval, the paper's number, fit time, paired difference to
   the study's paper method), with a row saying why for each method a study does not run.
@@ -25,15 +40,26 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from tzsl.exceptions import PartialRunError
 from tzsl._profile import profiling
 from tzsl._warnings import recorded_warnings
-from tzsl.studies._outputs import ResultsDir
 
-#: The manifest of ``reproduce-tables``: built-in studies, run in this order.
-REPRODUCE_STUDIES: tuple[str, ...] = ("phac2-dap", "fabric", "hand-simulated", "active-touch")
+if TYPE_CHECKING:  # the module stays light: the command line reads its lists for --help
+    from tzsl.studies._outputs import ResultsDir
+
+__all__ = ["EVIDENCE_STUDIES", "REPRODUCE_STUDIES", "STUDY_LISTS", "evidence", "reproduce_experiments",
+           "reproduce_tables", "run_studies"]
+
+#: The manifest of ``reproduce-tables``: the papers' built-in studies, run in this order.
+REPRODUCE_STUDIES: tuple[str, ...] = ("phac2-dap", "fabric", "hand-simulated")
+#: The manifest of ``evidence``: the built-in studies beyond the papers, run in this order.
+EVIDENCE_STUDIES: tuple[str, ...] = ("phac2-evidence", "fabric-evidence", "hand-evidence", "active-touch",
+                                     "phac2-headlines")
+#: Command -> (its default studies, whether it stacks their method comparisons into ``method_comparison.csv``).
+STUDY_LISTS: dict[str, tuple[tuple[str, ...], bool]] = {"reproduce-tables": (REPRODUCE_STUDIES, False),
+                                                        "evidence": (EVIDENCE_STUDIES, True)}
 
 
 def reproduce_experiments(studies=REPRODUCE_STUDIES, **overrides: Any) -> list:
@@ -49,21 +75,35 @@ def reproduce_experiments(studies=REPRODUCE_STUDIES, **overrides: Any) -> list:
     return experiments
 
 
-def reproduce_tables(
+def run_studies(
+    command: str,
     out: str | Path,
     force: bool = False,
     echo: Callable[[str], None] | None = None,
-    studies: tuple[str, ...] = REPRODUCE_STUDIES,
+    studies: tuple[str, ...] | None = None,
     **overrides: Any,
 ) -> ResultsDir:
-    """Run the built-in ``studies`` into ``out``; returns the results folder.
+    """Run the studies of ``command`` (a key of :data:`STUDY_LISTS`) into ``out``; returns the results folder.
 
-    ``overrides``: ``n_jobs``, ``seed``, ``backend``, ``scheduler``, ``progress``, ``data_dir``
-    (each applied to the studies that have the key).
+    Parameters
+    ----------
+    command : {"reproduce-tables", "evidence"}
+        Names the list (recorded in the manifest as ``study_list``, which the README's blocks name)
+        and says whether the studies' method comparisons are stacked into ``method_comparison.csv``.
+    out : str or Path
+        Results folder; existing results are refused before any study unless ``force``.
+    studies : tuple of str or None
+        Built-in names or experiment files (default: the command's list).
+    overrides
+        ``n_jobs``, ``seed``, ``backend``, ``scheduler``, ``progress``, ``data_dir`` (each applied to
+        the studies that have the key).
     """
     from tzsl.studies.engine import check_experiment, execute_study, manifest_record  # noqa: PLC0415
     from tzsl.studies.config import get_study  # noqa: PLC0415
+    from tzsl.studies._outputs import ResultsDir  # noqa: PLC0415
 
+    default, stack = STUDY_LISTS[command]
+    studies = default if studies is None else tuple(studies)
     say = echo or (lambda _msg: None)
     experiments = reproduce_experiments(studies, **overrides)
     results = ResultsDir(out, force=force, staging=True)
@@ -72,7 +112,9 @@ def reproduce_tables(
         outputs = get_study(exp.study).hook("outputs")
         if outputs is not None:
             results.check_free(outputs(exp.config))
-    results.check_free(["manifest.json", "method_comparison.csv"])
+    from tzsl.studies.study_methods import COMPARISON_FILE, FEW_CLASSES, combine_comparisons  # noqa: PLC0415
+
+    results.check_free(["manifest.json"] + ([COMPARISON_FILE] if stack else []))
     records, data_files, timings, tables, done_tables, warned, profiles = {}, [], {}, [], [], {}, []
     failures: list[str] = []
     for name, exp in zip(studies, experiments, strict=True):
@@ -89,16 +131,28 @@ def reproduce_tables(
         tables += sorted(done.tables)
         failures += [f"{name}: {line}" for line in done.failures]
         done_tables += [t for key, t in done.tables.items() if key.endswith("method_comparison")]
-    if done_tables:
-        from tzsl.studies.study_methods import COMPARISON_FILE, FEW_CLASSES, combine_comparisons  # noqa: PLC0415
-
+    if stack and done_tables:
         dap = {name: FEW_CLASSES for name in ("dap-avg", "dap-max", "multilabel-dap")}
         results.write_csv(COMPARISON_FILE, combine_comparisons(done_tables, {"fabric": dap, "hand": dap}))
         tables.append(COMPARISON_FILE[: -len(".csv")])
     results.write_manifest({"studies": records}, data_files=data_files,
-                           extra={"timings_s": timings, "tables": tables, "reproduce_studies": list(studies),
-                                  "failures": failures, "warnings": warned, "profile": profiles})
+                           extra={"study_list": command, "timings_s": timings, "tables": tables,
+                                  "reproduce_studies": list(studies), "failures": failures, "warnings": warned,
+                                  "profile": profiles})
     results.commit()
     if failures:
         raise PartialRunError(results.root, failures)
     return results
+
+
+def reproduce_tables(out: str | Path, force: bool = False, echo: Callable[[str], None] | None = None,
+                     studies: tuple[str, ...] = REPRODUCE_STUDIES, **overrides: Any) -> ResultsDir:
+    """``tzsl reproduce-tables``: the papers' studies into ``out`` (:func:`run_studies`)."""
+    return run_studies("reproduce-tables", out, force=force, echo=echo, studies=studies, **overrides)
+
+
+def evidence(out: str | Path, force: bool = False, echo: Callable[[str], None] | None = None,
+             studies: tuple[str, ...] = EVIDENCE_STUDIES, **overrides: Any) -> ResultsDir:
+    """``tzsl evidence``: the studies beyond the papers into ``out``, with ``method_comparison.csv``
+    (:func:`run_studies`)."""
+    return run_studies("evidence", out, force=force, echo=echo, studies=studies, **overrides)

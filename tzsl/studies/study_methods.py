@@ -18,7 +18,7 @@ Every study then scores its methods the same way (:func:`method_summary`): one r
 the fit time, and the paired difference to the paper's method of that study on the same trials;
 where the trials carry posterior columns, the calibration of the class posteriors (ECE and Brier
 score, calibrated and uncalibrated, with intervals: :mod:`tzsl.studies.study_calibration`).
-``tzsl reproduce-tables`` stacks the studies' tables into ``method_comparison.csv``
+``tzsl evidence`` stacks the studies' tables into ``method_comparison.csv``
 (:func:`combine_comparisons`), with a row saying why for every registered method a study cannot
 run (its input differs: grasps, frame sequences).
 """
@@ -59,7 +59,7 @@ __all__ = [
     "takes_seed",
 ]
 
-#: ``tzsl reproduce-tables``' table of every method x study.
+#: ``tzsl evidence``' table of every method x study.
 COMPARISON_FILE = "method_comparison.csv"
 
 #: Columns of every study's method comparison (and of :data:`COMPARISON_FILE`).
