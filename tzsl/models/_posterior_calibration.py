@@ -87,7 +87,7 @@ MIN_FOLD_CLASSES = 2
 #: refits the method on about two thirds of them, so the cost of calibration stops growing with
 #: the data set (``make bench-scale`` measures the whole run); the temperature is one scalar, well
 #: determined by this many held-out trials.
-MAX_CALIBRATION_TRIALS = 2_000
+MAX_CALIBRATION_TRIALS = 1_000
 
 #: Search range of ``log T`` (T from about 0.007 to 150).
 LOG_T_BOUNDS = (-5.0, 5.0)
