@@ -85,8 +85,10 @@ MIN_FOLD_CLASSES = 2
 #: Default ``calibration_max_trials``: training trials the pseudo-unseen folds are dealt on (a larger
 #: training set is subsampled, every class and object keeping its share). With 3 folds each fold
 #: refits the method on about two thirds of them, so the cost of calibration stops growing with
-#: the data set (``make bench-scale`` measures the whole run); the temperature is one scalar, well
-#: determined by this many held-out trials.
+#: the data set; the temperature is one scalar, well determined by this many held-out trials. A
+#: fold refit of a large-data attribute bank then costs little more than its fixed part (the
+#: hyper-parameter search of each attribute model), so the three folds cost less than the final
+#: fit of a large data set (``make bench-scale`` measures the whole run).
 MAX_CALIBRATION_TRIALS = 1_000
 
 #: Search range of ``log T`` (T from about 0.007 to 150).
