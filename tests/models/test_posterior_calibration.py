@@ -28,7 +28,14 @@ from tzsl.models import (
     build_method,
     get_method,
 )
-from tzsl.models.calibration import fit_temperature, pseudo_unseen_scores, tempered_proba
+from tzsl.models import AttributeClassifierBank, AttributeSVM
+from tzsl.models.calibration import (
+    MAX_CALIBRATION_TRIALS,
+    calibration_subsample,
+    fit_temperature,
+    pseudo_unseen_scores,
+    tempered_proba,
+)
 
 MU = 0.8
 
@@ -43,6 +50,7 @@ class TrueAttributePosteriors(BaseEstimator):
 
     def fit(self, X, Y, groups=None):
         self.n_features_in_ = np.asarray(X).shape[1]
+        self.n_trials_ = len(X)
         return self
 
     def predict_proba(self, X):
@@ -209,3 +217,80 @@ def test_folds_refit_with_the_final_fit_s_tuned_hyperparameters():
     assert est.estimator.attribute_model.gammas != (chosen.best_gamma_,)  # the parameter itself is untouched
     sae = build_method("sae", random_state=0).fit(X, rows[y], y)
     assert sae.calibration_info_["pinned"] == f"lams=({sae.estimator_.attribute_model_.best_lam_},)"
+
+
+def test_calibration_subsample_is_bounded_stratified_and_seeded():
+    """Above the bound: at most that many trials, every (class, object) keeps its share; seeded."""
+    codes = np.repeat(np.arange(30), 40)  # 30 classes of 40 trials, two objects each
+    groups = np.repeat(np.arange(60), 20)
+    kept = calibration_subsample(codes, groups, 300, np.random.RandomState(0))
+    assert kept.size <= 300 and np.all(np.diff(kept) > 0)
+    assert np.array_equal(np.bincount(groups[kept], minlength=60), np.full(60, 5))  # 20 * 300 / 1200 each
+    np.testing.assert_array_equal(kept, calibration_subsample(codes, groups, 300, np.random.RandomState(0)))
+    assert not np.array_equal(kept, calibration_subsample(codes, groups, 300, np.random.RandomState(1)))
+    # a class too small for its share keeps one trial; below the bound everything is kept
+    uneven = np.r_[np.zeros(995, int), np.arange(1, 6)]
+    assert np.array_equal(np.unique(uneven[calibration_subsample(uneven, None, 100, np.random.RandomState(0))]),
+                          np.arange(6))
+    np.testing.assert_array_equal(calibration_subsample(codes, groups, 1200, np.random.RandomState(0)),
+                                  np.arange(1200))
+
+
+def test_folds_are_dealt_on_at_most_the_bound_and_recover_the_power(data):
+    X, A, groups, X_test, K, y_test = data  # 600 training trials, 30 classes of 20
+    sizes = []
+
+    def score(fitted, Xv, K):
+        sizes.append((fitted.attribute_model_.n_trials_, len(Xv)))
+        return fitted.decision_function(Xv, K)
+
+    folds = pseudo_unseen_scores(dap(3.0), X, A, groups, n_folds=3, random_state=0, score=score, max_trials=240)
+    assert sum(held for _, held in sizes) == sum(len(y) for _, y, _ in folds) <= 240
+    assert all(fit + held <= 240 for fit, held in sizes)
+    est = CalibratedZeroShotClassifier(estimator=dap(3.0), calibration_max_trials=240, random_state=0)
+    est.fit(X, A, groups)
+    info = est.calibration_info_
+    assert info["n_held_out_trials"] <= 240 and info["n_training_trials"] == len(X)
+    assert est.temperature_ == pytest.approx(3.0, rel=0.3)
+    assert _ece(est.predict_proba(X_test, K), y_test) < 0.06
+    again = CalibratedZeroShotClassifier(estimator=dap(3.0), calibration_max_trials=240, random_state=0)
+    assert again.fit(X, A, groups).temperature_ == est.temperature_  # seeded
+
+
+def test_calibration_below_the_bound_is_unchanged():
+    """Fewer training trials than the bound: the same folds and temperature as with no bound at all."""
+    rng = np.random.default_rng(12)
+    rows, X, y = simulate(rng, 24, 10)
+    eszsl = ZeroShotClassifier(attribute_model=ESZSL(), decision_rule=CompatibilityRule())
+    assert len(X) < MAX_CALIBRATION_TRIALS
+    bounded = CalibratedZeroShotClassifier(estimator=eszsl, random_state=3).fit(X, rows[y], y)
+    unbounded = CalibratedZeroShotClassifier(estimator=eszsl, calibration_max_trials=None,
+                                             random_state=3).fit(X, rows[y], y)
+    at_size = CalibratedZeroShotClassifier(estimator=eszsl, calibration_max_trials=len(X),
+                                           random_state=3).fit(X, rows[y], y)
+    assert bounded.calibration_info_ == unbounded.calibration_info_ == at_size.calibration_info_
+    assert bounded.calibration_info_["n_held_out_trials"] == len(X)
+
+
+def test_folds_keep_the_attribute_bank_s_solver():
+    """A bank fitted approximately (above max_exact_trials) is refitted approximately on the smaller folds."""
+    rng = np.random.default_rng(13)
+    rows, X, y = simulate(rng, 12, 15, n_attributes=4)
+    solvers = []
+
+    def score(fitted, Xv, K):
+        solvers.append(fitted.attribute_model_.solver_choice_["solver"])
+        return fitted.decision_function(Xv, K)
+
+    bank = AttributeClassifierBank(estimator=AttributeSVM(n_C=2, n_gamma=1), max_exact_trials=150, random_state=0)
+    clf = ZeroShotClassifier(attribute_model=bank, decision_rule=DAPRule(prior="uni"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        est = CalibratedZeroShotClassifier(estimator=clf, random_state=0).fit(X[:, None, :], rows[y], y)
+        assert est.estimator_.attribute_model_.solver_choice_["solver"] == "approximate"  # 180 > 150 trials
+        assert est.calibration_info_["pinned"] == "solver=approximate"
+        from tzsl.models._posterior_calibration import _pinned  # the template the folds refit
+
+        template = _pinned(clone(clf), est.estimator_)
+        pseudo_unseen_scores(template, X[:, None, :], rows[y], y, random_state=0, score=score)
+    assert solvers == ["approximate"] * 3  # each fold trains on about 120 < 150 trials

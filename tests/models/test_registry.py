@@ -23,6 +23,7 @@ from tzsl.models import (
     register_method,
     unregister_method,
 )
+from tzsl.models.calibration import MAX_CALIBRATION_TRIALS
 from tzsl.models.protocol import training_classes
 
 
@@ -59,7 +60,7 @@ def test_toy_method_fits_and_predicts_through_the_registry(toy_method):
     method = get_method("toy-ncm")
     assert method.attribute_model is toy_method and method.parameters() == {
         "shrink": 0.0, "metric": "sqeuclidean", "random_state": None, "calibration": "temperature",
-        "calibration_folds": 3}
+        "calibration_folds": 3, "calibration_max_trials": MAX_CALIBRATION_TRIALS}
     rng = np.random.default_rng(0)
     rows = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0], [0, 1, 1]], float)
     y = np.repeat(np.arange(5), 10)

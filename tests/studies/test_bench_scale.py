@@ -21,3 +21,14 @@ def test_goal_line_reads_each_worker_against_the_goals():
     assert "memory per worker" in goal_line(1_000_000, WALL_GOAL_S * 2, [low, high]).split("NOT met")[0]
     assert goal_line(1_000_000, WALL_GOAL_S * 2, [low, low]).count("NOT met") == 1  # the wall only
     assert "wall" not in goal_line(100_000, WALL_GOAL_S * 2, [low, low])  # the wall goal is for a million trials
+
+
+def test_benchmark_runs_dap_and_eszsl_unless_dap_only():
+    """Issue 33's scale benchmark is DAP + ESZSL (the method comparison, with calibrated posteriors)."""
+    import tomllib
+
+    from tzsl.benchmarks.bench_scale import _TOML
+
+    fields = dict(n=10, plain="p", seed=0, n_jobs=2, backend="loky", scheduler="", out="o")
+    assert tomllib.loads(_TOML.format(**fields, eszsl="true"))["methods"]["eszsl"] is True
+    assert tomllib.loads(_TOML.format(**fields, eszsl="false"))["methods"]["eszsl"] is False

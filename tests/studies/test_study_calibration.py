@@ -7,15 +7,22 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+import pytest
 
+from tzsl.evaluation import Split
+from tzsl.models import AttributeClassifierBank, AttributeSVM, CalibratedZeroShotClassifier, CalibrationWarning
+from tzsl.models import ZSLInputError
 from tzsl.reporting.report import render_report
+from tzsl.studies import study_calibration
 from tzsl.studies.study_calibration import (
     CALIBRATION_COLUMNS,
+    dap_split_posteriors,
     posterior_columns,
     reliability_by_method,
     reliability_figure,
 )
 from tzsl.studies.study_methods import COMPARISON_COLUMNS, comparison_trials, method_summary
+from tzsl.studies.zero_shot.study import SplitPosteriors
 
 
 def _split(rng, n_classes=10, trials=30):
@@ -73,3 +80,30 @@ def test_reliability_table_figure_and_report_section(tmp_path):
     page = render_report(root)
     assert 'id="calibration"' in page and page.index('id="calibration"') < page.index("phac2_reliability.png")
     assert "phac2_reliability.csv" in page and "ece_uncalibrated" in page and "brier" in page
+
+
+def test_dap_split_calibration_uses_the_calibrator_s_bound_and_the_split_s_solver(monkeypatch):
+    """The DAP study's folds are dealt on at most the calibrator's default number of trials, and refit
+    the split's attribute bank with the solver its fit chose (here approximate, on few trials)."""
+    rng = np.random.default_rng(0)
+    rows = np.array([[1, 0], [0, 1], [1, 1], [0, 0], [1, 0], [0, 1]])
+    objects = np.repeat(np.arange(6), 8)
+    X = rows[objects][:, None, :] + 0.5 * rng.standard_normal((48, 1, 2))
+    bank = AttributeClassifierBank(estimator=AttributeSVM(n_C=1, n_gamma=1), max_exact_trials=40, random_state=0)
+    bank.fit(X, rows[objects], objects)
+    seen = {}
+
+    def record(clf, X_train, A_train, groups_train, **kwargs):
+        seen.update(kwargs, solver=clf.attribute_model.solver)
+        raise ZSLInputError("recorded")  # the study then keeps T = 1: nothing else to fit here
+
+    monkeypatch.setattr(study_calibration, "pseudo_unseen_scores", record)
+    split = Split(name="random-1", train_objects=tuple(map(str, range(6))), test_objects=("a", "b"),
+                  attributes=("h", "s"))
+    r = SplitPosteriors(split=split, attributes=("h", "s"), P=rng.random((4, 1, 2)), K=np.array([[1, 0], [0, 1]]),
+                        y=np.array([0, 1, 0, 1]), train_prior=np.array([0.5, 0.5]), model=bank)
+    with pytest.warns(CalibrationWarning, match="recorded"):
+        out = dap_split_posteriors(r, X, rows[objects], objects, fusions=("avg",))
+    assert seen["max_trials"] == CalibratedZeroShotClassifier().calibration_max_trials
+    assert bank.solver_choice_["solver"] == seen["solver"] == "approximate"  # 48 trials > 40; its folds: fewer
+    assert out["dap-avg"][2] == 1.0

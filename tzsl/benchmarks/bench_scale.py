@@ -3,7 +3,9 @@
 For each size N it writes a synthetic plain-file dataset with
 :func:`tzsl.datasets.write_synthetic_dataset` (60 classes, 30 attributes, 2 sensors, 32 features;
 SIMULATED, see that module), then runs ``tzsl run`` on it in a child process - study phac2-dap,
-one random split of 10 unseen classes, every other setting the schema's default - and prints
+one random split of 10 unseen classes, DAP and ESZSL (the method comparison, with both methods'
+posteriors calibrated on pseudo-unseen training classes; ``--dap-only`` leaves ESZSL and the
+comparison out), every other setting the schema's default - and prints
 
 * wall time of the run (loading + fits + tables), its CPU time summed over the run's processes
   (``getrusage`` of the reaped children: robust to other load on the machine; on an otherwise idle
@@ -51,6 +53,8 @@ study = "phac2-dap"
 description = "scale benchmark, {n} SIMULATED trials"
 [dataset]
 plain = "{plain}"
+[methods]
+eszsl = {eszsl}
 [splits]
 kinds = ["random"]
 n_splits = 1
@@ -107,11 +111,12 @@ def _cluster(backend: str, n_workers: int):
 
 
 def run_one(n: int, work: Path, *, n_jobs: int, backend: str, table_format: str, seed: int,
-            extra_args: tuple[str, ...] = ()) -> dict:
+            extra_args: tuple[str, ...] = (), eszsl: bool = True) -> dict:
     """Write the N-trial dataset (kept for reuse) and time ``tzsl run`` on it in a child process.
 
     With ``backend="dask"`` the run goes to a fresh local cluster of ``n_jobs`` worker processes,
     whose peak resident memory is sampled too (``peak_worker_gb``: the largest of them).
+    ``eszsl``: also run ESZSL and the method comparison (calibrated DAP and ESZSL posteriors).
     """
     import psutil  # noqa: PLC0415
 
@@ -130,7 +135,7 @@ def run_one(n: int, work: Path, *, n_jobs: int, backend: str, table_format: str,
     with _cluster(backend, n_jobs) as (address, workers):
         scheduler = "" if address is None else f'scheduler = "{address}"\n'
         toml.write_text(_TOML.format(n=n, plain=plain, seed=seed, n_jobs=n_jobs, backend=backend, out=out,
-                                     scheduler=scheduler))
+                                     scheduler=scheduler, eszsl=str(eszsl).lower()))
         start = time.perf_counter()
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         ps, peak, worker_peak = psutil.Process(proc.pid), 0, dict.fromkeys(workers, 0)
@@ -195,6 +200,8 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=None, help="also write the table as CSV here")
     parser.add_argument("--profile", action="store_true", help="run tzsl run --profile and print where its time went")
+    parser.add_argument("--dap-only", action="store_true",
+                        help="DAP alone: no ESZSL, no method comparison (and no calibration of the DAP rows)")
     args = parser.parse_args(argv)
     sizes = [int(s) for s in args.sizes.split(",") if s.strip()]
     args.work.mkdir(parents=True, exist_ok=True)
@@ -204,7 +211,7 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         print(f"N = {n:,} trials ...", flush=True)
         rows.append(run_one(n, args.work.resolve(), n_jobs=args.n_jobs, backend=args.backend,
                             table_format=args.table_format, seed=args.seed,
-                            extra_args=("--profile",) if args.profile else ()))
+                            extra_args=("--profile",) if args.profile else (), eszsl=not args.dap_only))
         r = rows[-1]
         print(f"  SIMULATED: wall {r['wall_s']:.1f} s, CPU {r['cpu_s']:.1f} s, peak {r['peak_tree_gb']:.2f} GB (run's "
               f"process tree) / {r['peak_process_gb']:.2f} GB (one process), AVGDAP {r['avgdap']:.3f} "

@@ -364,6 +364,16 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         self._record_grid_edges(names)
         return self
 
+    def selected_params(self) -> dict:
+        """Parameters that refit this bank with the solver it chose (``{"solver": "exact" | "approximate"}``).
+
+        A refit on part of the training trials (posterior calibration's pseudo-unseen folds, which
+        may be subsampled: :class:`tzsl.models.CalibratedZeroShotClassifier`) then uses the same
+        kind of attribute model as this fit, whatever its number of trials.
+        """
+        check_is_fitted(self)
+        return {"solver": self.solver_choice_["solver"]}
+
     def _record_grid_edges(self, names: list[str]) -> None:
         """Fill ``grid_edge_hits_`` from the fitted estimators; one :class:`GridEdgeWarning` for the batch."""
         self.grid_edge_hits_ = [

@@ -12,6 +12,10 @@ where ``s`` are the method's class scores (DAP: log-posteriors, so ``1 / T`` is 
 exponent on every attribute factor: a tempered product). ``T`` is fitted honestly, on the
 training trials only, by the zero-shot protocol itself:
 
+0. above ``calibration_max_trials`` training trials (default :data:`MAX_CALIBRATION_TRIALS`), the
+   folds are dealt on a seeded subsample of about that many trials, drawn from every (class,
+   object) in proportion to its trials (:func:`calibration_subsample`), so the cost of calibration
+   stops growing with the data set; below it every training trial is used;
 1. the training classes (distinct attribute rows) are dealt into ``calibration_folds``
    class-grouped folds (:func:`tzsl.models.protocol.class_grouped_folds`; which class goes to which fold
    is seeded by ``random_state``);
@@ -25,9 +29,10 @@ training trials only, by the zero-shot protocol itself:
    T``).
 
 The method is fitted on all training trials first; an attribute model that tunes its own
-hyper-parameters and offers ``selected_params()`` (ESZSL's ridges, SAE's ``lam``) is refitted
-on the folds with its choice pinned, so the fold scores have the scale of the final model (a
-re-tuned ridge changes the scale of the class scores, and with it the temperature).
+hyper-parameters and offers ``selected_params()`` (ESZSL's ridges, SAE's ``lam``, the DAP
+attribute bank's exact or approximate solver) is refitted on the folds with its choice pinned, so
+the fold scores have the scale of the final model (a re-tuned ridge, or an exact model where the
+final one is approximate, changes the scale of the class scores, and with it the temperature).
 
 Dividing by ``T > 0`` keeps every trial's ranking, so :meth:`~CalibratedZeroShotClassifier.predict`
 and every accuracy are those of the method alone. Test objects are never used.
@@ -56,6 +61,7 @@ from tzsl._scoring import tempered_proba
 from tzsl.models._attribute_model_base import attribute_table_tags
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_training import GridEdgeWarning
+from tzsl.models._scalable_attribute import share_of_objects
 from tzsl.models._validation import ValidatedParamsMixin
 from tzsl.models._zsl_input import ZSLInputError, class_grouped_folds
 
@@ -63,6 +69,8 @@ __all__ = [
     "CALIBRATIONS",
     "CalibratedZeroShotClassifier",
     "CalibrationWarning",
+    "MAX_CALIBRATION_TRIALS",
+    "calibration_subsample",
     "fit_temperature",
     "pseudo_unseen_scores",
     "tempered_proba",
@@ -73,6 +81,15 @@ CALIBRATIONS = ("temperature", "none")
 
 #: A fold keeps a 0/1 attribute when at least this many of its training classes have it and lack it.
 MIN_FOLD_CLASSES = 2
+
+#: Default ``calibration_max_trials``: training trials the pseudo-unseen folds are dealt on (a larger
+#: training set is subsampled, every class and object keeping its share). With 3 folds each fold
+#: refits the method on about two thirds of them, so the cost of calibration stops growing with
+#: the data set; the temperature is one scalar, well determined by this many held-out trials. A
+#: fold refit of a large-data attribute bank then costs little more than its fixed part (the
+#: hyper-parameter search of each attribute model), so the three folds cost less than the final
+#: fit of a large data set (``make bench-scale`` measures the whole run).
+MAX_CALIBRATION_TRIALS = 1_000
 
 #: Search range of ``log T`` (T from about 0.007 to 150).
 LOG_T_BOUNDS = (-5.0, 5.0)
@@ -127,8 +144,38 @@ def _class_codes(Y: np.ndarray) -> np.ndarray:
     return np.unique(Y, axis=0, return_inverse=True)[1].ravel()
 
 
+def calibration_subsample(codes: np.ndarray, groups, max_trials: int | None, rng) -> np.ndarray:
+    """Sorted indices of about ``max_trials`` trials, every (class, object) keeping its share (all if fewer).
+
+    Parameters
+    ----------
+    codes : int ndarray of shape (n_trials,)
+        Training class of each trial.
+    groups : array-like of shape (n_trials,) or None
+        Object of each trial (None: the class is the stratum).
+    max_trials : int or None
+        The bound; None: no bound.
+    rng : numpy.random.RandomState
+        Draws the trials (used only when ``n_trials > max_trials``).
+
+    Returns
+    -------
+    int ndarray of shape (n_kept,)
+        Each (class, object) keeps ``max(1, floor(count * max_trials / n_trials))`` of its trials,
+        chosen at random, so ``n_kept <= max_trials`` plus one per (class, object) whose share
+        rounds to zero; every class and object stays.
+    """
+    n = codes.size
+    if max_trials is None or n <= max_trials:
+        return np.arange(n)
+    strata = codes if groups is None else np.unique(
+        np.column_stack([codes, np.unique(np.asarray(groups), return_inverse=True)[1].ravel()]),
+        axis=0, return_inverse=True)[1].ravel()
+    return share_of_objects(strata, max_trials, rng)
+
+
 def pseudo_unseen_scores(estimator, X, Y, groups=None, *, n_folds: int = 3, random_state=None,
-                         score=None) -> list[tuple[object, np.ndarray]]:
+                         score=None, max_trials: int | None = None) -> list[tuple[object, np.ndarray]]:
     """Refit on training classes minus a held-out group; score the held-out classes among themselves.
 
     Parameters
@@ -147,6 +194,9 @@ def pseudo_unseen_scores(estimator, X, Y, groups=None, *, n_folds: int = 3, rand
     score : callable, optional
         ``score(fitted, X_held_out, K_held_out)``; default ``fitted.decision_function``. May
         return anything (e.g. scores under several decision rules).
+    max_trials : int or None, default None
+        Deal the folds on about this many trials (:func:`calibration_subsample`, seeded by
+        ``random_state``) when there are more; None: on all of them.
 
     Returns
     -------
@@ -164,9 +214,13 @@ def pseudo_unseen_scores(estimator, X, Y, groups=None, *, n_folds: int = 3, rand
     Y = np.asarray(Y, dtype=np.float64)
     Y = Y.reshape(-1, 1) if Y.ndim == 1 else Y
     codes = _class_codes(Y)
-    relabel = check_random_state(random_state).permutation(codes.max() + 1)  # seeded fold dealing
-    folds = class_grouped_folds(relabel[codes], n_folds, "posterior calibration (pseudo-unseen classes)")
+    rng = check_random_state(random_state)
+    relabel = rng.permutation(codes.max() + 1)  # seeded fold dealing
     g = None if groups is None else np.asarray(groups)
+    kept = calibration_subsample(codes, g, max_trials, rng)  # drawn after the dealing: same folds below the bound
+    if kept.size < codes.size:
+        X, Y, codes, g = X[kept], Y[kept], codes[kept], None if g is None else g[kept]
+    folds = class_grouped_folds(relabel[codes], n_folds, "posterior calibration (pseudo-unseen classes)")
     score = score or (lambda fitted, Xv, K: fitted.decision_function(Xv, K))
     out = []
     for train, held in folds:
@@ -229,6 +283,11 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
         ``"none"`` / None: ``predict_proba`` is the method's own softmax (``T = 1``, no extra fits).
     calibration_folds : int >= 2, default=3
         Class-grouped folds of pseudo-unseen classes (each costs one more fit of the method).
+    calibration_max_trials : int >= 2 or None, default=MAX_CALIBRATION_TRIALS
+        Deal the folds on a seeded subsample of about this many training trials (every class and
+        object keeps its share, :func:`calibration_subsample`) when there are more, so each fold's
+        fit costs at most that of this many trials; None: on all of them. Below it the result
+        does not depend on this parameter.
     random_state : int, RandomState instance or None, default=None
         Seeds which training class goes to which fold.
 
@@ -240,7 +299,8 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
         ``T`` (1.0 when not calibrated).
     calibration_info_ : dict
         How ``T`` was fitted: ``method`` ("temperature" or "none"), ``fitted`` (bool),
-        ``temperature``, ``n_folds``, ``n_classes`` (training classes), ``n_held_out_trials``,
+        ``temperature``, ``n_folds``, ``n_classes`` (training classes), ``n_held_out_trials``
+        (the trials the folds were dealt on: all, or the subsample), ``n_training_trials``,
         ``n_attributes_left_out`` (summed over folds), ``pinned`` (hyper-parameters held at the
         final fit's choice in the folds),
         ``log_loss_before`` / ``log_loss_after`` (per held-out trial), ``fitted_on``
@@ -255,13 +315,16 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
         "estimator": [HasMethods(["fit", "decision_function", "predict"])],
         "calibration": [StrOptions(set(CALIBRATIONS)), None],
         "calibration_folds": [Interval(Integral, 2, None, closed="left")],
+        "calibration_max_trials": [Interval(Integral, 2, None, closed="left"), None],
         "random_state": ["random_state"],
     }
 
-    def __init__(self, *, estimator=None, calibration="temperature", calibration_folds=3, random_state=None):
+    def __init__(self, *, estimator=None, calibration="temperature", calibration_folds=3,
+                 calibration_max_trials=MAX_CALIBRATION_TRIALS, random_state=None):
         self.estimator = estimator
         self.calibration = calibration
         self.calibration_folds = calibration_folds
+        self.calibration_max_trials = calibration_max_trials
         self.random_state = random_state
 
     def __sklearn_tags__(self):
@@ -293,6 +356,7 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
         n_classes = int(_class_codes(A).max()) + 1
         info = {"method": "none" if self.calibration in (None, "none") else "temperature", "fitted": False,
                 "temperature": 1.0, "n_folds": 0, "n_classes": n_classes, "n_held_out_trials": 0,
+                "n_training_trials": int(A.shape[0]),
                 "fitted_on": "pseudo-unseen classes of the training objects (class-grouped folds)"}
         if info["method"] == "temperature":
             info.update(self._fit_temperature(_pinned(clone(self.estimator), self.estimator_), X, A, groups,
@@ -307,7 +371,7 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
     def _fit_temperature(self, template, X, A, groups, n_classes: int) -> dict:
         try:
             folds = pseudo_unseen_scores(template, X, A, groups, n_folds=self.calibration_folds,
-                                         random_state=self.random_state)
+                                         random_state=self.random_state, max_trials=self.calibration_max_trials)
         except ZSLInputError as exc:  # too few classes for pseudo-unseen folds: say so, keep T = 1
             reason = f"not calibrated: {n_classes} training classes are too few for pseudo-unseen folds ({exc})"
             warnings.warn(f"{type(self.estimator).__name__}: {reason}; predict_proba is the method's own softmax",

@@ -96,7 +96,7 @@ def _fitted_preprocessor(template, X: np.ndarray):
     return copy.deepcopy(fitted)
 
 
-def _share_of_objects(groups: np.ndarray, cap: int | None, rng) -> np.ndarray:
+def share_of_objects(groups: np.ndarray, cap: int | None, rng) -> np.ndarray:
     """Sorted indices of about ``cap`` trials taken from every object in proportion (all if ``n <= cap``).
 
     ``groups`` (n_trials,): object of each trial. Each object keeps ``max(1, floor(count * cap / n))``
@@ -336,7 +336,7 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
         draws, _ = balanced_object_draws(yb, groups, self.n_draws if self.undersampling == "select" else 0, rng)
         fold_seed = int(rng.randint(np.iinfo(np.int32).max))
         map_seed = int(rng.randint(np.iinfo(np.int32).max))
-        tune = _share_of_objects(groups, self.max_tune_trials, rng)
+        tune = share_of_objects(groups, self.max_tune_trials, rng)
         sub = tune.size < n
         di, gi, ci, crit, oof, w_cal, (feature_map, solutions) = self._search(
             Z[tune] if sub else Z, yb[tune], groups[tune], [d[tune] for d in draws], Cs, gammas, fold_seed, map_seed)
@@ -344,7 +344,7 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
         self.n_fit_trials_ = int(draws[di][tune].sum())
         if sub:  # refit the chosen setting on the draw (up to max_fit_trials of it), from the search's solution
             idx = np.flatnonzero(draws[di])
-            idx = idx[_share_of_objects(groups[idx], self.max_fit_trials, rng)]
+            idx = idx[share_of_objects(groups[idx], self.max_fit_trials, rng)]
             F = self._transform(feature_map, Z[idx])
             self.n_fit_trials_ = int(idx.size)
             scale = draws[di][tune].sum() / idx.size  # same L2 penalty per trial as in the search

@@ -2,10 +2,19 @@
 
 :class:`tzsl.models.CalibratedZeroShotClassifier` composes a zero-shot estimator with these:
 the calibration choices (:data:`CALIBRATIONS`), the held-out scores of pseudo-unseen training
-classes (:func:`pseudo_unseen_scores`), the temperature that minimises their log-loss
+classes (:func:`pseudo_unseen_scores`, dealt on at most about :data:`MAX_CALIBRATION_TRIALS`
+training trials by default, :func:`calibration_subsample`), the temperature that minimises their log-loss
 (:func:`fit_temperature`) and the tempered softmax (:func:`tempered_proba`).
 """
 
-from tzsl.models._posterior_calibration import CALIBRATIONS, fit_temperature, pseudo_unseen_scores, tempered_proba
+from tzsl.models._posterior_calibration import (
+    CALIBRATIONS,
+    MAX_CALIBRATION_TRIALS,
+    calibration_subsample,
+    fit_temperature,
+    pseudo_unseen_scores,
+    tempered_proba,
+)
 
-__all__ = ["CALIBRATIONS", "fit_temperature", "pseudo_unseen_scores", "tempered_proba"]
+__all__ = ["CALIBRATIONS", "MAX_CALIBRATION_TRIALS", "calibration_subsample", "fit_temperature",
+           "pseudo_unseen_scores", "tempered_proba"]

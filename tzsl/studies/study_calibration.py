@@ -52,7 +52,7 @@ __all__ = [
 #: Columns added to every method comparison (calibrated posterior first, then the method's own).
 CALIBRATION_COLUMNS = calibration_columns("") + calibration_columns("_uncalibrated")
 
-#: The calibrator's defaults (folds), read from its signature: written once there.
+#: The calibrator's defaults (folds, subsample bound), read from its signature: written once there.
 _CALIBRATOR = CalibratedZeroShotClassifier()
 
 
@@ -176,9 +176,11 @@ def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions=("avg", "
     """Calibrated DAP posteriors of one PHAC-2 split from its already fitted test posteriors.
 
     The temperature of each DAP variant (uniform prior) is fitted on pseudo-unseen classes of the
-    split's training objects: the study's attribute model (``r.model``, cloned with its settings
-    and cache) is refitted on the training objects minus a held-out group of classes, and the
-    held-out trials are scored among the held-out classes (:func:`tzsl.models.calibration.pseudo_unseen_scores`).
+    split's training objects: the study's attribute model (``r.model``, cloned with its settings,
+    cache and chosen solver) is refitted on the training objects minus a held-out group of classes, and the
+    held-out trials are scored among the held-out classes (:func:`tzsl.models.calibration.pseudo_unseen_scores`),
+    on at most the calibrator's default ``calibration_max_trials`` training trials (a seeded
+    subsample of a larger split, every object keeping its share).
     The multi-label model (when the split has its posteriors) is refitted the same way.
 
     Parameters
@@ -200,7 +202,7 @@ def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions=("avg", "
         posteriors of shape (n_test_trials, n_test_objects).
     """
     rules = _dap_rules(fusions)
-    models = {"": clone(r.model)}
+    models = {"": clone(r.model).set_params(**r.model.selected_params())}  # the folds keep the split's solver
     if r.P_multilabel is not None:
         names = set(MultiLabelAttributeClassifier().get_params(deep=False))
         models["multilabel-"] = MultiLabelAttributeClassifier(
@@ -216,7 +218,8 @@ def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions=("avg", "
 
         try:
             folds = pseudo_unseen_scores(clf, X_train, A_train, groups_train,
-                                         n_folds=_CALIBRATOR.calibration_folds, random_state=seed, score=score)
+                                         n_folds=_CALIBRATOR.calibration_folds, random_state=seed, score=score,
+                                         max_trials=_CALIBRATOR.calibration_max_trials)
         except ZSLInputError as exc:  # as the calibrator does: say so, keep T = 1 (the method's own posterior)
             warnings.warn(f"{prefix}DAP of split {r.split.name}: not calibrated: {exc}; its posterior is the "
                           "method's own", CalibrationWarning, stacklevel=2)
