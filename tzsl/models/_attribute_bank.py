@@ -205,13 +205,6 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         if self.progress:
             tqdm.write(f"attribute detector: {self.detector_} (detector='auto', {self.detector_choice_['scores']})")
 
-    def selected_params(self) -> dict:
-        """The family ``detector="auto"`` chose, to pin in refits on the same training objects ({} otherwise)."""
-        check_is_fitted(self)
-        if self.detector != "auto":
-            return {}
-        return {"detector": self.detector_, **({} if self.detector_ == "rbf-svm" else {"estimator": None})}
-
     def _choose_template(self, n_trials: int):
         """The estimator template for ``n_trials`` training trials; sets ``solver_choice_``."""
         exact = self._template()
@@ -365,14 +358,20 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         return self
 
     def selected_params(self) -> dict:
-        """Parameters that refit this bank with the solver it chose (``{"solver": "exact" | "approximate"}``).
+        """Parameters that refit this bank as it was fitted: the solver it chose (``{"solver": "exact" |
+        "approximate"}``) and, with ``detector="auto"``, the family it chose.
 
         A refit on part of the training trials (posterior calibration's pseudo-unseen folds, which
         may be subsampled: :class:`tzsl.models.CalibratedZeroShotClassifier`) then uses the same
         kind of attribute model as this fit, whatever its number of trials.
         """
         check_is_fitted(self)
-        return {"solver": self.solver_choice_["solver"]}
+        pinned = {"solver": self.solver_choice_["solver"]}
+        if self.detector == "auto":
+            pinned["detector"] = self.detector_
+            if self.detector_ != "rbf-svm":
+                pinned["estimator"] = None
+        return pinned
 
     def _record_grid_edges(self, names: list[str]) -> None:
         """Fill ``grid_edge_hits_`` from the fitted estimators; one :class:`GridEdgeWarning` for the batch."""
