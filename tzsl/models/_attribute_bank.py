@@ -366,7 +366,8 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         kind of attribute model as this fit, whatever its number of trials.
         """
         check_is_fitted(self)
-        pinned = {"solver": self.solver_choice_["solver"]}
+        choice = getattr(self, "solver_choice_", None)  # None: a subclass without a solver (the chain)
+        pinned = {} if choice is None else {"solver": choice["solver"]}
         if self.detector == "auto":
             pinned["detector"] = self.detector_
             if self.detector_ != "rbf-svm":
