@@ -130,3 +130,15 @@ def problems_error(
     shown = "\n  ".join(str(p) for p in problems[:limit])
     more = f"\n  ... and {len(problems) - limit} more" if len(problems) > limit else ""
     return error(f"{source}: {len(problems)} problem(s){hint}:\n  {shown}{more}")
+
+
+def first_line(exc: BaseException) -> str:
+    """The first line of an exception's message (its type's name when it has none), for a one-line message."""
+    text = str(exc).strip()
+    return text.splitlines()[0] if text else type(exc).__name__
+
+
+def error_text(exc: BaseException) -> str:
+    """``Type: first line`` of an exception (its type's name alone when it has no message)."""
+    text = str(exc).strip()
+    return f"{type(exc).__name__}: {text.splitlines()[0]}" if text else type(exc).__name__

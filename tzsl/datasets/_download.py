@@ -39,7 +39,7 @@ import requests
 from tqdm import tqdm
 from urllib3.exceptions import ReadTimeoutError
 
-from tzsl.exceptions import ConfigError
+from tzsl.exceptions import ConfigError, first_line
 
 try:  # POSIX: an advisory lock on the data home, released by the system when its process dies
     import fcntl
@@ -47,7 +47,7 @@ except ImportError:  # pragma: no cover - Windows: a file in use cannot be delet
     fcntl = None  # type: ignore[assignment]
 
 __all__ = ["FETCH_ATTEMPTS", "DEFAULT_FETCH_TIMEOUT_S", "FETCH_TIMEOUT_ENV", "FETCH_STALL_S", "DeadlineDownloader",
-           "DownloadFailed", "download", "fetch_lock", "fetch_timeout", "first_line", "is_leftover",
+           "DownloadFailed", "download", "fetch_lock", "fetch_timeout", "is_leftover",
            "quiet_pooch_logger", "remove_leftovers"]
 
 #: Environment variable: the deadline per file, in seconds (``tzsl data fetch --timeout`` wins).
@@ -231,10 +231,6 @@ def _connection_reason(error: requests.RequestException) -> str:
     return f"{type(error).__name__}: {text.split('): ', 1)[-1]}"
 
 
-def first_line(exc: BaseException) -> str:
-    """The first line of an exception's message (its type's name when it has none)."""
-    text = str(exc).strip()
-    return text.splitlines()[0] if text else type(exc).__name__
 
 
 class _PoochRelay(logging.Filter):

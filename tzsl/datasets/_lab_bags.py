@@ -23,7 +23,6 @@ from tzsl.datasets._lab_checks import (
     channel_names,
     check_signal,
     check_size,
-    error_text,
     lab_error,
     progress_bar,
     read_label_table,
@@ -31,7 +30,7 @@ from tzsl.datasets._lab_checks import (
     to_float,
 )
 from tzsl.datasets._lab_mapping import BagMapping, SensorFields
-from tzsl.exceptions import ConfigError, DataFileError
+from tzsl.exceptions import ConfigError, DataFileError, error_text
 
 __all__ = ["read_bags"]
 

@@ -31,7 +31,7 @@ from tzsl.datasets._validate import ScannedDataset, scan_classes
 from tzsl.exceptions import DataFileError
 
 __all__ = ["ChannelCheck", "LabSource", "LabelRow", "TrialIds", "Trials", "channel_names", "check_signal",
-           "check_size", "error_text", "has_control", "lab_error", "one_line", "progress_bar", "read_class_table",
+           "check_size", "has_control", "lab_error", "one_line", "progress_bar", "read_class_table",
            "read_label_table", "seconds", "to_float"]
 
 #: trial id -> sensor -> (channel names (n_channels,), values (n_rows, n_channels) float64)
@@ -57,10 +57,6 @@ def one_line(text: object) -> str:
     return _CONTROL.sub(lambda m: repr(m.group())[1:-1], str(text))
 
 
-def error_text(exc: BaseException) -> str:
-    """``Type: first line`` of a library's exception, for a one-line message."""
-    text = str(exc).strip().splitlines()
-    return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
 
 
 def has_control(text: str) -> bool:

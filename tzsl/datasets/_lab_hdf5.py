@@ -23,7 +23,6 @@ from tzsl.datasets._lab_checks import (
     channel_names,
     check_signal,
     check_size,
-    error_text,
     has_control,
     lab_error,
     progress_bar,
@@ -31,7 +30,7 @@ from tzsl.datasets._lab_checks import (
     to_float,
 )
 from tzsl.datasets._lab_mapping import Hdf5Mapping, SensorFields
-from tzsl.exceptions import DataFileError
+from tzsl.exceptions import DataFileError, error_text
 
 __all__ = ["read_hdf5"]
 

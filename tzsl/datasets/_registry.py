@@ -22,9 +22,9 @@ from typing import NamedTuple
 
 import pooch
 
-from tzsl.datasets._download import FETCH_STALL_S, DownloadFailed, download, fetch_timeout, first_line
+from tzsl.datasets._download import FETCH_STALL_S, DownloadFailed, download, fetch_timeout
 from tzsl.datasets._home import DATA_DIR_ENV, get_data_home
-from tzsl.exceptions import ChecksumError, DataMissingError
+from tzsl.exceptions import ChecksumError, DataMissingError, first_line
 
 #: Registry value meaning "listed, but no hash known" (the fabric depth PNGs).
 NO_HASH = "none"

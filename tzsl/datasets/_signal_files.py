@@ -14,7 +14,7 @@ import pandas as pd
 from tzsl._io import looks_binary, read_npz
 from tzsl.datasets._paths import resolve_inside
 from tzsl.datasets._tables import SIGNAL_SUFFIXES, TRIALS_FILE, Problem
-from tzsl.exceptions import DataFileError
+from tzsl.exceptions import DataFileError, first_line
 
 
 def read_signal_file(path: str | os.PathLike) -> tuple[tuple[str, ...], np.ndarray]:
@@ -67,9 +67,6 @@ def signal_from_arrays(path: str | os.PathLike, arrays: dict[str, np.ndarray]) -
     return channels, np.column_stack([arrays[c].astype(np.float64) for c in channels])
 
 
-def _first_line(exc: Exception) -> str:
-    text = str(exc).strip().splitlines()
-    return text[0] if text else type(exc).__name__
 
 
 def _read_signal_csv(path: Path) -> tuple[tuple[str, ...], np.ndarray]:
@@ -85,11 +82,11 @@ def _read_signal_csv(path: Path) -> tuple[tuple[str, ...], np.ndarray]:
         if match:
             want, line, saw = (int(g) for g in match.groups())
             raise DataFileError(path, f"line has {saw} fields; the header has {want}", line=line) from None
-        raise DataFileError(path, f"not a readable CSV file ({_first_line(exc)})") from None
+        raise DataFileError(path, f"not a readable CSV file ({first_line(exc)})") from None
     except UnicodeDecodeError:
         raise DataFileError(path, "not a UTF-8 text file (a binary file given as CSV?)") from None
     except Exception as exc:  # noqa: BLE001 - pandas/OS raise many types for unreadable files
-        raise DataFileError(path, f"not a readable CSV file ({type(exc).__name__}: {_first_line(exc)})") from None
+        raise DataFileError(path, f"not a readable CSV file ({type(exc).__name__}: {first_line(exc)})") from None
     channels = tuple(str(c).strip() for c in frame.columns)
     if not channels:
         raise DataFileError(path, "no channel columns in the header", line=1)

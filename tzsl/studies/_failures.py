@@ -14,6 +14,8 @@ from typing import Any, TypeVar
 
 import pandas as pd
 
+from tzsl.exceptions import error_text  # re-exported: the one-line text of a failed fit
+
 __all__ = ["ERROR_COLUMN", "EXIT_PARTIAL", "attempt", "error_text", "table_failures"]
 
 #: Column of a study table that holds the failure of that row's fit (empty when it succeeded).
@@ -24,10 +26,6 @@ EXIT_PARTIAL = 1
 T = TypeVar("T")
 
 
-def error_text(exc: BaseException) -> str:
-    """One line naming the error type and its message's first line."""
-    message = str(exc).strip().splitlines()
-    return f"{type(exc).__name__}: {message[0]}" if message else type(exc).__name__
 
 
 def attempt(fit: Callable[..., T], *args: Any, **kwargs: Any) -> tuple[T | None, str]:
