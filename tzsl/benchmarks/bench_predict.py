@@ -27,9 +27,7 @@ from __future__ import annotations
 import argparse
 import itertools
 import os
-import resource
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -38,6 +36,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from tzsl.benchmarks._common import add_output_options, benchmark_main, timed_process
 
 __all__ = ["BENCH_COLUMNS", "GOAL_COLD_S", "GOAL_GRASP_MS", "METHODS", "api_times", "cold_times", "main",
            "run_bench", "simulated_dataset"]
@@ -91,14 +91,10 @@ def simulated_dataset(folder: Path, seed: int = 0) -> tuple[Path, Path, np.ndarr
 
 def _run_cli(args: Sequence[str], code: str = _CLI) -> tuple[float, float, str]:
     """Wall and CPU seconds of ``tzsl ARGS`` in a new process, and its output."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    start = time.perf_counter()
-    done = subprocess.run([sys.executable, "-c", code, *map(str, args)], capture_output=True, text=True, check=False)
-    wall = time.perf_counter() - start
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    wall, cpu, done = timed_process([sys.executable, "-c", code, *map(str, args)])
     if done.returncode != 0:
         raise RuntimeError(f"tzsl {' '.join(map(str, args))} failed (exit {done.returncode}):\n{done.stderr[-2000:]}")
-    return wall, (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime), done.stdout
+    return wall, cpu, done.stdout
 
 
 def cold_times(args: Sequence[str], repeats: int) -> tuple[list[float], list[float], str]:
@@ -195,21 +191,11 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
     parser.add_argument("--methods", default=",".join(METHODS), help=f"comma-separated, of {', '.join(METHODS)}")
     parser.add_argument("--repeats", type=int, default=5, help="cold runs per measure (median)")
     parser.add_argument("--grasps", type=int, default=200, help="grasps through the API (median)")
-    parser.add_argument("--out", type=Path, default=None, help="also write the table as CSV here")
-    parser.add_argument("--force", action="store_true", help="overwrite --out")
+    add_output_options(parser)
     args = parser.parse_args(argv)
-    if args.out is not None and args.out.exists() and not args.force:
-        parser.exit(2, f"bench_predict: error: {args.out} already exists; use --force to overwrite\n")
-    print(f"{os.cpu_count()} cores; load average before: {os.getloadavg()}", flush=True)
-    table = run_bench(methods=[m.strip() for m in args.methods.split(",") if m.strip()], repeats=args.repeats,
-                      n_grasps=args.grasps, echo=lambda line: print(line, flush=True))
-    print("\n" + "\n".join(summary_lines(table)))
-    if args.out is not None:
-        from tzsl._io import atomic_write  # noqa: PLC0415
-
-        atomic_write(args.out, lambda p: table.to_csv(p, index=False))
-        print(f"wrote {args.out}")
-    return table
+    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+    return benchmark_main(parser, args, "bench_predict", lambda echo: run_bench(
+        methods=methods, repeats=args.repeats, n_grasps=args.grasps, echo=echo), summary_lines)
 
 
 if __name__ == "__main__":

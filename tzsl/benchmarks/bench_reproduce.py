@@ -27,17 +27,15 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
-import subprocess
 import sys
 import tempfile
-import time
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from tzsl.benchmarks._common import add_output_options, benchmark_main, timed_process
 from tzsl.datasets import CACHE_DIR_ENV
 from tzsl.studies.reproduce import REPRODUCE_STUDIES
 
@@ -102,17 +100,12 @@ def run_reproduce(out: Path, cache_dir: Path, *, studies: Sequence[str] = (), n_
     if data_dir is not None:
         cmd += ["--data-dir", str(data_dir)]
     env = {**os.environ, CACHE_DIR_ENV: str(cache_dir)}
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    start = time.perf_counter()
-    done = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, check=False)
-    wall = time.perf_counter() - start
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    wall, cpu, done = timed_process(cmd, env=env, merge_stderr=True)
     if log is not None:
         log.write_text(done.stdout, encoding="utf-8")
     if done.returncode != 0:
         tail = "\n".join(done.stdout.splitlines()[-20:])
         raise RuntimeError(f"tzsl reproduce-tables failed (exit {done.returncode}):\n{tail}")
-    cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
     return wall, cpu, json.loads((Path(out) / "manifest.json").read_text(encoding="utf-8"))
 
 
@@ -205,23 +198,12 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
                         help=f"only this study (repeatable; default: all of {', '.join(REPRODUCE_STUDIES)})")
     parser.add_argument("--n-jobs", type=int, default=2)
     parser.add_argument("--data-dir", default=None, help="data home (default: $TZSL_DATA_DIR)")
-    parser.add_argument("--out", type=Path, default=None, help="also write the table as CSV here")
-    parser.add_argument("--force", action="store_true", help="overwrite --out")
+    add_output_options(parser)
     parser.add_argument("--keep", type=Path, default=None,
                         help="keep the results folders, logs and cache in this folder (default: a temporary one)")
     args = parser.parse_args(argv)
-    if args.out is not None and args.out.exists() and not args.force:
-        parser.exit(2, f"bench_reproduce: error: {args.out} already exists; use --force to overwrite\n")
-    print(f"{os.cpu_count()} cores; load average before: {os.getloadavg()}", flush=True)
-    table = run_bench(studies=args.study, n_jobs=args.n_jobs, data_dir=args.data_dir, keep=args.keep,
-                      echo=lambda line: print(line, flush=True))
-    print("\n" + "\n".join(summary_lines(table)))
-    if args.out is not None:
-        from tzsl._io import atomic_write  # noqa: PLC0415
-
-        atomic_write(args.out, lambda p: table.to_csv(p, index=False))
-        print(f"wrote {args.out}")
-    return table
+    return benchmark_main(parser, args, "bench_reproduce", lambda echo: run_bench(
+        studies=args.study, n_jobs=args.n_jobs, data_dir=args.data_dir, keep=args.keep, echo=echo), summary_lines)
 
 
 if __name__ == "__main__":
