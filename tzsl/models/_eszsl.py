@@ -136,9 +136,6 @@ _COMMON_CONSTRAINTS: dict = {"standardize": ["boolean"]}
 
 
 class _ESZSLBase(AttributeEmbeddingModel):
-    def _embed(self, X):
-        return X @ self.coef_
-
     def decision_function(self, X) -> np.ndarray:
         """Attribute-space scores ``standardise(X) @ coef_`` (:func:`tzsl.models.protocol.linear_embedding`).
 
