@@ -29,7 +29,6 @@ from sklearn.utils.validation import check_is_fitted
 from tzsl.models._attribute_model_base import attribute_table_tags
 from tzsl.exceptions import ConfigError
 from tzsl.models._decision import SCORE_KINDS
-from tzsl._scoring import valid_probabilities
 from tzsl.models._validation import ValidatedParamsMixin
 
 __all__ = ["ZeroShotClassifier", "score_kind"]
@@ -151,7 +150,7 @@ class ZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
         """
         check_is_fitted(self)
         if score_kind(self.attribute_model_) == "probability":
-            return valid_probabilities(self.attribute_model_.predict_proba(X))
+            return self.attribute_model_.predict_proba(X)
         return self.attribute_model_.decision_function(X)
 
     def _rule(self, decision_rule):
