@@ -275,11 +275,15 @@ class HandDAPClassifier(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
             self.relaxations_.append(line)
         return fitted_on
 
-    def _material_labels(self, labels: np.ndarray, contact: np.ndarray, groups) -> list[tuple[np.ndarray, str]]:
-        """One material attribute's labels on the touching grasps of each BioTac (or pooled), with its name."""
-        if groups == [None]:
-            return [(np.repeat(labels, self.n_fingers)[contact.reshape(-1)], "all BioTacs pooled")]
-        return [(labels[contact[:, b]], f"BioTac {b}") for b in groups]
+    def _touching(self, contact: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, str]]:
+        """The material classifiers' training rows: per BioTac (or pooled), the grasp and finger index of
+        every touching BioTac reading, shapes (n_rows,) each, and the group's name."""
+        n, F = contact.shape
+        if not self.per_finger:
+            sel = contact.reshape(-1)
+            return [(np.repeat(np.arange(n), F)[sel], np.tile(np.arange(F), n)[sel], "all BioTacs pooled")]
+        return [(np.flatnonzero(contact[:, b]), np.full(int(contact[:, b].sum()), b), f"BioTac {b}")
+                for b in range(F)]
 
     # ------------------------------------------------------------------ fit
     def fit(self, X, y, K: pd.DataFrame):
@@ -315,14 +319,12 @@ class HandDAPClassifier(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
             raise ConfigError(f"material attribute(s) {unknown} are not columns of K")
         shape_attrs = [a for a in K.columns if a not in mat_attrs]
         self.classes_ = np.array(pd.unique(y), dtype=object)
-        F, d = self.n_fingers, self.n_material_features
-        groups = range(F) if self.per_finger else [None]
+        groups = self._touching(contact)
         # what the training grasps can teach: an attribute a label of which has < 2 grasps somewhere is left out
         self.left_out_attributes_, self.relaxations_ = {}, []
         rows = K.loc[self.classes_, mat_attrs + shape_attrs].astype(int)
         A = rows.loc[y].to_numpy()
-        folds = {name: [self._calibration_folds(labels, name, where)
-                        for labels, where in self._material_labels(A[:, j], contact, groups)]
+        folds = {name: [self._calibration_folds(A[grasp, j], name, where) for grasp, _, where in groups]
                  for j, name in enumerate(mat_attrs)}
         folds.update({name: [self._calibration_folds(A[:, len(mat_attrs) + j], name, "joint angles")]
                       for j, name in enumerate(shape_attrs)})
@@ -340,16 +342,8 @@ class HandDAPClassifier(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
 
         # material: one PCA + calibrated linear SVM per attribute, per finger (or pooled)
         jobs, self._material_keys = [], []
-        for g, b in enumerate(groups):
-            if b is None:
-                sel = contact.reshape(-1)
-                Xb = material.reshape(-1, d)[sel]
-                Ab = np.repeat(A[:, : len(mat_attrs)], F, axis=0)[sel]
-                where = "all BioTacs pooled"
-            else:
-                sel = contact[:, b]
-                Xb, Ab = material[sel, b], A[sel, : len(mat_attrs)]
-                where = f"BioTac {b}"
+        for g, (grasp, finger, where) in enumerate(groups):
+            Xb, Ab = material[grasp, finger], A[grasp, : len(mat_attrs)]
             for j, name in enumerate(mat_attrs):
                 svm = LinearSVC(C=self.material_C, class_weight="balanced", random_state=int(seeds[0]))
                 pipe = make_pipeline(
