@@ -12,8 +12,9 @@ from typing import Any
 from pydantic import BaseModel
 
 
-def study_settings(schema: type[BaseModel], **flat: Any) -> BaseModel:
-    """``schema`` validated from ``flat`` keys sorted into its tables (tuples as lists, as TOML gives)."""
+def study_settings(schema: type[BaseModel], preset: str | None = None, **flat: Any) -> BaseModel:
+    """``schema`` validated from ``flat`` keys sorted into its tables (tuples as lists, as TOML gives),
+    on top of ``preset``'s defaults (:data:`tzsl.studies.config.PRESET_DEFAULTS`; None: the generic study's)."""
     tables: dict[str, dict[str, Any]] = {}
     for key, value in flat.items():
         if key == "svm_params":
@@ -29,4 +30,8 @@ def study_settings(schema: type[BaseModel], **flat: Any) -> BaseModel:
         if len(owners) != 1:
             raise KeyError(f"{key!r} is in the tables {owners} of {schema.__name__}, not exactly one")
         tables.setdefault(owners[0], {})[key] = list(value) if isinstance(value, tuple) else value
+    if preset is not None:
+        from tzsl.studies.config import with_preset_defaults  # noqa: PLC0415
+
+        tables = with_preset_defaults(tables, preset)
     return schema.model_validate(tables)

@@ -32,13 +32,13 @@ from pathlib import Path
 import pandas as pd
 
 from tzsl.reporting.best_method import confirm_choice
-from tzsl.studies.config import DapSettings, every_feature_method
+from tzsl.studies.config import ZeroShotSettings, every_feature_method
 from tzsl.features import dataset_features
 from tzsl.studies.zero_shot.methods import method_comparison
 from tzsl.studies.zero_shot.study import fit_splits, make_splits
 from tzsl.studies.study_labels import StudyLabels
 
-#: Split index offset of the challenging splits' fit seeds (as in run_dap_study).
+#: Split index offset of the challenging splits' fit seeds (as in run_zero_shot_tables).
 CHALLENGING_OFFSET = 100
 KINDS = ("random", "challenging")
 #: What the challenging confirmation is: the same partitions, other fit seeds.
@@ -54,12 +54,12 @@ def comparison(features, purpose: str, seed: int, n_splits: int, kinds, methods:
                echo=print, **tables) -> pd.DataFrame:
     """The method comparison of every kind in ``kinds`` on ``purpose`` splits of ``seed``.
 
-    ``tables``: further :class:`~tzsl.studies.config.DapSettings` keys by table, e.g.
+    ``tables``: further :class:`~tzsl.studies.config.ZeroShotSettings` keys by table, e.g.
     ``splits={"n_test": 5}, svm={...}`` (tests: a tiny SVM grid); a given table replaces the default's keys.
     """
     given = {"splits": {"n_splits": n_splits, "seed": seed, "purpose": purpose}, "svm": dict(SVM_PARAMS),
              "compute": {"n_jobs": n_jobs, "progress": False}}
-    config = DapSettings(**{t: {**given.get(t, {}), **tables.get(t, {})} for t in {*given, *tables}})
+    config = ZeroShotSettings.of_preset("phac2-dap", **{t: {**given.get(t, {}), **tables.get(t, {})} for t in {*given, *tables}})
     tables = []
     for kind in kinds:
         start = time.perf_counter()

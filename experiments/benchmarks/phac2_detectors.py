@@ -45,7 +45,7 @@ from tzsl.evaluation import (
 from tzsl.features import dataset_features
 from tzsl.models import GridEdgeWarning, LogisticAttribute
 from tzsl.models.dap import break_ties, dap_log_scores, fuse_attribute_posteriors
-from tzsl.studies.config import DapSettings
+from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.spread import model_seed
 from tzsl.studies.zero_shot.study import attribute_bank, split_masks
 
@@ -90,7 +90,7 @@ def accuracy_if_independent(P: np.ndarray, A: np.ndarray, K: np.ndarray, y: np.n
     return float(np.mean(hits))
 
 
-def score_split(features, split, config: DapSettings, index: int, labels: list[str], out: Path) -> list[dict]:
+def score_split(features, split, config: ZeroShotSettings, index: int, labels: list[str], out: Path) -> list[dict]:
     """Fit every detector of ``labels`` on the split's training objects; one result row each.
 
     The test posteriors go to ``out / "<split>_<detector>.npz"`` (``P`` (n, s, m), ``A``, ``groups``, ``y``, ``K``).
@@ -176,7 +176,7 @@ def main() -> None:
     for kind, index, split in study_splits(features, args.n_random, args.seed, args.purpose):
         if (args.no_challenging and kind == "challenging") or (args.no_random and kind == "random"):
             continue
-        config = DapSettings(splits={"n_splits": args.n_random, "seed": args.seed, "purpose": args.purpose},
+        config = ZeroShotSettings.of_preset("phac2-dap", splits={"n_splits": args.n_random, "seed": args.seed, "purpose": args.purpose},
                              compute={"cache": False, "n_jobs": 1, "progress": False}, svm={"cv": 5})
         rows += [{"kind": kind, **r} for r in score_split(features, split, config, index, args.detectors, args.out)]
         table = pd.DataFrame(rows)

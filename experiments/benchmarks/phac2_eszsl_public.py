@@ -29,7 +29,7 @@ import pandas as pd
 
 from tzsl.evaluation import bootstrap_accuracy, paired_difference_interval
 from tzsl.features import dataset_features
-from tzsl.studies.config import DapSettings
+from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.study import make_splits, split_masks
 from tzsl.models import build_method
 from tzsl.models.protocol import attribute_rows
@@ -76,7 +76,7 @@ def tzsl_eszsl(X_tr, objects_tr, rows_tr, X_te, K, **params) -> tuple[np.ndarray
 
 def run(features, purpose: str, seed: int, n_splits: int) -> pd.DataFrame:
     """Per-trial correctness of every method on ``n_splits`` random splits of ``seed``."""
-    splits, _ = make_splits(features, "random", DapSettings(splits={"n_splits": n_splits, "seed": seed,
+    splits, _ = make_splits(features, "random", ZeroShotSettings.of_preset("phac2-dap", splits={"n_splits": n_splits, "seed": seed,
                                                                          "purpose": purpose}))
     objects = features.objects
     X = features.X.reshape(len(objects), -1)

@@ -33,20 +33,20 @@ from scipy.special import expit
 
 from tzsl.features import dataset_features
 from tzsl.evaluation import PURPOSES
-from tzsl.studies.config import DapSettings
+from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.study import fit_split, make_splits, split_masks
 from tzsl.models import GridEdgeWarning
 
 GRIDS = ("paper", "extended", "adaptive")
 #: ``--purpose`` when not given: the study schema's default ``[splits] purpose``.
-DEFAULT_PURPOSE = DapSettings().splits.purpose
-#: split index offset of the challenging splits (as in run_dap_study)
+DEFAULT_PURPOSE = ZeroShotSettings.of_preset("phac2-dap").splits.purpose
+#: split index offset of the challenging splits (as in run_zero_shot_tables)
 CHALLENGING_OFFSET = 100
 
 
 def study_splits(features, n_random: int, seed: int, purpose: str = DEFAULT_PURPOSE):
     """``[(kind, index, Split)]``: the random splits of ``purpose`` then the challenging ones."""
-    config = DapSettings(splits={"n_splits": n_random, "seed": seed, "purpose": purpose})
+    config = ZeroShotSettings.of_preset("phac2-dap", splits={"n_splits": n_random, "seed": seed, "purpose": purpose})
     random_splits, _ = make_splits(features, "random", config)
     challenging, _ = make_splits(features, "challenging", config)
     return ([("random", i, s) for i, s in enumerate(random_splits)]
@@ -82,7 +82,7 @@ def main() -> None:
             path = args.out / f"{grid}_{split.name}.npz"
             if path.exists():
                 continue
-            config = DapSettings(splits={"n_splits": args.n_random, "seed": args.seed, "purpose": args.purpose},
+            config = ZeroShotSettings.of_preset("phac2-dap", splits={"n_splits": args.n_random, "seed": args.seed, "purpose": args.purpose},
                                  compute={"cache": False, "n_jobs": args.n_jobs}, svm={"cv": 5, "grid": grid})
             start = time.process_time()
             r = fit_split(features, split, config, index)

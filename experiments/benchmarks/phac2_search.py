@@ -32,7 +32,7 @@ import pandas as pd
 from tzsl._io import atomic_write
 from tzsl.evaluation import bootstrap_accuracy, paired_difference_interval
 from tzsl.features import dataset_features
-from tzsl.studies.config import DapSettings
+from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.study import fit_split, make_splits
 from tzsl.models.attribute_training import SEARCHES
 
@@ -46,13 +46,13 @@ def run(seed: int, n_splits: int, grid: str) -> tuple[pd.DataFrame, dict]:
     """Per-trial correctness of both searches on every split, and the summary row."""
     features = dataset_features("phac2-penn")
     compute = {"cache": False, "progress": False, "n_jobs": 1}
-    base = DapSettings(splits={"n_splits": n_splits, "seed": seed}, compute=compute)
+    base = ZeroShotSettings.of_preset("phac2-dap", splits={"n_splits": n_splits, "seed": seed}, compute=compute)
     splits, _ = make_splits(features, "random", base)
     rows, same, total = [], 0, 0
     for i, split in enumerate(splits):
         fitted = {}
         for search in SEARCHES:
-            config = DapSettings(splits=base.splits, compute=compute, svm={"grid": grid, "search": search})
+            config = ZeroShotSettings.of_preset("phac2-dap", splits=base.splits, compute=compute, svm={"grid": grid, "search": search})
             start, wall = time.process_time(), time.perf_counter()
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")

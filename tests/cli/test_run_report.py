@@ -80,8 +80,8 @@ def test_plain_folder_from_convert_gives_the_builtin_accuracies(tmp_path, data_d
     """Done when: convert PHAC-2 to a plain folder, validate it, run it from a TOML file -> same accuracies."""
     from tzsl.studies._outputs import ResultsDir
     from tzsl.features import dataset_features
-    from tzsl.studies.config import DapSettings
-    from tzsl.studies.zero_shot.study import run_dap_study
+    from tzsl.studies.config import ZeroShotSettings
+    from tzsl.studies.zero_shot.study import run_zero_shot_tables
 
     folder = tmp_path / "phac2_plain"
     converted = _run("convert", "--dataset", "phac2-penn", "--out", folder, "--data-dir", data_dir)
@@ -95,10 +95,10 @@ def test_plain_folder_from_convert_gives_the_builtin_accuracies(tmp_path, data_d
     assert ran.exit_code == 0, ran.output
     ours = pd.read_csv(tmp_path / "plain_results" / "table1_fusion.csv")
 
-    config = DapSettings(splits={"n_splits": 2, "n_test": 10, "seed": 0}, svm=dict(TINY), methods={"multilabel": False},
+    config = ZeroShotSettings.of_preset("phac2-dap", splits={"n_splits": 2, "n_test": 10, "seed": 0}, svm=dict(TINY), methods={"multilabel": False},
                          compute={"progress": False, "cache": False})
-    builtin = run_dap_study(dataset_features("phac2-penn", data_dir=data_dir), ResultsDir(tmp_path / "builtin"),
-                            config, kinds=("random",), sweep=False)["table1_fusion"]
+    builtin = run_zero_shot_tables(dataset_features("phac2-penn", data_dir=data_dir), ResultsDir(tmp_path / "builtin"),
+                                   config)["table1_fusion"]
     assert list(ours["split"].astype(str)) == ["1", "2", "mean", "std", "control"]
     for column in ("maxdap", "avgdap", "avgdap_per_class_mean", "n_attributes", "n_test_objects"):
         # CSV numbers carry 6 significant digits (tzsl.studies._outputs.CSV_FLOAT_FORMAT)

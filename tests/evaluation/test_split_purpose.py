@@ -90,12 +90,12 @@ def test_bad_purpose_or_seed_is_one_clear_error():
 def test_the_study_schema_defaults_to_confirmation_and_refuses_other_purposes():
     from pydantic import ValidationError  # noqa: PLC0415
 
-    from tzsl.studies.config import Phac2Splits, ZeroShotSplits  # noqa: PLC0415
+    from tzsl.studies.config import ZeroShotSplits, ZeroShotSplits  # noqa: PLC0415
 
-    assert Phac2Splits().purpose == ZeroShotSplits().purpose == "confirm"
-    assert Phac2Splits(purpose="select").purpose == "select"
+    assert ZeroShotSplits().purpose == ZeroShotSplits().purpose == "confirm"
+    assert ZeroShotSplits(purpose="select").purpose == "select"
     with pytest.raises(ValidationError):
-        Phac2Splits(purpose="report")
+        ZeroShotSplits(purpose="report")
 
 
 def test_the_command_line_takes_the_purpose():

@@ -127,10 +127,10 @@ def test_halving_leaves_bagging_to_the_grid_and_refuses_unknown_values():
 
 
 def test_schema_offers_exactly_the_estimators_searches():
-    from tzsl.studies.config._phac2 import Phac2Svm  # noqa: PLC0415
+    from tzsl.studies.config._zero_shot import SvmSettings  # noqa: PLC0415
     from tzsl.models.attribute_training import SEARCHES  # noqa: PLC0415
 
-    assert set(Phac2Svm.model_fields["search"].annotation.__args__) == set(SEARCHES)
+    assert set(SvmSettings.model_fields["search"].annotation.__args__) == set(SEARCHES)
 
 
 def test_halving_without_the_kernel_cache_gives_the_same_model(monkeypatch):

@@ -40,13 +40,21 @@ def test_builtin_studies_ship_inside_the_package_only():
 
 
 def test_studies_read_the_schema_defaults():
-    """A study file is the study's settings: the DAP study's tables are DapSettings' own defaults."""
-    from tzsl.studies.config import DapSettings, HandSettings
+    """A study file is the study's settings: the zero-shot study's tables are ZeroShotSettings' own defaults,
+    its PHAC-2 preset's those with PRESET_DEFAULTS["phac2-dap"] on top (and nothing else differs)."""
+    from tzsl.studies.config import PRESET_DEFAULTS, HandSettings, ZeroShotSettings
 
     minimal = validate({"study": "phac2-dap", "dataset": {"features": "x.csv"}}, "t", Path("."))
-    assert isinstance(minimal.config, DapSettings)
+    assert isinstance(minimal.config, ZeroShotSettings)
     for table in ("methods", "gzsl", "splits", "svm", "compute"):
-        assert getattr(minimal.config, table) == getattr(DapSettings(), table), table
+        assert getattr(minimal.config, table) == getattr(ZeroShotSettings.of_preset("phac2-dap"), table), table
+    generic = validate({"study": "zero-shot", "dataset": {"features": "x.csv"}}, "t", Path("."))
+    for table in ("methods", "gzsl", "splits", "svm", "compute"):
+        assert getattr(generic.config, table) == getattr(ZeroShotSettings(), table), table
+    differ = {table: {key for key, value in getattr(minimal.config, table).model_dump().items()
+                      if value != getattr(generic.config, table).model_dump()[key]}
+              for table in ("methods", "gzsl", "splits", "svm", "compute")}
+    assert {t: k for t, k in differ.items() if k} == {t: set(v) for t, v in PRESET_DEFAULTS["phac2-dap"].items()}
     hand = validate({"study": "hand", "dataset": {"builtin": "hand-simulated"}}, "t", Path("."))
     assert isinstance(hand.config, HandSettings)
     for table in ("simulation", "features", "methods", "compute"):
@@ -316,7 +324,7 @@ def test_run_writes_selected_tables_and_manifest(tmp_path):
     manifest = json.loads((tmp_path / "res" / "manifest.json").read_text())
     assert manifest["experiment_toml"] == RUN_TOML
     assert manifest["config"]["svm_params"] == {"cv": 3, "n_C": 1, "n_gamma": 1, "n_draws": 1}
-    assert manifest["config"]["dap_settings"]["gzsl"]["holdout_fraction"] == 0.25
+    assert manifest["config"]["study_settings"]["gzsl"]["holdout_fraction"] == 0.25
     solvers = manifest["config"]["attribute_solver"]  # 2 random splits of 80 trials: exact, and why
     assert [c["solver"] for c in solvers] == ["exact", "exact"] and "max_exact_trials" in solvers[0]["reason"]
     assert any(line.startswith("attribute models: exact (solver='auto'") for line in lines)

@@ -20,7 +20,7 @@ from tzsl.studies.zero_shot.gzsl import (
     stacked_predict,
 )
 from tests.study_settings import study_settings
-from tzsl.studies.config import DapSettings
+from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.study import make_splits
 
 TINY_SVM = {"n_C": 1, "n_gamma": 1, "n_draws": 1, "cv": 3}
@@ -50,9 +50,9 @@ def synthetic_features(n_objects: int = 24, n_attributes: int = 6, trials: int =
                       attributes=attrs, dataset="synthetic")
 
 
-def _config(**kw) -> DapSettings:
+def _config(**kw) -> ZeroShotSettings:
     """Study settings for the GZSL tests (``[gzsl]`` keys as ``**{"gzsl.key": value}``)."""
-    return study_settings(DapSettings, **{"n_splits": 2, "n_test": 5, "progress": False, "cache": False,
+    return study_settings(ZeroShotSettings, "phac2-dap", **{"n_splits": 2, "n_test": 5, "progress": False, "cache": False,
                                           "svm_params": dict(TINY_SVM), "multilabel": False, **kw})
 
 

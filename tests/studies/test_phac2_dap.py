@@ -10,7 +10,7 @@ from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split
 from tests.study_settings import study_settings
 from tzsl.studies._outputs import ResultsDir
-from tzsl.studies.config import DapSettings
+from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.study_labels import StudyLabels
 from tzsl.studies.zero_shot.study import (
     SplitPosteriors,
@@ -18,7 +18,7 @@ from tzsl.studies.zero_shot.study import (
     attribute_subsets,
     attribute_sweep,
     fit_split,
-    run_dap_study,
+    run_zero_shot_tables,
     table1_fusion,
     table2_priors,
 )
@@ -48,16 +48,16 @@ def synthetic_features(n_objects: int = 24, n_attributes: int = 6, trials: int =
                       feature_names=tuple(f"f{i}" for i in range(5)), attributes=attrs, dataset="synthetic")
 
 
-def _config(**kw) -> DapSettings:
+def _config(**kw) -> ZeroShotSettings:
     base = dict(n_splits=2, n_test=5, progress=False, svm_params=dict(TINY_SVM), multilabel=False,
                 sweep_min_attributes=3, sweep_max_subsets=20)
     base.update(kw)
-    return study_settings(DapSettings, **base)
+    return study_settings(ZeroShotSettings, "phac2-dap", **base)
 
 
 def test_paper_columns_only_on_the_papers_dataset_and_protocol(tmp_path):
     """A run labelled generic (any dataset but the paper's) carries no paper_* column (issue 20)."""
-    tables = run_dap_study(synthetic_features(), ResultsDir(tmp_path), _config(n_test=8), kinds=("random",))
+    tables = run_zero_shot_tables(synthetic_features(), ResultsDir(tmp_path), _config(n_test=8, sweep=True))
     for name in ("table1_fusion", "table2_priors", "attribute_accuracy"):
         assert not [c for c in tables[name].columns if c.startswith("paper")], name
 
@@ -66,8 +66,8 @@ def test_study_writes_every_table_with_paper_columns(tmp_path):
     features = synthetic_features()
     out = ResultsDir(tmp_path)
     # 8 test objects: the control never draws the identity, which moves it off chance by < 1/8!
-    tables = run_dap_study(features, out, _config(n_test=8), kinds=("random",),
-                           labels=StudyLabels(study="phac2", paper=True))
+    tables = run_zero_shot_tables(features, out, _config(n_test=8, sweep=True),
+                                  labels=StudyLabels(study="phac2", paper=True))
     for name in ("table1_fusion", "table2_priors", "attribute_accuracy", "attribute_sweep"):
         assert (tmp_path / f"{name}.csv").exists()
     assert (tmp_path / "attribute_accuracy.png").exists() and (tmp_path / "attribute_sweep.png").exists()
@@ -117,11 +117,11 @@ def test_study_writes_every_table_with_paper_columns(tmp_path):
 
 def test_study_refuses_to_overwrite(tmp_path):
     features = synthetic_features()
-    run_dap_study(features, ResultsDir(tmp_path), _config(n_splits=1), kinds=("random",), sweep=False)
+    run_zero_shot_tables(features, ResultsDir(tmp_path), _config(n_splits=1))
     from tzsl.exceptions import ConfigError
 
     with pytest.raises(ConfigError, match="--force"):
-        run_dap_study(features, ResultsDir(tmp_path), _config(n_splits=1), kinds=("random",), sweep=False)
+        run_zero_shot_tables(features, ResultsDir(tmp_path), _config(n_splits=1))
 
 
 def test_test_objects_do_not_influence_the_fit(monkeypatch):

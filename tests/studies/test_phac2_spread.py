@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 
 from tzsl.studies._outputs import PrefixedResults, ResultsDir
-from tzsl.studies.zero_shot.study import fit_split, make_splits, run_dap_study
+from tzsl.studies.zero_shot.study import fit_split, make_splits, run_zero_shot_tables
 from tzsl.studies.zero_shot.spread import (
     FUSION_PRIOR_TABLE,
     REFIT_TABLE,
@@ -39,10 +39,8 @@ def study(tmp_path_factory):
     features = synthetic_features(n_objects=30, n_attributes=6)
     out = ResultsDir(tmp_path_factory.mktemp("spread"))
     config = _config(n_splits=3, n_test=6, compare_on=("random", "challenging"), refit_seeds=1, refit_splits=1,
-                     challenging_min_train_positives=2)
-    tables = run_dap_study(features, out, config, kinds=("random", "challenging"), sweep=False,
-                           compare_methods=True, method_options={"methods": METHODS},
-                           labels=StudyLabels(study="zero-shot", data="synthetic"))
+                     challenging_min_train_positives=2, kinds=("random", "challenging"), compare=METHODS)
+    tables = run_zero_shot_tables(features, out, config, labels=StudyLabels(study="zero-shot", data="synthetic"))
     return features, config, out, tables
 
 

@@ -27,10 +27,10 @@ def test_defaults_are_the_banks():
 
 
 def test_schema_offers_exactly_the_banks_solvers():
-    from tzsl.studies.config._phac2 import Phac2Svm
+    from tzsl.studies.config._zero_shot import SvmSettings
     from tzsl.models._attribute_training import SOLVERS
 
-    field = Phac2Svm.model_fields["solver"]
+    field = SvmSettings.model_fields["solver"]
     assert set(field.annotation.__args__) == set(SOLVERS)
 
 

@@ -94,13 +94,13 @@ def test_splits_written_to_a_results_folder_read_back_exactly_with_their_rule(tm
 
     from tzsl.evaluation import read_splits_csv
     from tzsl.studies._outputs import ResultsDir
-    from tzsl.studies.config import DapSettings
+    from tzsl.studies.config import ZeroShotSettings
     from tzsl.studies.zero_shot.study import make_splits
 
     from tests.studies.test_phac2_dap import synthetic_features
 
     features = synthetic_features(n_objects=40, n_attributes=6, trials=2)
-    config = DapSettings(splits={"n_splits": 2, "n_test": 5}, compute={"progress": False})
+    config = ZeroShotSettings.of_preset("phac2-dap", splits={"n_splits": 2, "n_test": 5}, compute={"progress": False})
     splits = make_splits(features, "random", config)[0] + make_splits(features, "challenging", config)[0]
     out = ResultsDir(tmp_path)
     out.write_splits("splits.csv", splits)

@@ -154,7 +154,7 @@ def _check_template_run(tmp_path_factory, n_classes: int, n_attributes: int, n_s
     for table in out.glob("*.csv"):
         assert not [c for c in pd.read_csv(table, nrows=0).columns if c.startswith("paper")], table.name
     manifest = json.loads((out / "manifest.json").read_text())
-    assert manifest["config"]["purpose"] == "confirm" == manifest["config"]["dap_settings"]["splits"]["purpose"]
+    assert manifest["config"]["purpose"] == "confirm" == manifest["config"]["study_settings"]["splits"]["purpose"]
     noted = [line for line in result.output.splitlines() if line.startswith("note: relaxed ")]
     assert len(noted) == len(manifest["config"]["relaxations"])
     # warnings: one line per kind, no source path, each one in the manifest; repeats counted in one closing line
@@ -258,7 +258,7 @@ def test_the_command_line_prints_warnings_on_one_line(tmp_path, monkeypatch):
         warnings.warn("something to know\nwith a second line", RuntimeWarning, stacklevel=1)
         raise SystemExit(0)
 
-    monkeypatch.setattr(runners, "prepare_phac2", warns)
+    monkeypatch.setattr(runners, "prepare", warns)
     dataset = simulated_dataset(tmp_path / "data", 12, 4, 1, seed=2)
     result = _run("run", template_for(tmp_path, dataset, tmp_path / "out"), "--check")
     assert result.stderr.splitlines() == ["tzsl: warning: something to know"]

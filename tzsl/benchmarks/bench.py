@@ -26,7 +26,7 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC
 
 from tzsl.datasets import FeatureSet
-from tzsl.studies.config import DapSettings
+from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.study import SplitPosteriors, fit_split, make_splits, split_masks
 from tzsl.models.dap import attribute_prior
 
@@ -56,10 +56,10 @@ def literal_posteriors(features: FeatureSet, train: np.ndarray, test: np.ndarray
     return P
 
 
-def run_bench(features: FeatureSet, config: DapSettings | None = None, split_index: int = 0,
+def run_bench(features: FeatureSet, config: ZeroShotSettings | None = None, split_index: int = 0,
               skip_literal: bool = False, echo: Callable[[str], None] | None = None) -> pd.DataFrame:
     """Time and score the three ways on one random split; one row per way."""
-    config = (config or DapSettings()).model_copy(deep=True)
+    config = (config or ZeroShotSettings.of_preset("phac2-dap")).model_copy(deep=True)
     config.compute.cache, config.compute.progress, config.methods.multilabel = False, False, False
     splits, _ = make_splits(features, "random", config)
     split = splits[split_index]

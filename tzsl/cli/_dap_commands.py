@@ -108,14 +108,14 @@ def splits(kind, n_splits, n_test, purpose, out, dataset, features_file, plain_d
     """Write object splits as CSV (split, object, role), usable with 'tzsl evaluate --splits'."""
     from tzsl.evaluation import write_splits_csv  # noqa: PLC0415
     from tzsl.studies.zero_shot.study import make_splits  # noqa: PLC0415
-    from tzsl.studies.zero_shot.runner import phac2_features  # noqa: PLC0415
+    from tzsl.studies.zero_shot.runner import load_study_features  # noqa: PLC0415
 
     if out.exists() and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite")
     exp = _experiment({**_dataset_values(dataset, features_file, plain_dir, path, data_dir),
                        "splits.n_splits": n_splits, "splits.n_test": n_test, "splits.seed": seed,
                        "splits.purpose": purpose})
-    made, _ = make_splits(phac2_features(exp), kind, exp.config)
+    made, _ = make_splits(load_study_features(exp), kind, exp.config)
     write_splits_csv(made, out)
     for s in made:
         excluded = ", ".join(a for a, _ in s.excluded_attributes) or "none"
@@ -162,7 +162,7 @@ def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep
     attributes kept.
     """
     from tzsl.studies.engine import check_experiment  # noqa: PLC0415
-    from tzsl.studies.zero_shot.runner import phac2_features  # noqa: PLC0415
+    from tzsl.studies.zero_shot.runner import load_study_features  # noqa: PLC0415
 
     if out.exists() and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite")
@@ -182,7 +182,7 @@ def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep
                        **({} if min_objects is None else {"dataset.min_objects": min_objects}),
                        **_study_values(seed, n_jobs, backend, scheduler, undersampling, cv, grid, no_progress, no_cache)})
     check_experiment(exp)  # paths and the Dask scheduler, before any data is read
-    features = phac2_features(exp)
+    features = load_study_features(exp)
     start = time.perf_counter()
     if per_ep:
         _train_per_ep(features, out, splits_file, split_name, exp, force)
@@ -272,13 +272,13 @@ def bench(split_index, skip_literal, out, seed, data_dir, force):
     """Time one random PHAC-2 split: the paper's literal recipe vs tzsl (n_jobs 1 and 2), with accuracies."""
     from tzsl.benchmarks.bench import run_bench  # noqa: PLC0415
     from tzsl.features import dataset_features  # noqa: PLC0415
-    from tzsl.studies.config import DapSettings  # noqa: PLC0415
+    from tzsl.studies.config import ZeroShotSettings  # noqa: PLC0415
 
     if out is not None and out.exists() and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite")
     features = dataset_features("phac2-penn", data_dir=data_dir)
     # timed on the paper's grid, like the literal recipe beside it
-    config = DapSettings(splits={"seed": seed}, svm={"grid": "paper"})
+    config = ZeroShotSettings.of_preset("phac2-dap", splits={"seed": seed}, svm={"grid": "paper"})
     table = run_bench(features, config, split_index=split_index, skip_literal=skip_literal,
                       echo=click.echo)
     click.echo(table.to_string(index=False, float_format=lambda v: f"{v:.3f}"))

@@ -228,7 +228,7 @@ def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | 
     Parameters
     ----------
     features : FeatureSet
-    config : tzsl.studies.config.DapSettings
+    config : tzsl.studies.config.ZeroShotSettings
         The study's attribute-SVM settings (used when ``method`` is None).
     save : path
     method : str, optional

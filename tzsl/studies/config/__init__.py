@@ -1,13 +1,13 @@
 """The experiment schema: one typed model per study kind, every default written once.
 
-``study = "zero-shot"`` (:class:`ZeroShotStudy`, any dataset), its PHAC-2 paper preset
-``"phac2-dap"`` (:class:`Phac2Study`), ``"fabric"`` (:class:`FabricStudy`),
+``study = "zero-shot"`` and its PHAC-2 paper preset ``"phac2-dap"`` (:class:`ZeroShotStudy`, any
+dataset; what the preset changes of the defaults is :data:`PRESET_DEFAULTS`), ``"fabric"`` (:class:`FabricStudy`),
 ``"fabric-deep"`` (:class:`FabricDeepStudy`), ``"hand"`` (:class:`HandStudy`) and
 ``"active-touch"`` (:class:`ActiveTouchStudy`), each registered with its runner by
 :func:`register_study` (:func:`study_kinds` lists them). Each table of
 an experiment file is a strict pydantic model (unknown keys, wrong types and bad ranges are
 errors, all reported at once as ``FILE: key.path: reason``). Each study reads its own
-validated tables (the DAP study: :class:`DapSettings`, which every zero-shot study file is), and the
+validated tables (the zero-shot study: :class:`ZeroShotSettings`, which every zero-shot study file is), and the
 command-line options read their defaults from here; where a default is an estimator's, it is read from the estimator.
 
 ``[methods] compare = ["eszsl", {name = "embedding", lam = 0.1}]`` lists registry methods
@@ -33,19 +33,20 @@ from tzsl.studies.config._load import (
     to_toml,
     validate,
 )
-from tzsl.studies.config._phac2 import (
-    DapSettings,
-    Phac2Dataset,
-    Phac2Features,
-    Phac2Gzsl,
-    Phac2Methods,
-    Phac2Splits,
-    Phac2Study,
-    Phac2Svm,
+from tzsl.studies.config._zero_shot import (
+    PRESET_DEFAULTS,
+    DatasetSource,
+    GzslSettings,
+    PrefixedOutput,
+    PresetZeroShot,
+    SignalFeatures,
+    SvmSettings,
     ZeroShotMethods,
+    ZeroShotSettings,
     ZeroShotSplits,
     ZeroShotStudy,
     every_feature_method,
+    with_preset_defaults,
 )
 from tzsl.studies.config._studies import (
     ActiveMethods,
@@ -72,11 +73,10 @@ from tzsl.studies.config._registry import (
 __all__ = [
     "DATASET_PATHS", "SEED_LIMIT", "StudyKind", "get_study", "register_study", "study_kinds", "study_names",
     "unregister_study",
-    "ActiveMethods", "ActiveSplits", "ActiveTouchStudy", "Compute",
-    "DapSettings", "DaskCompute", "Experiment", "FabricDeepStudy",
-    "FabricStudy", "HandFeatures", "HandMethods", "HandSettings", "HandSimulation", "HandStudy", "Output", "Phac2Dataset",
-    "Phac2Features", "Phac2Gzsl", "Phac2Methods", "Phac2Splits", "Phac2Study", "Phac2Svm", "builtin_names",
-    "builtin_text", "check_n_jobs", "config_from_options", "defaults", "estimator_parameters", "load_experiment",
-    "to_toml",
-    "method_label", "validate", "ZeroShotMethods", "ZeroShotSplits", "ZeroShotStudy", "every_feature_method",
+    "ActiveMethods", "ActiveSplits", "ActiveTouchStudy", "Compute", "DaskCompute", "Experiment", "FabricDeepStudy",
+    "FabricStudy", "HandFeatures", "HandMethods", "HandSettings", "HandSimulation", "HandStudy", "Output",
+    "PRESET_DEFAULTS", "DatasetSource", "GzslSettings", "PrefixedOutput", "PresetZeroShot", "SignalFeatures",
+    "SvmSettings", "ZeroShotMethods", "ZeroShotSettings", "ZeroShotSplits", "ZeroShotStudy", "every_feature_method",
+    "with_preset_defaults", "builtin_names", "builtin_text", "check_n_jobs", "config_from_options", "defaults",
+    "estimator_parameters", "load_experiment", "to_toml", "method_label", "validate",
 ]

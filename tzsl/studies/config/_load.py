@@ -245,7 +245,7 @@ _LEADING_TABLES = ("dataset", "features")
 def to_toml(config: BaseModel) -> str:
     """The resolved experiment as TOML, every key written (unset keys as comments)."""
     data = config.model_dump()
-    # the data first, as study files are written (schemas that extend DapSettings list its tables first)
+    # the data first, as study files are written (schemas that extend ZeroShotSettings list its tables first)
     data = {k: data[k] for k in sorted(data, key=lambda k: k not in _LEADING_TABLES)}
     lines = []
     for key, value in data.items():

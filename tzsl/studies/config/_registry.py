@@ -30,7 +30,7 @@ from typing import get_args
 from pydantic import BaseModel
 
 from tzsl.exceptions import ConfigError
-from tzsl.studies.config._phac2 import Phac2Study, ZeroShotStudy
+from tzsl.studies.config._zero_shot import ZeroShotStudy
 from tzsl.studies.config._studies import ActiveTouchStudy, FabricDeepStudy, FabricStudy, HandStudy
 
 __all__ = ["StudyKind", "get_study", "register_study", "study_kinds", "study_names", "unregister_study"]
@@ -132,7 +132,7 @@ _ZERO_SHOT_HOOKS = {"runner": f"{_ZERO_SHOT}:run_zero_shot", "results": f"{_ZERO
                     "main_table": "table1_fusion"}
 
 register_study("zero-shot", schema=ZeroShotStudy, **_ZERO_SHOT_HOOKS, description="any dataset x DAP and every registered method x random and challenging unseen-object splits, GZSL, attribute tables")
-register_study("phac2-dap", schema=Phac2Study, **_ZERO_SHOT_HOOKS, preset_of="zero-shot", description="the DAP paper's PHAC-2 protocol (Tables 1-3), with the paper's numbers beside ours")
+register_study("phac2-dap", schema=ZeroShotStudy, **_ZERO_SHOT_HOOKS, preset_of="zero-shot", description="the DAP paper's PHAC-2 protocol (Tables 1-3), with the paper's numbers beside ours")
 _FABRIC, _HAND = "tzsl.studies.fabric.runner", "tzsl.studies.hand.runner"
 register_study("fabric", schema=FabricStudy, runner=f"{_FABRIC}:run_fabric", results=f"{_FABRIC}:fabric_results", outputs=f"{_FABRIC}:fabric_outputs", notes=f"{_FABRIC}:fabric_notes", main_table="table1", preset_of="zero-shot", description="the generic study on fabric-depth, then the fabric paper: embedding models on fabric groups (Table 1 analogue), group partitions")
 register_study("fabric-deep", schema=FabricDeepStudy, runner="tzsl.studies.fabric.runner:run_fabric_deep", main_table="table", requires=("torch",), extra="deep", description="the fabric paper's CNN + LSTM over key frames, over the lambda grid (needs torch)")

@@ -11,7 +11,7 @@ from typing import Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from tzsl.studies.config._phac2 import PresetZeroShot
+from tzsl.studies.config._zero_shot import PresetZeroShot
 from tzsl.studies.config._common import (
     COMPARE_DESCRIPTION,
     Compute,

@@ -58,7 +58,7 @@ from tzsl.evaluation import (
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.studies._failures import ERROR_COLUMN, attempt
 from tzsl.evaluation import Outcomes, add_trust_columns
-from tzsl.studies.config import DapSettings, Phac2Gzsl
+from tzsl.studies.config import ZeroShotSettings, GzslSettings
 from tzsl.studies.zero_shot.study import attribute_bank, compute_context
 from tzsl.studies.zero_shot.tables import split_label
 from tzsl.models import build_method
@@ -85,7 +85,7 @@ __all__ = [
 #: Output table of :func:`run_gzsl` in a results folder.
 GZSL_FILE = "gzsl.csv"
 
-#: Methods ``[gzsl] methods`` can score (:class:`~tzsl.studies.config.Phac2Gzsl`).
+#: Methods ``[gzsl] methods`` can score (:class:`~tzsl.studies.config.GzslSettings`).
 GZSL_METHODS: tuple[str, ...] = ("dap", "eszsl")
 
 
@@ -245,7 +245,7 @@ def _pseudo_problem(features: FeatureSet, problem: GzslProblem, min_train_positi
 # --------------------------------------------------------------------------- scores
 
 
-def _dap_scores(features: FeatureSet, problem: GzslProblem, config: DapSettings, gzsl: Phac2Gzsl,
+def _dap_scores(features: FeatureSet, problem: GzslProblem, config: ZeroShotSettings, gzsl: GzslSettings,
                 seed: int) -> np.ndarray:
     """DAP log-scores (n_evaluated, n_classes) of the evaluated trials, bank fitted on ``problem.fit``."""
     attrs = list(problem.attributes)
@@ -280,11 +280,11 @@ def _scores(method: str, features, problem, config, gzsl, seed) -> np.ndarray:
 # --------------------------------------------------------------------------- one split, all splits
 
 
-def _method_name(method: str, gzsl: Phac2Gzsl) -> str:
+def _method_name(method: str, gzsl: GzslSettings) -> str:
     return f"dap_{gzsl.fusion}_{gzsl.prior}" if method == "dap" else method
 
 
-def gzsl_split(features: FeatureSet, split: Split, config: DapSettings, index: int) -> list[dict]:
+def gzsl_split(features: FeatureSet, split: Split, config: ZeroShotSettings, index: int) -> list[dict]:
     """GZSL rows of one split (settings: ``config.gzsl``): one per method (and per calibration when enabled).
 
     Seeds: the attribute classifiers use the same seed as split ``index`` of the classic study
@@ -391,7 +391,7 @@ def gzsl_table(rows: list[dict]) -> pd.DataFrame:
     return add_trust_columns(table, outcomes, baselines=False)
 
 
-def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: DapSettings | None = None,
+def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: ZeroShotSettings | None = None,
              echo: Callable[[str], None] | None = None) -> pd.DataFrame:
     """GZSL evaluation of every split (see the module docstring for the protocol).
 
@@ -402,7 +402,7 @@ def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: DapSettings 
     splits : sequence of Split
         Object splits (e.g. the random splits of the DAP study); split ``i`` uses the seeds of
         the study's split ``i``.
-    config : DapSettings or None
+    config : ZeroShotSettings or None
         Attribute-classifier settings (``[svm]``, ``[compute]``) and the GZSL protocol (``[gzsl]``);
         default: the schema's defaults.
 
@@ -413,7 +413,7 @@ def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: DapSettings 
         stacking_constant`` and counts (classes, trials, attributes); ``error``: why a split
         failed (its rows NaN; the other splits still run), empty otherwise.
     """
-    config = config or DapSettings()
+    config = config or ZeroShotSettings.of_preset("phac2-dap")
     gzsl = config.gzsl
     if not splits:
         raise ConfigError("GZSL evaluation needs at least one split")

@@ -1,7 +1,7 @@
 """Registry methods vs DAP on the same PHAC-2 splits (``phac2_methods.csv``, ``phac2_method_comparison.csv``).
 
 Every method of ``[methods]`` (``eszsl``, ``embedding`` and ``compare``, see
-:meth:`~tzsl.studies.config.Phac2Methods.method_specs`) is fitted on each random split's
+:meth:`~tzsl.studies.config.ZeroShotMethods.method_specs`) is fitted on each random split's
 training objects with :func:`tzsl.studies.study_methods.fit_predict` and scored on the
 split's test trials. The reference is the paper's method, AVGDAP with a uniform prior, read
 from the already fitted DAP posteriors (no refit), as are MAXDAP and, when the study fitted it,

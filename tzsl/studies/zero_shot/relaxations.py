@@ -37,6 +37,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import challenging_splits, random_object_splits
@@ -164,8 +165,8 @@ def relaxed_n_test(object_attributes, splits) -> int:
 
 
 def _relax_challenging(features: FeatureSet, splits, negatives: int, notes: list[Relaxation],
-                       min_classes: int = 1) -> tuple[int | None, list]:
-    """(min positives, splits) of the challenging splits, or (None, []) when none can be drawn.
+                       min_classes: int = 1) -> tuple[int | None, list, pd.DataFrame | None]:
+    """(min positives, splits, object map) of the challenging splits, or (None, [], None) when none can be drawn.
 
     ``min_classes``: distinct training rows each partition needs (:data:`MIN_CV_CLASSES` when methods
     with class-grouped CV are compared on the challenging splits).
@@ -175,8 +176,8 @@ def _relax_challenging(features: FeatureSet, splits, negatives: int, notes: list
     asked = splits.challenging_min_train_positives
     for positives in range(asked, SVM_MIN_OBJECTS - 1, -1):
         try:
-            drawn, _ = challenging_splits(object_map_features(features), features.attributes,
-                                          min_train_positives=positives, min_train_negatives=negatives)
+            drawn, object_map = challenging_splits(object_map_features(features), features.attributes,
+                                                   min_train_positives=positives, min_train_negatives=negatives)
         except SplitError:
             continue
         # trainable attributes, and the training rows the compared methods' class-grouped CV needs
@@ -185,11 +186,11 @@ def _relax_challenging(features: FeatureSet, splits, negatives: int, notes: list
         if positives != asked:
             notes.append(Relaxation("splits.challenging_min_train_positives", asked, positives,
                                     "a partition's training objects lack positives of an attribute"))
-        return positives, drawn
+        return positives, drawn, object_map
     notes.append(Relaxation("splits.kinds", "random + challenging", "random",
                             "no set of challenging partitions of the 2-D feature map leaves every kept attribute 2 "
                             f"positive and 2 negative training objects and {min_classes} distinct training row(s)"))
-    return None, []
+    return None, [], None
 
 
 def relax_to_dataset(exp, features: FeatureSet):
@@ -208,12 +209,17 @@ def relax_to_dataset(exp, features: FeatureSet):
         A copy with the relaxed settings (the same object when nothing changed).
     notes : list of Relaxation
         In the order of the module docstring.
+    drawn : dict
+        The splits drawn to check the relaxed settings, by kind: ``"random"`` -> ``(splits, None)``,
+        ``"challenging"`` -> ``(splits, object map)`` (:func:`~tzsl.studies.zero_shot.study.make_splits`'s
+        result under the relaxed settings), so the study draws them once; empty for ``kinds = ["file"]``.
     """
     c = exp.config
     splits, svm = c.splits, c.svm
     notes: list[Relaxation] = []
+    found: dict[str, tuple[list, pd.DataFrame | None]] = {}
     if splits.kinds == ["file"]:
-        return exp, notes
+        return exp, notes, found
     A = features.attributes
     split_update: dict[str, Any] = {}
     train_sizes: list[int] = []
@@ -222,10 +228,11 @@ def relax_to_dataset(exp, features: FeatureSet):
         n_test, negatives, drawn = _relax_random(exp.source, A, splits, notes)
         split_update.update(n_test=n_test, min_train_negatives=negatives)
         train_sizes += [len(s.train_objects) for s in drawn]
+        found["random"] = (drawn, None)
     if "challenging" in splits.kinds:
         compared = "challenging" in c.methods.compare_on and bool(c.methods.method_specs())
-        positives, drawn = _relax_challenging(features, splits, negatives, notes,
-                                              MIN_CV_CLASSES if compared else 1)
+        positives, drawn, object_map = _relax_challenging(features, splits, negatives, notes,
+                                                          MIN_CV_CLASSES if compared else 1)
         if positives is None:
             kinds = [k for k in splits.kinds if k != "challenging"]
             if not kinds:
@@ -235,6 +242,7 @@ def relax_to_dataset(exp, features: FeatureSet):
         else:
             split_update["challenging_min_train_positives"] = positives
             train_sizes += [len(s.train_objects) for s in drawn]
+            found["challenging"] = (drawn, object_map)
     fewest = min(train_sizes) if train_sizes else len(A)
     if fewest < 2:
         raise ConfigError(f"{exp.source}: splits: a split leaves {fewest} training object(s); the attribute "
@@ -245,7 +253,7 @@ def relax_to_dataset(exp, features: FeatureSet):
         notes.append(Relaxation("svm.cv", svm.cv, fewest, f"a split has only {fewest} training objects"))
     changed = {k: v for k, v in split_update.items() if getattr(splits, k) != v}
     if not changed and not svm_update:
-        return exp, notes
+        return exp, notes, found
     config = c.model_copy(update={"splits": splits.model_copy(update=changed),
                                   "svm": svm.model_copy(update=svm_update)})
-    return dataclasses.replace(exp, config=config), notes
+    return dataclasses.replace(exp, config=config), notes, found

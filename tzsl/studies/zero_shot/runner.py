@@ -9,15 +9,17 @@ fit, which settings the dataset cannot honour (``tzsl run --check``).
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 import pandas as pd
 
+from tzsl.datasets import FeatureSet
 from tzsl.studies._outputs import PrefixedResults, ResultsDir, prefixed
 from tzsl.studies.config import Experiment
 from tzsl.studies.study_settings import StudyRun, format_table
 
-__all__ = ["SelectedColumns", "dropped_columns", "phac2_features", "prepare_phac2", "relaxation_notes",
+__all__ = ["PreparedStudy", "SelectedColumns", "dropped_columns", "load_study_features", "prepare", "relaxation_notes",
            "run_zero_shot", "zero_shot_outputs", "zero_shot_results"]
 
 
@@ -84,7 +86,7 @@ def zero_shot_results(exp: Experiment, force: bool) -> ResultsDir:
     return results
 
 
-def phac2_features(exp: Experiment):
+def load_study_features(exp: Experiment):
     """The FeatureSet of a zero-shot experiment's ``[dataset]`` and ``[features]``
     (:func:`tzsl.features.load_features`)."""
     from tzsl.features import load_features  # noqa: PLC0415
@@ -104,57 +106,89 @@ def _check_folds(exp: Experiment, n_train_objects: int) -> None:
     check_cv_folds(exp.config.svm.cv, n_train_objects, exp.source)
 
 
-def prepare_phac2(exp: Experiment):
-    """Load the dataset and the split file of a phac2-dap experiment and check the CV folds fit.
+@dataclass(frozen=True)
+class PreparedStudy:
+    """What a zero-shot run reads and draws before its first fit (:func:`prepare`).
 
-    Everything a phac2-dap run reads and draws before its first fit (``tzsl run --check`` calls
-    it too): the random splits are drawn here, so a split that cannot be drawn is reported with
-    the experiment file before any fit. Settings the dataset cannot honour are relaxed first
-    (:func:`tzsl.studies.zero_shot.relaxations.relax_to_dataset`). Returns ``(exp, features, splits or
-    None, split_file or None, relaxations)``: the relaxed experiment, the file's splits (``kinds =
-    ["file"]``), the random splits, or None (challenging only).
+    Attributes
+    ----------
+    exp : Experiment
+        The experiment with the settings the dataset cannot honour relaxed.
+    features : FeatureSet
+        The dataset's features, read once.
+    splits : dict
+        Every split the run scores, drawn (or read) once, by kind: ``"random"`` or ``"file"`` ->
+        ``(splits, None)``, ``"challenging"`` -> ``(splits, object map)``.
+    split_file : Path or None
+        The split file of ``kinds = ["file"]``.
+    relaxations : list of Relaxation
+        What was relaxed, in order (:mod:`tzsl.studies.zero_shot.relaxations`).
+    """
+
+    exp: Experiment
+    features: FeatureSet
+    splits: dict[str, tuple[list, pd.DataFrame | None]]
+    split_file: Path | None
+    relaxations: list
+
+    @property
+    def scored_splits(self) -> list | None:
+        """The random splits, or the file's (GZSL and the method comparison's); None: challenging only."""
+        found = self.splits.get("file") or self.splits.get("random")
+        return None if found is None else found[0]
+
+
+def prepare(exp: Experiment) -> PreparedStudy:
+    """Read the dataset (and the split file) of a zero-shot experiment, relax what it cannot honour, draw
+    the splits and check the CV folds fit.
+
+    Everything a zero-shot run reads and draws before its first fit (``tzsl run --check`` calls it
+    too), each once: a split that cannot be drawn is reported with the experiment file before any
+    fit; settings the dataset cannot honour are relaxed first
+    (:func:`tzsl.studies.zero_shot.relaxations.relax_to_dataset`, which draws the splits it checks).
     """
     from tzsl.evaluation import read_splits_csv  # noqa: PLC0415
     from tzsl.exceptions import ConfigError, SplitError  # noqa: PLC0415
+    from tzsl.studies.zero_shot.relaxations import relax_to_dataset  # noqa: PLC0415
     from tzsl.studies.zero_shot.study import make_splits  # noqa: PLC0415
 
-    from tzsl.studies.zero_shot.relaxations import relax_to_dataset  # noqa: PLC0415
-
-    features = phac2_features(exp)
-    exp, relaxed = relax_to_dataset(exp, features)
+    features = load_study_features(exp)
+    exp, relaxed, drawn = relax_to_dataset(exp, features)
     c = exp.config
-    user_splits, split_file = None, None
+    split_file = None
     if c.splits.kinds == ["file"]:
         split_file = exp.resolve(c.splits.file) if c.splits.file is not None else (
             exp.resolve(c.dataset.plain) / "splits.csv")
-        user_splits = read_splits_csv(split_file, features.attributes,
-                                      min_train_positives=c.splits.random_min_train_positives)
-        _check_folds(exp, min(len(s.train_objects) for s in user_splits))
+        drawn["file"] = (read_splits_csv(split_file, features.attributes,
+                                         min_train_positives=c.splits.random_min_train_positives), None)
+        _check_folds(exp, min(len(s.train_objects) for s in drawn["file"][0]))
     else:
         _check_folds(exp, features.n_objects - (c.splits.n_test if "random" in c.splits.kinds else 0))
-        if "random" in c.splits.kinds:
-            try:
-                user_splits, _ = make_splits(features, "random", c)
-            except SplitError as exc:
-                raise ConfigError(f"{exp.source}: splits: {exc}") from None
-    return exp, features, user_splits, split_file, relaxed
+        for kind in c.splits.kinds:
+            if kind not in drawn:
+                try:
+                    drawn[kind] = make_splits(features, kind, c)
+                except SplitError as exc:
+                    raise ConfigError(f"{exp.source}: splits: {exc}") from None
+    return PreparedStudy(exp, features, drawn, split_file, relaxed)
 
 
 def relaxation_notes(exp: Experiment) -> list[str]:
     """``relaxed ...`` lines for the settings the dataset cannot honour (reads the data; no fit)."""
-    return [f"relaxed {relaxed.line()}" for relaxed in prepare_phac2(exp)[-1]]
+    return [f"relaxed {relaxed.line()}" for relaxed in prepare(exp).relaxations]
 
 
 def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
     """``study = "zero-shot"`` and its paper preset ``"phac2-dap"``: one study, labelled by
     :func:`~tzsl.studies.study_labels.study_labels` (the paper's numbers only on its data)."""
     from tzsl.studies.zero_shot.gzsl import GZSL_FILE, RELAXED_COLUMN, relaxation_notes, run_gzsl  # noqa: PLC0415
-    from tzsl.studies.zero_shot.study import make_splits, run_dap_study, solver_lines  # noqa: PLC0415
+    from tzsl.studies.zero_shot.study import run_zero_shot_tables, solver_lines  # noqa: PLC0415
     from tzsl.studies.zero_shot.tables import table_titles  # noqa: PLC0415
     from tzsl.studies.study_labels import study_labels  # noqa: PLC0415
 
     study = exp.study
-    exp, features, user_splits, split_file, relaxed = prepare_phac2(exp)
+    prepared = prepare(exp)
+    exp, features, split_file, relaxed = prepared.exp, prepared.features, prepared.split_file, prepared.relaxations
     c = exp.config
     labels = study_labels(study, c, features)
     say(f"{features.dataset}: {features.n_trials} trials, {features.n_objects} objects, "
@@ -167,18 +201,14 @@ def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], Non
     kinds = tuple(c.splits.kinds)
     methods = c.methods
     options = {"methods": methods.method_specs()}
-    file_splits = user_splits if split_file is not None else None  # random ones are redrawn identically
     solver_record: dict = {}
     out = PrefixedResults(results, c.output.prefix)
-    tables = run_dap_study(features, out, c, kinds=kinds, splits=file_splits, sweep=methods.sweep,
-                           compare_methods=bool(options["methods"]), method_options=options,
-                           record=solver_record, labels=labels)
+    tables = run_zero_shot_tables(features, out, c, splits=prepared.splits, record=solver_record, labels=labels)
     for text in solver_lines(solver_record["attribute_solver"]):
         say(text)
     gzsl_notes = []
     if methods.gzsl:
-        splits = user_splits if user_splits is not None else make_splits(features, "random", c)[0]
-        tables["gzsl"] = run_gzsl(features, splits, c, echo=say)
+        tables["gzsl"] = run_gzsl(features, prepared.scored_splits, c, echo=say)
         out.write_csv(GZSL_FILE, tables["gzsl"])
         if RELAXED_COLUMN in tables["gzsl"].columns:
             gzsl_notes = relaxation_notes(tables["gzsl"][RELAXED_COLUMN])
@@ -191,7 +221,7 @@ def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], Non
             say(f"\n{title}\n{format_table(shown[name])}")
     # what the fits used: the file's settings after any relaxation (manifest "settings" are the file's)
     used = c.model_dump(mode="json", include={"methods", "gzsl", "splits", "svm", "compute"})
-    record = {"study_kind": study, "purpose": c.splits.purpose, "dap_settings": used,
+    record = {"study_kind": study, "purpose": c.splits.purpose, "study_settings": used,
               "svm_params": c.svm.estimator_params(),
               "kinds": list(kinds),
               "splits_file": None if split_file is None else str(split_file),

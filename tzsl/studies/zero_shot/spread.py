@@ -1,6 +1,6 @@
 """Headline evidence of the PHAC-2 study: DAP fusion x prior with paired differences, and the seed-refit spread.
 
-Two tables beside Tables 1-3 and the method comparison (:func:`tzsl.studies.zero_shot.study.run_dap_study`):
+Two tables beside Tables 1-3 and the method comparison (:func:`tzsl.studies.zero_shot.study.run_zero_shot_tables`):
 
 * ``dap_fusion_prior.csv``: every DAP fusion x attribute prior on every split kind run, scored
   like the method comparison (:func:`tzsl.studies.study_methods.method_summary`): accuracy

@@ -1,6 +1,6 @@
 """The PHAC-2 DAP study (DAP paper section 4): Tables 1-3, multi-label comparison, sweep.
 
-One call of :func:`run_dap_study` fits the attribute classifiers once per split and scores
+One call of :func:`run_zero_shot_tables` fits the attribute classifiers once per split and scores
 every DAP variant from the same test posteriors, so MAXDAP/AVGDAP and the three priors are
 compared on identical fits. The attribute-count sweep (section 4.7) reuses those posteriors.
 
@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,8 +23,7 @@ from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, challenging_splits, purpose_seed, random_object_splits
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.studies._failures import ERROR_COLUMN, attempt
-from tzsl.studies.config import DapSettings
-from tzsl.studies.zero_shot.methods import DEFAULT_METHODS
+from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.spread import evidence_tables, model_seed
 from tzsl.studies.study_labels import StudyLabels
 from tzsl.studies.study_methods import split_masks
@@ -60,7 +60,7 @@ __all__ = [
     "FUSIONS", "SPLITS_FILE", "PRIORS", "SplitPosteriors", "attribute_accuracy_summary",
     "attribute_accuracy_table", "attribute_bank", "attribute_estimator", "check_cv_folds", "attribute_subsets",
     "attribute_sweep", "compute_context", "fit_split", "fit_splits", "make_splits", "multilabel_table",
-    "object_map_features", "run_dap_study", "solver_lines", "split_masks", "table1_fusion", "table2_priors",
+    "object_map_features", "run_zero_shot_tables", "solver_lines", "split_masks", "table1_fusion", "table2_priors",
     "table3_challenging",
 ]
 
@@ -135,7 +135,7 @@ def object_map_features(features: FeatureSet) -> pd.DataFrame:
     return pd.DataFrame(features.X.reshape(n, s * d), index=pd.Index(features.objects, name="object_name"))
 
 
-def make_splits(features: FeatureSet, kind: str, config: DapSettings) -> tuple[list[Split], pd.DataFrame | None]:
+def make_splits(features: FeatureSet, kind: str, config: ZeroShotSettings) -> tuple[list[Split], pd.DataFrame | None]:
     """Random (F5) or challenging (F6) object splits of ``features``; the map for challenging."""
     if kind == "random":
         splits = random_object_splits(
@@ -167,12 +167,12 @@ def check_cv_folds(cv, n_train_objects: int, where: str) -> None:
                           "leave-one-object-out)")
 
 
-def attribute_estimator(config: DapSettings, seed: int) -> AttributeSVM:
+def attribute_estimator(config: ZeroShotSettings, seed: int) -> AttributeSVM:
     """The per-(attribute, sensor) SVM template of the study."""
     return AttributeSVM(undersampling=config.svm.undersampling, random_state=seed, **config.svm.estimator_params())
 
 
-def _memory(config: DapSettings) -> str | bool:
+def _memory(config: ZeroShotSettings) -> str | bool:
     """The fit store of the study's attribute banks: the cache folder, or False (``compute.cache = false``:
     no store, even with ``TZSL_CACHE_DIR`` set)."""
     from tzsl.datasets import get_cache_dir  # noqa: PLC0415
@@ -180,7 +180,7 @@ def _memory(config: DapSettings) -> str | bool:
     return str(get_cache_dir()) if config.compute.cache else False
 
 
-def attribute_bank(config: DapSettings, attributes, seed: int) -> AttributeClassifierBank:
+def attribute_bank(config: ZeroShotSettings, attributes, seed: int) -> AttributeClassifierBank:
     """Independent per-(attribute, sensor) classifiers, parallel and cached."""
     return AttributeClassifierBank(
         estimator=attribute_estimator(config, seed), attribute_names=list(attributes), n_jobs=config.compute.n_jobs,
@@ -189,7 +189,7 @@ def attribute_bank(config: DapSettings, attributes, seed: int) -> AttributeClass
     )
 
 
-def fit_split(features: FeatureSet, split: Split, config: DapSettings, index: int,
+def fit_split(features: FeatureSet, split: Split, config: ZeroShotSettings, index: int,
               multilabel: bool = False, refit: int = 0) -> SplitPosteriors:
     """Fit the attribute classifiers on the split's training objects; posteriors of its test trials.
 
@@ -222,7 +222,7 @@ def fit_split(features: FeatureSet, split: Split, config: DapSettings, index: in
 
 
 @contextlib.contextmanager
-def compute_context(config: DapSettings):
+def compute_context(config: ZeroShotSettings):
     """A Dask client for ``backend="dask"`` (the scheduler's, or a local cluster); else nothing."""
     if config.compute.backend != "dask":
         yield None
@@ -250,7 +250,7 @@ def compute_context(config: DapSettings):
             yield client
 
 
-def fit_splits(features: FeatureSet, splits: list[Split], config: DapSettings,
+def fit_splits(features: FeatureSet, splits: list[Split], config: ZeroShotSettings,
                multilabel: bool = False, offset: int = 0, failures: list[dict] | None = None) -> list[SplitPosteriors]:
     """:func:`fit_split` for every split (index ``offset + i`` seeds split ``i``).
 
@@ -290,20 +290,21 @@ def _print(echo, title: str, table: pd.DataFrame) -> None:
     echo(shown.to_string(index=False, float_format=lambda v: f"{v:.3f}", na_rep="-"))
 
 
-def run_dap_study(
+def run_zero_shot_tables(
     features: FeatureSet,
     out,
-    config: DapSettings | None = None,
-    kinds: tuple[str, ...] = ("random", "challenging"),
-    splits: list[Split] | None = None,
-    sweep: bool = True,
-    compare_methods: bool = False,
+    config: ZeroShotSettings,
+    *,
+    splits: Mapping[str, tuple[list[Split], pd.DataFrame | None]] | None = None,
     echo=None,
-    method_options: dict | None = None,
     record: dict | None = None,
     labels: StudyLabels | None = None,
 ) -> dict[str, pd.DataFrame]:
-    """Run the PHAC-2 DAP study and write its tables and figures into ``out``.
+    """Fit and score DAP (and the compared methods) on the study's splits; write its tables and figures into ``out``.
+
+    What runs is read from ``config``: the split kinds (``[splits] kinds``), the attribute-count sweep
+    (``[methods] sweep``) and the methods compared with DAP (``[methods]``,
+    :meth:`~tzsl.studies.config.ZeroShotMethods.method_specs`, on the kinds of ``compare_on``).
 
     Parameters
     ----------
@@ -311,22 +312,14 @@ def run_dap_study(
         Per-trial, per-sensor features (e.g. ``dataset_features("phac2-penn")``).
     out : tzsl.studies._outputs.ResultsDir
         Where tables (CSV) and figures (PNG) go; existing files need ``force``.
-    config : DapSettings or None
-    kinds : tuple of {"random", "challenging"}
-        Which split families to run. Ignored when ``splits`` is given.
-    splits : list of Split or None
-        User-supplied splits (``tzsl evaluate --splits FILE``): scored like random splits
-        (Tables 1 and 2), no paper numbers are matched to them beyond the split label.
-    sweep : bool
-        Run the attribute-count sweep on the random splits.
-    compare_methods : bool
-        Also fit registry methods on the split kinds of ``config.methods.compare_on`` (``phac2_methods.csv``,
-        ``phac2_method_comparison.csv``; :func:`~tzsl.studies.zero_shot.spread.evidence_tables`).
+    config : ZeroShotSettings
+        E.g. ``ZeroShotSettings()`` (the generic study) or ``ZeroShotSettings.of_preset("phac2-dap")``.
+    splits : dict or None
+        The splits the caller has drawn or read already, by kind (``"random"``, ``"challenging"``,
+        ``"file"`` -> :func:`make_splits`'s ``(splits, object map or None)``; see
+        :func:`tzsl.studies.zero_shot.runner.prepare`); a kind of ``config`` missing here is drawn here.
     echo : callable or None
         Receives human-readable tables (the CLI passes ``click.echo``).
-    method_options : dict or None
-        ``{"methods": registry entries}`` compared when ``compare_methods``; default: ESZSL and
-        embedding lambdas 0.1 and 1.
     record : dict or None
         Filled with ``"attribute_solver"``: one :attr:`AttributeClassifierBank.solver_choice_`
         per fitted split (exact or approximate attribute models, and why), for the manifest.
@@ -345,18 +338,19 @@ def run_dap_study(
         object_map_figure,
     )
 
-    config = config or DapSettings()
     labels = labels or StudyLabels()
+    kinds, drawn = config.splits.kinds, dict(splits or {})
+    for kind in kinds:
+        if kind not in drawn:
+            drawn[kind] = make_splits(features, kind, config)  # "file" cannot be drawn: given, or an error
     paper = labels.paper
     tables: dict[str, pd.DataFrame] = {}
     with compute_context(config):  # one Dask cluster for all the study's fits
         random_results: list[SplitPosteriors] = []
         failed: list[dict] = []  # splits whose DAP fit failed: failed_splits.csv, reported at the end
-        if splits is not None:
-            random_results = fit_splits(features, splits, config, multilabel=config.methods.multilabel, failures=failed)
-        elif "random" in kinds:
-            random_splits, _ = make_splits(features, "random", config)
-            random_results = fit_splits(features, random_splits, config, multilabel=config.methods.multilabel,
+        scored = "file" if "file" in kinds else "random"
+        if scored in kinds:
+            random_results = fit_splits(features, drawn[scored][0], config, multilabel=config.methods.multilabel,
                                         failures=failed)
         if random_results:
             tables["table1_fusion"] = table1_fusion(random_results, paper=paper)
@@ -367,24 +361,24 @@ def run_dap_study(
             tables["attribute_accuracy_per_split"] = per_split
             tables["attribute_accuracy"] = attribute_accuracy_summary(per_split, random_results, paper=paper)
             out.write_figure("attribute_accuracy.png", attribute_accuracy_figure(tables["attribute_accuracy"]))
-            if sweep:
+            if config.methods.sweep:
                 tables["attribute_sweep"] = attribute_sweep(
                     random_results, config.methods.sweep_min_attributes, config.methods.sweep_max_subsets, seed=config.study_seed)
                 out.write_figure("attribute_sweep.png", attribute_sweep_figure(tables["attribute_sweep"]))
         used = [r.split for r in random_results]
         results: list[SplitPosteriors] = []
-        if splits is None and "challenging" in kinds:
-            challenging, map_coords = make_splits(features, "challenging", config)
+        if "challenging" in kinds:
+            challenging, map_coords = drawn["challenging"]
             results = fit_splits(features, challenging, config, offset=100, failures=failed)
             used += [r.split for r in results]
             tables["table3_challenging"] = table3_challenging(results, map_coords, paper=paper)
             tables["object_map"] = map_coords
             out.write_figure("object_map.png", object_map_figure(map_coords))
-        by_kind = {"file" if splits is not None else "random": (random_results, 0), "challenging": (results, 100)}
+        by_kind = {scored: (random_results, 0), "challenging": (results, 100)}
         tables.update(evidence_tables(
             features, by_kind, seed=config.study_seed, labels=labels, compare_on=config.methods.compare_on,
             purpose=config.splits.purpose, n_jobs=config.compute.n_jobs,
-            methods=list((method_options or {}).get("methods", DEFAULT_METHODS)) if compare_methods else [],
+            methods=config.methods.method_specs(),
             refit_seeds=config.splits.refit_seeds, refit_splits=config.splits.refit_splits,
             refit=lambda split, index, k: fit_split(features, split, config, index, refit=k)))
         write_reliability_figure(out, tables, labels.reliability_table, labels.comparison_table)

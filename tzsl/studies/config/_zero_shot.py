@@ -1,23 +1,25 @@
-"""Schemas of ``study = "zero-shot"`` (any dataset x every method x random and challenging splits)
-and of its PHAC-2 paper preset ``study = "phac2-dap"``.
+"""The schema of ``study = "zero-shot"`` (any dataset x every method x random and challenging splits),
+which its PHAC-2 paper preset ``study = "phac2-dap"`` shares.
 
-Both run the same study (:func:`tzsl.studies.zero_shot.runner.run_zero_shot`): attribute SVMs
+Both run the same study (:func:`tzsl.studies.zero_shot.runner.run_zero_shot`): attribute models
 + DAP (fusions, priors), the attribute tables, the attribute-count sweep, the method comparison
-and GZSL, on random and challenging unseen-class splits. ``zero-shot`` defaults to all of it
-with every registered feature method; ``phac2-dap`` defaults to the cheapest complete study (DAP
-only, random splits, the paper's 10 test objects) and adds the paper's numbers on the paper's
-dataset and protocol (:mod:`tzsl.studies.study_labels`). Where a default belongs to an
-estimator (the SVM grids), it is read from that estimator.
+and GZSL, on random and challenging unseen-class splits. One flat model per table, composed into
+:class:`ZeroShotSettings` (what the study reads) and :class:`ZeroShotStudy` (a study file), each
+default written once: the generic study's on the fields, and what a preset changes of them in
+:data:`PRESET_DEFAULTS` (``phac2-dap``: the cheapest complete study, DAP only on the paper's random
+splits of 10 test objects; the ``[zero_shot]`` table of the fabric and hand presets: no compared
+method and no sweep). Where a default belongs to an estimator (the SVM grids), it is read from it.
 """
 
 from __future__ import annotations
 
 import inspect
-from typing import Literal
+from typing import Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
 from tzsl.datasets import dataset_names, get_dataset
+from tzsl.value_lists import FUSIONS, PRIORS, SPLIT_KINDS, SPLIT_SOURCES
 
 from tzsl.studies.config._common import (
     COMPARE_DESCRIPTION,
@@ -49,7 +51,9 @@ def _bank_default(name: str):
     return inspect.signature(AttributeClassifierBank).parameters[name].default
 
 
-class Phac2Dataset(Section):
+class DatasetSource(Section):
+    """``[dataset]``: exactly one of a built-in dataset, a plain-file folder or a feature table."""
+
     builtin: str | None = Field(None, description=f"a built-in dataset ({', '.join(dataset_names())})")
     plain: str | None = Field(None, description="a plain-file dataset folder (tzsl formats)")
     features: str | None = Field(None, description="a feature table written by tzsl extract --out")
@@ -81,7 +85,7 @@ class Phac2Dataset(Section):
         return self
 
 
-class Phac2Features(Section):
+class SignalFeatures(Section):
     """For plain folders with signal files; unset = the folder's dataset.toml [signals]."""
 
     statistics: list[str] | None = Field(None, description="per-channel statistics of signal files")
@@ -89,20 +93,37 @@ class Phac2Features(Section):
     channels: list[str] | None = Field(None, description="signal channels to use, in order")
 
 
-class Phac2Methods(Section):
-    dap: Literal[True] = Field(True, description="DAP with independent attribute SVMs (always runs)")
-    fusions: list[Literal["max", "avg"]] = Field(["max", "avg"], description="Table 1 columns")
-    priors: list[Literal["uni", "test", "train"]] = Field(["uni", "test", "train"], description="Table 2 columns")
+#: Registry methods read from the DAP study's own posteriors (no fit of their own).
+FROM_DAP_POSTERIORS = ("dap-avg", "dap-max", "multilabel-dap")
+
+
+def every_feature_method() -> list[dict]:
+    """``[{"name": m}, ...]`` for every registered method on feature vectors, except those read
+    from the DAP posteriors (:data:`FROM_DAP_POSTERIORS`)."""
+    from tzsl.models import available_methods, get_method  # noqa: PLC0415
+
+    return [{"name": name} for name in available_methods()
+            if get_method(name).input_kind == "features" and name not in FROM_DAP_POSTERIORS]
+
+
+class ZeroShotMethods(Section):
+    """``[methods]``: DAP always; every registered feature method beside it (``compare``), the
+    attribute-count sweep and GZSL by default."""
+
+    dap: Literal[True] = Field(True, description="DAP with independent attribute models (always runs)")
+    fusions: list[Literal[FUSIONS]] = Field(list(FUSIONS), description="Table 1 columns")
+    priors: list[Literal[PRIORS]] = Field(list(PRIORS), description="Table 2 columns")
     multilabel: bool = Field(False, description="joint multi-label attribute model (random splits)")
-    sweep: bool = Field(False, description="attribute-count sweep (random splits)")
-    sweep_min_attributes: int = Field(7, ge=1)
-    sweep_max_subsets: int = Field(1000, ge=1)
-    eszsl: bool = Field(False, description="ESZSL on the random splits (phac2_methods.csv)")
-    embedding: bool = Field(False, description="the fabric paper's embedding model (phac2_methods.csv)")
+    sweep: bool = Field(True, description="attribute-count sweep (random splits)")
+    sweep_min_attributes: int = Field(3, ge=1)
+    sweep_max_subsets: int = Field(200, ge=1)
+    eszsl: bool = Field(False, description="ESZSL on the random splits (the method comparison)")
+    embedding: bool = Field(False, description="the fabric paper's embedding model (the method comparison)")
     embedding_lambdas: list[float] = Field([0.1, 1.0], description="lambdas of the embedding model")
-    compare: list[MethodEntry] = Field([], description=COMPARE_DESCRIPTION)
-    gzsl: bool = Field(False, description="generalised zero-shot evaluation (gzsl.csv, see [gzsl])")
-    compare_on: list[Literal["random", "challenging"]] = Field(
+    compare: list[MethodEntry] = Field(default_factory=every_feature_method,
+                                       description=COMPARE_DESCRIPTION + " (default: every feature method)")
+    gzsl: bool = Field(True, description="generalised zero-shot evaluation (gzsl.csv, see [gzsl])")
+    compare_on: list[Literal[SPLIT_KINDS]] = Field(
         ["random"], description="split kinds the compared methods run on (rows of the method comparison by "
                                 "split_kind); 'challenging' needs it in [splits] kinds")
 
@@ -118,34 +139,42 @@ class Phac2Methods(Section):
 
     @model_validator(mode="after")
     def _registry(self):
+        """The default ``compare`` leaves out what the ``eszsl`` / ``embedding`` switches already run."""
+        if "compare" not in self.model_fields_set:
+            switched = {spec["name"] for spec in self._from_switches()}
+            self.compare = [spec for spec in self.compare if spec["name"] not in switched]
         if self.compare:
             self.compare = methods_ok(self.compare, tuple(method_label(s) for s in self._from_switches()))
         return self
 
     def method_specs(self) -> list[dict]:
-        """Every method compared with DAP on the random splits: the switches' then ``compare``'s.
+        """Every method compared with DAP: the switches' then ``compare``'s.
 
         Each as ``{"name": registry name, **parameters}`` (see :func:`tzsl.models.build_method`).
         """
         return self._from_switches() + [dict(s) for s in self.compare]
 
 
-class Phac2Gzsl(Section):
+class GzslSettings(Section):
+    """``[gzsl]``: generalised zero-shot evaluation (seen and unseen classes at test time)."""
+
     holdout_fraction: float = Field(0.3, gt=0, lt=1, description="fraction of each training object's trials "
                                                                "held out as seen-class test trials")
     methods: list[Literal["dap", "eszsl"]] = Field(["dap", "eszsl"])
-    fusion: Literal["avg", "max"] = "avg"
-    prior: Literal["uni", "train", "test"] = "uni"
+    fusion: Literal[FUSIONS] = "avg"
+    prior: Literal[PRIORS] = "uni"
     calibrated_stacking: bool = True
     max_draws: int = Field(1000, ge=1, description="draws of pseudo-unseen training classes")
 
     _methods = field_validator("methods")(lambda v: distinct(non_empty(v)))
 
 
-class Phac2Splits(Section):
-    kinds: list[Literal["random", "challenging", "file"]] = Field(["random"])
+class ZeroShotSplits(Section):
+    """``[splits]``: unseen-class splits (random object splits, the challenging partitions, or a file)."""
+
+    kinds: list[Literal[SPLIT_SOURCES]] = Field(list(SPLIT_KINDS))
     n_splits: int = Field(5, ge=1, description="random splits")
-    n_test: int = Field(10, ge=1, description="test objects per random split")
+    n_test: int = Field(5, ge=1, description="test (unseen) objects per random split")
     seed: int = Seed
     purpose: Literal["select", "confirm"] = Purpose
     file: str | None = Field(None, description="split CSV for kinds = ['file'] (default: the plain folder's "
@@ -176,7 +205,7 @@ class Phac2Splits(Section):
         return self
 
 
-class Phac2Svm(Section):
+class SvmSettings(Section):
     """Per-(attribute, sensor) RBF-SVM (:class:`~tzsl.models.AttributeSVM`); unset keys take its defaults."""
 
     cv: int = Field(5, ge=0, description="object-grouped folds; 0 = leave-one-object-out")
@@ -233,26 +262,26 @@ class Phac2Svm(Section):
         return v
 
 
-class Phac2Output(Output):
+class PrefixedOutput(Output):
     prefix: str = Field("", pattern=r"^([a-z0-9]+([_-][a-z0-9]+)*)?$",
                         description="written before every file name of the run (``PREFIX_table1_fusion.csv``) "
                                     "and after its study label in method comparisons, so two runs can share "
                                     "one folder (reproduce-tables); lower-case letters, digits, '-', '_'")
 
 
-class DapSettings(Section):
-    """What the DAP study reads: the ``[methods]``, ``[gzsl]``, ``[splits]``, ``[svm]`` and ``[compute]`` tables.
+class ZeroShotSettings(Section):
+    """What the zero-shot study reads: the ``[methods]``, ``[gzsl]``, ``[splits]``, ``[svm]`` and ``[compute]`` tables.
 
-    Every study file of the zero-shot kind is one (:class:`Phac2Study` adds the data and the output);
-    from Python, give only what differs from the defaults, e.g.
-    ``DapSettings(splits={"n_splits": 2}, svm={"cv": 3})``
-    (:func:`tzsl.studies.zero_shot.study.run_dap_study`).
+    A study file (:class:`ZeroShotStudy`) is one with its data and output; from Python, give only what
+    differs from the defaults, e.g. ``ZeroShotSettings(splits={"n_splits": 2}, svm={"cv": 3})``, or
+    start from a preset's: ``ZeroShotSettings.of_preset("phac2-dap", splits={"seed": 1})``
+    (:func:`tzsl.studies.zero_shot.study.run_split_tables`).
     """
 
-    methods: Phac2Methods = Field(default_factory=Phac2Methods)
-    gzsl: Phac2Gzsl = Field(default_factory=Phac2Gzsl)
-    splits: Phac2Splits = Field(default_factory=Phac2Splits)
-    svm: Phac2Svm = Field(default_factory=Phac2Svm)
+    methods: ZeroShotMethods = Field(default_factory=ZeroShotMethods)
+    gzsl: GzslSettings = Field(default_factory=GzslSettings)
+    splits: ZeroShotSplits = Field(default_factory=ZeroShotSplits)
+    svm: SvmSettings = Field(default_factory=SvmSettings)
     compute: DaskCompute = Field(default_factory=DaskCompute)
 
     @property
@@ -262,15 +291,53 @@ class DapSettings(Section):
 
         return purpose_seed(self.splits.seed, self.splits.purpose)
 
+    @classmethod
+    def of_preset(cls, preset: str, **tables: dict) -> ZeroShotSettings:
+        """The settings of ``preset`` (a key of :data:`PRESET_DEFAULTS`) with ``tables`` given on top."""
+        return cls.model_validate(with_preset_defaults(tables, preset))
 
-class Phac2Study(DapSettings):
-    """``study = "phac2-dap"``."""
 
-    study: Literal["phac2-dap"] = "phac2-dap"
+#: What a preset changes of the zero-shot study's defaults, by table (every other default is the
+#: generic study's): ``"phac2-dap"``, the DAP paper's protocol, the cheapest complete study (DAP only,
+#: the paper's 5 random splits of 10 test objects, the paper's attribute-count sweep range when it is
+#: switched on); ``"zero_shot_part"``, the ``[zero_shot]`` table of the fabric and hand presets (the
+#: paper protocol compares its own methods: no compared method, no sweep).
+PRESET_DEFAULTS: dict[str, dict[str, dict[str, Any]]] = {
+    "phac2-dap": {"methods": {"compare": [], "sweep": False, "gzsl": False, "sweep_min_attributes": 7,
+                              "sweep_max_subsets": 1000},
+                  "splits": {"kinds": ["random"], "n_test": 10}},
+    "zero_shot_part": {"methods": {"compare": [], "sweep": False}},
+}
+
+
+def with_preset_defaults(raw: Any, preset: str) -> Any:
+    """``raw`` (a study file's tables, as TOML gives them) with :data:`PRESET_DEFAULTS` ``[preset]``
+    filled in where it gives no value (a table that is not a table is left for the schema to refuse)."""
+    if not isinstance(raw, dict):
+        return raw
+    filled = dict(raw)
+    for table, values in PRESET_DEFAULTS[preset].items():
+        given = filled.get(table, {})
+        if isinstance(given, dict):
+            filled[table] = {**values, **given}
+    return filled
+
+
+class ZeroShotStudy(ZeroShotSettings):
+    """``study = "zero-shot"`` (any dataset, every registered feature method, random + challenging splits)
+    and its PHAC-2 paper preset ``study = "phac2-dap"`` (:data:`PRESET_DEFAULTS`)."""
+
+    study: Literal["zero-shot", "phac2-dap"] = "zero-shot"
     description: str = ""
-    dataset: Phac2Dataset
-    features: Phac2Features = Field(default_factory=Phac2Features)
-    output: Phac2Output = Field(default_factory=Phac2Output)
+    dataset: DatasetSource
+    features: SignalFeatures = Field(default_factory=SignalFeatures)
+    output: PrefixedOutput = Field(default_factory=PrefixedOutput)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _preset_defaults(cls, data: Any) -> Any:
+        study = data.get("study") if isinstance(data, dict) else None
+        return with_preset_defaults(data, study) if study in PRESET_DEFAULTS else data
 
     @model_validator(mode="after")
     def _across_tables(self):
@@ -293,78 +360,27 @@ class Phac2Study(DapSettings):
         return self
 
 
-# --------------------------------------------------------------------------- zero-shot (generic)
-
-#: Registry methods read from the DAP study's own posteriors (no fit of their own).
-FROM_DAP_POSTERIORS = ("dap-avg", "dap-max", "multilabel-dap")
-
-
-def every_feature_method() -> list[dict]:
-    """``[{"name": m}, ...]`` for every registered method on feature vectors, except those read
-    from the DAP posteriors (:data:`FROM_DAP_POSTERIORS`)."""
-    from tzsl.models import available_methods, get_method  # noqa: PLC0415
-
-    return [{"name": name} for name in available_methods()
-            if get_method(name).input_kind == "features" and name not in FROM_DAP_POSTERIORS]
-
-
-class ZeroShotMethods(Phac2Methods):
-    """Every registered feature method beside DAP (``compare``), the sweep and GZSL: on by default."""
-
-    sweep: bool = Field(True, description="attribute-count sweep (random splits)")
-    sweep_min_attributes: int = Field(3, ge=1)
-    sweep_max_subsets: int = Field(200, ge=1)
-    compare: list[MethodEntry] = Field(default_factory=every_feature_method,
-                                       description=COMPARE_DESCRIPTION + " (default: every feature method)")
-    gzsl: bool = Field(True, description="generalised zero-shot evaluation (gzsl.csv, see [gzsl])")
-
-    @model_validator(mode="after")
-    def _registry(self):
-        """The default ``compare`` leaves out what the ``eszsl`` / ``embedding`` switches already run."""
-        if "compare" not in self.model_fields_set:
-            switched = {spec["name"] for spec in self._from_switches()}
-            self.compare = [spec for spec in self.compare if spec["name"] not in switched]
-        if self.compare:
-            self.compare = methods_ok(self.compare, tuple(method_label(s) for s in self._from_switches()))
-        return self
-
-
-class ZeroShotSplits(Phac2Splits):
-    kinds: list[Literal["random", "challenging", "file"]] = Field(["random", "challenging"])
-    n_test: int = Field(5, ge=1, description="test (unseen) objects per random split")
-
-
-class ZeroShotStudy(Phac2Study):
-    """``study = "zero-shot"``: any dataset, every registered feature method, random + challenging splits."""
-
-    study: Literal["zero-shot"] = "zero-shot"
-    methods: ZeroShotMethods = Field(default_factory=ZeroShotMethods)
-    splits: ZeroShotSplits = Field(default_factory=ZeroShotSplits)
-
-
 # --------------------------------------------------------------------------- [zero_shot] of a paper preset
-
-
-class PresetMethods(ZeroShotMethods):
-    """The generic study's methods in a paper preset: DAP and GZSL by default (the paper protocol
-    compares its own methods); switch on more with ``compare``, ``eszsl``, ``sweep``."""
-
-    compare: list[MethodEntry] = Field([], description=COMPARE_DESCRIPTION + " (preset default: none)")
-    sweep: bool = Field(False, description="attribute-count sweep (random splits)")
 
 
 class PresetZeroShot(Section):
     """``[zero_shot]`` of a paper preset (``fabric``, ``hand``): the generic study on the preset's dataset.
 
     Its ``methods``, ``gzsl``, ``splits`` and ``svm`` are the ``zero-shot`` study's sections
-    (``[zero_shot.methods]`` ...); the dataset is the preset's built-in one, ``[compute]`` and
-    ``[output] folder`` are the preset's, and every file is written as ``<dataset>_<name>``.
+    (``[zero_shot.methods]`` ...) with :data:`PRESET_DEFAULTS` ``["zero_shot_part"]``; the dataset is the
+    preset's built-in one, ``[compute]`` and ``[output] folder`` are the preset's, and every file is
+    written as ``<dataset>_<name>``.
     """
 
     enabled: bool = Field(True, description="run the generic zero-shot tables before the paper protocol's")
     min_objects: int | None = Field(None, ge=1, description="keep attributes present in >= this many objects "
                                     "(unset: the extractor's default)")
-    methods: PresetMethods = Field(default_factory=PresetMethods)
-    gzsl: Phac2Gzsl = Field(default_factory=Phac2Gzsl)
+    methods: ZeroShotMethods = Field(default_factory=ZeroShotMethods)
+    gzsl: GzslSettings = Field(default_factory=GzslSettings)
     splits: ZeroShotSplits = Field(default_factory=ZeroShotSplits)
-    svm: Phac2Svm = Field(default_factory=Phac2Svm)
+    svm: SvmSettings = Field(default_factory=SvmSettings)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _preset_defaults(cls, data: Any) -> Any:
+        return with_preset_defaults(data, "zero_shot_part")
