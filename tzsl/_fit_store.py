@@ -42,6 +42,7 @@ from tzsl._io import atomic_write
 from tzsl._profile import count, timed
 from tzsl.cache import FITS_FOLDER, env_cache_dir, mark_used
 from tzsl.exceptions import ConfigError
+from tzsl.value_lists import JOBLIB_BACKENDS
 
 __all__ = [
     "FITS_FOLDER",
@@ -61,7 +62,6 @@ __all__ = [
 
 #: Parameters that do not change a fit's result, left out of its key.
 NEUTRAL_PARAMS = frozenset({"name", "n_jobs", "backend", "memory", "progress", "verbose"})
-_BACKENDS = ("loky", "dask", "threading", "multiprocessing", "sequential")
 #: Format of a stored fit (in every key): 2 = a pickle (protocol 5), read by the C unpickler; joblib's files
 #: (1) were read by its pure-Python unpickler, the slowest part of a study whose fits are all stored.
 _STORE_FORMAT = 2
@@ -348,8 +348,8 @@ def parallel_context(backend: str):
     ConfigError
         Unknown backend, or ``"dask"`` without a ``dask.distributed.Client``.
     """
-    if backend not in _BACKENDS:
-        raise ConfigError(f"backend must be one of {_BACKENDS}, got {backend!r}")
+    if backend not in JOBLIB_BACKENDS:
+        raise ConfigError(f"backend must be one of {JOBLIB_BACKENDS}, got {backend!r}")
     if backend == "dask":
         try:
             from distributed import get_client

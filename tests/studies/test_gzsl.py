@@ -166,6 +166,20 @@ def test_run_gzsl_table_layout_and_scores():
     np.testing.assert_allclose(per_split["zsl_chance"], 1 / per_split["n_unseen_classes"])
 
 
+def test_any_registered_feature_method_can_be_scored():
+    """[gzsl] methods takes the registry's feature methods beside "dap", each a row; others are refused by name."""
+    features = synthetic_features()
+    config = _config(**{"gzsl.methods": ["dap", "sae"], "gzsl.calibrated_stacking": False})
+    splits, _ = make_splits(features, "random", config)
+    table = run_gzsl(features, splits[:1], config)
+    per_split = table[~table["split"].isin(["mean", "std"])]
+    assert set(per_split["method"]) == {"dap_avg_uni", "sae"}
+    assert per_split["harmonic"].between(0, 1).all()
+    for bad, why in ((["dap", "hand-dap"], "takes grasps"), (["no-such-method"], "unknown method")):
+        with pytest.raises(ValidationError, match=why):
+            _config(**{"gzsl.methods": bad})
+
+
 def test_stacking_constant_never_depends_on_test_objects():
     features = synthetic_features()
     config = _config()

@@ -14,6 +14,7 @@ from pathlib import Path
 import click
 
 from tzsl.cli._root import (
+    RegistryName,
     backend_option,
     cli,
     data_dir_option,
@@ -25,6 +26,7 @@ from tzsl.cli._root import (
     seed_option,
 )
 from tzsl.exceptions import ConfigError
+from tzsl.value_lists import FUSIONS, PRIORS, SPLIT_KINDS
 
 STUDY = "phac2-dap"
 
@@ -37,8 +39,9 @@ def _source_options(func):
                         help="A plain-file dataset folder (see 'tzsl formats') instead of a built-in dataset.")(func)
     func = click.option("--features", "features_file", type=click.Path(dir_okay=False, path_type=Path),
                         default=None, help="A feature table written by 'tzsl extract --out'.")(func)
-    func = click.option("--dataset", type=click.Choice(["phac2-penn", "phac2-h5", "phac2-hold-mat"]),
-                        default=None, help="Built-in dataset [default: phac2-penn unless --plain or --features].")(func)
+    func = click.option("--dataset", type=RegistryName("dataset"), default=None,
+                        help="Built-in dataset ('tzsl datasets' lists them) [default: phac2-penn unless --plain or "
+                             "--features].")(func)
     return func
 
 
@@ -92,7 +95,7 @@ purpose_option = schema_option(
 
 
 @cli.command()
-@click.option("--split", "kind", type=click.Choice(["random", "challenging"]), default="random", show_default=True,
+@click.option("--split", "kind", type=click.Choice(SPLIT_KINDS), default="random", show_default=True,
               help="Split family.")
 @schema_option("--n-splits", study=STUDY, key="splits.n_splits", type=click.IntRange(min=1),
                help="Random splits to draw.")
@@ -128,9 +131,9 @@ def splits(kind, n_splits, n_test, purpose, out, dataset, features_file, plain_d
 @click.option("--splits", "splits_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Train on the training objects of one split of this CSV (see --split-name).")
 @click.option("--split-name", default=None, help="Which split of --splits (default: the first).")
-@click.option("--fusion", type=click.Choice(["avg", "max"]), default="avg", show_default=True,
+@click.option("--fusion", type=click.Choice(FUSIONS), default="avg", show_default=True,
               help="Sensor fusion stored in the bundle for 'tzsl predict'.")
-@click.option("--prior", type=click.Choice(["uni", "train", "test"]), default="uni", show_default=True,
+@click.option("--prior", type=click.Choice(PRIORS), default="uni", show_default=True,
               help="Attribute prior stored in the bundle.")
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="Model bundle to write (e.g. model.tzsl).")
@@ -219,7 +222,7 @@ def evaluate_values(kind, splits_file, n_splits, n_test, multilabel, sweep, out,
                     path, undersampling, cv, grid, no_progress, no_cache, seed, n_jobs, backend, scheduler,
                     data_dir, purpose: str | None = None) -> dict:
     """``tzsl evaluate``'s options as experiment keys (``{"table.key": value}``)."""
-    kinds = ["file"] if splits_file is not None else (["random", "challenging"] if kind == "both" else [kind])
+    kinds = ["file"] if splits_file is not None else (list(SPLIT_KINDS) if kind == "both" else [kind])
     return {**_dataset_values(dataset, features_file, plain_dir, path, data_dir),
             **_study_values(seed, n_jobs, backend, scheduler, undersampling, cv, grid, no_progress, no_cache),
             "splits.kinds": kinds, "splits.file": None if splits_file is None else str(splits_file),
@@ -229,7 +232,7 @@ def evaluate_values(kind, splits_file, n_splits, n_test, multilabel, sweep, out,
 
 
 @cli.command()
-@click.option("--split", "kind", type=click.Choice(["random", "challenging", "both"]), default="random",
+@click.option("--split", "kind", type=click.Choice([*SPLIT_KINDS, "both"]), default="random",
               show_default=True, help="Split family (paper Tables 1-2: random; Table 3: challenging).")
 @click.option("--splits", "splits_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Use the splits of this CSV instead (see 'tzsl splits').")

@@ -27,6 +27,7 @@ import click
 from tzsl import __version__
 from tzsl._warnings import TerminalWarnings
 from tzsl.exceptions import PartialRunError, TzslError
+from tzsl.value_lists import STUDY_BACKENDS
 
 #: Exit code of a usage error (click's own code).
 EXIT_USAGE = 2
@@ -216,7 +217,7 @@ def backend_option(func=None, *, override: bool = False):
     extra = ({"default": None, "help": "joblib backend (overrides [compute] backend)."} if override else
              {"cls": SchemaOption, "default": schema_default("phac2-dap", "compute.backend"), "show_default": True,
               "help": "joblib backend; 'dask' runs the fits on a Dask cluster (see --scheduler)."})
-    option = click.option("--backend", type=click.Choice(["loky", "dask"]), **extra)
+    option = click.option("--backend", type=click.Choice(STUDY_BACKENDS), **extra)
     return option(func) if func is not None else option
 
 

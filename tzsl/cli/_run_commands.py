@@ -57,12 +57,9 @@ def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, dat
     override the file's settings. See experiments/README.md.
     """
     from tzsl.studies.config import get_study, load_experiment, to_toml  # noqa: PLC0415
-    from tzsl.studies.engine import check_experiment, override_values, run_experiment  # noqa: PLC0415
+    from tzsl.studies.engine import check_experiment, run_experiment  # noqa: PLC0415
 
-    overrides = _overrides(out, n_jobs, seed, backend, scheduler, no_progress, data_dir)
-    exp = load_experiment(experiment)
-    if any(v is not None for v in overrides.values()):
-        exp = load_experiment(experiment, override_values(exp.study, overrides))
+    exp = load_experiment(experiment, options=_overrides(out, n_jobs, seed, backend, scheduler, no_progress, data_dir))
     if print_config:
         click.echo(to_toml(exp.config), nl=False)
         return

@@ -74,6 +74,7 @@ from tzsl.models._active_policy import (
 )
 from tzsl.models._attribute_bank import AttributeClassifierBank
 from tzsl.models._logistic_attribute import LogisticAttribute
+from tzsl.value_lists import FUSIONS
 from tzsl.models._dap import (
     attribute_prior,
     check_class_attributes,
@@ -200,7 +201,7 @@ class PerEPAttributeModel(BaseEstimator):
         "cv": [Interval(Integral, 2, None, closed="left")],
         "n_bins": [Interval(Integral, 2, None, closed="left")],
         "smoothing": [Interval(Real, 0, None, closed="neither")],
-        "fusion": [StrOptions({"avg", "max"})],
+        "fusion": [StrOptions(set(FUSIONS))],
         "prior": [StrOptions({"uni", "train"})],
         "update": [StrOptions({"dap", "confusion"})],
         "tempering": [StrOptions(set(TEMPERINGS))],

@@ -37,6 +37,7 @@ from tzsl._fit_store import (
     stored_fit,
 )
 from tzsl.models._validation import ValidatedParamsMixin
+from tzsl.value_lists import JOBLIB_BACKENDS
 
 __all__ = ["AttributeClassifierBank"]
 
@@ -144,7 +145,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         "detector_candidates": ["array-like"],
         "attribute_names": [None, "array-like"],
         "n_jobs": [None, Integral],
-        "backend": [StrOptions({"loky", "dask", "threading", "sequential", "multiprocessing"})],
+        "backend": [StrOptions(set(JOBLIB_BACKENDS))],
         "memory": [None, Options(bool, {False}), str, os.PathLike, HasMethods(["cache"])],
         "progress": ["boolean"],
         "random_state": ["random_state"],

@@ -27,6 +27,7 @@ import numpy as np
 
 from tzsl.exceptions import ConfigError, DataFileError
 from tzsl._scoring import valid_probabilities
+from tzsl.value_lists import FUSIONS, PRIORS
 
 __all__ = [
     "attribute_prior",
@@ -38,8 +39,6 @@ __all__ = [
     "fuse_attribute_posteriors",
 ]
 
-FUSIONS = ("avg", "max")
-PRIORS = ("uni", "train", "test")
 DEFAULT_EPS = 1e-6
 _TERMS_PER_CHUNK = 4_000_000  # floats of one (rows, classes, attributes) block in dap_log_scores
 

@@ -46,6 +46,7 @@ from tzsl.models._dap import (
     fuse_attribute_posteriors,
 )
 from tzsl.models._validation import ValidatedParamsMixin
+from tzsl.value_lists import FUSIONS, PRIORS
 
 __all__ = [
     "CompatibilityRule",
@@ -199,8 +200,8 @@ class DAPRule(DecisionRule):
     accepts = ("probability",)
     binary_attributes = True
     _parameter_constraints: dict = {
-        "fusion": [StrOptions({"avg", "max"})],
-        "prior": [StrOptions({"uni", "train", "test"}), "array-like"],
+        "fusion": [StrOptions(set(FUSIONS))],
+        "prior": [StrOptions(set(PRIORS)), "array-like"],
         "eps": [Interval(Real, 0, 0.5, closed="neither")],
     }
 

@@ -50,6 +50,7 @@ from tzsl.reporting.benchmark_blocks import (
     search_benchmark_block,
 )
 from tzsl.reporting.markdown_cells import find_table, number, ours
+from tzsl.value_lists import SPLIT_KINDS
 
 __all__ = ["BEGIN", "BLOCKS", "END", "begin", "block_spans", "comparison_lines", "end", "evidence_block",
            "evidence_summary_block", "headline_lines", "main", "produced_by", "results_block", "update_file"]
@@ -206,8 +207,6 @@ def comparison_lines(root: Path) -> list[str]:
     return lines
 
 
-#: Split kinds named in the comparison's column heads (the PHAC-2 study's).
-SPLIT_KINDS = ("random", "challenging")
 
 
 def _spread(row: pd.Series) -> str:

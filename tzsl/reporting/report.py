@@ -48,10 +48,6 @@ FOLD_ROWS = 40
 #: Tables with more columns than this (after merging paper and interval columns) use a smaller font.
 WIDE_COLUMNS = 7
 
-#: The manifest key of the zero-shot study's settings by table (``"dap_settings"`` in manifests written
-#: before it was renamed; still read, so older results folders report the same).
-ZERO_SHOT_SETTINGS_KEYS = ("study_settings", "dap_settings")
-
 #: Columns a generic ``ci95_low``/``ci95_high`` pair belongs to (first one present).
 INTERVAL_TARGETS = ("accuracy", "accuracy_mean", "mean", "value", "difference", "balanced_accuracy", "harmonic")
 
@@ -322,9 +318,8 @@ def _config_items(manifest: dict) -> dict[str, Any]:
     config = manifest.get("config") if isinstance(manifest.get("config"), dict) else {}
     flat: dict[str, Any] = {}
     for key, value in config.items():
-        if isinstance(value, dict) and key in (*ZERO_SHOT_SETTINGS_KEYS, "fabric", "hand"):
-            by_table = key in ZERO_SHOT_SETTINGS_KEYS  # the zero-shot study's settings: by table
-            flat.update({k: v for t in value.values() for k, v in t.items()} if by_table else value)
+        if isinstance(value, dict) and key in ("study_settings", "dap_settings", "fabric", "hand"):  # dap_: older
+            flat.update({k: v for t in value.values() for k, v in t.items()} if key.endswith("_settings") else value)
         else:
             flat[key] = value
     return flat

@@ -13,7 +13,7 @@ import hashlib
 import importlib.util
 import os
 import socket
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 from urllib.parse import urlparse
@@ -27,41 +27,6 @@ from tzsl.studies._outputs import ResultsDir
 from tzsl.studies.config import DATASET_PATHS, Experiment, get_study, load_experiment, to_toml
 from tzsl.studies.study_cache import run_cached
 from tzsl.studies.study_settings import StudyRun
-
-#: The option names every front-end shares -> the key of the experiment they override.
-OVERRIDES: dict[str, str] = {
-    "out": "output.folder", "n_jobs": "compute.n_jobs", "seed": "splits.seed", "backend": "compute.backend",
-    "scheduler": "compute.scheduler", "progress": "compute.progress", "data_dir": "dataset.data_dir",
-}
-
-def _has_key(study: str, key: str) -> bool:
-    table, name = key.split(".")
-    annotation = get_study(study).schema.model_fields[table].annotation
-    return name in getattr(annotation, "model_fields", {})
-
-
-def override_values(study: str | None, options: Mapping[str, Any], strict: bool = True) -> dict[str, Any]:
-    """``{"n_jobs": 2, ...}`` -> ``{"compute.n_jobs": 2, ...}`` (None = not given).
-
-    ``strict``: an option the study has no key for is an error (``tzsl run``); otherwise it is
-    skipped (``reproduce-tables`` applies ``--seed`` to the studies that have one).
-    """
-    values: dict[str, Any] = {}
-    for name, value in options.items():
-        if value is None:
-            continue
-        if name not in OVERRIDES:
-            raise ConfigError(f"unknown override {name!r} (known: {', '.join(OVERRIDES)})")
-        key = OVERRIDES[name]
-        if name in ("out", "data_dir"):
-            value = os.fspath(Path(value).expanduser().absolute())
-        if study is not None and not _has_key(study, key):
-            if strict:
-                raise ConfigError(f"--{name.replace('_', '-')} does not apply to study {study!r} (no key {key})")
-            continue
-        values[key] = value
-    return values
-
 
 # --------------------------------------------------------------------------- checks before any fit
 
@@ -173,7 +138,7 @@ def run_experiment(
     """Run an experiment file, a built-in study (by name) or a checked :class:`Experiment`.
 
     ``overrides``: ``out``, ``n_jobs``, ``seed``, ``backend``, ``scheduler``, ``progress``,
-    ``data_dir`` (see :data:`OVERRIDES`; None = as in the file). Writes the study's tables and
+    ``data_dir`` (see :data:`tzsl.studies.config.OPTION_KEYS`; None = as in the file). Writes the study's tables and
     ``manifest.json`` (resolved settings, the file's text and checksum, data checksums, failures,
     warnings, and ``config.profile``: wall and CPU seconds per stage, :mod:`tzsl._profile`).
 
@@ -187,8 +152,7 @@ def run_experiment(
             raise ConfigError("overrides need an experiment file or name, not a checked Experiment")
         exp = experiment
     else:
-        study = _study_of(experiment)
-        exp = load_experiment(experiment, override_values(study, overrides))
+        exp = load_experiment(experiment, options=overrides)
     say = echo or (lambda _msg: None)
     results = results_folder(exp, force)
     say(f"{exp.source}: study {exp.study} -> {results.final_root}")
@@ -206,14 +170,6 @@ def run_experiment(
         error.results, error.run = results, run
         raise error
     return results, run
-
-
-def _study_of(file_or_name) -> str | None:
-    """The ``study`` of a file or built-in name, for mapping overrides (None when unreadable)."""
-    try:
-        return load_experiment(file_or_name).study
-    except ConfigError:
-        return None
 
 
 def run(config_or_path: str | os.PathLike | Experiment, *, table: str | None = None, force: bool = False,

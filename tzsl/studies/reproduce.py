@@ -66,13 +66,8 @@ def reproduce_experiments(studies=REPRODUCE_STUDIES, **overrides: Any) -> list:
     """The checked experiments of ``studies`` with the shared overrides (``n_jobs``, ``seed``, ...) applied
     to each study that has the key."""
     from tzsl.studies.config import load_experiment  # noqa: PLC0415
-    from tzsl.studies.engine import override_values  # noqa: PLC0415
 
-    experiments = []
-    for name in studies:
-        study = load_experiment(name).study
-        experiments.append(load_experiment(name, override_values(study, overrides, strict=False)))
-    return experiments
+    return [load_experiment(name, options=overrides, strict=False) for name in studies]
 
 
 def run_studies(

@@ -24,12 +24,14 @@ from tzsl.studies.config._common import (
     method_label,
 )
 from tzsl.studies.config._load import (
+    OPTION_KEYS,
     Experiment,
     builtin_names,
     builtin_text,
     config_from_options,
     defaults,
     load_experiment,
+    option_values,
     to_toml,
     validate,
 )
@@ -78,5 +80,5 @@ __all__ = [
     "PRESET_DEFAULTS", "DatasetSource", "GzslSettings", "PrefixedOutput", "PresetZeroShot", "SignalFeatures",
     "SvmSettings", "ZeroShotMethods", "ZeroShotSettings", "ZeroShotSplits", "ZeroShotStudy", "every_feature_method",
     "with_preset_defaults", "builtin_names", "builtin_text", "check_n_jobs", "config_from_options", "defaults",
-    "estimator_parameters", "load_experiment", "to_toml", "method_label", "validate",
+    "estimator_parameters", "load_experiment", "OPTION_KEYS", "option_values", "to_toml", "method_label", "validate",
 ]

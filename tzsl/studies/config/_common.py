@@ -6,6 +6,8 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
+from tzsl.value_lists import STUDY_BACKENDS
+
 #: Largest seed numpy's legacy RandomState and scikit-learn accept (exclusive).
 SEED_LIMIT = 2**32
 
@@ -68,7 +70,7 @@ class Compute(Section):
 class DaskCompute(Compute):
     """``[compute]`` of studies that can run their fits on a Dask cluster, with a fit cache."""
 
-    backend: Literal["loky", "dask"] = Field("loky", description="joblib backend")
+    backend: Literal[STUDY_BACKENDS] = Field("loky", description="joblib backend")
     scheduler: str | None = Field(None, description="Dask scheduler address (tcp://host:port) for backend = 'dask'; "
                                                    "unset = a local cluster")
     connect_timeout: float = Field(10.0, gt=0, description="seconds to wait for the Dask scheduler")

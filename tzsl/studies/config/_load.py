@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import os
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -151,21 +152,24 @@ def set_value(raw: dict, key: str, value: Any) -> None:
     node[last] = value
 
 
-def validate(raw: dict, source: str, base: Path, text: str = "",
-             overrides: dict[str, Any] | None = None) -> Experiment:
+def validate(raw: dict, source: str, base: Path, text: str = "", overrides: dict[str, Any] | None = None,
+             options: Mapping[str, Any] | None = None, strict: bool = True) -> Experiment:
     """Check a parsed experiment (a dict as TOML gives it) and fill in its defaults.
 
-    ``overrides``: ``{"table.key": value}`` set before checking (command-line options).
+    ``overrides``: ``{"table.key": value}`` set before checking; ``options``: the shared command-line
+    options by name (:data:`OPTION_KEYS`, :func:`option_values` with ``strict``), mapped for the study
+    this very parse names.
     """
     raw = {k: (dict(v) if isinstance(v, dict) else v) for k, v in raw.items()}
-    for key, value in (overrides or {}).items():
-        if value is not None:
-            set_value(raw, key, value)
     study = raw.get("study")
     if study is None:
         raise ConfigError(f"{source}: study: missing (one of {', '.join(study_names())})")
     if study not in study_names():
         raise ConfigError(f"{source}: study: {_shown(study)}: expected one of {', '.join(study_names())}")
+    given = {**(overrides or {}), **option_values(study, options or {}, strict)}
+    for key, value in given.items():
+        if value is not None:
+            set_value(raw, key, value)
     problems = [f"{source}: {p}" for p in _no_nan(raw)]
     try:
         config = get_study(study).schema.model_validate(raw)
@@ -177,8 +181,13 @@ def validate(raw: dict, source: str, base: Path, text: str = "",
     return Experiment(source=source, base=base, config=config, text=text)
 
 
-def load_experiment(file_or_name: str | os.PathLike, overrides: dict[str, Any] | None = None) -> Experiment:
-    """Read and check an experiment file, or a built-in study by name.
+def load_experiment(file_or_name: str | os.PathLike, overrides: dict[str, Any] | None = None, *,
+                    options: Mapping[str, Any] | None = None, strict: bool = True) -> Experiment:
+    """Read and check an experiment file, or a built-in study by name, once.
+
+    ``overrides``: ``{"table.key": value}``; ``options``: the shared command-line options by name
+    (``{"n_jobs": 2, "out": "results"}``, :data:`OPTION_KEYS`), mapped for the study the file names
+    (``strict``: see :func:`option_values`).
 
     Raises
     ------
@@ -207,7 +216,7 @@ def load_experiment(file_or_name: str | os.PathLike, overrides: dict[str, Any] |
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{source}: not valid TOML: {exc}") from None
-    return validate(raw, source, base, text, overrides)
+    return validate(raw, source, base, text, overrides, options, strict)
 
 
 def config_from_options(study: str, values: dict[str, Any]) -> Experiment:
@@ -219,6 +228,48 @@ def config_from_options(study: str, values: dict[str, Any]) -> Experiment:
 def defaults(study: str, **required: Any) -> BaseModel:
     """The schema's defaults of a study (``required``: the tables that have no default, e.g. ``dataset``)."""
     return get_study(study).schema.model_validate({"study": study, **required})
+
+
+# --------------------------------------------------------------------------- command-line options
+
+
+#: The command-line option names every front-end shares (``tzsl run``, ``reproduce-tables``, ``evidence``,
+#: :func:`tzsl.run`) -> the key of the experiment each sets: the one option-to-schema table.
+OPTION_KEYS: dict[str, str] = {
+    "out": "output.folder", "n_jobs": "compute.n_jobs", "seed": "splits.seed", "backend": "compute.backend",
+    "scheduler": "compute.scheduler", "progress": "compute.progress", "data_dir": "dataset.data_dir",
+}
+#: Options whose value is a path, made absolute (relative to the current directory, not the file).
+_PATH_OPTIONS = ("out", "data_dir")
+
+
+def _has_key(study: str, key: str) -> bool:
+    table, name = key.split(".")
+    annotation = get_study(study).schema.model_fields[table].annotation
+    return name in getattr(annotation, "model_fields", {})
+
+
+def option_values(study: str, options: Mapping[str, Any], strict: bool = True) -> dict[str, Any]:
+    """``{"n_jobs": 2, ...}`` -> ``{"compute.n_jobs": 2, ...}`` for ``study`` (None = not given).
+
+    ``strict``: an option the study has no key for is an error (``tzsl run``); otherwise it is
+    skipped (``reproduce-tables`` applies ``--seed`` to the studies that have one).
+    """
+    values: dict[str, Any] = {}
+    for name, value in options.items():
+        if value is None:
+            continue
+        if name not in OPTION_KEYS:
+            raise ConfigError(f"unknown option {name!r} (known: {', '.join(OPTION_KEYS)})")
+        key = OPTION_KEYS[name]
+        if name in _PATH_OPTIONS:
+            value = os.fspath(Path(value).expanduser().absolute())
+        if not _has_key(study, key):
+            if strict:
+                raise ConfigError(f"--{name.replace('_', '-')} does not apply to study {study!r} (no key {key})")
+            continue
+        values[key] = value
+    return values
 
 
 # --------------------------------------------------------------------------- printing

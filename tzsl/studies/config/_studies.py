@@ -12,6 +12,7 @@ from typing import Any, Literal
 from pydantic import Field, field_validator, model_validator
 
 from tzsl.studies.config._zero_shot import PresetZeroShot
+from tzsl.value_lists import SPLIT_KINDS
 from tzsl.studies.config._common import (
     COMPARE_DESCRIPTION,
     Compute,
@@ -331,7 +332,7 @@ class ActiveMethods(Section):
 
 
 class ActiveSplits(Section):
-    kinds: list[Literal["random", "challenging"]] = Field(["random", "challenging"])
+    kinds: list[Literal[SPLIT_KINDS]] = Field(list(SPLIT_KINDS))
     n_splits: int = Field(10, ge=1, description="random splits (the challenging splits are always 5)")
     n_test: int = Field(10, ge=2, description="test objects per random split")
     seed: int = Seed

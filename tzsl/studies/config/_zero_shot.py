@@ -93,7 +93,7 @@ class SignalFeatures(Section):
     channels: list[str] | None = Field(None, description="signal channels to use, in order")
 
 
-#: Registry methods read from the DAP study's own posteriors (no fit of their own).
+#: Registry methods read from the zero-shot study's own DAP posteriors (no fit of their own).
 FROM_DAP_POSTERIORS = ("dap-avg", "dap-max", "multilabel-dap")
 
 
@@ -160,13 +160,31 @@ class GzslSettings(Section):
 
     holdout_fraction: float = Field(0.3, gt=0, lt=1, description="fraction of each training object's trials "
                                                                "held out as seen-class test trials")
-    methods: list[Literal["dap", "eszsl"]] = Field(["dap", "eszsl"])
+    methods: list[str] = Field(["dap", "eszsl"], description="'dap' (the study's attribute models, the fusion "
+                               "and prior below) and registered methods on feature vectors (tzsl methods)")
     fusion: Literal[FUSIONS] = "avg"
     prior: Literal[PRIORS] = "uni"
     calibrated_stacking: bool = True
     max_draws: int = Field(1000, ge=1, description="draws of pseudo-unseen training classes")
 
-    _methods = field_validator("methods")(lambda v: distinct(non_empty(v)))
+    @field_validator("methods")
+    @classmethod
+    def _methods(cls, v: list[str]) -> list[str]:
+        """``"dap"`` or a registered method on feature vectors (each scores every class of a trial)."""
+        distinct(non_empty(v))
+        from tzsl.exceptions import ConfigError  # noqa: PLC0415
+        from tzsl.models import get_method  # noqa: PLC0415 (the registry; imported only when a method is named)
+
+        for name in v:
+            if name == "dap":
+                continue
+            try:
+                method = get_method(name)
+            except ConfigError as exc:
+                raise ValueError(str(exc)) from None
+            if method.input_kind != "features":
+                raise ValueError(f"method {name!r} takes {method.input_kind}, not feature vectors")
+        return v
 
 
 class ZeroShotSplits(Section):

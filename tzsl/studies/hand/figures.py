@@ -1,6 +1,6 @@
 """Figures of the hand study: multi-grasp curves vs T and k, confusion matrices, attributes, S.
 
-Each function takes a table of :class:`tzsl.studies.hand.study.HandStudyResult` (rows per seed
+Each function takes a table of :class:`tzsl.studies.hand.results.HandStudyResult` (rows per seed
 plus ``mean`` / ``std`` rows) and returns a matplotlib Figure.
 """
 

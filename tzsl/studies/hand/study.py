@@ -29,7 +29,6 @@ empty for a single seed), and the paper's number beside ours where the paper pri
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +50,7 @@ from tzsl.studies.hand.methods import (
     timed,
 )
 from tzsl.studies.hand.model import feature_params, fit_hand_model, hand_features
+from tzsl.studies.hand.results import HandStudyResult
 from tzsl.studies.hand.figures import (
     attribute_accuracy_figure,
     attribute_distance_figure,
@@ -103,34 +103,6 @@ HAND_OUTPUTS: tuple[str, ...] = (
     f"{COMPARISON_TABLE}.csv",
     "hand_manifest.json",
 )
-
-
-@dataclass
-class HandStudyResult:
-    """Tables of one :func:`run_hand_study` call (each with per-seed, ``mean`` and ``std`` rows).
-
-    Attributes
-    ----------
-    table5, multigrasp_T, multigrasp_k, attribute_accuracy, attribute_distance, confusion : DataFrame
-    method_comparison : DataFrame
-        Every method on the same test grasps, LDAP the reference (``hand_method_comparison.csv``).
-    simulated : bool
-        Whether the grasps came from the simulator.
-    notes : list of str
-        Grasps dropped, sequence lengths capped, ...
-    written : list of Path
-    """
-
-    table5: pd.DataFrame
-    multigrasp_T: pd.DataFrame
-    multigrasp_k: pd.DataFrame
-    attribute_accuracy: pd.DataFrame
-    attribute_distance: pd.DataFrame
-    confusion: pd.DataFrame
-    method_comparison: pd.DataFrame
-    simulated: bool
-    notes: list[str] = field(default_factory=list)
-    written: list[Path] = field(default_factory=list)
 
 
 # ---------------------------------------------------------------------------- one seed

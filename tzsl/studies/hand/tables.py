@@ -16,7 +16,7 @@ from tzsl.studies import paper_numbers as paper
 from tzsl.evaluation import Outcomes, add_trust_columns
 
 if TYPE_CHECKING:
-    from tzsl.studies.hand.study import HandStudyResult
+    from tzsl.studies.hand.results import HandStudyResult
 
 __all__ = ["SUBSETS", "attribute_table", "distance_table", "format_hand_summary", "table5", "with_intervals"]
 

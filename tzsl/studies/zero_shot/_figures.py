@@ -1,4 +1,4 @@
-"""Figures of the DAP study (paper Figs. 2a, 3 and 4) as matplotlib figures (Agg backend)."""
+"""Figures of the zero-shot study (the DAP paper's Figs. 2a, 3 and 4) as matplotlib figures (Agg backend)."""
 
 from __future__ import annotations
 

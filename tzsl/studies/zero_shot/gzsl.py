@@ -1,4 +1,4 @@
-"""Generalised zero-shot (GZSL) evaluation beside the classic one, for DAP and ESZSL.
+"""Generalised zero-shot (GZSL) evaluation beside the classic one, for DAP and any registered method.
 
 Classic zero-shot evaluation (the DAP paper's) asks a test trial "which of the *unseen*
 classes is it?". GZSL asks "which of *all* classes, seen or unseen?": a model that is biased
@@ -21,8 +21,10 @@ Protocol, per object split (:class:`tzsl.evaluation.Split`):
   random with a recorded seed (PHAC-2, 10 trials per object, default 0.3: 3 held out, 7 fitted).
   The models are fitted on the remaining trials of the training objects only; the held-out
   trials and every trial of the test objects are scored over all classes.
-* **Scores**: DAP (the study's attribute classifiers, fusion and prior as configured, default
-  AVGDAP / uni-prior) and ESZSL (:class:`tzsl.models.ESZSLCV`, both BioTacs side by side).
+* **Scores** (``[gzsl] methods``): ``"dap"``, the study's attribute classifiers with the fusion and
+  prior configured (default AVGDAP / uni-prior), and any registered method on feature vectors
+  (``tzsl methods``; default ESZSL, :class:`tzsl.models.ESZSLCV`, the sensors side by side), fitted as the
+  method comparison fits it, its class scores uncalibrated.
   ``seen``, ``unseen`` are per-class mean accuracies and ``harmonic`` their harmonic mean
   (:func:`tzsl.evaluation.gzsl_scores`); ``zsl`` is the classic per-class mean accuracy of the
   unseen trials among the unseen classes only, from the same fit.
@@ -60,8 +62,9 @@ from tzsl.studies._failures import ERROR_COLUMN, attempt
 from tzsl.evaluation import Outcomes, add_trust_columns
 from tzsl.studies.config import ZeroShotSettings, GzslSettings
 from tzsl.studies.zero_shot.study import attribute_bank, compute_context
+from tzsl.studies.study_methods import method_input, study_estimator
 from tzsl.studies.zero_shot.tables import split_label
-from tzsl.models import build_method
+from tzsl.models import get_method
 from tzsl.models.protocol import attribute_rows
 from tzsl.models.dap import attribute_prior, dap_log_scores, fuse_attribute_posteriors
 
@@ -70,7 +73,6 @@ RELAXED_COLUMN = "relaxed"
 
 __all__ = [
     "GZSL_FILE",
-    "GZSL_METHODS",
     "GzslProblem",
     "choose_stacking_constant",
     "gzsl_problem",
@@ -85,8 +87,6 @@ __all__ = [
 #: Output table of :func:`run_gzsl` in a results folder.
 GZSL_FILE = "gzsl.csv"
 
-#: Methods ``[gzsl] methods`` can score (:class:`~tzsl.studies.config.GzslSettings`).
-GZSL_METHODS: tuple[str, ...] = ("dap", "eszsl")
 
 
 @dataclass
@@ -259,22 +259,21 @@ def _dap_scores(features: FeatureSet, problem: GzslProblem, config: ZeroShotSett
     return dap_log_scores(present, problem.class_rows, prior, P_absent=absent)
 
 
-def _eszsl_scores(features: FeatureSet, problem: GzslProblem) -> np.ndarray:
-    """ESZSL compatibilities (n_evaluated, n_classes); both sensors' features side by side."""
-    n, s, d = features.X.shape
-    X = features.X.reshape(n, s * d)
+def _method_scores(method: str, features: FeatureSet, problem: GzslProblem, seed: int) -> np.ndarray:
+    """Class scores (n_evaluated, n_classes) of the registered method ``method``, uncalibrated, fitted on
+    ``problem.fit`` as the method comparison fits it (:func:`~tzsl.studies.study_methods.study_estimator`)."""
+    spec = {"name": method, **({"calibration": "none"} if get_method(method).calibratable else {})}
     fit = problem.fit
     objects = features.objects[fit]
-    classes = np.unique(objects)
-    S = features.attributes.loc[classes, list(problem.attributes)].to_numpy(dtype=float)
-    model = build_method("eszsl", calibration="none").fit(X[fit], attribute_rows(objects, S), objects)
-    return model.decision_function(X[problem.evaluate], problem.class_rows.astype(float))
+    S = features.attributes.loc[np.unique(objects), list(problem.attributes)].to_numpy(dtype=float)
+    model = study_estimator(spec, seed).fit(method_input(spec, features.X[fit]), attribute_rows(objects, S), objects)
+    return model.decision_function(method_input(spec, features.X[problem.evaluate]), problem.class_rows.astype(float))
 
 
 def _scores(method: str, features, problem, config, gzsl, seed) -> np.ndarray:
     if method == "dap":
         return _dap_scores(features, problem, config, gzsl, seed)
-    return _eszsl_scores(features, problem)
+    return _method_scores(method, features, problem, seed)
 
 
 # --------------------------------------------------------------------------- one split, all splits
@@ -400,7 +399,7 @@ def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: ZeroShotSett
     features : FeatureSet
         Per-trial, per-sensor features (n_trials, n_sensors, d).
     splits : sequence of Split
-        Object splits (e.g. the random splits of the DAP study); split ``i`` uses the seeds of
+        Object splits (e.g. the random splits of the zero-shot study); split ``i`` uses the seeds of
         the study's split ``i``.
     config : ZeroShotSettings or None
         Attribute-classifier settings (``[svm]``, ``[compute]``) and the GZSL protocol (``[gzsl]``);

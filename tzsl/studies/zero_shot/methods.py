@@ -1,4 +1,5 @@
-"""Registry methods vs DAP on the same PHAC-2 splits (``phac2_methods.csv``, ``phac2_method_comparison.csv``).
+"""Registry methods vs DAP on the same splits of the zero-shot study (``methods_per_split.csv``, ``method_comparison.csv``;
+``phac2_methods.csv`` and ``phac2_method_comparison.csv`` in the PHAC-2 paper preset).
 
 Every method of ``[methods]`` (``eszsl``, ``embedding`` and ``compare``, see
 :meth:`~tzsl.studies.config.ZeroShotMethods.method_specs`) is fitted on each random split's
@@ -41,7 +42,7 @@ from tzsl.studies.study_methods import (
 from tzsl.studies.study_calibration import dap_split_posteriors, posterior_columns, reliability_by_method
 
 if TYPE_CHECKING:
-    from tzsl.studies.zero_shot.study import SplitPosteriors
+    from tzsl.studies.zero_shot.split_posteriors import SplitPosteriors
 
 __all__ = ["COMPARISON_TABLE", "DEFAULT_METHODS", "REFERENCE_METHOD", "STUDY", "fit_predict_split", "method_comparison"]
 

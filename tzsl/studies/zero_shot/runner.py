@@ -18,6 +18,7 @@ from tzsl.datasets import FeatureSet
 from tzsl.studies._outputs import PrefixedResults, ResultsDir, prefixed
 from tzsl.studies.config import Experiment
 from tzsl.studies.study_settings import StudyRun, format_table
+from tzsl.value_lists import FUSIONS, PRIORS
 
 __all__ = ["PreparedStudy", "SelectedColumns", "dropped_columns", "load_study_features", "prepare", "relaxation_notes",
            "run_zero_shot", "zero_shot_outputs", "zero_shot_results"]
@@ -38,11 +39,11 @@ def dropped_columns(methods, prefix: str = "") -> dict[str, list[str]]:
     """Columns of Tables 1 and 2 that ``[methods] fusions`` / ``priors`` leave out, by file name
     (with the run's ``[output] prefix``)."""
     drop: dict[str, list[str]] = {"table1_fusion.csv": [], "table2_priors.csv": []}
-    for fusion in sorted({"max", "avg"} - set(methods.fusions)):
+    for fusion in sorted(set(FUSIONS) - set(methods.fusions)):
         for column in [f"{fusion}dap"] + (["avgdap_per_class_mean"] if fusion == "avg" else []):
             drop["table1_fusion.csv"] += [column, f"{column}_ci95_low", f"{column}_ci95_high"]
         drop["table1_fusion.csv"].append(f"paper_{fusion}dap")
-    for prior in sorted({"uni", "test", "train"} - set(methods.priors)):
+    for prior in sorted(set(PRIORS) - set(methods.priors)):
         drop["table2_priors.csv"] += [prior, f"{prior}_ci95_low", f"{prior}_ci95_high", f"paper_{prior}"]
     return {prefixed(prefix, name): columns for name, columns in drop.items()}
 

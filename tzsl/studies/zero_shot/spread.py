@@ -31,14 +31,15 @@ from tzsl.datasets import FeatureSet
 from tzsl.studies._failures import ERROR_COLUMN, attempt
 from tzsl.studies.config import method_label
 from tzsl.studies.zero_shot.methods import REFERENCE_METHOD, fit_predict_split, method_comparison
-from tzsl.studies.zero_shot.tables import FUSIONS, PRIORS, split_label
+from tzsl.studies.zero_shot.tables import split_label
+from tzsl.value_lists import FUSIONS, PRIORS
 from tzsl.studies.study_calibration import CALIBRATION_COLUMNS
 from tzsl.studies.study_labels import StudyLabels
 from tzsl.studies.study_methods import comparison_trials, method_summary
 
 if TYPE_CHECKING:
     from tzsl.evaluation import Split
-    from tzsl.studies.zero_shot.study import SplitPosteriors
+    from tzsl.studies.zero_shot.split_posteriors import SplitPosteriors
 
 __all__ = ["FUSION_PRIOR_TABLE", "REFIT_TABLE", "add_refit_spread", "dap_fusion_prior", "dap_variant_label",
            "evidence_tables", "model_seed", "refit_accuracy"]

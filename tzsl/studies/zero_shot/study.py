@@ -1,4 +1,6 @@
-"""The PHAC-2 DAP study (DAP paper section 4): Tables 1-3, multi-label comparison, sweep.
+"""The zero-shot study's fits and tables over its splits: DAP's fusions and priors (Tables 1-3 of the DAP
+paper, section 4, when the dataset is PHAC-2), the multi-label comparison, the attribute-count sweep and
+the methods compared with DAP.
 
 One call of :func:`run_zero_shot_tables` fits the attribute classifiers once per split and scores
 every DAP variant from the same test posteriors, so MAXDAP/AVGDAP and the three priors are
@@ -14,7 +16,6 @@ from __future__ import annotations
 import contextlib
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -24,14 +25,13 @@ from tzsl.evaluation import Split, challenging_splits, purpose_seed, random_obje
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.studies._failures import ERROR_COLUMN, attempt
 from tzsl.studies.config import ZeroShotSettings
+from tzsl.studies.zero_shot.split_posteriors import SplitPosteriors
 from tzsl.studies.zero_shot.spread import evidence_tables, model_seed
 from tzsl.studies.study_labels import StudyLabels
 from tzsl.studies.study_methods import split_masks
 from tzsl.studies.study_calibration import write_reliability_figure
 from tzsl.studies.zero_shot.tables import (
     table_titles,
-    FUSIONS,
-    PRIORS,
     attribute_accuracy_summary,
     attribute_accuracy_table,
     attribute_subsets,
@@ -47,7 +47,7 @@ from tzsl.models import (
     AttributeSVM,
     MultiLabelAttributeClassifier,
 )
-from tzsl.models.dap import attribute_prior, dap_log_scores, fuse_attribute_posteriors
+from tzsl.models.dap import attribute_prior
 
 #: Table (``failed_splits.csv``) of the splits whose DAP fit failed; written only when one did.
 FAILED_SPLITS = "failed_splits"
@@ -57,74 +57,12 @@ SPLITS_FILE = "splits.csv"
 
 
 __all__ = [
-    "FUSIONS", "SPLITS_FILE", "PRIORS", "SplitPosteriors", "attribute_accuracy_summary",
+    "SPLITS_FILE", "SplitPosteriors", "attribute_accuracy_summary",
     "attribute_accuracy_table", "attribute_bank", "attribute_estimator", "check_cv_folds", "attribute_subsets",
     "attribute_sweep", "compute_context", "fit_split", "fit_splits", "make_splits", "multilabel_table",
     "object_map_features", "run_zero_shot_tables", "solver_lines", "split_masks", "table1_fusion", "table2_priors",
     "table3_challenging",
 ]
-
-@dataclass
-class SplitPosteriors:
-    """Test-set attribute posteriors of one split, enough to score every DAP variant.
-
-    Attributes
-    ----------
-    split : Split
-    attributes : tuple of str, length m
-        Attributes the split's classifiers were trained on.
-    P : ndarray of shape (n_test_trials, n_sensors, m)
-        ``p(a_m = 1 | x_s)`` of every test trial from the independent classifiers.
-    K : ndarray of shape (n_test_objects, m)
-        Test objects' attribute rows (the unseen classes), in ``split.test_objects`` order.
-    y : ndarray of shape (n_test_trials,)
-        Row of ``K`` of each test trial's object.
-    train_prior : ndarray of shape (m,)
-        Attribute frequency over training objects.
-    P_multilabel : ndarray of shape (n_test_trials, n_sensors, m) or None
-        Posteriors of the joint (multi-label) model, when fitted.
-    model : AttributeClassifierBank or None
-        The fitted independent attribute classifiers.
-    fit_seconds : float
-        Wall-clock seconds of fitting them (small when the fit cache had them).
-    """
-
-    split: Split
-    attributes: tuple[str, ...]
-    P: np.ndarray
-    K: np.ndarray
-    y: np.ndarray
-    train_prior: np.ndarray
-    P_multilabel: np.ndarray | None = None
-    model: AttributeClassifierBank | None = None
-    fit_seconds: float = float("nan")
-
-    def accuracy(self, fusion: str = "avg", prior: str = "uni", multilabel: bool = False) -> float:
-        """DAP trial accuracy on this split's test objects."""
-        return float((self.predict(fusion, prior, multilabel) == self.y).mean())
-
-    def predict(self, fusion: str = "avg", prior: str = "uni", multilabel: bool = False) -> np.ndarray:
-        """Predicted test-object row of every test trial, shape (n_test_trials,)."""
-        return self.scores(fusion, prior, multilabel).argmax(axis=1)
-
-    def scores(self, fusion: str = "avg", prior: str = "uni", multilabel: bool = False,
-               K: np.ndarray | None = None) -> np.ndarray:
-        """DAP log scores (n_test_trials, n_test_objects) against ``K`` (default the true rows).
-
-        The prior is always the one of the true rows (a permuted ``K``, as in the negative
-        control, has the same attribute frequencies).
-        """
-        P = self.P_multilabel if multilabel else self.P
-        if P is None:
-            raise ConfigError("no multi-label posteriors were computed for this split")
-        present, absent = fuse_attribute_posteriors(P, fusion)
-        return dap_log_scores(present, self.K if K is None else K, self._prior(prior), P_absent=absent)
-
-    def _prior(self, prior: str) -> np.ndarray:
-        if prior == "train":
-            return self.train_prior
-        return attribute_prior(prior, class_attributes=self.K)
-
 
 # --------------------------------------------------------------------------- splits
 

@@ -1,6 +1,7 @@
-"""Tables of the PHAC-2 DAP study (DAP paper section 4), each with the paper's numbers beside.
+"""Tables of the zero-shot study, in the DAP paper's layout (section 4), with the paper's numbers beside
+on the paper's dataset and protocol only.
 
-Views of the per-split test posteriors (:class:`tzsl.studies.zero_shot.study.SplitPosteriors`):
+Views of the per-split test posteriors (:class:`tzsl.studies.zero_shot.split_posteriors.SplitPosteriors`):
 Tables 1-3, the multi-label comparison, per-attribute accuracy and the attribute-count sweep
 (section 4.7). Mean and std rows over splits come from :func:`tzsl.evaluation.summarise_over_splits`.
 """
@@ -24,16 +25,15 @@ from tzsl.evaluation import (
 )
 from tzsl.evaluation import Outcomes, add_trust_columns
 from tzsl.models.dap import dap_accuracy_over_subsets
+from tzsl.value_lists import FUSIONS, PRIORS
 
 if TYPE_CHECKING:
-    from tzsl.studies.zero_shot.study import SplitPosteriors
+    from tzsl.studies.zero_shot.split_posteriors import SplitPosteriors
     from tzsl.studies.study_labels import StudyLabels
 
 __all__ = [
     "CONTROL_ROW",
     "table_titles",
-    "FUSIONS",
-    "PRIORS",
     "attribute_accuracy_summary",
     "attribute_accuracy_table",
     "attribute_subsets",
@@ -46,10 +46,6 @@ __all__ = [
     "table3_challenging",
 ]
 
-#: DAP sensor fusions of Table 1.
-FUSIONS = ("max", "avg")
-#: Attribute priors of Table 2, in its column order.
-PRIORS = ("uni", "test", "train")
 #: Label of the negative-control row (test attribute rows shuffled among the test classes).
 CONTROL_ROW = "control"
 #: Shuffled tables drawn per split for the negative control.
