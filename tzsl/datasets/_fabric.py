@@ -82,6 +82,8 @@ DEPTH_SHAPE = (224, 224)
 _GROUP_COLUMNS = ("fabric_id", "fabric_name", "group")
 _DEPTH_RE = re.compile(r"^F(?P<id>\d{4})_Depth_New_(?P<stamp>\d{6})\.png$")
 _DEPTH_PREFIX = "fabric/depth224/"
+#: The registered fabric x group table (built by a fetch from :data:`FABRIC_GROUPS_SOURCE`).
+FABRIC_GROUPS_CSV = "fabric/fabric_groups.csv"
 
 
 # ---------------------------------------------------------------------------------
@@ -381,8 +383,8 @@ def load_fabric(
     if attributes not in FABRIC_ATTRIBUTE_SETS:
         raise ConfigError(f"attributes must be one of {sorted(FABRIC_ATTRIBUTE_SETS)}; got {attributes!r}")
     home = get_data_home(data_dir)
-    fabrics = read_fabric_groups(fetch("fabric/fabric_groups.csv", home))
-    groups_path = home / "fabric/fabric_groups.csv"
+    fabrics = read_fabric_groups(fetch(FABRIC_GROUPS_CSV, home))
+    groups_path = home / FABRIC_GROUPS_CSV
     if len(fabrics) != N_FABRICS:
         raise DataFileError(groups_path, f"{len(fabrics)} fabrics; expected {N_FABRICS}")
     absent = sorted(set(range(N_GROUPS)) - set(fabrics["group"]))
