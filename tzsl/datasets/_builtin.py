@@ -20,7 +20,13 @@ from typing import ClassVar, Literal
 
 import pandas as pd
 
-from tzsl.datasets._fabric import _DEPTH_PREFIX, FABRIC_ATTRIBUTE_SETS, FABRIC_GROUPS_CSV, FabricData, load_fabric
+from tzsl.datasets._fabric import (
+    FABRIC_ATTRIBUTE_SETS,
+    FABRIC_DEPTH_DIR,
+    FABRIC_GROUPS_CSV,
+    FabricData,
+    load_fabric,
+)
 from tzsl.datasets._grasps import load_hand_table4
 from tzsl.datasets._hand_simulator import SimulatedGrasps, simulate_grasps
 from tzsl.datasets._phac2_h5 import load_phac2_h5
@@ -156,7 +162,7 @@ class FabricDepth(TactileDataset):
     content = "depth-images"
     eps = ("press",)
     convertible = False
-    registry_files = (FABRIC_GROUPS_CSV, f"fabric/{FABRIC_ATTRIBUTE_SETS['a8'][0]}", _DEPTH_PREFIX)
+    registry_files = (FABRIC_GROUPS_CSV, f"fabric/{FABRIC_ATTRIBUTE_SETS['a8'][0]}", FABRIC_DEPTH_DIR)
 
     def load(self, data_dir=None, path=None) -> FabricData:
         with warnings.catch_warnings():  # groups sharing a row are expected (the dataset card lists them)

@@ -33,6 +33,10 @@ report, with our intervals, chance, baselines and controls beside each number, a
   the study's paper method), with a row saying why for each method a study does not run.
 
 The other built-in studies (``phac2-gzsl``, ``fabric-deep``) run with ``tzsl run NAME``.
+
+On a machine without the data, :func:`run_studies` first fetches the registered files the studies
+read that are missing from their data home (:func:`fetch_study_data`; ``fetch=False``, the
+command's ``--no-fetch``, turns it off).
 """
 
 from __future__ import annotations
