@@ -75,8 +75,8 @@ def setup(tmp_path, monkeypatch):
     monkeypatch.delenv("TZSL_DATA_MIRROR", raising=False)
     try:
         with serve_folder(served) as (base, requested):
-            pup = registry_of(tmp_path / "registry.txt", [
-                f"{name} sha256:{hashlib.sha256(content).hexdigest()} {base}/{name}" for name, content in FILES.items()])
+            pup = registry_of(tmp_path / "registry.txt", [f"{name} sha256:{hashlib.sha256(content).hexdigest()} "
+                                                          f"{base}/{name}" for name, content in FILES.items()])
             monkeypatch.setattr(registry_module, "registry", lambda: pup)
             monkeypatch.setattr(fetch_module, "registry", lambda: pup)
             registry_module.clear_verification_cache()

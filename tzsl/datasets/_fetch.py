@@ -77,6 +77,11 @@ class FetchReport:
                 f"{len(self.downloaded)} downloaded){finished}; a rerun goes on from there")
 
 
+def _mirror(mirror: str | None) -> str | None:
+    """The mirror a fetch uses: ``mirror``, else ``$TZSL_DATA_MIRROR``, else None (the registry's URLs)."""
+    return mirror if mirror is not None else os.environ.get(MIRROR_ENV) or None
+
+
 def registered_datasets(pup: pooch.Pooch | None = None) -> list[str]:
     """Names of the datasets of the registry: the first folder of every registered path."""
     return sorted({name.split("/", 1)[0] for name in (pup or registry()).registry})
@@ -228,7 +233,7 @@ def fetch_datasets(
     unknown = [n for n in names if n not in known]
     if unknown:
         raise ConfigError(f"unknown dataset(s) {unknown}; known: {', '.join(known)}")
-    mirror = mirror if mirror is not None else os.environ.get(MIRROR_ENV) or None
+    mirror = _mirror(mirror)
     timeout = fetch_timeout(timeout)
     home = get_data_home(data_dir)
     files = None if files is None else frozenset(files)
@@ -349,7 +354,7 @@ def fetch_missing(
         missing |= {r for r in (inputs(pup) if inputs is not None else []) if not (home / r).is_file()}
     if not missing:
         return []
-    mirror = mirror if mirror is not None else os.environ.get(MIRROR_ENV) or None
+    mirror = _mirror(mirror)
     names = sorted({r.split("/", 1)[0] for r in missing})
     size = _size_text(sorted(missing))
     say = echo or (lambda _line: None)
