@@ -75,9 +75,9 @@ def relaxations(records: dict[str, dict]) -> list[str]:
     return list(dict.fromkeys(out))
 
 
-def config_items(manifest: dict) -> dict[str, Any]:
-    """The manifest's configuration flattened one level (study configs nested by name merged in)."""
-    config = manifest.get("config") if isinstance(manifest.get("config"), dict) else {}
+def config_items(config: dict) -> dict[str, Any]:
+    """A manifest's configuration (or one study's record) flattened one level (study configs nested by
+    name merged in)."""
     flat: dict[str, Any] = {}
     for key, value in config.items():
         if isinstance(value, dict) and key in ("dap_settings", "fabric", "hand"):  # dap_settings: by table
@@ -87,55 +87,65 @@ def config_items(manifest: dict) -> dict[str, Any]:
     return flat
 
 
+def _record_deviations(c: dict[str, Any], where: str) -> list[str]:
+    """The deviation sentences of one flattened study configuration ``c``, each ending with ``where``."""
+    out: list[str] = []
+    svm = c.get("svm_params")
+    if isinstance(svm, dict):
+        cv = svm.get("cv", "absent")
+        if cv is not None and cv != "absent":
+            out.append(f"Attribute SVMs tuned by {cv}-fold object-grouped cross-validation; the paper uses "
+                       f"leave-one-object-out {where}.")
+        grid = svm.get("grid")
+        if grid not in (None, "paper"):
+            out.append(f"SVM hyper-parameter grid {grid!r} instead of the paper's {where}.")
+        reduced = {k: svm[k] for k in ("n_C", "n_gamma", "n_draws") if k in svm}
+        if reduced:
+            out.append(f"Reduced SVM search {reduced} {where}.")
+    if "random_min_train_positives" in c:
+        out.append(f"Random splits leave out attributes with fewer than {c['random_min_train_positives']} "
+                   f"positive training objects (the paper states no rule for random splits) {where}.")
+    if c.get("challenging_min_train_positives") not in (None, 3):
+        out.append(f"Challenging splits require {c['challenging_min_train_positives']} positive training "
+                   f"objects per attribute (paper: 3) {where}.")
+    if c.get("undersampling") not in (None, "select"):
+        out.append(f"Class-0 under-sampling {c['undersampling']!r} (paper: one random draw) {where}.")
+    for key, paper in (("n_splits", 5), ("n_test", 10), ("sweep_max_subsets", 1000)):
+        if key in c and c[key] != paper:
+            out.append(f"{key} = {c[key]} (paper: {paper}) {where}.")
+    if c.get("hand_data") == "simulated" or c.get("simulated") is True:
+        out.append(f"Hand study on SIMULATED grasps: the paper's Shadow-hand recordings are not public, "
+                   f"so its numbers are not comparable to Table 5 {where}.")
+    if c.get("duplicate_groups"):
+        out.append(f"Fabric attribute rows shared by groups {c['duplicate_groups']}: a test group sharing "
+                   f"its row with a training group is not zero-shot {where}.")
+    if c.get("dataset"):
+        out.append(f"Dataset and features: {c['dataset']} {where}.")
+    if isinstance(c.get("n_features"), dict):
+        units = c.get("units") if isinstance(c.get("units"), dict) else {}
+        described = "; ".join(f"{k}: {v} features per {units.get(k, 'sample')}" for k, v in c["n_features"].items())
+        out.append(f"Features used: {described} {where}.")
+    if c.get("lams") is not None and c.get("alphas") is not None:
+        lams, alphas = (", ".join(map(str, c[k])) for k in ("lams", "alphas"))
+        out.append(f"Embedding model: lambda in {{{lams}}}, alpha chosen from {{{alphas}}} by class-grouped "
+                   f"cross-validation on the training groups {where}.")
+    return out
+
+
 def deviations(manifests: dict[str, dict]) -> list[str]:
     """Sentences saying where the recorded runs differ from the papers' protocols.
 
-    Read from the manifests' configurations (the zero-shot study's ``dap_settings`` tables, the
-    fabric and hand study configs); a key absent from every manifest yields no sentence.
+    Read from the manifests' configurations, study by study in a multi-study manifest (the
+    zero-shot study's ``dap_settings`` tables, the fabric and hand study configs); a key absent
+    from every manifest yields no sentence.
     """
     out: list[str] = []
     for name, manifest in manifests.items():
-        c = config_items(manifest)
+        config = manifest.get("config") if isinstance(manifest.get("config"), dict) else {}
+        studies = study_records(manifest)
+        for study, record in (studies if "studies" in config else {"": config}).items():
+            out += _record_deviations(config_items(record), f"({name}: {study})" if study else f"({name})")
         where = f"({name})"
-        svm = c.get("svm_params")
-        if isinstance(svm, dict):
-            cv = svm.get("cv", "absent")
-            if cv is not None and cv != "absent":
-                out.append(f"Attribute SVMs tuned by {cv}-fold object-grouped cross-validation; the paper uses "
-                           f"leave-one-object-out {where}.")
-            grid = svm.get("grid")
-            if grid not in (None, "paper"):
-                out.append(f"SVM hyper-parameter grid {grid!r} instead of the paper's {where}.")
-            reduced = {k: svm[k] for k in ("n_C", "n_gamma", "n_draws") if k in svm}
-            if reduced:
-                out.append(f"Reduced SVM search {reduced} {where}.")
-        if "random_min_train_positives" in c:
-            out.append(f"Random splits leave out attributes with fewer than {c['random_min_train_positives']} "
-                       f"positive training objects (the paper states no rule for random splits) {where}.")
-        if c.get("challenging_min_train_positives") not in (None, 3):
-            out.append(f"Challenging splits require {c['challenging_min_train_positives']} positive training "
-                       f"objects per attribute (paper: 3) {where}.")
-        if c.get("undersampling") not in (None, "select"):
-            out.append(f"Class-0 under-sampling {c['undersampling']!r} (paper: one random draw) {where}.")
-        for key, paper in (("n_splits", 5), ("n_test", 10), ("sweep_max_subsets", 1000)):
-            if key in c and c[key] != paper:
-                out.append(f"{key} = {c[key]} (paper: {paper}) {where}.")
-        if c.get("hand_data") == "simulated" or c.get("simulated") is True:
-            out.append(f"Hand study on SIMULATED grasps: the paper's Shadow-hand recordings are not public, "
-                       f"so its numbers are not comparable to Table 5 {where}.")
-        if c.get("duplicate_groups"):
-            out.append(f"Fabric attribute rows shared by groups {c['duplicate_groups']}: a test group sharing "
-                       f"its row with a training group is not zero-shot {where}.")
-        if c.get("dataset"):
-            out.append(f"Dataset and features: {c['dataset']} {where}.")
-        if isinstance(c.get("n_features"), dict):
-            units = c.get("units") if isinstance(c.get("units"), dict) else {}
-            described = "; ".join(f"{k}: {v} features per {units.get(k, 'sample')}" for k, v in c["n_features"].items())
-            out.append(f"Features used: {described} {where}.")
-        if c.get("lams") is not None and c.get("alphas") is not None:
-            lams, alphas = (", ".join(map(str, c[k])) for k in ("lams", "alphas"))
-            out.append(f"Embedding model: lambda in {{{lams}}}, alpha chosen from {{{alphas}}} by class-grouped "
-                       f"cross-validation on the training groups {where}.")
         for key in ("grid_edges", "grid_edge_warnings"):
             if manifest.get(key):
                 out.append(f"Selected hyper-parameters on a grid edge: {manifest[key]} {where}.")

@@ -99,9 +99,9 @@ def _is_simulated_section(section: Section, tables: list[dict], manifests: dict[
         return True
     if not section.simulated:
         return False
-    flags = [config_items(m).get("simulated") for n, m in manifests.items() if "hand" in n]
-    flags += [config_items(m).get("hand_data") == "simulated" for m in manifests.values()
-              if "hand_data" in config_items(m)]
+    configs = {n: config_items(m.get("config") or {}) for n, m in manifests.items()}
+    flags = [c.get("simulated") for n, c in configs.items() if "hand" in n]
+    flags += [c.get("hand_data") == "simulated" for c in configs.values() if "hand_data" in c]
     return not flags or any(flag is True for flag in flags)
 
 

@@ -58,8 +58,8 @@ _FUSION = ("per-sensor attribute posteriors fused by their maximum or average. T
 #: Report order (the papers' where they have one).
 SECTIONS: tuple[Section, ...] = (
     Section("fusion", "Sensor fusion on random unseen-class splits: MAXDAP and AVGDAP",
-            "DAP on {dataset}, {n_splits} random splits ({n_test_objects} unseen classes each), uniform attribute "
-            "prior; " + _FUSION,
+            "DAP on random splits of {dataset} ({n_splits} random splits of {n_test_objects} unseen classes each), "
+            "uniform attribute prior; " + _FUSION,
             tables=("table1_fusion",),
             paper_title="DAP paper, Table 1: sensor fusion (MAXDAP vs AVGDAP)",
             paper_what="DAP on PHAC-2 random object splits ({n_test_objects} test objects each), uniform attribute "
@@ -72,7 +72,7 @@ SECTIONS: tuple[Section, ...] = (
             "one region of the map ({n_objects} unseen classes per split); MAXDAP and AVGDAP.",
             tables=("table3_challenging", "object_map"), figures=("object_map",),
             paper_title="DAP paper, Table 3 and Fig. 3: challenging splits",
-            paper_what="Five splits from a 2-D PCA map of the objects' haptic features, each testing on one region "
+            paper_what="{n_splits} splits from a 2-D PCA map of the objects' haptic features, each testing on one region "
                        "of the map ({n_objects} test objects per split); MAXDAP and AVGDAP; partition numbering is "
                        "arbitrary, so only the means compare with the paper (which reports AVGDAP only)."),
     Section("attributes", "Attribute accuracy: how well each attribute is recognised on unseen classes",

@@ -110,7 +110,8 @@ def _key_columns(shown: list[str], cells: list[list[str]], text: set[int]) -> tu
 def table_view(table: pd.DataFrame) -> dict[str, Any]:
     """Header and cell strings of a table, ours beside the paper's and intervals in the cell.
 
-    A column ``X`` with ``paper_X`` becomes ``X [paper]`` with cells ``ours [paper]``; with
+    A column ``X`` with ``paper_X`` becomes ``X [paper]`` with cells ``ours [paper]`` (an empty
+    ``paper_*`` column is left out: the study has no paper number); with
     ``X_ci95_low``/``X_ci95_high`` (or a generic ``ci95_low``/``ci95_high`` pair, attached to
     the first of :data:`INTERVAL_TARGETS`), cells read ``ours (low-high)``. Counts (columns
     whole outside the mean/std rows) print without decimals (a mean count with one), other
@@ -131,8 +132,9 @@ def table_view(table: pd.DataFrame) -> dict[str, Any]:
     columns = [str(c) for c in table.columns]
     table = table.set_axis(columns, axis=1)
     intervals = _interval_pairs(columns)
-    merged = {c: f"paper_{c}" for c in columns if f"paper_{c}" in columns}
-    hidden = set(merged.values()) | {x for pair in intervals.values() for x in pair}
+    merged = {c: f"paper_{c}" for c in columns if f"paper_{c}" in columns and table[f"paper_{c}"].notna().any()}
+    empty_paper = {c for c in columns if c.startswith("paper_") and table[c].isna().all()}
+    hidden = set(merged.values()) | empty_paper | {x for pair in intervals.values() for x in pair}
     shown = [c for c in columns if c not in hidden]
     summary = _summary_mask(table)
     count = {c: _is_count(table[c], summary) for c in columns}
