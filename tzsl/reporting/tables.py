@@ -89,7 +89,8 @@ def _key_columns(shown: list[str], cells: list[list[str]], text: set[int]) -> tu
     """Positions of a wide table's key columns and the (column, value) of its one-valued text columns.
 
     Key: text columns with more than one value (and no cell over :data:`KEY_TEXT_MAX` characters),
-    the first column, the :data:`KEY_NUMBERS` present and ``note`` when some row has one; none when
+    the first column, the :data:`KEY_NUMBERS` present with a value somewhere and ``note`` when some row
+    has one; none when
     the table has no column of :data:`KEY_NUMBERS` (then nothing says which columns matter).
     """
     if not any(c in KEY_NUMBERS for c in shown) or len(cells) < 2:
@@ -102,7 +103,7 @@ def _key_columns(shown: list[str], cells: list[list[str]], text: set[int]) -> tu
                 constants.append((name, next(iter(values))))
             elif j == 0 or max(len(v) for v in values) <= KEY_TEXT_MAX:
                 keep.append(j)
-        elif j == 0 or name in KEY_NUMBERS or (name == "note" and values - {"-"}):
+        elif j == 0 or (name in KEY_NUMBERS and values - {"-"}) or (name == "note" and values - {"-"}):
             keep.append(j)
     return keep, constants
 
