@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import functools
 import hashlib
-import http.server
 import logging
 import os
 import re
@@ -24,99 +22,27 @@ from tzsl.cli import cli
 from tzsl.datasets import fetch_datasets, registered_datasets
 from tzsl.exceptions import ChecksumError, ConfigError, DataMissingError
 
+from tests.datasets.fetch_server import DRIP_S, registry_of, serve_folder
+
 FILES = {"alpha/one.csv": b"a,b\n1,2\n", "alpha/sub/two.bin": bytes(range(200)) * 50, "beta/three.txt": b"three\n"}
-
-
-#: How long a misbehaving handler of the test server goes on at most (s): every test stays bounded.
-HANDLER_LIMIT_S = 20.0
-#: Seconds between two bytes of the slow-drip paths.
-DRIP_S = 0.25
-
-
-class MisbehavingHandler(http.server.SimpleHTTPRequestHandler):
-    """Serves a folder, except under these prefixes (the rest of the path is ignored):
-
-    /drip/...        headers (Content-Length 1000), then 1 byte every DRIP_S
-    /header-drip/... the status line and headers themselves, 1 byte every DRIP_S
-    /stall/...       headers, then nothing
-    /truncate/...    headers (Content-Length 1000), 10 bytes, then the connection closes
-    /status/CODE/... that HTTP status
-    /flaky/...       HTTP 500 on the first request of a path, then the file (the rest of the path)
-    """
-
-    stop: threading.Event
-    seen: dict[str, int]
-
-    def log_message(self, *args) -> None:
-        pass
-
-    def _slowly(self, data: bytes) -> None:
-        end = time.monotonic() + HANDLER_LIMIT_S
-        for i in range(len(data)):
-            if self.stop.wait(DRIP_S) or time.monotonic() > end:
-                return
-            try:
-                self.wfile.write(data[i:i + 1])
-                self.wfile.flush()
-            except OSError:  # the client gave up
-                return
-
-    def do_GET(self) -> None:
-        kind, _, rest = self.path.lstrip("/").partition("/")
-        if kind in ("drip", "stall", "truncate"):
-            self.send_response(200)
-            self.send_header("Content-Length", "1000")
-            self.end_headers()
-            if kind == "drip":
-                self._slowly(b"x" * 1000)
-            elif kind == "stall":
-                self.stop.wait(HANDLER_LIMIT_S)
-            else:
-                self.wfile.write(b"x" * 10)
-        elif kind == "header-drip":
-            self._slowly(b"HTTP/1.0 200 OK\r\nContent-Length: 1000\r\n\r\n" + b"x" * 1000)
-        elif kind == "status":
-            code = int(rest.split("/", 1)[0])
-            self.send_error(code)
-        elif kind == "flaky":
-            self.seen[rest] = self.seen.get(rest, 0) + 1
-            if self.seen[rest] == 1:
-                self.send_error(500)
-            else:
-                self.path = "/" + rest
-                super().do_GET()
-        else:
-            super().do_GET()
 
 
 @pytest.fixture
 def server(tmp_path):
-    """A loopback HTTP server over a folder (:class:`MisbehavingHandler`); yields (base URL, folder).
-    Stops by itself, its slow handlers too."""
+    """A loopback HTTP server over a folder holding FILES (:func:`serve_folder`); yields (base URL, folder)."""
     root = tmp_path / "served"
     for name, content in FILES.items():
         (root / name).parent.mkdir(parents=True, exist_ok=True)
         (root / name).write_bytes(content)
-    stop = threading.Event()
-    handler = type("Handler", (MisbehavingHandler,), {"stop": stop, "seen": {}})
-    httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), functools.partial(handler, directory=str(root)))
-    thread = threading.Thread(target=httpd.serve_forever, daemon=True)
-    thread.start()
-    yield f"http://127.0.0.1:{httpd.server_address[1]}", root
-    stop.set()
-    httpd.shutdown()
-    httpd.server_close()
+    with serve_folder(root) as (base, _requested):
+        yield base, root
 
 
 def _registry(tmp_path: Path, base: str, *, urls: bool = True) -> pooch.Pooch:
     lines = [f"{name} sha256:{hashlib.sha256(content).hexdigest()}" + (f" {base}/{name}" if urls else "")
              for name, content in FILES.items()]
     lines.append("beta/local.csv sha256:" + "0" * 64)  # built locally: no URL
-    path = tmp_path / "registry.txt"
-    path.write_text("\n".join(lines) + "\n")
-    pup = pooch.create(path=".", base_url="", registry=None)
-    pup.load_registry(str(path))
-    return pup
+    return registry_of(tmp_path / "registry.txt", lines)
 
 
 def test_fetch_downloads_verifies_and_skips_what_is_there(tmp_path, server):
@@ -216,26 +142,15 @@ def test_fetch_builds_fabric_groups_and_leaves_reference_copies_out(tmp_path):
     served = tmp_path / "served"
     (served / "fabric/sources").mkdir(parents=True)
     (served / "fabric/sources/Data2.py").write_text(DATA2)
-    handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(served))
-    handler.log_message = lambda *args: None
-    httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
-    threading.Thread(target=httpd.serve_forever, daemon=True).start()
-    try:
-        base = f"http://127.0.0.1:{httpd.server_address[1]}"
+    with serve_folder(served) as (base, _requested):
         reference = sorted(REFERENCE_ONLY)[0]
-        lines = [
-                 f"fabric/fabric_groups.csv sha256:{hashlib.sha256(GROUPS_CSV).hexdigest()}",
-                 f"{reference} sha256:{'0' * 64}"]
-        (tmp_path / "registry.txt").write_text("\n".join(lines) + "\n")
-        pup = pooch.create(path=".", base_url="", registry=None)
-        pup.load_registry(str(tmp_path / "registry.txt"))
+        pup = registry_of(tmp_path / "registry.txt", [
+            f"fabric/fabric_groups.csv sha256:{hashlib.sha256(GROUPS_CSV).hexdigest()}",
+            f"{reference} sha256:{'0' * 64}"])
         home = tmp_path / "home"
         sources = {"fabric/fabric_groups.csv": {"fabric/sources/Data2.py": (
             f"sha256:{hashlib.sha256(DATA2.encode()).hexdigest()}", f"{base}/fabric/sources/Data2.py")}}
         fabric, phac2 = fetch_datasets([], home, pup=pup, progress=False, build_sources=sources)
-    finally:
-        httpd.shutdown()
-        httpd.server_close()
     assert fabric.built == ["fabric/fabric_groups.csv"] and (home / "fabric/sources/Data2.py").read_text() == DATA2
     assert (home / "fabric/fabric_groups.csv").read_bytes() == GROUPS_CSV
     assert phac2.reference == [reference] and phac2.missing == []
@@ -247,12 +162,8 @@ def test_fetch_builds_fabric_groups_and_leaves_reference_copies_out(tmp_path):
 
 def _pup(tmp_path: Path, urls: dict[str, str]) -> pooch.Pooch:
     """A registry of FILES' hashes with the given URLs (written as a registry file, as tzsl's is)."""
-    lines = [f"{name} sha256:{hashlib.sha256(FILES[name]).hexdigest()} {url}" for name, url in urls.items()]
-    path = tmp_path / "registry.txt"
-    path.write_text("\n".join(lines) + "\n")
-    pup = pooch.create(path=".", base_url="", registry=None)
-    pup.load_registry(str(path))
-    return pup
+    return registry_of(tmp_path / "registry.txt",
+                       [f"{name} sha256:{hashlib.sha256(FILES[name]).hexdigest()} {url}" for name, url in urls.items()])
 
 
 def _files_under(folder: Path) -> list[str]:

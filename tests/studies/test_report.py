@@ -17,7 +17,8 @@ import pytest  # noqa: E402
 
 from tzsl import __version__  # noqa: E402
 from tzsl.exceptions import ConfigError, DataFileError  # noqa: E402
-from tzsl.reporting.report import FOLD_ROWS, render_report, write_report  # noqa: E402
+from tzsl.reporting.report import render_report, write_report  # noqa: E402
+from tzsl.reporting.tables import FOLD_ROWS  # noqa: E402
 
 VOID = {"area", "base", "br", "col", "embed", "hr", "img", "input", "link", "meta", "source", "track", "wbr"}
 
@@ -152,7 +153,7 @@ def test_report_of_missing_or_empty_folder(tmp_path):
 
 
 def test_table_view_merges_paper_and_interval_columns_and_prints_counts_whole():
-    from tzsl.reporting.report import table_view
+    from tzsl.reporting.tables import table_view
 
     table = pd.DataFrame({
         "method": ["DAP", "ESZSL"], "n_objects": [10.0, 18.0], "accuracy": [0.31, 0.25],
@@ -174,7 +175,7 @@ def test_sections_banner_deviations_and_other_results(tmp_path):
     pd.DataFrame({"x": [1, 2]}).to_csv(root / "my_extra.csv", index=False)
     _figure(root / "fabric_lambda.png", 1.0)
     (root / "manifest.json").write_text(json.dumps({
-        "config": {"svm_params": {"cv": 5}, "hand_data": "simulated",
+        "config": {"study": "phac2-dap", "svm_params": {"cv": 5}, "hand_data": "simulated",
                    "dap_settings": {"splits": {"random_min_train_positives": 2, "n_splits": 20}}},
         "data_files": {"/data/phac2.h5": "ab" * 32}, "packages": {"numpy": "2.0"}}))
     page = render_report(root)
@@ -201,7 +202,7 @@ def test_no_banner_without_simulated_evidence_outside_the_hand_section(tmp_path)
 
 
 def test_counts_text_and_transposed_wide_short_tables():
-    from tzsl.reporting.report import TRANSPOSE_COLUMNS, table_view
+    from tzsl.reporting.tables import TRANSPOSE_COLUMNS, table_view
 
     table = pd.DataFrame({"split": ["1", "2", "mean"], "n_attributes": [18.0, 19.0, 18.5],
                           "excluded": ["bumpy;hairy", np.nan, np.nan], "avgdap": [0.3, 0.4, 0.35]})

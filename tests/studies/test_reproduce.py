@@ -12,7 +12,7 @@ import pytest
 from click.testing import CliRunner
 
 from tzsl.exceptions import ConfigError
-from tzsl.studies import engine
+from tzsl.studies import engine, reproduce
 from tzsl.studies.config import load_experiment
 from tzsl.studies.reproduce import (
     EVIDENCE_STUDIES,
@@ -80,6 +80,7 @@ def recorded(monkeypatch):
 
     monkeypatch.setattr(engine, "execute_study", fake_execute)
     monkeypatch.setattr(engine, "check_experiment", lambda exp: None)
+    monkeypatch.setattr(reproduce, "fetch_study_data", lambda *args, **kwargs: None)  # no study reads the data
     return seen
 
 

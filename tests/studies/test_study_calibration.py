@@ -16,6 +16,7 @@ from tzsl.reporting.report import render_report
 from tzsl.studies import study_calibration
 from tzsl.studies.study_calibration import (
     CALIBRATION_COLUMNS,
+    calibration_skipped,
     dap_split_posteriors,
     posterior_columns,
     reliability_by_method,
@@ -69,9 +70,16 @@ def test_reliability_table_figure_and_report_section(tmp_path):
     top = over[over["bin"] == over["bin"].max()].iloc[0]
     assert top["accuracy"] < top["confidence"] - 0.05  # over-confident: below the diagonal
     summary = method_summary(trials, {}, 0.1, "calibrated", study="simulated-study", data="simulated")
+    # "raw" writes the same posterior as calibrated and uncalibrated: its calibration was skipped
+    assert calibration_skipped(rel) == ["raw"]
     fig = reliability_figure(rel, summary)
-    labels = [t.get_text() for ax in fig.axes for t in ax.get_legend().get_texts()]
-    assert any(label.startswith("raw (ECE ") for label in labels)
+    panels = {ax.get_title(): ax for ax in fig.axes if ax.get_visible() and ax.get_title()}
+    assert list(panels) == ["calibrated", "raw"]  # small multiples: one panel per method
+    legend = {name: [t.get_text() for t in ax.get_legend().get_texts()] for name, ax in panels.items()}
+    assert [label.split(" (ECE ")[0] for label in legend["calibrated"]] == ["uncalibrated", "calibrated"]
+    assert [label.split(" (ECE ")[0] for label in legend["raw"]] == ["uncalibrated"]
+    notes = {name: [t.get_text() for t in ax.texts] for name, ax in panels.items()}
+    assert notes == {"calibrated": [], "raw": ["calibration skipped:\ncalibrated = uncalibrated"]}
     root = tmp_path / "res"
     root.mkdir()
     fig.savefig(root / "phac2_reliability.png")
@@ -79,7 +87,9 @@ def test_reliability_table_figure_and_report_section(tmp_path):
     summary.to_csv(root / "phac2_method_comparison.csv", index=False)
     page = render_report(root)
     assert 'id="calibration"' in page and page.index('id="calibration"') < page.index("phac2_reliability.png")
-    assert "phac2_reliability.csv" in page and "ece_uncalibrated" in page and "brier" in page
+    # the comparison shows its key columns (ece, brier); ece_uncalibrated is in the full table behind the toggle
+    assert "phac2_reliability.csv" in page and "ece_\u200buncalibrated" in page and "<th>brier (95% CI)</th>" in page
+    assert "Calibration was skipped for raw: the &#34;calibrated&#34; posterior equals the uncalibrated one" in page
 
 
 def test_dap_split_calibration_uses_the_calibrator_s_bound_and_the_split_s_solver(monkeypatch):

@@ -188,6 +188,11 @@ data_dir_option = click.option(
 )
 force_option = click.option("--force", is_flag=True, help="Overwrite existing results.")
 no_progress_option = click.option("--no-progress", is_flag=True, help="Hide progress bars.")
+no_fetch_option = click.option(
+    "--no-fetch", is_flag=True,
+    help="Do not download anything: a data file missing from the data home stops its study with one line "
+         "(default: the registered files the studies read that are missing are fetched first, as 'tzsl data "
+         "fetch' does; files present are not touched).")
 
 
 def n_jobs_option(func=None, *, study: str | None = "phac2-dap", override: bool = False):

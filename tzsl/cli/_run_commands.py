@@ -15,6 +15,7 @@ from tzsl.cli._root import (
     data_dir_option,
     force_option,
     n_jobs_option,
+    no_fetch_option,
     no_progress_option,
     scheduler_option,
     seed_option,
@@ -29,7 +30,7 @@ def override_options(func):
         func = option(func)
     func = click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=None,
                         help="Results folder (default: [output] folder, relative to the current directory).")(func)
-    return no_progress_option(data_dir_option(force_option(func)))
+    return no_fetch_option(no_progress_option(data_dir_option(force_option(func))))
 
 
 def _overrides(out, n_jobs, seed, backend, scheduler, no_progress, data_dir) -> dict:
@@ -46,7 +47,7 @@ def _overrides(out, n_jobs, seed, backend, scheduler, no_progress, data_dir) -> 
               "and stop.")
 @click.option("--profile", is_flag=True, help="Print where the time went: wall and CPU seconds per study and stage "
               "(always recorded in manifest.json).")
-def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, data_dir, force, check: bool,
+def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, no_fetch, data_dir, force, check: bool,
         print_config: bool, profile: bool) -> None:
     """Run a study: an experiment file (TOML) or a built-in study by NAME.
 
@@ -55,6 +56,9 @@ def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, dat
     in tzsl/studies/builtin/; print one with 'tzsl run NAME --print-config'). Every
     unknown key, wrong type or bad value is reported as FILE: key.path: reason. Options
     override the file's settings. See experiments/README.md.
+
+    A study on a built-in dataset first fetches the registered files it reads that are missing
+    from the data home (one line says what, where to and how big; --no-fetch: stop instead).
     """
     from tzsl.studies.config import get_study, load_experiment, to_toml  # noqa: PLC0415
     from tzsl.studies.engine import check_experiment, run_experiment  # noqa: PLC0415
@@ -71,6 +75,11 @@ def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, dat
         click.echo(f"{exp.source}: valid ({exp.study}); 'tzsl run {experiment} --print-config' shows every value")
         return
     start = time.perf_counter()
+    if not no_fetch:
+        from tzsl.studies.reproduce import fetch_study_data  # noqa: PLC0415
+
+        check_experiment(exp)
+        fetch_study_data([exp], (experiment,), click.echo, progress=not no_progress)
     results, done = run_experiment(exp, force=force, echo=click.echo)
     click.echo(f"\nwrote {len(results.written)} files to {results.root} in {time.perf_counter() - start:.0f} s")
     if profile:
@@ -86,7 +95,8 @@ def _study_list_options(default_out: Path, studies: tuple[str, ...]):
                          f"{', '.join(studies)}."),
             click.option("--profile", is_flag=True, help="Print where the time went: wall and CPU seconds per study "
                          "and stage (always recorded in manifest.json)."),
-            force_option, data_dir_option, no_progress_option, scheduler_option, backend_option(override=True),
+            force_option, data_dir_option, no_fetch_option, no_progress_option, scheduler_option,
+            backend_option(override=True),
             n_jobs_option(override=True),
             click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=default_out,
                          show_default=True, help="Results folder."),
@@ -96,13 +106,13 @@ def _study_list_options(default_out: Path, studies: tuple[str, ...]):
     return decorate
 
 
-def _run_study_list(command: str, out, n_jobs, backend, scheduler, no_progress, data_dir, force, profile,
+def _run_study_list(command: str, out, n_jobs, backend, scheduler, no_progress, no_fetch, data_dir, force, profile,
                     studies) -> None:
     from tzsl.studies.reproduce import run_studies  # noqa: PLC0415
 
     start = time.perf_counter()
     results = run_studies(command, out, force=force, echo=click.echo, studies=tuple(studies) or None,
-                          n_jobs=n_jobs, backend=backend, scheduler=scheduler,
+                          fetch=not no_fetch, n_jobs=n_jobs, backend=backend, scheduler=scheduler,
                           progress=False if no_progress else None, data_dir=data_dir)
     click.echo(f"\nwrote {len(results.written)} files to {out} in {time.perf_counter() - start:.0f} s")
     if profile:
@@ -111,29 +121,35 @@ def _run_study_list(command: str, out, n_jobs, backend, scheduler, no_progress, 
 
 @cli.command("reproduce-tables")
 @_study_list_options(Path("results"), REPRODUCE_STUDIES)
-def reproduce_tables(out, n_jobs, backend, scheduler, no_progress, data_dir, force, profile, studies):
+def reproduce_tables(out, n_jobs, backend, scheduler, no_progress, no_fetch, data_dir, force, profile, studies):
     """Every table (CSV) and figure (PNG) the two papers report, from the real data, paper numbers beside ours.
 
     Runs the built-in studies of the papers (the default of --study), in that order, exactly as
     'tzsl run NAME' does, into one folder with one manifest.json: what the papers report, with
     our intervals, chance, baselines and controls, and nothing else ('tzsl evidence' runs the
     rest). The hand study runs on SIMULATED grasps (the paper's Shadow-hand data are not public).
+
+    On first use, before the first study, it fetches the registered data files the studies read
+    that are missing from the data home (one line says what, where to and how big; then the
+    registry's URLs, hash checks and progress bars of 'tzsl data fetch'). --no-fetch: stop instead.
     """
-    _run_study_list("reproduce-tables", out, n_jobs, backend, scheduler, no_progress, data_dir, force, profile,
-                    studies)
+    _run_study_list("reproduce-tables", out, n_jobs, backend, scheduler, no_progress, no_fetch, data_dir, force,
+                    profile, studies)
 
 
 @cli.command("evidence")
 @_study_list_options(Path("results") / "evidence", EVIDENCE_STUDIES)
-def evidence(out, n_jobs, backend, scheduler, no_progress, data_dir, force, profile, studies):
+def evidence(out, n_jobs, backend, scheduler, no_progress, no_fetch, data_dir, force, profile, studies):
     """The evidence beyond the papers: every method on every dataset, GZSL, calibration, active touch, headlines.
 
     Runs the built-in studies beyond the papers (the default of --study), in that order, exactly as
     'tzsl run NAME' does, into one folder with one manifest.json and method_comparison.csv (every
     registered method x study). Tens of minutes cold on two cores; the fit store (TZSL_CACHE_DIR)
-    reads back what reproduce-tables fitted.
+    reads back what reproduce-tables fitted. Missing data files are fetched first, as by
+    reproduce-tables (--no-fetch: stop instead).
     """
-    _run_study_list("evidence", out, n_jobs, backend, scheduler, no_progress, data_dir, force, profile, studies)
+    _run_study_list("evidence", out, n_jobs, backend, scheduler, no_progress, no_fetch, data_dir, force, profile,
+                    studies)
 
 
 def _echo_profile(rows: list[dict]) -> None:

@@ -12,7 +12,8 @@ from typing import Any
 
 #: Public name -> the module of this package that defines it.
 _EXPORTS: dict[str, str] = {
-    **dict.fromkeys(["TactileDataset", "dataset_names", "get_dataset", "register_dataset"], "_builtin"),
+    **dict.fromkeys(["TactileDataset", "builtin_data_files", "dataset_names", "get_dataset", "register_dataset"],
+                    "_builtin"),
     **dict.fromkeys(["FINGER_NAMES", "Grasp", "HandTable", "JOINT_NAMES", "grasp_from_arrays", "load_hand_table4",
         "read_grasps", "write_grasps"], "_grasps"),
     **dict.fromkeys(["SimulatedGrasps", "simulate_grasps"], "_hand_simulator"),
@@ -44,7 +45,7 @@ _EXPORTS: dict[str, str] = {
     **dict.fromkeys(["BagMapping", "Hdf5Mapping", "SeriesMapping", "load_lab_mapping"], "_lab_mapping"),
     **dict.fromkeys(["DEFAULT_FETCH_TIMEOUT_S", "FETCH_ATTEMPTS", "FETCH_STALL_S", "FETCH_TIMEOUT_ENV"], "_download"),
     **dict.fromkeys(["FetchReport", "MIRROR_ENV", "REFERENCE_ONLY",
-        "fetch_datasets", "registered_datasets"], "_fetch"),
+        "fetch_datasets", "fetch_missing", "registered_datasets"], "_fetch"),
     **dict.fromkeys(["SignalTable", "read_signal_table"], "_signal_cache"),
     **dict.fromkeys(["signal_from_arrays"], "_signal_files"),
     **dict.fromkeys(["Problem", "read_signal_file", "validate_dataset"], "_validate"),
@@ -66,6 +67,7 @@ def __dir__() -> list[str]:
 
 __all__ = [
     "TactileDataset",
+    "builtin_data_files",
     "dataset_names",
     "get_dataset",
     "register_dataset",
@@ -150,6 +152,7 @@ __all__ = [
     "REFERENCE_ONLY",
     "FetchReport",
     "fetch_datasets",
+    "fetch_missing",
     "registered_datasets",
     "dataset_card",
     "signal_from_arrays",

@@ -20,16 +20,23 @@ from typing import ClassVar, Literal
 
 import pandas as pd
 
-from tzsl.datasets._fabric import FabricData, load_fabric
+from tzsl.datasets._fabric import (
+    FABRIC_ATTRIBUTE_SETS,
+    FABRIC_DEPTH_DIR,
+    FABRIC_GROUPS_CSV,
+    FabricData,
+    load_fabric,
+)
 from tzsl.datasets._grasps import load_hand_table4
 from tzsl.datasets._hand_simulator import SimulatedGrasps, simulate_grasps
 from tzsl.datasets._phac2_h5 import load_phac2_h5
-from tzsl.datasets._phac2_hold_mat import load_phac2_hold_mat, load_phac2_labels
-from tzsl.datasets._phac2_penn import PennStaticData, load_phac2_penn
+from tzsl.datasets._phac2_hold_mat import HOLD_DIR, LABELS_CSV, load_phac2_hold_mat, load_phac2_labels
+from tzsl.datasets._phac2_penn import PENN_STATIC_DIR, PennStaticData, load_phac2_penn
+from tzsl.datasets._registry import registered_files
 from tzsl.datasets._types import PHAC2_EPS, RawTrial
 from tzsl.exceptions import ConfigError
 
-__all__ = ["TactileDataset", "dataset_names", "get_dataset", "register_dataset"]
+__all__ = ["TactileDataset", "builtin_data_files", "dataset_names", "get_dataset", "register_dataset"]
 
 PathLike = str | os.PathLike
 
@@ -60,6 +67,10 @@ class TactileDataset(ABC):
     simulated : bool
         Its trials are drawn by tzsl's simulator, not recorded: every result on it says
         ``data = simulated``.
+    registry_files : tuple of str
+        The registered files ``load`` and ``labels`` read from the data home (paths, or folder
+        prefixes ending in ``/``, of the dataset registry): what a study on it fetches first
+        (:func:`builtin_data_files`).
     """
 
     name: ClassVar[str]
@@ -70,6 +81,7 @@ class TactileDataset(ABC):
     needs_path: ClassVar[bool] = False
     convertible: ClassVar[bool] = True
     simulated: ClassVar[bool] = False
+    registry_files: ClassVar[tuple[str, ...]] = ()
 
     @abstractmethod
     def load(self, data_dir: PathLike | None = None,
@@ -93,6 +105,7 @@ class Phac2Penn(TactileDataset):
     source = "Chu et al. (2015), PHAC-2; Penn's per-trial static features"
     content = "static-features"
     eps = tuple(PHAC2_EPS)
+    registry_files = (PENN_STATIC_DIR, LABELS_CSV)
 
     def load(self, data_dir=None, path=None) -> PennStaticData:
         return load_phac2_penn(data_dir)
@@ -104,6 +117,7 @@ class Phac2HoldMat(TactileDataset):
     source = "Chu et al. (2015), PHAC-2 raw release (HOLD phase)"
     content = "signals"
     eps = ("hold",)
+    registry_files = (HOLD_DIR, LABELS_CSV)
 
     def load(self, data_dir=None, path=None) -> list[RawTrial]:
         return load_phac2_hold_mat(data_dir)
@@ -120,6 +134,7 @@ class Phac2H5(TactileDataset):
     eps = tuple(PHAC2_EPS)
     needs_path = True
     convertible = False
+    registry_files = (LABELS_CSV,)  # the labels; the release itself is the user's file (path)
 
     def load(self, data_dir=None, path=None) -> list[RawTrial]:
         if path is None:
@@ -147,6 +162,7 @@ class FabricDepth(TactileDataset):
     content = "depth-images"
     eps = ("press",)
     convertible = False
+    registry_files = (FABRIC_GROUPS_CSV, f"fabric/{FABRIC_ATTRIBUTE_SETS['a8'][0]}", FABRIC_DEPTH_DIR)
 
     def load(self, data_dir=None, path=None) -> FabricData:
         with warnings.catch_warnings():  # groups sharing a row are expected (the dataset card lists them)
@@ -201,6 +217,24 @@ def get_dataset(name: str) -> TactileDataset:
     if name not in _DATASETS:
         raise ConfigError(f"unknown dataset {name!r}; choose one of {', '.join(_DATASETS)}")
     return _DATASETS[name]
+
+
+def builtin_data_files(name: str) -> list[str]:
+    """The registered files (paths relative to the data home) that ``[dataset] builtin = name`` reads.
+
+    A built-in dataset's :attr:`TactileDataset.registry_files` (``hand-simulated``: none); a name
+    that is a folder of the dataset registry (the fabric study's ``builtin = "fabric"``, which
+    reads its groups, attribute matrices and depth images) every registered file of that folder;
+    nothing for any other name.
+
+    Returns
+    -------
+    list of str
+        Sorted registered paths.
+    """
+    dataset = _DATASETS.get(name)
+    prefixes = dataset.registry_files if dataset is not None else (f"{name}/",)
+    return sorted({relpath for prefix in prefixes for relpath in registered_files(prefix)})
 
 
 def dataset_names(*, convertible: bool | None = None) -> tuple[str, ...]:

@@ -81,7 +81,10 @@ N_FABRICS = 119
 DEPTH_SHAPE = (224, 224)
 _GROUP_COLUMNS = ("fabric_id", "fabric_name", "group")
 _DEPTH_RE = re.compile(r"^F(?P<id>\d{4})_Depth_New_(?P<stamp>\d{6})\.png$")
-_DEPTH_PREFIX = "fabric/depth224/"
+#: The registered depth images (a folder of the data home).
+FABRIC_DEPTH_DIR = "fabric/depth224/"
+#: The registered fabric x group table (built by a fetch from :data:`FABRIC_GROUPS_SOURCE`).
+FABRIC_GROUPS_CSV = "fabric/fabric_groups.csv"
 
 
 # ---------------------------------------------------------------------------------
@@ -313,9 +316,9 @@ class FabricData:
 
 
 def _image_table(fabrics: pd.DataFrame, home: Path) -> pd.DataFrame:
-    relpaths = registered_files(_DEPTH_PREFIX)
+    relpaths = registered_files(FABRIC_DEPTH_DIR)
     if not relpaths:
-        raise DataFileError(None, f"the dataset registry lists no {_DEPTH_PREFIX} files")
+        raise DataFileError(None, f"the dataset registry lists no {FABRIC_DEPTH_DIR} files")
     missing = [r for r in relpaths if not (home / r).is_file()]
     if missing:
         raise DataMissingError(
@@ -325,7 +328,7 @@ def _image_table(fabrics: pd.DataFrame, home: Path) -> pd.DataFrame:
         )
     rows = []
     for rel in relpaths:
-        m = _DEPTH_RE.match(rel[len(_DEPTH_PREFIX):])
+        m = _DEPTH_RE.match(rel[len(FABRIC_DEPTH_DIR):])
         if m is None:
             raise DataFileError(home / rel, "depth image name does not match F####_Depth_New_HHMMSS.png")
         rows.append((int(m["id"]), m["stamp"], str(fetch(rel, home))))
@@ -333,10 +336,10 @@ def _image_table(fabrics: pd.DataFrame, home: Path) -> pd.DataFrame:
     known = set(fabrics["fabric_id"])
     unknown = sorted(set(images["fabric_id"]) - known)
     if unknown:
-        raise DataFileError(home / _DEPTH_PREFIX, f"depth images of fabrics {unknown[:5]} not in fabric_groups.csv")
+        raise DataFileError(home / FABRIC_DEPTH_DIR, f"depth images of fabrics {unknown[:5]} not in fabric_groups.csv")
     without = sorted(known - set(images["fabric_id"]))
     if without:
-        raise DataMissingError(home / _DEPTH_PREFIX, f"no depth image for fabric ids {without[:10]}")
+        raise DataMissingError(home / FABRIC_DEPTH_DIR, f"no depth image for fabric ids {without[:10]}")
     images = images.merge(fabrics, on="fabric_id", how="left", validate="many_to_one")
     images = images.sort_values(["fabric_id", "stamp", "path"], ignore_index=True)
     images["capture_index"] = images.groupby("fabric_id").cumcount().astype(np.int64)
@@ -381,8 +384,8 @@ def load_fabric(
     if attributes not in FABRIC_ATTRIBUTE_SETS:
         raise ConfigError(f"attributes must be one of {sorted(FABRIC_ATTRIBUTE_SETS)}; got {attributes!r}")
     home = get_data_home(data_dir)
-    fabrics = read_fabric_groups(fetch("fabric/fabric_groups.csv", home))
-    groups_path = home / "fabric/fabric_groups.csv"
+    fabrics = read_fabric_groups(fetch(FABRIC_GROUPS_CSV, home))
+    groups_path = home / FABRIC_GROUPS_CSV
     if len(fabrics) != N_FABRICS:
         raise DataFileError(groups_path, f"{len(fabrics)} fabrics; expected {N_FABRICS}")
     absent = sorted(set(range(N_GROUPS)) - set(fabrics["group"]))

@@ -18,7 +18,7 @@ the fabric paper's ``Data2.py``); derived reference copies that no study reads
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,12 +26,12 @@ import pooch
 
 from tzsl._io import atomic_write_bytes
 from tzsl.datasets._download import FETCH_STALL_S, fetch_lock, fetch_timeout, remove_leftovers
-from tzsl.datasets._fabric import FABRIC_GROUPS_SOURCE, fabric_groups_csv_bytes
+from tzsl.datasets._fabric import FABRIC_GROUPS_CSV, FABRIC_GROUPS_SOURCE, fabric_groups_csv_bytes
 from tzsl.datasets._home import get_data_home
-from tzsl.datasets._registry import download_file, registry, source_of, verify_file
-from tzsl.exceptions import ChecksumError, ConfigError, DataFileError, DataMissingError
+from tzsl.datasets._registry import download_file, registered_size, registry, source_of, verify_file
+from tzsl.exceptions import ChecksumError, ConfigError, DataFileError, DataMissingError, first_line
 
-__all__ = ["MIRROR_ENV", "REFERENCE_ONLY", "FetchReport", "fetch_datasets", "registered_datasets"]
+__all__ = ["MIRROR_ENV", "REFERENCE_ONLY", "FetchReport", "fetch_datasets", "fetch_missing", "registered_datasets"]
 
 #: Environment variable naming a mirror (see the module docstring).
 MIRROR_ENV = "TZSL_DATA_MIRROR"
@@ -77,17 +77,28 @@ class FetchReport:
                 f"{len(self.downloaded)} downloaded){finished}; a rerun goes on from there")
 
 
+def _mirror(mirror: str | None) -> str | None:
+    """The mirror a fetch uses: ``mirror``, else ``$TZSL_DATA_MIRROR``, else None (the registry's URLs)."""
+    return mirror if mirror is not None else os.environ.get(MIRROR_ENV) or None
+
+
 def registered_datasets(pup: pooch.Pooch | None = None) -> list[str]:
     """Names of the datasets of the registry: the first folder of every registered path."""
     return sorted({name.split("/", 1)[0] for name in (pup or registry()).registry})
 
 
+def _penn_pickles(pup: pooch.Pooch) -> list[str]:
+    """The registered Penn static pickles (what the PHAC-2 label table is built from)."""
+    from tzsl.datasets._phac2_penn import PENN_STATIC_DIR  # noqa: PLC0415
+
+    return [name for name in sorted(pup.registry) if name.startswith(PENN_STATIC_DIR)]
+
+
 def _build_penn_labels(home: Path, pup: pooch.Pooch) -> bytes:
     """The registered object x adjective CSV, rebuilt from the downloaded Penn pickles."""
-    from tzsl.datasets._phac2_penn import PENN_STATIC_DIR, labels_csv_bytes, read_penn_static_pickles  # noqa: PLC0415
+    from tzsl.datasets._phac2_penn import labels_csv_bytes, read_penn_static_pickles  # noqa: PLC0415
 
-    pickles = [home / name for name in sorted(pup.registry) if name.startswith(PENN_STATIC_DIR)]
-    return labels_csv_bytes(read_penn_static_pickles(pickles).labels)
+    return labels_csv_bytes(read_penn_static_pickles([home / name for name in _penn_pickles(pup)]).labels)
 
 
 def _build_fabric_groups(home: Path, pup: pooch.Pooch) -> bytes:
@@ -96,16 +107,24 @@ def _build_fabric_groups(home: Path, pup: pooch.Pooch) -> bytes:
     return fabric_groups_csv_bytes(source.read_text(encoding="utf-8"), origin=str(source))
 
 
+#: The PHAC-2 label table's registered path (``LABELS_CSV`` of the HOLD reader, which imports scipy).
+_PENN_LABELS = "phac2/derived/phac2_labels_60x24.csv"
+
 #: Registered files without a public URL that tzsl builds from downloaded ones.
 BUILDERS: dict[str, Callable[[Path, pooch.Pooch], bytes]] = {
-    "phac2/derived/phac2_labels_60x24.csv": _build_penn_labels,
-    "fabric/fabric_groups.csv": _build_fabric_groups,
+    _PENN_LABELS: _build_penn_labels,
+    FABRIC_GROUPS_CSV: _build_fabric_groups,
+}
+
+#: Registered files a builder reads (fetched with the file it builds): built path -> their paths.
+BUILD_INPUTS: dict[str, Callable[[pooch.Pooch], list[str]]] = {
+    _PENN_LABELS: _penn_pickles,
 }
 
 #: Public files a builder reads that are not data (so not in the registry): path in the data
 #: home -> (sha256 of the file at that commit, URL). Downloaded (and hash-checked) only to build.
 BUILD_SOURCES: dict[str, dict[str, tuple[str, str]]] = {
-    "fabric/fabric_groups.csv": {
+    FABRIC_GROUPS_CSV: {
         FABRIC_GROUPS_SOURCE: (
             "sha256:e3c5567299d0ec313047bb76802bb8967a5df2acdc0f74e76c77768c962c3501",
             "https://raw.githubusercontent.com/GitGroot/gelsight_zeroshot_category/"
@@ -159,6 +178,7 @@ def fetch_datasets(
     pup: pooch.Pooch | None = None,
     echo: Callable[[str], None] | None = None,
     build_sources: dict[str, dict[str, tuple[str, str]]] | None = None,
+    files: Collection[str] | None = None,
 ) -> list[FetchReport]:
     """Download and verify every registered file of ``names`` (all datasets when empty).
 
@@ -187,6 +207,8 @@ def fetch_datasets(
         Receives one line per dataset (and one if another fetch holds the data home).
     build_sources : dict, optional
         The public files builders read (default :data:`BUILD_SOURCES`; tests pass their own).
+    files : collection of str, optional
+        Only these registered paths of the datasets (default: all of them; :func:`fetch_missing`).
 
     Returns
     -------
@@ -211,16 +233,17 @@ def fetch_datasets(
     unknown = [n for n in names if n not in known]
     if unknown:
         raise ConfigError(f"unknown dataset(s) {unknown}; known: {', '.join(known)}")
-    mirror = mirror if mirror is not None else os.environ.get(MIRROR_ENV) or None
+    mirror = _mirror(mirror)
     timeout = fetch_timeout(timeout)
     home = get_data_home(data_dir)
+    files = None if files is None else frozenset(files)
     reports: list[FetchReport] = []
     with fetch_lock(home, on_wait=echo):
         for name in names or known:
             report = FetchReport(name)
             try:
                 _fetch_dataset(report, home, pup, mirror=mirror, progress=progress, timeout=timeout, stall=stall,
-                               build_sources=build_sources)
+                               build_sources=build_sources, only=files)
             except DataFileError as exc:  # one line: the file's failure, then where this fetch stopped
                 raise type(exc)(None, f"{exc}; {report.stopped_at([r.name for r in reports])}") from None
             reports.append(report)
@@ -230,9 +253,11 @@ def fetch_datasets(
 
 
 def _fetch_dataset(report: FetchReport, home: Path, pup: pooch.Pooch, *, mirror: str | None, progress: bool,
-                   timeout: float, stall: float, build_sources: dict[str, dict[str, tuple[str, str]]]) -> None:
-    """Fill ``report`` (its dataset's files: present, downloaded, built, missing, left out)."""
-    files = [f for f in sorted(pup.registry) if f.split("/", 1)[0] == report.name]
+                   timeout: float, stall: float, build_sources: dict[str, dict[str, tuple[str, str]]],
+                   only: Collection[str] | None = None) -> None:
+    """Fill ``report`` (its dataset's files, or those of them in ``only``: present, downloaded, built,
+    missing, left out)."""
+    files = [f for f in sorted(pup.registry) if f.split("/", 1)[0] == report.name and (only is None or f in only)]
     report.total = len(files)
     sources = [home / source for f in files for source in build_sources.get(f, {})]
     report.leftovers = remove_leftovers([home / f for f in files] + sources)
@@ -266,3 +291,88 @@ def _fetch_dataset(report: FetchReport, home: Path, pup: pooch.Pooch, *, mirror:
             report.reference.append(relpath)
         else:
             report.missing.append(relpath)
+
+
+def _size_text(relpaths: Sequence[str]) -> str:
+    """The download size of ``relpaths`` from ``registry_sizes.txt`` ("24.9 MB"; "" when it lists none)."""
+    sizes = [registered_size(r) for r in relpaths]
+    known = sum(size for size in sizes if size is not None)
+    if known == 0:
+        return ""
+    return f"{'at least ' if None in sizes else ''}{known / 1e6:.1f} MB"
+
+
+def fetch_missing(
+    relpaths: Iterable[str],
+    data_dir: str | os.PathLike | None = None,
+    *,
+    needed_by: str = "the study",
+    progress: bool = True,
+    echo: Callable[[str], None] | None = None,
+    mirror: str | None = None,
+    timeout: float | None = None,
+    pup: pooch.Pooch | None = None,
+    build_sources: dict[str, dict[str, tuple[str, str]]] | None = None,
+) -> list[FetchReport]:
+    """Fetch the registered files among ``relpaths`` that are not in the data home (a study's first use).
+
+    Nothing happens when every file is there: no network, no lock, no hashing (the study's
+    readers verify the hashes, as always). Otherwise ``echo`` gets one line (how many files of
+    which datasets, their size from ``registry_sizes.txt``, the data home, the source), then
+    :func:`fetch_datasets` gets just the missing files (and the registered files a missing
+    built file is built from): the same downloads, deadline, retries, hash checks, progress bars,
+    lock and cleanup as ``tzsl data fetch``.
+
+    Parameters
+    ----------
+    relpaths : iterable of str
+        Registered paths (:func:`tzsl.datasets.builtin_data_files`).
+    data_dir : path-like, optional
+        Data home (:func:`tzsl.datasets.get_data_home`).
+    needed_by : str
+        Who reads the files (``"phac2-dap, fabric"``), for the line printed and the error.
+    progress, echo, mirror, timeout, pup, build_sources
+        As for :func:`fetch_datasets`.
+
+    Returns
+    -------
+    list of FetchReport
+        One per dataset fetched (empty when nothing was missing).
+
+    Raises
+    ------
+    DataMissingError, ChecksumError
+        One line: what was being fetched for ``needed_by``, the file, the URL and why (no network,
+        a hash mismatch, the deadline, a full disk), where the fetch stopped, and what to do.
+        Nothing is left half-written (downloads and builds go to temporary files first).
+    """
+    pup = pup or registry()
+    home = get_data_home(data_dir)
+    missing = {r for r in relpaths if not (home / r).is_file()}
+    for relpath in sorted(missing):
+        inputs = BUILD_INPUTS.get(relpath)
+        missing |= {r for r in (inputs(pup) if inputs is not None else []) if not (home / r).is_file()}
+    if not missing:
+        return []
+    mirror = _mirror(mirror)
+    names = sorted({r.split("/", 1)[0] for r in missing})
+    size = _size_text(sorted(missing))
+    say = echo or (lambda _line: None)
+    files = f"{len(missing)} data file{'s' if len(missing) > 1 else ''} of {', '.join(names)}"
+    say(f"first use: fetching {files}{f' ({size})' if size else ''} for {needed_by} into {home}, from "
+        f"{mirror or 'their public URLs'} (--no-fetch: stop instead)")
+    todo = "; see `tzsl data fetch --help` for a mirror or a longer deadline"
+    try:
+        reports = fetch_datasets(names, home, mirror=mirror, progress=progress, timeout=timeout, pup=pup, echo=echo,
+                                 build_sources=build_sources, files=missing)
+    except DataFileError as exc:
+        raise type(exc)(None, f"fetching the data of {needed_by}: {exc}{todo}") from None
+    except OSError as exc:  # a build or the data home itself: full disk, no permission
+        raise DataMissingError(None, f"fetching the data of {needed_by}: cannot write into {home}: "
+                                     f"{type(exc).__name__}: {first_line(exc)}{todo}") from None
+    absent = [r for report in reports for r in report.missing]
+    if absent:
+        raise DataMissingError(home / absent[0], f"{len(absent)} file(s) of {needed_by} have no public URL "
+                                                 f"(source: {source_of(absent[0])}); give a mirror "
+                                                 f"(${MIRROR_ENV}) or put them in {home}")
+    return reports

@@ -106,6 +106,24 @@ def registered_files(prefix: str = "") -> list[str]:
     return sorted(name for name in registry().registry if name.startswith(prefix))
 
 
+@lru_cache(maxsize=1)
+def _registered_sizes() -> dict[str, int]:
+    """Registered path -> its size in bytes (``registry_sizes.txt`` beside this module)."""
+    sizes: dict[str, int] = {}
+    with resources.files("tzsl.datasets").joinpath("registry_sizes.txt").open("r", encoding="utf-8") as fh:
+        for line in fh:
+            if line.strip() and not line.startswith("#"):
+                relpath, size = line.split()
+                sizes[relpath] = int(size)
+    return sizes
+
+
+def registered_size(relpath: str) -> int | None:
+    """Size in bytes of the registered file ``relpath`` (None when ``registry_sizes.txt`` does not list
+    it, as for the files of a test's own registry)."""
+    return _registered_sizes().get(relpath)
+
+
 def registered_hash(relpath: str) -> str | None:
     """The registered ``"sha256:<hex>"`` of ``relpath``, or None if it is listed without one.
 

@@ -63,7 +63,7 @@ def best_rows(table: pd.DataFrame) -> pd.DataFrame:
     ran[KIND_COLUMN] = split_kinds(ran)
     if "purpose" not in ran.columns:
         ran["purpose"] = ""
-    ran["purpose"] = ran["purpose"].fillna("").astype(str)
+    ran["purpose"] = ["" if pd.isna(v) else str(v) for v in ran["purpose"]]
     rows = []
     for _, group in ran.groupby(["study", KIND_COLUMN, "purpose"], sort=False):
         best = group.loc[group["accuracy"].idxmax()].copy()

@@ -33,6 +33,10 @@ report, with our intervals, chance, baselines and controls beside each number, a
   the study's paper method), with a row saying why for each method a study does not run.
 
 The other built-in studies (``phac2-gzsl``, ``fabric-deep``) run with ``tzsl run NAME``.
+
+On a machine without the data, :func:`run_studies` first fetches the registered files the studies
+read that are missing from their data home (:func:`fetch_study_data`; ``fetch=False``, the
+command's ``--no-fetch``, turns it off).
 """
 
 from __future__ import annotations
@@ -49,8 +53,8 @@ from tzsl._warnings import recorded_warnings
 if TYPE_CHECKING:  # the module stays light: the command line reads its lists for --help
     from tzsl.studies._outputs import ResultsDir
 
-__all__ = ["EVIDENCE_STUDIES", "REPRODUCE_STUDIES", "STUDY_LISTS", "evidence", "reproduce_experiments",
-           "reproduce_tables", "run_studies"]
+__all__ = ["EVIDENCE_STUDIES", "REPRODUCE_STUDIES", "STUDY_LISTS", "evidence", "fetch_study_data",
+           "reproduce_experiments", "reproduce_tables", "run_studies"]
 
 #: The manifest of ``reproduce-tables``: the papers' built-in studies, run in this order.
 REPRODUCE_STUDIES: tuple[str, ...] = ("phac2-dap", "fabric", "hand-simulated")
@@ -70,12 +74,54 @@ def reproduce_experiments(studies=REPRODUCE_STUDIES, **overrides: Any) -> list:
     return [load_experiment(name, options=overrides, strict=False) for name in studies]
 
 
+def fetch_study_data(experiments: list, names: tuple[str, ...], echo: Callable[[str], None] | None = None,
+                     progress: bool = True) -> None:
+    """Fetch the registered data files the studies read that are missing from their data home (first use).
+
+    What a study reads is decided from its config: its ``[dataset] builtin`` (resolved by
+    :func:`tzsl.datasets.builtin_data_files`) in its ``[dataset] data_dir`` (else the data home).
+    A study on the user's own files reads none. Nothing is fetched, and the network is not used,
+    when every file is there; otherwise :func:`tzsl.datasets.fetch_missing` prints one line and
+    fetches them as ``tzsl data fetch`` does.
+
+    Parameters
+    ----------
+    experiments : list of Experiment
+        The checked experiments.
+    names : tuple of str
+        Their names (built-in names or files), in the same order, for the lines printed.
+    echo : callable, optional
+        Receives the lines.
+    progress : bool
+        Progress bars while files download.
+
+    Raises
+    ------
+    DataMissingError, ChecksumError
+        A file that cannot be fetched (one line; see :func:`tzsl.datasets.fetch_missing`).
+    """
+    from tzsl.datasets import builtin_data_files, fetch_missing, get_data_home  # noqa: PLC0415
+
+    wanted: dict[Path, tuple[set[str], list[str]]] = {}
+    for name, exp in zip(names, experiments, strict=True):
+        dataset = getattr(exp.config, "dataset", None)  # a registered study may read no dataset
+        files = builtin_data_files(dataset.builtin) if getattr(dataset, "builtin", None) else []
+        if files:
+            home = get_data_home(exp.resolve(getattr(dataset, "data_dir", None)))
+            paths, readers = wanted.setdefault(home, (set(), []))
+            paths.update(files)
+            readers.append(name)
+    for home, (paths, readers) in wanted.items():
+        fetch_missing(sorted(paths), home, needed_by=", ".join(readers), progress=progress, echo=echo)
+
+
 def run_studies(
     command: str,
     out: str | Path,
     force: bool = False,
     echo: Callable[[str], None] | None = None,
     studies: tuple[str, ...] | None = None,
+    fetch: bool = True,
     **overrides: Any,
 ) -> ResultsDir:
     """Run the studies of ``command`` (a key of :data:`STUDY_LISTS`) into ``out``; returns the results folder.
@@ -89,6 +135,9 @@ def run_studies(
         Results folder; existing results are refused before any study unless ``force``.
     studies : tuple of str or None
         Built-in names or experiment files (default: the command's list).
+    fetch : bool
+        Before the first study, fetch the registered data files the studies read that are missing
+        (:func:`fetch_study_data`); False: a missing file stops its study with the usual error.
     overrides
         ``n_jobs``, ``seed``, ``backend``, ``scheduler``, ``progress``, ``data_dir`` (each applied to
         the studies that have the key).
@@ -110,6 +159,8 @@ def run_studies(
     from tzsl.studies.study_methods import COMPARISON_FILE, FEW_CLASSES, combine_comparisons  # noqa: PLC0415
 
     results.check_free(["manifest.json"] + ([COMPARISON_FILE] if stack else []))
+    if fetch:
+        fetch_study_data(experiments, studies, echo, progress=overrides.get("progress") is not False)
     records, data_files, timings, tables, done_tables, warned, profiles = {}, [], {}, [], [], {}, []
     failures: list[str] = []
     for name, exp in zip(studies, experiments, strict=True):

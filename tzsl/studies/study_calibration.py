@@ -12,7 +12,8 @@ module adds what calibration needs to that path, and nothing else:
   two-level bootstrap interval (:func:`tzsl.evaluation.add_calibration_columns`), called once by
   ``method_summary``;
 * :func:`reliability_by_method` and :func:`reliability_figure`: the reliability diagram of a study
-  (``<study>_reliability.csv`` / ``.png``).
+  (``<study>_reliability.csv`` / ``.png``), one panel per method; :func:`calibration_skipped`: the
+  methods whose calibration was skipped (the figure and the report say so).
 * :func:`dap_split_posteriors`: the PHAC-2 study's DAP rows come from posteriors it has already
   fitted; their temperature is fitted here the same way (pseudo-unseen classes of the split's
   training objects, :func:`tzsl.models.calibration.pseudo_unseen_scores`), never on test objects.
@@ -41,6 +42,7 @@ from tzsl.models.calibration import fit_temperature, pseudo_unseen_scores, tempe
 __all__ = [
     "CALIBRATION_COLUMNS",
     "add_calibration",
+    "calibration_skipped",
     "dap_split_posteriors",
     "method_posteriors",
     "posterior_columns",
@@ -129,40 +131,70 @@ def reliability_by_method(trials: pd.DataFrame, study: str, n_bins: int = DEFAUL
     return pd.concat(parts, ignore_index=True)[columns] if parts else pd.DataFrame(columns=columns)
 
 
+def calibration_skipped(table: pd.DataFrame) -> list[str]:
+    """Methods whose calibrated reliability points equal their uncalibrated ones: calibration was skipped.
+
+    ``table``: :func:`reliability_by_method` (a ``split_kind`` column allowed). A method calibrated on
+    pseudo-unseen training classes moves its posterior; one left uncalibrated (too few training
+    classes: a :class:`~tzsl.models.CalibrationWarning`) writes its own posterior twice.
+    """
+    keys = [c for c in ("split_kind", "bin") if c in table.columns]
+    out = []
+    for method, t in table.groupby("method", sort=False):
+        calibrated, own = (t[t["posterior"] == kind].sort_values(keys)[["confidence", "accuracy"]].to_numpy(float)
+                           for kind in ("calibrated", "uncalibrated"))
+        if len(calibrated) and calibrated.shape == own.shape and np.allclose(calibrated, own, equal_nan=True):
+            out.append(str(method))
+    return out
+
+
 def reliability_figure(table: pd.DataFrame, comparison: pd.DataFrame | None = None):
-    """Reliability diagram: accuracy against mean confidence per bin, one panel per posterior kind.
+    """Reliability diagram as small multiples: one panel per method, its calibrated and uncalibrated curves.
 
     ``table``: :func:`reliability_by_method`; ``comparison`` (optional): the method comparison, whose
     ``ece`` / ``ece_uncalibrated`` values label the curves. Points on the diagonal are calibrated;
-    below it, over-confident.
+    below it, over-confident. A panel whose method was not calibrated (:func:`calibration_skipped`)
+    draws one curve and says so.
     """
     import matplotlib  # noqa: PLC0415 (only studies that draw need it)
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # noqa: PLC0415
 
-    kinds = [k for k in ("uncalibrated", "calibrated") if (table["posterior"] == k).any()]
-    fig, axes = plt.subplots(1, max(len(kinds), 1), figsize=(5.5 * max(len(kinds), 1), 5), squeeze=False)
+    methods = list(dict.fromkeys(table["method"])) or [""]
+    n_cols = min(4, len(methods))
+    n_rows = -(-len(methods) // n_cols)
+    fig, axes = plt.subplots(n_rows, n_cols, figsize=(3.3 * n_cols, 3.1 * n_rows + 0.6), squeeze=False)
     ece: dict[tuple[str, str], float] = {}
     if comparison is not None:
         for kind, column in (("calibrated", "ece"), ("uncalibrated", "ece_uncalibrated")):
             if column in comparison.columns:
                 ece.update({(kind, m): float(v) for m, v in zip(comparison["method"], comparison[column])})
-    n_methods = max(table["method"].nunique(), 1)
-    colours = plt.get_cmap("tab20")(np.arange(n_methods) % 20)  # one colour per method, same in both panels
-    for ax, kind in zip(axes[0], kinds):
-        ax.set_prop_cycle(color=list(colours))
-        ax.plot([0, 1], [0, 1], color="grey", ls=":", lw=1, label="calibrated")
-        for method, t in table[table["posterior"] == kind].groupby("method", sort=False):
+    skipped = set(calibration_skipped(table))
+    styles = {"uncalibrated": {"color": "0.45", "ls": "--", "marker": "s"}, "calibrated": {"color": "C0", "marker": "o"}}
+    for ax, method in zip(axes.flat, methods):
+        ax.plot([0, 1], [0, 1], color="grey", ls=":", lw=1)
+        for kind, style in styles.items():
+            points = table[(table["method"] == method) & (table["posterior"] == kind)]
+            if points.empty or (kind == "calibrated" and method in skipped):
+                continue
             value = ece.get((kind, method), np.nan)
-            label = method if np.isnan(value) else f"{method} (ECE {value:.3f})"
-            ax.plot(t["confidence"], t["accuracy"], marker="o", ms=3, lw=1, label=label)
+            label = kind if np.isnan(value) else f"{kind} (ECE {value:.3f})"
+            ax.plot(points["confidence"], points["accuracy"], ms=3, lw=1, label=label, **style)
+        if method in skipped:
+            ax.text(0.97, 0.03, "calibration skipped:\ncalibrated = uncalibrated", transform=ax.transAxes,
+                    ha="right", va="bottom", fontsize=7, color="#b00020")
         ax.set_xlim(0, 1)
         ax.set_ylim(0, 1)
-        ax.set_xlabel("mean top-class probability (equal-mass bins)")
-        ax.set_ylabel("share of trials whose top class is right")
-        ax.set_title(f"{table['study'].iloc[0]}: {kind} posteriors, test objects")
-        ax.legend(fontsize=6, loc="upper left")
+        ax.set_title(method, fontsize=9)
+        if ax.get_lines()[1:]:
+            ax.legend(fontsize=6, loc="upper left")
+    for ax in axes.flat[len(methods):]:
+        ax.set_visible(False)
+    fig.supxlabel("mean top-class probability (equal-mass bins)", fontsize=9)
+    fig.supylabel("share of trials whose top class is right", fontsize=9)
+    study = table["study"].iloc[0] if len(table) else ""
+    fig.suptitle(f"{study}: reliability on test objects, one panel per method", fontsize=10)
     fig.tight_layout()
     return fig
 
