@@ -22,6 +22,7 @@ module adds what calibration needs to that path, and nothing else:
 from __future__ import annotations
 
 import warnings
+from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
@@ -38,6 +39,7 @@ from tzsl.models import (
     ZSLInputError,
 )
 from tzsl.models.calibration import fit_temperature, pseudo_unseen_scores, tempered_proba
+from tzsl.value_lists import FUSIONS
 
 __all__ = [
     "CALIBRATION_COLUMNS",
@@ -203,7 +205,7 @@ def _dap_rules(fusions) -> dict[str, DAPRule]:
     return {f"dap-{f}": DAPRule(fusion=f, prior="uni") for f in fusions}
 
 
-def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions=("avg", "max"),
+def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions: Sequence[str] | None = None,
                          seed: int = 0) -> dict[str, tuple[np.ndarray, np.ndarray, float]]:
     """Calibrated DAP posteriors of one PHAC-2 split from its already fitted test posteriors.
 
@@ -223,7 +225,8 @@ def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions=("avg", "
         Attribute rows of the training trials (the split's kept attributes).
     groups_train : ndarray of shape (n_train,)
         Object of each training trial.
-    fusions : tuple of {"avg", "max"}
+    fusions : sequence of {"avg", "max"}, optional
+        Default: every fusion (:data:`tzsl.value_lists.FUSIONS`), AVGDAP (the reference) first.
     seed : int
         Seeds which training class goes to which fold.
 
@@ -233,7 +236,7 @@ def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions=("avg", "
         ``{"dap-avg": (proba, proba_uncalibrated, temperature), "dap-max": ..., "multilabel-dap": ...}``,
         posteriors of shape (n_test_trials, n_test_objects).
     """
-    rules = _dap_rules(fusions)
+    rules = _dap_rules(fusions if fusions is not None else sorted(FUSIONS, key=lambda f: f != "avg"))
     models = {"": clone(r.model).set_params(**r.model.selected_params())}  # the folds keep the split's solver
     if r.P_multilabel is not None:
         names = set(MultiLabelAttributeClassifier().get_params(deep=False))
