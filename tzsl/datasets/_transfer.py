@@ -8,7 +8,8 @@ placement). What the files of a fetch share is a :class:`Transfer`:
 - one :class:`FetchProgress` bar (bytes of the fetch, files done), not one bar per file or thread;
 - one stop: the first file that fails stops the others at once (their sockets are shut, so a
   download waiting for bytes ends now, not at its deadline; pooch removes its temporary file),
-  and no file starts after it; Ctrl-C does the same before it propagates;
+  and no file starts after it; Ctrl-C does the same before it propagates (the sockets are shut
+  with urllib3's ``HTTPResponse.shutdown``, urllib3 2.3 and later);
 - one :class:`requests.Session` per thread, so that a thread's downloads reuse its connection to
   the server (keep-alive) instead of opening one per file.
 """
