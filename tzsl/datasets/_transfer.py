@@ -20,7 +20,7 @@ import contextlib
 import os
 import threading
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
+from concurrent.futures import FIRST_EXCEPTION, Future, ThreadPoolExecutor, wait
 from typing import TypeVar
 
 import requests
@@ -246,9 +246,11 @@ def download_all(jobs: Sequence[Job], get: Callable[[Job], Result], *, workers: 
             transfer.stop()
             raise
 
+    futures: list[Future[Result | None]] = []
     with ThreadPoolExecutor(max_workers=min(workers, len(jobs)), thread_name_prefix="tzsl-fetch") as pool:
-        futures = [pool.submit(run, job) for job in jobs]
         try:
+            for job in jobs:
+                futures.append(pool.submit(run, job))
             wait(futures, return_when=FIRST_EXCEPTION)
         except BaseException:  # Ctrl-C: stop the downloads in flight; leaving the block waits for them
             transfer.stop()
