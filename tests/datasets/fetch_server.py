@@ -24,6 +24,15 @@ HANDLER_LIMIT_S = 20.0
 DRIP_S = 0.25
 
 
+class Requested(list):
+    """The paths a test server was asked for, in order; ``ports``: the client ports they came
+    from (one per connection: fewer ports than paths means kept-alive connections)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.ports: set[int] = set()
+
+
 class MisbehavingHandler(http.server.SimpleHTTPRequestHandler):
     """Serves a folder, except under these prefixes (the rest of the path is ignored):
 
@@ -34,12 +43,18 @@ class MisbehavingHandler(http.server.SimpleHTTPRequestHandler):
     /status/CODE/... that HTTP status
     /flaky/...       HTTP 500 on the first request of a path, then the file (the rest of the path)
 
-    Every requested path is appended to ``requested``.
+    Every requested path is appended to ``requested`` (and the client's port, one per connection,
+added to ``requested.ports``); every answer waits ``delay_s`` first (the
+    round trip of a distant server). HTTP/1.1: a client may reuse its connection (keep-alive), as
+    with GitHub; the misbehaving answers close theirs.
     """
 
+    protocol_version = "HTTP/1.1"
+    disable_nagle_algorithm = True  # as a web server does: a kept-alive connection's small answers go out at once
     stop: threading.Event
     seen: dict[str, int]
-    requested: list[str]
+    requested: Requested
+    delay_s: float = 0.0
 
     def log_message(self, *args) -> None:
         pass
@@ -57,10 +72,15 @@ class MisbehavingHandler(http.server.SimpleHTTPRequestHandler):
 
     def do_GET(self) -> None:
         self.requested.append(self.path)
+        self.requested.ports.add(self.client_address[1])
+        if self.delay_s and self.stop.wait(self.delay_s):
+            return
         kind, _, rest = self.path.lstrip("/").partition("/")
         if kind in ("drip", "stall", "truncate"):
+            self.close_connection = True
             self.send_response(200)
             self.send_header("Content-Length", "1000")
+            self.send_header("Connection", "close")
             self.end_headers()
             if kind == "drip":
                 self._slowly(b"x" * 1000)
@@ -69,6 +89,7 @@ class MisbehavingHandler(http.server.SimpleHTTPRequestHandler):
             else:
                 self.wfile.write(b"x" * 10)
         elif kind == "header-drip":
+            self.close_connection = True
             self._slowly(b"HTTP/1.0 200 OK\r\nContent-Length: 1000\r\n\r\n" + b"x" * 1000)
         elif kind == "status":
             code = int(rest.split("/", 1)[0])
@@ -85,12 +106,13 @@ class MisbehavingHandler(http.server.SimpleHTTPRequestHandler):
 
 
 @contextlib.contextmanager
-def serve_folder(root: Path) -> Iterator[tuple[str, list[str]]]:
-    """Serve ``root`` on a free loopback port; yields (base URL, the paths requested so far).
-    Stops on exit, its slow handlers too."""
+def serve_folder(root: Path, delay_s: float = 0.0) -> Iterator[tuple[str, Requested]]:
+    """Serve ``root`` on a free loopback port, each answer ``delay_s`` seconds late; yields (base
+    URL, the paths requested so far). Stops on exit, its slow handlers too."""
     stop = threading.Event()
-    requested: list[str] = []
-    handler = type("Handler", (MisbehavingHandler,), {"stop": stop, "seen": {}, "requested": requested})
+    requested = Requested()
+    handler = type("Handler", (MisbehavingHandler,), {"stop": stop, "seen": {}, "requested": requested,
+                                                      "delay_s": delay_s})
     httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), functools.partial(handler, directory=str(root)))
     thread = threading.Thread(target=httpd.serve_forever, daemon=True)
     thread.start()
@@ -108,3 +130,21 @@ def registry_of(path: Path, lines: list[str]) -> pooch.Pooch:
     pup = pooch.create(path=".", base_url="", registry=None)
     pup.load_registry(str(path))
     return pup
+
+
+def main(argv: list[str] | None = None) -> None:
+    """``python -m tests.datasets.fetch_server FOLDER [--delay S]``: serve FOLDER (e.g. the shared
+    data, as a mirror) until stopped, printing its base URL first (the fetch benchmark's server)."""
+    import argparse  # noqa: PLC0415
+
+    parser = argparse.ArgumentParser(description=main.__doc__)
+    parser.add_argument("folder", type=Path)
+    parser.add_argument("--delay", type=float, default=0.0, help="seconds each answer waits (a distant server)")
+    args = parser.parse_args(argv)
+    with serve_folder(args.folder, delay_s=args.delay) as (base, _requested):
+        print(base, flush=True)
+        threading.Event().wait()
+
+
+if __name__ == "__main__":
+    main()

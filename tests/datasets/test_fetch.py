@@ -228,8 +228,8 @@ def test_the_failure_of_one_file_of_several_says_where_the_fetch_stopped(tmp_pat
     pup = _pup(tmp_path, {"alpha/one.csv": f"{base}/alpha/one.csv", "alpha/sub/two.bin": bad,
                           "beta/three.txt": f"{base}/beta/three.txt"})
     home = tmp_path / "home"
-    with pytest.raises(DataMissingError) as info:
-        fetch_datasets(["beta", "alpha"], home, pup=pup, progress=False)
+    with pytest.raises(DataMissingError) as info:  # one at a time: alpha/one.csv is complete before the failure
+        fetch_datasets(["beta", "alpha"], home, pup=pup, progress=False, workers=1)
     assert str(info.value) == (f"alpha file sub/two.bin: cannot download from {bad} (1 attempt: HTTP 404 Not "
                                "Found); alpha: 1 of 2 files in place (0 present, 1 downloaded); beta complete; "
                                "a rerun goes on from there")
@@ -274,8 +274,10 @@ def test_the_command_prints_one_line_per_failure(tmp_path, server, kind, progres
         pooch.get_logger().removeHandler(catcher)
     assert result.exit_code == 3, result.output
     [line] = _visible_lines(result.stderr)
-    url = f"{base}/{kind}/gelsight_press/foam_brick_1.avi"
-    assert line.startswith(f"tzsl: error: gelsight_press file foam_brick_1.avi: "
+    # several files download at a time: the line names the first that failed, with its own URL
+    name = re.match(r"tzsl: error: gelsight_press file ([^ ]+): ", line)[1]  # type: ignore[index]
+    url = f"{base}/{kind}/gelsight_press/{name}"
+    assert line.startswith(f"tzsl: error: gelsight_press file {name}: "
                            + (f"no complete download within 1 s from {url} (1 attempt: " if kind == "drip" else
                               f"cannot download from {url} (1 attempt: HTTP 404" if kind.endswith("404") else
                               f"no complete download within 1 s from {url} (1 attempt: HTTP 500"))
@@ -363,6 +365,20 @@ def test_ctrl_c_mid_download_leaves_no_file(tmp_path, server):
     assert _files_under(home) == []
 
 
+@pytest.mark.slow
+def test_ctrl_c_during_several_downloads_stops_them_all_at_once_and_leaves_no_file(tmp_path, server):
+    base, _ = server
+    _pup(tmp_path, {"alpha/one.csv": f"{base}/drip/alpha/one.csv",
+                    "alpha/sub/two.bin": f"{base}/drip/alpha/sub/two.bin"})  # two threads, both dripping
+    home = tmp_path / "home"
+    child, _ = _fetch_until_downloading(tmp_path, tmp_path / "registry.txt", home)
+    start = time.monotonic()
+    child.send_signal(signal.SIGINT)
+    _, err = child.communicate(timeout=10)  # not the drips' 60 s deadline
+    assert time.monotonic() - start < 5 and child.returncode != 0 and b"KeyboardInterrupt" in err
+    assert _files_under(home) == []
+
+
 def test_a_second_fetch_into_the_same_data_home_waits_for_the_first(tmp_path, server):
     from tzsl.datasets._download import fetch_lock  # noqa: PLC0415
 
@@ -399,8 +415,8 @@ def test_the_installed_command_prints_one_line_on_a_real_stderr(tmp_path, server
                           env=env, capture_output=True, timeout=120)  # bytes: text mode turns \r into \n
     assert done.returncode == 3 and done.stdout == b""
     [line] = _visible_lines(done.stderr.decode())
-    assert line.startswith("tzsl: error: gelsight_press file foam_brick_1.avi: "
-                           + ("no complete download within 1 s" if kind == "drip" else "cannot download"))
+    assert re.match(r"tzsl: error: gelsight_press file [^ ]+: "
+                    + ("no complete download within 1 s" if kind == "drip" else "cannot download"), line), line
     assert kind == "drip" or "(3 attempts, the last: HTTP 500 Internal Server Error)" in line
     assert _files_under(tmp_path / "home") == []
 

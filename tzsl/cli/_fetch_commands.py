@@ -25,6 +25,18 @@ class TimeoutOption(click.Option):
         return super().get_help_record(ctx)
 
 
+class WorkersOption(click.Option):
+    """``--workers``: its default (``$TZSL_FETCH_WORKERS``, else tzsl's) is resolved by
+    :func:`tzsl.datasets.fetch_datasets`; the help reads it from :mod:`tzsl.datasets` only when shown."""
+
+    def get_help_record(self, ctx):
+        from tzsl.datasets import DEFAULT_FETCH_WORKERS, FETCH_WORKERS_ENV, MAX_FETCH_WORKERS  # noqa: PLC0415
+
+        self.help = self.help.format(most=MAX_FETCH_WORKERS)
+        self.show_default = f"${FETCH_WORKERS_ENV}, else {DEFAULT_FETCH_WORKERS}"
+        return super().get_help_record(ctx)
+
+
 @cli.group()
 def data() -> None:
     """The papers' datasets: fetch them into the data home."""
@@ -40,9 +52,12 @@ def data() -> None:
               help="Deadline per file: a file not completely downloaded within SECONDS (retries included) "
                    "stops the fetch with one line. Within it, an attempt that receives no byte for {stall} s, "
                    "is cut short or gets an HTTP 5xx answer is retried ({attempts} attempts at most).")
+@click.option("--workers", cls=WorkersOption, type=int, default=None, metavar="N",
+              help="Files downloaded at a time (1 to {most}); the first file that fails stops the others.")
 @data_dir_option
 @no_progress_option
-def fetch(names: tuple[str, ...], mirror: str | None, timeout: float | None, data_dir, no_progress: bool) -> None:
+def fetch(names: tuple[str, ...], mirror: str | None, timeout: float | None, workers: int | None, data_dir,
+          no_progress: bool) -> None:
     """Download and verify every registered file of NAMES (default: every dataset).
 
     Files already present with the registered sha256 are kept, so an interrupted fetch goes on
@@ -55,7 +70,7 @@ def fetch(names: tuple[str, ...], mirror: str | None, timeout: float | None, dat
 
     home = get_data_home(data_dir)
     reports = fetch_datasets(names, data_dir, mirror=mirror, progress=not no_progress, timeout=timeout,
-                             echo=click.echo)
+                             workers=workers, echo=click.echo)
     missing = [path for r in reports for path in r.missing]
     if missing:
         raise DataMissingError(home / missing[0], f"{len(missing)} registered file(s) have no public URL and were "

@@ -19,6 +19,9 @@ line). A download killed outright (SIGKILL, power cut) leaves pooch's temporary 
 (``tmp`` + 8 characters) behind, a build tzsl's own (``.<name>.<8 characters>.tmp``);
 :func:`remove_leftovers` deletes those in the folders the next fetch writes to, under
 :func:`fetch_lock` so that no running fetch loses its file.
+
+The files of one fetch share a :class:`~tzsl.datasets._transfer.Transfer` (several downloads at a
+time, one progress bar, one stop, kept-alive connections): :mod:`tzsl.datasets._transfer`.
 """
 
 from __future__ import annotations
@@ -31,14 +34,14 @@ import threading
 import time
 import warnings
 from collections.abc import Callable, Iterable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import pooch
 import requests
-from tqdm import tqdm
 from urllib3.exceptions import ReadTimeoutError
 
+from tzsl.datasets._transfer import STOP_POLL_S, Transfer
 from tzsl.exceptions import ConfigError, first_line
 
 try:  # POSIX: an advisory lock on the data home, released by the system when its process dies
@@ -118,16 +121,15 @@ class DeadlineDownloader:
         :func:`time.monotonic` time (s) by which the file must be complete.
     stall : float
         Seconds without a byte after which this attempt fails (retryable).
-    progress : bool
-        A tqdm bar (bytes) on stderr while the file downloads, erased when it ends.
-    label : str
-        The bar's label (the file's name).
+    transfer : Transfer
+        The fetch this download belongs to: its HTTP session (this thread's), its progress bar
+        (bytes counted as they arrive, taken back when the attempt fails) and its stop (the
+        download then ends with :class:`~tzsl.datasets._transfer.DownloadCancelled`).
     """
 
     deadline: float
     stall: float = FETCH_STALL_S
-    progress: bool = False
-    label: str = ""
+    transfer: Transfer = field(default_factory=Transfer)
 
     def _remaining(self) -> float:
         remaining = self.deadline - time.monotonic()
@@ -137,14 +139,16 @@ class DeadlineDownloader:
 
     def _get(self, url: str) -> requests.Response:
         """The response (status and headers read) within the deadline, however slowly the server
-        sends them: the request runs in a daemon thread that is abandoned at the deadline."""
+        sends them: the request runs in a daemon thread that is abandoned at the deadline (or when
+        the fetch stops)."""
         box: dict[str, object] = {}
         done, abandoned = threading.Event(), threading.Event()
         wait = min(self.stall, self._remaining())
+        session = self.transfer.session()
 
         def request() -> None:
             try:
-                box["response"] = requests.get(url, stream=True, timeout=(wait, wait))
+                box["response"] = session.get(url, stream=True, timeout=(wait, wait))
             except Exception as exc:  # noqa: BLE001 - reported by the caller's thread
                 box["error"] = exc
             finally:
@@ -153,11 +157,14 @@ class DeadlineDownloader:
                     box["response"].close()  # type: ignore[union-attr]
 
         threading.Thread(target=request, name="tzsl-fetch-request", daemon=True).start()
-        if not done.wait(self._remaining()):
+        try:  # wake up at the deadline, and every STOP_POLL_S to see whether the fetch stopped
+            while not done.wait(min(STOP_POLL_S, self._remaining())):
+                self.transfer.check()
+        except BaseException:
             abandoned.set()
             if done.is_set() and "response" in box:
                 box["response"].close()  # type: ignore[union-attr]
-            raise DownloadFailed("status and headers not received", retry=False, deadline=True)
+            raise
         error = box.get("error")
         if isinstance(error, requests.Timeout):
             raise DownloadFailed(f"no response for {wait:g} s", retry=True)
@@ -196,9 +203,10 @@ class DeadlineDownloader:
                 raise DownloadFailed(f"{raw.tell()}{of} bytes received", retry=False, deadline=True)
             return remaining
 
+        progress = self.transfer.progress
+        counted = 0  # bytes of this attempt on the fetch's bar
         try:
-            with open(output_file, "wb") as out, tqdm(total=total, unit="B", unit_scale=True, ncols=79, leave=False,
-                                                      desc=self.label, disable=not self.progress) as bar:
+            with self.transfer.reading(raw), open(output_file, "wb") as out:
                 while True:
                     remaining = on_time()
                     if settimeout is not None:  # wake up at the deadline or after a stall, whichever is first
@@ -206,17 +214,26 @@ class DeadlineDownloader:
                     try:
                         chunk = raw.read1(CHUNK_BYTES, decode_content=True)
                     except (ReadTimeoutError, TimeoutError):
+                        self.transfer.check()
                         on_time()
                         raise DownloadFailed(f"no byte for {self.stall:g} s after {raw.tell()}{of} bytes",
                                              retry=True) from None
                     except Exception as exc:  # noqa: BLE001 - urllib3's IncompleteRead, a reset connection
+                        self.transfer.check()  # the fetch stopped: its socket was shut
                         on_time()
                         raise DownloadFailed(f"connection ended after {raw.tell()}{of} bytes "
                                              f"({type(exc).__name__})", retry=True) from None
+                    self.transfer.check()  # a shut socket reads as the end of the body
                     if not chunk:
                         break
                     out.write(chunk)
-                    bar.update(raw.tell() - bar.n)
+                    if progress is not None:
+                        progress.add_bytes(raw.tell() - counted)
+                        counted = raw.tell()
+        except BaseException:
+            if progress is not None and counted:
+                progress.add_bytes(-counted)  # this attempt's bytes are not kept
+            raise
         finally:
             response.close()
         if total is not None and raw.tell() < total:
@@ -255,8 +272,10 @@ def quiet_pooch_logger() -> Iterator[None]:
 
 
 def download(pup: pooch.Pooch, relpath: str, url: str, *, timeout: float, stall: float = FETCH_STALL_S,
-             progress: bool = False, downloader: Callable | None = None) -> tuple[Path, int]:
+             transfer: Transfer, downloader: Callable | None = None) -> tuple[Path, int]:
     """Download ``relpath`` of ``pup`` (a one-file Pooch whose path is the data home) from ``url``.
+
+    Safe to call from several threads at once (one file each) with the same ``transfer``.
 
     Parameters
     ----------
@@ -270,8 +289,8 @@ def download(pup: pooch.Pooch, relpath: str, url: str, *, timeout: float, stall:
         Deadline (s) for the file, every attempt and wait included.
     stall : float
         Seconds without a byte after which an attempt is abandoned.
-    progress : bool
-        A progress bar while the file downloads.
+    transfer : Transfer
+        The fetch's shared progress bar (a file done is counted on it), stop and HTTP sessions.
     downloader : callable, optional
         Another pooch downloader (tests): tried once, without deadline.
 
@@ -287,23 +306,30 @@ def download(pup: pooch.Pooch, relpath: str, url: str, *, timeout: float, stall:
         attempt's failure and ``attempts`` how many were made.
     ValueError
         pooch's hash mismatch (nothing is kept).
+    DownloadCancelled
+        The fetch stopped (``transfer``) before the file was complete (nothing is kept).
     """
+    (Path(pup.abspath) / relpath).parent.mkdir(parents=True, exist_ok=True)  # pooch's own mkdir races
     start = time.monotonic()
     deadline = start + timeout
     http = downloader is None and url.startswith(("http://", "https://"))
     tries = FETCH_ATTEMPTS if http else 1
     for attempt in range(1, tries + 1):
-        get = DeadlineDownloader(deadline, stall, progress, Path(relpath).name) if http else downloader
+        transfer.check()
+        get = DeadlineDownloader(deadline, stall, transfer) if http else downloader
         try:
             with quiet_pooch_logger():
-                return Path(pup.fetch(relpath, downloader=get)), attempt
+                path = Path(pup.fetch(relpath, downloader=get))
+            if transfer.progress is not None:
+                transfer.progress.file_done()
+            return path, attempt
         except DownloadFailed as exc:
             exc.attempts = attempt
             if exc.deadline or not exc.retry or attempt == tries:
                 raise
             wait = min(float(attempt), deadline - time.monotonic())
             if wait > 0:
-                time.sleep(wait)
+                transfer.pause(wait)
             if time.monotonic() >= deadline:
                 exc.deadline = True
                 raise

@@ -3,7 +3,9 @@
 The registry (``registry.txt``: path, sha256, public URL) says what to get; pooch downloads
 each missing file to a temporary name, checks its sha256 and only then moves it into place, so
 an interrupted fetch leaves no half file and a rerun goes on where it stopped (files present and
-verified are skipped). Every file has a deadline (``timeout``, ``$TZSL_FETCH_TIMEOUT``, else
+verified are skipped). Several files download at a time (``workers``, ``$TZSL_FETCH_WORKERS``,
+else :data:`~tzsl.datasets._transfer.DEFAULT_FETCH_WORKERS`; :mod:`tzsl.datasets._transfer`),
+under one progress bar per dataset; the first file that fails stops the others. Every file has a deadline (``timeout``, ``$TZSL_FETCH_TIMEOUT``, else
 :data:`~tzsl.datasets._download.DEFAULT_FETCH_TIMEOUT_S`), failed attempts are retried silently
 within it, pooch prints nothing, and the temporary files a killed fetch left in the dataset's
 folders are removed first (:mod:`tzsl.datasets._download`). One fetch at a time writes to a data
@@ -26,6 +28,7 @@ import pooch
 
 from tzsl._io import atomic_write_bytes
 from tzsl.datasets._download import FETCH_STALL_S, fetch_lock, fetch_timeout, remove_leftovers
+from tzsl.datasets._transfer import FetchProgress, Transfer, download_all, fetch_workers
 from tzsl.datasets._fabric import FABRIC_GROUPS_CSV, FABRIC_GROUPS_SOURCE, fabric_groups_csv_bytes
 from tzsl.datasets._home import get_data_home
 from tzsl.datasets._registry import download_file, registered_size, registry, source_of, verify_file
@@ -179,6 +182,7 @@ def fetch_datasets(
     echo: Callable[[str], None] | None = None,
     build_sources: dict[str, dict[str, tuple[str, str]]] | None = None,
     files: Collection[str] | None = None,
+    workers: int | None = None,
 ) -> list[FetchReport]:
     """Download and verify every registered file of ``names`` (all datasets when empty).
 
@@ -195,7 +199,7 @@ def fetch_datasets(
         Base URL laid out like the data home; default ``$TZSL_DATA_MIRROR``, else the
         registry's public URLs.
     progress : bool
-        A tqdm progress bar (bytes, on stderr) while each file downloads, erased when it ends.
+        A tqdm progress bar (on stderr, erased when done) per dataset: bytes and files downloaded.
     timeout : float, optional
         Deadline per file in seconds, every attempt included; default ``$TZSL_FETCH_TIMEOUT``,
         else :data:`~tzsl.datasets._download.DEFAULT_FETCH_TIMEOUT_S`.
@@ -209,6 +213,10 @@ def fetch_datasets(
         The public files builders read (default :data:`BUILD_SOURCES`; tests pass their own).
     files : collection of str, optional
         Only these registered paths of the datasets (default: all of them; :func:`fetch_missing`).
+    workers : int, optional
+        Files downloaded at a time; default ``$TZSL_FETCH_WORKERS``, else
+        :data:`~tzsl.datasets._transfer.DEFAULT_FETCH_WORKERS`. The first file that fails stops
+        the others (those complete are kept; the others leave nothing).
 
     Returns
     -------
@@ -218,7 +226,9 @@ def fetch_datasets(
     Raises
     ------
     ConfigError
-        An unknown dataset name, or a deadline that is not a number of seconds above 0.
+        An unknown dataset name, a deadline that is not a number of seconds above 0, or a
+        number of workers that is not a whole number from 1 to
+        :data:`~tzsl.datasets._transfer.MAX_FETCH_WORKERS`.
     DataMissingError
         A file with no complete download (the deadline passed, the server refused, the
         attempts failed). One line: the dataset and file, the URL, why, then what this fetch
@@ -235,6 +245,7 @@ def fetch_datasets(
         raise ConfigError(f"unknown dataset(s) {unknown}; known: {', '.join(known)}")
     mirror = _mirror(mirror)
     timeout = fetch_timeout(timeout)
+    workers = fetch_workers(workers)
     home = get_data_home(data_dir)
     files = None if files is None else frozenset(files)
     reports: list[FetchReport] = []
@@ -243,7 +254,7 @@ def fetch_datasets(
             report = FetchReport(name)
             try:
                 _fetch_dataset(report, home, pup, mirror=mirror, progress=progress, timeout=timeout, stall=stall,
-                               build_sources=build_sources, only=files)
+                               build_sources=build_sources, only=files, workers=workers)
             except DataFileError as exc:  # one line: the file's failure, then where this fetch stopped
                 raise type(exc)(None, f"{exc}; {report.stopped_at([r.name for r in reports])}") from None
             reports.append(report)
@@ -254,30 +265,45 @@ def fetch_datasets(
 
 def _fetch_dataset(report: FetchReport, home: Path, pup: pooch.Pooch, *, mirror: str | None, progress: bool,
                    timeout: float, stall: float, build_sources: dict[str, dict[str, tuple[str, str]]],
-                   only: Collection[str] | None = None) -> None:
+                   only: Collection[str] | None = None, workers: int = 1) -> None:
     """Fill ``report`` (its dataset's files, or those of them in ``only``: present, downloaded, built,
-    missing, left out)."""
+    missing, left out), downloading on ``workers`` threads."""
     files = [f for f in sorted(pup.registry) if f.split("/", 1)[0] == report.name and (only is None or f in only)]
     report.total = len(files)
     sources = [home / source for f in files for source in build_sources.get(f, {})]
     report.leftovers = remove_leftovers([home / f for f in files] + sources)
+    jobs: list[tuple[str, str]] = []  # (registered path, URL) of the files to download
     for relpath in files:
         if _present(home / relpath, relpath, pup):
             report.present.append(relpath)
             continue
         url = f"{mirror.rstrip('/')}/{relpath}" if mirror else pup.urls.get(relpath)
-        if url is None:
-            continue  # built below, or missing
+        if url is not None:  # else built below, or missing
+            jobs.append((relpath, url))
+
+    def get(job: tuple[str, str]) -> None:
+        relpath, url = job
         try:
-            attempts = download_file(relpath, home, url=url, pup=pup, progress=progress, timeout=timeout,
-                                     stall=stall).attempts
+            attempts = download_file(relpath, home, url=url, pup=pup, timeout=timeout, stall=stall,
+                                     transfer=transfer).attempts
         except DataMissingError:
             if relpath in pup.urls:
                 raise
-            continue  # a locally built file the mirror does not hold: built below, or missing
-        report.downloaded.append(relpath)
+            return  # a locally built file the mirror does not hold: built below, or missing
+        report.downloaded.append(relpath)  # list.append is atomic: safe from the download threads
         if attempts > 1:
             report.retried.append(relpath)
+
+    sizes = [registered_size(relpath) for relpath, _ in jobs]
+    bar = FetchProgress(len(jobs), None if None in sizes else sum(sizes), label=report.name,  # type: ignore[arg-type]
+                        enabled=progress and bool(jobs))
+    try:
+        with Transfer(bar) as transfer:
+            download_all(jobs, get, workers=workers, transfer=transfer)
+    finally:  # in the registry's order, whichever thread finished first
+        order = {relpath: i for i, relpath in enumerate(files)}
+        report.downloaded.sort(key=order.__getitem__)
+        report.retried.sort(key=order.__getitem__)
     for relpath in files:
         if relpath in report.present or relpath in report.downloaded:
             continue
@@ -313,6 +339,7 @@ def fetch_missing(
     timeout: float | None = None,
     pup: pooch.Pooch | None = None,
     build_sources: dict[str, dict[str, tuple[str, str]]] | None = None,
+    workers: int | None = None,
 ) -> list[FetchReport]:
     """Fetch the registered files among ``relpaths`` that are not in the data home (a study's first use).
 
@@ -320,8 +347,8 @@ def fetch_missing(
     readers verify the hashes, as always). Otherwise ``echo`` gets one line (how many files of
     which datasets, their size from ``registry_sizes.txt``, the data home, the source), then
     :func:`fetch_datasets` gets just the missing files (and the registered files a missing
-    built file is built from): the same downloads, deadline, retries, hash checks, progress bars,
-    lock and cleanup as ``tzsl data fetch``.
+    built file is built from): the same downloads (several at a time), deadline, retries, hash
+    checks, progress bar, lock and cleanup as ``tzsl data fetch``.
 
     Parameters
     ----------
@@ -331,7 +358,7 @@ def fetch_missing(
         Data home (:func:`tzsl.datasets.get_data_home`).
     needed_by : str
         Who reads the files (``"phac2-dap, fabric"``), for the line printed and the error.
-    progress, echo, mirror, timeout, pup, build_sources
+    progress, echo, mirror, timeout, pup, build_sources, workers
         As for :func:`fetch_datasets`.
 
     Returns
@@ -364,7 +391,7 @@ def fetch_missing(
     todo = "; see `tzsl data fetch --help` for a mirror or a longer deadline"
     try:
         reports = fetch_datasets(names, home, mirror=mirror, progress=progress, timeout=timeout, pup=pup, echo=echo,
-                                 build_sources=build_sources, files=missing)
+                                 build_sources=build_sources, files=missing, workers=workers)
     except DataFileError as exc:
         raise type(exc)(None, f"fetching the data of {needed_by}: {exc}{todo}") from None
     except OSError as exc:  # a build or the data home itself: full disk, no permission

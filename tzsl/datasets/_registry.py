@@ -23,6 +23,7 @@ from typing import NamedTuple
 import pooch
 
 from tzsl.datasets._download import FETCH_STALL_S, DownloadFailed, download, fetch_timeout
+from tzsl.datasets._transfer import DownloadCancelled, FetchProgress, Transfer
 from tzsl.datasets._home import DATA_DIR_ENV, get_data_home
 from tzsl.exceptions import ChecksumError, DataMissingError, first_line
 
@@ -240,7 +241,7 @@ class Downloaded(NamedTuple):
 
 def download_file(relpath: str, home: Path, *, url: str | None = None, pup: pooch.Pooch | None = None,
                   downloader=None, progress: bool = False, timeout: float | None = None,
-                  stall: float = FETCH_STALL_S) -> Downloaded:
+                  stall: float = FETCH_STALL_S, transfer: Transfer | None = None) -> Downloaded:
     """Download one registered file into the data home with pooch, hash-checked before it is moved
     into place (an interrupted, abandoned or corrupt download leaves no file).
 
@@ -258,12 +259,16 @@ def download_file(relpath: str, home: Path, *, url: str | None = None, pup: pooc
         A pooch downloader, tried once; default :class:`~tzsl.datasets._download.DeadlineDownloader`
         for HTTP(S) (retried within the deadline, with a tqdm bar when ``progress``).
     progress : bool, default False
+        A progress bar for this file (without ``transfer``).
     timeout : float, optional
         Deadline (s) for the whole file, retries included; default
         :func:`~tzsl.datasets._download.fetch_timeout` (``$TZSL_FETCH_TIMEOUT``, else
         :data:`~tzsl.datasets._download.DEFAULT_FETCH_TIMEOUT_S`).
     stall : float
         Seconds without a byte after which an attempt is abandoned.
+    transfer : Transfer, optional
+        The fetch this file is one of (:func:`~tzsl.datasets._transfer.download_all`: its progress
+        bar, stop and HTTP sessions); default a transfer of this file alone.
 
     Returns
     -------
@@ -277,6 +282,8 @@ def download_file(relpath: str, home: Path, *, url: str | None = None, pup: pooc
     DataMissingError
         No URL, or no complete download (one line: ``<dataset> file <name>: ...``, naming the URL,
         the deadline when it passed, the attempts and the last one's failure).
+    DownloadCancelled
+        ``transfer`` stopped (another file of the fetch failed) before this file was complete.
     """
     pup = pup or registry()
     url = url or pup.urls.get(relpath)
@@ -288,9 +295,14 @@ def download_file(relpath: str, home: Path, *, url: str | None = None, pup: pooc
                           urls={relpath: url}, retry_if_failed=0)
     dataset, _, name = relpath.partition("/")
     what = f"{dataset} file {name}"
+    own = transfer is None
+    if transfer is None:
+        transfer = Transfer(FetchProgress(1, registered_size(relpath), label=Path(name).name, enabled=progress))
     try:
-        path, attempts = download(single, relpath, url, timeout=timeout, stall=stall, progress=progress,
+        path, attempts = download(single, relpath, url, timeout=timeout, stall=stall, transfer=transfer,
                                   downloader=downloader)
+    except DownloadCancelled:
+        raise
     except DownloadFailed as exc:
         tries = f"{exc.attempts} attempt{'s, the last' if exc.attempts > 1 else ''}: {exc.reason}"
         raise DataMissingError(None, f"{what}: no complete download within {timeout:g} s from {url} ({tries})"
@@ -300,6 +312,9 @@ def download_file(relpath: str, home: Path, *, url: str | None = None, pup: pooc
     except Exception as exc:  # noqa: BLE001 - a caller's or pooch's other downloaders: one line naming the URL
         raise DataMissingError(None, f"{what}: cannot download from {url}: {type(exc).__name__}: "
                                      f"{first_line(exc)}") from None
+    finally:
+        if own:
+            transfer.close()
     stat = path.stat()
     with _LOCK:
         _VERIFIED.add((str(path.resolve()), stat.st_size, stat.st_mtime_ns))
