@@ -9,7 +9,8 @@ from click.testing import CliRunner
 
 from tzsl.cli import cli
 
-from tzsl.inference.predict import load_predictor, read_class_table
+from tzsl.inference.predict import read_class_table
+from tzsl.inference.zero_shot_bundles import load_predictor
 from tzsl.inference.recogniser import predict_grasps
 
 torch = pytest.importorskip("torch", reason="PyTorch is not installed (the optional deep extra)")
