@@ -19,7 +19,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from tzsl.bundle import read_bundle_header, save_bundle
+from tzsl.inference.bundle import read_bundle_header, save_bundle
 from tzsl.cli import cli
 from tzsl.datasets import FeatureSet, write_plain_dataset
 from tzsl.exceptions import ConfigError, ModelBundleError
@@ -161,7 +161,7 @@ def test_loading_and_ranking_does_not_import_torch(five_fingers, tmp_path, bundl
 
 
 def test_skops_import_leaves_torch_importable_afterwards(tmp_path):
-    code = ("import sys; from tzsl._bundle_payload import skops_io; skops_io(); assert 'torch' not in sys.modules; "
+    code = ("import sys; from tzsl.inference.skops_bundles import skops_io; skops_io(); assert 'torch' not in sys.modules; "
             "import importlib.util; print(importlib.util.find_spec('torch') is not None and 'ok')")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO,
                           env={"PYTHONPATH": str(REPO), "PATH": ""}, check=False)
@@ -303,7 +303,7 @@ def test_dap_bundle_written_with_skops_still_loads_and_ranks_as_the_arrays(five_
 
 
 def _tree(path: Path) -> dict:
-    from tzsl.bundle import load_bundle  # noqa: PLC0415
+    from tzsl.inference.bundle import load_bundle  # noqa: PLC0415
 
     return load_bundle(path)[0]
 

@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 from scipy.special import softmax
 
-from tzsl.bundle import load_bundle, save_bundle
+from tzsl.inference.bundle import load_bundle, save_bundle
 from tzsl.datasets import FeatureSet, load_hand_table4, read_grasps, simulate_grasps
 from tzsl.datasets._feature_table import write_feature_table
 from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError

@@ -10,7 +10,7 @@ import pytest
 from click.testing import CliRunner
 from scipy.special import softmax
 
-from tzsl.bundle import load_bundle, save_bundle
+from tzsl.inference.bundle import load_bundle, save_bundle
 from tzsl.cli import cli
 from tzsl.datasets import FeatureSet
 from tzsl.datasets import write_feature_table

@@ -158,7 +158,7 @@ def read_linear_payload(tree: dict, n_attributes: int, where: str) -> tuple[Line
     Parameters
     ----------
     tree : dict
-        The payload as :func:`tzsl.bundle.load_bundle` returns it (nested dict of arrays).
+        The payload as :func:`tzsl.inference.bundle.load_bundle` returns it (nested dict of arrays).
     n_attributes : int
         The bundle's attribute count (its metadata's ``attribute_names``).
     where : str

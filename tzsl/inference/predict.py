@@ -242,8 +242,9 @@ def prediction_report(pred: Prediction, predictor: Predictor, top: int = 5) -> d
     Returns
     -------
     dict
-        ``model`` (method, kind), ``calibration`` (:meth:`~tzsl.inference.zero_shot_bundles.Predictor.calibration_report`: whether
-        the posteriors are calibrated, the temperature and how it was fitted), ``grasps`` (per
+        ``model`` (method, kind), ``calibration``
+        (:meth:`~tzsl.inference.zero_shot_bundles.Predictor.calibration_report`: whether the
+        posteriors are calibrated, the temperature and how it was fitted), ``grasps`` (per
         grasp: id, source, the ``top`` classes with their posterior (0 = all), the decision),
         ``fusion`` (mode, k, decided, decision, grasps used, and DF-MDAP's final ranking), ``notes``.
     """

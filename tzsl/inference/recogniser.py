@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 
 from tzsl._scoring import sc_mdap
-from tzsl.bundle import read_bundle_header
+from tzsl.inference.bundle import read_bundle_header
 from tzsl.exceptions import ConfigError, ModelBundleError
 from tzsl.inference.bundle_kinds import PER_EP_KIND, left_out_attributes
 from tzsl.inference.predict import Prediction, read_class_table
@@ -108,7 +108,7 @@ class Recogniser:
         ----------
         model : str or Path
             A bundle written by ``tzsl train-attributes`` (``--per-ep`` too), ``train-hand`` or
-            ``train-deep``. Loading it runs no code (see :mod:`tzsl.bundle`).
+            ``train-deep``. Loading it runs no code (see :mod:`tzsl.inference.bundle`).
         classes : str or Path
             CSV (class name, then one 0/1 column per model attribute) or a dataset folder (its
             ``classes.csv``).

@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 
 from tzsl._scoring import tempered_proba
-from tzsl.bundle import load_bundle, read_bundle_header, save_bundle
+from tzsl.inference.bundle import load_bundle, read_bundle_header, save_bundle
 from tzsl.exceptions import ConfigError, ModelBundleError
 from tzsl.inference.bundle_kinds import DEEP_KIND, ZERO_SHOT_KIND
 from tzsl.inference.detector_bundles import DAPArrayRule, DetectorBank, detector_payload, read_detector_payload
@@ -259,7 +259,7 @@ def _read_arrays(tree: dict, metadata: dict, where: str) -> dict:
 
 
 def load_predictor(path: str | Path, *, trust_pickle: bool = False) -> Predictor:
-    """Load a bundle (see :func:`tzsl.bundle.load_bundle`; no code is run) as a :class:`Predictor`.
+    """Load a bundle (see :func:`tzsl.inference.bundle.load_bundle`; no code is run) as a :class:`Predictor`.
 
     ``trust_pickle=True`` also loads old (format version 1) pickle bundles, which can run code:
     only for files whose author you trust.
@@ -273,7 +273,7 @@ def load_predictor(path: str | Path, *, trust_pickle: bool = False) -> Predictor
     kind = read_bundle_header(path).kind  # verified, nothing deserialised yet
     if kind == DEEP_KIND:
         from tzsl.models import NearestAttributeRule  # noqa: PLC0415
-        from tzsl.models.embedding import load_deep_bundle  # noqa: PLC0415 - needs the deep extra
+        from tzsl.inference.deep_bundles import load_deep_bundle  # noqa: PLC0415 - needs the deep extra
 
         model = load_deep_bundle(path, trust_pickle=trust_pickle)
         metadata = dict(read_bundle_header(path).metadata)
