@@ -1,9 +1,9 @@
 """Predict-time arithmetic of the zero-shot models in numpy alone (importing it never imports scikit-learn).
 
 The estimators of :mod:`tzsl.models` and the load-once predictor of :mod:`tzsl.inference` share
-these functions, so a bundle whose model is a linear map (ESZSL, SAE, ALE, SJE, DeViSE: stored as
-arrays, :mod:`tzsl.inference.model_bundles`) ranks classes exactly as its estimator does, without
-importing scikit-learn (most of a cold process's start):
+these functions, so a bundle stored as arrays (a linear map: ESZSL, SAE, ALE, SJE, DeViSE,
+:mod:`tzsl.inference.linear_bundles`; a DAP model, :mod:`tzsl.inference.detector_bundles`) ranks
+classes exactly as its estimator does, without importing scikit-learn (most of a cold process's start):
 
 * :func:`linear_embedding`: standardise and map features to attribute space;
 * :func:`compatibility_scores`, :func:`squared_distances`, :func:`cosine_similarities`: class

@@ -338,3 +338,28 @@ def test_tampered_dap_bundle_is_refused_in_one_line(five_fingers, tmp_path):
                                     str(candidates), str(root / "new.csv")])
     assert done.exit_code == 3
     assert done.output.strip().count("\n") == 0 and "checksum mismatch" in done.output, done.output
+
+
+def test_any_malformed_detector_array_is_a_bundle_error(five_fingers):
+    """Every array of a DAP payload replaced by a group, a text or a wrong shape: a one-line ModelBundleError
+    (only the display name falls back to its default), never another exception."""
+    import copy  # noqa: PLC0415
+
+    from tzsl.inference import zero_shot_bundles  # noqa: PLC0415
+
+    root, _, _ = five_fingers
+    tree = _tree(root / "dap.tzsl")
+    tree["calibration"] = {"temperature": np.asarray(1.5)}
+    metadata = {**read_bundle_header(root / "dap.tzsl").metadata, "bundle": {"path": "model.tzsl"}}
+    places = [(group, key) for group in ("detectors", "rule", "calibration") for key in tree[group]]
+    places += [(None, "estimator"), (None, "calibration")]
+    for group, key in places:
+        for bad in ({"x": np.zeros(1)}, np.asarray("x"), np.zeros((2, 2, 2))):
+            broken = copy.deepcopy(tree)
+            (broken if group is None else broken[group])[key] = bad
+            try:
+                zero_shot_bundles._checked(zero_shot_bundles._read_arrays(broken, metadata, "model.tzsl"), metadata)
+            except ModelBundleError as exc:
+                assert str(exc).startswith("model.tzsl: ") and "\n" not in str(exc), (group, key, exc)
+            else:
+                assert (group, key) == (None, "estimator"), (group, key, bad)

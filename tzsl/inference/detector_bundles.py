@@ -50,6 +50,7 @@ from tzsl._scoring import (
     fuse_attribute_posteriors,
 )
 from tzsl.exceptions import ConfigError, ModelBundleError
+from tzsl.inference.linear_bundles import read_calibration, stored_name
 
 __all__ = ["DETECTOR_FAMILIES", "DAPArrayRule", "DetectorBank", "detector_payload", "read_detector_payload"]
 
@@ -359,8 +360,8 @@ def _read_rule(tree: Any, n_attributes: int, fail) -> DAPArrayRule:
     fusion, prior = _text(tree, "fusion"), _text(tree, "prior")
     if fusion not in FUSIONS or prior not in _PRIOR_KINDS:
         raise fail(f"rule fusion {fusion!r} or prior {prior!r} unknown; known: {list(FUSIONS)}, {list(_PRIOR_KINDS)}")
-    eps = np.asarray(tree.get("eps", np.nan), dtype=np.float64)
-    if eps.shape != () or not 0.0 < float(eps) < 0.5:
+    eps = np.asarray(tree.get("eps", np.nan))
+    if eps.shape != () or eps.dtype.kind != "f" or not 0.0 < float(eps) < 0.5:
         raise fail("rule eps must be one number in (0, 0.5)")
     values = None
     if prior in ("train", "given"):
@@ -439,10 +440,8 @@ def read_detector_payload(tree: dict, n_attributes: int, where: str) -> tuple[De
         vectors = _pad([stacked[a:b] for a, b in zip(starts[:-1], starts[1:])], int(counts.max()))
         dual_padded = _pad([dual[a:b, None] for a, b in zip(starts[:-1], starts[1:])], int(counts.max()))[:, :, 0]
     rule = _read_rule(tree.get("rule"), m, fail)
-    name = _text(tree.get("estimator", {}), "name") or "AttributeClassifierBank"
-    calibration = tree.get("calibration")
-    if calibration is not None:
-        calibration = {key: np.asarray(v).item() for key, v in calibration.items()}
+    name = stored_name(tree, "AttributeClassifierBank")
+    calibration = read_calibration(tree, fail)
     offset = None
     if projected:
         offset = np.stack([arrays["pca_mean"][e].reshape(1, -1) @ arrays["components"][e].T for e in range(E)])[:, 0]
