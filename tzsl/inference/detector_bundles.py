@@ -28,8 +28,9 @@ The ``E = n_attributes * n_sensors`` detectors are stacked in the bank's order (
     rule/prior_values (n_attributes,) for "train" / "given", rule/eps
     calibration/...       0-d arrays: the calibrator's record (absent: none)
 
-The posteriors equal the estimators' own (``predict_proba``) to rounding (tests check 1e-12), and
-the rule ranks them with the DAP functions :class:`~tzsl.models.DAPRule` calls
+The posteriors equal the estimators' own (``predict_proba``) to rounding (tests check 1e-12; the
+kernel sums are added in libsvm's order), and the rule ranks them with the DAP functions
+:class:`~tzsl.models.DAPRule` calls
 (:mod:`tzsl._scoring`). Reading a payload checks every array's shape and values (one line naming
 the bundle and the array); like every bundle payload it runs no code (``allow_pickle=False``).
 """
@@ -82,6 +83,8 @@ class DetectorBank:
         ``pca_mean @ components.T`` of each detector, and the whitening divisors.
     vectors : ndarray of shape (E, n_max, k) or None
         RBF: each detector's vectors, zero-padded to the longest (their ``dual_coef`` is 0).
+    vector_norms : ndarray of shape (E, n_max) or None
+        Their squared norms.
     dual_coef : ndarray of shape (E, n_max) or None
     gamma : ndarray of shape (E,) or None
     coef : ndarray of shape (E, k) or None
@@ -102,6 +105,7 @@ class DetectorBank:
     pca_offset: np.ndarray | None
     whiten: np.ndarray | None
     vectors: np.ndarray | None
+    vector_norms: np.ndarray | None
     dual_coef: np.ndarray | None
     gamma: np.ndarray | None
     coef: np.ndarray | None
@@ -139,7 +143,7 @@ class DetectorBank:
         """``sum_i dual_coef_i exp(-gamma ||z - v_i||^2)`` of (E, n, k) features, in blocks; shape (E, n)."""
         E, n, _ = Z.shape
         rows = max(1, _KERNEL_BLOCK // max(1, E * self.vectors.shape[1]))
-        norms = np.einsum("evk,evk->ev", self.vectors, self.vectors)[:, None, :]
+        norms = self.vector_norms[:, None, :]
         out = np.empty((E, n))
         for start in range(0, n, rows):
             block = Z[:, start : start + rows]
@@ -150,10 +154,9 @@ class DetectorBank:
             np.maximum(D, 0.0, out=D)
             D *= -self.gamma[:, None, None]
             np.exp(D, out=D)
-            acc = np.zeros(D.shape[:2])
-            for v in range(D.shape[2]):  # vector by vector, as libsvm sums: the SVM's scores to the bit
-                acc += D[:, :, v] * self.dual_coef[:, v, None]
-            out[:, start : start + rows] = acc
+            D *= self.dual_coef[:, None, :]
+            # summed vector by vector (cumsum adds in order, unlike sum), as libsvm sums: the SVM's scores
+            out[:, start : start + rows] = np.cumsum(D, axis=2)[:, :, -1]
         return out
 
     def attribute_scores(self, X) -> np.ndarray:
@@ -446,6 +449,8 @@ def read_detector_payload(tree: dict, n_attributes: int, where: str) -> tuple[De
     if projected:
         offset = np.stack([arrays["pca_mean"][e].reshape(1, -1) @ arrays["components"][e].T for e in range(E)])[:, 0]
     bank = DetectorBank(family, m, s, d, arrays["mean"], arrays["scale"], arrays.get("components"), offset,
-                        arrays.get("whiten"), vectors, dual_padded, gamma, arrays.get("coef"), arrays["intercept"],
+                        arrays.get("whiten"), vectors,
+                        None if vectors is None else np.einsum("evk,evk->ev", vectors, vectors), dual_padded, gamma,
+                        arrays.get("coef"), arrays["intercept"],
                         arrays["platt"], name)
     return bank, rule, calibration
