@@ -9,7 +9,7 @@ import pytest
 from sklearn.linear_model import LogisticRegression
 
 import tzsl
-from tzsl.bundle import BUNDLE_KEY_ENV, load_bundle, read_bundle_header, save_bundle
+from tzsl.inference.bundle import BUNDLE_KEY_ENV, load_bundle, read_bundle_header, save_bundle
 from tzsl.exceptions import ConfigError, ModelBundleError
 
 
@@ -221,7 +221,7 @@ def test_trusted_types_cover_every_tzsl_model_class_and_nothing_else():
     import inspect
 
     import tzsl.models
-    from tzsl.bundle import is_trusted_type
+    from tzsl.inference.skops_bundles import is_trusted_type
 
     classes = [obj for name in tzsl.models.__all__ if inspect.isclass(obj := getattr(tzsl.models, name))]
     assert classes
@@ -303,3 +303,12 @@ def test_arrays_round_trip_as_npz_and_pandas_inside_models(tmp_path):
     assert meta["bundle"]["payload_format"] == "skops"
     pd.testing.assert_frame_equal(loaded.table_, model.table_)
     pd.testing.assert_series_equal(loaded.series_, model.series_)
+
+
+def test_tzsl_bundle_keeps_users_imports_working():
+    """``tzsl.bundle`` (documented before the bundles moved to tzsl.inference) re-exports the same functions."""
+    import tzsl.bundle as old  # noqa: PLC0415
+    from tzsl.inference import bundle, skops_bundles  # noqa: PLC0415
+
+    assert old.load_bundle is bundle.load_bundle and old.save_bundle is bundle.save_bundle
+    assert old.read_bundle_header is bundle.read_bundle_header and old.is_trusted_type is skops_bundles.is_trusted_type

@@ -157,7 +157,7 @@ def test_read_broken_grasp_folder(data):
 def phac2_model(tmp_path_factory):
     from tzsl.datasets import FeatureSet
     from tzsl.datasets._feature_table import write_feature_table
-    from tzsl.inference.model_bundles import save_zero_shot_bundle
+    from tzsl.inference.zero_shot_bundles import save_zero_shot_bundle
     from tzsl.models import AttributeClassifierBank, AttributeSVM, DAPRule, ZeroShotClassifier
 
     root = tmp_path_factory.mktemp("fuzz_model")

@@ -73,7 +73,7 @@ def test_bundle_records_eps_and_schema(simulated):
 
 
 def test_bundle_round_trip_keeps_the_fitted_exponents(simulated, tmp_path):
-    from tzsl.bundle import save_bundle
+    from tzsl.inference.bundle import save_bundle
     from tzsl.exceptions import ModelBundleError
 
     root, meta, _, _ = simulated

@@ -19,12 +19,12 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from tzsl.bundle import read_bundle_header, save_bundle
+from tzsl.inference.bundle import read_bundle_header, save_bundle
 from tzsl.cli import cli
 from tzsl.datasets import FeatureSet, write_plain_dataset
 from tzsl.exceptions import ConfigError, ModelBundleError
 from tzsl.inference import Recogniser
-from tzsl.inference.predict import load_predictor
+from tzsl.inference.zero_shot_bundles import load_predictor
 from tzsl.inference.predict_active import train_per_ep_bundle
 
 REPO = Path(__file__).resolve().parents[2]
@@ -34,6 +34,7 @@ CLASSES = pd.DataFrame(list(itertools.product([0, 1], repeat=4)), columns=ATTRS,
 UNSEEN = ["c5", "c10"]  # rows 0101 and 1010
 SENSORS = [f"finger_{i}" for i in range(5)]
 FEATURES = [f"f{i}" for i in range(6)]
+TRAINED: dict = {}  # the fitted DAP classifier behind the fixture's dap.tzsl
 
 
 def _ok(*args) -> str:
@@ -44,7 +45,7 @@ def _ok(*args) -> str:
 
 @pytest.fixture(scope="module")
 def five_fingers(tmp_path_factory):
-    """A plain feature dataset of 5 sensors, ESZSL and SAE (linear) and DAP (skops) bundles, new trials."""
+    """A plain feature dataset of 5 sensors, ESZSL, SAE, ALE (linear) and DAP (detector arrays) bundles, new trials."""
     rng = np.random.default_rng(0)
     root = tmp_path_factory.mktemp("api")
     trials = pd.DataFrame([(f"{c}_{t}", c) for c in CLASSES.index for t in range(5)], columns=["trial_id", "class"])
@@ -59,7 +60,22 @@ def five_fingers(tmp_path_factory):
     _ok(*common, "--method", "eszsl", "--out", root / "eszsl.tzsl")
     _ok(*common, "--method", "sae", "--out", root / "sae.tzsl")
     _ok(*common, "--method", "ale", "--out", root / "ale.tzsl")
-    _ok(*common, "--cv", 2, "--no-cache", "--out", root / "dap.tzsl")
+    import tzsl.inference.model_bundles as model_bundles  # noqa: PLC0415
+
+    save = model_bundles.save_zero_shot_bundle
+
+    def keep(path, classifier, *args, **kwargs):  # the fitted DAP model, to compare its arrays with
+        TRAINED["dap"] = classifier
+        return save(path, classifier, *args, **kwargs)
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(model_bundles, "save_zero_shot_bundle", keep)
+        _ok(*common, "--cv", 2, "--no-cache", "--out", root / "dap.tzsl")
+    # the same model as tzsl wrote DAP bundles before they were arrays: the estimator, with skops
+    zsl = TRAINED["dap"].estimator_
+    calibration = {k: v if isinstance(v, str | int) else float(v) for k, v in TRAINED["dap"].calibration_info_.items()}
+    save_bundle(root / "dap-skops.tzsl", {"model": zsl, "decision_rule": zsl.decision_rule_, "calibration": calibration},
+                kind="zero-shot", metadata=read_bundle_header(root / "dap.tzsl").metadata)
     new = trials[trials["class"].isin(UNSEEN)].index
     rows = [{"trial_id": trials.at[i, "trial_id"], "sensor": s, **dict(zip(FEATURES, X[i, j], strict=True))}
             for i in new for j, s in enumerate(SENSORS)]
@@ -100,7 +116,7 @@ def test_linear_bundles_are_arrays_and_rank_as_their_estimator(five_fingers, met
     assert read_bundle_header(path).payload_format == "npz"
     predictor = load_predictor(path)
     assert predictor.rule.name == rule and "as arrays" in predictor.describe()
-    assert read_bundle_header(root / "dap.tzsl").payload_format == "skops"
+    assert read_bundle_header(root / "dap.tzsl").payload_format == "npz"
     # the arrays rank as the fitted estimator does: refit it in memory the way train-attributes does
     from tzsl.features import load_features  # noqa: PLC0415
     from tzsl.inference.model_bundles import training_subset  # noqa: PLC0415
@@ -130,9 +146,10 @@ _IMPORTS = textwrap.dedent("""
 
 
 @pytest.mark.parametrize("bundle, absent", [("eszsl", {"torch", "dask", "sklearn", "skops"}),
-                                            ("dap", {"torch", "dask"})])
+                                            ("dap", {"torch", "dask", "sklearn", "skops"}),
+                                            ("dap-skops", {"torch", "dask"})])
 def test_loading_and_ranking_does_not_import_torch(five_fingers, tmp_path, bundle, absent):
-    """Linear bundles need numpy alone; skops bundles need scikit-learn, never torch (deep bundles do)."""
+    """Linear and DAP bundles need numpy alone; skops bundles need scikit-learn, never torch (deep bundles do)."""
     root, candidates, X = five_fingers
     np.save(tmp_path / "grasp.npy", X[0])
     done = subprocess.run([sys.executable, "-c", _IMPORTS, str(root / f"{bundle}.tzsl"), str(candidates),
@@ -144,7 +161,7 @@ def test_loading_and_ranking_does_not_import_torch(five_fingers, tmp_path, bundl
 
 
 def test_skops_import_leaves_torch_importable_afterwards(tmp_path):
-    code = ("import sys; from tzsl._bundle_payload import skops_io; skops_io(); assert 'torch' not in sys.modules; "
+    code = ("import sys; from tzsl.inference.skops_bundles import skops_io; skops_io(); assert 'torch' not in sys.modules; "
             "import importlib.util; print(importlib.util.find_spec('torch') is not None and 'ok')")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO,
                           env={"PYTHONPATH": str(REPO), "PATH": ""}, check=False)
@@ -250,3 +267,99 @@ def test_command_line_defaults_are_the_apis():
     options = {p.name: p for p in cli.commands["predict"].params}
     assert options["mode"].default == DEFAULT_FUSION and list(options["mode"].type.choices) == list(FUSION_MODES)
     assert options["k"].default == DEFAULT_K
+
+
+# ---------------------------------------------------------------------------- DAP bundles as arrays
+def test_dap_bundle_is_arrays_with_its_estimators_posteriors(five_fingers):
+    """The trained bundle's arrays give the fitted bank's posteriors and the calibrated class posteriors."""
+    from tzsl.inference.detector_bundles import DAPArrayRule, DetectorBank  # noqa: PLC0415
+
+    root, candidates, X = five_fingers
+    predictor = load_predictor(root / "dap.tzsl")
+    assert isinstance(predictor.model, DetectorBank) and isinstance(predictor.rule, DAPArrayRule)
+    assert "as arrays" in predictor.describe() and "skops" not in predictor.describe()
+    clf = TRAINED["dap"]
+    random = np.random.default_rng(1).normal(0, 3, (40, *X.shape[1:]))
+    for grasps in (X, random):
+        expected = clf.estimator_.attribute_scores(grasps)
+        np.testing.assert_allclose(predictor.model.attribute_scores(grasps), expected, rtol=0, atol=1e-12)
+    K = CLASSES.loc[UNSEEN + ["c0", "c15"], predictor.attribute_names].to_numpy()
+    recogniser = Recogniser.load(root / "dap.tzsl", candidates)
+    got = np.array([[dict(recogniser.rank(x))[c] for c in UNSEEN + ["c0", "c15"]] for x in X])
+    np.testing.assert_allclose(got, clf.predict_proba(X, K), rtol=0, atol=1e-12)
+
+
+def test_dap_bundle_written_with_skops_still_loads_and_ranks_as_the_arrays(five_fingers):
+    from tzsl.inference.detector_bundles import DetectorBank  # noqa: PLC0415
+
+    root, candidates, X = five_fingers
+    assert read_bundle_header(root / "dap-skops.tzsl").payload_format == "skops"
+    old = Recogniser.load(root / "dap-skops.tzsl", candidates)
+    assert isinstance(old.predictor.model, DetectorBank)
+    assert "read from skops: re-save the model" in old.predictor.describe()
+    new = Recogniser.load(root / "dap.tzsl", candidates)
+    for x in X:
+        assert old.rank(x) == new.rank(x)
+
+
+def _tree(path: Path) -> dict:
+    from tzsl.inference.bundle import load_bundle  # noqa: PLC0415
+
+    return load_bundle(path)[0]
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda t: t["detectors"].update(family=np.asarray("exec")), "family 'exec' is not one of"),
+    (lambda t: t["detectors"].update(shape=np.asarray([3, 5, 6])), r"shape must be \(n_attributes = 4"),
+    (lambda t: t["detectors"].update(mean=t["detectors"]["mean"][:, :3]), r"mean has shape \(20, 3\)"),
+    (lambda t: t["detectors"]["platt"].__setitem__((0, 0), np.nan), "platt holds NaN"),
+    (lambda t: t["detectors"].update(n_vectors=t["detectors"]["n_vectors"] + 1), "must hold n_vectors"),
+    (lambda t: t["detectors"].update(gamma=-t["detectors"]["gamma"]), "gamma must be positive"),
+    (lambda t: t["rule"].update(prior=np.asarray("oracle")), "prior 'oracle'"),
+    (lambda t: t.pop("rule"), "rule/name = 'dap'"),
+])
+def test_bad_detector_payload_is_one_line(five_fingers, tmp_path, change, message):
+    root, candidates, _ = five_fingers
+    tree = _tree(root / "dap.tzsl")
+    change(tree)
+    path = save_bundle(tmp_path / "bad.tzsl", tree, kind="zero-shot",
+                       metadata=read_bundle_header(root / "dap.tzsl").metadata)
+    with pytest.raises(ModelBundleError, match=message) as info:
+        Recogniser.load(path, candidates)
+    assert str(info.value).startswith(f"{path}: detector arrays: ") and "\n" not in str(info.value)
+
+
+def test_tampered_dap_bundle_is_refused_in_one_line(five_fingers, tmp_path):
+    root, candidates, _ = five_fingers
+    data = bytearray((root / "dap.tzsl").read_bytes())
+    data[-200] ^= 0xFF  # one byte of the arrays
+    (tmp_path / "tampered.tzsl").write_bytes(bytes(data))
+    done = CliRunner().invoke(cli, ["predict", "--model", str(tmp_path / "tampered.tzsl"), "--classes",
+                                    str(candidates), str(root / "new.csv")])
+    assert done.exit_code == 3
+    assert done.output.strip().count("\n") == 0 and "checksum mismatch" in done.output, done.output
+
+
+def test_any_malformed_detector_array_is_a_bundle_error(five_fingers):
+    """Every array of a DAP payload replaced by a group, a text or a wrong shape: a one-line ModelBundleError
+    (only the display name falls back to its default), never another exception."""
+    import copy  # noqa: PLC0415
+
+    from tzsl.inference import zero_shot_bundles  # noqa: PLC0415
+
+    root, _, _ = five_fingers
+    tree = _tree(root / "dap.tzsl")
+    tree["calibration"] = {"temperature": np.asarray(1.5)}
+    metadata = {**read_bundle_header(root / "dap.tzsl").metadata, "bundle": {"path": "model.tzsl"}}
+    places = [(group, key) for group in ("detectors", "rule", "calibration") for key in tree[group]]
+    places += [(None, "estimator"), (None, "calibration")]
+    for group, key in places:
+        for bad in ({"x": np.zeros(1)}, np.asarray("x"), np.zeros((2, 2, 2))):
+            broken = copy.deepcopy(tree)
+            (broken if group is None else broken[group])[key] = bad
+            try:
+                zero_shot_bundles._checked(zero_shot_bundles._read_arrays(broken, metadata, "model.tzsl"), metadata)
+            except ModelBundleError as exc:
+                assert str(exc).startswith("model.tzsl: ") and "\n" not in str(exc), (group, key, exc)
+            else:
+                assert (group, key) == (None, "estimator"), (group, key, bad)

@@ -18,7 +18,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from tzsl.bundle import read_bundle_header
+from tzsl.inference.bundle import read_bundle_header
 from tzsl.cli import EXIT_TZSL_ERROR, cli
 from tzsl.datasets import write_plain_dataset
 

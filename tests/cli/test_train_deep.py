@@ -53,7 +53,7 @@ def test_option_errors_are_one_line(tmp_path):
 
 @pytest.mark.slow
 def test_train_deep_on_fabric_depth_images(torch, data_dir, tmp_path):
-    from tzsl.models.embedding import load_deep_bundle
+    from tzsl.inference.deep_bundles import load_deep_bundle
 
     out = tmp_path / "m.tzsl-deep"
     ckpt = tmp_path / "ckpt"
@@ -131,7 +131,7 @@ def _write_press(path, group: int, rng):
 
 
 def test_train_deep_on_user_gelsight_videos(torch, data_dir, tmp_path):
-    from tzsl.models.embedding import load_deep_bundle
+    from tzsl.inference.deep_bundles import load_deep_bundle
 
     rng = np.random.default_rng(0)
     root = tmp_path / "gelsight"

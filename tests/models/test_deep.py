@@ -16,7 +16,7 @@ from sklearn.utils.estimator_checks import (
 
 from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError, TzslError
 from tzsl.models import DeepAttributeEmbedding
-from tzsl.models.embedding import load_deep_bundle, save_deep_bundle
+from tzsl.inference.deep_bundles import load_deep_bundle, save_deep_bundle
 from tzsl.models._embedding import _forward, _glorot_init, _layer_shapes, _loss_and_grad, loss_weights
 from tzsl.models._eszsl import ZSLInputError
 
@@ -295,7 +295,7 @@ def test_bundle_round_trip_and_tampering(torch, tmp_path, monkeypatch):
 
 
 def test_bundle_of_a_trained_cnn_stores_it(torch, tmp_path):
-    from tzsl.bundle import save_bundle
+    from tzsl.inference.bundle import save_bundle
 
     X, y = sequences(n_per_class=2, size=12)
     m = small(epochs=1).fit(X, y, A4)

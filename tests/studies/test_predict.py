@@ -7,14 +7,17 @@ import pandas as pd
 import pytest
 from scipy.special import softmax
 
-from tzsl.bundle import load_bundle, save_bundle
+from tzsl.inference.bundle import load_bundle, save_bundle
 from tzsl.datasets import FeatureSet, load_hand_table4, read_grasps, simulate_grasps
 from tzsl.datasets._feature_table import write_feature_table
 from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
 from tzsl.studies.config import HandSettings
 from tzsl.studies.hand.study import feature_params
-from tzsl.inference.model_bundles import ZERO_SHOT_KIND, save_model_bundle, save_zero_shot_bundle, train_hand_bundle
-from tzsl.inference.predict import format_prediction, load_predictor, read_class_table
+from tzsl.inference.bundle_kinds import ZERO_SHOT_KIND
+from tzsl.inference.model_bundles import train_hand_bundle
+from tzsl.inference.zero_shot_bundles import save_model_bundle, save_zero_shot_bundle
+from tzsl.inference.predict import format_prediction, read_class_table
+from tzsl.inference.zero_shot_bundles import load_predictor
 from tzsl.inference.recogniser import predict_grasps
 from tzsl.features import grasp_features
 from tzsl.models import (
@@ -219,11 +222,11 @@ def phac2(tmp_path_factory):
     classes = root / "classes.csv"
     pd.DataFrame({"object": ["te0", "te1", "te2"], "hard": [1, 0, 1], "soft": [0, 1, 1],
                   "rough": [1, 0, 0]}).to_csv(classes, index=False)
-    return root, bank, prior, test, path, classes
+    return root, bank, prior, test, path, classes, clf
 
 
 def test_phac2_bundle_predicts_like_the_bank(phac2):
-    root, bank, prior, test, path, classes = phac2
+    root, bank, prior, test, path, classes, _ = phac2
     predictor = load_predictor(path)
     assert predictor.kind == ZERO_SHOT_KIND and predictor.attribute_names == ["hard", "soft", "rough"]
     assert predictor.metadata["input"] == {"format": "features", "sensors": ["finger_0", "finger_1"],
@@ -246,7 +249,7 @@ def test_phac2_bundle_predicts_like_the_bank(phac2):
 
 
 def test_phac2_sensor_order_and_missing_features(phac2, tmp_path):
-    root, bank, prior, test, path, classes = phac2
+    root, bank, prior, test, path, classes, _ = phac2
     predictor = load_predictor(path)
     K = read_class_table(classes, predictor.attribute_names)
     swapped = FeatureSet(X=test.X[:, ::-1, ::-1], trials=test.trials, sensors=test.sensors[::-1],
@@ -263,10 +266,11 @@ def test_phac2_sensor_order_and_missing_features(phac2, tmp_path):
 
 
 def test_bundle_contents_are_checked(phac2, tmp_path):
-    _, bank, _, test, path, _ = phac2
+    _, bank, _, test, path, _, clf = phac2
     payload, meta = load_bundle(path)
     meta.pop("bundle")
-    rule = payload["decision_rule"]
+    assert set(payload) == {"detectors", "rule", "estimator"}  # a DAP model is stored as arrays
+    payload, rule = {"model": clf}, clf.decision_rule_
     with pytest.raises(ConfigError, match="2 attribute names for a rule over 3"):
         save_model_bundle(tmp_path / "a.tzsl", payload["model"], rule, method="x", attribute_names=["a", "b"],
                           input_schema=meta["input"])
@@ -311,7 +315,7 @@ def _lying_npz(path, shape):
 
 
 def test_predict_cli_bad_feature_files_are_one_line(phac2, tmp_path):
-    root, _, _, _, model, classes = phac2
+    root, _, _, _, model, classes, _ = phac2
     truncated = tmp_path / "truncated.npz"
     truncated.write_bytes((root / "test.npz").read_bytes()[:300])
     assert "not a readable .npz archive" in _one_line_error(_cli("predict", "--model", model, "--classes", classes,
@@ -333,11 +337,11 @@ def test_predict_cli_old_pickle_bundle_needs_trust_pickle(phac2, tmp_path):
 
     import tzsl
 
-    root, bank, _, _, model, classes = phac2
+    root, bank, _, _, model, classes, clf = phac2
     raw = model.read_bytes()
     header = json.loads(raw.split(b"\n")[1])
     buf = io.BytesIO()
-    joblib.dump(load_bundle(model)[0], buf)  # the same model + decision rule, pickled
+    joblib.dump({"model": clf, "decision_rule": clf.decision_rule_}, buf)  # the same model + decision rule, pickled
     payload = buf.getvalue()
     header = {k: v for k, v in header.items() if k not in ("header_sha256", "hmac_sha256", "payload_format")}
     header.update(format_version=1, tzsl_version=tzsl.__version__, payload_bytes=len(payload),
@@ -360,11 +364,12 @@ def test_predict_cli_refuses_crafted_bundle(phac2, tmp_path):
 
     import skops.io as sio
 
-    root, _, _, _, model, classes = phac2
+    root, _, _, _, model, classes, _ = phac2
     header = json.loads(model.read_bytes().split(b"\n")[1])
     payload = sio.dumps({"f": os.system})
     header = {k: v for k, v in header.items() if k not in ("header_sha256", "hmac_sha256")}
-    header.update(payload_bytes=len(payload), payload_sha256=hashlib.sha256(payload).hexdigest())
+    header.update(payload_bytes=len(payload), payload_sha256=hashlib.sha256(payload).hexdigest(),
+                  payload_format="skops")
     header["header_sha256"] = hashlib.sha256(json.dumps(header, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
     evil = tmp_path / "evil.tzsl"
     evil.write_bytes(b"TZSL-MODEL-BUNDLE\n" + json.dumps(header).encode() + b"\n" + payload)

@@ -3,7 +3,7 @@
 On a SIMULATED five-finger dataset (every 0/1 row of 4 attributes is a class; 5 sensors of 10
 features, a noisy linear image of the class's attributes; written to a temporary folder), it
 trains each method of ``--methods`` with ``tzsl train-attributes`` (``eszsl``: stored as arrays;
-``dap``: the default per-(attribute, sensor) SVMs, stored with skops) and measures:
+``dap``: the default per-(attribute, sensor) SVMs, stored as arrays too) and measures:
 
 * **cold**: ``tzsl predict`` of one grasp in a new Python process (start to exit, as a user
   sees it), the median of ``--repeats`` runs, against :data:`GOAL_COLD_S`; and ``tzsl --help``;
@@ -144,7 +144,7 @@ def run_bench(*, methods: Sequence[str] = tuple(METHODS), repeats: int = 5, n_gr
     DataFrame
         :data:`BENCH_COLUMNS`; cold measures in seconds, API measures in milliseconds.
     """
-    from tzsl.bundle import read_bundle_header  # noqa: PLC0415
+    from tzsl.inference.bundle import read_bundle_header  # noqa: PLC0415
 
     unknown = [m for m in methods if m not in METHODS]
     if unknown:

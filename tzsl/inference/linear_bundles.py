@@ -21,6 +21,7 @@ bundle payload, it runs no code when read (``allow_pickle=False``).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -29,7 +30,8 @@ import numpy as np
 from tzsl._scoring import compatibility_scores, cosine_similarities, linear_embedding, squared_distances
 from tzsl.exceptions import ConfigError, ModelBundleError
 
-__all__ = ["LINEAR_RULES", "LinearAttributeModel", "LinearRule", "linear_payload", "read_linear_payload"]
+__all__ = ["LINEAR_RULES", "LinearAttributeModel", "LinearRule", "linear_payload", "read_calibration", "read_linear_payload",
+           "stored_name"]
 
 #: Decision rules a linear bundle can hold: :class:`~tzsl.models.CompatibilityRule` and the two
 #: metrics of :class:`~tzsl.models.NearestAttributeRule`.
@@ -151,6 +153,30 @@ def linear_payload(model: Any, decision_rule: Any, calibration: dict | None = No
     return payload
 
 
+def stored_name(tree: dict, default: str) -> str:
+    """The ``estimator/name`` text of an array payload (``default`` when absent or not one text)."""
+    group = tree.get("estimator")
+    value = np.asarray(group.get("name", "")) if isinstance(group, dict) else np.asarray("")
+    return str(value) if value.dtype.kind == "U" and value.ndim == 0 and str(value) else default
+
+
+def read_calibration(tree: dict, fail: Callable[[str], Exception]) -> dict | None:
+    """The calibrator's record of an array payload (``calibration/...``: 0-d arrays), None when absent.
+
+    Raises
+    ------
+    Exception
+        ``fail(problem)`` when the group is not a set of single numbers or texts.
+    """
+    group = tree.get("calibration")
+    if group is None:
+        return None
+    values = {k: np.asarray(v) for k, v in group.items()} if isinstance(group, dict) else None
+    if values is None or any(v.ndim or v.dtype.kind not in "biufU" for v in values.values()):
+        raise fail("calibration must hold single numbers or texts")
+    return {k: v.item() for k, v in values.items()}
+
+
 def read_linear_payload(tree: dict, n_attributes: int, where: str) -> tuple[LinearAttributeModel, LinearRule,
                                                                                dict | None]:
     """The model, rule and calibration of a linear bundle's arrays, checked.
@@ -158,7 +184,7 @@ def read_linear_payload(tree: dict, n_attributes: int, where: str) -> tuple[Line
     Parameters
     ----------
     tree : dict
-        The payload as :func:`tzsl.bundle.load_bundle` returns it (nested dict of arrays).
+        The payload as :func:`tzsl.inference.bundle.load_bundle` returns it (nested dict of arrays).
     n_attributes : int
         The bundle's attribute count (its metadata's ``attribute_names``).
     where : str
@@ -189,10 +215,8 @@ def read_linear_payload(tree: dict, n_attributes: int, where: str) -> tuple[Line
     name = str(np.asarray(rule["name"]).item())
     if name not in LINEAR_RULES:
         raise fail(f"unknown rule {name!r}; known: {list(LINEAR_RULES)}")
-    estimator = str(np.asarray(tree.get("estimator", {}).get("name", "linear")).item())
-    calibration = tree.get("calibration")
-    if calibration is not None:
-        calibration = {k: np.asarray(v).item() for k, v in calibration.items()}
+    estimator = stored_name(tree, "linear")
+    calibration = read_calibration(tree, fail)
     model = LinearAttributeModel(weights.astype(np.float64), None if mean is None else np.asarray(mean, np.float64),
                                  None if scale is None else np.asarray(scale, np.float64), estimator)
     return model, LinearRule(name, n_attributes), calibration

@@ -1,147 +1,40 @@
-"""Save fitted zero-shot models as bundles that ``tzsl predict`` reads through one path.
+"""Make the robot models the train commands save: ``tzsl train-attributes`` and ``tzsl train-hand``.
 
-Every bundle of kind ``"zero-shot"`` (:data:`ZERO_SHOT_KIND`) holds the same three things,
-whatever the method (any of ``tzsl methods`` that is an attribute model + decision rule, and the
-hand's :class:`~tzsl.models.HandDAPClassifier`):
-
-payload (skops, see :mod:`tzsl.bundle`: loading it runs no code)
-    Linear models (ESZSL, SAE, ALE, SJE, DeViSE with their rule) are stored as arrays instead,
-    read with numpy alone (:mod:`tzsl.inference.linear_bundles`). Every other model:
-    ``{"model": fitted estimator, "decision_rule": fitted DecisionRule}``, plus ``"calibration"``
-    (a plain dict: the temperature and how it was fitted,
-    :attr:`tzsl.models.CalibratedZeroShotClassifier.calibration_info_`) when the model was saved
-    from a calibrated method; bundles without it predict with the method's own posteriors
-    (``tzsl predict`` says "uncalibrated").
-    ``model.attribute_scores(X)`` gives the attribute scores (a fitted
-    :class:`~tzsl.models.ZeroShotClassifier`; a HandDAPClassifier gives its fused posteriors) and
-    ``decision_rule`` turns them and a class-attribute table given at predict time into class
-    scores (priors, sensor fusion and tie-breaking live there).
-metadata (JSON)
-    ``method``: the registry name; ``attribute_names``: list of m str, the rule's attribute axis;
-    ``input``: the feature schema :mod:`tzsl.inference.predict_inputs` reads inputs with;
-    plus provenance (``training_objects``, ``seed``, ``dataset``, ...).
-
-The deep CNN + LSTM keeps its own bundle kind ``"deep"`` (its weights are an ``.npz`` payload,
-:func:`tzsl.models.embedding.save_deep_bundle`); ``tzsl predict`` composes it with a
-:class:`~tzsl.models.NearestAttributeRule` on loading, so it is predicted the same way.
+Each function fits a model on a dataset's training objects (with the study's settings: the
+study code is imported when a model is trained, never when this module is imported) and writes
+it as a ``"zero-shot"`` bundle (:mod:`tzsl.inference.zero_shot_bundles`: arrays for linear and
+DAP models, skops for the others). The per-EP (active touch) model is
+:func:`tzsl.inference.predict_active.train_per_ep_bundle`; the deep model's bundle is
+:mod:`tzsl.inference.deep_bundles`.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from tzsl.bundle import save_bundle
 from tzsl.datasets import FeatureSet, HandTable, read_grasps
 from tzsl.exceptions import ConfigError
-from tzsl.inference.bundle_kinds import DEEP_KIND, ZERO_SHOT_KIND, left_out_attributes  # noqa: F401 - re-exported
-from tzsl.inference.linear_bundles import linear_payload
+from tzsl.inference.zero_shot_bundles import save_model_bundle, save_zero_shot_bundle
 from tzsl.models import (
     CalibratedZeroShotClassifier,
     DAPRule,
-    DecisionRule,
     HandDAPClassifier,
     ZeroShotClassifier,
     get_method,
 )
 
 __all__ = [
-    "DEEP_KIND",
-    "ZERO_SHOT_KIND",
-    "feature_schema",
-    "left_out_attributes",
     "left_out_notes",
-    "save_model_bundle",
-    "save_zero_shot_bundle",
     "train_attribute_bundle",
     "train_hand_bundle",
     "training_record",
     "training_subset",
 ]
 
-
-
-def feature_schema(features: FeatureSet, ndim: int) -> dict:
-    """The ``input`` metadata of a model fitted on ``features``.
-
-    Parameters
-    ----------
-    features : FeatureSet
-        The training features: their sensors and feature names are the layout the model reads.
-        Signal datasets (``features.info`` holding ``statistics``) also record the channels,
-        statistics and baseline rows, so signal files can be given at predict time.
-    ndim : {2, 3}
-        The method's input (:attr:`tzsl.models.Method.input_ndim`).
-    """
-    if ndim not in (2, 3):
-        raise ConfigError(f"ndim must be 2 or 3, got {ndim!r}")
-    schema: dict[str, Any] = {"format": "features", "sensors": [str(s) for s in features.sensors],
-                              "feature_names": [str(f) for f in features.feature_names], "ndim": int(ndim)}
-    info = features.info or {}
-    if "statistics" in info:
-        schema["signals"] = {"channels": list(info["channels"]), "statistics": list(info["statistics"]),
-                             "baseline_rows": int(info.get("baseline_rows", 0))}
-    return schema
-
-
-def save_model_bundle(path: str | Path, model: Any, decision_rule: DecisionRule, *, method: str,
-                      attribute_names: Sequence[str], input_schema: dict, force: bool = False,
-                      calibration: dict | None = None, **extra) -> Path:
-    """Write a ``"zero-shot"`` bundle (layout in the module docstring).
-
-    Parameters
-    ----------
-    path : str or Path
-    model : fitted estimator with ``attribute_scores(X)``
-    decision_rule : fitted DecisionRule over ``len(attribute_names)`` attributes
-    method : str
-        Registry name (shown by ``tzsl predict``).
-    attribute_names : sequence of str, length m
-    input_schema : dict
-        The feature schema (see :func:`feature_schema`).
-    force : bool
-    calibration : dict, optional
-        How the class posteriors are calibrated (``temperature`` > 0 and how it was fitted);
-        stored in the payload. None: the method's own posteriors.
-    **extra
-        JSON-serialisable provenance.
-    """
-    if not callable(getattr(model, "attribute_scores", None)):
-        raise ConfigError(f"{type(model).__name__} has no attribute_scores(X); it cannot be saved for 'tzsl predict'")
-    if not isinstance(decision_rule, DecisionRule) or not hasattr(decision_rule, "n_attributes_"):
-        raise ConfigError("decision_rule must be a fitted tzsl.models.DecisionRule")
-    names = [str(a) for a in attribute_names]
-    if len(names) != decision_rule.n_attributes_:
-        raise ConfigError(f"{len(names)} attribute names for a rule over {decision_rule.n_attributes_} attributes")
-    metadata = {"method": method, "attribute_names": names, "input": dict(input_schema), **extra}
-    if calibration is not None:
-        calibration = {k: (v if isinstance(v, str | int) else float(v)) for k, v in calibration.items()}
-    payload = linear_payload(model, decision_rule, calibration)  # linear models: arrays, read with numpy alone
-    if payload is None:
-        payload = {"model": model, "decision_rule": decision_rule}
-        if calibration is not None:
-            payload["calibration"] = calibration
-    return save_bundle(path, payload, kind=ZERO_SHOT_KIND, metadata=metadata, force=force)
-
-
-def save_zero_shot_bundle(path: str | Path, classifier: ZeroShotClassifier | CalibratedZeroShotClassifier,
-                          features: FeatureSet, *, method: str, ndim: int, force: bool = False, **extra) -> Path:
-    """Save a fitted :class:`~tzsl.models.ZeroShotClassifier` (or one inside its calibrator, whose
-    temperature is saved too) fitted on ``features`` (attribute columns in order)."""
-    calibration = None
-    if isinstance(classifier, CalibratedZeroShotClassifier):
-        classifier, calibration = classifier.estimator_, classifier.calibration_info_
-    if not isinstance(classifier, ZeroShotClassifier):
-        raise ConfigError(f"{type(classifier).__name__} is not an attribute model + decision rule; it cannot be "
-                          "saved for 'tzsl predict'")
-    return save_model_bundle(path, classifier, classifier.decision_rule_, method=method, calibration=calibration,
-                             attribute_names=list(features.attributes.columns),
-                             input_schema=feature_schema(features, ndim), force=force,
-                             dataset=features.dataset, **extra)
 
 
 # ---------------------------------------------------------------------------- training commands

@@ -1,7 +1,7 @@
 """Classify new grasps with a saved model bundle, grasp by grasp, with multi-grasp fusion.
 
 This is the engine of ``tzsl predict`` and of :class:`tzsl.inference.Recogniser`. Every model is
-predicted the same way, whatever the method: a bundle (:mod:`tzsl.inference.model_bundles`) holds a
+predicted the same way, whatever the method: a bundle (:mod:`tzsl.inference.zero_shot_bundles`) holds a
 fitted model whose ``attribute_scores(X)`` gives attribute scores, a fitted decision rule
 (:class:`tzsl.models.DecisionRule`), the attribute names and a feature schema. The input files
 are read into the model's input by that schema (:mod:`tzsl.inference.predict_inputs`), the
@@ -29,183 +29,23 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from io import StringIO
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from tzsl._scoring import duplicate_attribute_groups, tempered_proba
-from tzsl.bundle import load_bundle, read_bundle_header
-from tzsl.exceptions import DataFileError, ModelBundleError
-from tzsl.inference.bundle_kinds import DEEP_KIND, ZERO_SHOT_KIND
-from tzsl.inference.linear_bundles import LinearAttributeModel, LinearRule, read_linear_payload
-from tzsl.inference.predict_inputs import INPUT_FORMATS, describe_inputs
+from tzsl._scoring import duplicate_attribute_groups
+from tzsl.exceptions import DataFileError
+from tzsl.inference.zero_shot_bundles import Predictor
 
 __all__ = [
-    "PREDICT_KINDS",
     "Prediction",
-    "Predictor",
     "format_prediction",
-    "load_predictor",
     "prediction_report",
     "read_class_table",
     "top_ties",
 ]
 
-#: Bundle kinds ``tzsl predict`` reads as a model + decision rule.
-PREDICT_KINDS: tuple[str, ...] = (ZERO_SHOT_KIND, DEEP_KIND)
-#: Keys a zero-shot bundle's payload may hold (``calibration`` is optional).
-_PAYLOAD_KEYS = {"model", "decision_rule", "calibration"}
 _DESCRIPTIVE = ("split", "subset")
-
-
-# ---------------------------------------------------------------------------- the saved model
-@dataclass
-class Predictor:
-    """A loaded bundle: model + decision rule + attribute names + feature schema.
-
-    Attributes
-    ----------
-    model : fitted estimator with ``attribute_scores(X)``
-        Or, for a linear bundle, a :class:`~tzsl.inference.linear_bundles.LinearAttributeModel`.
-    rule : fitted DecisionRule
-        Or, for a linear bundle, a :class:`~tzsl.inference.linear_bundles.LinearRule`.
-    attribute_names : list of str, length m
-    input : dict
-        Feature schema (:mod:`tzsl.inference.predict_inputs`).
-    metadata : dict
-        The bundle's metadata (with ``bundle``: kind, path, ...).
-    calibration : dict or None
-        The bundle's calibrator (``temperature`` and how it was fitted, see
-        :class:`tzsl.models.CalibratedZeroShotClassifier`); None for bundles saved without one.
-    """
-
-    model: Any
-    rule: Any
-    attribute_names: list[str]
-    input: dict
-    metadata: dict
-    calibration: dict | None = None
-
-    @property
-    def kind(self) -> str:
-        return str(self.metadata.get("bundle", {}).get("kind", ""))
-
-    @property
-    def inputs(self) -> str:
-        """What the model takes as input files."""
-        return describe_inputs(self.input)
-
-    def describe(self) -> str:
-        """One line naming the model."""
-        inner = getattr(self.model, "attribute_model_", self.model)
-        fitted = self.calibration_report()
-        calibrated = (f"calibrated (temperature {fitted['temperature']:.3g})" if fitted["calibrated"]
-                      else "uncalibrated")
-        parts = (f"{self.model.name} + {self.rule.name} rule, as arrays" if isinstance(self.model, LinearAttributeModel)
-                 else f"{type(inner).__name__} + {type(self.rule).__name__}")
-        return (f"{self.metadata.get('method', self.kind)} ({parts}), "
-                f"{len(self.attribute_names)} attributes, {calibrated} posteriors; input: {self.inputs}")
-
-    @property
-    def temperature(self) -> float:
-        """The calibrator's temperature (1.0 without one)."""
-        return float(self.calibration["temperature"]) if self.calibration else 1.0
-
-    def posteriors(self, class_scores: np.ndarray) -> np.ndarray:
-        """Class posteriors ``softmax(class_scores / temperature)`` along the last axis (calibrated when the bundle is)."""
-        return tempered_proba(np.atleast_2d(class_scores), self.temperature).reshape(np.shape(class_scores))
-
-    def calibration_report(self) -> dict:
-        """How the posteriors are calibrated: ``calibrated`` (bool), ``temperature`` and the calibrator's record."""
-        if not self.calibration:
-            return {"calibrated": False, "temperature": 1.0,
-                    "reason": "uncalibrated: the bundle holds no calibrator (saved without one, or by an older tzsl)"}
-        return {"calibrated": bool(self.calibration.get("fitted", False)), **self.calibration}
-
-    def class_scores(self, scores: np.ndarray, K: np.ndarray) -> np.ndarray:
-        """Class scores (n, c) of attribute scores ``scores`` (n, ...) against the classes ``K`` (c, m)."""
-        return self.rule.decision_function(scores, K)
-
-
-def _where(metadata: dict) -> str:
-    return metadata.get("bundle", {}).get("path", "model bundle")
-
-
-def _checked(payload: Any, metadata: dict) -> Predictor:
-    where = _where(metadata)
-    if not (isinstance(payload, dict) and {"model", "decision_rule"} <= set(payload) <= _PAYLOAD_KEYS):
-        raise ModelBundleError(f"{where}: a zero-shot bundle holds {{'model', 'decision_rule'}} and optionally "
-                               f"'calibration', found "
-                               f"{sorted(payload) if isinstance(payload, dict) else type(payload).__name__}")
-    model, rule, calibration = payload["model"], payload["decision_rule"], payload.get("calibration")
-    if calibration is not None:
-        t = calibration.get("temperature") if isinstance(calibration, dict) else None
-        if not (isinstance(t, float | int) and np.isfinite(t) and t > 0):
-            raise ModelBundleError(f"{where}: the calibration is not a dict with a positive temperature ({calibration!r})")
-    if not callable(getattr(model, "attribute_scores", None)):
-        raise ModelBundleError(f"{where}: the model ({type(model).__name__}) has no attribute_scores(X)")
-    if not isinstance(rule, LinearRule):
-        from tzsl.models import DecisionRule  # noqa: PLC0415 - estimator payloads import scikit-learn anyway
-
-        if not isinstance(rule, DecisionRule) or not hasattr(rule, "n_attributes_"):
-            raise ModelBundleError(f"{where}: the decision rule is not a fitted DecisionRule ({type(rule).__name__})")
-    missing = [k for k in ("attribute_names", "input") if k not in metadata]
-    if missing:
-        raise ModelBundleError(f"{where}: zero-shot bundle metadata lacks {missing}")
-    names, schema = metadata["attribute_names"], metadata["input"]
-    if not isinstance(names, list) or len(names) != rule.n_attributes_:
-        raise ModelBundleError(f"{where}: metadata attribute_names do not match the rule's "
-                               f"{rule.n_attributes_} attributes")
-    if not isinstance(schema, dict) or schema.get("format") not in INPUT_FORMATS:
-        raise ModelBundleError(f"{where}: metadata input is not a feature schema of format {list(INPUT_FORMATS)}")
-    if schema["format"] == "features":
-        ok = all(isinstance(schema.get(k), list) for k in ("sensors", "feature_names")) and schema.get("ndim") in (2, 3)
-        if not ok:
-            raise ModelBundleError(f"{where}: the feature schema needs sensors, feature_names and ndim 2 or 3")
-    if schema["format"] == "hand-grasps" and not isinstance(schema.get("feature_params"), dict):
-        raise ModelBundleError(f"{where}: the hand-grasps schema needs feature_params")
-    return Predictor(model, rule, [str(a) for a in names], schema, metadata, calibration)
-
-
-def load_predictor(path: str | Path, *, trust_pickle: bool = False) -> Predictor:
-    """Load a bundle (see :func:`tzsl.bundle.load_bundle`; no code is run) as a :class:`Predictor`.
-
-    ``trust_pickle=True`` also loads old (format version 1) pickle bundles, which can run code:
-    only for files whose author you trust.
-
-    Raises
-    ------
-    ModelBundleError
-        Unreadable / corrupt / foreign bundle, a kind ``tzsl predict`` does not read, or a
-        payload that is not a model + decision rule.
-    """
-    kind = read_bundle_header(path).kind  # verified, nothing deserialised yet
-    if kind == DEEP_KIND:
-        from tzsl.models import NearestAttributeRule  # noqa: PLC0415
-        from tzsl.models.embedding import load_deep_bundle  # noqa: PLC0415 - needs the deep extra
-
-        model = load_deep_bundle(path, trust_pickle=trust_pickle)
-        metadata = dict(read_bundle_header(path).metadata)
-        metadata["bundle"] = {"kind": kind, "path": str(path)}
-        names = metadata.get("attribute_names") or [f"attr_{j}" for j in range(int(model.n_attributes_))]
-        rule = NearestAttributeRule().fit(np.asarray(model.class_attributes_, dtype=float))
-        return _checked({"model": model, "decision_rule": rule},
-                        {**metadata, "method": "cnn-lstm", "attribute_names": list(names), "input": {"format": "frames"}})
-    if kind not in PREDICT_KINDS:
-        hint = " (a per-EP model: give --eps-done)" if kind == "per-ep" else ""
-        raise ModelBundleError(f"{path}: no predictor for bundles of kind {kind!r}{hint} (known: {list(PREDICT_KINDS)}); "
-                               "re-save models of older tzsl versions with this one")
-    payload, metadata = load_bundle(path, expected_kind=kind, trust_pickle=trust_pickle)
-    if metadata["bundle"]["payload_format"] == "npz":  # a linear model's arrays: numpy alone
-        names = metadata.get("attribute_names")
-        if not isinstance(names, list):
-            raise ModelBundleError(f"{path}: zero-shot bundle metadata lacks ['attribute_names']")
-        model, rule, calibration = read_linear_payload(payload, len(names), str(path))
-        payload = {"model": model, "decision_rule": rule}
-        if calibration is not None:
-            payload["calibration"] = calibration
-    return _checked(payload, metadata)
 
 
 # ---------------------------------------------------------------------------- class table
@@ -225,7 +65,7 @@ def read_class_table(path: str | Path, attribute_names: Sequence[str], *,
         Keep only these classes, in this order (e.g. the unseen ones of a dataset's table).
     left_out : sequence of str
         Attributes the model left out (too rare to learn: the bundle's ``left_out_attributes``,
-        :func:`tzsl.inference.model_bundles.left_out_attributes`): their columns are ignored, in a
+        :func:`tzsl.inference.bundle_kinds.left_out_attributes`): their columns are ignored, in a
         file too, and a note says so once.
 
     Returns
@@ -319,7 +159,7 @@ class Prediction:
     grasp_ids, sources, info : list of str, length n
     grasp_posteriors : ndarray of shape (n, c)
         ``p(z | x)`` of every grasp alone, over the candidate classes (calibrated when the bundle
-        holds a calibrator: :meth:`Predictor.posteriors`).
+        holds a calibrator: :meth:`tzsl.inference.zero_shot_bundles.Predictor.posteriors`).
     decisions : ndarray of int, shape (n,)
         Per-grasp top class (index into ``classes``).
     mode : {"sc", "df"}
@@ -402,8 +242,9 @@ def prediction_report(pred: Prediction, predictor: Predictor, top: int = 5) -> d
     Returns
     -------
     dict
-        ``model`` (method, kind), ``calibration`` (:meth:`Predictor.calibration_report`: whether
-        the posteriors are calibrated, the temperature and how it was fitted), ``grasps`` (per
+        ``model`` (method, kind), ``calibration``
+        (:meth:`~tzsl.inference.zero_shot_bundles.Predictor.calibration_report`: whether the
+        posteriors are calibrated, the temperature and how it was fitted), ``grasps`` (per
         grasp: id, source, the ``top`` classes with their posterior (0 = all), the decision),
         ``fusion`` (mode, k, decided, decision, grasps used, and DF-MDAP's final ranking), ``notes``.
     """

@@ -1,7 +1,7 @@
 """Read the grasps given to ``tzsl predict`` into the feature matrix a saved model expects.
 
-A bundle's *feature schema* (metadata ``input``, written by :mod:`tzsl.inference.model_bundles`)
-says what the model reads; :func:`read_inputs` turns input files into that matrix. The reader
+A bundle's *feature schema* (metadata ``input``, written by :func:`feature_schema`) says what the
+model reads; :func:`read_inputs` turns input files into that matrix. The reader
 depends on the data format only, never on the model:
 
 ``{"format": "features", "sensors": [s str], "feature_names": [d str], "ndim": 2 or 3, "signals": ...}``
@@ -32,18 +32,43 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from tzsl._io import read_npz
-from tzsl.datasets import read_csv_table, read_grasps, read_signal_file, signal_from_arrays
+from tzsl.datasets import FeatureSet, read_csv_table, read_grasps, read_signal_file, signal_from_arrays
 from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
 
-__all__ = ["INPUT_FORMATS", "Grasps", "describe_inputs", "grasp_model_input", "read_feature_rows", "read_inputs"]
+__all__ = ["INPUT_FORMATS", "Grasps", "describe_inputs", "feature_schema", "grasp_model_input", "read_feature_rows",
+           "read_inputs"]
 
 #: Feature-schema formats :func:`read_inputs` reads.
 INPUT_FORMATS: tuple[str, ...] = ("features", "hand-grasps", "frames")
+
+
+def feature_schema(features: FeatureSet, ndim: int) -> dict:
+    """The ``input`` metadata of a model fitted on ``features``.
+
+    Parameters
+    ----------
+    features : tzsl.datasets.FeatureSet
+        The training features: their sensors and feature names are the layout the model reads.
+        Signal datasets (``features.info`` holding ``statistics``) also record the channels,
+        statistics and baseline rows, so signal files can be given at predict time.
+    ndim : {2, 3}
+        The method's input (:attr:`tzsl.models.Method.input_ndim`).
+    """
+    if ndim not in (2, 3):
+        raise ConfigError(f"ndim must be 2 or 3, got {ndim!r}")
+    schema: dict[str, Any] = {"format": "features", "sensors": [str(s) for s in features.sensors],
+                              "feature_names": [str(f) for f in features.feature_names], "ndim": int(ndim)}
+    info = features.info or {}
+    if "statistics" in info:
+        schema["signals"] = {"channels": list(info["channels"]), "statistics": list(info["statistics"]),
+                             "baseline_rows": int(info.get("baseline_rows", 0))}
+    return schema
 
 
 @dataclass

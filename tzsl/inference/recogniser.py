@@ -7,9 +7,10 @@ and, with a per-EP bundle, asks which exploratory procedure to do next
 (:meth:`Recogniser.suggest_next_ep`). ``tzsl predict`` runs on this class: the same grasps give
 the same result from the command line and from Python.
 
-Linear models (ESZSL, SAE, ALE, SJE, DeViSE) load and rank with numpy alone
-(:mod:`tzsl.inference.linear_bundles`); other models import scikit-learn when loaded; no bundle
-but a deep one imports torch.
+Linear models (ESZSL, SAE, ALE, SJE, DeViSE: :mod:`tzsl.inference.linear_bundles`) and DAP
+models (an attribute-detector bank + DAP rule: :mod:`tzsl.inference.detector_bundles`) load and
+rank with numpy alone; other models import scikit-learn when loaded; no bundle but a deep one
+imports torch.
 """
 
 from __future__ import annotations
@@ -22,11 +23,12 @@ import numpy as np
 import pandas as pd
 
 from tzsl._scoring import sc_mdap
-from tzsl.bundle import read_bundle_header
+from tzsl.inference.bundle import read_bundle_header
 from tzsl.exceptions import ConfigError, ModelBundleError
 from tzsl.inference.bundle_kinds import PER_EP_KIND, left_out_attributes
-from tzsl.inference.predict import Prediction, Predictor, load_predictor, read_class_table
+from tzsl.inference.predict import Prediction, read_class_table
 from tzsl.inference.predict_inputs import grasp_model_input, read_inputs
+from tzsl.inference.zero_shot_bundles import Predictor, load_predictor
 
 __all__ = ["DEFAULT_FUSION", "DEFAULT_K", "FUSION_MODES", "Recogniser", "predict_grasps"]
 
@@ -52,7 +54,7 @@ class Recogniser:
         Candidate classes (:func:`~tzsl.inference.predict.read_class_table`: indexed by class
         name, columns in the model's attribute order).
     predictor : Predictor, optional
-        A loaded zero-shot / hand / deep bundle (:func:`~tzsl.inference.predict.load_predictor`).
+        A loaded zero-shot / hand / deep bundle (:func:`~tzsl.inference.zero_shot_bundles.load_predictor`).
     per_ep : tuple (model, metadata), optional
         A loaded per-EP bundle (:func:`~tzsl.inference.predict_active.load_per_ep_model`).
     mode : {"sc", "df"}, default DEFAULT_FUSION ("sc")
@@ -106,7 +108,7 @@ class Recogniser:
         ----------
         model : str or Path
             A bundle written by ``tzsl train-attributes`` (``--per-ep`` too), ``train-hand`` or
-            ``train-deep``. Loading it runs no code (see :mod:`tzsl.bundle`).
+            ``train-deep``. Loading it runs no code (see :mod:`tzsl.inference.bundle`).
         classes : str or Path
             CSV (class name, then one 0/1 column per model attribute) or a dataset folder (its
             ``classes.csv``).
@@ -335,7 +337,7 @@ def predict_grasps(
     Parameters
     ----------
     predictor : Predictor
-        From :func:`~tzsl.inference.predict.load_predictor`.
+        From :func:`~tzsl.inference.zero_shot_bundles.load_predictor`.
     classes : DataFrame of shape (c, m)
         From :func:`~tzsl.inference.predict.read_class_table` (columns in the model's attribute order).
     inputs : sequence of paths

@@ -35,7 +35,8 @@ Design choices (beyond the paper)
 Files: this module (parameters, network, frozen features, inference),
 :mod:`~tzsl.models._deep_training` (epochs, checkpoints, early stopping),
 :mod:`~tzsl.models._deep_input` (input checks, lazy torch), :mod:`~tzsl.models._deep_bundle`
-(model bundles), :mod:`~tzsl.models._deep_backbones` (the torch networks).
+(the model as arrays, for its bundle: :mod:`tzsl.inference.deep_bundles`),
+:mod:`~tzsl.models._deep_backbones` (the torch networks).
 """
 
 from __future__ import annotations

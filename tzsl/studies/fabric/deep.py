@@ -403,7 +403,7 @@ def run_deep_fabric_study(
                         "seconds_per_epoch": r.seconds_per_epoch, "feature_seconds": r.feature_seconds,
                     })
                     if save_model is not None:
-                        from tzsl.models.embedding import save_deep_bundle  # noqa: PLC0415
+                        from tzsl.inference.deep_bundles import save_deep_bundle  # noqa: PLC0415
 
                         save_deep_bundle(r.model, save_model, force=out.force)
     runs = pd.DataFrame(rows)

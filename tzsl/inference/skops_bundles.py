@@ -1,34 +1,41 @@
-"""Model payloads of :mod:`tzsl.bundle`: skops for estimators (with tzsl's trusted types), ``.npz`` for arrays.
+"""Bundle payloads stored with skops: fitted estimators, read without running code.
 
-Nothing here runs code from a file: skops payloads naming a type outside the trusted list are
-refused before anything is built (:func:`is_trusted_type`), and ``.npz`` payloads are read with
-``allow_pickle=False``. pandas tables inside a model (skops cannot store them) are written as plain
-columns and rebuilt on load.
+A zero-shot model that no array payload holds (:mod:`tzsl.inference.zero_shot_bundles`), a
+per-EP model (:mod:`tzsl.inference.predict_active`) and the hand model are saved with
+:mod:`skops.io`. Reading a payload refuses every type that is not on tzsl's trusted list *before*
+anything is built (:func:`is_trusted_type`, naming the type): the types skops trusts by default
+(builtins, numpy arrays and scalars), classes defined in ``sklearn`` and in ``tzsl.models`` /
+``tzsl.features`` (each resolved and checked to be a class defined where its name says, so a name
+cannot smuggle in a function or a module), and :data:`EXTRA_TRUSTED_TYPES`. pandas tables inside a
+model (skops cannot store them) are written as plain columns and rebuilt on load.
 """
 
 from __future__ import annotations
 
 import copy
 import importlib
-import io
 import sys
 import zipfile
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from tzsl._io import read_npz
-from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
+from tzsl.exceptions import ModelBundleError
+
+__all__ = ["EXTRA_TRUSTED_TYPES", "SKOPS_SKIPPED_LIBRARIES", "TRUSTED_MODULE_PREFIXES", "is_trusted_type",
+           "read_skops_payload", "skops_io", "skops_payload"]
+
+_PANDAS = "__tzsl_pandas__"
+
 
 #: Packages whose *classes* a skops payload may name (each checked to be a class defined there).
 TRUSTED_MODULE_PREFIXES: tuple[str, ...] = ("sklearn.", "tzsl.models.", "tzsl.features.")
 #: Further type names trusted in skops payloads (skops leaves them out of its defaults).
 EXTRA_TRUSTED_TYPES: frozenset[str] = frozenset({"numpy.dtype"})
 
-_PANDAS = "__tzsl_pandas__"
 #: Optional array libraries that importing skops would import for nothing: skops lists every
 #: scikit-learn estimator when it is first imported (``sklearn.utils.all_estimators``), which walks
 #: every scikit-learn package, ``sklearn.externals.array_api_compat.torch`` and ``.dask`` included,
@@ -158,53 +165,20 @@ def _decode(obj: Any) -> Any:
     return obj
 
 
-def _is_array_tree(obj: Any) -> bool:
-    if isinstance(obj, np.ndarray):
-        return True
-    return isinstance(obj, Mapping) and len(obj) > 0 and all(
-        isinstance(k, str) and "/" not in k and _is_array_tree(v) for k, v in obj.items())
+def skops_payload(model: Any) -> bytes:
+    """The skops bytes of a fitted estimator (pandas tables inside it stored as plain columns)."""
+    return skops_io().dumps(_encode(model), compression=zipfile.ZIP_DEFLATED)
 
 
-def _flatten(tree: Mapping, prefix: str = "") -> dict[str, np.ndarray]:
-    flat: dict[str, np.ndarray] = {}
-    for key, value in tree.items():
-        if isinstance(value, Mapping):
-            flat.update(_flatten(value, f"{prefix}{key}/"))
-            continue
-        array = np.asarray(value)
-        if array.dtype.hasobject:
-            if not all(isinstance(v, str) for v in array.ravel()):
-                raise ConfigError(f"array {prefix}{key!r} holds Python objects; a bundle stores numbers and text only")
-            array = array.astype(str)
-        flat[prefix + key] = array
-    return flat
+def read_skops_payload(path: Path, payload: bytes) -> Any:
+    """The estimator of a skops payload; refuses untrusted types by name before building anything.
 
-
-def _unflatten(flat: Mapping[str, np.ndarray]) -> dict:
-    tree: dict = {}
-    for key, value in flat.items():
-        node = tree
-        *parents, leaf = key.split("/")
-        for part in parents:
-            node = node.setdefault(part, {})
-        node[leaf] = value
-    return tree
-
-
-def serialise(model: Any) -> tuple[str, bytes]:
-    buffer = io.BytesIO()
-    if _is_array_tree(model) and not isinstance(model, np.ndarray):
-        np.savez_compressed(buffer, **_flatten(model))
-        return "npz", buffer.getvalue()
-    return "skops", skops_io().dumps(_encode(model), compression=zipfile.ZIP_DEFLATED)
-
-
-def deserialise(path: Path, payload_format: str, payload: bytes) -> Any:
-    if payload_format == "npz":
-        try:
-            return _unflatten(read_npz(io.BytesIO(payload), name=path))
-        except DataFileError as exc:
-            raise ModelBundleError(f"{path}: model arrays unreadable: {exc.problem}") from None
+    Raises
+    ------
+    ModelBundleError
+        Not a readable skops file, a type tzsl does not trust, or deserialising failed (one line
+        naming ``path``).
+    """
     sio = skops_io()
     try:
         untrusted = sio.get_untrusted_types(data=payload)
