@@ -70,15 +70,21 @@ def _study_options(func):
 def _dataset_values(dataset, features_file, plain_dir, path, data_dir) -> dict:
     if dataset is None and features_file is None and plain_dir is None:
         dataset = "phac2-penn"
+    from tzsl.studies.config import option_values  # noqa: PLC0415
+
     values = {"dataset.builtin": dataset, "dataset.features": features_file, "dataset.plain": plain_dir,
-              "dataset.path": path, "dataset.data_dir": data_dir}
-    return {k: None if v is None else str(v) for k, v in values.items()}
+              "dataset.path": path}
+    return {**{k: None if v is None else str(v) for k, v in values.items()},
+            **option_values(STUDY, {"data_dir": data_dir})}
 
 
 def _study_values(seed, n_jobs, backend, scheduler, undersampling, cv, grid, no_progress, no_cache) -> dict:
-    return {"splits.seed": seed, "compute.n_jobs": n_jobs, "compute.backend": backend,
-            "compute.scheduler": scheduler, "svm.undersampling": undersampling, "svm.cv": cv, "svm.grid": grid,
-            "compute.progress": not no_progress, "compute.cache": not no_cache}
+    from tzsl.studies.config import option_values  # noqa: PLC0415
+
+    shared = option_values(STUDY, {"seed": seed, "n_jobs": n_jobs, "backend": backend, "scheduler": scheduler,
+                                   "progress": not no_progress})
+    return {**shared, "svm.undersampling": undersampling, "svm.cv": cv, "svm.grid": grid,
+            "compute.cache": not no_cache}
 
 
 def _experiment(values: dict):
@@ -222,13 +228,15 @@ def evaluate_values(kind, splits_file, n_splits, n_test, multilabel, sweep, out,
                     path, undersampling, cv, grid, no_progress, no_cache, seed, n_jobs, backend, scheduler,
                     data_dir, purpose: str | None = None) -> dict:
     """``tzsl evaluate``'s options as experiment keys (``{"table.key": value}``)."""
+    from tzsl.studies.config import option_values  # noqa: PLC0415
+
     kinds = ["file"] if splits_file is not None else (list(SPLIT_KINDS) if kind == "both" else [kind])
     return {**_dataset_values(dataset, features_file, plain_dir, path, data_dir),
             **_study_values(seed, n_jobs, backend, scheduler, undersampling, cv, grid, no_progress, no_cache),
             "splits.kinds": kinds, "splits.file": None if splits_file is None else str(splits_file),
             "splits.n_splits": n_splits, "splits.n_test": n_test, "methods.multilabel": multilabel,
             **({} if purpose is None else {"splits.purpose": purpose}),
-            "methods.sweep": sweep, "output.folder": str(out)}
+            "methods.sweep": sweep, **option_values(STUDY, {"out": out})}
 
 
 @cli.command()

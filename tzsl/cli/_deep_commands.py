@@ -122,16 +122,18 @@ def train_deep_values(out: Path, results: Path | None, config: str, attributes: 
                       conditions: tuple[str, ...], data_dir: Path | None, seed: int, no_progress: bool,
                       lam, **model_options) -> dict:
     """``tzsl train-deep``'s options as the keys of a ``study = "fabric-deep"`` experiment."""
+    from tzsl.studies.config import option_values  # noqa: PLC0415
+
     if conditions and gelsight_root is None:
         raise ConfigError("--condition needs --gelsight-root")
     return {
         "output.folder": str(results if results is not None else (out.parent if str(out.parent) else Path("."))),
-        "output.model": str(out), "splits.configs": [int(config)], "splits.n_seeds": 1, "splits.seed": seed,
+        "output.model": str(out), "splits.configs": [int(config)], "splits.n_seeds": 1,
         "methods.embedding_lambdas": [parse_lam(str(lam))], "dataset.attributes": attributes,
         "dataset.gelsight_root": None if gelsight_root is None else str(gelsight_root),
         "features.gelsight_conditions": list(conditions) or None,
-        "dataset.data_dir": None if data_dir is None else str(data_dir), "compute.progress": not no_progress,
         "methods.model": deep_model_params(lam=lam, **model_options),
+        **option_values("fabric-deep", {"seed": seed, "data_dir": data_dir, "progress": not no_progress}),
     }
 
 

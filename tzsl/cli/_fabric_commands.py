@@ -29,14 +29,16 @@ FABRIC_MODELS = ("classical", "deep")
 def evaluate_fabric_values(model, out, n_seeds, configs, gelsight_root, attributes, no_progress, data_dir, n_jobs,
                            seed) -> tuple[str, dict]:
     """``tzsl evaluate-fabric``'s options as (study, experiment keys)."""
-    values = {"output.folder": str(out), "splits.n_seeds": n_seeds, "splits.seed": seed,
-              "splits.configs": [int(c) for c in configs] or None, "dataset.attributes": attributes,
+    from tzsl.studies.config import option_values  # noqa: PLC0415
+
+    study = "fabric-deep" if model == "deep" else "fabric"
+    values = {"splits.n_seeds": n_seeds, "splits.configs": [int(c) for c in configs] or None,
+              "dataset.attributes": attributes,
               "dataset.gelsight_root": None if gelsight_root is None else str(gelsight_root),
-              "dataset.data_dir": None if data_dir is None else str(data_dir),
-              "compute.progress": not no_progress}
+              **option_values(study, {"out": out, "seed": seed, "data_dir": data_dir, "progress": not no_progress})}
     if model == "deep":
-        return "fabric-deep", values
-    return "fabric", {**values, "compute.n_jobs": n_jobs, "zero_shot.enabled": False}  # the paper protocol only
+        return study, values
+    return study, {**values, **option_values(study, {"n_jobs": n_jobs}), "zero_shot.enabled": False}  # paper only
 
 
 @cli.command("evaluate-fabric")

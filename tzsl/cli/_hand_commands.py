@@ -83,13 +83,15 @@ def simulate_grasps_command(out: Path, grasps_per_object: int, noise: float, dif
 def evaluate_hand_values(grasps, table, out, seeds, grasps_per_object, noise, difficulty, shape_miss_rate,
                          n_sequences, n_jobs, no_progress) -> dict:
     """``tzsl evaluate-hand``'s options as experiment keys (``{"table.key": value}``)."""
+    from tzsl.studies.config import option_values  # noqa: PLC0415
+
     return {"dataset.builtin": "hand-simulated" if grasps is None else None,
             "dataset.grasps": None if grasps is None else str(grasps),
-            "dataset.table": None if table is None else str(table), "output.folder": str(out),
+            "dataset.table": None if table is None else str(table),
+            **option_values("hand", {"out": out, "n_jobs": n_jobs, "progress": not no_progress}),
             "splits.seeds": list(seeds), "simulation.n_grasps_per_object": grasps_per_object,
             "simulation.noise": noise, "simulation.difficulty": difficulty,
             "simulation.shape_miss_rate": shape_miss_rate, "methods.n_sequences": n_sequences,
-            "compute.n_jobs": n_jobs, "compute.progress": not no_progress,
             "zero_shot.enabled": False}  # the paper protocol only
 
 
