@@ -35,8 +35,8 @@ def attribute_accuracy_figure(summary: pd.DataFrame):
     return fig
 
 
-def object_map_figure(map_coords: pd.DataFrame):
-    """The 2-D object map with the partition lines y = x, y = -x and the halving line (paper Fig. 3)."""
+def object_map_figure(map_coords: pd.DataFrame, dataset: str):
+    """The 2-D object map of ``dataset`` with the partition lines y = x, y = -x and the halving line (paper Fig. 3)."""
     fig, ax = plt.subplots(figsize=(7, 6))
     for part, group in map_coords.groupby("partition"):
         label = f"{part}: {group['partition_label'].iloc[0]}"
@@ -61,7 +61,7 @@ def object_map_figure(map_coords: pd.DataFrame):
     ax.set_ylim(-lim, lim)
     ax.set_xlabel("PC 1")
     ax.set_ylabel("PC 2")
-    ax.set_title("PHAC-2 objects: 2-D map and challenging partitions")
+    ax.set_title(f"{dataset} objects: 2-D map and challenging partitions")
     ax.legend(fontsize=7, loc="best")
     fig.tight_layout()
     return fig

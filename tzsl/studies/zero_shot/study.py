@@ -311,7 +311,7 @@ def run_zero_shot_tables(
             used += [r.split for r in results]
             tables["table3_challenging"] = table3_challenging(results, map_coords, paper=paper)
             tables["object_map"] = map_coords
-            out.write_figure("object_map.png", object_map_figure(map_coords))
+            out.write_figure("object_map.png", object_map_figure(map_coords, features.dataset))
         by_kind = {scored: (random_results, 0), "challenging": (results, 100)}
         tables.update(evidence_tables(
             features, by_kind, seed=config.study_seed, labels=labels, compare_on=config.methods.compare_on,
