@@ -168,8 +168,11 @@ def _echo_profile(rows: list[dict]) -> None:
 def report(results_dir: Path, out: Path | None, force: bool) -> None:
     """Write one self-contained HTML page of a results folder.
 
-    Every CSV table (paper columns shaded), every PNG figure (embedded) and every manifest
-    (collapsible), with the tzsl version and date. No other file is needed to view it.
+    A study of your own dataset opens with the dataset's card and a summary (the best method
+    against chance and the trivial baseline, with intervals; what was relaxed), then sections
+    named for what they show; the papers' presets keep the papers' headings and deviations. Wide
+    tables show their key columns (the rest behind 'show'), every PNG figure is embedded and
+    every manifest collapsible, with the tzsl version and date. No other file is needed to view it.
     """
     from tzsl.reporting.report import write_report  # noqa: PLC0415
 
