@@ -21,6 +21,7 @@ from tzsl.studies.config._common import (
     DaskCompute,
     Output,
     check_n_jobs,
+    dap_label,
     method_label,
 )
 from tzsl.studies.config._load import (
@@ -78,5 +79,5 @@ __all__ = [
     "Phac2Features", "Phac2Gzsl", "Phac2Methods", "Phac2Splits", "Phac2Study", "Phac2Svm", "builtin_names",
     "builtin_text", "check_n_jobs", "config_from_options", "defaults", "estimator_parameters", "load_experiment",
     "to_toml",
-    "method_label", "validate", "ZeroShotMethods", "ZeroShotSplits", "ZeroShotStudy", "every_feature_method",
+    "dap_label", "method_label", "validate", "ZeroShotMethods", "ZeroShotSplits", "ZeroShotStudy", "every_feature_method",
 ]

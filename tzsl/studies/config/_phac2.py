@@ -27,6 +27,7 @@ from tzsl.studies.config._common import (
     Purpose,
     Section,
     Seed,
+    dap_label,
     distinct,
     lambdas_ok,
     method_label,
@@ -203,6 +204,23 @@ class Phac2Svm(Section):
                     "trials); 'auto': exact up to max_exact_trials training trials, approximate above")
     max_exact_trials: int = Field(default_factory=lambda: _bank_default("max_exact_trials"), ge=1,
                                   description="largest training set (trials) that solver = 'auto' fits exactly")
+    detector: str = Field(
+        default_factory=lambda: _bank_default("detector"),
+        description="family of the per-(attribute, sensor) classifier of the study's DAP (tzsl.models.attribute_training."
+                    "DETECTORS): 'rbf-svm' (these SVMs: the DAP paper's), 'logistic', 'linear-svm', 'robust-logistic' "
+                    "(linear, C by object-grouped CV), 'logistic-c1' (class-balanced L2 logistic regression, C = 1) or "
+                    "'auto' (rbf-svm or logistic, chosen on pseudo-unseen training classes); the other keys of [svm] "
+                    "apply to 'rbf-svm' (and 'auto''s RBF-SVM). The DAP rows are labelled with it: dap-avg for "
+                    "'rbf-svm', dap-avg-<detector> (the registered method) otherwise")
+
+    @field_validator("detector")
+    @classmethod
+    def _detector(cls, v):
+        from tzsl.models.attribute_training import DETECTORS  # noqa: PLC0415
+
+        if v not in DETECTORS:
+            raise ValueError(f"unknown detector {v!r}; choose one of {', '.join(DETECTORS)}")
+        return v
 
     def estimator_params(self) -> dict:
         """The :class:`~tzsl.models.AttributeSVM` parameters of this table that differ from the SVM's
@@ -282,6 +300,11 @@ class Phac2Study(DapSettings):
         if kinds == ["file"] and self.splits.file is None and self.dataset.plain is None:
             problems.append(("splits.kinds", "['file'] needs file = a split CSV (or a plain dataset folder "
                                              "with splits.csv)"))
+        own = {dap_label(fusion, self.svm.detector) for fusion in ("avg", "max")}
+        twice = sorted(own & {method_label(spec) for spec in self.methods.compare})
+        if twice:
+            problems.append(("methods.compare", f"{', '.join(twice)} is the study's own DAP ([svm] detector = "
+                                                f"{self.svm.detector!r}); leave it out of compare"))
         if "challenging" in self.methods.compare_on and "challenging" not in kinds:
             problems.append(("methods.compare_on", "'challenging' needs 'challenging' in splits.kinds"))
         if self.methods.gzsl and kinds == ["challenging"]:
@@ -334,12 +357,48 @@ class ZeroShotSplits(Phac2Splits):
     n_test: int = Field(5, ge=1, description="test (unseen) objects per random split")
 
 
+def _study_detector() -> str:
+    """The generic study's detector family (:data:`tzsl.models.attribute_training.STUDY_DETECTOR`)."""
+    from tzsl.models.attribute_training import STUDY_DETECTOR  # noqa: PLC0415
+
+    return STUDY_DETECTOR
+
+
+class ZeroShotSvm(Phac2Svm):
+    """``[svm]`` of the generic study: its DAP's detector defaults to the family the evidence chose."""
+
+    detector: str = Field(default_factory=_study_detector, description=Phac2Svm.model_fields["detector"].description
+                          + " (zero-shot study default: tzsl.models.attribute_training.STUDY_DETECTOR, chosen on "
+                            "PHAC-2 selection splits: tzsl.models.INHERITED_CHOICES, study-detector)")
+
+
 class ZeroShotStudy(Phac2Study):
     """``study = "zero-shot"``: any dataset, every registered feature method, random + challenging splits."""
 
     study: Literal["zero-shot"] = "zero-shot"
     methods: ZeroShotMethods = Field(default_factory=ZeroShotMethods)
     splits: ZeroShotSplits = Field(default_factory=ZeroShotSplits)
+    svm: ZeroShotSvm = Field(default_factory=ZeroShotSvm)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _default_compare(cls, data):
+        """The default ``compare`` (every feature method) runs the paper's ``dap-avg`` and leaves out the
+        registered method the study's own DAP already is (``dap-avg-<detector>``)."""
+        if not isinstance(data, dict):
+            return data
+        methods, svm = data.get("methods") or {}, data.get("svm") or {}
+        if not isinstance(methods, dict) or "compare" in methods:
+            return data
+        methods = dict(methods)
+        detector = (svm.get("detector") if isinstance(svm, dict) else getattr(svm, "detector", None)) or _study_detector()
+        if detector == "rbf-svm":
+            return data
+        own = {dap_label(fusion, detector) for fusion in ("avg", "max")}
+        switched = {name for name in ("eszsl", "embedding") if methods.get(name)}
+        methods["compare"] = [{"name": "dap-avg"}] + [spec for spec in every_feature_method()
+                                                      if spec["name"] not in own | switched]
+        return {**data, "methods": methods}
 
 
 # --------------------------------------------------------------------------- [zero_shot] of a paper preset
