@@ -109,6 +109,7 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=32)
     ap.add_argument("--purpose", choices=PURPOSES, default="confirm")
     ap.add_argument("--no-challenging", action="store_true", help="random splits only")
+    ap.add_argument("--no-random", action="store_true", help="challenging splits only")
     ap.add_argument("--summarise", action="store_true", help="only summarise the trials.csv of --out")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
@@ -118,7 +119,7 @@ def main() -> None:
         study_seed = DapSettings(splits={"seed": args.seed, "purpose": args.purpose}).study_seed
         parts, cpu_rows = [], []
         for kind, index, split in study_splits(features, args.n_random, args.seed, args.purpose):
-            if args.no_challenging and kind == "challenging":
+            if (args.no_challenging and kind == "challenging") or (args.no_random and kind == "random"):
                 continue
             table, cpu = score_split(features, split, study_seed + index)
             parts.append(table.assign(kind=kind))
