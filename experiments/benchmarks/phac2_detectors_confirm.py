@@ -16,6 +16,12 @@ mean of the members' trial-wise z-scored class scores, ties broken with the spli
 (dap-avg-logistic-c1, eszsl, sae) and ``ensemble-both`` (all four). Unlike the registered
 ensemble, its members here share their seeds with the single methods.
 
+``--dataset`` runs the same comparison on another dataset with an attribute table: a built-in one
+(``fabric-depth``, ``hand-simulated``: SIMULATED grasps) or ``synthetic`` (SIMULATED:
+:func:`tzsl.datasets.write_synthetic_dataset`, 600 trials of 60 classes, 30 attributes), with
+``--n-test`` unseen classes per random split (and ``--no-challenging`` where challenging splits are not
+sound).
+
 Output (``--out`` folder): ``trials.csv`` (one row per method and test trial, written after every
 split) and ``summary.csv`` (per split kind and method: accuracy with its two-level bootstrap 95%
 interval, and the paired difference to ``dap-avg`` and to ``eszsl`` on the same trials with their
@@ -36,7 +42,8 @@ import numpy as np
 import pandas as pd
 
 from tzsl.evaluation import PURPOSES, bootstrap_accuracy, paired_differences_table
-from tzsl.features import dataset_features
+from tzsl.datasets import write_synthetic_dataset
+from tzsl.features import dataset_features, load_features
 from tzsl.models import AttributeSVM, GridEdgeWarning
 from tzsl.models.dap import break_ties
 from tzsl.models.protocol import zscore_rows
@@ -44,7 +51,9 @@ from tzsl.studies.config import DapSettings
 from tzsl.studies.study_methods import method_input
 from tzsl.studies.zero_shot.methods import fit_predict_split
 
-from phac2_posteriors import study_splits  # noqa: E402  (run from experiments/benchmarks/ or with it on sys.path)
+from tzsl.studies.zero_shot.study import make_splits
+
+from phac2_posteriors import CHALLENGING_OFFSET  # noqa: E402  (run from experiments/benchmarks/ or with it on sys.path)
 
 #: Members fitted on every split: label -> registry entry (bare: no calibration).
 MEMBERS: dict[str, dict] = {
@@ -60,6 +69,26 @@ ENSEMBLES: dict[str, tuple[str, ...]] = {
     "ensemble-both": ("dap-avg", "dap-avg-logistic-c1", "eszsl", "sae"),
 }
 REFERENCES = ("dap-avg", "eszsl")
+
+
+def features_of(dataset: str, out: Path):
+    """The FeatureSet of ``dataset``: a built-in name, or ``synthetic`` (written once under ``out``)."""
+    if dataset != "synthetic":
+        return dataset_features(dataset)
+    folder = out / "synthetic_dataset"
+    if not folder.exists():
+        write_synthetic_dataset(folder, 600, seed=0)
+    return load_features(plain=folder)
+
+
+def splits_of(features, config: DapSettings, challenging: bool) -> list:
+    """``[(kind, index, Split)]``: the random splits of ``config`` then (``challenging``) the challenging ones."""
+    random_splits, _ = make_splits(features, "random", config)
+    out = [("random", i, s) for i, s in enumerate(random_splits)]
+    if challenging:
+        out += [("challenging", CHALLENGING_OFFSET + i, s) for i, s in enumerate(make_splits(features, "challenging",
+                                                                                              config)[0])]
+    return out
 
 
 def score_split(features, split, seed: int) -> tuple[pd.DataFrame, dict[str, float]]:
@@ -111,15 +140,19 @@ def main() -> None:
     ap.add_argument("--no-challenging", action="store_true", help="random splits only")
     ap.add_argument("--no-random", action="store_true", help="challenging splits only")
     ap.add_argument("--summarise", action="store_true", help="only summarise the trials.csv of --out")
+    ap.add_argument("--dataset", default="phac2-penn", help="phac2-penn, fabric-depth, hand-simulated or synthetic")
+    ap.add_argument("--n-test", type=int, default=10, help="unseen classes per random split")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     if not args.summarise:
-        features = dataset_features("phac2-penn")
+        features = features_of(args.dataset, args.out)
         warnings.simplefilter("ignore", GridEdgeWarning)
-        study_seed = DapSettings(splits={"seed": args.seed, "purpose": args.purpose}).study_seed
+        config = DapSettings(splits={"seed": args.seed, "purpose": args.purpose, "n_splits": args.n_random,
+                                     "n_test": args.n_test})
+        study_seed = config.study_seed
         parts, cpu_rows = [], []
-        for kind, index, split in study_splits(features, args.n_random, args.seed, args.purpose):
-            if (args.no_challenging and kind == "challenging") or (args.no_random and kind == "random"):
+        for kind, index, split in splits_of(features, config, not args.no_challenging):
+            if args.no_random and kind == "random":
                 continue
             table, cpu = score_split(features, split, study_seed + index)
             parts.append(table.assign(kind=kind))
