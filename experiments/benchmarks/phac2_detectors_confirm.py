@@ -29,6 +29,8 @@ intervals)::
 
     nice -n 5 python experiments/benchmarks/phac2_detectors_confirm.py --out DIR --purpose select --seed 0 --n-random 5
     nice -n 5 python experiments/benchmarks/phac2_detectors_confirm.py --out DIR --purpose confirm --seed 32 --n-random 50
+    nice -n 5 python experiments/benchmarks/phac2_detectors_confirm.py --out DIR --dataset fabric-depth --n-test 3 \
+        --n-random 3 --no-challenging --min-train-negatives 2
 """
 
 from __future__ import annotations
@@ -142,13 +144,15 @@ def main() -> None:
     ap.add_argument("--summarise", action="store_true", help="only summarise the trials.csv of --out")
     ap.add_argument("--dataset", default="phac2-penn", help="phac2-penn, fabric-depth, hand-simulated or synthetic")
     ap.add_argument("--n-test", type=int, default=10, help="unseen classes per random split")
+    ap.add_argument("--min-train-negatives", type=int, default=1,
+                    help="a split leaves out an attribute absent in fewer training objects (the SVM's CV needs 2)")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     if not args.summarise:
         features = features_of(args.dataset, args.out)
         warnings.simplefilter("ignore", GridEdgeWarning)
         config = DapSettings(splits={"seed": args.seed, "purpose": args.purpose, "n_splits": args.n_random,
-                                     "n_test": args.n_test})
+                                     "n_test": args.n_test, "min_train_negatives": args.min_train_negatives})
         study_seed = config.study_seed
         parts, cpu_rows = [], []
         for kind, index, split in splits_of(features, config, not args.no_challenging):
