@@ -62,3 +62,16 @@ def test_a_study_with_a_linear_detector_labels_its_dap_rows_and_pairs_with_them(
     assert comparison.set_index("method")["difference"].drop("dap-avg-logistic-c1").notna().all()
     fusion = pd.read_csv(out / "dap_fusion_prior.csv")
     assert set(fusion["reference"]) == {"dap-avg-logistic-c1"}
+
+
+def test_the_paper_presets_generic_part_keeps_the_rbf_svm_beside_the_chosen_family():
+    """fabric-evidence / hand-evidence compare dap-avg-logistic-c1 in their generic part, whose own DAP
+    stays the RBF-SVM; listing the run's files builds that part with the preset's [svm] too (it failed
+    with the generic study's default detector, whose DAP is dap-avg-logistic-c1 itself)."""
+    from tzsl.studies.zero_shot.preset import generic_experiment, preset_outputs  # noqa: PLC0415
+
+    for name in ("fabric-evidence", "hand-evidence"):
+        exp = load_experiment(name)
+        assert generic_experiment(exp).config.svm.detector == "rbf-svm"
+        assert {s["name"] for s in generic_experiment(exp).config.methods.compare} >= {"dap-avg-logistic-c1"}
+        assert preset_outputs(exp.config, [])
