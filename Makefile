@@ -77,7 +77,7 @@ evidence: install-core
 # typed (tzsl.reporting.readme_results): each entry is FILE[:BLOCK]=FOLDER, the results folder that
 # block (default: every block of the file) reads. The evidence blocks are left as they are (with a
 # note) while $(EVIDENCE) does not exist.
-NUMBERS := README.md:readme=$(RESULTS) README.md:evidence=$(EVIDENCE) \
+NUMBERS := README.md:readme=$(RESULTS) README.md:evidence=$(EVIDENCE) README.md:detectors=$(EVIDENCE) \
 	docs/user_guide/reproducing.md:results-evidence=$(EVIDENCE) \
 	experiments/benchmarks/README.md=$(BENCH_RESULTS) \
 	docs/user_guide/performance.md=$(SEARCH_RESULTS)

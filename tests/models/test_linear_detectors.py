@@ -14,6 +14,7 @@ from tzsl.models import (
     AttributeClassifierBank,
     AttributeSVM,
     LinearAttribute,
+    LogisticAttribute,
     MultiLabelAttributeClassifier,
     build_method,
     get_method,
@@ -121,7 +122,8 @@ def test_linear_detector_refuses_a_single_object_class_and_bad_ranges():
 def test_bank_fits_the_linear_families(detector):
     X, A, g, rows = bank_problem()
     bank = AttributeClassifierBank(detector=detector, random_state=0, memory=False).fit(X, A, g)
-    assert all(isinstance(est, LinearAttribute) for per in bank.estimators_ for est in per)
+    family = LogisticAttribute if detector == "logistic-c1" else LinearAttribute
+    assert all(isinstance(est, family) for per in bank.estimators_ for est in per)
     assert bank.detector_ == detector and bank.detector_choice_ == {"detector": detector, "criterion": "given"}
     assert bank.solver_choice_["solver"] == "exact" and "linear" in bank.solver_choice_["reason"]
     P = bank.predict_proba(X)
@@ -169,7 +171,7 @@ def test_auto_with_a_given_svm_template_can_choose_a_linear_family():
 def test_registered_linear_methods_build_and_run():
     X, A, g, rows = bank_problem(n_obj=12)
     for name, detector in (("dap-avg-logistic", "logistic"), ("dap-avg-linear-svm", "linear-svm"),
-                           ("dap-avg-robust-logistic", "robust-logistic")):
+                           ("dap-avg-robust-logistic", "robust-logistic"), ("dap-avg-logistic-c1", "logistic-c1")):
         assert get_method(name).preset["detector"] == detector and "detector" not in get_method(name).parameters()
         model = build_method(name, random_state=0, memory=False, calibration="none").fit(X, A, g)
         assert model.attribute_model_.detector_ == detector
@@ -198,3 +200,14 @@ def test_classifier_chain_takes_a_linear_detector():
 def test_linear_svm_detector_passes_check_estimator(estimator, check):
     """The estimator-check list holds the robust logistic detector; the linear SVM's own fit path here."""
     check(estimator)
+
+
+def test_the_untuned_logistic_family_is_the_per_ep_models_classifier_and_takes_no_template():
+    """``logistic-c1``: LogisticAttribute with its defaults (C = 1, class-balanced); an SVM template is refused."""
+    template = detector_template("logistic-c1")
+    assert isinstance(template, LogisticAttribute) and template.get_params() == LogisticAttribute().get_params()
+    with pytest.raises(ConfigError, match="estimator is the template of detector='rbf-svm'"):
+        detector_template("logistic-c1", AttributeSVM())
+    X, A, g, _ = bank_problem()
+    chain = MultiLabelAttributeClassifier(detector="logistic-c1", random_state=0, memory=False).fit(X, A, g)
+    assert chain.predict_proba(X).shape == (len(g), 2, A.shape[1])

@@ -403,3 +403,29 @@ def test_each_block_reads_its_own_folder(tmp_path):
     assert main([str(papers), str(readme), "--block", "readme", "--check"]) == 0
     with pytest.raises(ConfigError, match="has no block 'nope'"):
         update_file(readme, papers, blocks=["nope"])
+
+
+def test_detectors_block_pairs_the_chosen_detector_with_dap_avg_and_eszsl(tmp_path):
+    """The README's detectors block: the run with the most splits comparing the chosen detector's DAP,
+    its rows paired with dap-avg, and the chosen DAP minus ESZSL paired over the per-split table."""
+    from tzsl.models.attribute_training import STUDY_DETECTOR  # noqa: PLC0415
+    from tzsl.reporting.readme_results import detectors_block  # noqa: PLC0415
+    from tzsl.studies.config import dap_label  # noqa: PLC0415
+
+    chosen = dap_label("avg", STUDY_DETECTOR)
+    with pytest.raises(MissingResults, match=f"no method comparison with {chosen}"):
+        detectors_block(tmp_path)
+    for folder, n in (("few", 2), ("many", 4)):
+        (tmp_path / folder).mkdir()
+        rows = [{"split_kind": "random", "method": m, "accuracy": acc, "ci95_low": acc - 0.1, "ci95_high": acc + 0.1,
+                 "n_splits": n, "difference": d, "difference_ci95_low": d - 0.05, "difference_ci95_high": d + 0.05}
+                for m, acc, d in (("dap-avg", 0.3, np.nan), (chosen, 0.4, 0.1), ("eszsl", 0.35, 0.05))]
+        pd.DataFrame(rows).to_csv(tmp_path / folder / "x_phac2_method_comparison.csv", index=False)
+        per_split = pd.DataFrame({"split": [str(i) for i in range(n)] + ["mean", "std"], "split_kind": "random",
+                                  chosen: [0.4, 0.5, 0.4, 0.5][:n] + [0.45, 0.05],
+                                  "eszsl": [0.3, 0.4, 0.3, 0.4][:n] + [0.35, 0.05]})
+        per_split.to_csv(tmp_path / folder / "x_phac2_methods.csv", index=False)
+    text = detectors_block(tmp_path)
+    assert f"| random (4) | `{chosen}` | 0.400 [0.300, 0.500] | +0.100 [+0.050, +0.150] |" in text
+    assert "| random (4) | `dap-avg` | 0.300 [0.200, 0.400] | reference |" in text
+    assert f"| random (4) | `{chosen}` minus `eszsl` | | +0.100 [+0.100, +0.100] (over splits) |" in text

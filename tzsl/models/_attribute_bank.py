@@ -76,13 +76,15 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
     estimator : classifier or None, default=None
         Template of ``detector="rbf-svm"``, cloned for every (attribute, sensor); must accept
         ``fit(X, y, groups)`` and give ``predict_proba``. ``None``: :class:`AttributeSVM` with
-        default parameters. Must be None with a linear ``detector``.
-    detector : {"rbf-svm", "logistic", "linear-svm", "robust-logistic", "auto"}, default="rbf-svm"
+        default parameters. Must be None with any other ``detector``.
+    detector : {"rbf-svm", "logistic", "linear-svm", "robust-logistic", "logistic-c1", "auto"}, default="rbf-svm"
         Family of the per-(attribute, sensor) classifier (:mod:`tzsl.models._detectors`):
         ``"rbf-svm"``: ``estimator``; ``"logistic"`` / ``"linear-svm"``:
         :class:`~tzsl.models.LinearAttribute` (L2 logistic regression / linear SVM on z-scored
         features, ``C`` by object-grouped CV, Platt posteriors); ``"robust-logistic"``: the
-        logistic detector trained group-robustly over training objects; ``"auto"``: the family
+        logistic detector trained group-robustly over training objects; ``"logistic-c1"``:
+        :class:`~tzsl.models.LogisticAttribute` (z-scored class-balanced L2 logistic regression,
+        ``C = 1``, nothing tuned); ``"auto"``: the family
         of ``detector_candidates`` with the best AVGDAP accuracy on pseudo-unseen training
         classes (class-grouped folds of the training objects only), recorded in
         ``detector_choice_``; it costs ``AUTO_FOLDS`` refits of every candidate.

@@ -9,6 +9,8 @@ bank given a template):
 * ``"linear-svm"``: :class:`~tzsl.models.LinearAttribute` with a linear SVM (squared hinge);
 * ``"robust-logistic"``: the logistic detector trained group-robustly over training objects
   (``weighting="robust"``), aimed at errors an unseen object shares across its attributes;
+* ``"logistic-c1"``: :class:`~tzsl.models.LogisticAttribute` (z-score, class-balanced L2 logistic
+  regression, ``C = 1``, its own posteriors): nothing tuned, the per-EP model's classifier;
 * ``"auto"``: one of :data:`AUTO_CANDIDATES`, chosen by :func:`choose_detector` on the training
   objects only.
 """
@@ -26,10 +28,11 @@ from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_svm import AttributeSVM
 from tzsl.models._attribute_training import GridEdgeWarning, default_preprocessor
 from tzsl.models._linear_attribute import LinearAttribute
+from tzsl.models._logistic_attribute import LogisticAttribute
 from tzsl.models._zsl_input import ZSLInputError
 
-__all__ = ["AUTO_CANDIDATES", "AUTO_FOLDS", "DETECTORS", "LINEAR_DETECTORS", "choose_detector",
-           "detector_preprocessor", "detector_template"]
+__all__ = ["AUTO_CANDIDATES", "AUTO_FOLDS", "DETECTORS", "FIXED_DETECTORS", "LINEAR_DETECTORS", "STUDY_DETECTOR",
+           "choose_detector", "detector_preprocessor", "detector_template"]
 
 #: The linear families and their :class:`LinearAttribute` parameters.
 LINEAR_DETECTORS: dict[str, dict] = {
@@ -37,8 +40,14 @@ LINEAR_DETECTORS: dict[str, dict] = {
     "linear-svm": {"loss": "squared_hinge"},
     "robust-logistic": {"loss": "log_loss", "weighting": "robust"},
 }
+#: The untuned families and their classifier (default parameters).
+FIXED_DETECTORS: dict[str, type] = {"logistic-c1": LogisticAttribute}
 #: ``detector`` options of an attribute bank.
-DETECTORS = ("rbf-svm", *LINEAR_DETECTORS, "auto")
+DETECTORS = ("rbf-svm", *LINEAR_DETECTORS, *FIXED_DETECTORS, "auto")
+#: The detector family of the generic zero-shot study (``[svm] detector`` of ``study = "zero-shot"``): chosen
+#: on PHAC-2 selection splits and reported on confirmation splits (:data:`tzsl.models.INHERITED_CHOICES`,
+#: ``study-detector``). The paper presets and :class:`~tzsl.models.AttributeClassifierBank` keep ``"rbf-svm"``.
+STUDY_DETECTOR = "logistic-c1"
 #: The families ``detector="auto"`` chooses between (the flexible kernel and the linear detector).
 AUTO_CANDIDATES = ("rbf-svm", "logistic")
 #: Class-grouped folds of pseudo-unseen training classes that ``detector="auto"`` scores on.
@@ -70,25 +79,28 @@ def detector_template(detector: str, estimator=None):
     """
     if detector == "rbf-svm":
         return AttributeSVM() if estimator is None else estimator
-    if detector not in LINEAR_DETECTORS:
+    if detector not in LINEAR_DETECTORS and detector not in FIXED_DETECTORS:
         raise ConfigError(f"detector {detector!r} has no template; choose one of {DETECTORS[:-1]}")
     if estimator is not None:
         raise ConfigError(f"detector={detector!r}: estimator is the template of detector='rbf-svm'; leave it None "
                           f"(got {type(estimator).__name__})")
+    if detector in FIXED_DETECTORS:
+        return FIXED_DETECTORS[detector]()
     return LinearAttribute(**LINEAR_DETECTORS[detector])
 
 
 def detector_preprocessor(template):
     """The preprocessor a detector template applies: its own, or its family's default (unfitted).
 
-    :class:`LinearAttribute`: ``StandardScaler`` (z-score); otherwise
+    :class:`LinearAttribute` and :class:`LogisticAttribute`: ``StandardScaler`` (z-score); otherwise
     :func:`~tzsl.models.attribute_training.default_preprocessor` (z-score + PCA), as
     :class:`AttributeSVM` uses.
     """
     own = template.get_params().get("preprocessor")
     if own is not None:
         return own
-    return StandardScaler() if isinstance(template, LinearAttribute) else default_preprocessor()
+    linear = isinstance(template, (LinearAttribute, LogisticAttribute))
+    return StandardScaler() if linear else default_preprocessor()
 
 
 def _held_out_terms(fitted, X_held, K_held) -> tuple[np.ndarray, np.ndarray]:

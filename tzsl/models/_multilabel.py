@@ -137,11 +137,10 @@ class MultiLabelAttributeClassifier(AttributeClassifierBank):
         for t, j in enumerate(order):
             prev = A[:, order[:t]].astype(float)
             for k in range(s):
-                est = clone(template).set_params(
-                    preprocessor=_chain_preprocessor(clone(base_pre), d),
-                    random_state=seeds[t * s + k],
-                    name=f"{names[j]} (sensor {k}, chain position {t})",
-                )
+                link = {"preprocessor": _chain_preprocessor(clone(base_pre), d), "random_state": seeds[t * s + k],
+                        "name": f"{names[j]} (sensor {k}, chain position {t})"}
+                # an untuned family (logistic-c1) has no preprocessor, seed or name: it z-scores every input itself
+                est = clone(template).set_params(**{key: v for key, v in link.items() if key in template.get_params()})
                 inputs = np.hstack([X[:, k, :], prev])
                 templates.append(est)
                 data.append((inputs, targets[j], groups))

@@ -43,6 +43,8 @@ __all__ = ["ScoreEnsembleZSL", "zscore_rows"]
 #: Members of the shipped ensemble (registry entries): AVGDAP with the uniform prior and the PHAC-2
 #: study's attribute SVMs (5 object-grouped folds, the paper's gamma grid: the configuration
 #: measured; balanced Platt posteriors pair with the uniform prior, see AttributeSVM), ESZSL and SAE.
+#: Chosen again on selection splits against the DAP of the generic study's detector in its place or
+#: beside it (issue 32; INHERITED_CHOICES, "ensemble-members"): the RBF-SVM DAP stayed.
 DEFAULT_MEMBERS: tuple = ({"name": "dap-avg", "estimator": AttributeSVM(cv=5, grid="paper")},
                           "eszsl", "sae")
 

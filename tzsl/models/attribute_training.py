@@ -6,7 +6,7 @@ and :class:`tzsl.models.AttributeClassifierBank`: the option values (:data:`GRID
 (:func:`gamma_grid`), the default preprocessor, class-balanced draws of whole objects
 (:func:`balanced_object_draws`), object-balanced trial weights (:func:`object_balanced_weights`),
 Platt scaling (:func:`fit_platt`, :func:`fit_platt_many`), and the detector families of an
-attribute bank (:data:`DETECTORS`, :data:`AUTO_CANDIDATES`, :func:`detector_template`,
+attribute bank (:data:`DETECTORS`, :data:`AUTO_CANDIDATES`, :data:`STUDY_DETECTOR`, :func:`detector_template`,
 :func:`choose_detector`: ``detector="auto"``'s choice on pseudo-unseen training classes).
 """
 
@@ -22,7 +22,7 @@ from tzsl.models._attribute_training import (
     gamma_grid,
     object_balanced_weights,
 )
-from tzsl.models._detectors import AUTO_CANDIDATES, DETECTORS, choose_detector, detector_template
+from tzsl.models._detectors import AUTO_CANDIDATES, DETECTORS, STUDY_DETECTOR, choose_detector, detector_template
 
 __all__ = [
     "AUTO_CANDIDATES",
@@ -32,6 +32,7 @@ __all__ = [
     "MAX_GRID_EXTENSIONS",
     "SEARCHES",
     "SOLVERS",
+    "STUDY_DETECTOR",
     "balanced_object_draws",
     "choose_detector",
     "default_preprocessor",

@@ -112,6 +112,15 @@ def method_label(spec: dict) -> str:
     return "_".join(parts)
 
 
+def dap_label(fusion: str, detector: str = "rbf-svm") -> str:
+    """Row label of the study's own DAP with ``fusion`` and the uniform prior.
+
+    ``dap-avg`` / ``dap-max`` with the paper's RBF-SVM detectors; with another ``[svm] detector``
+    the family follows (``dap-avg-logistic-c1``: the name of the registered method it is).
+    """
+    return f"dap-{fusion}" if detector == "rbf-svm" else f"dap-{fusion}-{detector}"
+
+
 def methods_ok(values: list, taken: tuple[str, ...] = ()) -> list[dict]:
     """``methods.compare`` checked against the method registry, each entry as ``{"name": ..., **params}``.
 

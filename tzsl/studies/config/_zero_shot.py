@@ -29,6 +29,7 @@ from tzsl.studies.config._common import (
     Purpose,
     Section,
     Seed,
+    dap_label,
     distinct,
     lambdas_ok,
     method_label,
@@ -42,6 +43,13 @@ def _svm_default(name: str):
 
     value = inspect.signature(AttributeSVM).parameters[name].default
     return list(value) if isinstance(value, tuple) else value
+
+
+def _study_detector() -> str:
+    """The generic study's detector family (:data:`tzsl.models.attribute_training.STUDY_DETECTOR`)."""
+    from tzsl.models.attribute_training import STUDY_DETECTOR  # noqa: PLC0415
+
+    return STUDY_DETECTOR
 
 
 def _bank_default(name: str):
@@ -250,6 +258,25 @@ class SvmSettings(Section):
                     "trials); 'auto': exact up to max_exact_trials training trials, approximate above")
     max_exact_trials: int = Field(default_factory=lambda: _bank_default("max_exact_trials"), ge=1,
                                   description="largest training set (trials) that solver = 'auto' fits exactly")
+    detector: str = Field(
+        default_factory=lambda: _study_detector(),
+        description="family of the per-(attribute, sensor) classifier of the study's DAP (tzsl.models.attribute_training."
+                    "DETECTORS): 'rbf-svm' (these SVMs: the DAP paper's), 'logistic', 'linear-svm', 'robust-logistic' "
+                    "(linear, C by object-grouped CV), 'logistic-c1' (class-balanced L2 logistic regression, C = 1) or "
+                    "'auto' (rbf-svm or logistic, chosen on pseudo-unseen training classes); the other keys of [svm] "
+                    "apply to 'rbf-svm' (and 'auto''s RBF-SVM). The DAP rows are labelled with it: dap-avg for "
+                    "'rbf-svm', dap-avg-<detector> (the registered method) otherwise. Default: the zero-shot study's "
+                    "tzsl.models.attribute_training.STUDY_DETECTOR, chosen on PHAC-2 selection splits "
+                    "(tzsl.models.INHERITED_CHOICES, study-detector); the paper presets: the paper's 'rbf-svm'")
+
+    @field_validator("detector")
+    @classmethod
+    def _detector(cls, v):
+        from tzsl.models.attribute_training import DETECTORS  # noqa: PLC0415
+
+        if v not in DETECTORS:
+            raise ValueError(f"unknown detector {v!r}; choose one of {', '.join(DETECTORS)}")
+        return v
 
     def estimator_params(self) -> dict:
         """The :class:`~tzsl.models.AttributeSVM` parameters of this table that differ from the SVM's
@@ -302,6 +329,12 @@ class ZeroShotSettings(Section):
     svm: SvmSettings = Field(default_factory=SvmSettings)
     compute: DaskCompute = Field(default_factory=DaskCompute)
 
+    @model_validator(mode="before")
+    @classmethod
+    def _preset_defaults(cls, data: Any) -> Any:
+        study = data.get("study") if isinstance(data, dict) else None
+        return default_compare(with_preset_defaults(data, study) if study in PRESET_DEFAULTS else data)
+
     @property
     def study_seed(self) -> int:
         """The seed of every fit and draw after the splits: ``[splits] seed`` and ``purpose`` together."""
@@ -315,16 +348,19 @@ class ZeroShotSettings(Section):
         return cls.model_validate(with_preset_defaults(tables, preset))
 
 
+#: The DAP paper's attribute detector (per-(attribute, sensor) RBF-SVMs), which the paper presets keep.
+PAPER_DETECTOR = "rbf-svm"
+
 #: What a preset changes of the zero-shot study's defaults, by table (every other default is the
 #: generic study's): ``"phac2-dap"``, the DAP paper's protocol, the cheapest complete study (DAP only,
 #: the paper's 5 random splits of 10 test objects, the paper's attribute-count sweep range when it is
-#: switched on); ``"zero_shot_part"``, the ``[zero_shot]`` table of the fabric and hand presets (the
-#: paper protocol compares its own methods: no compared method, no sweep).
+#: switched on, the paper's RBF-SVM detectors); ``"zero_shot_part"``, the ``[zero_shot]`` table of the fabric
+#: and hand presets (the paper protocol compares its own methods: no compared method, no sweep, RBF-SVMs).
 PRESET_DEFAULTS: dict[str, dict[str, dict[str, Any]]] = {
     "phac2-dap": {"methods": {"compare": [], "sweep": False, "gzsl": False, "sweep_min_attributes": 7,
                               "sweep_max_subsets": 1000},
-                  "splits": {"kinds": ["random"], "n_test": 10}},
-    "zero_shot_part": {"methods": {"compare": [], "sweep": False}},
+                  "splits": {"kinds": ["random"], "n_test": 10}, "svm": {"detector": PAPER_DETECTOR}},
+    "zero_shot_part": {"methods": {"compare": [], "sweep": False}, "svm": {"detector": PAPER_DETECTOR}},
 }
 
 
@@ -341,6 +377,24 @@ def with_preset_defaults(raw: Any, preset: str) -> Any:
     return filled
 
 
+def default_compare(data: Any) -> Any:
+    """A study file's tables with the default ``[methods] compare`` of a non-RBF ``[svm] detector``: every
+    feature method but the registered one the study's own DAP already is (``dap-avg-<detector>``), with the
+    paper's ``dap-avg`` beside it. A file that lists ``compare`` (or a preset that sets it) keeps its own."""
+    if not isinstance(data, dict):
+        return data
+    methods, svm = data.get("methods") or {}, data.get("svm") or {}
+    if not isinstance(methods, dict) or "compare" in methods:
+        return data
+    detector = (svm.get("detector") if isinstance(svm, dict) else getattr(svm, "detector", None)) or _study_detector()
+    if detector == PAPER_DETECTOR:
+        return data
+    own = {dap_label(fusion, detector) for fusion in FUSIONS}
+    switched = {name for name in ("eszsl", "embedding") if methods.get(name)}
+    compare = [{"name": "dap-avg"}] + [spec for spec in every_feature_method() if spec["name"] not in own | switched]
+    return {**data, "methods": {**methods, "compare": compare}}
+
+
 class ZeroShotStudy(ZeroShotSettings):
     """``study = "zero-shot"`` (any dataset, every registered feature method, random + challenging splits)
     and its PHAC-2 paper preset ``study = "phac2-dap"`` (:data:`PRESET_DEFAULTS`)."""
@@ -350,12 +404,6 @@ class ZeroShotStudy(ZeroShotSettings):
     dataset: DatasetSource
     features: SignalFeatures = Field(default_factory=SignalFeatures)
     output: PrefixedOutput = Field(default_factory=PrefixedOutput)
-
-    @model_validator(mode="before")
-    @classmethod
-    def _preset_defaults(cls, data: Any) -> Any:
-        study = data.get("study") if isinstance(data, dict) else None
-        return with_preset_defaults(data, study) if study in PRESET_DEFAULTS else data
 
     @model_validator(mode="after")
     def _across_tables(self):
@@ -367,6 +415,11 @@ class ZeroShotStudy(ZeroShotSettings):
         if kinds == ["file"] and self.splits.file is None and self.dataset.plain is None:
             problems.append(("splits.kinds", "['file'] needs file = a split CSV (or a plain dataset folder "
                                              "with splits.csv)"))
+        own = {dap_label(fusion, self.svm.detector) for fusion in FUSIONS}
+        twice = sorted(own & {method_label(spec) for spec in self.methods.compare})
+        if twice:
+            problems.append(("methods.compare", f"{', '.join(twice)} is the study's own DAP ([svm] detector = "
+                                                f"{self.svm.detector!r}); leave it out of compare"))
         if "challenging" in self.methods.compare_on and "challenging" not in kinds:
             problems.append(("methods.compare_on", "'challenging' needs 'challenging' in splits.kinds"))
         if self.methods.gzsl and kinds == ["challenging"]:

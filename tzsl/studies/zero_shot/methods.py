@@ -26,6 +26,7 @@ from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, summarise_over_splits
 from tzsl.exceptions import TzslError
 from tzsl.models import get_method
+from tzsl.studies.config import dap_label
 from tzsl.studies._failures import ERROR_COLUMN, attempt
 from tzsl.studies.paper_numbers import DAP_MULTILABEL_ACCURACY, DAP_TABLE1, DAP_TABLE3
 from tzsl.studies.zero_shot.tables import split_label
@@ -44,13 +45,19 @@ from tzsl.studies.study_calibration import dap_split_posteriors, posterior_colum
 if TYPE_CHECKING:
     from tzsl.studies.zero_shot.split_posteriors import SplitPosteriors
 
-__all__ = ["COMPARISON_TABLE", "DEFAULT_METHODS", "REFERENCE_METHOD", "STUDY", "fit_predict_split", "method_comparison"]
+__all__ = ["COMPARISON_TABLE", "DEFAULT_METHODS", "REFERENCE_METHOD", "STUDY", "fit_predict_split", "method_comparison",
+           "study_detector"]
 
 #: Methods compared when none are given: ESZSL and the embedding model at lambda 0.1 and 1.
 DEFAULT_METHODS: tuple[dict, ...] = ({"name": "eszsl"}, {"name": "embedding", "lam": 0.1},
                                      {"name": "embedding", "lam": 1.0})
-#: Row label of the paper's method (AVGDAP, uniform prior) in ``method_comparison.csv``.
+#: Row label of the paper's method (AVGDAP, uniform prior, RBF-SVM detectors) in ``method_comparison.csv``.
 REFERENCE_METHOD = "dap-avg"
+
+
+def study_detector(results) -> str:
+    """The ``detector`` of the attribute banks behind the study's fitted splits (``rbf-svm`` without one)."""
+    return getattr(results[0].model, "detector", "rbf-svm") if results else "rbf-svm"
 #: Study label of the rows; table key (file stem) of the comparison.
 STUDY = "phac2"
 COMPARISON_TABLE = comparison_file(STUDY)[: -len(".csv")]
@@ -153,14 +160,18 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
         share are the DAP fit's.
     """
     rows, trials = [], []
-    seconds: dict[str, list[float]] = {REFERENCE_METHOD: []}
+    detector = study_detector(results)
+    reference = dap_label("avg", detector)
+    labels_of = {"dap-avg": reference, "dap-max": dap_label("max", detector),
+                 "multilabel-dap": "multilabel-dap" if detector == "rbf-svm" else f"multilabel-dap-{detector}"}
+    seconds: dict[str, list[float]] = {reference: []}
     edges: dict[str, list[float]] = {}
     fits = _fit_every_method(features, results, methods, seed, n_jobs)
     for i, r in enumerate(results):
         label = split_label(r.split)
         objects = np.asarray(r.split.test_objects)[r.y]
         row = {"split": label, "purpose": purpose, "chance": r.split.chance, "dap_avg_uni": r.accuracy("avg", "uni")}
-        from_posteriors = [(REFERENCE_METHOD, r.predict("avg", "uni")), ("dap-max", r.predict("max", "uni"))]
+        from_posteriors = [("dap-avg", r.predict("avg", "uni")), ("dap-max", r.predict("max", "uni"))]
         if r.P_multilabel is not None:
             from_posteriors.append(("multilabel-dap", r.predict("avg", "uni", multilabel=True)))
         errors = []
@@ -168,12 +179,12 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
         if posteriors is None:  # the DAP rows keep their accuracy; their calibration is NaN
             posteriors = {}
             errors.append(f"DAP calibration: {error}")
-        for name, predicted in from_posteriors:
+        for name, predicted in from_posteriors:  # the calibration's keys are the rows' registry names
             P = posteriors.get(name, (None, None))
-            trials.append(comparison_trials(name, label, objects, predicted == r.y,
+            trials.append(comparison_trials(labels_of[name], label, objects, predicted == r.y,
                                             **posterior_columns(P[0], P[1], r.y, predicted)))
-            seconds.setdefault(name, []).append(r.fit_seconds)
-            edges.setdefault(name, []).append(grid_edge_share(r.model))
+            seconds.setdefault(labels_of[name], []).append(r.fit_seconds)
+            edges.setdefault(labels_of[name], []).append(grid_edge_share(r.model))
         for spec in methods:
             name = method_label(spec)
             done, error = fits[(i, name)]
@@ -194,10 +205,13 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
     per_split.insert(1, "split_kind", split_kind)
     chance = float(np.mean([r.split.chance for r in results]))
     labels = labels or StudyLabels()
-    paper = PAPER_BY_KIND.get(split_kind) if labels.paper else None
+    paper = PAPER_BY_KIND.get(split_kind) if labels.paper and detector == "rbf-svm" else None
     notes = (CHALLENGING_NOTES if split_kind == "challenging" else PAPER_NOTES) if paper else GENERIC_NOTES
+    notes = {labels_of[name]: note.replace("dap-avg", reference) for name, note in notes.items()}
+    if detector != "rbf-svm":
+        notes[reference] = f"{notes[reference]}; attribute detector {detector} ([svm] detector)"
     trials = pd.concat(trials, ignore_index=True)
-    summary = method_summary(trials, seconds, chance, REFERENCE_METHOD,
+    summary = method_summary(trials, seconds, chance, reference,
                              study=labels.study, data=labels.data, paper=paper,
                              notes=notes, grid_edge=edges, purpose=purpose, split_kind=split_kind)
     if not labels.paper:  # paper_* headers only beside the paper's dataset and protocol

@@ -29,8 +29,8 @@ import pandas as pd
 
 from tzsl.datasets import FeatureSet
 from tzsl.studies._failures import ERROR_COLUMN, attempt
-from tzsl.studies.config import method_label
-from tzsl.studies.zero_shot.methods import REFERENCE_METHOD, fit_predict_split, method_comparison
+from tzsl.studies.config import dap_label, method_label
+from tzsl.studies.zero_shot.methods import fit_predict_split, method_comparison, study_detector
 from tzsl.studies.zero_shot.tables import split_label
 from tzsl.value_lists import FUSIONS, PRIORS
 from tzsl.studies.study_calibration import CALIBRATION_COLUMNS
@@ -70,13 +70,16 @@ def model_seed(seed: int, index: int, refit: int = 0) -> int:
     return int(np.random.SeedSequence(entropy).generate_state(1)[0])
 
 
-def dap_variant_label(fusion: str, prior: str) -> str:
-    """Row label of a DAP variant: ``dap-avg`` (uniform prior), ``dap-max-train-prior``, ..."""
-    return f"dap-{fusion}" if prior == "uni" else f"dap-{fusion}-{prior}-prior"
+def dap_variant_label(fusion: str, prior: str, detector: str = "rbf-svm") -> str:
+    """Row label of a DAP variant: ``dap-avg`` (uniform prior), ``dap-max-train-prior``, ...; with
+    another ``[svm] detector`` than the RBF-SVM the family follows the fusion (``dap-avg-logistic-c1``)."""
+    base = dap_label(fusion, detector)
+    return base if prior == "uni" else f"{base}-{prior}-prior"
 
 
 def _variant_accuracies(r: SplitPosteriors, fusions, priors) -> dict[str, float]:
-    return {dap_variant_label(f, p): r.accuracy(f, p) for f in fusions for p in priors}
+    detector = study_detector([r])
+    return {dap_variant_label(f, p, detector): r.accuracy(f, p) for f in fusions for p in priors}
 
 
 def dap_fusion_prior(by_kind: dict[str, list[SplitPosteriors]], fusions, priors,
@@ -101,17 +104,17 @@ def dap_fusion_prior(by_kind: dict[str, list[SplitPosteriors]], fusions, priors,
     """
     fusions = ["avg", *[f for f in fusions if f != "avg"]]
     priors = ["uni", *[p for p in priors if p != "uni"]]
-    variants = {dap_variant_label(f, p): (f, p) for f in fusions for p in priors}
     blocks = []
     for kind, results in by_kind.items():
         if not results:
             continue
-        trials = [comparison_trials(dap_variant_label(f, p), split_label(r.split),
-                                    np.asarray(r.split.test_objects)[r.y], r.predict(f, p) == r.y)
-                  for r in results for f in fusions for p in priors]
-        seconds = {dap_variant_label(f, p): [r.fit_seconds for r in results] for f in fusions for p in priors}
+        detector = study_detector(results)
+        variants = {dap_variant_label(f, p, detector): (f, p) for f in fusions for p in priors}
+        trials = [comparison_trials(label, split_label(r.split), np.asarray(r.split.test_objects)[r.y],
+                                    r.predict(f, p) == r.y) for r in results for label, (f, p) in variants.items()]
+        seconds = {label: [r.fit_seconds for r in results] for label in variants}
         chance = float(np.mean([r.split.chance for r in results]))
-        table = method_summary(pd.concat(trials, ignore_index=True), seconds, chance, REFERENCE_METHOD,
+        table = method_summary(pd.concat(trials, ignore_index=True), seconds, chance, dap_label("avg", detector),
                                study=labels.study, data=labels.data, split_kind=kind)
         table.insert(4, "fusion", table["method"].map({v: f for v, (f, _) in variants.items()}))
         table.insert(5, "prior", table["method"].map({v: p for v, (_, p) in variants.items()}))

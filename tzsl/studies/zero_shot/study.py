@@ -58,7 +58,7 @@ SPLITS_FILE = "splits.csv"
 
 __all__ = [
     "SPLITS_FILE", "SplitPosteriors", "attribute_accuracy_summary",
-    "attribute_accuracy_table", "attribute_bank", "attribute_estimator", "check_cv_folds", "attribute_subsets",
+    "attribute_accuracy_table", "attribute_bank", "attribute_estimator", "check_cv_folds", "detector_params", "attribute_subsets",
     "attribute_sweep", "compute_context", "fit_split", "fit_splits", "make_splits", "multilabel_table",
     "object_map_features", "run_zero_shot_tables", "solver_lines", "split_masks", "table1_fusion", "table2_priors",
     "table3_challenging",
@@ -110,6 +110,14 @@ def attribute_estimator(config: ZeroShotSettings, seed: int) -> AttributeSVM:
     return AttributeSVM(undersampling=config.svm.undersampling, random_state=seed, **config.svm.estimator_params())
 
 
+def detector_params(config: ZeroShotSettings, seed: int) -> dict:
+    """``detector`` and ``estimator`` of the study's attribute models (``[svm] detector``): the SVM
+    template of :func:`attribute_estimator` for the families that fit it (``rbf-svm``, ``auto``), else None."""
+    detector = config.svm.detector
+    svm = detector in ("rbf-svm", "auto")
+    return {"detector": detector, "estimator": attribute_estimator(config, seed) if svm else None}
+
+
 def _memory(config: ZeroShotSettings) -> str | bool:
     """The fit store of the study's attribute banks: the cache folder, or False (``compute.cache = false``:
     no store, even with ``TZSL_CACHE_DIR`` set)."""
@@ -121,7 +129,7 @@ def _memory(config: ZeroShotSettings) -> str | bool:
 def attribute_bank(config: ZeroShotSettings, attributes, seed: int) -> AttributeClassifierBank:
     """Independent per-(attribute, sensor) classifiers, parallel and cached."""
     return AttributeClassifierBank(
-        estimator=attribute_estimator(config, seed), attribute_names=list(attributes), n_jobs=config.compute.n_jobs,
+        **detector_params(config, seed), attribute_names=list(attributes), n_jobs=config.compute.n_jobs,
         backend=config.compute.backend, memory=_memory(config), progress=config.compute.progress, random_state=seed,
         solver=config.svm.solver, max_exact_trials=config.svm.max_exact_trials,
     )
@@ -147,7 +155,7 @@ def fit_split(features: FeatureSet, split: Split, config: ZeroShotSettings, inde
     P_ml = None
     if multilabel:
         joint = MultiLabelAttributeClassifier(
-            estimator=attribute_estimator(config, seed), attribute_names=list(attributes), n_jobs=config.compute.n_jobs,
+            **detector_params(config, seed), attribute_names=list(attributes), n_jobs=config.compute.n_jobs,
             backend=config.compute.backend, memory=_memory(config), progress=config.compute.progress, random_state=seed,
         )
         joint.fit(features.X[train], A[train], groups[train])
