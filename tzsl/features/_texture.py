@@ -61,12 +61,12 @@ from sklearn.utils.validation import check_is_fitted
 from tzsl._parallel import reissued, relayed
 from tzsl.exceptions import ConfigError, DataFileError
 
-__all__ = ["TextureDescriptor", "texture_feature_names"]
+__all__ = ["DESCRIPTOR_CHUNK", "TextureDescriptor", "texture_feature_names"]
 
 _GLCM_PROPS = ("contrast", "homogeneity", "energy", "correlation")
 _NORMALIZATIONS = ("robust", "minmax", "fixed")
-# Images per joblib task / per batched FFT (bounds memory: 64 x 12 filters x ~200^2 complex).
-_CHUNK = 64
+#: Images per joblib task / per batched FFT (bounds memory: 64 x 12 filters x ~200^2 complex).
+DESCRIPTOR_CHUNK = 64
 
 
 def _angles(n: int) -> np.ndarray:
@@ -418,7 +418,7 @@ class TextureDescriptor(TransformerMixin, BaseEstimator):
                 + ("(n_images, H, W)" if want == 3 else f"(n_videos, {self.n_frames_}, H, W)"),
             )
         flat = X.reshape(-1, *X.shape[-2:])
-        chunks = [flat[i : i + _CHUNK] for i in range(0, flat.shape[0], _CHUNK)]
+        chunks = [flat[i : i + DESCRIPTOR_CHUNK] for i in range(0, flat.shape[0], DESCRIPTOR_CHUNK)]
         parts = [reissued(r) for r in Parallel(n_jobs=self.n_jobs)(delayed(relayed(_describe))(c, params) for c in chunks)]
         out = np.concatenate(parts, axis=0)
         return out.reshape(X.shape[0], -1)
