@@ -57,7 +57,9 @@ Methods and model selection (training groups only)
 * Groups sharing one attribute vector (a8: groups 3, 4, 5) are merged in training. So the
   paper's split tests group 5 on a row seen in training: it is kept as a ``protocol=paper``
   reproduction row (``zero_shot`` False), and the headline is its ``zero-shot-drop`` variant
-  (:func:`~tzsl.studies.fabric.tables.fabric_protocols`; per-class mean accuracy).
+  (:func:`~tzsl.studies.fabric.tables.fabric_protocols`; per-class mean accuracy). The two
+  protocols train on the same groups, so each fit is done once and scored on both
+  (:func:`~tzsl.studies.fabric.methods.zero_shot_runs`).
 * Prediction: nearest attribute vector among the TEST groups only (zero-shot); accuracy over
   test samples and per-class mean accuracy over test groups.
 
