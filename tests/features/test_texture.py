@@ -14,7 +14,7 @@ from sklearn.utils.estimator_checks import (
 
 from tzsl.exceptions import ConfigError, DataFileError
 from tzsl.features import TextureDescriptor
-from tzsl.features._texture import _gabor_features, _normalise
+from tzsl.features._texture import _gabor_features, _normalise, _uniform_lbp_histograms
 
 SMALL = dict(lbp_radii=(1, 2), glcm_distances=(1, 2), gabor_frequencies=(0.1, 0.25))
 
@@ -196,3 +196,17 @@ def test_real_depth_images(data_dir):
     within = np.linalg.norm(zs[0] - zs[1])
     between = np.median(np.linalg.norm(z[:, None] - z[None], axis=-1)[np.triu_indices(40, 1)])
     assert within < between
+
+
+@pytest.mark.parametrize(("points", "radius"), [(8, 1.0), (8, 3.0), (4, 2.0), (16, 2.5), (8, 1.5)])
+def test_uniform_lbp_histograms_equal_scikit_image_bit_for_bit(points, radius):
+    from skimage.feature import local_binary_pattern  # noqa: PLC0415
+
+    rng = np.random.default_rng(points)
+    images = np.concatenate([rng.integers(0, 256, size=(3, 23, 31)),  # 8-bit levels, as the descriptor's
+                             np.repeat(rng.integers(0, 4, size=(1, 23, 1)), 31, axis=2)])  # ties and flat rows
+    hists = _uniform_lbp_histograms(images.astype(np.uint8), points, radius)
+    for image, hist in zip(images, hists):
+        codes = local_binary_pattern(image.astype(np.uint8), points, radius, method="uniform")
+        expected = np.bincount(codes.astype(np.int64).ravel(), minlength=points + 2) / codes.size
+        np.testing.assert_array_equal(hist, expected)

@@ -117,6 +117,29 @@ def test_zero_shot_run_fits_on_training_groups_only():
     assert 0.0 <= run.per_class_mean_accuracy <= 1.0
 
 
+def test_splits_with_the_same_training_groups_share_one_fit():
+    from tzsl.studies.fabric.methods import zero_shot_runs  # noqa: PLC0415
+
+    X, groups = _synthetic()
+    paper, headline = fabric_protocols([1], pd.DataFrame(A8_LIKE))
+    fits = []
+
+    def fit_model(X_tr, y_tr, S_tr):
+        fits.append(y_tr)
+        return build_method("embedding", lam=1, early_stopping=False, random_state=0, calibration="none").fit(
+            X_tr, attribute_rows(y_tr, S_tr), y_tr
+        )
+
+    both = zero_shot_runs(fit_model, X, groups, A8_LIKE, [paper.split, headline.split])
+    assert len(fits) == 1 and both[0].model is both[1].model  # one fit for the two protocols
+    for run, split in zip(both, (paper.split, headline.split)):  # each scored as if fitted alone
+        alone = zero_shot_run(fit_model, X, groups, A8_LIKE, split)
+        assert set(run.y_true) == set(split.test_groups)
+        np.testing.assert_array_equal(run.y_pred, alone.y_pred)
+    with pytest.raises(ConfigError, match="one set of training groups"):
+        zero_shot_runs(fit_model, X, groups, A8_LIKE, [fabric_zsl_split(1), fabric_zsl_split(2)])
+
+
 def test_zero_shot_run_needs_both_sides():
     X, groups = _synthetic()
     keep = np.isin(groups, [1, 2, 3, 4, 6])
@@ -341,6 +364,21 @@ def test_gelsight_layout_runs_through_the_study(gelsight_root, data_dir, tmp_pat
     assert len(manifest["gelsight_videos_sha256"]) == 64
 
 
+def test_each_fit_is_done_and_counted_once(gelsight_root, data_dir, tmp_path):
+    from tzsl._profile import profiling  # noqa: PLC0415
+
+    with profiling("fabric") as profile:  # in this process (n_jobs=1): the jobs' events are counted once
+        result = run_fabric_study(
+            ResultsDir(tmp_path), _settings(configs=(1,), conditions=(), seeds=1, lams=(0,), alphas=(0.1,),
+                                            progress=False, n_jobs=1, gelsight_root=str(gelsight_root)),
+            data_dir=data_dir, gelsight_root=gelsight_root,
+        )
+    counts = {r["stage"]: r["calls"] for r in profile.rows() if r["stage"].startswith("fit_store.")}
+    # 2 conditions x (lam 0 + ESZSL), each fitted once for both protocols (paper, zero-shot-drop)
+    assert sum(counts[k] for k in counts if k != "fit_store.repeat") == 4, counts
+    assert len(result["runs"]) == 2 * 2 * 2
+
+
 @pytest.mark.slow
 def test_partitions_add_a_table_and_leave_the_others_unchanged(gelsight_root, data_dir, tmp_path):
     flat = dict(configs=(1,), gelsight_root=str(gelsight_root), gelsight_conditions=["Flat"], conditions=(), seeds=1,
@@ -381,11 +419,11 @@ def test_a_failing_fit_is_a_row_with_nan_and_its_error():
 
     X, groups = _synthetic()
     split = fabric_zsl_split(1)
-    ok = _run_job(X, groups, A8_LIKE, split, ESZSL_METHOD, None, None, (), 50)
+    [ok] = _run_job(X, groups, A8_LIKE, [split], ESZSL_METHOD, None, None, (), 50)
     assert ok["error"] == "" and 0 <= ok["accuracy"] <= 1
     X_bad = X.copy()
     X_bad[0, 0] = np.nan  # ESZSL refuses non-finite features
-    row = _run_job(X_bad, groups, A8_LIKE, split, ESZSL_METHOD, None, None, (), 50)
+    [row] = _run_job(X_bad, groups, A8_LIKE, [split], ESZSL_METHOD, None, None, (), 50)
     assert np.isnan(row["accuracy"]) and np.isnan(row["per_class_mean_accuracy"])
     assert row["error"].startswith("ZSLInputError: ") and "\n" not in row["error"]
     assert row["n_test"] == ok["n_test"] and row["method"] == ESZSL_METHOD

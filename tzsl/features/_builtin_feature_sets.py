@@ -18,13 +18,15 @@ from pathlib import Path
 import joblib
 import numpy as np
 import pandas as pd
+from joblib import Parallel, delayed
 
 from tzsl._io import file_sha256
+from tzsl._parallel import reissued, relayed
 from tzsl.datasets import FabricData, FeatureSet, SimulatedGrasps, get_cache_dir, read_depth_images
 from tzsl.exceptions import ConfigError
 from tzsl.features._attribute_filter import filter_attributes
 from tzsl.features._grasp_features import MATERIAL_FEATURES, grasp_features
-from tzsl.features._texture import TextureDescriptor, texture_feature_names
+from tzsl.features._texture import DESCRIPTOR_CHUNK, TextureDescriptor, texture_feature_names
 
 __all__ = ["depth_image_descriptors", "descriptor_memory", "descriptor_params", "fabric_depth_feature_set",
            "files_digest", "simulated_grasp_feature_set"]
@@ -49,11 +51,21 @@ def descriptor_memory(cache_dir=None) -> joblib.Memory:
     return joblib.Memory(str(get_cache_dir(cache_dir)), verbose=0)
 
 
-def _describe_depth_files(digest: str, paths: list[str], params: dict, n_jobs: int | None) -> np.ndarray:
-    """Descriptors of depth PNGs (the cached unit; ``paths`` and ``n_jobs`` are not in the key)."""
+def _describe_depth_chunk(paths: list[str], params: dict) -> np.ndarray:
+    """Descriptors (n, d) of a few depth PNGs, read and described in one joblib job."""
     images = read_depth_images(paths)
-    desc = TextureDescriptor(**params, n_jobs=n_jobs).fit(images[:1])
-    return desc.transform(images)
+    return TextureDescriptor(**params, n_jobs=1).fit(images[:1]).transform(images)
+
+
+def _describe_depth_files(digest: str, paths: list[str], params: dict, n_jobs: int | None) -> np.ndarray:
+    """Descriptors of depth PNGs (the cached unit; ``paths`` and ``n_jobs`` are not in the key).
+
+    The files are read in the workers that describe them (chunks of the descriptor's batch size),
+    not one after the other in this process before.
+    """
+    chunks = [paths[i:i + DESCRIPTOR_CHUNK] for i in range(0, len(paths), DESCRIPTOR_CHUNK)]
+    parts = Parallel(n_jobs=n_jobs)(delayed(relayed(_describe_depth_chunk))(c, params) for c in chunks)
+    return np.concatenate([reissued(p) for p in parts], axis=0)
 
 
 def depth_image_descriptors(

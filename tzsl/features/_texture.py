@@ -61,12 +61,12 @@ from sklearn.utils.validation import check_is_fitted
 from tzsl._parallel import reissued, relayed
 from tzsl.exceptions import ConfigError, DataFileError
 
-__all__ = ["TextureDescriptor", "texture_feature_names"]
+__all__ = ["DESCRIPTOR_CHUNK", "TextureDescriptor", "texture_feature_names"]
 
 _GLCM_PROPS = ("contrast", "homogeneity", "energy", "correlation")
 _NORMALIZATIONS = ("robust", "minmax", "fixed")
-# Images per joblib task / per batched FFT (bounds memory: 64 x 12 filters x ~200^2 complex).
-_CHUNK = 64
+#: Images per joblib task / per batched FFT (bounds memory: 64 x 12 filters x ~200^2 complex).
+DESCRIPTOR_CHUNK = 64
 
 
 def _angles(n: int) -> np.ndarray:
@@ -146,9 +146,72 @@ def _gabor_features(x: np.ndarray, params: dict) -> np.ndarray:
     return feats
 
 
+def _uniform_lbp_histograms(images: np.ndarray, points: int, radius: float) -> np.ndarray:
+    """Histograms of ``skimage.feature.local_binary_pattern(image, points, radius, "uniform")`` per image.
+
+    The same codes as scikit-image's (its sampling points ``round(-R sin t, 5)``, ``round(R cos t,
+    5)``, the same bilinear interpolation with zeros outside the image, the same comparison and
+    count of 0/1 changes), computed with whole-image array operations instead of a loop over
+    pixels: about 3 times faster, and equal bit for bit (``tests/features/test_texture.py``).
+
+    Parameters
+    ----------
+    images : ndarray of shape (n, H, W)
+        Grey images (any real dtype; compared as float64, as scikit-image does).
+    points : int
+        Neighbours P on the circle.
+    radius : float
+        Circle radius R in pixels.
+
+    Returns
+    -------
+    ndarray of shape (n, points + 2), float64
+        Per image, the share of pixels with each code 0 .. P + 1 (P + 1: not uniform).
+    """
+    images = np.asarray(images, dtype=np.float64)
+    n, rows, cols = images.shape
+    angles = 2 * np.pi * np.arange(points, dtype=np.float64) / points
+    pad = int(np.ceil(radius)) + 1
+    r_pos, c_pos = np.arange(rows, dtype=np.float64), np.arange(cols, dtype=np.float64)
+    # Each neighbour is read at (r + dr_i, c + dc_i). The offsets are rounded to 5 decimals, so
+    # floor(r + dr_i) - r is one integer for every pixel row r (images far below 1e9 pixels); the
+    # interpolation weights (r + dr_i) - floor(r + dr_i) are computed per row / column exactly as
+    # scikit-image computes them per pixel (they differ in the last bit between rows).
+    neighbours = []
+    for dr_i, dc_i in zip(np.round(-radius * np.sin(angles), 5), np.round(radius * np.cos(angles), 5)):
+        r, c = r_pos + dr_i, c_pos + dc_i
+        wr, wc = (r - np.floor(r))[:, None], (c - np.floor(c))[None, :]
+        r0, c0 = int(np.floor(dr_i)) + pad, int(np.floor(dc_i)) + pad
+        r1, c1 = int(np.ceil(dr_i)) + pad, int(np.ceil(dc_i)) + pad
+        # on the pixel grid the weights are 0: the interpolation returns the pixel itself
+        neighbours.append((r0, r1, c0, c1, wr, wc, 1 - wr, 1 - wc, wr.any() or wc.any()))
+    padded = np.zeros((rows + 2 * pad, cols + 2 * pad))
+    hists = np.empty((n, points + 2))
+    for k in range(n):
+        image = images[k]
+        padded[pad:pad + rows, pad:pad + cols] = image
+        ones = np.zeros((rows, cols), dtype=np.int16)
+        changes = np.zeros((rows, cols), dtype=np.int16)
+        previous = None
+        for r0, r1, c0, c1, wr, wc, wr_, wc_, between in neighbours:
+            texture = padded[r0:r0 + rows, c0:c0 + cols]
+            if between:
+                top = wc_ * texture + wc * padded[r0:r0 + rows, c1:c1 + cols]
+                bottom = wc_ * padded[r1:r1 + rows, c0:c0 + cols] + wc * padded[r1:r1 + rows, c1:c1 + cols]
+                texture = wr_ * top + wr * bottom
+            signed = texture - image >= 0
+            ones += signed
+            if previous is not None:  # changes between consecutive neighbours (not last to first)
+                changes += signed != previous
+            previous = signed
+        codes = np.where(changes <= 2, ones, points + 1)
+        hists[k] = np.bincount(codes.ravel(), minlength=points + 2) / codes.size
+    return hists
+
+
 def _describe(images: np.ndarray, params: dict) -> np.ndarray:
     """(n, H, W) raw -> (n, d) descriptors (one joblib task)."""
-    from skimage.feature import graycomatrix, graycoprops, local_binary_pattern
+    from skimage.feature import graycomatrix, graycoprops
 
     x = _normalise(images, params)
     n = x.shape[0]
@@ -164,16 +227,11 @@ def _describe(images: np.ndarray, params: dict) -> np.ndarray:
     qg = _quantise(x, int(params["glcm_levels"]))
     p = int(params["lbp_points"])
     angles = _angles(int(params["glcm_n_angles"]))
-    lbp = np.empty((n, len(params["lbp_radii"]) * (p + 2)))
+    lbp = np.concatenate([_uniform_lbp_histograms(q256, p, r) for r in params["lbp_radii"]], axis=1)
     glcm = np.empty((n, len(_GLCM_PROPS) * len(params["glcm_distances"]) * len(angles)))
-    # scikit-image's LBP and GLCM work on one image at a time (compiled inner loops);
-    # images are spread over joblib workers in chunks.
+    # scikit-image's GLCM works on one image at a time (compiled inner loops); images are spread
+    # over joblib workers in chunks.
     for i in range(n):
-        hists = []
-        for r in params["lbp_radii"]:
-            codes = local_binary_pattern(q256[i], p, r, method="uniform")
-            hists.append(np.bincount(codes.astype(np.int64).ravel(), minlength=p + 2) / codes.size)
-        lbp[i] = np.concatenate(hists)
         mat = graycomatrix(
             qg[i], params["glcm_distances"], angles, levels=int(params["glcm_levels"]),
             symmetric=True, normed=True,
@@ -360,7 +418,7 @@ class TextureDescriptor(TransformerMixin, BaseEstimator):
                 + ("(n_images, H, W)" if want == 3 else f"(n_videos, {self.n_frames_}, H, W)"),
             )
         flat = X.reshape(-1, *X.shape[-2:])
-        chunks = [flat[i : i + _CHUNK] for i in range(0, flat.shape[0], _CHUNK)]
+        chunks = [flat[i : i + DESCRIPTOR_CHUNK] for i in range(0, flat.shape[0], DESCRIPTOR_CHUNK)]
         parts = [reissued(r) for r in Parallel(n_jobs=self.n_jobs)(delayed(relayed(_describe))(c, params) for c in chunks)]
         out = np.concatenate(parts, axis=0)
         return out.reshape(X.shape[0], -1)

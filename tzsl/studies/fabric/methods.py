@@ -16,6 +16,7 @@ only; beside the depth-image rows they are for orientation (the note says so).
 
 from __future__ import annotations
 
+import os
 import time
 import warnings
 from collections.abc import Callable, Sequence
@@ -43,7 +44,8 @@ from tzsl.models import build_method
 from tzsl.models.protocol import attribute_rows
 from tzsl.fit_store import fit_cached, fit_store_counts
 
-__all__ = ["COMPARISON_TABLE", "REFERENCE_LAMBDA", "ZeroShotRun", "fabric_comparison", "run_job", "zero_shot_run"]
+__all__ = ["COMPARISON_TABLE", "REFERENCE_LAMBDA", "ZeroShotRun", "fabric_comparison", "run_job", "zero_shot_run",
+           "zero_shot_runs"]
 
 #: Table key (file stem) of the study's comparison.
 COMPARISON_TABLE = comparison_file("fabric")[: -len(".csv")]
@@ -116,27 +118,65 @@ def zero_shot_run(
     ConfigError
         No training or no test sample.
     """
+    return zero_shot_runs(fit_model, X, groups, attribute_matrix, [split])[0]
+
+
+def zero_shot_runs(
+    fit_model: Callable[[np.ndarray, np.ndarray, np.ndarray], object],
+    X: np.ndarray,
+    groups: np.ndarray,
+    attribute_matrix: np.ndarray,
+    splits: Sequence[FabricSplit],
+) -> list[ZeroShotRun]:
+    """:func:`zero_shot_run` for splits with the same training groups: one fit, one prediction per split.
+
+    The paper's split and its zero-shot variant train on the same groups and differ in the test
+    groups only (:func:`~tzsl.studies.fabric.tables.fabric_protocols`); their fit is the same
+    computation, so it is done once and each split's test samples are recognised among its own
+    test groups.
+
+    Parameters
+    ----------
+    fit_model, X, groups, attribute_matrix
+        As in :func:`zero_shot_run`.
+    splits : sequence of FabricSplit
+        Non-empty; all with the same ``train_groups``.
+
+    Returns
+    -------
+    list of ZeroShotRun
+        One per split, in order; all share one fitted ``model``.
+
+    Raises
+    ------
+    ConfigError
+        Splits with different training groups; a split without training or test samples.
+    """
+    if not splits or len({tuple(sp.train_groups) for sp in splits}) != 1:
+        raise ConfigError(f"zero_shot_runs needs splits with one set of training groups; got "
+                          f"{[list(sp.train_groups) for sp in splits]}")
     X = np.asarray(X)
     groups = np.asarray(groups)
     A = np.asarray(attribute_matrix, dtype=np.float64)
-    train, test = split.is_train(groups), split.is_test(groups)
-    if not train.any() or not test.any():
-        raise ConfigError(
-            f"fabric config {split.config}: {int(train.sum())} training and {int(test.sum())} test "
-            f"samples (train groups {list(split.train_groups)}, test groups {list(split.test_groups)}); "
-            "both must be non-empty"
-        )
+    tests = []
+    for split in splits:
+        train, test = split.is_train(groups), split.is_test(groups)
+        if not train.any() or not test.any():
+            raise ConfigError(
+                f"fabric config {split.config}: {int(train.sum())} training and {int(test.sum())} test "
+                f"samples (train groups {list(split.train_groups)}, test groups {list(split.test_groups)}); "
+                "both must be non-empty"
+            )
+        tests.append(test)
     train_classes = np.unique(groups[train])
     model = fit_model(X[train], groups[train], A[train_classes])
-    test_classes = np.asarray(split.test_groups)
-    rows = model.predict(X[test], A[test_classes])
-    return ZeroShotRun(
-        model=model,
-        train_classes=train_classes,
-        test_classes=test_classes,
-        y_true=groups[test],
-        y_pred=test_classes[np.asarray(rows)],
-    )
+    runs = []
+    for split, test in zip(splits, tests):
+        test_classes = np.asarray(split.test_groups)
+        rows = model.predict(X[test], A[test_classes])
+        runs.append(ZeroShotRun(model=model, train_classes=train_classes, test_classes=test_classes,
+                                y_true=groups[test], y_pred=test_classes[np.asarray(rows)]))
+    return runs
 
 
 class _ShapedInput:
@@ -153,19 +193,22 @@ def run_job(
     samples_X: np.ndarray,
     groups: np.ndarray,
     A: np.ndarray,
-    split: FabricSplit,
+    splits: Sequence[FabricSplit],
     method: str,
     lam,
     seed: int | None,
     alphas: tuple[float, ...],
     max_iter: int,
     spec: dict | None = None,
-) -> dict:
-    """One fit (method x seed) on one condition and split; returns a row of the runs table.
+) -> list[dict]:
+    """One fit (method x seed) on one condition, scored on each split; returns a runs-table row per split.
 
-    ``spec``: a registry method entry (``methods.compare``) fitted instead of the built-in ones.
-    The row's ``correct`` (n_test,) marks the recognised test samples (for the comparison; not
-    written to the runs table); ``fit_seconds`` times the fit with its model selection.
+    ``splits`` share their training groups (:func:`zero_shot_runs`: one fit, one prediction per
+    split; a failure is every split's). ``spec``: a registry method entry (``methods.compare``)
+    fitted instead of the built-in ones. A row's ``correct`` (n_test,) marks the recognised test
+    samples (for the comparison; not written to the runs table); ``fit_seconds`` times the fit with
+    its model selection (the same fit for every split). The first row's ``_fit_store`` is
+    ``(process id, this job's fit-store events)``, for the parent to count jobs run in workers.
     """
     info: dict = {}
     before = fit_store_counts()
@@ -206,12 +249,20 @@ def run_job(
 
     chosen = fit_registry if spec is not None else fit_eszsl if method == ESZSL_METHOD else fit_embedding
     with threadpool_limits(limits=1):  # many small fits: one BLAS thread each, parallel over fits
-        run, error = attempt(zero_shot_run, timed, samples_X, groups, A, split)
-    info["_fit_store"] = fit_store_counts(since=before)  # this job's fit-store events (not a runs column)
-    if run is None:  # recorded in the runs table (NaN scores), reported at the end of the run
-        return {"method": method, "seed": seed, "accuracy": np.nan, "per_class_mean_accuracy": np.nan,
-                "n_train": int(split.is_train(groups).sum()), "n_test": int(split.is_test(groups).sum()),
-                "train_classes": "", "predicted_counts": "", **info, ERROR_COLUMN: error}
+        runs, error = attempt(zero_shot_runs, timed, samples_X, groups, A, splits)
+    if runs is None:  # recorded in the runs table (NaN scores), reported at the end of the run
+        rows = [{"method": method, "seed": seed, "accuracy": np.nan, "per_class_mean_accuracy": np.nan,
+                 "n_train": int(split.is_train(groups).sum()), "n_test": int(split.is_test(groups).sum()),
+                 "train_classes": "", "predicted_counts": "", **info, ERROR_COLUMN: error} for split in splits]
+    else:
+        rows = [_run_row(run, method, seed, split, groups, info) for run, split in zip(runs, splits)]
+    rows[0]["_fit_store"] = (os.getpid(), fit_store_counts(since=before))  # not a runs column
+    return rows
+
+
+def _run_row(run: ZeroShotRun, method: str, seed: int | None, split: FabricSplit, groups: np.ndarray,
+             info: dict) -> dict:
+    """The runs-table row of one scored split (see :func:`run_job`)."""
     pred = pd.Series(run.y_pred).value_counts().reindex(run.test_classes, fill_value=0)
     return {
         "method": method,

@@ -237,8 +237,8 @@ def run_partitions(samples: Sequence[FabricSamples], attribute_matrix, *, min_te
         return pd.DataFrame(columns=list(PARTITION_COLUMNS)), parts
     # one fit per (condition, partition): every partition has its own training groups, nothing to share
     jobs = [(s, p) for s in samples for p in parts]
-    runs = Parallel(n_jobs=n_jobs)(delayed(run_job)(s.X, s.groups, A, p, ESZSL_METHOD, None, None, (), max_iter)
-                                   for s, p in jobs)
+    runs = [rows[0] for rows in Parallel(n_jobs=n_jobs)(
+        delayed(run_job)(s.X, s.groups, A, [p], ESZSL_METHOD, None, None, (), max_iter) for s, p in jobs)]
     meta = [{"condition": s.condition, "partition": p.config, "n_test_groups": len(p.test_groups)} for s, p in jobs]
     outcomes = partition_outcomes(runs, meta)
     if outcomes.empty:

@@ -57,7 +57,9 @@ Methods and model selection (training groups only)
 * Groups sharing one attribute vector (a8: groups 3, 4, 5) are merged in training. So the
   paper's split tests group 5 on a row seen in training: it is kept as a ``protocol=paper``
   reproduction row (``zero_shot`` False), and the headline is its ``zero-shot-drop`` variant
-  (:func:`~tzsl.studies.fabric.tables.fabric_protocols`; per-class mean accuracy).
+  (:func:`~tzsl.studies.fabric.tables.fabric_protocols`; per-class mean accuracy). The two
+  protocols train on the same groups, so each fit is done once and scored on both
+  (:func:`~tzsl.studies.fabric.methods.zero_shot_runs`).
 * Prediction: nearest attribute vector among the TEST groups only (zero-shot); accuracy over
   test samples and per-class mean accuracy over test groups.
 
@@ -78,6 +80,7 @@ image (or video) files and the descriptor parameters; a re-run only refits the m
 
 from __future__ import annotations
 
+import os
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
@@ -208,12 +211,12 @@ def run_fabric_study(
     out.check_free([TABLE_FILE, RUNS_FILE, FIGURE_FILE, f"{COMPARISON_TABLE}.csv", MANIFEST_FILE]
                    + ([PARTITIONS_FILE] if partitions is not None else []))
 
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), stage("load"):
         # duplicate attribute vectors are expected (a8: groups 3, 4, 5); recorded in the note
         warnings.filterwarnings("ignore", message="fabric attribute matrix", category=UserWarning)
         fabric = load_fabric(data_dir, attributes, images=bool(conditions))
-    A = fabric.attributes.to_numpy(dtype=np.float64)
-    protocols = fabric_protocols(configs, fabric.attributes)  # the paper's split and its zero-shot variant
+        A = fabric.attributes.to_numpy(dtype=np.float64)
+        protocols = fabric_protocols(configs, fabric.attributes)  # the paper's split and its zero-shot variant
 
     samples: list[FabricSamples] = []
     digests: dict[str, str] = {}
@@ -227,16 +230,44 @@ def run_fabric_study(
             [p for s in gel for p in s.samples["path"].tolist()]
         )
     if conditions:
-        desc = depth_image_descriptors(fabric, cache_dir=cache_dir, n_jobs=n_jobs, progress=progress)
-        digests["depth_images_sha256"] = files_digest(fabric.images["path"].tolist())
-        seq, img = depth_samples(fabric, desc)
+        with stage("features"):  # the depth images' descriptors, in joblib workers (cached)
+            desc = depth_image_descriptors(fabric, cache_dir=cache_dir, n_jobs=n_jobs, progress=progress)
+            digests["depth_images_sha256"] = files_digest(fabric.images["path"].tolist())
+            seq, img = depth_samples(fabric, desc)
         samples += [s for s in (seq, img) if s.condition in conditions]
     samples += gel
 
     seed_list = list(range(int(seed), int(seed) + seeds))
-    jobs, meta = [], []
-    for s in samples:
-        for proto in protocols:
+    # the fits of one data condition: (method, lam, seed, alphas, registry spec), in the runs table's order
+    fits = [(f"lam_{label}", lam, sd, tuple(alphas), None) for lam, label in zip(lams, labels) for sd in seed_list]
+    fits.append((ESZSL_METHOD, None, None, (), None))
+    fits += [(method_label(spec), None, sd, (), spec)  # registry methods: every seed if random, else once
+             for spec in methods for sd in (seed_list if takes_seed(spec) else [None])]
+    # protocols with the same training groups (the paper's split and its zero-shot variant) share
+    # every fit: one job fits once and scores each of them
+    families: dict[tuple[int, ...], list[int]] = {}
+    for p, proto in enumerate(protocols):
+        families.setdefault(tuple(proto.split.train_groups), []).append(p)
+    jobs, first_job = [], {}  # (sample index, family) -> its first job; one job per fit
+    for i, s in enumerate(samples):
+        for family in families.values():
+            first_job[i, tuple(family)] = len(jobs)
+            splits = [protocols[p].split for p in family]
+            jobs += [delayed(relayed(run_job))(s.X, s.groups, A, splits, method, lam, sd, alphas_, max_iter, spec)
+                     for method, lam, sd, alphas_, spec in fits]
+
+    from tqdm.auto import tqdm
+
+    with stage("fit"):  # the embedding and ESZSL fits, in joblib workers
+        results = map(reissued, Parallel(n_jobs=n_jobs, return_as="generator")(jobs))
+        job_rows = list(tqdm(results, total=len(jobs), desc="fabric fits", disable=not progress))
+    for first, *_ in job_rows:  # the fit-store events of jobs run in workers, into this run's profile
+        pid, counts = first.pop("_fit_store")
+        for name, n in counts.items() if pid != os.getpid() else ():  # in this process: counted already
+            count_fits(name, n)
+    rows = []  # one per (condition, protocol, fit)
+    for i, s in enumerate(samples):
+        for p, proto in enumerate(protocols):
             split, config = proto.split, proto.split.config
             row_meta = {
                 "condition": s.condition, "config": config, "protocol": proto.name, "zero_shot": proto.zero_shot,
@@ -244,49 +275,30 @@ def run_fabric_study(
                 "train_groups": " ".join(map(str, split.train_groups)), "paper_row": s.paper_row or "",
                 "note": f"{proto.note}; {fabric_note(s, config, fabric.duplicate_groups, attributes)}",
             }
-            for lam, label in zip(lams, labels):
-                for sd in seed_list:
-                    jobs.append(delayed(relayed(run_job))(s.X, s.groups, A, split, f"lam_{label}", lam, sd,
-                                                  tuple(alphas), max_iter))
-                    meta.append(row_meta)
-            jobs.append(delayed(relayed(run_job))(s.X, s.groups, A, split, ESZSL_METHOD, None, None, (), max_iter))
-            meta.append(row_meta)
-            for spec in methods:  # registry methods: every seed if the method is random, else once
-                for sd in seed_list if takes_seed(spec) else [None]:
-                    jobs.append(delayed(relayed(run_job))(s.X, s.groups, A, split, method_label(spec), None, sd, (),
-                                                  max_iter, spec))
-                    meta.append(row_meta)
-
-    from tqdm.auto import tqdm
-
-    with stage("fit"):  # the embedding and ESZSL fits, in joblib workers
-        results = map(reissued, Parallel(n_jobs=n_jobs, return_as="generator")(jobs))
-        rows = [
-            {**m, **r}
-            for m, r in zip(meta, tqdm(results, total=len(jobs), desc="fabric fits", disable=not progress))
-        ]
-    for row in rows:  # the jobs' fit-store events, into this run's profile
-        for name, n in row.pop("_fit_store", {}).items():
-            count_fits(name, n)
-    outcomes, per_run = fabric_outcomes(rows)  # per-sample outcomes -> intervals in the table and the runs
-    correct = [row.pop("correct", None) for row in rows]  # per test sample: the comparison's trials
-    runs = pd.DataFrame(rows)
-    seeds_ = runs["seed"].astype("Int64")
-    runs = add_trust_columns(runs.assign(seed=seeds_.astype(object).where(seeds_.notna(), "None")), per_run)
-    runs["seed"] = seeds_
-    for col in ("alpha", "gamma", "eszsl_lam", "cv_score", "n_iter", "converged"):
-        if col not in runs.columns:
-            runs[col] = np.nan
-    table = fabric_table(runs, lams, outcomes)
+            family = families[tuple(split.train_groups)]
+            start, at = first_job[i, tuple(family)], family.index(p)
+            rows += [{**row_meta, **job_rows[start + f][at]} for f in range(len(fits))]
+    with stage("tables"):  # runs and Table 1 with their intervals (the bootstrap is a stage of its own)
+        outcomes, per_run = fabric_outcomes(rows)  # per-sample outcomes -> intervals in the table and the runs
+        correct = [row.pop("correct", None) for row in rows]  # per test sample: the comparison's trials
+        runs = pd.DataFrame(rows)
+        seeds_ = runs["seed"].astype("Int64")
+        runs = add_trust_columns(runs.assign(seed=seeds_.astype(object).where(seeds_.notna(), "None")), per_run)
+        runs["seed"] = seeds_
+        for col in ("alpha", "gamma", "eszsl_lam", "cv_score", "n_iter", "converged"):
+            if col not in runs.columns:
+                runs[col] = np.nan
+        table = fabric_table(runs, lams, outcomes)
 
     out.write_csv(TABLE_FILE, table)
     out.write_csv(RUNS_FILE, runs)
     # the comparison runs on each config's zero-shot protocol (the headline), fits that completed
     headline = {p.split.config: p for p in protocols if p.zero_shot}
-    keep = np.flatnonzero([c is not None and r["protocol"] == headline[int(r["config"])].name
-                           for c, (_, r) in zip(correct, runs.iterrows())])
-    comparison = fabric_comparison(runs.iloc[keep].reset_index(drop=True), [correct[i] for i in keep], samples,
-                                   {c: p.split for c, p in headline.items()}, seed_list, labels)
+    with stage("tables"):  # the method comparison: paired intervals (its bootstrap is a stage of its own)
+        keep = np.flatnonzero([c is not None and r["protocol"] == headline[int(r["config"])].name
+                               for c, (_, r) in zip(correct, runs.iterrows())])
+        comparison = fabric_comparison(runs.iloc[keep].reset_index(drop=True), [correct[i] for i in keep], samples,
+                                       {c: p.split for c, p in headline.items()}, seed_list, labels)
     out.write_csv(f"{COMPARISON_TABLE}.csv", comparison)
     out.write_figure(FIGURE_FILE, fabric_lambda_figure(table, lams))
     extra_tables: dict[str, pd.DataFrame] = {}
@@ -330,5 +342,6 @@ def run_fabric_study(
     data_files = [fabric.root / "fabric_groups.csv", fabric.root / FABRIC_ATTRIBUTE_SETS[attributes][0]]
     data_files += [Path(p) for p in (fabric.images["path"] if conditions else [])]
     data_files += [Path(p) for s in gel for p in s.samples["path"]]
-    out.write_manifest(config, [p for p in data_files if p.is_file()], name=MANIFEST_FILE, extra=digests)
+    with stage("write"):  # the manifest hashes every data file read
+        out.write_manifest(config, [p for p in data_files if p.is_file()], name=MANIFEST_FILE, extra=digests)
     return {"table1": table, "runs": runs, COMPARISON_TABLE: comparison, **extra_tables}
