@@ -70,3 +70,20 @@ def test_split_fit_rows_and_the_fits_a_run_is_divided_by(tmp_path, monkeypatch):
         ("total", "total", "wall", 12.0), ("total", "total", "cpu", 15.0),
         ("random_0", "n_jobs=1", "wall", 10.0), ("random_0", "n_jobs=2", "wall", 6.0)]
     assert (split_fit_seconds(table, 1), split_fit_seconds(table, 2), split_fit_seconds(table, -1)) == (10.0, 6.0, 6.0)
+
+
+def test_a_study_list_manifest_gives_each_study_its_total_stages_and_counters():
+    manifest = {"config": {"studies": {"hand-simulated": {"settings": {"dataset": {"builtin": "hand-simulated"}}},
+                                       "fabric": {"settings": {}}}},
+                "timings_s": {"hand-simulated_s": 4.0, "fabric_s": 9.0},
+                "profile": [{"study": "hand-simulated", "stage": "fit", "wall_s": 3.0, "cpu_s": 2.5, "calls": 2},
+                            {"study": "hand-simulated", "stage": "fit_store.miss", "wall_s": 0.0, "cpu_s": 0.0,
+                             "calls": 5},
+                            {"study": "fabric", "stage": "other", "wall_s": 9.0, "cpu_s": 8.0, "calls": 0}]}
+    rows = pd.DataFrame(manifest_rows(manifest, part="reproduce", run="warm", n_jobs=2))
+    assert list(zip(rows.study, rows.stage, rows.quantity, rows.value, strict=True)) == [
+        ("hand-simulated", "total", "wall", 4.0), ("hand-simulated", "fit", "wall", 3.0),
+        ("hand-simulated", "fit", "cpu", 2.5), ("hand-simulated", "fit_store.miss", "count", 5.0),
+        ("fabric", "total", "wall", 9.0), ("fabric", "other", "wall", 9.0), ("fabric", "other", "cpu", 8.0)]
+    assert rows.groupby("study")["simulated"].all().to_dict() == {"fabric": False, "hand-simulated": True}
+    assert set(rows.run) == {"warm"} and set(rows.n_jobs) == {2}

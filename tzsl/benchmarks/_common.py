@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import numbers
 import os
 import resource
 import statistics
@@ -84,7 +85,7 @@ def measurement(part: str, study: str, stage: str, run: str, quantity: str, unit
 
     ``load``: the 1-minute load average before the measure (default: now).
     """
-    values = [float(values)] if isinstance(values, int | float) else [float(v) for v in values]
+    values = [float(values)] if isinstance(values, numbers.Real) else [float(v) for v in values]
     return {"part": part, "study": study, "stage": stage, "run": run, "quantity": quantity, "unit": unit,
             "value": statistics.median(values), "min": min(values), "max": max(values), "n": len(values),
             "simulated": bool(simulated), "n_jobs": n_jobs, "load_1min": os.getloadavg()[0] if load is None else load,
@@ -117,7 +118,7 @@ def manifest_rows(manifest: Mapping, **common) -> list[dict]:
     part, run = common.pop("part"), common.pop("run")
     rows = []
     for study in dict.fromkeys(profile["study"]):
-        record = records.get(study) or next(iter(records.values()), {})
+        record = records.get(study, {})
         keywords = {**common, "simulated": common.get("simulated", False) or _simulated(record)}
         if f"{study}_s" in timings:
             rows.append(measurement(part, study, "total", run, "wall", "s", timings[f"{study}_s"], **keywords))
