@@ -45,7 +45,8 @@ from tzsl.benchmarks.bench_reproduce import (SPLIT_FIT_PART, STUDY_LIST_PARTS, r
 from tzsl.benchmarks.bench_template import DEFAULT_TEMPLATE, run_template
 from tzsl.benchmarks.goals import GOALS, PARTS
 
-__all__ = ["BENCH_COLUMNS", "DEFAULT_PARTS", "attach_goals", "bench_table", "main", "run_bench", "summary_lines"]
+__all__ = ["BENCH_COLUMNS", "DEFAULT_PARTS", "attach_goals", "bench_table", "main", "run_bench", "summary_lines",
+           "with_ratios"]
 
 #: The parts ``make bench`` times without ``--only``.
 DEFAULT_PARTS: tuple[str, ...] = ("reproduce", "template", "predict")
