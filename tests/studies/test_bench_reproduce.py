@@ -1,16 +1,18 @@
-"""``make bench`` (reproduce-tables cold and warm vs issue 22): the machinery on a tiny stand-in, not a timing."""
+"""``make bench``'s study runs: cold and warm on a tiny stand-in study, manifests read as measurements (no timing)."""
 
 from __future__ import annotations
 
-import math
+import json
 import sys
 from pathlib import Path
 
 import pandas as pd
 import pytest
 
-from tzsl.benchmarks.bench_reproduce import BENCH_COLUMNS, GOAL_S, REFERENCE_S, bench_table, main, summary_lines
-from tzsl.studies.reproduce import REPRODUCE_STUDIES
+from tzsl.benchmarks import bench_reproduce
+from tzsl.benchmarks._common import MEASURE_COLUMNS, manifest_rows
+from tzsl.benchmarks.bench_reproduce import run_split_fit, run_study_list, split_fit_seconds
+from tzsl.studies import engine
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_reproduce import TINY_HAND  # noqa: E402
@@ -19,55 +21,69 @@ from test_reproduce import TINY_HAND  # noqa: E402
 TINY_HAND_NO_COMPARE = TINY_HAND.replace("[splits]", "compare = []\n[splits]")
 
 
-def _manifest(studies, seconds):
-    return {"reproduce_studies": list(studies), "timings_s": {f"{s}_s": seconds for s in studies},
-            "profile": [{"study": s, "stage": stage, "wall_s": seconds / 2, "cpu_s": 0.1, "calls": 1}
-                        for s in studies for stage in ("fit", "other")]}
-
-
-def test_reference_and_goal_only_for_what_the_issue_measured():
-    runs = {"cold": (200.0, 150.0, _manifest(REPRODUCE_STUDIES, 40.0)),
-            "warm": (20.0, 15.0, _manifest(REPRODUCE_STUDIES, 4.0))}
-    table = bench_table(runs, n_jobs=2, loads={"cold": 1.0, "warm": 1.5})
-    assert tuple(table.columns) == BENCH_COLUMNS
-    total = table[(table.study == "total")].set_index("run")
-    assert total.at["cold", "reference_s"] == REFERENCE_S[("total", "cold")]
-    assert total.at["warm", "goal_s"] == GOAL_S["warm"]
-    assert total.at["cold", "ratio_to_reference"] == pytest.approx(200.0 / REFERENCE_S[("total", "cold")])
-    study = table[(table.study == "fabric") & (table.stage == "total")].set_index("run")
-    assert study.at["cold", "ratio_to_reference"] == pytest.approx(40.0 / REFERENCE_S[("fabric", "cold")])
-    assert math.isnan(study.at["warm", "reference_s"])  # the issue gives per-study numbers cold only
-    assert len(table) == 2 * (1 + len(REPRODUCE_STUDIES) * 3)
-    lines = summary_lines(table)
-    assert any(line.startswith("goal (cold)") and "not met" in line for line in lines)
-    assert any(line.startswith("goal (warm)") and "not met" in line for line in lines)
-    # a subset of the studies is not the issue's command: no total reference, no goal
-    part = bench_table({"cold": (5.0, 4.0, _manifest(["hand-simulated"], 3.0))}, n_jobs=1, loads={})
-    assert part[part.study == "total"][["reference_s", "goal_s"]].isna().all(axis=None)
-    assert not any(line.startswith("goal") for line in summary_lines(part))
-
-
-def test_bench_runs_cold_and_warm_and_writes_the_csv(tmp_path, capsys):
+def test_a_study_list_runs_cold_then_warm_from_an_empty_cache(tmp_path, capsys):
     hand = tmp_path / "hand.toml"
     hand.write_text(TINY_HAND_NO_COMPARE)
-    out = tmp_path / "bench.csv"
-    main(["--study", str(hand), "--n-jobs", "1", "--out", str(out), "--keep", str(tmp_path / "work")])
-    table = pd.read_csv(out)
-    assert tuple(table.columns) == BENCH_COLUMNS
+    work = tmp_path / "work"
+    table = pd.DataFrame(run_study_list("reproduce", work, studies=[str(hand)], n_jobs=1))
+    assert tuple(table.columns) == MEASURE_COLUMNS
     assert list(dict.fromkeys(table["run"])) == ["cold", "warm"]
     for run in ("cold", "warm"):
         rows = table[table.run == run]
-        assert set(rows.study) == {"total", str(hand)}
-        counters = rows.stage.str.startswith("fit_store.")  # events (fit-store hits, misses), not timed stages
-        assert (rows[~counters].wall_s > 0).all() and (rows[counters].wall_s == 0).all()
-        assert {"total", "figures"} <= set(rows[rows.study == str(hand)].stage)
-        assert rows[rows.study == str(hand)].stage.tolist()[0] == "total"
-    # the cold run started from an empty cache folder that the runs then used
-    assert (tmp_path / "work" / "results_warm" / "manifest.json").is_file()
-    printed = capsys.readouterr().out
-    assert "cold run" in printed and "warm run" in printed and f"wrote {out}" in printed
-    before = out.read_bytes()
-    with pytest.raises(SystemExit):
-        main(["--study", str(hand), "--out", str(out)])  # no --force: refused before any run
-    assert out.read_bytes() == before
-    assert "already exists" in capsys.readouterr().err
+        # a subset of the studies is not the issue's command: its total is named so, and no goal matches it
+        assert set(rows.study) == {"total (subset)", str(hand)}
+        process = rows[rows.study == "total (subset)"].set_index("quantity")
+        assert list(process.index) == ["wall", "cpu"] and (process["value"] > 0).all()
+        study = rows[rows.study == str(hand)]
+        assert study.iloc[0][["stage", "quantity"]].tolist() == ["total", "wall"]
+        assert {"figures"} <= set(study.stage) and study["simulated"].all()  # the hand's simulated grasps
+        counters = study[study.quantity == "count"]
+        assert counters.stage.str.startswith("fit_store.").all() and (counters["unit"] == "events").all()
+        assert (study[study.quantity == "wall"]["value"] > 0).all()
+    assert (work / "reproduce-warm" / "manifest.json").is_file() and (work / "reproduce-cold.log").is_file()
+    assert "reproduce, cold run" in capsys.readouterr().out
+    with pytest.raises(RuntimeError, match="not empty"):  # a second bench cannot start from a filled cache
+        run_study_list("reproduce", work, studies=[str(hand)], n_jobs=1)
+
+
+def test_a_single_study_manifest_is_read_like_a_study_list_one(tmp_path):
+    hand = tmp_path / "hand.toml"
+    hand.write_text(TINY_HAND_NO_COMPARE)
+    engine.run_experiment(hand, out=tmp_path / "out")  # what tzsl run writes
+    manifest = json.loads((tmp_path / "out" / "manifest.json").read_text())
+    rows = pd.DataFrame(manifest_rows(manifest, part="template", run="cold", n_jobs=1, simulated=False))
+    assert set(rows.study) == {"hand"} and "figures" in set(rows.stage)
+    assert rows["simulated"].all()  # read from the study's built-in dataset
+    assert not (rows.stage == "total").any()  # tzsl run's whole is the process's time
+
+
+def test_split_fit_rows_and_the_fits_a_run_is_divided_by(tmp_path, monkeypatch):
+    def fake_tzsl(args, **kwargs):
+        out = Path(args[args.index("--out") + 1])
+        pd.DataFrame({"method": ["tzsl n_jobs=1", "tzsl n_jobs=2"], "split": ["random_0"] * 2,
+                      "seconds": [10.0, 6.0], "avgdap_accuracy": [0.4, 0.4]}).to_csv(out, index=False)
+        return 12.0, 15.0, ""
+
+    monkeypatch.setattr(bench_reproduce, "run_tzsl", fake_tzsl)
+    table = pd.DataFrame(run_split_fit(tmp_path, n_jobs=2, echo=lambda _line: None))
+    assert list(zip(table.study, table.stage, table.quantity, table.value, strict=True)) == [
+        ("total", "total", "wall", 12.0), ("total", "total", "cpu", 15.0),
+        ("random_0", "n_jobs=1", "wall", 10.0), ("random_0", "n_jobs=2", "wall", 6.0)]
+    assert (split_fit_seconds(table, 1), split_fit_seconds(table, 2), split_fit_seconds(table, -1)) == (10.0, 6.0, 6.0)
+
+
+def test_a_study_list_manifest_gives_each_study_its_total_stages_and_counters():
+    manifest = {"config": {"studies": {"hand-simulated": {"settings": {"dataset": {"builtin": "hand-simulated"}}},
+                                       "fabric": {"settings": {}}}},
+                "timings_s": {"hand-simulated_s": 4.0, "fabric_s": 9.0},
+                "profile": [{"study": "hand-simulated", "stage": "fit", "wall_s": 3.0, "cpu_s": 2.5, "calls": 2},
+                            {"study": "hand-simulated", "stage": "fit_store.miss", "wall_s": 0.0, "cpu_s": 0.0,
+                             "calls": 5},
+                            {"study": "fabric", "stage": "other", "wall_s": 9.0, "cpu_s": 8.0, "calls": 0}]}
+    rows = pd.DataFrame(manifest_rows(manifest, part="reproduce", run="warm", n_jobs=2))
+    assert list(zip(rows.study, rows.stage, rows.quantity, rows.value, strict=True)) == [
+        ("hand-simulated", "total", "wall", 4.0), ("hand-simulated", "fit", "wall", 3.0),
+        ("hand-simulated", "fit", "cpu", 2.5), ("hand-simulated", "fit_store.miss", "count", 5.0),
+        ("fabric", "total", "wall", 9.0), ("fabric", "other", "wall", 9.0), ("fabric", "other", "cpu", 8.0)]
+    assert rows.groupby("study")["simulated"].all().to_dict() == {"fabric": False, "hand-simulated": True}
+    assert set(rows.run) == {"warm"} and set(rows.n_jobs) == {2}

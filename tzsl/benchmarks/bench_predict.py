@@ -1,34 +1,26 @@
-"""``make bench-predict`` (and ``make bench``): a robot's side, ``tzsl predict`` cold and the load-once Python API.
+"""``make bench``'s predict part (``make bench-predict``): ``tzsl predict`` cold and the load-once Python API.
 
 On a SIMULATED five-finger dataset (every 0/1 row of 4 attributes is a class; 5 sensors of 10
 features, a noisy linear image of the class's attributes; written to a temporary folder), it
-trains each method of ``--methods`` with ``tzsl train-attributes`` (``eszsl``: stored as arrays;
-``dap``: the default per-(attribute, sensor) SVMs, stored as arrays too) and measures:
+trains each method of ``methods`` with ``tzsl train-attributes`` (``eszsl``: stored as arrays;
+``dap``: the default per-(attribute, sensor) SVMs, stored as arrays too) and measures (study: the
+method; every number SIMULATED):
 
-* **cold**: ``tzsl predict`` of one grasp in a new Python process (start to exit, as a user
-  sees it), the median of ``--repeats`` runs, against :data:`GOAL_COLD_S`; and ``tzsl --help``;
-* **api**: :class:`tzsl.inference.Recogniser` in this process: ``load`` once, then per grasp
+* run **cold**: ``tzsl predict`` of one grasp in a new Python process (stage ``predict``; start
+  to exit, as a user sees it), the median of ``repeats`` runs, and ``tzsl --help`` (study ``-``,
+  stage ``help``); the note says whether such a process imported torch, scikit-learn or skops;
+* run **api**: :class:`tzsl.inference.Recogniser` in this process: ``load`` once, then per grasp
   ``rank`` (one grasp alone) and ``add`` (one more grasp, SC-MDAP decision), the median
-  milliseconds over ``--grasps`` grasps, against :data:`GOAL_GRASP_MS`;
-* whether a cold process imported torch or scikit-learn.
+  milliseconds over ``n_grasps`` grasps (quantity ``per_grasp``).
 
-It prints a table and writes it as a CSV (:data:`BENCH_COLUMNS`, atomically). This is a
-benchmark, not a test: the numbers depend on the machine and its load (the 1-minute load
-average before each measure is written beside it).
-
-Run::
-
-    python -m tzsl.benchmarks.bench_predict --out bench/predict_bench.csv --force
-    python -m tzsl.benchmarks.bench_predict --methods eszsl --repeats 3   # quick
+This is a benchmark, not a test: the numbers depend on the machine and its load (the 1-minute load
+average before each measure is written beside it). The goals are in :mod:`tzsl.benchmarks.goals`.
 """
 
 from __future__ import annotations
 
-import argparse
 import itertools
-import os
 import statistics
-import sys
 import tempfile
 import time
 from collections.abc import Callable, Sequence
@@ -37,24 +29,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from tzsl.benchmarks._common import add_output_options, benchmark_main, timed_process
+from tzsl.benchmarks._common import measurement, run_tzsl
 
-__all__ = ["BENCH_COLUMNS", "GOAL_COLD_S", "GOAL_GRASP_MS", "METHODS", "api_times", "cold_times", "main",
-           "run_bench", "simulated_dataset"]
+__all__ = ["METHODS", "api_times", "cold_times", "run_predict", "simulated_dataset"]
 
-#: Goal of issue 33 (item 6) for ``tzsl predict`` of one grasp from a cold process, seconds.
-GOAL_COLD_S = 1.0
-#: Goal of issue 33 (item 6) for one grasp through the Python API, milliseconds.
-GOAL_GRASP_MS = 10.0
 #: Methods the bench can train -> ``tzsl train-attributes`` options.
 METHODS: dict[str, tuple[str, ...]] = {"eszsl": ("--method", "eszsl"), "dap": ("--cv", "2", "--no-cache")}
-#: Columns of the bench CSV, one row per (method, measure).
-BENCH_COLUMNS = ("method", "payload", "measure", "unit", "median", "min", "max", "n", "cpu_s", "goal", "meets_goal",
-                 "imports", "load_1min")
 
 _ATTRIBUTES = ("hard", "soft", "rough", "smooth")
 _N_SENSORS, _N_FEATURES, _N_TRIALS = 5, 10, 6
-_CLI = "import sys; from tzsl.cli import main; main(sys.argv[1:])"
 _IMPORTS_PROBE = ("import sys\nfrom tzsl.cli import main\ntry:\n    main(sys.argv[1:])\nexcept SystemExit:\n    pass\n"
                   "print('IMPORTED', ' '.join(m for m in ('torch', 'sklearn', 'skops') if m in sys.modules))")
 
@@ -89,60 +72,56 @@ def simulated_dataset(folder: Path, seed: int = 0) -> tuple[Path, Path, np.ndarr
     return folder, one, X
 
 
-def _run_cli(args: Sequence[str], code: str = _CLI) -> tuple[float, float, str]:
-    """Wall and CPU seconds of ``tzsl ARGS`` in a new process, and its output."""
-    wall, cpu, done = timed_process([sys.executable, "-c", code, *map(str, args)])
-    if done.returncode != 0:
-        raise RuntimeError(f"tzsl {' '.join(map(str, args))} failed (exit {done.returncode}):\n{done.stderr[-2000:]}")
-    return wall, cpu, done.stdout
-
-
 def cold_times(args: Sequence[str], repeats: int) -> tuple[list[float], list[float], str]:
     """Wall and CPU seconds of ``repeats`` cold runs of ``tzsl ARGS``, and what such a process imports."""
     walls, cpus = [], []
     for _ in range(repeats):
-        wall, cpu, _ = _run_cli(args)
+        wall, cpu, _ = run_tzsl(args)
         walls.append(wall)
         cpus.append(cpu)
-    out = _run_cli(args, _IMPORTS_PROBE)[2]
+    out = run_tzsl(args, code=_IMPORTS_PROBE)[2]
     imported = next((line[len("IMPORTED"):].strip() for line in out.splitlines() if line.startswith("IMPORTED")), "")
     return walls, cpus, imported
 
 
 def api_times(model: Path, classes: Path, grasps: np.ndarray) -> dict[str, list[float]]:
-    """Seconds of :meth:`Recogniser.load` (once) and of ``rank`` / ``add`` per grasp (this process)."""
+    """Seconds of :meth:`Recogniser.load` (once, key ``load``) and of ``rank`` / ``add`` per grasp (this process)."""
     from tzsl.inference import Recogniser  # noqa: PLC0415
 
     start = time.perf_counter()
     recogniser = Recogniser.load(model, classes)
-    times: dict[str, list[float]] = {"api_load": [time.perf_counter() - start], "api_rank": [], "api_add": []}
+    times: dict[str, list[float]] = {"load": [time.perf_counter() - start], "rank": [], "add": []}
     for grasp in grasps:
         start = time.perf_counter()
         recogniser.rank(grasp)
-        times["api_rank"].append(time.perf_counter() - start)
+        times["rank"].append(time.perf_counter() - start)
         start = time.perf_counter()
         recogniser.add(grasp)
-        times["api_add"].append(time.perf_counter() - start)
+        times["add"].append(time.perf_counter() - start)
     return times
 
 
-def _row(method: str, payload: str, measure: str, unit: str, values: Sequence[float], goal: float,
-         cpu: float = float("nan"), imports: str = "") -> dict:
-    median = statistics.median(values)
-    return {"method": method, "payload": payload, "measure": measure, "unit": unit, "median": median,
-            "min": min(values), "max": max(values), "n": len(values), "cpu_s": cpu, "goal": goal,
-            "meets_goal": bool(median <= goal) if np.isfinite(goal) else None, "imports": imports,
-            "load_1min": os.getloadavg()[0]}
+def _cold_rows(study: str, stage: str, walls: list[float], cpus: list[float], imported: str, note: str) -> list[dict]:
+    """A cold measure's wall and CPU rows (SIMULATED), the note saying what the process imported."""
+    note = f"{note}; imports: {imported or 'neither torch nor scikit-learn'}"
+    return [measurement("predict", study, stage, "cold", "wall", "s", walls, simulated=True, n_jobs=1, note=note),
+            measurement("predict", study, stage, "cold", "cpu", "s", cpus, simulated=True, n_jobs=1, note=note)]
 
 
-def run_bench(*, methods: Sequence[str] = tuple(METHODS), repeats: int = 5, n_grasps: int = 200,
-              echo: Callable[[str], None] = print) -> pd.DataFrame:
+def run_predict(*, methods: Sequence[str] = tuple(METHODS), repeats: int = 5, n_grasps: int = 200,
+                echo: Callable[[str], None] = print) -> list[dict]:
     """Train each method on the simulated dataset and time predict cold and through the API.
 
     Returns
     -------
-    DataFrame
-        :data:`BENCH_COLUMNS`; cold measures in seconds, API measures in milliseconds.
+    list of dict
+        Measurements (:data:`tzsl.benchmarks._common.MEASURE_COLUMNS`) of part ``predict``, all
+        SIMULATED; cold measures in seconds, API measures in milliseconds.
+
+    Raises
+    ------
+    ValueError
+        A method is not one of :data:`METHODS`.
     """
     from tzsl.inference.bundle import read_bundle_header  # noqa: PLC0415
 
@@ -154,49 +133,19 @@ def run_bench(*, methods: Sequence[str] = tuple(METHODS), repeats: int = 5, n_gr
         folder, one, X = simulated_dataset(Path(tmp) / "five_fingers")
         grasps = X[np.resize(np.arange(len(X)), n_grasps)]
         walls, cpus, imported = cold_times(["--help"], repeats)
-        rows.append(_row("-", "-", "cold_help", "s", walls, float("nan"), statistics.median(cpus), imported))
-        echo(f"tzsl --help (cold): median {rows[-1]['median']:.2f} s")
+        rows += _cold_rows("-", "help", walls, cpus, imported, "tzsl --help")
+        echo(f"tzsl --help (cold): median {statistics.median(walls):.2f} s")
         for method in methods:
             model = Path(tmp) / f"{method}.tzsl"
-            _run_cli(["train-attributes", "--plain", folder, "--no-progress", *METHODS[method], "--out", model])
+            run_tzsl(["train-attributes", "--plain", folder, "--no-progress", *METHODS[method], "--out", model])
             payload = read_bundle_header(model).payload_format
             walls, cpus, imported = cold_times(["predict", "--model", model, "--classes", folder, one], repeats)
-            rows.append(_row(method, payload, "cold_predict", "s", walls, GOAL_COLD_S, statistics.median(cpus),
-                             imported))
-            echo(f"{method} ({payload}): tzsl predict one grasp, cold: median {rows[-1]['median']:.2f} s wall, "
-                 f"{rows[-1]['cpu_s']:.2f} s CPU; imports: {imported or 'neither torch nor scikit-learn'}")
-            times = api_times(model, folder, grasps)
-            for measure, values in times.items():
+            rows += _cold_rows(method, "predict", walls, cpus, imported, f"{payload} bundle")
+            echo(f"{method} ({payload}): tzsl predict one grasp, cold: median {statistics.median(walls):.2f} s wall, "
+                 f"{statistics.median(cpus):.2f} s CPU; imports: {imported or 'neither torch nor scikit-learn'}")
+            for stage, values in api_times(model, folder, grasps).items():
                 ms = [1000.0 * v for v in values]
-                rows.append(_row(method, payload, measure, "ms", ms, float("nan") if measure == "api_load"
-                                 else GOAL_GRASP_MS))
-                echo(f"{method} ({payload}): {measure}: median {rows[-1]['median']:.3f} ms over {len(ms)}")
-    return pd.DataFrame(rows, columns=list(BENCH_COLUMNS))
-
-
-def summary_lines(table: pd.DataFrame) -> list[str]:
-    """People's view of :func:`run_bench`'s table, with each goal met or not."""
-    lines = [f"{'method':<7} {'payload':<7} {'measure':<13} {'median':>10} {'min':>10} {'max':>10} {'goal':>7}  met"]
-    for r in table.itertuples(index=False):
-        goal = "-" if not np.isfinite(r.goal) else f"{r.goal:g} {r.unit}"
-        met = "-" if r.meets_goal is None else ("yes" if r.meets_goal else "NO")
-        lines.append(f"{r.method:<7} {r.payload:<7} {r.measure:<13} {r.median:>8.3f} {r.unit:<1} {r.min:>8.3f} "
-                     f"{r.unit:<1} {r.max:>8.3f} {r.unit:<1} {goal:>7}  {met}")
-    return lines
-
-
-def main(argv: list[str] | None = None) -> pd.DataFrame:
-    """Command line of ``make bench-predict`` (``--help``)."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--methods", default=",".join(METHODS), help=f"comma-separated, of {', '.join(METHODS)}")
-    parser.add_argument("--repeats", type=int, default=5, help="cold runs per measure (median)")
-    parser.add_argument("--grasps", type=int, default=200, help="grasps through the API (median)")
-    add_output_options(parser)
-    args = parser.parse_args(argv)
-    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
-    return benchmark_main(parser, args, "bench_predict", lambda echo: run_bench(
-        methods=methods, repeats=args.repeats, n_grasps=args.grasps, echo=echo), summary_lines)
-
-
-if __name__ == "__main__":
-    main()
+                rows.append(measurement("predict", method, stage, "api", "wall" if stage == "load" else "per_grasp",
+                                        "ms", ms, simulated=True, n_jobs=1, note=f"{payload} bundle"))
+                echo(f"{method} ({payload}): {stage}: median {statistics.median(ms):.3f} ms over {len(ms)}")
+    return rows
