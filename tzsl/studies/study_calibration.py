@@ -36,7 +36,7 @@ from tzsl.models import (
     ZeroShotClassifier,
     ZSLInputError,
 )
-from tzsl.models.calibration import fit_temperature, pseudo_unseen_scores, tempered_proba
+from tzsl.models.calibration import fit_temperature, pseudo_unseen_scores, selected_params, tempered_proba
 
 __all__ = [
     "CALIBRATION_COLUMNS",
@@ -177,7 +177,8 @@ def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions=("avg", "
 
     The temperature of each DAP variant (uniform prior) is fitted on pseudo-unseen classes of the
     split's training objects: the study's attribute model (``r.model``, cloned with its settings,
-    cache and chosen solver) is refitted on the training objects minus a held-out group of classes, and the
+    cache, chosen solver and, with the calibrator's default ``calibration_refit="pinned"``, each
+    attribute classifier's chosen hyper-parameters) is refitted on the training objects minus a held-out group of classes, and the
     held-out trials are scored among the held-out classes (:func:`tzsl.models.calibration.pseudo_unseen_scores`),
     on at most the calibrator's default ``calibration_max_trials`` training trials (a seeded
     subsample of a larger split, every object keeping its share).
@@ -202,7 +203,8 @@ def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions=("avg", "
         posteriors of shape (n_test_trials, n_test_objects).
     """
     rules = _dap_rules(fusions)
-    models = {"": clone(r.model).set_params(**r.model.selected_params())}  # the folds keep the split's solver
+    chosen = selected_params(r.model, _CALIBRATOR.calibration_refit)  # the split's solver (and hyper-parameters)
+    models = {"": clone(r.model).set_params(**chosen)}
     if r.P_multilabel is not None:
         names = set(MultiLabelAttributeClassifier().get_params(deep=False))
         models["multilabel-"] = MultiLabelAttributeClassifier(
