@@ -171,8 +171,8 @@ def _dap_rules(fusions) -> dict[str, DAPRule]:
     return {f"dap-{f}": DAPRule(fusion=f, prior="uni") for f in fusions}
 
 
-def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions=("avg", "max"),
-                         seed: int = 0) -> dict[str, tuple[np.ndarray, np.ndarray, float]]:
+def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions=("avg", "max"), seed: int = 0,
+                         refit: str = _CALIBRATOR.calibration_refit) -> dict[str, tuple[np.ndarray, np.ndarray, float]]:
     """Calibrated DAP posteriors of one PHAC-2 split from its already fitted test posteriors.
 
     The temperature of each DAP variant (uniform prior) is fitted on pseudo-unseen classes of the
@@ -195,6 +195,9 @@ def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions=("avg", "
     fusions : tuple of {"avg", "max"}
     seed : int
         Seeds which training class goes to which fold.
+    refit : {"pinned", "search"}, default: the calibrator's ``calibration_refit``
+        Whether the folds keep each attribute classifier's chosen hyper-parameters
+        (:data:`tzsl.models.calibration.CALIBRATION_REFITS`).
 
     Returns
     -------
@@ -203,7 +206,7 @@ def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions=("avg", "
         posteriors of shape (n_test_trials, n_test_objects).
     """
     rules = _dap_rules(fusions)
-    chosen = selected_params(r.model, _CALIBRATOR.calibration_refit)  # the split's solver (and hyper-parameters)
+    chosen = selected_params(r.model, refit)  # the split's solver (and hyper-parameters)
     models = {"": clone(r.model).set_params(**chosen)}
     if r.P_multilabel is not None:
         names = set(MultiLabelAttributeClassifier().get_params(deep=False))
