@@ -60,7 +60,7 @@ def test_toy_method_fits_and_predicts_through_the_registry(toy_method):
     method = get_method("toy-ncm")
     assert method.attribute_model is toy_method and method.parameters() == {
         "shrink": 0.0, "metric": "sqeuclidean", "random_state": None, "calibration": "temperature",
-        "calibration_folds": 3, "calibration_max_trials": MAX_CALIBRATION_TRIALS}
+        "calibration_folds": 3, "calibration_max_trials": MAX_CALIBRATION_TRIALS, "calibration_refit": "pinned"}
     rng = np.random.default_rng(0)
     rows = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0], [0, 1, 1]], float)
     y = np.repeat(np.arange(5), 10)

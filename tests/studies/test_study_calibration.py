@@ -104,7 +104,7 @@ def test_dap_split_calibration_uses_the_calibrator_s_bound_and_the_split_s_solve
     seen = {}
 
     def record(clf, X_train, A_train, groups_train, **kwargs):
-        seen.update(kwargs, solver=clf.attribute_model.solver)
+        seen.update(kwargs, solver=clf.attribute_model.solver, pinned=clf.attribute_model.estimator_params)
         raise ZSLInputError("recorded")  # the study then keeps T = 1: nothing else to fit here
 
     monkeypatch.setattr(study_calibration, "pseudo_unseen_scores", record)
@@ -117,3 +117,8 @@ def test_dap_split_calibration_uses_the_calibrator_s_bound_and_the_split_s_solve
     assert seen["max_trials"] == CalibratedZeroShotClassifier().calibration_max_trials
     assert bank.solver_choice_["solver"] == seen["solver"] == "approximate"  # 48 trials > 40; its folds: fewer
     assert out["dap-avg"][2] == 1.0
+    chosen = [[(e.C_, e.gamma_) for e in row] for row in bank.estimators_]  # the calibrator's default: pinned
+    assert [[(p["C_range"][0], p["gamma_range"][0]) for p in row] for row in seen["pinned"]] == chosen
+    with pytest.warns(CalibrationWarning, match="recorded"):
+        dap_split_posteriors(r, X, rows[objects], objects, fusions=("avg",), refit="search")
+    assert seen["pinned"] is None and seen["solver"] == "approximate"  # the grids searched again, same solver

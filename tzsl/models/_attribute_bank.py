@@ -118,6 +118,11 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
     max_exact_trials : int, default=3000
         Largest training set fitted exactly by ``solver="auto"`` (the exact model's cost against
         trials is measured by ``make bench-scale``).
+    estimator_params : list of list of dict or None, default=None
+        ``estimator_params[m][s]``: parameters set on the clone of attribute ``m`` on sensor ``s``
+        (after its seed and name). :meth:`selected_params` gives each fitted model's chosen
+        hyper-parameters this way (:func:`chosen_settings`), so a refit on part of the trials
+        (posterior calibration's folds) skips the hyper-parameter search. None: the template as is.
 
     Attributes
     ----------
@@ -153,6 +158,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         "random_state": ["random_state"],
         "solver": [StrOptions(set(SOLVERS))],
         "max_exact_trials": [Interval(Integral, 1, None, closed="left")],
+        "estimator_params": [None, list],
     }
 
     def __init__(
@@ -169,6 +175,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         random_state=None,
         solver="auto",
         max_exact_trials=AUTO_MAX_EXACT_TRIALS,
+        estimator_params=None,
     ):
         self.estimator = estimator
         self.detector = detector
@@ -181,6 +188,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         self.random_state = random_state
         self.solver = solver
         self.max_exact_trials = max_exact_trials
+        self.estimator_params = estimator_params
 
     def _names(self, m: int) -> list[str]:
         if self.attribute_names is None:
@@ -335,6 +343,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
                         f"attribute {nm!r}: {label} in only {k} training object(s); need at least 2 "
                         "(leave the attribute out of this split)"
                     )
+        per_model = self._per_model_params(A.shape[1], s)
         self._choose_detector(X, A, groups)
         template = self._choose_template(n)
         seeds = spawn_seeds(self.random_state, A.shape[1] * s)
@@ -351,6 +360,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
                     est.set_params(random_state=seeds[j * s + k])
                 if "name" in params:
                     est.set_params(name=f"{nm} (sensor {k})")
+                est.set_params(**per_model[j][k])
                 templates.append(est)
                 data.append((per_sensor[k], targets[j], groups))
                 keys.append(None if digests is None else (digests[0][k], digests[1][j], digests[2]))
@@ -360,13 +370,25 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         self._record_grid_edges(names)
         return self
 
+    def _per_model_params(self, m: int, s: int) -> list[list[dict]]:
+        """``estimator_params`` checked against ``m`` attributes x ``s`` sensors (empty dicts when None)."""
+        if self.estimator_params is None:
+            return [[{}] * s for _ in range(m)]
+        shape = [len(row) for row in self.estimator_params]
+        if len(shape) != m or any(k != s for k in shape):
+            raise ConfigError(f"estimator_params must hold {m} attributes x {s} sensors of parameters, "
+                              f"got {len(shape)} attributes with {sorted(set(shape))} sensors")
+        return self.estimator_params
+
     def selected_params(self) -> dict:
         """Parameters that refit this bank as it was fitted: the solver it chose (``{"solver": "exact" |
-        "approximate"}``) and, with ``detector="auto"``, the family it chose.
+        "approximate"}``), with ``detector="auto"`` the family it chose, and ``estimator_params``: each
+        (attribute, sensor) model's chosen hyper-parameters (:func:`chosen_settings`).
 
         A refit on part of the training trials (posterior calibration's pseudo-unseen folds, which
         may be subsampled: :class:`tzsl.models.CalibratedZeroShotClassifier`) then uses the same
-        kind of attribute model as this fit, whatever its number of trials.
+        kind of attribute model as this fit, whatever its number of trials, and the same
+        hyper-parameters, without searching them again.
         """
         check_is_fitted(self)
         choice = getattr(self, "solver_choice_", None)  # None: a subclass without a solver (the chain)
@@ -375,6 +397,8 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
             pinned["detector"] = self.detector_
             if self.detector_ != "rbf-svm":
                 pinned["estimator"] = None
+        if "estimator_params" in self.get_params(deep=False):
+            pinned["estimator_params"] = [[chosen_settings(est) for est in row] for row in self.estimators_]
         return pinned
 
     def _record_grid_edges(self, names: list[str]) -> None:
@@ -423,6 +447,38 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         for (j, k), column in zip(pairs, columns):
             P[:, k, j] = column
         return P
+
+
+def chosen_settings(estimator) -> dict:
+    """Parameters that refit a fitted attribute classifier with the hyper-parameters it chose, searching none.
+
+    By the attribute classifiers' convention (:class:`~tzsl.models.AttributeSVM`,
+    :class:`~tzsl.models.ScalableAttributeClassifier`, :class:`~tzsl.models.LinearAttribute`): a
+    tuned ``C_`` / ``gamma_`` becomes a one-point grid (``C_range = (C_, C_)``, ``n_C = 1``; the
+    same for ``gamma``), ``grid = "paper"`` (no added or widened ``gamma`` / ``C`` points),
+    ``max_grid_extensions = 0`` and ``n_draws = 1`` (one balanced under-sampling draw: a draw is
+    of the fitted trials' objects and cannot be reused on others). The refit still fits its Platt
+    sigmoid on its own object-grouped out-of-fold scores. Parameters the classifier lacks are left out.
+
+    Parameters
+    ----------
+    estimator : fitted classifier
+
+    Returns
+    -------
+    dict
+        ``set_params`` keywords (empty for a classifier without tuned ``C_`` / ``gamma_``).
+    """
+    params = estimator.get_params(deep=False)
+    out: dict = {}
+    for name in ("C", "gamma"):
+        value = getattr(estimator, f"{name}_", None)
+        if value is not None and f"{name}_range" in params and f"n_{name}" in params:
+            out[f"{name}_range"], out[f"n_{name}"] = (float(value), float(value)), 1
+    if out:
+        fixed = {"grid": "paper", "max_grid_extensions": 0, "n_draws": 1}
+        out.update({k: v for k, v in fixed.items() if k in params})
+    return out
 
 
 def _digests(per_sensor: list, targets: list, groups) -> tuple[list[str], list[str], str]:

@@ -70,7 +70,7 @@ class MultiLabelAttributeClassifier(AttributeClassifierBank):
 
     _parameter_constraints: dict = {  # the chain always fits its template exactly: no solver choice
         **{k: v for k, v in AttributeClassifierBank._parameter_constraints.items()
-           if k not in ("solver", "max_exact_trials")},
+           if k not in ("solver", "max_exact_trials", "estimator_params")},
         "order": [None, StrOptions({"random"}), "array-like"],
     }
 

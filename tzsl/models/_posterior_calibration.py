@@ -30,9 +30,14 @@ training trials only, by the zero-shot protocol itself:
 
 The method is fitted on all training trials first; an attribute model that tunes its own
 hyper-parameters and offers ``selected_params()`` (ESZSL's ridges, SAE's ``lam``, the DAP
-attribute bank's exact or approximate solver) is refitted on the folds with its choice pinned, so
-the fold scores have the scale of the final model (a re-tuned ridge, or an exact model where the
-final one is approximate, changes the scale of the class scores, and with it the temperature).
+attribute bank's exact or approximate solver and, with ``calibration_refit="pinned"``, the
+default, each of its attribute classifiers' chosen ``C`` / ``gamma``) is refitted on the folds
+with its choice pinned, so the fold scores have the scale of the final model (a re-tuned ridge,
+or an exact model where the final one is approximate, changes the scale of the class scores, and
+with it the temperature) and a fold refit costs one fit per attribute classifier instead of its
+hyper-parameter search (with ``calibration_refit="search"`` the folds search the attribute
+classifiers' grids again, as before). The ECE and accuracy of both on confirmation splits are
+compared by ``experiments/benchmarks/calibration_refit.py``.
 
 Dividing by ``T > 0`` keeps every trial's ranking, so :meth:`~CalibratedZeroShotClassifier.predict`
 and every accuracy are those of the method alone. Test objects are never used.
@@ -67,17 +72,27 @@ from tzsl.models._zsl_input import ZSLInputError, class_grouped_folds
 
 __all__ = [
     "CALIBRATIONS",
+    "CALIBRATION_REFITS",
     "CalibratedZeroShotClassifier",
     "CalibrationWarning",
     "MAX_CALIBRATION_TRIALS",
     "calibration_subsample",
     "fit_temperature",
     "pseudo_unseen_scores",
+    "selected_params",
     "tempered_proba",
 ]
 
 #: Values of the ``calibration`` parameter: a fitted temperature, or none (the method's own softmax).
 CALIBRATIONS = ("temperature", "none")
+
+#: Values of the ``calibration_refit`` parameter: the folds keep every chosen hyper-parameter of the
+#: final fit, or search the attribute classifiers' hyper-parameters again (the solver stays pinned).
+CALIBRATION_REFITS = ("pinned", "search")
+
+#: Key of ``selected_params()`` holding an attribute bank's per-classifier hyper-parameters, which
+#: ``calibration_refit="search"`` leaves out.
+PER_CLASSIFIER_PARAMS = "estimator_params"
 
 #: A fold keeps a 0/1 attribute when at least this many of its training classes have it and lack it.
 MIN_FOLD_CLASSES = 2
@@ -236,25 +251,51 @@ def pseudo_unseen_scores(estimator, X, Y, groups=None, *, n_folds: int = 3, rand
     return out
 
 
+#: Parameters holding one entry per attribute, cut with the attributes a fold leaves out.
+_PER_ATTRIBUTE = ("attribute_names", PER_CLASSIFIER_PARAMS)
+
+
 def _on_attributes(estimator, keep: np.ndarray):
-    """``estimator`` with every nested ``attribute_names`` parameter cut to the kept attributes."""
+    """``estimator`` with every nested per-attribute parameter (:data:`_PER_ATTRIBUTE`) cut to the kept attributes."""
     if keep.all():
         return estimator
     cut = {key: [name for name, k in zip(value, keep) if k]
            for key, value in estimator.get_params(deep=True).items()
-           if key.split("__")[-1] == "attribute_names" and value is not None and len(value) == len(keep)}
+           if key.split("__")[-1] in _PER_ATTRIBUTE and value is not None and len(value) == len(keep)}
     return estimator.set_params(**cut)
 
 
-def _selected(model) -> dict:
-    """``model.selected_params()`` when it has that method, else {}."""
+def selected_params(model, refit: str = CALIBRATION_REFITS[0]) -> dict:
+    """What a calibration fold pins of a fitted attribute model: ``model.selected_params()`` when it has
+    that method, else {}; without :data:`PER_CLASSIFIER_PARAMS` when ``refit == "search"``.
+
+    Parameters
+    ----------
+    model : fitted attribute model or None
+    refit : {"pinned", "search"}, default="pinned"
+        :data:`CALIBRATION_REFITS`.
+
+    Returns
+    -------
+    dict
+        ``set_params`` keywords for an unfitted clone of ``model``.
+    """
     pick = getattr(model, "selected_params", None)
-    return pick() if callable(pick) else {}
+    chosen = pick() if callable(pick) else {}
+    if refit == "search":
+        chosen.pop(PER_CLASSIFIER_PARAMS, None)
+    return chosen
 
 
-def _pinned(template, fitted):
+def _pinned_text(chosen: dict) -> str:
+    """``calibration_info_["pinned"]``: ``key=value`` pairs, a per-classifier list as its count."""
+    return ", ".join(f"{k}=<chosen hyper-parameters of {sum(len(row) for row in v)} attribute classifiers>"
+                     if k == PER_CLASSIFIER_PARAMS else f"{k}={v}" for k, v in chosen.items())
+
+
+def _pinned(template, fitted, refit: str = CALIBRATION_REFITS[0]):
     """``template`` (unfitted) with the fitted attribute model's tuned choice pinned (``selected_params``)."""
-    chosen = _selected(getattr(fitted, "attribute_model_", None))
+    chosen = selected_params(getattr(fitted, "attribute_model_", None), refit)
     if chosen and "attribute_model" in template.get_params(deep=False):
         template.set_params(**{f"attribute_model__{k}": v for k, v in chosen.items()})
     return template
@@ -288,6 +329,12 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
         object keeps its share, :func:`calibration_subsample`) when there are more, so each fold's
         fit costs at most that of this many trials; None: on all of them. Below it the result
         does not depend on this parameter.
+    calibration_refit : {"pinned", "search"}, default="pinned"
+        ``"pinned"``: each fold refits the attribute classifiers with the hyper-parameters the
+        final fit chose (``C``, ``gamma``; one under-sampling draw), so a fold costs one fit of
+        each instead of its search; ``"search"``: the folds search them again (the former
+        behaviour, about ``n_C x n_gamma x n_draws`` times the fits). Either way the solver and
+        the method's own tuned choices (ESZSL's ridges, SAE's ``lam``) stay pinned.
     random_state : int, RandomState instance or None, default=None
         Seeds which training class goes to which fold.
 
@@ -316,15 +363,17 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
         "calibration": [StrOptions(set(CALIBRATIONS)), None],
         "calibration_folds": [Interval(Integral, 2, None, closed="left")],
         "calibration_max_trials": [Interval(Integral, 2, None, closed="left"), None],
+        "calibration_refit": [StrOptions(set(CALIBRATION_REFITS))],
         "random_state": ["random_state"],
     }
 
     def __init__(self, *, estimator=None, calibration="temperature", calibration_folds=3,
-                 calibration_max_trials=MAX_CALIBRATION_TRIALS, random_state=None):
+                 calibration_max_trials=MAX_CALIBRATION_TRIALS, calibration_refit="pinned", random_state=None):
         self.estimator = estimator
         self.calibration = calibration
         self.calibration_folds = calibration_folds
         self.calibration_max_trials = calibration_max_trials
+        self.calibration_refit = calibration_refit
         self.random_state = random_state
 
     def __sklearn_tags__(self):
@@ -359,7 +408,7 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
                 "n_training_trials": int(A.shape[0]),
                 "fitted_on": "pseudo-unseen classes of the training objects (class-grouped folds)"}
         if info["method"] == "temperature":
-            info.update(self._fit_temperature(_pinned(clone(self.estimator), self.estimator_), X, A, groups,
+            info.update(self._fit_temperature(_pinned(clone(self.estimator), self.estimator_, self.calibration_refit), X, A, groups,
                                               n_classes))
         self.temperature_ = float(info["temperature"])
         self.calibration_info_ = info
@@ -384,9 +433,9 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
         def loss(temp: float) -> float:
             return -sum(log_softmax(s / temp, axis=1)[np.arange(len(y)), y].sum() for s, y in zip(scores, ys)) / n
 
-        pinned = _selected(getattr(self.estimator_, "attribute_model_", None))
+        pinned = selected_params(getattr(self.estimator_, "attribute_model_", None), self.calibration_refit)
         return {"fitted": True, "temperature": t, "n_folds": len(folds), "n_held_out_trials": n,
-                "pinned": ", ".join(f"{k}={v}" for k, v in pinned.items()),
+                "pinned": _pinned_text(pinned),
                 "n_attributes_left_out": int(sum(d for _, _, d in folds)),
                 "log_loss_before": float(loss(1.0)), "log_loss_after": float(loss(t))}
 

@@ -38,7 +38,7 @@ from tzsl.models import (
     ZeroShotClassifier,
     ZSLInputError,
 )
-from tzsl.models.calibration import fit_temperature, pseudo_unseen_scores, tempered_proba
+from tzsl.models.calibration import fit_temperature, pseudo_unseen_scores, selected_params, tempered_proba
 from tzsl.value_lists import FUSIONS
 
 __all__ = [
@@ -205,13 +205,14 @@ def _dap_rules(fusions) -> dict[str, DAPRule]:
     return {f"dap-{f}": DAPRule(fusion=f, prior="uni") for f in fusions}
 
 
-def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions: Sequence[str] | None = None,
-                         seed: int = 0) -> dict[str, tuple[np.ndarray, np.ndarray, float]]:
+def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions: Sequence[str] | None = None, seed: int = 0,
+                         refit: str = _CALIBRATOR.calibration_refit) -> dict[str, tuple[np.ndarray, np.ndarray, float]]:
     """Calibrated DAP posteriors of one PHAC-2 split from its already fitted test posteriors.
 
     The temperature of each DAP variant (uniform prior) is fitted on pseudo-unseen classes of the
     split's training objects: the study's attribute model (``r.model``, cloned with its settings,
-    cache and chosen solver) is refitted on the training objects minus a held-out group of classes, and the
+    cache, chosen solver and, with the calibrator's default ``calibration_refit="pinned"``, each
+    attribute classifier's chosen hyper-parameters) is refitted on the training objects minus a held-out group of classes, and the
     held-out trials are scored among the held-out classes (:func:`tzsl.models.calibration.pseudo_unseen_scores`),
     on at most the calibrator's default ``calibration_max_trials`` training trials (a seeded
     subsample of a larger split, every object keeping its share).
@@ -229,6 +230,9 @@ def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions: Sequence
         Default: every fusion (:data:`tzsl.value_lists.FUSIONS`), AVGDAP (the reference) first.
     seed : int
         Seeds which training class goes to which fold.
+    refit : {"pinned", "search"}, default: the calibrator's ``calibration_refit``
+        Whether the folds keep each attribute classifier's chosen hyper-parameters
+        (:data:`tzsl.models.calibration.CALIBRATION_REFITS`).
 
     Returns
     -------
@@ -237,7 +241,8 @@ def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions: Sequence
         posteriors of shape (n_test_trials, n_test_objects).
     """
     rules = _dap_rules(fusions if fusions is not None else sorted(FUSIONS, key=lambda f: f != "avg"))
-    models = {"": clone(r.model).set_params(**r.model.selected_params())}  # the folds keep the split's solver
+    chosen = selected_params(r.model, refit)  # the split's solver (and hyper-parameters)
+    models = {"": clone(r.model).set_params(**chosen)}
     if r.P_multilabel is not None:
         names = set(MultiLabelAttributeClassifier().get_params(deep=False))
         models["multilabel-"] = MultiLabelAttributeClassifier(
