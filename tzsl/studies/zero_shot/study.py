@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from tzsl._profile import stage
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, challenging_splits, purpose_seed, random_object_splits
 from tzsl.exceptions import ConfigError, SplitError
@@ -359,34 +360,40 @@ def run_dap_study(
             random_results = fit_splits(features, random_splits, config, multilabel=config.methods.multilabel,
                                         failures=failed)
         if random_results:
-            tables["table1_fusion"] = table1_fusion(random_results, paper=paper)
-            tables["table2_priors"] = table2_priors(random_results, paper=paper)
-            if config.methods.multilabel:
-                tables["multilabel"] = multilabel_table(random_results, paper=paper)
-            per_split = attribute_accuracy_table(random_results, features.sensors)
-            tables["attribute_accuracy_per_split"] = per_split
-            tables["attribute_accuracy"] = attribute_accuracy_summary(per_split, random_results, paper=paper)
+            with stage("tables"):
+                tables["table1_fusion"] = table1_fusion(random_results, paper=paper)
+                tables["table2_priors"] = table2_priors(random_results, paper=paper)
+                if config.methods.multilabel:
+                    tables["multilabel"] = multilabel_table(random_results, paper=paper)
+                per_split = attribute_accuracy_table(random_results, features.sensors)
+                tables["attribute_accuracy_per_split"] = per_split
+                tables["attribute_accuracy"] = attribute_accuracy_summary(per_split, random_results, paper=paper)
             out.write_figure("attribute_accuracy.png", attribute_accuracy_figure(tables["attribute_accuracy"]))
             if sweep:
-                tables["attribute_sweep"] = attribute_sweep(
-                    random_results, config.methods.sweep_min_attributes, config.methods.sweep_max_subsets, seed=config.study_seed)
+                with stage("sweep"):
+                    tables["attribute_sweep"] = attribute_sweep(random_results, config.methods.sweep_min_attributes,
+                                                                config.methods.sweep_max_subsets, seed=config.study_seed)
                 out.write_figure("attribute_sweep.png", attribute_sweep_figure(tables["attribute_sweep"]))
         used = [r.split for r in random_results]
         results: list[SplitPosteriors] = []
         if splits is None and "challenging" in kinds:
-            challenging, map_coords = make_splits(features, "challenging", config)
+            with stage("splits"):  # the unsupervised object map the challenging splits are drawn from
+                challenging, map_coords = make_splits(features, "challenging", config)
             results = fit_splits(features, challenging, config, offset=100, failures=failed)
             used += [r.split for r in results]
-            tables["table3_challenging"] = table3_challenging(results, map_coords, paper=paper)
+            with stage("tables"):
+                tables["table3_challenging"] = table3_challenging(results, map_coords, paper=paper)
             tables["object_map"] = map_coords
             out.write_figure("object_map.png", object_map_figure(map_coords))
         by_kind = {"file" if splits is not None else "random": (random_results, 0), "challenging": (results, 100)}
-        tables.update(evidence_tables(
+        with stage("tables"):
+            evidence = evidence_tables(
             features, by_kind, seed=config.study_seed, labels=labels, compare_on=config.methods.compare_on,
             purpose=config.splits.purpose, n_jobs=config.compute.n_jobs,
             methods=list((method_options or {}).get("methods", DEFAULT_METHODS)) if compare_methods else [],
             refit_seeds=config.splits.refit_seeds, refit_splits=config.splits.refit_splits,
-            refit=lambda split, index, k: fit_split(features, split, config, index, refit=k)))
+            refit=lambda split, index, k: fit_split(features, split, config, index, refit=k))
+        tables.update(evidence)
         write_reliability_figure(out, tables, labels.reliability_table, labels.comparison_table)
         if failed:
             tables[FAILED_SPLITS] = pd.DataFrame(failed)
