@@ -23,8 +23,12 @@ refit: with ``m`` objects in a draw and a ``g x c`` grid that is ``g * c * (m + 
 
 from __future__ import annotations
 
+import copy
+import threading
+from collections import OrderedDict
 from numbers import Integral, Real
 
+import joblib
 import numpy as np
 from sklearn import config_context
 from sklearn.base import BaseEstimator, ClassifierMixin, clone
@@ -37,6 +41,7 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 from threadpoolctl import threadpool_limits
 
+from tzsl._fit_store import array_digest
 from tzsl.models._attribute_training import (
     PLATT_WEIGHTING,
     SCORING,
@@ -67,6 +72,39 @@ from tzsl.models._platt_binary import PlattBinaryClassifierMixin
 from tzsl.models._validation import ParameterError, ValidatedParamsMixin
 
 __all__ = ["AttributeSVM"]
+
+#: Most bytes of preprocessed training sets (features and squared distances) a process keeps for reuse.
+PREPROCESSED_BYTES = 64 * 2**20
+#: This process's last preprocessed training sets: (preprocessor, features digest) -> (fitted, Z, D).
+_PREPROCESSED: OrderedDict = OrderedDict()
+_PREPROCESSED_LOCK = threading.Lock()
+
+
+def _preprocessed(pre, X: np.ndarray) -> tuple[object, np.ndarray, np.ndarray]:
+    """``(fitted preprocessor, Z, D)``: ``pre`` fitted on ``X`` (n_trials, n_features), the transformed trials Z
+    (n_trials, n_components) and their squared Euclidean distances D (n_trials, n_trials).
+
+    Every attribute of a sensor trains on the same trials (an :class:`AttributeClassifierBank` gives each
+    (attribute, sensor) fit the sensor's features), so a process keeps its last results, up to
+    :data:`PREPROCESSED_BYTES`, and hands the next fit on equal features with an equal preprocessor a copy
+    of the same fitted preprocessor and the same (read-only) Z and D: the same numbers, computed once.
+    """
+    key = (joblib.hash(pre), array_digest(X))
+    with _PREPROCESSED_LOCK:  # the bank's threading backend fits in threads of one process
+        known = _PREPROCESSED.get(key)
+        if known is not None:
+            _PREPROCESSED.move_to_end(key)
+    if known is not None:
+        return copy.deepcopy(known[0]), known[1], known[2]
+    Z = np.asarray(pre.fit_transform(X), dtype=np.float64)
+    D = euclidean_distances(Z, squared=True)
+    if Z.nbytes + D.nbytes <= PREPROCESSED_BYTES:
+        Z.flags.writeable = D.flags.writeable = False
+        with _PREPROCESSED_LOCK:
+            _PREPROCESSED[key] = (copy.deepcopy(pre), Z, D)
+            while sum(z.nbytes + d.nbytes for _, z, d in _PREPROCESSED.values()) > PREPROCESSED_BYTES:
+                _PREPROCESSED.popitem(last=False)
+    return pre, Z, D
 
 class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
     """Binary RBF-SVM for one attribute and one sensor, under-sampled, group-tuned, Platt-calibrated.
@@ -388,9 +426,8 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
 
         # many small dense problems: more BLAS threads than one only spin (and do not change results)
         with threadpool_limits(limits=1):
-            pre = clone(self.preprocessor) if self.preprocessor is not None else default_preprocessor()
-            Z = np.asarray(pre.fit_transform(X), dtype=np.float64)
-            D = euclidean_distances(Z, squared=True)
+            pre, Z, D = _preprocessed(clone(self.preprocessor) if self.preprocessor is not None
+                                      else default_preprocessor(), X)
             draws, draw_w = self._draws(yb, groups, rng)
             fold_seed = int(rng.randint(np.iinfo(np.int32).max))
             cw = None if self.undersampling == "none" else "balanced"

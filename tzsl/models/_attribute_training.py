@@ -13,10 +13,11 @@ from scipy.special import expit, log_expit
 from numbers import Integral
 
 from sklearn.base import BaseEstimator
-from sklearn.model_selection import LeaveOneGroupOut, StratifiedGroupKFold
+from sklearn.model_selection import LeaveOneGroupOut
 
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.features import VariancePCA
+from tzsl.models._grouped_folds import stratified_group_fold_masks
 
 __all__ = [
     "AUTO_MAX_EXACT_TRIALS",
@@ -353,8 +354,9 @@ def object_grouped_folds(cv, yb: np.ndarray, groups: np.ndarray, seed: int) -> l
     Parameters
     ----------
     cv : None, int or splitter
-        ``None``: leave-one-object-out. int: ``StratifiedGroupKFold(min(cv, n), shuffle=True)``
-        with ``n`` the number of objects of the rarer class (so every fold keeps both classes).
+        ``None``: leave-one-object-out. int: ``StratifiedGroupKFold(min(cv, n), shuffle=True)``'s folds
+        (:func:`~tzsl.models._grouped_folds.stratified_group_fold_masks`) with ``n`` the number of
+        objects of the rarer class (so every fold keeps both classes).
         A splitter: its ``split(X, y, groups)``.
     yb : ndarray of bool, shape (n_trials,)
     groups : ndarray of shape (n_trials,)
@@ -372,18 +374,15 @@ def object_grouped_folds(cv, yb: np.ndarray, groups: np.ndarray, seed: int) -> l
     ConfigError
         The test folds do not partition the trials.
     """
-    if cv is None:
-        splitter = LeaveOneGroupOut()
-    elif isinstance(cv, Integral):
+    if isinstance(cv, Integral):  # StratifiedGroupKFold's folds, without its per-group Python loop
         n_min = min(np.unique(groups[yb]).size, np.unique(groups[~yb]).size)
-        splitter = StratifiedGroupKFold(n_splits=min(int(cv), n_min), shuffle=True, random_state=seed)
+        masks = stratified_group_fold_masks(yb, groups, min(int(cv), n_min), seed)
     else:
-        splitter = cv
-    masks = []
-    for _, test in splitter.split(np.zeros((yb.size, 1)), yb, groups):
-        m = np.zeros(yb.size, dtype=bool)
-        m[test] = True
-        masks.append(m)
+        masks = []
+        for _, test in (LeaveOneGroupOut() if cv is None else cv).split(np.zeros((yb.size, 1)), yb, groups):
+            m = np.zeros(yb.size, dtype=bool)
+            m[test] = True
+            masks.append(m)
     counts = np.sum(masks, axis=0) if masks else np.zeros(yb.size)
     if not np.all(counts == 1):
         raise ConfigError("cv: the test folds must partition the training trials (each trial exactly once)")

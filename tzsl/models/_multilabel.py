@@ -29,6 +29,7 @@ from sklearn.compose import ColumnTransformer
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import StrOptions
 
+from tzsl._profile import timed
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_bank import AttributeClassifierBank
 from tzsl.models._detectors import AUTO_CANDIDATES, detector_preprocessor
@@ -101,6 +102,7 @@ class MultiLabelAttributeClassifier(AttributeClassifierBank):
         )
         self.order = order
 
+    @timed("fit")
     def fit(self, X, A, groups=None):
         """Fit every link of every sensor's chain.
 
@@ -151,6 +153,7 @@ class MultiLabelAttributeClassifier(AttributeClassifierBank):
         self.n_sensors_, self.n_attributes_, self.n_features_in_ = s, m, d
         return self
 
+    @timed("predict")
     def predict_proba(self, X) -> np.ndarray:
         """Attribute posteriors, walking each sensor's chain.
 

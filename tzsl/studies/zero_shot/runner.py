@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from tzsl._profile import stage
 from tzsl.datasets import FeatureSet
 from tzsl.studies._outputs import PrefixedResults, ResultsDir, prefixed
 from tzsl.studies.config import Experiment
@@ -154,7 +155,8 @@ def prepare(exp: Experiment) -> PreparedStudy:
     from tzsl.studies.zero_shot.study import make_splits  # noqa: PLC0415
 
     features = load_study_features(exp)
-    exp, relaxed, drawn = relax_to_dataset(exp, features)
+    with stage("splits"):  # the relaxation draws (and checks) every split the run scores
+        exp, relaxed, drawn = relax_to_dataset(exp, features)
     c = exp.config
     split_file = None
     if c.splits.kinds == ["file"]:

@@ -20,6 +20,7 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 
+from tzsl._profile import stage
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, challenging_splits, purpose_seed, random_object_splits
 from tzsl.exceptions import ConfigError, SplitError
@@ -286,9 +287,10 @@ def run_zero_shot_tables(
 
     labels = labels or StudyLabels()
     kinds, drawn = config.splits.kinds, dict(splits or {})
-    for kind in kinds:
-        if kind not in drawn:
-            drawn[kind] = make_splits(features, kind, config)  # "file" cannot be drawn: given, or an error
+    with stage("splits"):  # what the caller has not drawn (the challenging splits' unsupervised object map)
+        for kind in kinds:
+            if kind not in drawn:
+                drawn[kind] = make_splits(features, kind, config)  # "file" cannot be drawn: given, or an error
     paper = labels.paper
     tables: dict[str, pd.DataFrame] = {}
     with compute_context(config):  # one Dask cluster for all the study's fits
@@ -299,17 +301,19 @@ def run_zero_shot_tables(
             random_results = fit_splits(features, drawn[scored][0], config, multilabel=config.methods.multilabel,
                                         failures=failed)
         if random_results:
-            tables["table1_fusion"] = table1_fusion(random_results, paper=paper)
-            tables["table2_priors"] = table2_priors(random_results, paper=paper)
-            if config.methods.multilabel:
-                tables["multilabel"] = multilabel_table(random_results, paper=paper)
-            per_split = attribute_accuracy_table(random_results, features.sensors)
-            tables["attribute_accuracy_per_split"] = per_split
-            tables["attribute_accuracy"] = attribute_accuracy_summary(per_split, random_results, paper=paper)
+            with stage("tables"):
+                tables["table1_fusion"] = table1_fusion(random_results, paper=paper)
+                tables["table2_priors"] = table2_priors(random_results, paper=paper)
+                if config.methods.multilabel:
+                    tables["multilabel"] = multilabel_table(random_results, paper=paper)
+                per_split = attribute_accuracy_table(random_results, features.sensors)
+                tables["attribute_accuracy_per_split"] = per_split
+                tables["attribute_accuracy"] = attribute_accuracy_summary(per_split, random_results, paper=paper)
             out.write_figure("attribute_accuracy.png", attribute_accuracy_figure(tables["attribute_accuracy"]))
             if config.methods.sweep:
-                tables["attribute_sweep"] = attribute_sweep(
-                    random_results, config.methods.sweep_min_attributes, config.methods.sweep_max_subsets, seed=config.study_seed)
+                with stage("sweep"):
+                    tables["attribute_sweep"] = attribute_sweep(random_results, config.methods.sweep_min_attributes,
+                                                                config.methods.sweep_max_subsets, seed=config.study_seed)
                 out.write_figure("attribute_sweep.png", attribute_sweep_figure(tables["attribute_sweep"]))
         used = [r.split for r in random_results]
         results: list[SplitPosteriors] = []
@@ -317,16 +321,19 @@ def run_zero_shot_tables(
             challenging, map_coords = drawn["challenging"]
             results = fit_splits(features, challenging, config, offset=100, failures=failed)
             used += [r.split for r in results]
-            tables["table3_challenging"] = table3_challenging(results, map_coords, paper=paper)
+            with stage("tables"):
+                tables["table3_challenging"] = table3_challenging(results, map_coords, paper=paper)
             tables["object_map"] = map_coords
             out.write_figure("object_map.png", object_map_figure(map_coords, features.dataset))
         by_kind = {scored: (random_results, 0), "challenging": (results, 100)}
-        tables.update(evidence_tables(
+        with stage("tables"):
+            evidence = evidence_tables(
             features, by_kind, seed=config.study_seed, labels=labels, compare_on=config.methods.compare_on,
             purpose=config.splits.purpose, n_jobs=config.compute.n_jobs,
             methods=config.methods.method_specs(),
             refit_seeds=config.splits.refit_seeds, refit_splits=config.splits.refit_splits,
-            refit=lambda split, index, k: fit_split(features, split, config, index, refit=k)))
+            refit=lambda split, index, k: fit_split(features, split, config, index, refit=k))
+        tables.update(evidence)
         write_reliability_figure(out, tables, labels.reliability_table, labels.comparison_table)
         if failed:
             tables[FAILED_SPLITS] = pd.DataFrame(failed)
