@@ -94,10 +94,12 @@ def measurement(part: str, study: str, stage: str, run: str, quantity: str, unit
 
 def _simulated(record: Mapping) -> bool:
     """Whether a manifest's study record ran on a built-in dataset that tzsl simulates."""
-    from tzsl.datasets import get_dataset  # noqa: PLC0415
+    from tzsl.datasets import dataset_names, get_dataset  # noqa: PLC0415
 
     builtin = (record.get("settings") or {}).get("dataset", {}).get("builtin")
-    return bool(builtin) and bool(get_dataset(builtin).simulated)
+    # a registered dataset says whether it is simulated; the fabric study's builtin names a registry folder
+    # of real recordings ("fabric"), not a registered dataset
+    return builtin in dataset_names() and bool(get_dataset(builtin).simulated)
 
 
 def manifest_rows(manifest: Mapping, **common) -> list[dict]:
