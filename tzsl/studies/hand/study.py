@@ -33,10 +33,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from joblib import Parallel, delayed
 
-from tzsl._parallel import reissued, relayed
-from tzsl._profile import stage
 from tzsl.datasets import Grasp, HandTable, read_grasps, simulate_grasps
 from tzsl.evaluation import summarise_over_splits
 from tzsl.exceptions import ConfigError, SplitError
@@ -232,25 +229,6 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandSettin
     return out
 
 
-def _seed_features(seed: int, fixed: GraspFeatures | None, table: HandTable,
-                   config: HandSettings) -> tuple[GraspFeatures, dict | None, int]:
-    """``(features, simulator parameters, grasps)`` of one seed: ``fixed`` (given grasps), or a data set
-    simulated with that seed (``fixed`` None)."""
-    if fixed is not None:
-        return fixed, None, len(fixed)
-    sim = simulate_grasps(table.K, **config.simulation.model_dump(),
-                          material_attributes=table.material_attributes, random_state=seed)
-    return hand_features(sim.grasps, table, config), sim.params, len(sim.grasps)
-
-
-def _seed_job(seed: int, fixed: GraspFeatures | None, table: HandTable, config: HandSettings) -> tuple:
-    """One seed of the study: ``(parts or None, error, notes, simulator parameters, grasps)``."""
-    features, params, n_grasps = _seed_features(seed, fixed, table, config)
-    notes: list[str] = []
-    res, error = attempt(_evaluate_seed, features, table, config, seed, notes)
-    return res, error, notes, params, n_grasps
-
-
 # ---------------------------------------------------------------------------- the study
 def run_hand_study(
     grasps: str | Path | Sequence[Grasp] | None,
@@ -315,17 +293,16 @@ def run_hand_study(
     parts: dict[str, list] = {k: [] for k in ("table5", "T", "k", "attr", "S", "confusion", "trust", "trials", "seconds")}
     simulation: dict[str, dict] = {}
     failed: list[tuple[int, str]] = []
-    # the seeds are independent (own data set, fit, grasp orders and tie-breaks): one joblib job each, so the
-    # simulation, features and scoring of a seed use a core too, not only its model fit
-    inner = config.model_copy(update={"compute": config.compute.model_copy(update={"n_jobs": 1})})
-    jobs = (delayed(relayed(_seed_job))(seed, fixed, table, inner) for seed in seeds)
-    with stage("seeds"):  # simulate, fit and score every seed (in joblib workers when n_jobs > 1)
-        done = [reissued(item) for item in Parallel(n_jobs=min(config.compute.n_jobs, len(seeds)))(jobs)]
-    for seed, (res, error, seed_notes, params, n_grasps) in zip(seeds, done):
-        notes += seed_notes
+    for seed in seeds:
         if simulated:
-            simulation[str(seed)] = params
-            log(f"seed {seed}: simulated {n_grasps} grasps of {len(table.K)} objects")
+            sim = simulate_grasps(table.K, **config.simulation.model_dump(),
+                                  material_attributes=table.material_attributes, random_state=seed)
+            simulation[str(seed)] = sim.params
+            features = hand_features(sim.grasps, table, config)
+            log(f"seed {seed}: simulated {len(sim.grasps)} grasps of {len(table.K)} objects")
+        else:
+            features = fixed
+        res, error = attempt(_evaluate_seed, features, table, config, seed, notes)
         if res is None:  # NaN rows in Table 5 with the reason; reported at the end of the run
             failed.append((seed, error))
             parts["table5"] += [{"seed": seed, "method": f.upper(), "all": np.nan, ERROR_COLUMN: error}
@@ -339,7 +316,7 @@ def run_hand_study(
         ldap = [r for r in res["table5"] if r["method"] == "LDAP"][0]["all"]
         log(f"seed {seed}: LDAP single-grasp accuracy {ldap:.3f}")
     if len(failed) == len(seeds):  # nothing to tabulate: the last seed again, its error ends the run
-        _evaluate_seed(_seed_features(seeds[-1], fixed, table, config)[0], table, config, seeds[-1], [])
+        _evaluate_seed(features, table, config, seeds[-1], [])
 
     names = list(table.test_objects)
     trust = parts["trust"]
