@@ -151,7 +151,13 @@ def test_auto_records_its_choice_and_pins_it():
                                                 -choice["scores"][c]["attribute_log_loss"]))
     assert choice["detector"] == bank.detector_ == best
     assert all(0.0 <= v["accuracy"] <= 1.0 and v["attribute_log_loss"] > 0 for v in choice["scores"].values())
-    assert bank.selected_params() == {"solver": "exact", "detector": best, "estimator": None}
+    chosen = bank.selected_params()
+    assert {k: chosen[k] for k in ("solver", "detector", "estimator")} == {"solver": "exact", "detector": best,
+                                                                          "estimator": None}
+    # and each (attribute, sensor) model's chosen C, pinned as a one-point grid for calibration refits
+    C = [[est.C_ for est in per_sensor] for per_sensor in bank.estimators_]
+    assert [[params["C_range"] for params in row] for row in chosen["estimator_params"]] == [
+        [(c, c) for c in row] for row in C]
 
 
 def test_auto_refuses_too_few_training_classes_with_its_own_message():

@@ -152,7 +152,7 @@ def _uniform_lbp_histograms(images: np.ndarray, points: int, radius: float) -> n
     The same codes as scikit-image's (its sampling points ``round(-R sin t, 5)``, ``round(R cos t,
     5)``, the same bilinear interpolation with zeros outside the image, the same comparison and
     count of 0/1 changes), computed with whole-image array operations instead of a loop over
-    pixels: about 3 times faster, and equal bit for bit (``tests/features/test_texture.py``).
+    pixels, faster and equal bit for bit (``tests/features/test_texture.py``).
 
     Parameters
     ----------
