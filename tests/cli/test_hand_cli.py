@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import pandas as pd
 import pytest
 from click.testing import CliRunner
@@ -96,7 +98,10 @@ def test_evaluate_hand_on_a_grasp_folder(trained, tmp_path):
     out = tmp_path / "res"
     result = _run("evaluate-hand", "--grasps", root / "g", "--out", out, "--seeds", "0", "--n-sequences", 5)
     assert result.exit_code == 0, result.output
-    assert sorted(p.name for p in out.iterdir()) == sorted([*HAND_OUTPUTS, "manifest.json"])
+    assert sorted(p.name for p in out.iterdir()) == sorted([*HAND_OUTPUTS, "manifest.json"])  # one manifest
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["config"]["hand"]["simulated"] is False and manifest["config"]["hand"]["seeds"] == [0]
+    assert any(path.endswith("grasps.csv") for path in manifest["data_files"])
     assert "Table 5" in result.output and "59.63%" in result.output and "simulating" not in result.output
     _one_line_error(_run("evaluate-hand", "--grasps", root / "g", "--out", out), "already exists", "--force")
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import shutil
 import warnings
 
@@ -184,17 +183,18 @@ def real_study(data_dir, tmp_path_factory):
     out = tmp_path_factory.mktemp("fabric_results")
     # a module fixture runs before the autouse cache isolation of conftest: use the same folder
     cache = tmp_path_factory.getbasetemp() / "tzsl-cache"
-    result = run_fabric_study(ResultsDir(out), _settings(configs=(1, 2), **REDUCED), data_dir=data_dir, cache_dir=cache)
-    return out, result
+    record: dict = {}  # what the run's one manifest.json records of the study (the engine writes it)
+    result = run_fabric_study(ResultsDir(out), _settings(configs=(1, 2), **REDUCED), data_dir=data_dir, cache_dir=cache,
+                              record=record)
+    return out, result, record
 
 
 @pytest.mark.slow
 def test_real_study_table_layout(real_study):
-    out, result = real_study
+    out, result, _ = real_study
     table, runs = result["table1"], result["runs"]
-    assert {p.name for p in out.iterdir()} >= {
-        "fabric_table1.csv", "fabric_runs.csv", "fabric_lambda.png", "fabric_manifest.json"
-    }
+    assert {p.name for p in out.iterdir()} >= {"fabric_table1.csv", "fabric_runs.csv", "fabric_lambda.png"}
+    assert not list(out.glob("*manifest.json"))  # the run's one manifest is the engine's
     on_disk = pd.read_csv(out / "fabric_table1.csv")
     assert on_disk.shape == table.shape
     assert table[["condition", "config", "protocol"]].values.tolist() == [
@@ -234,7 +234,7 @@ def test_real_study_table_layout(real_study):
 
 @pytest.mark.slow
 def test_real_headline_rows_have_no_test_group_seen_in_training(real_study, data_dir):
-    _, result = real_study
+    _, result, _ = real_study
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
         attributes = load_fabric(data_dir, images=False).attributes.reset_index(drop=True)
@@ -252,7 +252,7 @@ def test_real_headline_rows_have_no_test_group_seen_in_training(real_study, data
 
 @pytest.mark.slow
 def test_real_study_never_fits_on_test_groups(real_study):
-    _, result = real_study
+    _, result, _ = real_study
     runs = result["runs"][result["runs"]["protocol"] == "paper"]
     for config, train in ((1, "1 2 3 4 6"), (2, "1 2 3 5 6")):
         sub = runs[runs["config"] == config]
@@ -289,14 +289,13 @@ def test_real_descriptors_cached_and_fit_on_training_groups(real_study, data_dir
 
 @pytest.mark.slow
 def test_real_study_refuses_to_overwrite(real_study, data_dir):
-    out, _ = real_study
+    out, _, record = real_study
     before = (out / "fabric_table1.csv").read_bytes()
     with pytest.raises(ConfigError, match="already exists; use --force"):
         run_fabric_study(ResultsDir(out), _settings(configs=(1,), **REDUCED), data_dir=data_dir)
     assert (out / "fabric_table1.csv").read_bytes() == before
-    manifest = json.loads((out / "fabric_manifest.json").read_text())
-    assert manifest["config"]["lams"] == ["0", "inf"] and manifest["config"]["seeds"] == [0]
-    assert len(manifest["depth_images_sha256"]) == 64
+    assert record["fabric"]["lams"] == ["0", "inf"] and record["fabric"]["seeds"] == [0]
+    assert len(record["depth_images_sha256"]) == 64 and len(record["data_files"]) > 1300
 
 
 def test_impossible_settings_are_refused_by_the_schema():
@@ -343,10 +342,11 @@ def gelsight_root(tmp_path_factory):
 
 @pytest.mark.slow
 def test_gelsight_layout_runs_through_the_study(gelsight_root, data_dir, tmp_path):
+    record: dict = {}
     result = run_fabric_study(
         ResultsDir(tmp_path), _settings(configs=(1,), conditions=(), seeds=1, lams=(0,), alphas=(0.1,), progress=False,
                                         gelsight_root=str(gelsight_root)),
-        data_dir=data_dir, gelsight_root=gelsight_root,
+        data_dir=data_dir, gelsight_root=gelsight_root, record=record,
     )
     assert result["table1"]["protocol"].tolist() == ["paper", "zero-shot-drop"] * 2
     table = result["table1"][result["table1"]["protocol"] == "paper"].reset_index(drop=True)
@@ -359,9 +359,8 @@ def test_gelsight_layout_runs_through_the_study(gelsight_root, data_dir, tmp_pat
     assert table[["lam_0", "ESZSL"]].stack().between(0, 1).all()
     # identical videos in both folders give identical results (and share the cache)
     assert flat["lam_0"] == mine["lam_0"] and flat["ESZSL"] == mine["ESZSL"]
-    manifest = json.loads((tmp_path / "fabric_manifest.json").read_text())
-    assert manifest["config"]["n_features"]["gelsight-Flat"] == 5 * 99
-    assert len(manifest["gelsight_videos_sha256"]) == 64
+    assert record["fabric"]["n_features"]["gelsight-Flat"] == 5 * 99
+    assert len(record["gelsight_videos_sha256"]) == 64
 
 
 def test_each_fit_is_done_and_counted_once(gelsight_root, data_dir, tmp_path):

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pandas as pd
 import pytest
@@ -72,10 +70,8 @@ def test_every_file_is_written_with_its_columns(study, folder):
     assert set(conf["method"]) == {"LDAP", "DF-MDAP (T=3)", "SC-MDAP (k=2)"}
     for png in out.glob("*.png"):
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    manifest = json.loads((out / "hand_manifest.json").read_text())
-    assert manifest["config"]["seeds"] == [0, 1] and manifest["config"]["simulated"] is False
-    assert set(manifest["outputs"]) == set(HAND_OUTPUTS) - {"hand_manifest.json"}
-    assert str(folder / "grasps.csv") in manifest["data_files"]
+    assert result.record["hand"]["seeds"] == [0, 1] and result.record["hand"]["simulated"] is False
+    assert folder / "grasps.csv" in result.data_files
 
 
 def test_table5_matches_the_model_scored_directly(study, folder):
@@ -163,9 +159,8 @@ def test_simulated_when_no_grasps_and_refuses_overwrite(tmp_path):
     hand = page[page.index('<section id="hand-table5">'):]
     hand = hand[:hand.index("</section>")]
     assert "SIMULATED DATA" in hand
-    manifest = json.loads((tmp_path / "hand_manifest.json").read_text())
-    assert manifest["config"]["simulated"] is True
-    assert manifest["simulation"]["3"]["random_state"] == 3
+    assert result.record["hand"]["simulated"] is True
+    assert result.record["simulation"]["3"]["random_state"] == 3
     with pytest.raises(ConfigError, match="--force"):
         run_hand_study(None, TABLE, tmp_path, seeds=[3], config=cfg)
 

@@ -194,8 +194,9 @@ progress = false
     # the comparison runs on the zero-shot protocol of the split (the headline)
     headline = toy[toy["zero_shot"].astype(bool)]
     assert comparison.set_index("method").loc["toy", "accuracy"] == pytest.approx(headline["accuracy"].iloc[0], abs=1e-5)
-    manifest = json.loads((tmp_path / "res" / "fabric_manifest.json").read_text())
-    assert manifest["config"]["methods"] == [{"name": "toy"}]
+    manifest = json.loads((tmp_path / "res" / "manifest.json").read_text())  # the run's one manifest
+    assert manifest["config"]["fabric"]["methods"] == [{"name": "toy"}]
+    assert not (tmp_path / "res" / "fabric_manifest.json").exists()
 
 
 def test_unknown_methods_and_parameters_are_refused_at_load_time(toy_method, tmp_path):

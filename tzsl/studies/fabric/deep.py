@@ -300,7 +300,6 @@ def load_deep_sequences(
 # ---------------------------------------------------------------------------------------------
 DEEP_TABLE_FILE = "fabric_deep_table.csv"
 DEEP_RUNS_FILE = "fabric_deep_runs.csv"
-DEEP_MANIFEST_FILE = "fabric_deep_manifest.json"
 
 
 def run_deep_fabric_study(
@@ -311,6 +310,7 @@ def run_deep_fabric_study(
     gelsight_root=None,
     cache_dir=None,
     save_model=None,
+    record: dict | None = None,
 ) -> dict[str, pd.DataFrame]:
     """The deep model over the paper's lambda grid: fabric depth sequences (and user videos).
 
@@ -333,13 +333,16 @@ def run_deep_fabric_study(
         Save the trained network as a model bundle here (one fit only: one condition, config,
         lambda and seed; only the config's zero-shot protocol is then run); refused when it
         exists unless ``out.force``.
+    record : dict, optional
+        Filled with what the run's one manifest records of the study (``tzsl run`` writes it into
+        ``manifest.json``): ``"fabric_deep"`` (seeds, configs, lambdas, the model's parameters) and
+        ``"data_files"``.
 
     Returns
     -------
     dict of str -> DataFrame
         ``"runs"`` (one row per fit) and ``"table"`` (mean and std over seeds per condition,
-        config and lambda). Written as ``fabric_deep_runs.csv``, ``fabric_deep_table.csv`` and
-        ``fabric_deep_manifest.json``.
+        config and lambda). Written as ``fabric_deep_runs.csv`` and ``fabric_deep_table.csv``.
     """
     import warnings  # noqa: PLC0415
 
@@ -356,7 +359,7 @@ def run_deep_fabric_study(
     params = model_params
     params.setdefault("verbose", progress)
     DeepAttributeEmbedding(**params)._check_params()  # bad settings fail before any work
-    out.check_free([DEEP_TABLE_FILE, DEEP_RUNS_FILE, DEEP_MANIFEST_FILE])
+    out.check_free([DEEP_TABLE_FILE, DEEP_RUNS_FILE])
     if save_model is not None and Path(save_model).exists() and not out.force:
         raise ConfigError(f"{save_model} already exists; use --force to overwrite it")
     cache = Path(cache_dir) if cache_dir is not None else Path(get_cache_dir()) / "deep-features"
@@ -422,13 +425,12 @@ def run_deep_fabric_study(
     data_files = sorted({Path(p) for _, seqs in sources if "path" in seqs.table for p in seqs.table["path"]})
     if gelsight_root is None:  # depth sequences: the images they were built from
         data_files = [Path(p) for p in fabric.images["path"]]
-    out.write_manifest(
-        {"study": "fabric-deep", "seeds": list(range(int(seed), int(seed) + int(seeds))), "configs": configs,
-         "lams": [str(v) for v in lams], "attributes": attributes, "gelsight_root": str(gelsight_root or ""),
-         "model_params": {k: str(v) for k, v in DeepAttributeEmbedding(**params).get_params().items()}},
-        data_files=data_files,
-        name=DEEP_MANIFEST_FILE,
-    )
+    if record is not None:  # the engine's manifest hashes every data file read
+        record.update({"fabric_deep": {
+            "study": "fabric-deep", "seeds": list(range(int(seed), int(seed) + int(seeds))), "configs": configs,
+            "lams": [str(v) for v in lams], "attributes": attributes, "gelsight_root": str(gelsight_root or ""),
+            "model_params": {k: str(v) for k, v in DeepAttributeEmbedding(**params).get_params().items()}},
+            "data_files": list(data_files)})
     return {"runs": runs, "table": table}
 
 

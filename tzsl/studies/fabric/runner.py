@@ -20,9 +20,9 @@ __all__ = ["fabric_notes", "fabric_outputs", "fabric_results", "run_fabric", "ru
 def _paper_outputs(config) -> list[str]:
     """Files the fabric paper protocol writes."""
     from tzsl.studies.fabric.methods import COMPARISON_TABLE  # noqa: PLC0415
-    from tzsl.studies.fabric.study import FIGURE_FILE, MANIFEST_FILE, PARTITIONS_FILE, RUNS_FILE, TABLE_FILE  # noqa: PLC0415
+    from tzsl.studies.fabric.study import FIGURE_FILE, PARTITIONS_FILE, RUNS_FILE, TABLE_FILE  # noqa: PLC0415
 
-    return [TABLE_FILE, RUNS_FILE, FIGURE_FILE, f"{COMPARISON_TABLE}.csv", MANIFEST_FILE] + (
+    return [TABLE_FILE, RUNS_FILE, FIGURE_FILE, f"{COMPARISON_TABLE}.csv"] + (
         [PARTITIONS_FILE] if config.partitions.enabled else [])
 
 
@@ -37,18 +37,20 @@ def run_fabric(exp: Experiment, results: ResultsDir, say: Callable[[str], None])
 
     generic = run_generic_part(exp, results, say)
     c = exp.config
+    record: dict = {"study_kind": "fabric"}
     tables = run_fabric_study(results, c, data_dir=exp.resolve(c.dataset.data_dir),
-                              gelsight_root=exp.resolve(c.dataset.gelsight_root))
+                              gelsight_root=exp.resolve(c.dataset.gelsight_root), record=record)
     say("\nFabric Table 1 analogue - ours beside the paper's\n" + format_fabric_table(tables["table1"]))
-    return with_generic_part(StudyRun(dict(tables), {"study_kind": "fabric"}), generic)
+    return with_generic_part(StudyRun(dict(tables), record, record.pop("data_files")), generic)
 
 
 def run_fabric_deep(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
     from tzsl.studies.fabric.deep import format_deep_table, run_deep_fabric_study  # noqa: PLC0415
 
     c = exp.config
+    record: dict = {"study_kind": "fabric-deep"}
     tables = run_deep_fabric_study(results, c, data_dir=exp.resolve(c.dataset.data_dir),
                                    gelsight_root=exp.resolve(c.dataset.gelsight_root),
-                                   save_model=exp.resolve(c.output.model))
+                                   save_model=exp.resolve(c.output.model), record=record)
     say("\nFabric, CNN + LSTM over the lambda grid\n" + format_deep_table(tables["table"]))
-    return StudyRun(dict(tables), {"study_kind": "fabric-deep"})
+    return StudyRun(dict(tables), record, record.pop("data_files"))

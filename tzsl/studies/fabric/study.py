@@ -71,7 +71,8 @@ Outputs (through :class:`~tzsl.studies._outputs.ResultsDir`)
 test groups, interval, chance and a majority baseline: :mod:`tzsl.studies.fabric.partitions`),
 ``fabric_method_comparison.csv`` (every method on the same test samples, intervals and paired
 differences to the embedding model at the paper's lambda 0.1:
-:func:`tzsl.studies.fabric.methods.fabric_comparison`) and ``fabric_manifest.json``.
+:func:`tzsl.studies.fabric.methods.fabric_comparison`); what the run's manifest records of the study
+is filled into ``record`` (``tzsl run`` writes the one ``manifest.json``).
 
 Caching: the texture descriptors (the costly step for the 1300 images) are cached with
 :class:`joblib.Memory` under :func:`tzsl.datasets.get_cache_dir`, keyed on the sha256 of the
@@ -154,7 +155,6 @@ DEPTH_CONDITIONS: tuple[str, ...] = ("depth-sequence", "depth-image")
 TABLE_FILE = "fabric_table1.csv"
 RUNS_FILE = "fabric_runs.csv"
 FIGURE_FILE = "fabric_lambda.png"
-MANIFEST_FILE = "fabric_manifest.json"
 PARTITIONS_FILE = "fabric_partitions.csv"
 
 
@@ -168,8 +168,9 @@ def run_fabric_study(
     data_dir=None,
     gelsight_root=None,
     cache_dir=None,
+    record: dict | None = None,
 ) -> dict[str, pd.DataFrame]:
-    """Run the fabric study and write its table, runs, figure and manifest.
+    """Run the fabric study and write its table, runs and figure.
 
     Parameters
     ----------
@@ -190,6 +191,10 @@ def run_fabric_study(
         The data home with ``fabric/`` and your GelSight videos, resolved (default: ``[dataset]``'s).
     cache_dir : str, path or None
         Descriptor cache (default :func:`tzsl.datasets.get_cache_dir`).
+    record : dict, optional
+        Filled with what the run's one manifest records of the study (``tzsl run`` and :func:`tzsl.run`
+        write it into ``manifest.json``): ``"fabric"`` (protocols, conditions, grids, seeds, ...), the
+        data's digests (``depth_images_sha256``, ``gelsight_videos_sha256``) and ``"data_files"``.
 
     Returns
     -------
@@ -208,7 +213,7 @@ def run_fabric_study(
     data_dir = settings.dataset.data_dir if data_dir is None else data_dir
     gelsight_root = settings.dataset.gelsight_root if gelsight_root is None else gelsight_root
     labels = [lambda_label(lam) for lam in lams]
-    out.check_free([TABLE_FILE, RUNS_FILE, FIGURE_FILE, f"{COMPARISON_TABLE}.csv", MANIFEST_FILE]
+    out.check_free([TABLE_FILE, RUNS_FILE, FIGURE_FILE, f"{COMPARISON_TABLE}.csv"]
                    + ([PARTITIONS_FILE] if partitions is not None else []))
 
     with warnings.catch_warnings(), stage("load"):
@@ -342,6 +347,6 @@ def run_fabric_study(
     data_files = [fabric.root / "fabric_groups.csv", fabric.root / FABRIC_ATTRIBUTE_SETS[attributes][0]]
     data_files += [Path(p) for p in (fabric.images["path"] if conditions else [])]
     data_files += [Path(p) for s in gel for p in s.samples["path"]]
-    with stage("write"):  # the manifest hashes every data file read
-        out.write_manifest(config, [p for p in data_files if p.is_file()], name=MANIFEST_FILE, extra=digests)
+    if record is not None:  # the engine's manifest hashes every data file read
+        record.update({"fabric": config, **digests, "data_files": [p for p in data_files if p.is_file()]})
     return {"table1": table, "runs": runs, COMPARISON_TABLE: comparison, **extra_tables}

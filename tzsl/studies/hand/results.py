@@ -25,6 +25,11 @@ class HandStudyResult:
     notes : list of str
         Grasps dropped, sequence lengths capped, ...
     written : list of Path
+    record : dict
+        What the run's manifest records of the study: ``"hand"`` (settings, seeds, the grasps' source,
+        whether simulated, the table's split), ``"notes"`` and, when simulated, ``"simulation"``.
+    data_files : list of Path
+        The data files read (the grasp folder's ``grasps.csv``), checksummed in the manifest.
     """
 
     table5: pd.DataFrame
@@ -37,3 +42,5 @@ class HandStudyResult:
     simulated: bool
     notes: list[str] = field(default_factory=list)
     written: list[Path] = field(default_factory=list)
+    record: dict = field(default_factory=dict)
+    data_files: list[Path] = field(default_factory=list)

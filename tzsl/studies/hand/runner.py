@@ -49,5 +49,5 @@ def run_hand(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -
                                                        "attribute_accuracy", "attribute_distance", "confusion")}
     tables["hand_method_comparison"] = result.method_comparison
     record = {"study_kind": "hand", "seeds": list(seeds),
-              "grasps": None if grasps is None else str(grasps), "table": ds.table}
-    return with_generic_part(StudyRun(tables, record, [] if grasps is None else [grasps / "grasps.csv"]), generic)
+              "grasps": None if grasps is None else str(grasps), "table": ds.table, **result.record}
+    return with_generic_part(StudyRun(tables, record, result.data_files), generic)

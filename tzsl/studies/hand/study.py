@@ -101,7 +101,6 @@ HAND_OUTPUTS: tuple[str, ...] = (
     "hand_attribute_distance.csv",
     "hand_attribute_distance.png",
     f"{COMPARISON_TABLE}.csv",
-    "hand_manifest.json",
 )
 
 
@@ -240,7 +239,11 @@ def run_hand_study(
     force: bool = False,
     log: Callable[[str], None] | None = None,
 ) -> HandStudyResult:
-    """Run the hand study and write its tables, figures and manifest to ``out``.
+    """Run the hand study and write its tables and figures to ``out``.
+
+    What the run's manifest records of it (settings, seeds, notes, the simulator's parameters) and the
+    data files it read are :attr:`HandStudyResult.record` and ``data_files``: ``tzsl run`` and
+    :func:`tzsl.run` write them into the run's one ``manifest.json``.
 
     Parameters
     ----------
@@ -350,20 +353,11 @@ def run_hand_study(
     results.write_csv(f"{COMPARISON_TABLE}.csv", result.method_comparison)
     results.write_csv("hand_attribute_distance.csv", result.attribute_distance)
     results.write_figure("hand_attribute_distance.png", attribute_distance_figure(result.attribute_distance, data_label))
-    results.write_manifest(
-        {
-            "study": "hand (DAP paper section 5.8)",
-            "seeds": seeds,
-            "grasps": source,
-            "simulated": simulated,
-            "table": table.source,
-            "train_objects": table.train_objects,
-            "test_objects": table.test_objects,
-            **config.model_dump(mode="json"),
-        },
-        data_files=data_files,
-        name="hand_manifest.json",
-        extra={"notes": notes, "simulation": simulation} if simulated else {"notes": notes},
-    )
+    result.record = {  # for the run's one manifest (the engine's manifest.json)
+        "hand": {"study": "hand (DAP paper section 5.8)", "seeds": list(seeds), "grasps": source,
+                 "simulated": simulated, "table": table.source, "train_objects": table.train_objects,
+                 "test_objects": table.test_objects, **config.model_dump(mode="json")},
+        "notes": notes, **({"simulation": simulation} if simulated else {})}
+    result.data_files = list(data_files)
     result.written = list(results.written)
     return result
