@@ -64,9 +64,8 @@ from tzsl.studies.config import ZeroShotSettings, GzslSettings
 from tzsl.studies.zero_shot.study import attribute_bank, compute_context
 from tzsl.studies.study_methods import method_input, study_estimator
 from tzsl.studies.zero_shot.tables import split_label
-from tzsl.models import get_method
+from tzsl.models import DAPRule, get_method
 from tzsl.models.protocol import attribute_rows
-from tzsl.models.dap import attribute_prior, dap_log_scores, fuse_attribute_posteriors
 
 #: Column of gzsl.csv saying what a split relaxed to calibrate stacking (present only when one did).
 RELAXED_COLUMN = "relaxed"
@@ -253,10 +252,8 @@ def _dap_scores(features: FeatureSet, problem: GzslProblem, config: ZeroShotSett
     fit = problem.fit
     bank = attribute_bank(config, attrs, seed)
     bank.fit(features.X[fit], A[fit], features.objects[fit])
-    present, absent = fuse_attribute_posteriors(bank.predict_proba(features.X[problem.evaluate]), gzsl.fusion)
-    prior = attribute_prior(gzsl.prior, train_attributes=A[fit], class_attributes=problem.class_rows,
-                            groups=features.objects[fit])
-    return dap_log_scores(present, problem.class_rows, prior, P_absent=absent)
+    rule = DAPRule(fusion=gzsl.fusion, prior=gzsl.prior).fit(A[fit], groups=features.objects[fit])
+    return rule.decision_function(bank.predict_proba(features.X[problem.evaluate]), problem.class_rows)
 
 
 def _method_scores(method: str, features: FeatureSet, problem: GzslProblem, seed: int) -> np.ndarray:

@@ -10,8 +10,8 @@ import numpy as np
 
 from tzsl.evaluation import Split
 from tzsl.exceptions import ConfigError
-from tzsl.models import AttributeClassifierBank
-from tzsl.models.dap import attribute_prior, dap_log_scores, fuse_attribute_posteriors
+from tzsl.models import AttributeClassifierBank, DAPRule
+from tzsl.models.dap import attribute_prior
 
 __all__ = ["SplitPosteriors"]
 
@@ -61,7 +61,8 @@ class SplitPosteriors:
 
     def scores(self, fusion: str = "avg", prior: str = "uni", multilabel: bool = False,
                K: np.ndarray | None = None) -> np.ndarray:
-        """DAP log scores (n_test_trials, n_test_objects) against ``K`` (default the true rows).
+        """DAP log scores (n_test_trials, n_test_objects) against ``K`` (default the true rows), by
+        :class:`~tzsl.models.DAPRule`.
 
         The prior is always the one of the true rows (a permuted ``K``, as in the negative
         control, has the same attribute frequencies).
@@ -69,8 +70,8 @@ class SplitPosteriors:
         P = self.P_multilabel if multilabel else self.P
         if P is None:
             raise ConfigError("no multi-label posteriors were computed for this split")
-        present, absent = fuse_attribute_posteriors(P, fusion)
-        return dap_log_scores(present, self.K if K is None else K, self._prior(prior), P_absent=absent)
+        rule = DAPRule(fusion=fusion, prior=self._prior(prior)).fit(self.K)  # the prior is given: nothing learnt
+        return rule.decision_function(P, self.K if K is None else K)
 
     def _prior(self, prior: str) -> np.ndarray:
         if prior == "train":
