@@ -193,8 +193,9 @@ def test_evaluate_fabric_model_deep_calls_the_deep_study(torch, tmp_path, monkey
 
     seen = {}
 
-    def fake_study(out, settings, **kwargs):
+    def fake_study(out, settings, record, **kwargs):
         seen.update(kwargs, settings=settings, out=out.final_root)  # out.root is the staging folder while running
+        record.update(fabric_deep={"study": "fabric-deep"}, data_files=[])  # what the real study hands the manifest
         table = pd.DataFrame({"condition": ["depth-sequence"], "config": [1], "method": ["lam_0.1"], "n_seeds": [2],
                               **{c: [0.5] for c in ("accuracy", "per_class_mean_accuracy", "train_accuracy")},
                               **{f"{c}_std": [0.0] for c in ("accuracy", "per_class_mean_accuracy", "train_accuracy")},
