@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from tzsl._profile import stage
 from tzsl.datasets import Grasp, HandTable, read_grasps, simulate_grasps
 from tzsl.evaluation import summarise_over_splits
 from tzsl.exceptions import ConfigError, SplitError
@@ -288,7 +289,8 @@ def run_hand_study(
             grasps = read_grasps(grasps)
         else:
             source = "in-memory grasps"
-        fixed = hand_features(grasps, table, config)
+        with stage("features"):
+            fixed = hand_features(grasps, table, config)
     data_label = (f"SIMULATED grasps (tzsl simulator, seeds {seeds}) - not the paper's data"
                   if simulated else f"grasps: {source}")
 
@@ -298,10 +300,11 @@ def run_hand_study(
     failed: list[tuple[int, str]] = []
     for seed in seeds:
         if simulated:
-            sim = simulate_grasps(table.K, **config.simulation.model_dump(),
-                                  material_attributes=table.material_attributes, random_state=seed)
-            simulation[str(seed)] = sim.params
-            features = hand_features(sim.grasps, table, config)
+            with stage("simulate"):  # the simulator (SIMULATED grasps) and their grasp features
+                sim = simulate_grasps(table.K, **config.simulation.model_dump(),
+                                      material_attributes=table.material_attributes, random_state=seed)
+                simulation[str(seed)] = sim.params
+                features = hand_features(sim.grasps, table, config)
             log(f"seed {seed}: simulated {len(sim.grasps)} grasps of {len(table.K)} objects")
         else:
             features = fixed
