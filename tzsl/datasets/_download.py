@@ -41,7 +41,7 @@ import pooch
 import requests
 from urllib3.exceptions import ReadTimeoutError
 
-from tzsl.datasets._transfer import STOP_POLL_S, Transfer
+from tzsl.datasets._transfer import STOP_POLL_S, Transfer, fetch_setting
 from tzsl.exceptions import ConfigError, first_line
 
 try:  # POSIX: an advisory lock on the data home, released by the system when its process dies
@@ -82,19 +82,9 @@ def fetch_timeout(timeout: float | None = None) -> float:
     ConfigError
         A value that is not a number of seconds above 0 (naming where it came from).
     """
-    where = "timeout"
-    if timeout is None:
-        text = os.environ.get(FETCH_TIMEOUT_ENV, "").strip()
-        if not text:
-            return DEFAULT_FETCH_TIMEOUT_S
-        where = f"${FETCH_TIMEOUT_ENV}"
-        try:
-            timeout = float(text)
-        except ValueError:
-            raise ConfigError(f"{where}={text!r}: give the deadline per file as a number of seconds above 0") from None
-    if not 0 < timeout < float("inf"):
-        raise ConfigError(f"{where}={timeout:g}: give the deadline per file as a number of seconds above 0")
-    return float(timeout)
+    return float(fetch_setting("timeout", timeout, FETCH_TIMEOUT_ENV, DEFAULT_FETCH_TIMEOUT_S, float,
+                               lambda v: 0 < v < float("inf"), "the deadline per file as a number of seconds above 0",
+                               shown=lambda v: f"{v:g}"))
 
 
 class DownloadFailed(Exception):

@@ -21,7 +21,7 @@ import os
 import threading
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_EXCEPTION, Future, ThreadPoolExecutor, wait
-from typing import TypeVar
+from typing import Any, TypeVar
 
 import requests
 from tqdm import tqdm
@@ -45,6 +45,31 @@ Job = TypeVar("Job")
 Result = TypeVar("Result")
 
 
+def fetch_setting(name: str, value: Any, env: str, default: Any, parse: Callable[[str], Any],
+                  valid: Callable[[Any], bool], expected: str, shown: Callable[[Any], str] = repr) -> Any:
+    """A fetch setting: ``value`` when given, else ``$env`` parsed with ``parse``, else ``default``.
+
+    Raises
+    ------
+    ConfigError
+        ``<name or $env>=<value>: give <expected>`` when ``$env`` cannot be parsed (the text shown with
+        ``repr``) or the value is not ``valid`` (shown with ``shown``).
+    """
+    where = name
+    if value is None:
+        text = os.environ.get(env, "").strip()
+        if not text:
+            return default
+        where = f"${env}"
+        try:
+            value = parse(text)
+        except ValueError:
+            raise ConfigError(f"{where}={text!r}: give {expected}") from None
+    if not valid(value):
+        raise ConfigError(f"{where}={shown(value)}: give {expected}")
+    return value
+
+
 def fetch_workers(workers: int | None = None) -> int:
     """Files downloaded at a time: ``workers``, else ``$TZSL_FETCH_WORKERS``, else
     :data:`DEFAULT_FETCH_WORKERS`.
@@ -54,21 +79,10 @@ def fetch_workers(workers: int | None = None) -> int:
     ConfigError
         A value that is not a whole number from 1 to :data:`MAX_FETCH_WORKERS` (naming where it came from).
     """
-    where = "workers"
-    if workers is None:
-        text = os.environ.get(FETCH_WORKERS_ENV, "").strip()
-        if not text:
-            return DEFAULT_FETCH_WORKERS
-        where = f"${FETCH_WORKERS_ENV}"
-        try:
-            workers = int(text)
-        except ValueError:
-            raise ConfigError(f"{where}={text!r}: give the files downloaded at a time as a whole number "
-                              f"from 1 to {MAX_FETCH_WORKERS}") from None
-    if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= MAX_FETCH_WORKERS:
-        raise ConfigError(f"{where}={workers!r}: give the files downloaded at a time as a whole number "
-                          f"from 1 to {MAX_FETCH_WORKERS}")
-    return workers
+    return fetch_setting(
+        "workers", workers, FETCH_WORKERS_ENV, DEFAULT_FETCH_WORKERS, int,
+        lambda v: not isinstance(v, bool) and isinstance(v, int) and 1 <= v <= MAX_FETCH_WORKERS,
+        f"the files downloaded at a time as a whole number from 1 to {MAX_FETCH_WORKERS}")
 
 
 class DownloadCancelled(Exception):
