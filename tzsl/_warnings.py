@@ -72,12 +72,22 @@ def warning_kind(message: Warning | str, category: type[Warning]) -> str:
     return f"{category.__name__}: {_NUMBER.sub('#', _QUOTED.sub('…', text))}"
 
 
+def _kind_label(kind: str, width: int = 48) -> str:
+    """How the closing line names a kind: its category, and for a plain ``UserWarning`` /
+    ``RuntimeWarning`` also its (blanked) wording, cut to ``width`` characters, so two kinds of one
+    category are told apart (``UserWarning "attribute … is rare: # objects"``)."""
+    category, _, wording = kind.partition(": ")
+    if not wording:
+        return category
+    return f'{category} "{wording if len(wording) <= width else wording[:width - 1] + "…"}"'
+
+
 class TerminalWarnings:
     """The command line's warning printer: the first warning of each kind, one line each.
 
     ``show`` has the signature of :func:`warnings.showwarning`; ``summary()`` is the closing line
     (None when nothing was held back), e.g. ``tzsl: warning: 22 more warnings of the kinds above
-    (GridEdgeWarning: 21, CalibrationWarning: 1); a run lists every one in its manifest.json``.
+    (GridEdgeWarning: 21, UserWarning "attribute … is rare: # objects": 1); a run lists every one in its manifest.json``.
 
     Parameters
     ----------
@@ -102,6 +112,6 @@ class TerminalWarnings:
         repeats = {kind: n for kind, n in self._held.items() if n}
         if not repeats:
             return None
-        names = ", ".join(f"{kind.split(': ')[0] if ': ' in kind else kind}: {n}" for kind, n in repeats.items())
+        names = ", ".join(f"{_kind_label(kind)}: {n}" for kind, n in repeats.items())
         return (f"tzsl: warning: {sum(repeats.values())} more warnings of the kinds above ({names}); a run lists "
                 "every one in its manifest.json")

@@ -252,7 +252,11 @@ def test_the_terminal_shows_each_kind_of_warning_once_then_counts_the_repeats():
     assert printed == ["tzsl: warning: 0 hyper-parameter choices sit on a grid edge (GridEdgeWarning)",
                        "tzsl: warning: attribute 'hard' is rare: 2 objects", "tzsl: warning: overflow"]
     assert terminal.summary() == ("tzsl: warning: 20 more warnings of the kinds above (GridEdgeWarning: 19, "
-                                  "UserWarning: 1); a run lists every one in its manifest.json")
+                                  'UserWarning "attribute … is rare: # objects": 1); a run lists every one in '
+                                  "its manifest.json")
+    for _ in range(2):  # another kind of the same category is named by its own wording
+        terminal.show(UserWarning("the solver did not converge in 100 iterations"), UserWarning, "x.py", 1)
+    assert 'UserWarning "the solver did not converge in # iterations": 1' in terminal.summary()
     assert warning_kind("a 'x' 3", UserWarning) == warning_kind("a 'yy' 4.5", UserWarning)
     assert TerminalWarnings(printed.append).summary() is None
 
