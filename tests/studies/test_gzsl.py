@@ -146,7 +146,7 @@ def test_run_gzsl_table_layout_and_scores():
     table = run_gzsl(features, splits, config)
     per_split = table[~table["split"].isin(["mean", "std"])]
     assert len(per_split) == 2 * 2 * 2  # splits x methods x calibrated
-    assert set(per_split["method"]) == {"dap_avg_uni", "eszsl"}
+    assert set(per_split["method"]) == {"dap-avg", "eszsl"}
     for col in ("seen", "unseen", "harmonic", "zsl"):
         assert per_split[col].between(0, 1).all()
     s, u = per_split["seen"], per_split["unseen"]
@@ -156,7 +156,7 @@ def test_run_gzsl_table_layout_and_scores():
     expected = per_split.groupby(["method", "calibrated"])["harmonic"].mean()
     np.testing.assert_allclose(mean["harmonic"].sort_index(), expected.sort_index())
     # a learnable synthetic problem: DAP recognises seen classes far above chance
-    assert per_split.loc[per_split["method"] == "dap_avg_uni", "seen"].mean() > 0.3
+    assert per_split.loc[per_split["method"] == "dap-avg", "seen"].mean() > 0.3
     # intervals beside every accuracy, on per-split and mean rows; the chances of the two protocols
     with_iv = table[table["split"] != "std"]
     for col in ("seen", "unseen", "zsl"):
@@ -173,7 +173,7 @@ def test_any_registered_feature_method_can_be_scored():
     splits, _ = make_splits(features, "random", config)
     table = run_gzsl(features, splits[:1], config)
     per_split = table[~table["split"].isin(["mean", "std"])]
-    assert set(per_split["method"]) == {"dap_avg_uni", "sae"}
+    assert set(per_split["method"]) == {"dap-avg", "sae"}
     assert per_split["harmonic"].between(0, 1).all()
     for bad, why in ((["dap", "hand-dap"], "takes grasps"), (["no-such-method"], "unknown method")):
         with pytest.raises(ValidationError, match=why):
@@ -217,7 +217,7 @@ def test_a_failing_split_is_recorded_and_the_other_splits_complete():
     table = run_gzsl(features, [bad, good], _config(**{"gzsl.calibrated_stacking": False}))
     per_split = table[~table["split"].isin(["mean", "std"])]
     failed = per_split[per_split["error"].fillna("") != ""]
-    assert set(failed["method"]) == {"dap_avg_uni", "eszsl"} and failed["harmonic"].isna().all()
+    assert set(failed["method"]) == {"dap-avg", "eszsl"} and failed["harmonic"].isna().all()
     assert failed["error"].str.startswith("SplitError: ").all() and failed["error"].str.contains("without trials").all()
     done = per_split[per_split["error"].fillna("") == ""]
     assert len(done) == 2 and done["harmonic"].between(0, 1).all()

@@ -87,7 +87,7 @@ progress = false
 def _check_comparison(folder: Path, n_splits: int, data: str) -> pd.DataFrame:
     """Neither run is the paper's protocol: generic file names, no paper column (issue 20)."""
     per_split = pd.read_csv(folder / "methods_per_split.csv")
-    assert {"dap_avg_uni", "toy", "toy_temperature_0.5"} <= set(per_split.columns)
+    assert {"dap-avg", "toy", "toy_temperature_0.5"} <= set(per_split.columns)
     assert not {"eszsl", "embedding_lam_0.1"} & set(per_split.columns)  # not switched on
     table = pd.read_csv(folder / "method_comparison.csv")
     assert table["method"].tolist() == ["dap-avg", "dap-max", "toy", "toy_temperature_0.5"]

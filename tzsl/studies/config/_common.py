@@ -112,13 +112,15 @@ def method_label(spec: dict) -> str:
     return "_".join(parts)
 
 
-def dap_label(fusion: str, detector: str = "rbf-svm") -> str:
-    """Row label of the study's own DAP with ``fusion`` and the uniform prior.
+def dap_label(fusion: str, detector: str = "rbf-svm", *, prior: str = "uni") -> str:
+    """Row label of the study's own DAP with ``fusion`` and ``prior``.
 
-    ``dap-avg`` / ``dap-max`` with the paper's RBF-SVM detectors; with another ``[svm] detector``
-    the family follows (``dap-avg-logistic-c1``: the name of the registered method it is).
+    ``dap-avg`` / ``dap-max`` with the paper's RBF-SVM detectors and the uniform prior; with another
+    ``[svm] detector`` the family follows the fusion (``dap-avg-logistic-c1``: the name of the registered
+    method it is); another prior follows last (``dap-max-train-prior``, ``dap-avg-logistic-c1-test-prior``).
     """
-    return f"dap-{fusion}" if detector == "rbf-svm" else f"dap-{fusion}-{detector}"
+    base = f"dap-{fusion}" if detector == "rbf-svm" else f"dap-{fusion}-{detector}"
+    return base if prior == "uni" else f"{base}-{prior}-prior"
 
 
 def methods_ok(values: list, taken: tuple[str, ...] = ()) -> list[dict]:

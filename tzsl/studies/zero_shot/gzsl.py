@@ -60,7 +60,7 @@ from tzsl.evaluation import (
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.studies._failures import ERROR_COLUMN, attempt
 from tzsl.evaluation import Outcomes, add_trust_columns
-from tzsl.studies.config import ZeroShotSettings, GzslSettings
+from tzsl.studies.config import GzslSettings, ZeroShotSettings, dap_label
 from tzsl.studies.zero_shot.study import attribute_bank, compute_context
 from tzsl.studies.study_methods import method_input, study_estimator
 from tzsl.studies.zero_shot.tables import split_label
@@ -276,8 +276,11 @@ def _scores(method: str, features, problem, config, gzsl, seed) -> np.ndarray:
 # --------------------------------------------------------------------------- one split, all splits
 
 
-def _method_name(method: str, gzsl: GzslSettings) -> str:
-    return f"dap_{gzsl.fusion}_{gzsl.prior}" if method == "dap" else method
+def _method_name(method: str, config: ZeroShotSettings) -> str:
+    """Row label: a registered method's name; the study's DAP as the comparison labels it (its fusion,
+    detector and prior: ``dap-avg``, ``dap-avg-logistic-c1``, ``dap-max-train-prior``)."""
+    gzsl = config.gzsl
+    return dap_label(gzsl.fusion, config.svm.detector, prior=gzsl.prior) if method == "dap" else method
 
 
 def gzsl_split(features: FeatureSet, split: Split, config: ZeroShotSettings, index: int) -> list[dict]:
@@ -320,7 +323,7 @@ def gzsl_split(features: FeatureSet, split: Split, config: ZeroShotSettings, ind
             val_scores, error = attempt(_scores, method, features, pseudo, config, gzsl, seed)
             if val_scores is None:  # the uncalibrated row stands; the calibrated one is left out, said why
                 base[RELAXED_COLUMN] = "; ".join(filter(None, [base[RELAXED_COLUMN], (
-                    f"split {split.name}: calibrated stacking of {_method_name(method, gzsl)} skipped: {error}")]))
+                    f"split {split.name}: calibrated stacking of {_method_name(method, config)} skipped: {error}")]))
             else:
                 gammas.append((True, choose_stacking_constant(val_scores, pseudo.trial_class[pseudo.evaluate],
                                                               pseudo.seen)))
@@ -328,7 +331,7 @@ def gzsl_split(features: FeatureSet, split: Split, config: ZeroShotSettings, ind
             pred = stacked_predict(scores, problem.seen, gamma)
             result = gzsl_scores(y, pred, seen_classes, unseen_classes)
             seen_trials = ~is_unseen
-            rows.append({**base, "method": _method_name(method, gzsl), "calibrated": calibrated,
+            rows.append({**base, "method": _method_name(method, config), "calibrated": calibrated,
                          "stacking_constant": gamma, **result, "zsl": zsl,
                          "_outcomes": [("seen", y[seen_trials], pred[seen_trials] == y[seen_trials]),
                                        ("unseen", y[is_unseen], pred[is_unseen] == y[is_unseen]),
@@ -421,13 +424,13 @@ def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: ZeroShotSett
             if not why and not has_holdout_trials(features, split):
                 why = "no training object has 2 trials (no seen-class trial to hold out)"
             if why:  # nothing to evaluate: left out, said why (no failure)
-                rows += [{"split": split_label(split), "method": _method_name(m, gzsl), "calibrated": False,
+                rows += [{"split": split_label(split), "method": _method_name(m, config), "calibrated": False,
                           RELAXED_COLUMN: f"split {split.name}: {why}; split left out",
                           ERROR_COLUMN: ""} for m in gzsl.methods]
                 continue
             part, error = attempt(gzsl_split, features, split, config, i)
             if part is None:  # NaN rows for this split, reported at the end of the run
-                rows += [{"split": split_label(split), "method": _method_name(m, gzsl), "calibrated": False,
+                rows += [{"split": split_label(split), "method": _method_name(m, config), "calibrated": False,
                           "seen": np.nan, "unseen": np.nan, "harmonic": np.nan, "zsl": np.nan,
                           "stacking_constant": np.nan, ERROR_COLUMN: error} for m in gzsl.methods]
                 if echo is not None:

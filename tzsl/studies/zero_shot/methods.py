@@ -151,7 +151,7 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
     -------
     dict of DataFrame
         ``labels.methods_table`` (``"phac2_methods"`` for the paper preset): one row per split
-        (purpose, dap_avg_uni and one column per method label, e.g. ``eszsl``, ``embedding_lam_0.1``; NaN where that fit failed, the reason in the
+        (purpose, the study's DAP (``dap-avg``, or ``dap-avg-<detector>``) and one column per method label, e.g. ``eszsl``, ``embedding_lam_0.1``; NaN where that fit failed, the reason in the
         ``error`` column), then mean and std rows;
         ``labels.comparison_table``: :func:`~tzsl.studies.study_methods.method_summary`
         with ``dap-avg`` as the reference (with ECE and Brier score, calibrated and not);
@@ -170,7 +170,7 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
     for i, r in enumerate(results):
         label = split_label(r.split)
         objects = np.asarray(r.split.test_objects)[r.y]
-        row = {"split": label, "purpose": purpose, "chance": r.split.chance, "dap_avg_uni": r.accuracy("avg", "uni")}
+        row = {"split": label, "purpose": purpose, "chance": r.split.chance, reference: r.accuracy("avg", "uni")}
         from_posteriors = [("dap-avg", r.predict("avg", "uni")), ("dap-max", r.predict("max", "uni"))]
         if r.P_multilabel is not None:
             from_posteriors.append(("multilabel-dap", r.predict("avg", "uni", multilabel=True)))

@@ -41,7 +41,7 @@ if TYPE_CHECKING:
     from tzsl.evaluation import Split
     from tzsl.studies.zero_shot.split_posteriors import SplitPosteriors
 
-__all__ = ["FUSION_PRIOR_TABLE", "REFIT_TABLE", "add_refit_spread", "dap_fusion_prior", "dap_variant_label",
+__all__ = ["FUSION_PRIOR_TABLE", "REFIT_TABLE", "add_refit_spread", "dap_fusion_prior",
            "evidence_tables", "model_seed", "refit_accuracy"]
 
 #: File stems of the two tables.
@@ -70,16 +70,9 @@ def model_seed(seed: int, index: int, refit: int = 0) -> int:
     return int(np.random.SeedSequence(entropy).generate_state(1)[0])
 
 
-def dap_variant_label(fusion: str, prior: str, detector: str = "rbf-svm") -> str:
-    """Row label of a DAP variant: ``dap-avg`` (uniform prior), ``dap-max-train-prior``, ...; with
-    another ``[svm] detector`` than the RBF-SVM the family follows the fusion (``dap-avg-logistic-c1``)."""
-    base = dap_label(fusion, detector)
-    return base if prior == "uni" else f"{base}-{prior}-prior"
-
-
 def _variant_accuracies(r: SplitPosteriors, fusions, priors) -> dict[str, float]:
     detector = study_detector([r])
-    return {dap_variant_label(f, p, detector): r.accuracy(f, p) for f in fusions for p in priors}
+    return {dap_label(f, detector, prior=p): r.accuracy(f, p) for f in fusions for p in priors}
 
 
 def dap_fusion_prior(by_kind: dict[str, list[SplitPosteriors]], fusions, priors,
@@ -109,7 +102,7 @@ def dap_fusion_prior(by_kind: dict[str, list[SplitPosteriors]], fusions, priors,
         if not results:
             continue
         detector = study_detector(results)
-        variants = {dap_variant_label(f, p, detector): (f, p) for f in fusions for p in priors}
+        variants = {dap_label(f, detector, prior=p): (f, p) for f in fusions for p in priors}
         trials = [comparison_trials(label, split_label(r.split), np.asarray(r.split.test_objects)[r.y],
                                     r.predict(f, p) == r.y) for r in results for label, (f, p) in variants.items()]
         seconds = {label: [r.fit_seconds for r in results] for label in variants}
@@ -143,7 +136,7 @@ def refit_accuracy(features: FeatureSet, by_kind: dict[str, tuple[list[SplitPost
     n_splits : int or None
         Splits of each kind refitted, the first ones (None: all).
     fusions, priors : sequence of str
-        The DAP variants scored (:func:`dap_variant_label`).
+        The DAP variants scored (:func:`~tzsl.studies.config.dap_label`).
     methods : dict
         Split kind -> the method entries compared on it (none: DAP only).
 
