@@ -13,7 +13,7 @@ report, with our intervals, chance, baselines and controls beside each number, a
   and the figures ``attribute_accuracy.png``, ``object_map.png``, ``attribute_sweep.png``; every split
   scored in ``splits.csv`` (readable by ``--splits``);
 * ``fabric``: ``fabric_table1.csv``, ``fabric_runs.csv``, ``fabric_lambda.png``,
-  ``fabric_method_comparison.csv`` (the lambda grid and ESZSL paired on the same samples) and its manifest;
+  ``fabric_method_comparison.csv`` (the lambda grid and ESZSL paired on the same samples);
 * ``hand-simulated``: ``hand_table5.csv`` and its curves, on **simulated** grasps (the
   Shadow-hand data of the paper are not public).
 
