@@ -4,8 +4,8 @@
     ``from tzsl.datasets._types import RawTrial`` is fine inside ``tzsl/datasets/`` and refused
     anywhere else; outside the owning package, import the public name from its ``__init__``.
     A private module is open to its package and that package's subpackages, so ``tzsl._io``
-    (the atomic writers) serves all of ``tzsl`` and ``tzsl.studies._outputs`` serves
-    ``tzsl.studies.config``. Imports inside functions (the command line's lazy ones) count.
+    (the atomic writers) serves all of ``tzsl`` and ``tzsl.studies.zero_shot._figures`` serves
+    ``tzsl.studies.zero_shot``. Imports inside functions (the command line's lazy ones) count.
 (b) No module imports a private name (``_helper``) of another tzsl module, nor reads one as an
     attribute of an imported tzsl module (``_mod._helper``), even inside one package: a name
     used by two modules is public. (Third-party private names, such as scikit-learn's

@@ -38,9 +38,9 @@ from tzsl._profile import stage
 from tzsl.datasets import Grasp, HandTable, read_grasps, simulate_grasps
 from tzsl.evaluation import summarise_over_splits
 from tzsl.exceptions import ConfigError, SplitError
-from tzsl.studies import paper_numbers as paper
-from tzsl.studies._failures import ERROR_COLUMN, attempt
-from tzsl.studies._outputs import ResultsDir
+from tzsl.studies.papers import numbers as paper
+from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.config import HandSettings
 from tzsl.studies.hand.methods import (
     COMPARISON_TABLE,
