@@ -15,7 +15,7 @@ from tzsl.cache import (CACHE_DIR_ENV, DEFAULT_MAX_SIZE_GB, IN_USE_SECONDS, MAX_
 from tzsl.cli import cli
 from tzsl.exceptions import ConfigError
 from tzsl.fit_store import resolve_store
-from tzsl.studies.study_cache import study_cache_folder
+from tzsl.studies.outputs.study_cache import study_cache_folder
 
 DAY = 86400.0
 

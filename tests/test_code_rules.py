@@ -4,14 +4,17 @@
     ``from tzsl.datasets._types import RawTrial`` is fine inside ``tzsl/datasets/`` and refused
     anywhere else; outside the owning package, import the public name from its ``__init__``.
     A private module is open to its package and that package's subpackages, so ``tzsl._io``
-    (the atomic writers) serves all of ``tzsl`` and ``tzsl.studies._outputs`` serves
-    ``tzsl.studies.config``. Imports inside functions (the command line's lazy ones) count.
+    (the atomic writers) serves all of ``tzsl`` and ``tzsl.studies.zero_shot._figures`` serves
+    ``tzsl.studies.zero_shot``. Imports inside functions (the command line's lazy ones) count.
 (b) No module imports a private name (``_helper``) of another tzsl module, nor reads one as an
     attribute of an imported tzsl module (``_mod._helper``), even inside one package: a name
     used by two modules is public. (Third-party private names, such as scikit-learn's
     ``_fit_context`` and ``_param_validation`` behind its parameter-validation protocol, are
     outside this rule.)
 (c) No ``.py`` file in ``tzsl/`` is over :data:`MAX_LINES` lines.
+(d) DAP's arithmetic (``dap_log_scores``) is called only by its decision rule (``DAPRule``) and by the
+    array rule of a saved bundle, which may not import scikit-learn (:data:`DAP_ARITHMETIC_CALLERS`);
+    every other module scores DAP through the rule.
 
 Every failure names ``file:line`` so it can be fixed where it stands. Tests are exempt from (a)
 and (b): they may reach into private code to check it.
@@ -181,3 +184,26 @@ def test_size_allow_list_names_existing_files():
     stale = [rel for rel in SIZE_ALLOW_LIST | PRIVATE_IMPORT_ALLOW_LIST
              if not (REPO_ROOT / rel).is_file()]
     assert not stale, stale
+
+
+
+#: The modules that may call ``dap_log_scores`` (rule (d)).
+DAP_ARITHMETIC_CALLERS = frozenset({"tzsl/models/_decision.py", "tzsl/inference/detector_bundles.py"})
+
+
+def _calls_of(tree: ast.AST, name: str) -> list[int]:
+    """Lines of the calls of ``name`` (as a bare name or an attribute) in ``tree``."""
+    return [node.lineno for node in ast.walk(tree) if isinstance(node, ast.Call)
+            and ((isinstance(node.func, ast.Name) and node.func.id == name)
+                 or (isinstance(node.func, ast.Attribute) and node.func.attr == name))]
+
+
+def test_dap_arithmetic_only_through_its_rule():
+    assert _calls_of(ast.parse("from tzsl.models import dap\ndap.dap_log_scores(P, K, p)\n"), "dap_log_scores") == [2]
+    callers = []
+    for path in _source_files():
+        rel = path.relative_to(REPO_ROOT).as_posix()
+        if rel not in DAP_ARITHMETIC_CALLERS:
+            callers += [f"{rel}:{line}: calls dap_log_scores; score DAP through tzsl.models.DAPRule"
+                        for line in _calls_of(ast.parse(path.read_text(encoding="utf-8")), "dap_log_scores")]
+    assert not callers, "\n".join(callers)

@@ -7,7 +7,7 @@ Linux, ``$XDG_CACHE_HOME/tzsl/joblib`` when that is set).
 
 Two of its parts hold whole results and are managed here (:data:`CACHE_PARTS`):
 
-* the **study cache**, ``studies/<key>/`` (:mod:`tzsl.studies.study_cache`): a study run again
+* the **study cache**, ``studies/<key>/`` (:mod:`tzsl.studies.outputs.study_cache`): a study run again
   unchanged is restored from it. It is on by default; ``TZSL_STUDY_CACHE=0`` (:data:`STUDY_CACHE_ENV`)
   turns it off, and so does ``[compute] cache = false`` for one study;
 * the **fit store**, ``fits/<xx>/<key>.pkl`` (:mod:`tzsl.fit_store`): fitted models read back

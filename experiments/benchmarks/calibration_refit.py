@@ -2,7 +2,7 @@
 
 The calibrated DAP rows of a study (AVGDAP and MAXDAP, uniform prior) get their temperature from
 pseudo-unseen folds of the split's training objects
-(:func:`tzsl.studies.study_calibration.dap_split_posteriors`). With ``calibration_refit="search"``
+(:func:`tzsl.studies.comparison.calibration.dap_split_posteriors`). With ``calibration_refit="search"``
 (the former behaviour) each fold refits every (attribute, sensor) classifier with its whole
 hyper-parameter search; with ``"pinned"`` (the default) each fold refits it once with the ``C`` /
 ``gamma`` the split's fit chose (:func:`tzsl.models._attribute_bank.chosen_settings`). For each
@@ -59,8 +59,8 @@ from tzsl.evaluation import (
 from tzsl.features import dataset_features, load_plain_dataset
 from tzsl.models.calibration import CALIBRATION_REFITS
 from tzsl.studies.config import DapSettings
-from tzsl.studies.study_calibration import dap_split_posteriors
-from tzsl.studies.study_methods import split_masks
+from tzsl.studies.comparison.calibration import dap_split_posteriors
+from tzsl.studies.comparison.method_runs import split_masks
 from tzsl.studies.zero_shot.study import fit_split, make_splits
 
 #: The phac2-evidence study's attribute SVM settings (tzsl/studies/builtin/phac2_evidence.toml).

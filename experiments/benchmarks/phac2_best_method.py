@@ -36,7 +36,7 @@ from tzsl.studies.config import ZeroShotSettings, every_feature_method
 from tzsl.features import dataset_features
 from tzsl.studies.zero_shot.methods import method_comparison
 from tzsl.studies.zero_shot.study import fit_splits, make_splits
-from tzsl.studies.study_labels import StudyLabels
+from tzsl.studies.papers.run_labels import StudyLabels
 
 #: Split index offset of the challenging splits' fit seeds (as in run_zero_shot_tables).
 CHALLENGING_OFFSET = 100

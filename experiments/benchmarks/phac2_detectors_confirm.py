@@ -50,7 +50,7 @@ from tzsl.models import AttributeSVM, GridEdgeWarning
 from tzsl.models.dap import break_ties
 from tzsl.models.protocol import zscore_rows
 from tzsl.studies.config import ZeroShotSettings
-from tzsl.studies.study_methods import method_input
+from tzsl.studies.comparison.method_runs import method_input
 from tzsl.studies.zero_shot.methods import fit_predict_split
 
 from tzsl.studies.zero_shot.study import make_splits

@@ -23,7 +23,7 @@ from pydantic import Field
 from tzsl.cli import cli
 from tzsl.studies.config import Compute, Output, register_study, unregister_study
 from tzsl.studies.config._common import Section
-from tzsl.studies.study_settings import StudyRun
+from tzsl.studies.outputs.study_run import StudyRun
 
 from tests.datasets.fetch_server import registry_of, serve_folder
 

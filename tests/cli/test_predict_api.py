@@ -121,7 +121,7 @@ def test_linear_bundles_are_arrays_and_rank_as_their_estimator(five_fingers, met
     from tzsl.features import load_features  # noqa: PLC0415
     from tzsl.inference.model_bundles import training_subset  # noqa: PLC0415
     from tzsl.models.protocol import attribute_rows  # noqa: PLC0415
-    from tzsl.studies.study_methods import method_input, study_estimator  # noqa: PLC0415
+    from tzsl.studies.comparison.method_runs import method_input, study_estimator  # noqa: PLC0415
 
     sub, _, _ = training_subset(load_features(plain=root / "five"), root / "five" / "splits.csv")
     attributes = list(sub.attributes.columns)

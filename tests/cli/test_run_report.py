@@ -78,7 +78,7 @@ def test_report_command(tmp_path):
 @pytest.mark.realdata
 def test_plain_folder_from_convert_gives_the_builtin_accuracies(tmp_path, data_dir):
     """Done when: convert PHAC-2 to a plain folder, validate it, run it from a TOML file -> same accuracies."""
-    from tzsl.studies._outputs import ResultsDir
+    from tzsl.studies.outputs.results_folder import ResultsDir
     from tzsl.features import dataset_features
     from tzsl.studies.config import ZeroShotSettings
     from tzsl.studies.zero_shot.study import run_zero_shot_tables
@@ -101,7 +101,7 @@ def test_plain_folder_from_convert_gives_the_builtin_accuracies(tmp_path, data_d
                                    config)["table1_fusion"]
     assert list(ours["split"].astype(str)) == ["1", "2", "mean", "std", "control"]
     for column in ("maxdap", "avgdap", "avgdap_per_class_mean", "n_attributes", "n_test_objects"):
-        # CSV numbers carry 6 significant digits (tzsl.studies._outputs.CSV_FLOAT_FORMAT)
+        # CSV numbers carry 6 significant digits (tzsl.studies.outputs.results_folder.CSV_FLOAT_FORMAT)
         np.testing.assert_allclose(ours[column].to_numpy(float), builtin[column].to_numpy(float), rtol=0,
                                    atol=1e-6, err_msg=column)
     # the same splits: identical per-attribute test accuracies on every split

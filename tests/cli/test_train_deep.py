@@ -157,7 +157,7 @@ def test_train_deep_on_user_gelsight_videos(torch, data_dir, tmp_path):
 def test_deep_fabric_study_table(torch, data_dir, tmp_path):
     """The study behind ``evaluate-fabric --model deep``: runs, table, manifest; refuses overwrites."""
     from tzsl.exceptions import ConfigError
-    from tzsl.studies._outputs import ResultsDir
+    from tzsl.studies.outputs.results_folder import ResultsDir
     from tzsl.studies.config import FabricDeepStudy
     from tzsl.studies.fabric.deep import format_deep_table, run_deep_fabric_study
 

@@ -90,7 +90,7 @@ def test_sae_selected_edge_extends_and_interior_does_not():
 def test_grid_edge_share_reads_models_and_fills_the_comparison_column():
     import pandas as pd
 
-    from tzsl.studies.study_methods import COMPARISON_COLUMNS, grid_edge_share, method_summary
+    from tzsl.studies.comparison.method_runs import COMPARISON_COLUMNS, grid_edge_share, method_summary
 
     X, Y, groups = problem()
     at_edge = ESZSLCV(gammas=(1e4, 1e5), lams=(1.0,), grid_extensions=0).fit(X, Y, groups)

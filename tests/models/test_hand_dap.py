@@ -19,7 +19,7 @@ from tzsl.datasets._grasps import load_hand_table4
 from tzsl.datasets._hand_simulator import simulate_grasps
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.features._grasp_features import grasp_features
-from tzsl.models._dap import dap_log_scores
+from tzsl.models._dap import break_ties, dap_log_scores
 from tzsl.models._hand_dap import FUSIONS, HandDAPClassifier, NoContactError, fuse_grasp_posteriors
 
 TABLE = load_hand_table4()
@@ -193,3 +193,25 @@ def test_hand_decision_is_the_dap_rule(hand_data, fitted):
         HandDAPClassifier(prior=1.5).fit(train.to_array(), train.objects, TABLE.K)
     with pytest.raises(TypeError):
         HandDAPClassifier(("glass",))  # keyword-only
+
+
+def test_dap_rule_is_the_dap_arithmetic_with_the_models_prior(hand_data, fitted):
+    """``dap_rule()`` (what the hand and active-touch studies score with) gives exactly the numbers and the
+    seeded tie-breaks of DAP with ``p(a_m = 1) = prior`` on fused posteriors, single grasps and DF-MDAP means."""
+    import copy
+
+    from tzsl.models.multigrasp import df_mdap
+
+    _, test = hand_data
+    model = copy.deepcopy(fitted)
+    model.prior = 0.3  # used only at decision time
+    K = TABLE.K.loc[TABLE.test_objects, list(model.K_.columns)].to_numpy(dtype=float)
+    P = model.predict_attribute_proba(test.to_array(), "ldap")
+    super_grasps = df_mdap(P[: (len(P) // 3) * 3].reshape(-1, 3, P.shape[1]))
+    prior = np.full(K.shape[1], 0.3)
+    rule = model.dap_rule()
+    for posteriors in (P, super_grasps):
+        np.testing.assert_array_equal(rule.decision_function(posteriors, K), dap_log_scores(posteriors, K, prior))
+        np.testing.assert_array_equal(rule.predict(posteriors, K, random_state=np.random.default_rng(7)),
+                                      break_ties(dap_log_scores(posteriors, K, prior), np.random.default_rng(7)))
+    assert not np.array_equal(rule.decision_function(P, K), fitted.dap_rule().decision_function(P, K))

@@ -9,7 +9,7 @@ import pytest
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import random_object_splits
 from tzsl.exceptions import ConfigError
-from tzsl.studies._outputs import ResultsDir
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tests.study_settings import study_settings
 from tzsl.studies.active_touch.study import evaluate_split, run_active_touch_study
 from tzsl.studies.config import ActiveTouchStudy

@@ -8,7 +8,7 @@ import pytest
 
 from tzsl.datasets import load_hand_table4
 from tzsl.exceptions import ConfigError
-from tzsl.studies._outputs import ResultsDir
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tests.study_settings import study_settings
 from tzsl.studies.active_touch.hand import GRASP_TYPES, grasp_type_of, run_active_hand
 from tzsl.studies.config import ActiveTouchStudy

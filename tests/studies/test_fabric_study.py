@@ -14,7 +14,7 @@ from tzsl.datasets import fabric_zsl_split, load_fabric
 from tzsl.evaluation import seen_test_classes
 from tzsl.exceptions import ConfigError, DataFileError
 from tests.study_settings import study_settings
-from tzsl.studies._outputs import ResultsDir
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.config import FabricStudy
 from tzsl.studies.fabric.study import (
     depth_image_descriptors,
@@ -27,7 +27,7 @@ from tzsl.studies.fabric.study import (
     zero_shot_run,
 )
 from tzsl.studies.fabric.tables import fabric_protocols
-from tzsl.studies.paper_numbers import FABRIC_TABLE1
+from tzsl.studies.papers.numbers import FABRIC_TABLE1
 from tzsl.models import ZSLInputError, build_method
 from tzsl.models.protocol import attribute_rows
 

@@ -207,7 +207,7 @@ def test_bad_settings_are_refused():
 
 
 def test_a_failing_split_is_recorded_and_the_other_splits_complete():
-    from tzsl.studies._failures import table_failures  # noqa: PLC0415
+    from tzsl.studies.outputs.failures import table_failures  # noqa: PLC0415
 
     features = synthetic_features()
     config = _config()
@@ -227,7 +227,7 @@ def test_a_failing_split_is_recorded_and_the_other_splits_complete():
 
 def test_a_split_without_an_unseen_class_is_left_out_with_a_note():
     """Merged attribute rows can leave a split no unseen class: a note, not a failure (issue 20)."""
-    from tzsl.studies._failures import table_failures  # noqa: PLC0415
+    from tzsl.studies.outputs.failures import table_failures  # noqa: PLC0415
     from tzsl.studies.zero_shot.gzsl import RELAXED_COLUMN  # noqa: PLC0415
 
     features = synthetic_features()
@@ -247,7 +247,7 @@ def test_a_split_without_an_unseen_class_is_left_out_with_a_note():
 def test_training_objects_with_one_trial_are_kept_whole_with_a_note():
     """One trial per object, as a lab may record (issue 31): GZSL holds out seen-class trials of the
     objects that have two; with none, the split is left out with a note, not a failed fit."""
-    from tzsl.studies._failures import table_failures  # noqa: PLC0415
+    from tzsl.studies.outputs.failures import table_failures  # noqa: PLC0415
     from tzsl.studies.zero_shot.gzsl import RELAXED_COLUMN  # noqa: PLC0415
 
     features = synthetic_features(trials=2)

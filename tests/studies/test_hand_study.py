@@ -9,7 +9,7 @@ from pydantic import ValidationError
 
 from tzsl.datasets import load_hand_table4, simulate_grasps
 from tzsl.exceptions import ConfigError, DataFileError
-from tzsl.studies import paper_numbers as paper
+from tzsl.studies.papers import numbers as paper
 from tzsl.studies.hand.study import (
     HAND_OUTPUTS,
     fit_hand_model,
@@ -182,7 +182,7 @@ def test_bad_config(bad):
 def test_a_failing_seed_is_recorded_and_the_others_complete(folder, tmp_path, monkeypatch):
     import tzsl.studies.hand.study as hand  # noqa: PLC0415
     from tzsl.exceptions import SplitError  # noqa: PLC0415
-    from tzsl.studies._failures import table_failures  # noqa: PLC0415
+    from tzsl.studies.outputs.failures import table_failures  # noqa: PLC0415
 
     real = hand._evaluate_seed
 

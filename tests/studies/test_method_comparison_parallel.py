@@ -52,7 +52,7 @@ def test_every_random_part_of_a_study_estimator_is_seeded():
     folds at random: a study seeds every ``random_state`` of what it fits, so a rerun reproduces
     every posterior (before, those three were left unseeded and their ECE moved between runs)."""
     from tzsl.models import available_methods, get_method  # noqa: PLC0415
-    from tzsl.studies.study_methods import study_estimator  # noqa: PLC0415
+    from tzsl.studies.comparison.method_runs import study_estimator  # noqa: PLC0415
 
     for name in available_methods():
         if get_method(name).input_kind != "features":

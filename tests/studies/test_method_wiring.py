@@ -212,7 +212,7 @@ def test_unknown_methods_and_parameters_are_refused_at_load_time(toy_method, tmp
 
 
 def test_input_shape_and_seed_come_from_the_registry(toy_method):
-    from tzsl.studies.study_methods import method_input, study_estimator, takes_seed
+    from tzsl.studies.comparison.method_runs import method_input, study_estimator, takes_seed
     from tzsl.models import get_method
 
     X = np.arange(24.0).reshape(4, 2, 3)

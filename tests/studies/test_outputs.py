@@ -5,7 +5,7 @@ import pytest
 
 from tzsl._io import atomic_write, file_sha256
 from tzsl.exceptions import ConfigError
-from tzsl.studies._outputs import ResultsDir, package_versions
+from tzsl.studies.outputs.results_folder import ResultsDir, package_versions
 
 
 def test_atomic_write_leaves_old_file_when_writer_fails(tmp_path):
@@ -45,7 +45,7 @@ def test_manifest_records_outputs_data_and_versions(tmp_path):
 
 
 def test_csv_numbers_have_one_format_and_counts_stay_integer(tmp_path):
-    from tzsl.studies._outputs import csv_ready
+    from tzsl.studies.outputs.results_folder import csv_ready
 
     table = pd.DataFrame({
         "split": ["1", "2", "mean"],
@@ -65,7 +65,7 @@ def test_csv_numbers_have_one_format_and_counts_stay_integer(tmp_path):
 
 
 def test_staged_results_move_into_place_on_commit(tmp_path):
-    from tzsl.studies._outputs import STAGING_FOLDER  # noqa: PLC0415
+    from tzsl.studies.outputs.results_folder import STAGING_FOLDER  # noqa: PLC0415
 
     out = ResultsDir(tmp_path / "res", staging=True)
     out.write_csv("a.csv", pd.DataFrame({"x": [1]}))
@@ -84,7 +84,7 @@ def test_staged_results_move_into_place_on_commit(tmp_path):
 def test_a_crashed_run_does_not_block_the_rerun(tmp_path, monkeypatch):
     """A run killed before it completes leaves only the staging folder; the rerun (no --force) succeeds."""
     from tzsl.datasets import FeatureSet, feature_set_to_plain  # noqa: PLC0415
-    from tzsl.studies._outputs import STAGING_FOLDER  # noqa: PLC0415
+    from tzsl.studies.outputs.results_folder import STAGING_FOLDER  # noqa: PLC0415
     from tzsl.studies.engine import run_experiment  # noqa: PLC0415
 
     import numpy as np  # noqa: PLC0415
@@ -130,7 +130,7 @@ def test_staging_lock_refuses_a_live_writer_and_takes_over_a_dead_one(tmp_path):
     import subprocess  # noqa: PLC0415
     import sys  # noqa: PLC0415
 
-    from tzsl.studies._outputs import STAGING_FOLDER, STAGING_LOCK  # noqa: PLC0415
+    from tzsl.studies.outputs.results_folder import STAGING_FOLDER, STAGING_LOCK  # noqa: PLC0415
 
     staging = tmp_path / "res" / STAGING_FOLDER
     staging.mkdir(parents=True)
@@ -150,7 +150,7 @@ def test_staging_lock_refuses_a_live_writer_and_takes_over_a_dead_one(tmp_path):
 
 
 def test_commit_refuses_a_file_that_appeared_meanwhile(tmp_path):
-    from tzsl.studies._outputs import STAGING_FOLDER  # noqa: PLC0415
+    from tzsl.studies.outputs.results_folder import STAGING_FOLDER  # noqa: PLC0415
 
     out = ResultsDir(tmp_path / "res", staging=True)
     out.write_csv("a.csv", pd.DataFrame({"x": [1]}))
@@ -166,12 +166,12 @@ def test_manifest_names_the_commit_read_when_the_folder_opened(tmp_path, monkeyp
     import json  # noqa: PLC0415
     import re  # noqa: PLC0415
 
-    from tzsl.studies import _outputs  # noqa: PLC0415
+    from tzsl.studies.outputs import results_folder  # noqa: PLC0415
 
-    commit = _outputs.source_commit()  # this checkout: a short sha (maybe -dirty), or None outside git
+    commit = results_folder.source_commit()  # this checkout: a short sha (maybe -dirty), or None outside git
     assert commit is None or re.fullmatch(r"[0-9a-f]{12}(-dirty)?", commit), commit
-    monkeypatch.setattr(_outputs, "source_commit", lambda: "0123abcd4567")
-    results = _outputs.ResultsDir(tmp_path)
-    monkeypatch.setattr(_outputs, "source_commit", lambda: "89abcdef0123")
+    monkeypatch.setattr(results_folder, "source_commit", lambda: "0123abcd4567")
+    results = results_folder.ResultsDir(tmp_path)
+    monkeypatch.setattr(results_folder, "source_commit", lambda: "89abcdef0123")
     results.write_manifest({})
     assert json.loads((tmp_path / "manifest.json").read_text())["commit"] == "0123abcd4567"

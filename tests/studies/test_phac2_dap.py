@@ -9,9 +9,9 @@ import pytest
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split
 from tests.study_settings import study_settings
-from tzsl.studies._outputs import ResultsDir
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.config import ZeroShotSettings
-from tzsl.studies.study_labels import StudyLabels
+from tzsl.studies.papers.run_labels import StudyLabels
 from tzsl.studies.zero_shot.study import (
     SplitPosteriors,
     attribute_bank,

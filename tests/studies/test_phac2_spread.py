@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from tzsl.studies._outputs import PrefixedResults, ResultsDir
+from tzsl.studies.outputs.results_folder import PrefixedResults, ResultsDir
 from tzsl.studies.zero_shot.study import fit_split, make_splits, run_zero_shot_tables
 from tzsl.studies.zero_shot.spread import (
     FUSION_PRIOR_TABLE,
@@ -23,8 +23,8 @@ from tzsl.studies.zero_shot.spread import (
     dap_variant_label,
     model_seed,
 )
-from tzsl.studies.study_labels import StudyLabels
-from tzsl.studies.study_methods import COMPARISON_COLUMNS, combine_comparisons
+from tzsl.studies.papers.run_labels import StudyLabels
+from tzsl.studies.comparison.method_runs import COMPARISON_COLUMNS, combine_comparisons
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_phac2_dap import _config, synthetic_features  # noqa: E402

@@ -20,7 +20,7 @@ from tzsl.reporting.report import render_report
 from tzsl.reporting.sections import SECTIONS, fill, table_facts
 from tzsl.reporting.summary import headline
 from tzsl.reporting.tables import KEY_MAX_COLUMNS, table_view
-from tzsl.studies.study_methods import COMPARISON_COLUMNS
+from tzsl.studies.comparison.method_runs import COMPARISON_COLUMNS
 
 
 def _text(page: str) -> str:

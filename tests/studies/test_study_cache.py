@@ -22,8 +22,8 @@ from tzsl.studies.engine import run_experiment
 from tzsl.cache import MAX_SIZE_ENV, STUDY_CACHE_ENV
 from tzsl.exceptions import ConfigError
 from tzsl.studies.config import load_experiment
-from tzsl.studies.study_cache import study_cache_folder, study_key
-from tzsl.studies.study_settings import StudyRun
+from tzsl.studies.outputs.study_cache import study_cache_folder, study_key
+from tzsl.studies.outputs.study_run import StudyRun
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_reproduce import TINY_HAND  # noqa: E402

@@ -13,8 +13,8 @@ from tzsl.evaluation import Split
 from tzsl.models import AttributeClassifierBank, AttributeSVM, CalibratedZeroShotClassifier, CalibrationWarning
 from tzsl.models import ZSLInputError
 from tzsl.reporting.report import render_report
-from tzsl.studies import study_calibration
-from tzsl.studies.study_calibration import (
+from tzsl.studies.comparison import calibration as study_calibration
+from tzsl.studies.comparison.calibration import (
     CALIBRATION_COLUMNS,
     calibration_skipped,
     dap_split_posteriors,
@@ -22,7 +22,7 @@ from tzsl.studies.study_calibration import (
     reliability_by_method,
     reliability_figure,
 )
-from tzsl.studies.study_methods import COMPARISON_COLUMNS, comparison_trials, method_summary
+from tzsl.studies.comparison.method_runs import COMPARISON_COLUMNS, comparison_trials, method_summary
 from tzsl.studies.zero_shot.study import SplitPosteriors
 
 

@@ -23,7 +23,7 @@ from tzsl.studies.config import (
 )
 from tzsl.studies.config._common import Section
 from tzsl.studies.engine import run, run_experiment
-from tzsl.studies.study_settings import StudyRun
+from tzsl.studies.outputs.study_run import StudyRun
 
 PLUGIN = "echo-test"
 

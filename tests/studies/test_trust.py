@@ -93,7 +93,7 @@ def test_splits_written_to_a_results_folder_read_back_exactly_with_their_rule(tm
     import json
 
     from tzsl.evaluation import read_splits_csv
-    from tzsl.studies._outputs import ResultsDir
+    from tzsl.studies.outputs.results_folder import ResultsDir
     from tzsl.studies.config import ZeroShotSettings
     from tzsl.studies.zero_shot.study import make_splits
 

@@ -23,7 +23,7 @@ from tzsl.cli import cli
 
 from tzsl.datasets import write_plain_dataset
 from tzsl.studies.config import load_experiment
-from tzsl.studies.study_labels import paper_protocol
+from tzsl.studies.papers.run_labels import paper_protocol
 
 REPO = Path(__file__).resolve().parents[2]
 TEMPLATE = REPO / "experiments" / "my_dataset_template.toml"

@@ -4,7 +4,7 @@
   (part ``evidence``) twice in a child process (:func:`tzsl.benchmarks._common.cold_and_warm`):
   **cold** with ``TZSL_CACHE_DIR`` set to a new, empty folder, **warm** the same command again
   with the cache the cold run filled (every study is restored from the study cache,
-  :mod:`tzsl.studies.study_cache`; with ``TZSL_STUDY_CACHE=0`` in the environment only the fit
+  :mod:`tzsl.studies.outputs.study_cache`; with ``TZSL_STUDY_CACHE=0`` in the environment only the fit
   store is warm). Each run gives the command's wall and CPU seconds (process start to exit;
   ``getrusage`` of the reaped children), every study's wall time and its stages (the run's own
   profile in ``manifest.json``, see :mod:`tzsl._profile`).

@@ -51,7 +51,7 @@ def extract(dataset: str, path: Path | None, out: Path | None, min_objects: int,
     """Extract per-trial, per-sensor features and print a summary."""
     from tzsl.datasets import feature_table_paths, write_feature_table  # noqa: PLC0415
     from tzsl.features import dataset_features  # noqa: PLC0415
-    from tzsl.studies.extract import format_summary, summarise  # noqa: PLC0415
+    from tzsl.features.summary import format_summary, summarise  # noqa: PLC0415
 
     if out is not None:
         if out.suffix not in (".csv", ".npz"):

@@ -78,9 +78,9 @@ from tzsl.value_lists import FUSIONS
 from tzsl.models._dap import (
     attribute_prior,
     check_class_attributes,
-    dap_log_scores,
     fuse_attribute_posteriors,
 )
+from tzsl.models._decision import DAPRule
 
 __all__ = [
     "PHAC2_EP_SECONDS",
@@ -413,17 +413,19 @@ class PerEPAttributeModel(BaseEstimator):
         if P.ndim != 4 or P.shape[1] != len(self.eps_):
             raise ConfigError(f"posteriors must have shape (n_trials, {len(self.eps_)}, n_sensors, n_attributes), "
                               f"got {P.shape}")
+        # DAP through its rule, with this model's fusion and prior (an explicit prior: fitting reads only the
+        # attribute count)
+        rule = DAPRule(fusion=self.fusion, prior=self.dap_prior()).fit(K) if self.update != "confusion" else None
         out = []
         for e in range(P.shape[1]):
-            if self.update == "confusion":
+            if rule is None:
                 present, _ = fuse_attribute_posteriors(P[:, e], "avg")
                 bins = np.minimum((present * self.n_bins).astype(int), self.n_bins - 1)  # (n, m)
                 logC = np.log(self.confusion_[e])  # (m, 2, B)
                 terms = logC[np.arange(K.shape[1])[None, :, None], np.arange(2)[None, None, :], bins[:, :, None]]
                 out.append(terms[:, :, 0].sum(axis=1)[:, None] + (terms[:, :, 1] - terms[:, :, 0]) @ K.T)
             else:
-                present, absent = fuse_attribute_posteriors(P[:, e], self.fusion)
-                out.append(dap_log_scores(present, K, self.dap_prior(), P_absent=absent))
+                out.append(rule.decision_function(P[:, e], K))
         return np.stack(out, axis=1)
 
     def outcome_log_likelihoods(self, class_attributes, n_samples: int = 256, random_state=0) -> np.ndarray:

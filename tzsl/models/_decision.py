@@ -15,9 +15,12 @@ sensors, attribute priors and tie-breaking live here, once:
 
 The hand's single-grasp LDAP (:class:`tzsl.models.HandDAPClassifier`) fuses over fingers inside
 its attribute layer (eqs. 7-10, :func:`tzsl.models.multigrasp.fuse_grasp_posteriors`) and then applies DAP
-with the uniform prior: ``HandDAPClassifier(prior=0.5).predict_log_scores(X, K)`` equals
+through this rule with its prior (:meth:`~tzsl.models.HandDAPClassifier.dap_rule`): with ``prior=0.5``,
+``hand.predict_log_scores(X, K)`` equals
 ``DAPRule(prior="uni").fit(A).decision_function(hand.predict_attribute_proba(X), K)``
-(a 2-D posterior is one sensor, so ``fusion`` does not matter).
+(a 2-D posterior is one sensor, so ``fusion`` does not matter). Studies, DF-MDAP and the active-touch model
+score their fused posteriors through the rule too; only the load-once predictor of a saved bundle
+(:mod:`tzsl.inference`, without scikit-learn) calls the same arithmetic (:mod:`tzsl.models.dap`) directly.
 
 Every rule has ``fit(A, groups=None)`` (training attribute rows; only the ``train`` prior uses
 them), ``decision_function(scores, K)``, ``predict_proba(scores, K)`` (softmax over the given

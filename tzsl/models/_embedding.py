@@ -20,7 +20,7 @@ The two ends of the paper's lambda grid {0, 0.1, 1, 10, inf}:
   Table 1 literally says inf is "the case in which the objective function only contains the term
   C", but that would make the inf column the same objective as the lambda = 0 column, whereas
   Table 1 reports different numbers for them (row Fold of ``FABRIC_TABLE1`` in
-  :mod:`tzsl.studies.paper_numbers`) and section 5.2 argues that
+  :mod:`tzsl.studies.papers.numbers`) and section 5.2 argues that
   "a single regression loss may result in overfitting" and that the best accuracy comes from
   combining the losses "rather than just one or the other". We therefore take that sentence as a
   typo for R. ``lam=0`` reproduces the literal "C only" reading.

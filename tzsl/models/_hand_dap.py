@@ -16,7 +16,8 @@ Fusion over the touching BioTacs (:func:`fuse_grasp_posteriors`):
 * LDAP, eqs. (9)-(10): shape ``max(0.5, p(a_m=1|x_sh))``; material
   ``1/B sum_b max(0.5, p(a_m=1|x_b,mat))``.
 
-The fused posteriors go into DAP, eq. (3), through :func:`tzsl.models.dap.dap_log_scores`, with
+The fused posteriors go into DAP, eq. (3), through the decision rule :class:`tzsl.models.DAPRule`
+(:meth:`HandDAPClassifier.dap_rule`: one sensor, the estimator's prior), with
 ``p(a_m = 0 | x) = 1 - p(a_m = 1 | x)``. Eq. (7) fuses ``p(a_m = 1 | .)`` only; this differs from
 the PHAC-2 MAXDAP of eq. (5), which takes the maximum of the posterior of each class's required
 value (``tzsl.models.dap.fuse_attribute_posteriors(..., "max")``).
@@ -51,7 +52,7 @@ from threadpoolctl import threadpool_limits
 from tzsl._parallel import reissued, relayed
 from tzsl.exceptions import ConfigError, SplitError, TzslError
 from tzsl.features import unpack_grasp_features
-from tzsl.models._dap import dap_log_scores
+from tzsl.models._decision import DAPRule
 from tzsl.models._validation import ParameterError, ValidatedParamsMixin
 
 __all__ = ["FUSIONS", "HandDAPClassifier", "NoContactError", "fuse_grasp_posteriors"]
@@ -437,9 +438,19 @@ class HandDAPClassifier(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
             Overrides the estimator's fusion method.
         """
         Kc = self._class_matrix(K)
-        P = self.predict_attribute_proba(X, fusion)
-        prior = np.full(P.shape[1], float(self.prior))
-        return dap_log_scores(P, Kc.to_numpy(dtype=float), prior)
+        return self.dap_rule().decision_function(self.predict_attribute_proba(X, fusion), Kc.to_numpy(dtype=float))
+
+    def dap_rule(self) -> DAPRule:
+        """The DAP decision rule of the fused grasp posteriors: :class:`~tzsl.models.DAPRule` with the prior
+        ``p(a_m = 1) = prior`` for every attribute, fitted on the training objects' rows :attr:`K_`.
+
+        Its ``decision_function(P, K)`` and ``predict(P, K, random_state)`` take fused posteriors of shape
+        (n, m) (:meth:`predict_attribute_proba`, or their DF-MDAP mean over grasps) and a 0/1 table (k, m),
+        columns as :attr:`K_`; a 2-D posterior is one sensor, so the rule's fusion does not apply.
+        """
+        check_is_fitted(self, "material_models_")
+        prior = np.full(self.K_.shape[1], float(self.prior))
+        return DAPRule(prior=prior).fit(self.K_.to_numpy(dtype=float))
 
     def predict(self, X, K: pd.DataFrame | None = None, fusion: str | None = None) -> np.ndarray:
         """Most probable object of every grasp (eq. 4), shape (n,); names from ``K``'s index."""

@@ -28,7 +28,7 @@ from sklearn.utils import check_random_state
 
 from tzsl.exceptions import ConfigError
 from tzsl._scoring import sc_mdap
-from tzsl.models._dap import dap_log_scores
+from tzsl.models._decision import DAPRule
 
 __all__ = [
     "attribute_distance_matrix",
@@ -78,7 +78,8 @@ def df_mdap_log_scores(P_ldap: np.ndarray, K: np.ndarray | pd.DataFrame, prior: 
     if P.ndim != 3:
         raise ConfigError(f"P_ldap must have shape (n_sequences, T, m), got {P.shape}")
     K = np.asarray(K, dtype=float)
-    return dap_log_scores(df_mdap(P), K, np.full(P.shape[-1], float(prior)))
+    # DAP through its rule; with an explicit prior, fitting reads only the attribute count
+    return DAPRule(prior=np.full(P.shape[-1], float(prior))).fit(K).decision_function(df_mdap(P), K)
 
 
 def sample_grasp_sequences(

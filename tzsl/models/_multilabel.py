@@ -2,7 +2,7 @@
 
 The DAP paper (§4.4) compares its independent per-attribute SVMs with a multi-label SVM from
 scikit-multilearn that drops the independence assumption (the paper's two accuracies are
-``DAP_INDEPENDENT_ACCURACY`` and ``DAP_MULTILABEL_ACCURACY`` of :mod:`tzsl.studies.paper_numbers`). scikit-
+``DAP_INDEPENDENT_ACCURACY`` and ``DAP_MULTILABEL_ACCURACY`` of :mod:`tzsl.studies.papers.numbers`). scikit-
 multilearn is unmaintained, so the joint model here is a **classifier chain** (Read et al., 2011;
 the same idea as :class:`sklearn.multioutput.ClassifierChain`) per sensor:
 

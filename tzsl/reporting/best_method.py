@@ -1,6 +1,6 @@
 """Which method is best, with the evidence: read from method comparison tables (issue 23).
 
-A method comparison (``method_comparison.csv``, :data:`tzsl.studies.study_methods.COMPARISON_COLUMNS`)
+A method comparison (``method_comparison.csv``, :data:`tzsl.studies.comparison.method_runs.COMPARISON_COLUMNS`)
 holds, per study and split kind, every method's accuracy with its interval and its paired
 difference to the study's reference (the paper's method) with its interval. Two uses:
 

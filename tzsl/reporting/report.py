@@ -122,7 +122,7 @@ def _blocks(tables: list[dict], stems: list[str], figure_stems: list[str], png_b
 
 def _calibration_notes(frames: list[pd.DataFrame]) -> list[str]:
     """Sentences naming the methods whose calibrated reliability points equal their uncalibrated ones."""
-    from tzsl.studies.study_calibration import calibration_skipped  # noqa: PLC0415 (one rule for figure and page)
+    from tzsl.studies.comparison.calibration import calibration_skipped  # noqa: PLC0415 (one rule for figure and page)
 
     out = []
     for frame in frames:

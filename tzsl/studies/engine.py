@@ -23,10 +23,10 @@ import pandas as pd
 from tzsl._profile import profiling
 from tzsl._warnings import recorded_warnings
 from tzsl.exceptions import ConfigError, PartialRunError, problems_error
-from tzsl.studies._outputs import ResultsDir
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.config import DATASET_PATHS, Experiment, get_study, load_experiment, to_toml
-from tzsl.studies.study_cache import run_cached
-from tzsl.studies.study_settings import StudyRun
+from tzsl.studies.outputs.study_cache import run_cached
+from tzsl.studies.outputs.study_run import StudyRun
 
 # --------------------------------------------------------------------------- checks before any fit
 
@@ -101,7 +101,7 @@ def execute_study(exp: Experiment, results: ResultsDir, echo: Callable[[str], No
     """Run the study of ``exp`` into ``results`` (no manifest.json; see :func:`run_experiment`).
 
     A study run before with the same settings, code and data is restored from the study cache
-    (:mod:`tzsl.studies.study_cache`; on unless ``TZSL_STUDY_CACHE=0`` or ``[compute] cache = false``).
+    (:mod:`tzsl.studies.outputs.study_cache`; on unless ``TZSL_STUDY_CACHE=0`` or ``[compute] cache = false``).
     """
     check_experiment(exp)
     runner = get_study(exp.study).hook("runner")
@@ -111,7 +111,7 @@ def execute_study(exp: Experiment, results: ResultsDir, echo: Callable[[str], No
 def results_folder(exp: Experiment, force: bool) -> ResultsDir:
     """The (staged) results folder of ``exp``: the study's own (its ``results`` hook), else a plain one.
 
-    Files are staged in the output folder's :data:`~tzsl.studies._outputs.STAGING_FOLDER`
+    Files are staged in the output folder's :data:`~tzsl.studies.outputs.results_folder.STAGING_FOLDER`
     and moved into place by :meth:`ResultsDir.commit` when the run completes, so a crashed run
     never blocks its rerun.
     """

@@ -51,7 +51,7 @@ from tzsl._profile import profiling
 from tzsl._warnings import recorded_warnings
 
 if TYPE_CHECKING:  # the module stays light: the command line reads its lists for --help
-    from tzsl.studies._outputs import ResultsDir
+    from tzsl.studies.outputs.results_folder import ResultsDir
 
 __all__ = ["EVIDENCE_STUDIES", "REPRODUCE_STUDIES", "STUDY_LISTS", "evidence", "fetch_study_data",
            "reproduce_experiments", "reproduce_tables", "run_studies"]
@@ -144,7 +144,7 @@ def run_studies(
     """
     from tzsl.studies.engine import check_experiment, execute_study, manifest_record  # noqa: PLC0415
     from tzsl.studies.config import get_study  # noqa: PLC0415
-    from tzsl.studies._outputs import ResultsDir  # noqa: PLC0415
+    from tzsl.studies.outputs.results_folder import ResultsDir  # noqa: PLC0415
 
     default, stack = STUDY_LISTS[command]
     studies = default if studies is None else tuple(studies)
@@ -156,7 +156,7 @@ def run_studies(
         outputs = get_study(exp.study).hook("outputs")
         if outputs is not None:
             results.check_free(outputs(exp.config))
-    from tzsl.studies.study_methods import COMPARISON_FILE, FEW_CLASSES, combine_comparisons  # noqa: PLC0415
+    from tzsl.studies.comparison.method_runs import COMPARISON_FILE, FEW_CLASSES, combine_comparisons  # noqa: PLC0415
 
     results.check_free(["manifest.json"] + ([COMPARISON_FILE] if stack else []))
     if fetch:

@@ -40,7 +40,7 @@ from tzsl.datasets import HandTable, simulate_grasps
 from tzsl.evaluation import bootstrap_accuracy_columns, paired_difference_interval
 from tzsl.studies.config import ActiveTouchStudy, HandSettings
 from tzsl.studies.hand.study import fit_hand_model, hand_features
-from tzsl.models.dap import break_ties, dap_log_scores
+from tzsl.models.dap import break_ties
 from tzsl.models.multigrasp import fuse_grasp_posteriors
 from tzsl.models.active_touch import binned_confusion, expected_information_gain, outcome_log_likelihoods
 
@@ -136,7 +136,7 @@ def _evaluate_seed(table: HandTable, study: HandSettings, config: ActiveTouchStu
     K = table.K.loc[names, columns].to_numpy(dtype=float)
     test = np.isin(features.objects, names) & features.contact.any(axis=1)
     te = features.subset(test)
-    S = dap_log_scores(_ldap(model, te), K, np.full(K.shape[1], float(model.prior)))
+    S = model.dap_rule().decision_function(_ldap(model, te), K)
     obj = pd.Index(names).get_indexer(te.objects)
     types = grasp_type_of(te.contact)
     L = outcome_log_likelihoods(_type_confusion(features, table, study, config.hand.cv, seed, columns), K,

@@ -7,9 +7,9 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from tzsl.studies._outputs import ResultsDir
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.config import Experiment
-from tzsl.studies.study_settings import StudyRun, format_table
+from tzsl.studies.outputs.study_run import StudyRun, format_table
 
 __all__ = ["active_touch_outputs", "run_active_touch"]
 

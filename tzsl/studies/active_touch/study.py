@@ -51,7 +51,7 @@ from tzsl.evaluation import (
     random_object_splits,
 )
 from tzsl.exceptions import ConfigError
-from tzsl.studies._outputs import ResultsDir
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.active_touch.stopping import decided_table, stop_outcomes, stopping_figure
 from tzsl.studies.config import ActiveTouchStudy
 from tzsl.studies.zero_shot.study import object_map_features

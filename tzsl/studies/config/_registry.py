@@ -8,7 +8,7 @@ names no study and imports none:
     Runs a checked experiment into a results folder (required).
 ``results(exp, force) -> ResultsDir``
     Opens the staged results folder and checks that the files it will write are free (default: a
-    plain :class:`~tzsl.studies._outputs.ResultsDir` checked for ``manifest.json``).
+    plain :class:`~tzsl.studies.outputs.results_folder.ResultsDir` checked for ``manifest.json``).
 ``outputs(config) -> list[str]``
     The files a run writes, checked free by ``tzsl reproduce-tables`` before any study runs.
 ``notes(exp) -> list[str]``

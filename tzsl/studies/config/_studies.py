@@ -229,7 +229,7 @@ class HandFeatures(Section):
 
 
 def _paper(name: str) -> int:
-    from tzsl.studies import paper_numbers  # noqa: PLC0415
+    from tzsl.studies.papers import numbers as paper_numbers  # noqa: PLC0415
 
     return getattr(paper_numbers, name)
 

@@ -316,7 +316,7 @@ def run_deep_fabric_study(
 
     Parameters
     ----------
-    out : tzsl.studies._outputs.ResultsDir
+    out : tzsl.studies.outputs.results_folder.ResultsDir
         Output folder; existing outputs are refused unless forced (checked first).
     settings : FabricDeepStudy or None
         The checked study file (:class:`~tzsl.studies.config.FabricDeepStudy`; default: the schema's

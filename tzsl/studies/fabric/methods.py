@@ -6,7 +6,7 @@ model at one lambda (weight decay by class-grouped CV), ESZSL, or a registry met
 
 :func:`fabric_comparison` turns the study's fits into ``fabric_method_comparison.csv``, one
 block per data condition (``study = fabric-<condition>``), scored like every study's comparison
-(:func:`tzsl.studies.study_methods.method_summary`): the splits are (config, seed) pairs, the
+(:func:`tzsl.studies.comparison.method_runs.method_summary`): the splits are (config, seed) pairs, the
 bootstrap clusters are fabrics (a fabric's images are not independent), and a deterministic
 method's predictions count for every seed, so each method is paired with the reference on the
 same test samples. The reference is the paper's method, the embedding ``C + lambda R`` at the
@@ -30,10 +30,10 @@ from threadpoolctl import threadpool_limits
 from tzsl.datasets import FabricSplit
 from tzsl.evaluation import per_class_mean_accuracy, select_embedding_alpha, trial_accuracy
 from tzsl.exceptions import ConfigError
-from tzsl.studies._failures import ERROR_COLUMN, attempt
+from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
 from tzsl.studies.fabric.samples import FabricSamples
 from tzsl.studies.fabric.tables import ESZSL_METHOD
-from tzsl.studies.study_methods import (
+from tzsl.studies.comparison.method_runs import (
     comparison_file,
     comparison_trials,
     method_input,
@@ -312,7 +312,7 @@ def fabric_comparison(runs: pd.DataFrame, correct: list[np.ndarray], samples: Se
     Returns
     -------
     DataFrame
-        :data:`~tzsl.studies.study_methods.COMPARISON_COLUMNS`, one block per condition.
+        :data:`~tzsl.studies.comparison.method_runs.COMPARISON_COLUMNS`, one block per condition.
     """
     ref_lam = REFERENCE_LAMBDA if REFERENCE_LAMBDA in lam_labels else lam_labels[0]
     reference = f"embedding_lam_{ref_lam}"

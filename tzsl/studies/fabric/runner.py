@@ -9,9 +9,9 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from tzsl.studies._outputs import ResultsDir
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.config import Experiment
-from tzsl.studies.study_settings import StudyRun
+from tzsl.studies.outputs.study_run import StudyRun
 from tzsl.studies.zero_shot.preset import PresetHooks
 
 __all__ = ["fabric_notes", "fabric_outputs", "fabric_results", "run_fabric", "run_fabric_deep"]

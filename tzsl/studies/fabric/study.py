@@ -63,7 +63,7 @@ Methods and model selection (training groups only)
 * Prediction: nearest attribute vector among the TEST groups only (zero-shot); accuracy over
   test samples and per-class mean accuracy over test groups.
 
-Outputs (through :class:`~tzsl.studies._outputs.ResultsDir`)
+Outputs (through :class:`~tzsl.studies.outputs.results_folder.ResultsDir`)
 ----------------------------------------------------------------
 ``fabric_table1.csv`` (:func:`fabric_table`), ``fabric_runs.csv`` (one row per fit),
 ``fabric_lambda.png`` (accuracy vs lambda, ours and the paper's: Fig. 6),
@@ -94,7 +94,7 @@ from tzsl._parallel import reissued, relayed
 from tzsl._profile import stage
 from tzsl.datasets import FABRIC_ATTRIBUTE_SETS, load_fabric
 from tzsl.evaluation import DEFAULT_ALPHAS, select_embedding_alpha
-from tzsl.studies._outputs import ResultsDir
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.config import FabricStudy
 from tzsl.studies.fabric.samples import (
     N_KEY_FRAMES,
@@ -126,7 +126,7 @@ from tzsl.studies.fabric.methods import (
     zero_shot_run,
 )
 from tzsl.studies.fabric.partitions import run_partitions
-from tzsl.studies.study_methods import method_label, takes_seed
+from tzsl.studies.comparison.method_runs import method_label, takes_seed
 from tzsl.features import TextureDescriptor
 from tzsl.fit_store import count_fits
 

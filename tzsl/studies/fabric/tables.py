@@ -18,7 +18,7 @@ from tzsl.datasets import FabricSplit, fabric_zsl_split
 from tzsl.evaluation import summarise_over_splits, zero_shot_variant
 from tzsl.evaluation import Outcomes, add_trust_columns
 from tzsl.studies.fabric.samples import FabricSamples
-from tzsl.studies.paper_numbers import FABRIC_TABLE1
+from tzsl.studies.papers.numbers import FABRIC_TABLE1
 from tzsl.models.embedding import loss_weights
 
 __all__ = [
@@ -113,7 +113,7 @@ def method_names(lams: Sequence) -> list[str]:
 
 
 def paper_key(method: str) -> str:
-    """Key of a method column in :data:`~tzsl.studies.paper_numbers.FABRIC_TABLE1`."""
+    """Key of a method column in :data:`~tzsl.studies.papers.numbers.FABRIC_TABLE1`."""
     return ESZSL_METHOD if method == ESZSL_METHOD else method[len("lam_"):]
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from tzsl.studies import paper_numbers as paper
+from tzsl.studies.papers import numbers as paper
 
 __all__ = [
     "attribute_accuracy_figure",

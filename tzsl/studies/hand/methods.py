@@ -4,7 +4,7 @@ The hand study fits one :class:`~tzsl.models.HandDAPClassifier` per seed and sco
 fusions (MAXDAP, AVGDAP, LDAP) on the test grasps with a touching BioTac. The same test grasps
 are given to every registry method of ``[methods] compare`` (feature methods: ESZSL, SAE, ALE,
 SJE, DeViSE, IAP, the embedding model, DAP with one RBF-SVM per attribute), fitted on the
-training objects' grasps through :func:`tzsl.studies.study_methods.fit_predict`. Their input
+training objects' grasps through :func:`tzsl.studies.comparison.method_runs.fit_predict`. Their input
 is the packed grasp array (:func:`tzsl.features.pack_grasp_features`: every finger's 22 material
 features, the contact flags, the joint angles; NaN set to 0): the hand-specific fusion over
 touching fingers is what the hand DAP adds on top. The reference is the paper's method, LDAP;
@@ -18,9 +18,9 @@ import time
 import numpy as np
 import pandas as pd
 
-from tzsl.studies.paper_numbers import DAP_HAND_TABLE5
-from tzsl.studies.study_calibration import posterior_columns
-from tzsl.studies.study_methods import comparison_file, comparison_trials, fit_predict, method_label, method_summary
+from tzsl.studies.papers.numbers import DAP_HAND_TABLE5
+from tzsl.studies.comparison.calibration import posterior_columns
+from tzsl.studies.comparison.method_runs import comparison_file, comparison_trials, fit_predict, method_label, method_summary
 
 __all__ = ["COMPARISON_TABLE", "REFERENCE_METHOD", "STUDY", "fusion_label", "hand_comparison", "registry_trials"]
 
@@ -59,7 +59,7 @@ def registry_trials(specs, X_train: np.ndarray, objects_train: np.ndarray, K: pd
     Returns
     -------
     (list of DataFrame, dict)
-        :func:`~tzsl.studies.study_methods.comparison_trials` per method and its fit seconds.
+        :func:`~tzsl.studies.comparison.method_runs.comparison_trials` per method and its fit seconds.
     """
     X_train, X_test = np.nan_to_num(np.asarray(X_train, float)), np.nan_to_num(np.asarray(X_test, float))
     names = np.asarray(list(test_objects))

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from tzsl.studies._outputs import ResultsDir
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.config import Experiment
-from tzsl.studies.study_settings import StudyRun
+from tzsl.studies.outputs.study_run import StudyRun
 from tzsl.studies.zero_shot.preset import PresetHooks
 
 __all__ = ["hand_notes", "hand_outputs", "hand_results", "run_hand"]

@@ -38,9 +38,9 @@ from tzsl._profile import stage
 from tzsl.datasets import Grasp, HandTable, read_grasps, simulate_grasps
 from tzsl.evaluation import summarise_over_splits
 from tzsl.exceptions import ConfigError, SplitError
-from tzsl.studies import paper_numbers as paper
-from tzsl.studies._failures import ERROR_COLUMN, attempt
-from tzsl.studies._outputs import ResultsDir
+from tzsl.studies.papers import numbers as paper
+from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.config import HandSettings
 from tzsl.studies.hand.methods import (
     COMPARISON_TABLE,
@@ -68,7 +68,6 @@ from tzsl.studies.hand.tables import (
     with_intervals,
 )
 from tzsl.features import GraspFeatures
-from tzsl.models.dap import break_ties, dap_log_scores
 from tzsl.models.multigrasp import (
     HAND_FUSIONS,
     attribute_distance_matrix,
@@ -128,7 +127,7 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandSettin
     Kc = table.K.loc[test_objects, columns].astype(int)
     names = Kc.index.to_numpy()
     K = Kc.to_numpy(dtype=float)
-    prior = np.full(K.shape[1], float(model.prior))
+    rule = model.dap_rule()  # DAP over the fused posteriors, the model's prior
 
     test = np.isin(features.objects, test_objects)
     touched = features.contact.any(axis=1)
@@ -144,7 +143,7 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandSettin
     # exact ties (e.g. LDAP's max(0.5, p) when a grasp misses the attribute two classes differ in)
     # are broken uniformly at random, seeded, so no class wins ties by its place in Table 4
     ties = np.random.default_rng([seed, 7])
-    pred = {f: names[break_ties(dap_log_scores(fused[f], K, prior), ties)] for f in HAND_FUSIONS}
+    pred = {f: names[rule.predict(fused[f], K, random_state=ties)] for f in HAND_FUSIONS}
     subset_of = table.subset.reindex(y).fillna("").to_numpy()
     subsets = [s for s in SUBSETS if (subset_of == s).any()] + sorted(
         {s for s in subset_of if s and s not in SUBSETS}
@@ -182,7 +181,7 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandSettin
     idx, own = sample_grasp_sequences(y, L, config.methods.n_sequences, random_state=seed)
     P_ldap = fused["ldap"]
     for T in range(1, min(config.methods.max_T, L) + 1):
-        p = names[break_ties(dap_log_scores(df_mdap(P_ldap[idx[:, :T]]), K, prior), ties)]
+        p = names[rule.predict(df_mdap(P_ldap[idx[:, :T]]), K, random_state=ties)]
         all_ok, most_ok = _object_counts(p, own, names)
         out["trust"].append(("T", seed, "accuracy", own, p == own, "trial", {"T": T}))
         out["T"].append({"seed": seed, "T": T, "accuracy": float((p == own).mean()),
@@ -190,7 +189,7 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandSettin
                          "n_sequences": int(len(own))})
         if T == min(config.methods.confusion_T, L):
             out["confusion"] += _confusion_rows(f"DF-MDAP (T={T})", seed, own, p, names)
-    decisions = break_ties(dap_log_scores(P_ldap, K, prior), ties)  # LDAP per grasp (as the paper)
+    decisions = rule.predict(P_ldap, K, random_state=ties)  # LDAP per grasp (as the paper)
     for k in range(1, config.methods.max_k + 1):
         d, used, decided = sc_mdap(decisions[idx], k)
         p = names[d]

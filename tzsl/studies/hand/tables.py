@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 
 from tzsl.evaluation import summarise_over_splits
-from tzsl.studies import paper_numbers as paper
+from tzsl.studies.papers import numbers as paper
 from tzsl.evaluation import Outcomes, add_trust_columns
 
 if TYPE_CHECKING:

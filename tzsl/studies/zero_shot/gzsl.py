@@ -58,11 +58,11 @@ from tzsl.evaluation import (
     summarise_over_splits,
 )
 from tzsl.exceptions import ConfigError, SplitError
-from tzsl.studies._failures import ERROR_COLUMN, attempt
+from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
 from tzsl.evaluation import Outcomes, add_trust_columns
 from tzsl.studies.config import GzslSettings, ZeroShotSettings, dap_label
 from tzsl.studies.zero_shot.study import attribute_bank, compute_context
-from tzsl.studies.study_methods import method_input, study_estimator
+from tzsl.studies.comparison.method_runs import method_input, study_estimator
 from tzsl.studies.zero_shot.tables import split_label
 from tzsl.models import DAPRule, get_method
 from tzsl.models.protocol import attribute_rows
@@ -258,7 +258,7 @@ def _dap_scores(features: FeatureSet, problem: GzslProblem, config: ZeroShotSett
 
 def _method_scores(method: str, features: FeatureSet, problem: GzslProblem, seed: int) -> np.ndarray:
     """Class scores (n_evaluated, n_classes) of the registered method ``method``, uncalibrated, fitted on
-    ``problem.fit`` as the method comparison fits it (:func:`~tzsl.studies.study_methods.study_estimator`)."""
+    ``problem.fit`` as the method comparison fits it (:func:`~tzsl.studies.comparison.method_runs.study_estimator`)."""
     spec = {"name": method, **({"calibration": "none"} if get_method(method).calibratable else {})}
     fit = problem.fit
     objects = features.objects[fit]

@@ -3,12 +3,12 @@
 
 Every method of ``[methods]`` (``eszsl``, ``embedding`` and ``compare``, see
 :meth:`~tzsl.studies.config.ZeroShotMethods.method_specs`) is fitted on each random split's
-training objects with :func:`tzsl.studies.study_methods.fit_predict` and scored on the
+training objects with :func:`tzsl.studies.comparison.method_runs.fit_predict` and scored on the
 split's test trials. The reference is the paper's method, AVGDAP with a uniform prior, read
 from the already fitted DAP posteriors (no refit), as are MAXDAP and, when the study fitted it,
 the multi-label DAP; their temperatures are fitted on pseudo-unseen classes of each split's
-training objects (:func:`tzsl.studies.study_calibration.dap_split_posteriors`). Scoring is the
-one of every study (:func:`tzsl.studies.study_methods.method_summary`), with the study's
+training objects (:func:`tzsl.studies.comparison.calibration.dap_split_posteriors`). Scoring is the
+one of every study (:func:`tzsl.studies.comparison.method_runs.method_summary`), with the study's
 reliability diagram (``phac2_reliability.csv``; ``reliability.csv`` outside the paper preset).
 """
 
@@ -27,11 +27,11 @@ from tzsl.evaluation import Split, summarise_over_splits
 from tzsl.exceptions import TzslError
 from tzsl.models import get_method
 from tzsl.studies.config import dap_label
-from tzsl.studies._failures import ERROR_COLUMN, attempt
-from tzsl.studies.paper_numbers import DAP_MULTILABEL_ACCURACY, DAP_TABLE1, DAP_TABLE3
+from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
+from tzsl.studies.papers.numbers import DAP_MULTILABEL_ACCURACY, DAP_TABLE1, DAP_TABLE3
 from tzsl.studies.zero_shot.tables import split_label
-from tzsl.studies.study_labels import StudyLabels
-from tzsl.studies.study_methods import (
+from tzsl.studies.papers.run_labels import StudyLabels
+from tzsl.studies.comparison.method_runs import (
     comparison_file,
     comparison_trials,
     fit_predict,
@@ -40,7 +40,7 @@ from tzsl.studies.study_methods import (
     method_summary,
     split_masks,
 )
-from tzsl.studies.study_calibration import dap_split_posteriors, posterior_columns, reliability_by_method
+from tzsl.studies.comparison.calibration import dap_split_posteriors, posterior_columns, reliability_by_method
 
 if TYPE_CHECKING:
     from tzsl.studies.zero_shot.split_posteriors import SplitPosteriors
@@ -81,7 +81,7 @@ def fit_predict_split(spec: dict, features: FeatureSet, split: Split, seed: int)
 
     Returns
     -------
-    fit : tzsl.studies.study_methods.MethodFit
+    fit : tzsl.studies.comparison.method_runs.MethodFit
     y : ndarray of shape (n_test_trials,)
         Row of ``split.test_objects`` of each test trial (the truth of ``fit.predicted``).
     """
@@ -141,7 +141,7 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
     into one training class by the methods that merge duplicates (ESZSL, the embedding model).
     ``split_kind`` (``random``, ``challenging``) labels every row of the three tables.
 
-    ``labels`` (:func:`~tzsl.studies.study_labels.study_labels`; default: a generic run on
+    ``labels`` (:func:`~tzsl.studies.papers.run_labels.study_labels`; default: a generic run on
     real data) name the tables and say whether the paper's numbers and notes go beside;
     ``purpose`` (``"select"`` / ``"confirm"``, :data:`tzsl.evaluation.PURPOSES`) fills the
     ``purpose`` column of both tables; ``n_jobs``: the (split, method) fits run in that many
@@ -153,7 +153,7 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
         ``labels.methods_table`` (``"phac2_methods"`` for the paper preset): one row per split
         (purpose, the study's DAP (``dap-avg``, or ``dap-avg-<detector>``) and one column per method label, e.g. ``eszsl``, ``embedding_lam_0.1``; NaN where that fit failed, the reason in the
         ``error`` column), then mean and std rows;
-        ``labels.comparison_table``: :func:`~tzsl.studies.study_methods.method_summary`
+        ``labels.comparison_table``: :func:`~tzsl.studies.comparison.method_runs.method_summary`
         with ``dap-avg`` as the reference (with ECE and Brier score, calibrated and not);
         ``labels.reliability_table``: the reliability diagram's points of every method; ``dap-max``
         and ``multilabel-dap`` (when fitted) come from the same posteriors, their fit time and grid-edge

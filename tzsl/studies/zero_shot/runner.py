@@ -16,9 +16,9 @@ import pandas as pd
 
 from tzsl._profile import stage
 from tzsl.datasets import FeatureSet
-from tzsl.studies._outputs import PrefixedResults, ResultsDir, prefixed
+from tzsl.studies.outputs.results_folder import PrefixedResults, ResultsDir, prefixed
 from tzsl.studies.config import Experiment
-from tzsl.studies.study_settings import StudyRun, format_table
+from tzsl.studies.outputs.study_run import StudyRun, format_table
 from tzsl.value_lists import FUSIONS, PRIORS
 
 __all__ = ["PreparedStudy", "SelectedColumns", "dropped_columns", "load_study_features", "prepare", "relaxation_notes",
@@ -51,7 +51,7 @@ def dropped_columns(methods, prefix: str = "") -> dict[str, list[str]]:
 
 def zero_shot_outputs(config) -> list[str]:
     """Files a zero-shot (or phac2-dap) run writes (checked free before any computation)."""
-    from tzsl.studies.study_labels import StudyLabels, paper_protocol  # noqa: PLC0415
+    from tzsl.studies.papers.run_labels import StudyLabels, paper_protocol  # noqa: PLC0415
     from tzsl.studies.zero_shot.spread import FUSION_PRIOR_TABLE, REFIT_TABLE  # noqa: PLC0415
 
     labels = StudyLabels(paper=paper_protocol(config.study, config)[0])
@@ -183,11 +183,11 @@ def relaxation_notes(exp: Experiment) -> list[str]:
 
 def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
     """``study = "zero-shot"`` and its paper preset ``"phac2-dap"``: one study, labelled by
-    :func:`~tzsl.studies.study_labels.study_labels` (the paper's numbers only on its data)."""
+    :func:`~tzsl.studies.papers.run_labels.study_labels` (the paper's numbers only on its data)."""
     from tzsl.studies.zero_shot.gzsl import GZSL_FILE, RELAXED_COLUMN, relaxation_notes, run_gzsl  # noqa: PLC0415
     from tzsl.studies.zero_shot.study import run_zero_shot_tables, solver_lines  # noqa: PLC0415
     from tzsl.studies.zero_shot.tables import table_titles  # noqa: PLC0415
-    from tzsl.studies.study_labels import study_labels  # noqa: PLC0415
+    from tzsl.studies.papers.run_labels import study_labels  # noqa: PLC0415
 
     study = exp.study
     prepared = prepare(exp)

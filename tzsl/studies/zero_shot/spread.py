@@ -3,7 +3,7 @@
 Two tables beside Tables 1-3 and the method comparison (:func:`tzsl.studies.zero_shot.study.run_zero_shot_tables`):
 
 * ``dap_fusion_prior.csv``: every DAP fusion x attribute prior on every split kind run, scored
-  like the method comparison (:func:`tzsl.studies.study_methods.method_summary`): accuracy
+  like the method comparison (:func:`tzsl.studies.comparison.method_runs.method_summary`): accuracy
   with its two-level bootstrap interval, the paired difference to AVGDAP with the uniform prior
   (``dap-avg``) on the same trials with its interval, and the spreads below;
 * ``refit_accuracy.csv`` (``[splits] refit_seeds`` > 0): the accuracy of every DAP variant and
@@ -28,14 +28,14 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets import FeatureSet
-from tzsl.studies._failures import ERROR_COLUMN, attempt
+from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
 from tzsl.studies.config import dap_label, method_label
 from tzsl.studies.zero_shot.methods import fit_predict_split, method_comparison, study_detector
 from tzsl.studies.zero_shot.tables import split_label
 from tzsl.value_lists import FUSIONS, PRIORS
-from tzsl.studies.study_calibration import CALIBRATION_COLUMNS
-from tzsl.studies.study_labels import StudyLabels
-from tzsl.studies.study_methods import comparison_trials, method_summary
+from tzsl.studies.comparison.calibration import CALIBRATION_COLUMNS
+from tzsl.studies.papers.run_labels import StudyLabels
+from tzsl.studies.comparison.method_runs import comparison_trials, method_summary
 
 if TYPE_CHECKING:
     from tzsl.evaluation import Split
@@ -91,7 +91,7 @@ def dap_fusion_prior(by_kind: dict[str, list[SplitPosteriors]], fusions, priors,
     Returns
     -------
     DataFrame
-        The columns of :data:`~tzsl.studies.study_methods.COMPARISON_COLUMNS` with ``fusion``
+        The columns of :data:`~tzsl.studies.comparison.method_runs.COMPARISON_COLUMNS` with ``fusion``
         and ``prior`` after ``method``, less the paper, grid-edge and calibration columns; one
         row per (split kind, fusion, prior), ``dap-avg`` (the reference) first.
     """

@@ -24,13 +24,13 @@ from tzsl._profile import stage
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, challenging_splits, purpose_seed, random_object_splits
 from tzsl.exceptions import ConfigError, SplitError
-from tzsl.studies._failures import ERROR_COLUMN, attempt
+from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
 from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.split_posteriors import SplitPosteriors
 from tzsl.studies.zero_shot.spread import evidence_tables, model_seed
-from tzsl.studies.study_labels import StudyLabels
-from tzsl.studies.study_methods import split_masks
-from tzsl.studies.study_calibration import write_reliability_figure
+from tzsl.studies.papers.run_labels import StudyLabels
+from tzsl.studies.comparison.method_runs import split_masks
+from tzsl.studies.comparison.calibration import write_reliability_figure
 from tzsl.studies.zero_shot.tables import (
     table_titles,
     attribute_accuracy_summary,
@@ -257,7 +257,7 @@ def run_zero_shot_tables(
     ----------
     features : FeatureSet
         Per-trial, per-sensor features (e.g. ``dataset_features("phac2-penn")``).
-    out : tzsl.studies._outputs.ResultsDir
+    out : tzsl.studies.outputs.results_folder.ResultsDir
         Where tables (CSV) and figures (PNG) go; existing files need ``force``.
     config : ZeroShotSettings
         E.g. ``ZeroShotSettings()`` (the generic study) or ``ZeroShotSettings.of_preset("phac2-dap")``.
@@ -272,7 +272,7 @@ def run_zero_shot_tables(
         per fitted split (exact or approximate attribute models, and why), for the manifest.
     labels : StudyLabels or None
         How the tables name the run and whether the paper's numbers go beside
-        (:func:`tzsl.studies.study_labels.study_labels`); default: a generic run, no paper.
+        (:func:`tzsl.studies.papers.run_labels.study_labels`); default: a generic run, no paper.
 
     Returns
     -------

@@ -29,7 +29,7 @@ from tzsl.value_lists import FUSIONS, PRIORS
 
 if TYPE_CHECKING:
     from tzsl.studies.zero_shot.split_posteriors import SplitPosteriors
-    from tzsl.studies.study_labels import StudyLabels
+    from tzsl.studies.papers.run_labels import StudyLabels
 
 __all__ = [
     "CONTROL_ROW",
@@ -148,7 +148,7 @@ def table1_fusion(results: list[SplitPosteriors], paper: bool = False) -> pd.Dat
     Every accuracy column has its interval columns and the table ``chance`` (and ``majority``
     where test objects have unequal trial counts): :func:`tzsl.evaluation._trust.add_trust_columns`.
     """
-    from tzsl.studies.paper_numbers import DAP_TABLE1  # noqa: PLC0415
+    from tzsl.studies.papers.numbers import DAP_TABLE1  # noqa: PLC0415
 
     rows = [{
         "split": split_label(r.split), "n_test_objects": r.split.n_test, "chance": r.split.chance,
@@ -168,7 +168,7 @@ def table1_fusion(results: list[SplitPosteriors], paper: bool = False) -> pd.Dat
 
 def table2_priors(results: list[SplitPosteriors], paper: bool = False) -> pd.DataFrame:
     """Table 2: AVGDAP with uni / test / train attribute priors, intervals, chance, control (``paper``: the paper's beside)."""
-    from tzsl.studies.paper_numbers import DAP_TABLE2  # noqa: PLC0415
+    from tzsl.studies.papers.numbers import DAP_TABLE2  # noqa: PLC0415
 
     rows = [{"split": split_label(r.split), **{p: r.accuracy("avg", p) for p in PRIORS}} for r in results]
     outcomes, control = _outcomes(results, {p: ("avg", p, False, "trial") for p in PRIORS})
@@ -185,7 +185,7 @@ def table3_challenging(results: list[SplitPosteriors], map_coords: pd.DataFrame 
     The paper reports AVGDAP only, and only its mean (``paper_avgdap`` on the ``mean`` row, with
     ``paper``): partition numbering is arbitrary, so only the means compare.
     """
-    from tzsl.studies.paper_numbers import DAP_TABLE3  # noqa: PLC0415
+    from tzsl.studies.papers.numbers import DAP_TABLE3  # noqa: PLC0415
 
     rows = []
     for r in results:
@@ -212,7 +212,7 @@ def table3_challenging(results: list[SplitPosteriors], map_coords: pd.DataFrame 
 
 def multilabel_table(results: list[SplitPosteriors], paper: bool = False) -> pd.DataFrame:
     """Independent vs joint attribute classifiers (AVGDAP, uni-prior); ``paper``: section 4.4's numbers beside."""
-    from tzsl.studies.paper_numbers import DAP_INDEPENDENT_ACCURACY, DAP_MULTILABEL_ACCURACY  # noqa: PLC0415
+    from tzsl.studies.papers.numbers import DAP_INDEPENDENT_ACCURACY, DAP_MULTILABEL_ACCURACY  # noqa: PLC0415
 
     rows = [{"split": split_label(r.split), "independent": r.accuracy("avg", "uni"),
              "multilabel": r.accuracy("avg", "uni", multilabel=True)} for r in results if r.P_multilabel is not None]
@@ -279,7 +279,7 @@ def attribute_accuracy_summary(per_split: pd.DataFrame, results: list[SplitPoste
     the mean over attributes.
     """
     from tzsl.evaluation import attribute_intervals  # noqa: PLC0415
-    from tzsl.studies.paper_numbers import DAP_ATTRIBUTE_ACCURACY_QUOTED, DAP_MEAN_ATTRIBUTE_ACCURACY  # noqa: PLC0415
+    from tzsl.studies.papers.numbers import DAP_ATTRIBUTE_ACCURACY_QUOTED, DAP_MEAN_ATTRIBUTE_ACCURACY  # noqa: PLC0415
 
     mean_rows = per_split[per_split["sensor"] == "mean"]
     scores = ["balanced_accuracy", "accuracy", "majority"]

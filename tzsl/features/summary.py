@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from tzsl.datasets import FeatureSet
 
+__all__ = ["format_summary", "summarise"]
+
 
 def summarise(features: FeatureSet) -> dict[str, object]:
     """What ``tzsl extract`` prints: counts, dimensions, kept and dropped attributes."""

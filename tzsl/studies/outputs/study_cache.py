@@ -14,7 +14,7 @@ The key is everything that decides a study's output:
 * the study kind and its checked settings (:meth:`Experiment.config`), leaving out only the
   output folder and the progress bar (:data:`NEUTRAL_SETTINGS`);
 * the code: a digest of every file of the installed ``tzsl`` package and the versions of the
-  packages every manifest records (:data:`tzsl.studies._outputs.RECORDED_PACKAGES`) and of Python;
+  packages every manifest records (:data:`tzsl.studies.outputs.results_folder.RECORDED_PACKAGES`) and of Python;
   and the source files of plug-ins outside the package that a study may run: its study kind's
   hooks and the classes of every registered method. A study whose plug-in source cannot be read
   (code defined in a notebook) is not cached;
@@ -55,9 +55,9 @@ from tzsl._warnings import recorded_warnings
 from tzsl.cache import (STUDIES_FOLDER, STUDY_CACHE_ENV, enforce_size_cap, format_size, get_cache_dir, mark_used,
                         size_cap_gb, study_cache_on)
 from tzsl.datasets import get_data_home
-from tzsl.studies._outputs import ResultsDir, package_versions
+from tzsl.studies.outputs.results_folder import ResultsDir, package_versions
 from tzsl.studies.config import DATASET_PATHS, get_study
-from tzsl.studies.study_settings import StudyRun
+from tzsl.studies.outputs.study_run import StudyRun
 
 __all__ = ["NEUTRAL_SETTINGS", "run_cached", "study_cache_folder", "study_key"]
 
@@ -76,7 +76,7 @@ def study_cache_folder() -> Path | None:
 @cache
 def _code_digest() -> str:
     """Digest of every file of the installed tzsl package (caches excluded) and the recorded package versions."""
-    package = Path(__file__).resolve().parents[1]
+    package = Path(__file__).resolve().parents[2]
     digest = hashlib.sha256(f"{_ENTRY_FORMAT} {sys.version}".encode())
     digest.update(json.dumps(package_versions(), sort_keys=True).encode())
     for path in sorted(package.rglob("*")):

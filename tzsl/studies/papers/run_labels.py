@@ -59,7 +59,7 @@ class StudyLabels:
 
 def _protocol_differences(config) -> list[str]:
     """How the run's protocol differs from the DAP paper's (empty: it is the paper's)."""
-    from tzsl.studies import paper_numbers as paper  # noqa: PLC0415
+    from tzsl.studies.papers import numbers as paper  # noqa: PLC0415
 
     ds, splits = config.dataset, config.splits
     why = []

@@ -17,7 +17,7 @@ Every study then scores its methods the same way (:func:`method_summary`): one r
 (splits, then test classes with their trials), the paper's number where the paper has one, chance,
 the fit time, and the paired difference to the paper's method of that study on the same trials;
 where the trials carry posterior columns, the calibration of the class posteriors (ECE and Brier
-score, calibrated and uncalibrated, with intervals: :mod:`tzsl.studies.study_calibration`).
+score, calibrated and uncalibrated, with intervals: :mod:`tzsl.studies.comparison.calibration`).
 ``tzsl evidence`` stacks the studies' tables into ``method_comparison.csv``
 (:func:`combine_comparisons`), with a row saying why for every registered method a study cannot
 run (its input differs: grasps, frame sequences).
@@ -36,7 +36,7 @@ from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, bootstrap_accuracy, paired_differences_table
 from tzsl.exceptions import SplitError
 from tzsl.studies.config import method_label
-from tzsl.studies.study_calibration import CALIBRATION_COLUMNS, add_calibration, method_posteriors
+from tzsl.studies.comparison.calibration import CALIBRATION_COLUMNS, add_calibration, method_posteriors
 from tzsl.models import available_methods, get_method
 from tzsl.models.protocol import attribute_rows
 from tzsl.fit_store import fit_cached
@@ -184,7 +184,7 @@ def comparison_trials(method: str, split, classes: np.ndarray, correct: np.ndarr
     ``classes`` (n_trials,): the true class (object, fabric, grasped object) of each trial, the
     bootstrap's cluster; ``trial`` is the position within the split (the pairing key);
     ``posteriors``: per-trial calibration columns
-    (:func:`tzsl.studies.study_calibration.posterior_columns`).
+    (:func:`tzsl.studies.comparison.calibration.posterior_columns`).
     """
     classes = np.asarray(classes)
     return pd.DataFrame({"method": method, "split": str(split), "class": classes,

@@ -35,6 +35,11 @@ from tzsl._profile import timed
 from tzsl._io import atomic_write, ensure_folder, file_sha256
 from tzsl.exceptions import ConfigError
 
+__all__ = [
+    "CSV_FLOAT_FORMAT", "RECORDED_PACKAGES", "STAGING_FOLDER", "STAGING_LOCK", "PrefixedResults", "ResultsDir",
+    "csv_ready", "package_versions", "prefixed", "source_commit",
+]
+
 #: Hidden folder inside the output folder where a staged run writes until it completes.
 STAGING_FOLDER = ".tzsl-partial"
 
@@ -60,7 +65,7 @@ def source_commit() -> str | None:
     git checkout (an installed wheel) or git is missing: the manifest then says so instead of
     naming a commit.
     """
-    source = Path(__file__).resolve().parents[2]
+    source = Path(__file__).resolve().parents[3]
 
     def git(*args: str) -> str | None:
         try:

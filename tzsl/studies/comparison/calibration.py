@@ -1,13 +1,13 @@
 """Calibration inside a study: posterior columns of the comparison trials, ECE/Brier columns, reliability.
 
-Every study scores its methods through :func:`tzsl.studies.study_methods.method_summary`; this
+Every study scores its methods through :func:`tzsl.studies.comparison.method_runs.method_summary`; this
 module adds what calibration needs to that path, and nothing else:
 
 * :func:`method_posteriors`: the calibrated and the method's own (uncalibrated) class posteriors of
   a fitted method on the test trials (a method built by the registry is inside a
   :class:`~tzsl.models.CalibratedZeroShotClassifier`, fitted on pseudo-unseen training classes);
 * :func:`posterior_columns`: the per-trial confidence and Brier terms of both, as extra columns of
-  :func:`~tzsl.studies.study_methods.comparison_trials`;
+  :func:`~tzsl.studies.comparison.method_runs.comparison_trials`;
 * :func:`add_calibration`: the ``ece`` / ``brier`` columns (and ``*_uncalibrated``), each with its
   two-level bootstrap interval (:func:`tzsl.evaluation.add_calibration_columns`), called once by
   ``method_summary``;
@@ -277,7 +277,7 @@ def write_reliability_figure(out, tables: dict[str, pd.DataFrame], stem: str, co
     ECE labels of ``tables[comparison]`` (the method comparison), if there are points. Tables with a
     ``split_kind`` column (random and challenging splits) are drawn for their first split kind.
 
-    ``out``: the study's :class:`~tzsl.studies._outputs.ResultsDir`.
+    ``out``: the study's :class:`~tzsl.studies.outputs.results_folder.ResultsDir`.
     """
     table, summary = tables.get(stem), tables.get(comparison)
     if table is None or table.empty:

@@ -11,7 +11,7 @@ from typing import Any
 
 import pandas as pd
 
-from tzsl.studies._failures import table_failures
+from tzsl.studies.outputs.failures import table_failures
 
 __all__ = ["StudyRun", "format_table"]
 
