@@ -58,7 +58,7 @@ from tzsl.evaluation import (
 )
 from tzsl.features import dataset_features, load_plain_dataset
 from tzsl.models.calibration import CALIBRATION_REFITS
-from tzsl.studies.config import DapSettings
+from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.study_calibration import dap_split_posteriors
 from tzsl.studies.study_methods import split_masks
 from tzsl.studies.zero_shot.study import fit_split, make_splits
@@ -73,10 +73,11 @@ def features_and_settings(data: str, trials: int, seed: int, n_splits: int, solv
     compute = {"cache": False, "progress": False, "n_jobs": 1}
     splits = {"n_splits": n_splits, "seed": seed, "n_test": 10}
     if data == "phac2":
-        return dataset_features("phac2-penn"), DapSettings(splits=splits, compute=compute, svm=PHAC2_EVIDENCE_SVM)
+        return dataset_features("phac2-penn"), ZeroShotSettings.of_preset("phac2-dap", splits=splits, compute=compute,
+                                                                           svm=PHAC2_EVIDENCE_SVM)
     folder = work / f"synthetic_{trials}"
     write_synthetic_dataset(folder, trials, seed=0)
-    return load_plain_dataset(folder), DapSettings(splits=splits, compute=compute, svm={"solver": solver})
+    return load_plain_dataset(folder), ZeroShotSettings(splits=splits, compute=compute, svm={"solver": solver})
 
 
 def paired_ece_difference(conf_a, conf_b, correct, classes, splits, n_boot: int = 2000) -> tuple[float, float, float]:
