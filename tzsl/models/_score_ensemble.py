@@ -91,9 +91,10 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
         How posterior calibration's pseudo-unseen folds (``calibration_refit="pinned"``, see
         :class:`tzsl.models.CalibratedZeroShotClassifier`) refit the members: True, each with the
         hyper-parameters its fit chose (the DAP bank's ``C`` / ``gamma`` per classifier, ESZSL's
-        ridges, SAE's ``lam``: less than half the calibration CPU on PHAC-2); False, every member
+        ridges, SAE's ``lam``), at a fraction of the calibration's CPU; False, every member
         searches again. False was kept on selection splits (the inherited choice
-        ``ensemble-calibration-refit``).
+        ``ensemble-calibration-refit``; its numbers: the ``ensemble-calibration-benchmark`` block of
+        ``experiments/benchmarks/README.md``).
     random_state : int or None, default=None
         Seeds members that take a seed (the DAP SVM draws) and the breaking of exact ties.
 
