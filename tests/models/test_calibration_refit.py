@@ -21,9 +21,11 @@ from tzsl.models import (
     DAPRule,
     LinearAttribute,
     ScalableAttributeClassifier,
+    ScoreEnsembleZSL,
     ZeroShotClassifier,
 )
 from tzsl.models._attribute_bank import chosen_settings
+from tzsl.models._posterior_calibration import _on_attributes
 from tzsl.models.calibration import pseudo_unseen_scores, selected_params
 
 
@@ -114,3 +116,64 @@ def test_estimator_params_of_the_wrong_shape_is_a_config_error():
     bank = AttributeClassifierBank(estimator=AttributeSVM(n_C=1, n_gamma=1), estimator_params=[[{}]] * 4)
     with pytest.raises(ConfigError, match="5 attributes x 1 sensors"):
         bank.fit(X, rows[y], y)
+
+
+# --------------------------------------------------------------------------- the score ensemble (issue 33 item 4)
+def _ensemble(pin_members=True):
+    small_dap = {"name": "dap-avg", "estimator": AttributeSVM(n_C=3, n_gamma=2, cv=3)}
+    return ScoreEnsembleZSL(methods=(small_dap, "eszsl", "sae"), pin_members=pin_members, random_state=0)
+
+
+def _calibrated_ensembles(X, rows, y):
+    """Calibrated ensembles: members pinned, members searching (the default), and refit="search" with pinning asked."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return {name: CalibratedZeroShotClassifier(estimator=_ensemble(pin), calibration_refit=refit,
+                                                   random_state=0).fit(X, rows[y], y)
+                for name, pin, refit in (("pinned", True, "pinned"), ("search", False, "pinned"),
+                                         ("refit-search", True, "search"))}
+
+
+def test_ensemble_pins_each_member_s_choice_in_its_calibration_folds_when_asked():
+    """pin_members=True (issue 33): the folds refit each member with its own choice; by default they search."""
+    assert ScoreEnsembleZSL().pin_members is False  # kept on selection splits (ensemble-calibration-refit)
+    rows, X, y = _data()
+    fits = _calibrated_ensembles(X, rows, y)
+    info = fits["pinned"].calibration_info_["pinned"]
+    assert "dap-avg: solver=exact, estimator_params=<chosen hyper-parameters of 5 attribute classifiers>" in info
+    assert "eszsl: gammas=" in info and "sae: lams=" in info
+    assert fits["search"].calibration_info_["pinned"] == fits["refit-search"].calibration_info_["pinned"] == ""
+    assert fits["search"].temperature_ == fits["refit-search"].temperature_  # both: every member searches
+    # the pinned entries are the members' registry parameters, and a refit from them searches nothing
+    entries = fits["pinned"].estimator_.pinned_methods(selected_params)
+    assert [e["name"] for e in entries] == ["dap-avg", "eszsl", "sae"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        refit = ScoreEnsembleZSL(methods=entries, random_state=0).fit(X, rows[y], y)
+    bank, fitted_bank = refit.estimators_[0].attribute_model_, fits["pinned"].estimator_.estimators_[0].attribute_model_
+    assert all(est.C_grid_.size == 1 and est.gamma_grid_.size == 1 for row in bank.estimators_ for est in row)
+    assert [est.C_ for row in bank.estimators_ for est in row] == [est.C_ for row in fitted_bank.estimators_
+                                                                     for est in row]
+    assert refit.estimators_[1].attribute_model_.best_gamma_ == fits["pinned"].estimator_.estimators_[1].attribute_model_.best_gamma_
+
+
+def test_ensemble_pinned_and_search_folds_give_the_same_predictions():
+    rows, X, y = _data()
+    fits = _calibrated_ensembles(X, rows, y)
+    np.testing.assert_array_equal(fits["pinned"].predict(X, rows), fits["search"].predict(X, rows))
+    for est in fits.values():
+        assert est.calibration_info_["fitted"] and np.isfinite(est.temperature_)
+
+
+def test_a_fold_that_leaves_out_an_attribute_cuts_the_ensemble_member_s_pinned_classifiers():
+    rows, X, y = _data()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fitted = _ensemble().fit(X, rows[y], y)
+    entries = fitted.pinned_methods(selected_params)
+    assert "estimator_params" in entries[0]
+    keep = np.array([True, False, True, True, True])
+    cut = _on_attributes(ScoreEnsembleZSL(methods=entries), keep).methods
+    assert len(cut[0]["estimator_params"]) == 4
+    assert cut[0]["estimator_params"] == [entries[0]["estimator_params"][j] for j in (0, 2, 3, 4)]
+    assert cut[1:] == entries[1:]  # no per-attribute parameter: as they were

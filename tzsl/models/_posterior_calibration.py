@@ -255,13 +255,23 @@ def pseudo_unseen_scores(estimator, X, Y, groups=None, *, n_folds: int = 3, rand
 _PER_ATTRIBUTE = ("attribute_names", PER_CLASSIFIER_PARAMS)
 
 
+def _cut_to(params: dict, keep: np.ndarray) -> dict:
+    """The per-attribute entries (:data:`_PER_ATTRIBUTE`) of ``params`` (names possibly nested with ``__``),
+    each cut to the kept attributes."""
+    return {key: [value for value, k in zip(values, keep) if k] for key, values in params.items()
+            if key.split("__")[-1] in _PER_ATTRIBUTE and values is not None and len(values) == len(keep)}
+
+
 def _on_attributes(estimator, keep: np.ndarray):
-    """``estimator`` with every nested per-attribute parameter (:data:`_PER_ATTRIBUTE`) cut to the kept attributes."""
+    """``estimator`` with every nested per-attribute parameter (:data:`_PER_ATTRIBUTE`) cut to the kept
+    attributes, the entries of a score ensemble's members (``methods`` of dicts) included."""
     if keep.all():
         return estimator
-    cut = {key: [name for name, k in zip(value, keep) if k]
-           for key, value in estimator.get_params(deep=True).items()
-           if key.split("__")[-1] in _PER_ATTRIBUTE and value is not None and len(value) == len(keep)}
+    params = estimator.get_params(deep=True)
+    cut = _cut_to(params, keep)
+    if hasattr(estimator, "pinned_methods"):
+        cut["methods"] = [{**entry, **_cut_to(entry, keep)} if isinstance(entry, dict) else entry
+                          for entry in params["methods"]]
     return estimator.set_params(**cut)
 
 
@@ -293,8 +303,27 @@ def _pinned_text(chosen: dict) -> str:
                      if k == PER_CLASSIFIER_PARAMS else f"{k}={v}" for k, v in chosen.items())
 
 
+def _pinned_summary(fitted, refit: str = CALIBRATION_REFITS[0]) -> str:
+    """``calibration_info_["pinned"]`` of a fitted method: its attribute model's pinned choices, or a score
+    ensemble's (``pinned_methods``) member by member (none with ``refit="search"``)."""
+    if hasattr(fitted, "pinned_methods"):
+        if refit != "pinned":
+            return ""
+        pinned, own = fitted.pinned_methods(selected_params), fitted.pinned_methods(lambda model: {})
+        return "; ".join(f"{p['name']}: {_pinned_text({k: v for k, v in p.items() if k not in q})}"
+                         for p, q in zip(pinned, own) if len(p) > len(q))
+    return _pinned_text(selected_params(getattr(fitted, "attribute_model_", None), refit))
+
+
 def _pinned(template, fitted, refit: str = CALIBRATION_REFITS[0]):
-    """``template`` (unfitted) with the fitted attribute model's tuned choice pinned (``selected_params``)."""
+    """``template`` (unfitted) with the fitted method's tuned choices pinned: its attribute model's
+    (``selected_params``; with ``refit="search"`` without the per-classifier ones), or, for a score
+    ensemble (``pinned_methods``), its members' as the ensemble says (``pin_members``) with
+    ``refit="pinned"`` and none with ``"search"`` (every member searches again)."""
+    if hasattr(fitted, "pinned_methods"):
+        if refit == "pinned":
+            template.set_params(methods=fitted.pinned_methods(selected_params))
+        return template
     chosen = selected_params(getattr(fitted, "attribute_model_", None), refit)
     if chosen and "attribute_model" in template.get_params(deep=False):
         template.set_params(**{f"attribute_model__{k}": v for k, v in chosen.items()})
@@ -433,9 +462,8 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
         def loss(temp: float) -> float:
             return -sum(log_softmax(s / temp, axis=1)[np.arange(len(y)), y].sum() for s, y in zip(scores, ys)) / n
 
-        pinned = selected_params(getattr(self.estimator_, "attribute_model_", None), self.calibration_refit)
         return {"fitted": True, "temperature": t, "n_folds": len(folds), "n_held_out_trials": n,
-                "pinned": _pinned_text(pinned),
+                "pinned": _pinned_summary(self.estimator_, self.calibration_refit),
                 "n_attributes_left_out": int(sum(d for _, _, d in folds)),
                 "log_loss_before": float(loss(1.0)), "log_loss_after": float(loss(t))}
 

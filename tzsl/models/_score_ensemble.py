@@ -87,6 +87,14 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
         the others the sensors side by side.
     weights : sequence of float or None, default=None
         Non-negative weight of each member; ``None``: equal weights.
+    pin_members : bool, default=False
+        How posterior calibration's pseudo-unseen folds (``calibration_refit="pinned"``, see
+        :class:`tzsl.models.CalibratedZeroShotClassifier`) refit the members: True, each with the
+        hyper-parameters its fit chose (the DAP bank's ``C`` / ``gamma`` per classifier, ESZSL's
+        ridges, SAE's ``lam``), at a fraction of the calibration's CPU; False, every member
+        searches again. False was kept on selection splits (the inherited choice
+        ``ensemble-calibration-refit``; its numbers: the ``ensemble-calibration-benchmark`` block of
+        ``experiments/benchmarks/README.md``).
     random_state : int or None, default=None
         Seeds members that take a seed (the DAP SVM draws) and the breaking of exact ties.
 
@@ -110,12 +118,14 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
     _parameter_constraints: dict = {
         "methods": [list, tuple],
         "weights": [None, "array-like"],
+        "pin_members": ["boolean"],
         "random_state": [None, "random_state"],
     }
 
-    def __init__(self, *, methods=DEFAULT_MEMBERS, weights=None, random_state=None):
+    def __init__(self, *, methods=DEFAULT_MEMBERS, weights=None, pin_members=False, random_state=None):
         self.methods = methods
         self.weights = weights
+        self.pin_members = pin_members
         self.random_state = random_state
 
     def __sklearn_tags__(self):
@@ -183,6 +193,29 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
         self.class_attributes_ = np.unique(A, axis=0)
         self.n_sensors_, self.n_features_in_ = X.shape[1], X.shape[2]
         return self
+
+    def pinned_methods(self, pick) -> list[dict]:
+        """Member entries that refit each fitted member with its chosen hyper-parameters (``pin_members``).
+
+        Posterior calibration refits the ensemble on pseudo-unseen folds
+        (:class:`tzsl.models.CalibratedZeroShotClassifier`); with ``calibration_refit="pinned"`` it
+        refits it from these entries, so with ``pin_members`` each member keeps the choice of this
+        fit; without it the entries are the members' own, and every member searches again.
+
+        Parameters
+        ----------
+        pick : callable
+            ``pick(attribute_model) -> dict``: the parameters that pin a fitted member's attribute
+            model (``None`` for a member without one), e.g. its ``selected_params()``.
+
+        Returns
+        -------
+        list of dict
+            ``{"name": ..., **parameters}`` per member, in ``methods`` order, with ``pick``'s added.
+        """
+        check_is_fitted(self)
+        return [{**_spec(entry), **(pick(getattr(est, "attribute_model_", None)) if self.pin_members else {})}
+                for entry, est in zip(self.methods, self.estimators_)]
 
     def decision_function(self, X, class_attributes=None) -> np.ndarray:
         """Ensemble class scores.

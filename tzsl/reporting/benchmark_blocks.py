@@ -14,13 +14,16 @@ import pandas as pd
 from tzsl.exceptions import ConfigError
 from tzsl.reporting.markdown_cells import find_table, number, ours
 
-__all__ = ["BEST_METHOD_FILE", "ESZSL_PUBLIC_FILE", "MissingResults", "benchmark_accuracy_block", "benchmark_table",
-           "best_method_block", "eszsl_public_block", "search_benchmark_block"]
+__all__ = ["BEST_METHOD_FILE", "ENSEMBLE_CALIBRATION_FILES", "ESZSL_PUBLIC_FILE", "MissingResults",
+           "benchmark_accuracy_block", "benchmark_table", "best_method_block", "ensemble_calibration_block",
+           "eszsl_public_block", "search_benchmark_block"]
 
 #: The decision CSV of ``experiments/benchmarks/phac2_best_method.py``.
 BEST_METHOD_FILE = "phac2_best_method.csv"
 #: The summary CSV of ``experiments/benchmarks/phac2_eszsl_public.py``.
 ESZSL_PUBLIC_FILE = "eszsl_public.csv"
+#: The summary CSVs of ``experiments/benchmarks/calibration_refit.py --method ensemble`` (one per purpose and seed).
+ENSEMBLE_CALIBRATION_FILES = "calibration_refit_summary_phac2_ensemble_*.csv"
 
 
 class MissingResults(ConfigError):
@@ -185,4 +188,49 @@ def eszsl_public_block(results: str | Path) -> str:
         lines.append(f"| {r['purpose']} | `{r['method']}` | {int(r['n_splits'])} | "
                      f"{ours(r, 'accuracy', 'ci95_low', 'ci95_high')} | {diff} | "
                      f"{100 * float(r['share_at_grid_edge']):.0f}% |")
+    return "\n".join(lines)
+
+
+def ensemble_calibration_block(results: str | Path) -> str:
+    """The ensemble's calibration folds, members pinned vs searching (``calibration_refit.py --method ensemble``).
+
+    Reads every :data:`ENSEMBLE_CALIBRATION_FILES` under ``results``, selection splits first.
+
+    Raises
+    ------
+    MissingResults
+        No such file under ``results``.
+    """
+    root = Path(results)
+    found = sorted(root.rglob(ENSEMBLE_CALIBRATION_FILES)) if root.is_dir() else []
+    if not found:
+        raise MissingResults(f"{root}: no {ENSEMBLE_CALIBRATION_FILES}; run experiments/benchmarks/calibration_refit.py "
+                             f"--method ensemble --out {root} first")
+    table = pd.concat([pd.read_csv(f) for f in found])
+    table = table.assign(order=table["purpose"].map({"select": 0, "confirm": 1})).sort_values(["order", "seed"])
+    lines = ["Generated from `calibration_refit_summary_phac2_ensemble_*.csv` by `make numbers`: ECE [95% interval] "
+             "of the calibrated `ensemble` on PHAC-2 random splits with its calibration folds refitting the members "
+             "with their chosen hyper-parameters (pinned) or searching them again (search), the paired difference "
+             "pinned minus search [95% interval], the accuracy difference (0: a temperature keeps the ranking) and "
+             "the CPU seconds of the calibrations (one core, summed over the splits).", "",
+             "| purpose | seed | splits (trials) | ECE pinned | ECE search | pinned - search | accuracy difference | "
+             "CPU pinned (s) | CPU search (s) |", "|---|---|---|---|---|---|---|---|---|"]
+    for _, r in table.iterrows():
+        diff = (f"{float(r['ece_difference']):+.3f} [{float(r['ece_difference_ci95_low']):+.3f}, "
+                f"{float(r['ece_difference_ci95_high']):+.3f}]")
+        lines.append(f"| {r['purpose']} | {int(r['seed'])} | {int(r['n_splits'])} ({int(r['n_trials'])}) | "
+                     f"{ours(r, 'pinned_ece')} | {ours(r, 'search_ece')} | {diff} | "
+                     f"{float(r['accuracy_difference']):+.3f} | {float(r['pinned_cpu_s']):.1f} | "
+                     f"{float(r['search_cpu_s']):.1f} |")
+    select = table[table["purpose"] == "select"]
+    if len(select) and {"rule_max_ece_difference", "rule_min_cpu_saving"} <= set(select.columns):
+        r = select.iloc[0]
+        margin, saving = float(r["rule_max_ece_difference"]), float(r["rule_min_cpu_saving"])
+        ece_ok = float(r["ece_difference_ci95_high"]) <= margin
+        cpu_ok = float(r["pinned_cpu_s"]) <= (1 - saving) * float(r["search_cpu_s"])
+        lines += ["", f"The rule, fixed before measuring: pin the members by default if on the selection splits the "
+                      f"interval's upper end is at most {margin:.2f} ({'holds' if ece_ok else 'does not hold'}) and "
+                      f"the calibration CPU falls by at least {100 * saving:.0f}% "
+                      f"({'holds' if cpu_ok else 'does not hold'}): "
+                      + ("the members are pinned by default." if ece_ok and cpu_ok else "the members keep searching.")]
     return "\n".join(lines)
