@@ -24,8 +24,13 @@ Choices fixed before measuring
   :func:`tzsl.models.dap.fuse_attribute_posteriors`), clipped to ``[1e-6, 1 - 1e-6]``.
 * Held-out logits: 10 object-grouped folds of the training objects
   (:func:`tzsl.models.protocol.class_grouped_folds` over objects), the bank cloned and refitted
-  per fold; an attribute whose fold-training objects all share one value is left out of that
-  fold's fit and its held-out logits are missing (residual 0 in ``Sigma``; counted in ``missing``).
+  per fold without ``groups`` (:class:`~tzsl.models.LogisticAttribute` ignores them; the bank's
+  at-least-2-objects check then counts trials, so an attribute with 2 positive training objects is
+  still scored on each of them by a detector that saw the other); an attribute present or absent
+  in fewer than 2 of a fold's training trials is left out of that fold's fit and its held-out
+  logits are missing (residual 0 in ``Sigma``; their share is ``missing``). A ``mu_a(v)`` with no
+  held-out logit at all is the mean in-sample logit of the split's final detectors over the
+  training trials with ``a = v`` (their count is ``mu_fallbacks``).
 * ``mu_a(v)``: the mean over training objects with ``a = v`` of the object's mean held-out logit.
 * ``Sigma``: Ledoit-Wolf (:class:`sklearn.covariance.LedoitWolf`) of the per-TRIAL residuals
   ``s - mu(A)``. Why trial-level: one test trial is scored at a time, and its deviation from its
@@ -114,12 +119,12 @@ def fused_logits(bank, X: np.ndarray) -> np.ndarray:
 def held_out_logits(template, X: np.ndarray, A: np.ndarray, groups: np.ndarray) -> np.ndarray:
     """Fused logits (n, m) of every training trial from a clone of ``template`` fitted without its object.
 
-    NaN where an attribute had a single value among a fold's training objects (not fitted there).
+    NaN where an attribute was present or absent in fewer than 2 of a fold's training trials (not fitted there).
     """
     S = np.full(A.shape, np.nan)
     for fit_rows, held in class_grouped_folds(groups, N_FOLDS, "held-out logits (objects)"):
-        varies = (A[fit_rows].min(axis=0) == 0) & (A[fit_rows].max(axis=0) == 1)
-        bank = clone(template).fit(X[fit_rows], A[fit_rows][:, varies], groups[fit_rows])
+        varies = ((A[fit_rows] == 1).sum(axis=0) >= 2) & ((A[fit_rows] == 0).sum(axis=0) >= 2)
+        bank = clone(template).fit(X[fit_rows], A[fit_rows][:, varies])  # no groups: see the module docstring
         S[np.ix_(held, np.flatnonzero(varies))] = fused_logits(bank, X[held])
     return S
 
@@ -132,11 +137,21 @@ def object_means(R: np.ndarray, groups: np.ndarray) -> tuple[np.ndarray, np.ndar
     return means, codes
 
 
-def class_means(S: np.ndarray, A: np.ndarray, groups: np.ndarray) -> np.ndarray:
-    """``mu`` of shape (2, m): mean over objects with ``a = v`` of the object's mean held-out logit."""
-    S_obj, codes = object_means(S, groups)
-    A_obj = object_means(A.astype(float), groups)[0]
-    return np.stack([[np.nanmean(S_obj[A_obj[:, a] == v, a]) for a in range(A.shape[1])] for v in (0, 1)])
+def class_means(S: np.ndarray, A: np.ndarray, groups: np.ndarray, S_fit: np.ndarray) -> tuple[np.ndarray, int]:
+    """``mu`` of shape (2, m): mean over objects with ``a = v`` of the object's mean held-out logit.
+
+    Where no held-out logit of value ``v`` exists, the mean in-sample logit ``S_fit`` (n, m) of the
+    trials with ``a = v``; returns ``(mu, number of such fallbacks)``.
+    """
+    with warnings.catch_warnings():  # an object or value without held-out logits: NaN, filled below
+        warnings.simplefilter("ignore", RuntimeWarning)
+        S_obj = object_means(S, groups)[0]
+        A_obj = object_means(A.astype(float), groups)[0]
+        mu = np.stack([[np.nanmean(S_obj[A_obj[:, a] == v, a]) for a in range(A.shape[1])] for v in (0, 1)])
+    missing = np.isnan(mu)
+    for v, a in zip(*np.nonzero(missing)):
+        mu[v, a] = S_fit[A[:, a] == v, a].mean()
+    return mu, int(missing.sum())
 
 
 def residuals(S: np.ndarray, A: np.ndarray, mu: np.ndarray) -> np.ndarray:
@@ -197,7 +212,7 @@ def score_split(features, split, seed: int, references: bool, out: Path) -> tupl
         S_oof = held_out_logits(fit.model.attribute_model_, features.X[train], A[train], groups[train])
         np.savez(cache, S_oof=S_oof)
     S_test = fused_logits(fit.model.attribute_model_, features.X[test])
-    mu = class_means(S_oof, A[train], groups[train])
+    mu, fallbacks = class_means(S_oof, A[train], groups[train], fused_logits(fit.model.attribute_model_, features.X[train]))
     R_oof = residuals(S_oof, A[train], mu)
     for label, kind in RULES.items():
         scores = gaussian_scores(S_test, K, mu, covariance(R_oof, groups[train], kind))
@@ -207,7 +222,7 @@ def score_split(features, split, seed: int, references: bool, out: Path) -> tupl
             member, truth = fit_predict_split(MEMBERS[label], features, split, seed)
             rows.append((label, member.predicted == truth))
     hard = (S_test >= 0).astype(int)
-    info = {"split": split.name, "missing": float(np.isnan(S_oof).mean()), "cpu_seconds": time.process_time() - start,
+    info = {"split": split.name, "missing": float(np.isnan(S_oof).mean()), "mu_fallbacks": fallbacks, "cpu_seconds": time.process_time() - start,
             "test_error_corr01": within_object_error_correlation(A[test], hard, groups[test]),
             **{f"oof_{k}": v for k, v in error_structure(R_oof, A[train], groups[train]).items()},
             **{f"test_{k}": v for k, v in error_structure(residuals(S_test, A[test], mu), A[test], groups[test]).items()}}
