@@ -67,8 +67,10 @@ def test_error_structure_tells_object_effects_from_trial_noise(bench):
     rng = np.random.default_rng(1)
     K = rng.integers(0, 2, size=(30, 8))
     S, A, objects, _ = _simulated_logits(rng, K, 1, 10, shared=3.0)
-    shared = bench.error_structure(bench.residuals(S, A, np.array([[-1.0] * 8, [1.0] * 8])), A, objects)
-    noise = bench.error_structure(0.5 * rng.normal(size=S.shape), A, objects)
+    shared = bench.error_structure(S, bench.residuals(S, A, np.array([[-1.0] * 8, [1.0] * 8])), A, objects)
+    independent = 2.0 * A - 1 + 0.5 * rng.normal(size=S.shape)
+    noise = bench.error_structure(independent, independent - (2.0 * A - 1), A, objects)
     assert shared["between_share"] > 0.8 and noise["between_share"] < 0.3
     assert shared["obj_corr"] > 0.8 and abs(noise["obj_corr"]) < 0.2
     assert abs(shared["within_corr"]) < 0.2
+    assert shared["error_dispersion"] > 1.5 and 0.7 < noise["error_dispersion"] < 1.3  # errors piling onto trials
