@@ -357,12 +357,13 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
                 for ci, key in zip(cis, keys):
                     oof[di, gi, ci, rows] = fits[key]
 
-        def score(di: int, gi: int, cis: np.ndarray, n_seen: int) -> np.ndarray:
+        def score(di: int, cells: np.ndarray, n_seen: int) -> np.ndarray:
             idx, fold_index = parts[di][0], parts[di][4]
             rows = idx[np.concatenate([te for _, te in fold_index[:n_seen]])]
             y_seen = yb[rows]
             w = balanced_sample_weights(y_seen) if self.platt_weighting == "balanced" else np.ones(rows.size)
-            return cv_criteria(oof[di, gi][np.ix_(cis, rows)], y_seen, w, self.scoring)[0]
+            by_cell = oof[di].reshape(-1, oof.shape[-1])  # (n_gammas * n_C, n_train), a view
+            return cv_criteria(by_cell[np.ix_(np.flatnonzero(cells), rows)], y_seen, w, self.scoring)[0]
 
         return successive_halving(oof.shape[:3], [len(p[4]) for p in parts], fit, score)
 
