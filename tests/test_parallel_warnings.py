@@ -6,7 +6,7 @@ import warnings
 
 from joblib import Parallel, delayed
 
-from tzsl._parallel import reissued, relayed
+from tzsl._parallel import one_blas_thread, reissued, relayed
 from tzsl._warnings import recorded_warnings
 from tzsl.models import GridEdgeWarning
 
@@ -27,3 +27,20 @@ def test_a_job_without_warnings_returns_its_result_unchanged():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert reissued(relayed(sorted)([3, 1, 2])) == [1, 2, 3]
+
+
+def test_one_blas_thread_limits_blas_in_the_block_and_restores_it():
+    import numpy  # noqa: F401, PLC0415 - its BLAS is loaded
+    from threadpoolctl import threadpool_info  # noqa: PLC0415
+
+    def blas_threads() -> list[int]:
+        return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]
+
+    before = blas_threads()
+    assert before  # a BLAS library is there to limit
+    with one_blas_thread():
+        assert set(blas_threads()) == {1}
+        with one_blas_thread():  # nested, as a fit inside a limited block
+            assert set(blas_threads()) == {1}
+        assert set(blas_threads()) == {1}
+    assert blas_threads() == before

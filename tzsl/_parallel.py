@@ -1,4 +1,4 @@
-"""Warnings raised in joblib workers, relayed to the parent process.
+"""Warnings raised in joblib workers, relayed to the parent process; one BLAS thread for small problems.
 
 A loky worker is another process: a warning it raises is printed by that process (with its source
 path) and never reaches the command line's one-line printer or the run's manifest
@@ -9,11 +9,16 @@ and the parent raises them again, so they are shown and recorded like any other.
 
 from __future__ import annotations
 
+import contextlib
+import threading
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
-__all__ = ["reissued", "relayed"]
+__all__ = ["one_blas_thread", "reissued", "relayed"]
+
+_CONTROLLER: list = []  # this process's threadpoolctl.ThreadpoolController, made at the first use
+_CONTROLLER_LOCK = threading.Lock()
 
 
 class _Relayed:
@@ -41,3 +46,22 @@ def reissued(item: tuple[Any, list[tuple[type[Warning], str]]]) -> Any:
     for category, message in caught:
         warnings.warn(message, category, stacklevel=2)
     return result
+
+
+@contextlib.contextmanager
+def one_blas_thread() -> Iterator[None]:
+    """Run the block with one BLAS thread (``threadpool_limits(limits=1)``), at a fraction of its cost.
+
+    For the many small dense problems of the attribute fits and predictions: there a second BLAS thread
+    only spins, and on a busy machine it spent three times the CPU of one (PHAC-2 posteriors); the
+    numbers are the same. ``threadpoolctl.threadpool_limits`` looks up the process's BLAS libraries
+    every time (about 1 ms); the controller that lists them is made once per process, at the first
+    use (after numpy and scipy have loaded theirs), and only its limit is set and restored per block.
+    """
+    with _CONTROLLER_LOCK:
+        if not _CONTROLLER:
+            from threadpoolctl import ThreadpoolController  # noqa: PLC0415
+
+            _CONTROLLER.append(ThreadpoolController())
+    with _CONTROLLER[0].limit(limits=1):
+        yield

@@ -14,7 +14,7 @@ from sklearn.utils.estimator_checks import (
 
 from tzsl.exceptions import ConfigError, DataFileError
 from tzsl.features import TextureDescriptor
-from tzsl.features._texture import _gabor_features, _normalise, _uniform_lbp_histograms
+from tzsl.features._texture import _GLCM_PROPS, _angles, _gabor_features, _normalise, _quantise, _uniform_lbp_histograms
 
 SMALL = dict(lbp_radii=(1, 2), glcm_distances=(1, 2), gabor_frequencies=(0.1, 0.25))
 
@@ -210,3 +210,17 @@ def test_uniform_lbp_histograms_equal_scikit_image_bit_for_bit(points, radius):
         codes = local_binary_pattern(image.astype(np.uint8), points, radius, method="uniform")
         expected = np.bincount(codes.astype(np.int64).ravel(), minlength=points + 2) / codes.size
         np.testing.assert_array_equal(hist, expected)
+
+
+def test_glcm_block_equals_scikit_image_per_image_bit_for_bit():
+    from skimage.feature import graycomatrix, graycoprops  # noqa: PLC0415
+
+    images = np.concatenate([_images(n=5, seed=3), np.full((1, 40, 40), 900, dtype=np.uint16)])  # and a flat one
+    desc = TextureDescriptor(**SMALL, glcm_n_angles=3).fit(images)
+    params = desc._params()
+    out = desc.transform(images)
+    glcm = out[:, [i for i, name in enumerate(desc.feature_names_per_image_) if name.startswith("glcm_")]]
+    levels = int(params["glcm_levels"])
+    for q, row in zip(_quantise(_normalise(images, params), levels), glcm):
+        mat = graycomatrix(q, params["glcm_distances"], _angles(3), levels=levels, symmetric=True, normed=True)
+        np.testing.assert_array_equal(row, np.concatenate([graycoprops(mat, p).ravel() for p in _GLCM_PROPS]))

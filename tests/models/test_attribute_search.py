@@ -35,8 +35,8 @@ def test_the_driver_keeps_a_third_and_finishes_the_survivors():
             if with_outside:
                 outside.add((di, gi, ci))
 
-    def score(di, gi, cis, n_seen):  # configuration (1, 2, 0) is best, then by flat index
-        return np.array([[0.0 if (di, gi, ci) == (1, 2, 0) else 1.0 + ci, 0.0] for ci in cis])
+    def score(di, cells, n_seen):  # configuration (1, 2, 0) is best, then by flat index
+        return np.array([[0.0 if (di, gi, ci) == (1, 2, 0) else 1.0 + ci, 0.0] for gi, ci in zip(*np.nonzero(cells))])
 
     alive = successive_halving(shape, folds, fit, score)
     assert alive[1, 2, 0] and alive.sum() == 3  # 18 -> 6 -> 3 (never fewer than the factor)
@@ -70,7 +70,7 @@ def test_survivors_are_scored_exactly_as_the_grid_scores_them(params):
 
 
 def test_a_grid_of_at_most_factor_configurations_is_searched_whole():
-    alive = successive_halving((1, 3, 1), [5], lambda *args: None, lambda di, gi, cis, n: np.zeros((cis.size, 2)))
+    alive = successive_halving((1, 3, 1), [5], lambda *args: None, lambda di, cells, n: np.zeros((cells.sum(), 2)))
     assert alive.all()
 
 

@@ -236,13 +236,21 @@ def simulate_grasps(
     transient = np.where(touching, np.exp(-since / (2 * tau[..., None])), 0.0)
     level = np.where(np.arange(_N_MAT) == 1, 0.0, 1.0)  # TAC: transient, not a level
     sigma = noise * np.concatenate([[2.0, 3.0, 1.0], np.full(19, 4.0)])
-    # signals (G, F, R, 22)
-    sig_t = (
-        base[:, :, None, :]
-        + delta[:, :, None, :] * (rise[..., None] * level + transient[..., None] * (1 - level) * 3.0)
-        + sigma * rng.standard_normal((G, F, R, _N_MAT))
-    ).astype(np.float32)
-    pac = (2048.0 + noise * 5.0 * rng.standard_normal((G, F, R, 22))).astype(np.float32)
+    # signals (G, F, R, 22): base + delta * (rise * level + transient * (1 - level) * 3) + sigma * noise,
+    # computed in place on two buffers (the same operations on the same operands, so the same numbers)
+    sig_t = rise[..., None] * level
+    buffer = transient[..., None] * (1 - level)
+    buffer *= 3.0
+    sig_t += buffer
+    sig_t *= delta[:, :, None, :]
+    sig_t += base[:, :, None, :]
+    np.multiply(sigma, rng.standard_normal((G, F, R, _N_MAT)), out=buffer)
+    sig_t += buffer
+    sig_t = sig_t.astype(np.float32)
+    np.multiply(noise * 5.0, rng.standard_normal((G, F, R, 22)), out=buffer)
+    buffer += 2048.0
+    pac = buffer.astype(np.float32)
+    del buffer
 
     # --- shape: final posture of the 10 closing joints -------------------------------------
     felt = np.repeat(K[shape_attributes].to_numpy()[:, None, :], n_g, axis=1).reshape(G, len(shape_attributes))

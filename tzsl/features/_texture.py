@@ -168,7 +168,7 @@ def _uniform_lbp_histograms(images: np.ndarray, points: int, radius: float) -> n
     ndarray of shape (n, points + 2), float64
         Per image, the share of pixels with each code 0 .. P + 1 (P + 1: not uniform).
     """
-    images = np.asarray(images, dtype=np.float64)
+    images = np.asarray(images)
     n, rows, cols = images.shape
     angles = 2 * np.pi * np.arange(points, dtype=np.float64) / points
     pad = int(np.ceil(radius)) + 1
@@ -185,21 +185,26 @@ def _uniform_lbp_histograms(images: np.ndarray, points: int, radius: float) -> n
         r1, c1 = int(np.ceil(dr_i)) + pad, int(np.ceil(dc_i)) + pad
         # on the pixel grid the weights are 0: the interpolation returns the pixel itself
         neighbours.append((r0, r1, c0, c1, wr, wc, 1 - wr, 1 - wc, wr.any() or wc.any()))
+    # a neighbour on the pixel grid is compared in the images' own dtype (``texture - image >= 0`` is
+    # ``texture >= image`` for floats, and exact for integers), an interpolated one in float64
     padded = np.zeros((rows + 2 * pad, cols + 2 * pad))
+    padded_raw = np.zeros((rows + 2 * pad, cols + 2 * pad), dtype=images.dtype)
     hists = np.empty((n, points + 2))
     for k in range(n):
-        image = images[k]
+        image_raw = images[k]
+        image = image_raw.astype(np.float64)
         padded[pad:pad + rows, pad:pad + cols] = image
+        padded_raw[pad:pad + rows, pad:pad + cols] = image_raw
         ones = np.zeros((rows, cols), dtype=np.int16)
         changes = np.zeros((rows, cols), dtype=np.int16)
         previous = None
         for r0, r1, c0, c1, wr, wc, wr_, wc_, between in neighbours:
-            texture = padded[r0:r0 + rows, c0:c0 + cols]
             if between:
-                top = wc_ * texture + wc * padded[r0:r0 + rows, c1:c1 + cols]
+                top = wc_ * padded[r0:r0 + rows, c0:c0 + cols] + wc * padded[r0:r0 + rows, c1:c1 + cols]
                 bottom = wc_ * padded[r1:r1 + rows, c0:c0 + cols] + wc * padded[r1:r1 + rows, c1:c1 + cols]
-                texture = wr_ * top + wr * bottom
-            signed = texture - image >= 0
+                signed = wr_ * top + wr * bottom >= image
+            else:
+                signed = padded_raw[r0:r0 + rows, c0:c0 + cols] >= image_raw
             ones += signed
             if previous is not None:  # changes between consecutive neighbours (not last to first)
                 changes += signed != previous
@@ -228,15 +233,17 @@ def _describe(images: np.ndarray, params: dict) -> np.ndarray:
     p = int(params["lbp_points"])
     angles = _angles(int(params["glcm_n_angles"]))
     lbp = np.concatenate([_uniform_lbp_histograms(q256, p, r) for r in params["lbp_radii"]], axis=1)
-    glcm = np.empty((n, len(_GLCM_PROPS) * len(params["glcm_distances"]) * len(angles)))
     # scikit-image's GLCM works on one image at a time (compiled inner loops); images are spread
-    # over joblib workers in chunks.
-    for i in range(n):
-        mat = graycomatrix(
-            qg[i], params["glcm_distances"], angles, levels=int(params["glcm_levels"]),
-            symmetric=True, normed=True,
-        )
-        glcm[i] = np.concatenate([graycoprops(mat, prop).ravel() for prop in _GLCM_PROPS])
+    # over joblib workers in chunks. The properties of every image's (distance, angle) matrices come
+    # from one graycoprops call per property on the matrices side by side on its angle axis (each
+    # matrix is normalised and reduced on its own, so the same numbers as one call per image).
+    n_dist, n_angles = len(params["glcm_distances"]), len(angles)
+    mats = np.concatenate([
+        graycomatrix(qg[i], params["glcm_distances"], angles, levels=int(params["glcm_levels"]),
+                     symmetric=True, normed=True)
+        for i in range(n)], axis=3)  # (levels, levels, n_dist, n * n_angles)
+    props = np.stack([graycoprops(mats, prop).reshape(n_dist, n, n_angles) for prop in _GLCM_PROPS])
+    glcm = props.transpose(2, 0, 1, 3).reshape(n, -1)  # per image: property, distance, angle
     gabor = _gabor_features(x, params)
     return np.concatenate([stats, lbp, glcm, gabor], axis=1)
 

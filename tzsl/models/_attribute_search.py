@@ -117,7 +117,7 @@ def successive_halving(
     shape: tuple[int, int, int],
     n_folds: Sequence[int],
     fit: Callable[[int, int, np.ndarray, range, bool], None],
-    score: Callable[[int, int, np.ndarray, int], np.ndarray],
+    score: Callable[[int, np.ndarray, int], np.ndarray],
     factor: int = HALVING_FACTOR,
 ) -> np.ndarray:
     """Run successive halving over a (draw, gamma, C) grid; the configurations fitted on every fold.
@@ -130,9 +130,11 @@ def successive_halving(
     fit : callable ``fit(draw, gamma_index, C_indices, folds, outside)``
         Fill the out-of-fold scores of those configurations on folds ``folds`` (a range of fold
         indices) and, if ``outside``, on the trials outside the draw.
-    score : callable ``score(draw, gamma_index, C_indices, n_seen) -> (k, 2)``
-        (criterion, tie-break) of those configurations on the trials of their draw's first
-        ``n_seen`` folds (lower is better).
+    score : callable ``score(draw, cells, n_seen) -> (k, 2)``
+        (criterion, tie-break) of the draw's configurations where ``cells`` (bool, shape
+        (n_gammas, n_C)) is True, in row-major (gamma, C) order, on the trials of the draw's first
+        ``n_seen`` folds (lower is better). One call per draw and round scores all of the draw's
+        survivors together (one Platt solve for all of them: :func:`~tzsl.models.attribute_training.cv_criteria`).
     factor : int, default HALVING_FACTOR
 
     Returns
@@ -152,12 +154,10 @@ def successive_halving(
             last = step >= len(schedule) - 1
             for gi in range(shape[1]):
                 cis = np.flatnonzero(alive[di, gi])
-                if cis.size == 0:
-                    continue
-                if target > seen[di] or (final and last):
+                if cis.size and (target > seen[di] or (final and last)):
                     fit(di, gi, cis, range(seen[di], target), final)
-                if not final:
-                    crit[di, gi, cis] = np.nan_to_num(score(di, gi, cis, target), nan=np.inf)
+            if not final and alive[di].any():
+                crit[di][alive[di]] = np.nan_to_num(score(di, alive[di], target), nan=np.inf)
             seen[di] = target
         if final:
             break

@@ -39,8 +39,8 @@ from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
-from threadpoolctl import threadpool_limits
 
+from tzsl._parallel import one_blas_thread
 from tzsl._fit_store import array_digest
 from tzsl.models._attribute_training import (
     PLATT_WEIGHTING,
@@ -327,19 +327,22 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
         """
         _libsvm.set_verbosity_wrap(0)
         parts = [self._draw_parts(D, yb, groups, keep, fold_seed, cw) for keep in draws]
-        kernels: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
+        kernels: dict[tuple[int, int, bool], np.ndarray] = {}
         # every (draw, gamma) kernel is kept for the later rounds while they fit in HALVING_KERNEL_BYTES
         keep_kernels = sum(p[3].nbytes for p in parts) * len(gammas) <= HALVING_KERNEL_BYTES
 
-        def kernel(di: int, gi: int) -> tuple[np.ndarray, np.ndarray]:
-            if (di, gi) in kernels:
-                return kernels[di, gi]
+        def kernel(di: int, gi: int, outside: bool) -> np.ndarray:
+            """The RBF kernel of the draw's trials (outside False: (n_draw, n_draw)) or of the trials outside
+            the draw to them (True: (n_out, n_draw)); the outside block only for the configurations that
+            reach the last round (elementwise, so the same numbers as one kernel of both blocks)."""
+            if (di, gi, outside) in kernels:
+                return kernels[di, gi, outside]
             n_draw = parts[di][0].size
-            K = np.exp(parts[di][3] * -gammas[gi])
-            pair = np.ascontiguousarray(K[:n_draw]), np.ascontiguousarray(K[n_draw:])
+            rows = parts[di][3][n_draw:] if outside else parts[di][3][:n_draw]
+            K = np.exp(rows * -gammas[gi])
             if keep_kernels:
-                kernels[di, gi] = pair
-            return pair
+                kernels[di, gi, outside] = K
+            return K
 
         def fit(di: int, gi: int, cis: np.ndarray, folds: range, outside: bool) -> None:
             idx, out, y_draw, _, fold_index, fold_w, w_full = parts[di]
@@ -347,9 +350,9 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
                 keys = [(di, float(gammas[gi]), float(Cs[ci]), f) for ci in cis]
                 todo = [(ci, key) for ci, key in zip(cis, keys) if key not in fits]
                 if todo:
-                    Kd, K_out = kernel(di, gi)
+                    Kd = kernel(di, gi, False)
                     tr, te = fold_index[f] if f >= 0 else (None, None)
-                    K_fit, K_eval = (Kd, K_out) if f < 0 else (Kd[np.ix_(tr, tr)], Kd[np.ix_(te, tr)])
+                    K_fit, K_eval = (Kd, kernel(di, gi, True)) if f < 0 else (Kd[np.ix_(tr, tr)], Kd[np.ix_(te, tr)])
                     y_fit, w = (y_draw, w_full) if f < 0 else (y_draw[tr], fold_w[f])
                     for ci, key in todo:
                         fits[key] = svc_fit_decision(K_fit, y_fit, Cs[ci], w, K_eval)
@@ -357,12 +360,13 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
                 for ci, key in zip(cis, keys):
                     oof[di, gi, ci, rows] = fits[key]
 
-        def score(di: int, gi: int, cis: np.ndarray, n_seen: int) -> np.ndarray:
+        def score(di: int, cells: np.ndarray, n_seen: int) -> np.ndarray:
             idx, fold_index = parts[di][0], parts[di][4]
             rows = idx[np.concatenate([te for _, te in fold_index[:n_seen]])]
             y_seen = yb[rows]
             w = balanced_sample_weights(y_seen) if self.platt_weighting == "balanced" else np.ones(rows.size)
-            return cv_criteria(oof[di, gi][np.ix_(cis, rows)], y_seen, w, self.scoring)[0]
+            by_cell = oof[di].reshape(-1, oof.shape[-1])  # (n_gammas * n_C, n_train), a view
+            return cv_criteria(by_cell[np.ix_(np.flatnonzero(cells), rows)], y_seen, w, self.scoring)[0]
 
         return successive_halving(oof.shape[:3], [len(p[4]) for p in parts], fit, score)
 
@@ -425,7 +429,7 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
         rng = check_random_state(self.random_state)
 
         # many small dense problems: more BLAS threads than one only spin (and do not change results)
-        with threadpool_limits(limits=1):
+        with one_blas_thread():
             pre, Z, D = _preprocessed(clone(self.preprocessor) if self.preprocessor is not None
                                       else default_preprocessor(), X)
             draws, draw_w = self._draws(yb, groups, rng)

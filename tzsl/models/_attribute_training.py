@@ -203,10 +203,13 @@ PLATT_MAX_ITER = 100
 PLATT_STEP_TOL = 1e-10
 
 
-def _platt_loss(theta: np.ndarray, u: np.ndarray, t: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """Weighted cross-entropy of ``expit(theta[:, 0] * u + theta[:, 1])`` to targets ``t``; shape (k,)."""
+def _platt_loss(theta: np.ndarray, u: np.ndarray, t: np.ndarray, w: np.ndarray,
+                t_neg: np.ndarray | None = None) -> np.ndarray:
+    """Weighted cross-entropy of ``expit(theta[:, 0] * u + theta[:, 1])`` to targets ``t``; shape (k,).
+
+    ``t_neg``: ``1.0 - t`` when the caller has it already (the same numbers)."""
     z = theta[:, :1] * u + theta[:, 1:]
-    return -(w * (t * log_expit(z) + (1.0 - t) * log_expit(-z))).sum(axis=1)
+    return -(w * (t * log_expit(z) + ((1.0 - t) if t_neg is None else t_neg) * log_expit(-z))).sum(axis=1)
 
 
 def fit_platt_many(
@@ -247,28 +250,33 @@ def fit_platt_many(
     w_pos, w_neg = w[y].sum(), w[~y].sum()
     theta = np.zeros((s.shape[0], 2))
     theta[:, 1] = np.log((w_pos + 1.0) / (w_neg + 1.0))
-    loss = _platt_loss(theta, u, t, w)
+    t_neg = 1.0 - t
+    loss = _platt_loss(theta, u, t, w, t_neg)
     active = ~flat
     for _ in range(PLATT_MAX_ITER):
         act = np.flatnonzero(active)
         if act.size == 0:
             break
-        ua, th = u[act], theta[act]
+        # every row still active (the first iterations): the arrays themselves, not copies of them
+        ua, th = (u, theta.copy()) if act.size == u.shape[0] else (u[act], theta[act])
         p = expit(th[:, :1] * ua + th[:, 1:])
         r, h = w * (p - t), w * p * (1.0 - p)
+        hu = h * ua  # h * ua * ua is (h * ua) * ua: computed once for both sums
         g = np.stack([(r * ua).sum(axis=1), r.sum(axis=1)], axis=1)  # (k_active, 2)
-        h_aa, h_ab, h_bb = (h * ua * ua).sum(axis=1) + 1e-12, (h * ua).sum(axis=1), h.sum(axis=1) + 1e-12
+        h_aa, h_ab, h_bb = (hu * ua).sum(axis=1) + 1e-12, hu.sum(axis=1), h.sum(axis=1) + 1e-12
         det = h_aa * h_bb - h_ab**2
         step = -np.stack([h_bb * g[:, 0] - h_ab * g[:, 1], h_aa * g[:, 1] - h_ab * g[:, 0]], axis=1) / det[:, None]
         decrement = -(g * step).sum(axis=1)  # Newton decrement squared: the loss still to gain, x2
         moving = (np.abs(step).max(axis=1) > PLATT_STEP_TOL) & (decrement > 1e-15 * np.maximum(loss[act], 1.0))
         active[act[~moving]] = False
-        act, ua, th, g, step = act[moving], ua[moving], th[moving], g[moving], step[moving]
+        if not moving.all():
+            act, ua, th, g, step = act[moving], ua[moving], th[moving], g[moving], step[moving]
         length = np.ones(act.size)
         left = np.arange(act.size)
         while left.size:  # backtracking (Armijo): halve each step until the loss falls enough
+            every = left.size == act.size  # (the first pass): the arrays themselves, not copies
             trial = th[left] + length[left, None] * step[left]
-            new = _platt_loss(trial, ua[left], t, w)
+            new = _platt_loss(trial, ua if every else ua[left], t, w, t_neg)
             ok = new <= loss[act[left]] + 1e-4 * length[left] * (g[left] * step[left]).sum(axis=1)
             theta[act[left[ok]]], loss[act[left[ok]]] = trial[ok], new[ok]
             length[left[~ok]] /= 2.0

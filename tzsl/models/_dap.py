@@ -27,8 +27,8 @@ rows, ``"test"`` = mean over the test classes' rows of the class-attribute table
 from __future__ import annotations
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
+from tzsl._parallel import one_blas_thread
 from tzsl._scoring import (  # numpy alone, shared with the load-once predictor (tzsl.inference)
     DEFAULT_EPS,
     attribute_prior,
@@ -128,7 +128,7 @@ def dap_accuracy_over_subsets(
     out = np.empty((mask.shape[0], len(y)) if per_trial else mask.shape[0])
     # one BLAS thread: the products are small, and on 2 cores threaded BLAS spent 5 times the CPU (and
     # wall) time of one thread on the PHAC-2 sweep; the outcomes no longer depend on the machine's cores
-    with threadpool_limits(limits=1):
+    with one_blas_thread():
         for start in range(0, mask.shape[0], chunk):
             S = np.einsum("nkm,rm->rnk", T, mask[start : start + chunk], optimize=True)
             hits = S.argmax(axis=2) == y[None, :]

@@ -12,6 +12,8 @@ reductions in the same order, so the same floats) and the same tie rule, hence t
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from sklearn.model_selection import StratifiedGroupKFold
 from sklearn.utils import check_random_state
@@ -76,12 +78,11 @@ def stratified_group_fold_masks(y: np.ndarray, groups: np.ndarray, n_splits: int
     for g in order:
         # every candidate at once: row c of `trial` is per_fold with the group added to fold c
         trial = per_fold[None, :, :] + eye * counts[g][None, None, :]
-        evals = np.mean(np.std(trial / scale, axis=1), axis=1)
-        sizes = np.sum(per_fold, axis=1)
-        best, min_eval, min_size = -1, np.inf, np.inf
-        for i in range(n_splits):
-            e, s = float(evals[i]), float(sizes[i])
-            close = np.isfinite(min_eval) and abs(e - min_eval) <= _ATOL + _RTOL * abs(min_eval)
+        evals = np.mean(np.std(trial / scale, axis=1), axis=1).tolist()  # Python floats: the same values
+        sizes = np.sum(per_fold, axis=1).tolist()
+        best, min_eval, min_size = -1, math.inf, math.inf
+        for i, (e, s) in enumerate(zip(evals, sizes)):
+            close = math.isfinite(min_eval) and abs(e - min_eval) <= _ATOL + _RTOL * abs(min_eval)
             if e < min_eval or (close and s < min_size):
                 best, min_eval, min_size = i, e, s
         per_fold[best] += counts[g]

@@ -47,9 +47,8 @@ from sklearn.svm import SVC, LinearSVC
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
-from threadpoolctl import threadpool_limits
 
-from tzsl._parallel import reissued, relayed
+from tzsl._parallel import one_blas_thread, reissued, relayed
 from tzsl.exceptions import ConfigError, SplitError, TzslError
 from tzsl.features import unpack_grasp_features
 from tzsl.models._decision import DAPRule
@@ -126,7 +125,7 @@ def fuse_grasp_posteriors(
 
 def _fit_one(estimator, X: np.ndarray, y: np.ndarray):
     # the problems are tiny (~100 x 8): multi-threaded BLAS only adds overhead
-    with threadpool_limits(limits=1):
+    with one_blas_thread():
         return clone(estimator).fit(X, y)
 
 

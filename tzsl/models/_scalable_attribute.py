@@ -54,8 +54,8 @@ from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
-from threadpoolctl import threadpool_limits
 
+from tzsl._parallel import one_blas_thread
 from tzsl._fit_store import array_digest
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_training import (
@@ -288,7 +288,7 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
                     f"{self._label()}: fewer than 2 training objects with label {cls!r}; need at least 2"
                 )
         rng = check_random_state(self.random_state)
-        with threadpool_limits(limits=1):
+        with one_blas_thread():
             self._fit(X, yb, groups, rng)
         return self
 
@@ -371,7 +371,7 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
         Z = np.asarray(self.preprocessor_.transform(X), dtype=np.float64)
         fm = self.feature_map_
         out = np.empty(Z.shape[0])
-        with threadpool_limits(limits=1):  # the same bits in every process, whatever its BLAS threads
+        with one_blas_thread():  # the same bits in every process, whatever its BLAS threads
             weights = fm.normalization_.T @ self.coef_  # the features' linear map folded into the kernel's
             for start in range(0, Z.shape[0], self.block_size):
                 block = rbf_kernel(Z[start : start + self.block_size], fm.components_, gamma=fm.gamma)
