@@ -2,26 +2,18 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 import warnings
-from pathlib import Path
 
 import pytest
 
+from tests.benchmark_scripts import benchmark_script
 from tests.studies.test_phac2_dap import TINY_SVM, synthetic_features
-
-SCRIPT = Path(__file__).resolve().parents[2] / "experiments" / "benchmarks" / "phac2_best_method.py"
 
 
 @pytest.fixture(scope="module")
 def bench():
-    spec = importlib.util.spec_from_file_location("phac2_best_method_probe", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module
-    del sys.modules[spec.name]
+    with benchmark_script("phac2_best_method.py") as module:
+        yield module
 
 
 def test_choice_on_selection_numbers_from_confirmation(bench):

@@ -2,31 +2,18 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
+from tests.benchmark_scripts import benchmark_script
 from tests.studies.test_phac2_dap import synthetic_features
 from tzsl.models import AttributeClassifierBank
-
-FOLDER = Path(__file__).resolve().parents[2] / "experiments" / "benchmarks"
 
 
 @pytest.fixture(scope="module")
 def bench():
-    sys.path.insert(0, str(FOLDER))  # the script imports its sibling phac2_detectors_confirm
-    spec = importlib.util.spec_from_file_location("phac2_correlated_dap_probe", FOLDER / "phac2_correlated_dap.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    try:
-        spec.loader.exec_module(module)
+    with benchmark_script("phac2_correlated_dap.py") as module:  # imports its sibling phac2_detectors_confirm
         yield module
-    finally:
-        del sys.modules[spec.name]
-        sys.path.remove(str(FOLDER))
 
 
 def test_held_out_logits_score_every_trial_even_of_an_attribute_with_two_positive_objects(bench):

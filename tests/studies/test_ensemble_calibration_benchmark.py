@@ -4,29 +4,18 @@ the benchmark README's generated block. It measures nothing here."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pandas as pd
 import pytest
 
+from tests.benchmark_scripts import benchmark_script
 from tzsl.reporting.benchmark_blocks import MissingResults, ensemble_calibration_block
-
-SCRIPT = Path(__file__).resolve().parents[2] / "experiments" / "benchmarks" / "calibration_refit.py"
 
 
 @pytest.fixture(scope="module")
 def bench():
-    spec = importlib.util.spec_from_file_location("calibration_refit_probe", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    try:
-        spec.loader.exec_module(module)
+    with benchmark_script("calibration_refit.py") as module:
         yield module
-    finally:
-        del sys.modules[spec.name]
 
 
 def _trials(bench, n_splits=2, n_trials=12, seed=0):

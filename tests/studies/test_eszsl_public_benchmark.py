@@ -3,31 +3,21 @@ its summary is what the benchmark README's generated block reads."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 import warnings
-from pathlib import Path
 
 import pandas as pd
 
+from tests.benchmark_scripts import benchmark_script
 from tests.studies.test_phac2_dap import synthetic_features
 from tzsl.reporting.benchmark_blocks import eszsl_public_block
 
-SCRIPT = Path(__file__).resolve().parents[2] / "experiments" / "benchmarks" / "phac2_eszsl_public.py"
-
 
 def test_the_benchmark_runs_and_its_summary_makes_the_block(tmp_path):
-    spec = importlib.util.spec_from_file_location("phac2_eszsl_public_probe", SCRIPT)
-    bench = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = bench
-    try:
-        spec.loader.exec_module(bench)
+    with benchmark_script("phac2_eszsl_public.py") as bench:
         features = synthetic_features(n_objects=30, n_attributes=6)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             trials = [bench.run(features, purpose, 0, 2) for purpose in ("select", "confirm")]
-    finally:
-        del sys.modules[spec.name]
     table = bench.summarise(pd.concat(trials, ignore_index=True))
     assert set(table["purpose"]) == {"select", "confirm"} and (table["n_splits"] == 2).all()
     public = table[table["method"] == bench.REFERENCE]
