@@ -55,7 +55,7 @@ def one_blas_thread() -> Iterator[None]:
     For the many small dense problems of the attribute fits and predictions: there a second BLAS thread
     only spins, and on a busy machine it spent three times the CPU of one (PHAC-2 posteriors); the
     numbers are the same. ``threadpoolctl.threadpool_limits`` looks up the process's BLAS libraries
-    every time (about 1 ms); the controller that lists them is made once per process, at the first
+    every time; the controller that lists them is made once per process, at the first
     use (after numpy and scipy have loaded theirs), and only its limit is set and restored per block.
     """
     with _CONTROLLER_LOCK:

@@ -3,9 +3,9 @@
 import os
 
 #: Idle OpenBLAS threads of a ``tzsl`` process wait 2**4 cycles before they sleep, not OpenBLAS's default
-#: 2**28 (about 0.1 s) of spinning: the command's own process calls BLAS on small arrays between stretches
-#: of Python (the attribute posteriors), and on 2 busy cores the spinning thread cost 2-3 times the CPU of
-#: the posteriors (0.32 -> 0.12 CPU-s per PHAC-2 bank), with the same threads and the same numbers. Set
+#: 2**28 cycles of spinning: the command's own process calls BLAS on small arrays between stretches of
+#: Python (the attribute posteriors), and on 2 busy cores the spinning thread cost more CPU than the
+#: posteriors themselves (measured in the commit that set it), with the same threads and numbers. Set
 #: before numpy loads OpenBLAS (``import tzsl`` loads no numpy); a user's own setting wins.
 OPENBLAS_THREAD_TIMEOUT = "4"
 os.environ.setdefault("OPENBLAS_THREAD_TIMEOUT", OPENBLAS_THREAD_TIMEOUT)

@@ -12,7 +12,7 @@ from pathlib import Path
 import pandas as pd
 
 from tzsl.exceptions import ConfigError
-from tzsl.reporting.markdown_cells import find_table, number, ours
+from tzsl.reporting.markdown_cells import find_table, number, ours, signed
 
 __all__ = ["BEST_METHOD_FILE", "ENSEMBLE_CALIBRATION_FILES", "ESZSL_PUBLIC_FILE", "MissingResults",
            "benchmark_accuracy_block", "benchmark_table", "best_method_block", "ensemble_calibration_block",
@@ -62,8 +62,7 @@ def benchmark_accuracy_block(results: str | Path) -> str:
             if r is None:
                 row += ["", ""]
                 continue
-            diff = "-" if pd.isna(r["diff_ci95_low"]) or r["method"] == "dap-avg[paper]" else (
-                f"{float(r['diff_vs_avgdap']):+.3f} [{float(r['diff_ci95_low']):+.3f}, {float(r['diff_ci95_high']):+.3f}]")
+            diff = "-" if pd.isna(r["diff_ci95_low"]) or r["method"] == "dap-avg[paper]" else signed(r["diff_vs_avgdap"], r["diff_ci95_low"], r["diff_ci95_high"])
             row += [ours(r, "accuracy", "ci95_low", "ci95_high"), diff]
         lines.append(f"| `{method}` | " + " | ".join(row) + " |")
     grid = find_table(root, "grid_summary.csv")
@@ -124,8 +123,7 @@ def search_benchmark_block(results: str | Path) -> str:
              "same choice | CPU grid (s) | CPU halving (s) | CPU ratio |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for _, r in table.iterrows():
-        diff = (f"{float(r['difference']):+.3f} [{float(r['difference_ci95_low']):+.3f}, "
-                f"{float(r['difference_ci95_high']):+.3f}]")
+        diff = signed(r["difference"], r["difference_ci95_low"], r["difference_ci95_high"])
         lines.append(f"| {r['grid']} | {int(r['seed'])} | {int(r['n_splits'])} | "
                      f"{ours(r, 'grid_avgdap', 'grid_ci95_low', 'grid_ci95_high')} | "
                      f"{ours(r, 'halving_avgdap', 'halving_ci95_low', 'halving_ci95_high')} | {diff} | "
@@ -152,8 +150,7 @@ def best_method_block(results: str | Path) -> str:
              "(splits) | minus reference | beats it |", "|---|---|---|---|---|---|"]
     for _, r in table.iterrows():
         diff = "-" if pd.isna(r.get("difference")) else (
-            f"{float(r['difference']):+.3f} [{float(r['difference_ci95_low']):+.3f}, "
-            f"{float(r['difference_ci95_high']):+.3f}] vs `{r['reference']}`")
+            f"{signed(r['difference'], r['difference_ci95_low'], r['difference_ci95_high'])} vs `{r['reference']}`")
         lines.append(f"| {r['kind']} | `{r['chosen']}` ({number(r.get('selection_n_splits'), 0)}) | "
                      f"{number(r['selection_accuracy'])} | {ours(r, 'accuracy', 'ci95_low', 'ci95_high')} "
                      f"({number(r.get('confirmation_n_splits'), 0)}) | {diff} | "
@@ -183,8 +180,7 @@ def eszsl_public_block(results: str | Path) -> str:
              "| purpose | method | splits | accuracy | minus public | share at a grid edge |",
              "|---|---|---|---|---|---|"]
     for _, r in table.iterrows():
-        diff = "-" if r["method"] == reference else (
-            f"{float(r['diff_vs_public']):+.3f} [{float(r['diff_ci95_low']):+.3f}, {float(r['diff_ci95_high']):+.3f}]")
+        diff = "-" if r["method"] == reference else signed(r["diff_vs_public"], r["diff_ci95_low"], r["diff_ci95_high"])
         lines.append(f"| {r['purpose']} | `{r['method']}` | {int(r['n_splits'])} | "
                      f"{ours(r, 'accuracy', 'ci95_low', 'ci95_high')} | {diff} | "
                      f"{100 * float(r['share_at_grid_edge']):.0f}% |")
@@ -216,8 +212,7 @@ def ensemble_calibration_block(results: str | Path) -> str:
              "| purpose | seed | splits (trials) | ECE pinned | ECE search | pinned - search | accuracy difference | "
              "CPU pinned (s) | CPU search (s) |", "|---|---|---|---|---|---|---|---|---|"]
     for _, r in table.iterrows():
-        diff = (f"{float(r['ece_difference']):+.3f} [{float(r['ece_difference_ci95_low']):+.3f}, "
-                f"{float(r['ece_difference_ci95_high']):+.3f}]")
+        diff = signed(r["ece_difference"], r["ece_difference_ci95_low"], r["ece_difference_ci95_high"])
         lines.append(f"| {r['purpose']} | {int(r['seed'])} | {int(r['n_splits'])} ({int(r['n_trials'])}) | "
                      f"{ours(r, 'pinned_ece')} | {ours(r, 'search_ece')} | {diff} | "
                      f"{float(r['accuracy_difference']):+.3f} | {float(r['pinned_cpu_s']):.1f} | "

@@ -6,7 +6,12 @@ from pathlib import Path
 
 import pandas as pd
 
-__all__ = ["find_table", "number", "ours"]
+__all__ = ["find_table", "number", "ours", "signed"]
+
+
+def signed(value, low, high) -> str:
+    """A difference with its interval, signs shown: ``+0.078 [+0.042, +0.117]``."""
+    return f"{float(value):+.3f} [{float(low):+.3f}, {float(high):+.3f}]"
 
 
 def number(v, digits: int = 3) -> str:

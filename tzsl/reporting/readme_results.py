@@ -51,7 +51,7 @@ from tzsl.reporting.benchmark_blocks import (
     eszsl_public_block,
     search_benchmark_block,
 )
-from tzsl.reporting.markdown_cells import find_table, number, ours
+from tzsl.reporting.markdown_cells import find_table, number, ours, signed
 from tzsl.value_lists import SPLIT_KINDS
 
 __all__ = ["BEGIN", "BLOCKS", "END", "begin", "block_spans", "comparison_lines", "detectors_block", "end", "evidence_block",
@@ -218,8 +218,7 @@ def _spread(row: pd.Series) -> str:
 def _difference(row: pd.Series) -> str:
     if pd.isna(row.get("difference")):
         return "reference"
-    return (f"{float(row['difference']):+.3f} [{float(row['difference_ci95_low']):+.3f}, "
-            f"{float(row['difference_ci95_high']):+.3f}]")
+    return signed(row["difference"], row["difference_ci95_low"], row["difference_ci95_high"])
 
 
 def headline_lines(root: Path) -> list[str]:
@@ -392,8 +391,7 @@ def detectors_block(results: str | Path) -> str:
             part = part.dropna(subset=[chosen, "eszsl"])
             if len(part) >= 2:
                 d = paired_difference_interval(part[chosen], part["eszsl"], classes=part["split"].astype(str))
-                lines.append(f"| {kind} ({len(part)}) | `{chosen}` minus `eszsl` | | {d[0]:+.3f} [{d[1]:+.3f}, "
-                             f"{d[2]:+.3f}] (over splits) |")
+                lines.append(f"| {kind} ({len(part)}) | `{chosen}` minus `eszsl` | | {signed(*d[:3])} (over splits) |")
     return "\n".join(lines)
 
 
