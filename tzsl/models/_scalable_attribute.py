@@ -67,7 +67,15 @@ from tzsl.models._attribute_training import (
 )
 from tzsl.models._platt_binary import PlattBinaryClassifierMixin
 
-__all__ = ["ScalableAttributeClassifier"]
+__all__ = ["MAX_TUNE_TRIALS", "ScalableAttributeClassifier"]
+
+#: Default ``max_tune_trials``: training trials the hyper-parameter search of one attribute model uses
+#: (a larger training set is subsampled, every object keeping its share). Chosen for cost, not accuracy
+#: (``make bench-scale``, SIMULATED data): the search is the fixed part of every fit (draws x gammas x
+#: (folds + 1) warm-started ``C`` paths), linear in this number, and with 30 attributes x 2 sensors it
+#: dominates a large run; the rule was the largest of 2,000 / 4,000 / 8,000 whose 100,000-trial
+#: DAP + ESZSL benchmark run costs at most 600 CPU seconds (300 s wall on 2 cores).
+MAX_TUNE_TRIALS = 4_000
 
 #: Fitted preprocessors kept per process, keyed by (preprocessor parameters, training array digest).
 _PREPROCESSOR_MEMO: OrderedDict = OrderedDict()
@@ -147,7 +155,7 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
         Trials per block when computing the feature map (bounds the scratch memory).
     max_iter : int, default=200
         L-BFGS iterations per fit of the ``C`` path.
-    max_tune_trials : int or None, default=8000
+    max_tune_trials : int or None, default=MAX_TUNE_TRIALS
         Largest number of training trials the hyper-parameter search uses (see above); ``None``:
         all of them.
     max_fit_trials : int or None, default=100000
@@ -205,7 +213,7 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
 
     def __init__(self, *, preprocessor=None, n_components=256, gamma_range=(0.001, 1.0), n_gamma=4,
                  C_range=(0.1, 1000.0), n_C=5, cv=3, undersampling="select", n_draws=1,
-                 platt_weighting="balanced", block_size=8192, max_iter=200, max_tune_trials=8000,
+                 platt_weighting="balanced", block_size=8192, max_iter=200, max_tune_trials=MAX_TUNE_TRIALS,
                  max_fit_trials=100_000, name=None, random_state=None):
         self.preprocessor = preprocessor
         self.n_components = n_components
