@@ -44,6 +44,7 @@ import joblib
 
 import numpy as np
 from scipy.special import log_expit
+from sklearn import config_context
 from sklearn.base import BaseEstimator, ClassifierMixin, clone
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.kernel_approximation import Nystroem
@@ -248,11 +249,14 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
         model = LogisticRegression(warm_start=True, class_weight="balanced", max_iter=self.max_iter, tol=1e-4)
         if start is not None:
             model.coef_, model.intercept_ = start[0][None, :].copy(), np.array([start[1]])
+        # 0/1 codes, not booleans: scikit-learn encodes non-numeric labels in a Python loop over the
+        # trials on every fit (same classes order, same fit); features made here are finite
+        y_codes = np.asarray(y_train, dtype=np.int8)
         solutions = []
         for ci, C in enumerate(Cs):
-            with warnings.catch_warnings():  # a capped path step is reported through n_iter_, not per fit
-                warnings.simplefilter("ignore", ConvergenceWarning)
-                model.set_params(C=float(C)).fit(F_train, y_train)
+            with warnings.catch_warnings(), config_context(assume_finite=True):
+                warnings.simplefilter("ignore", ConvergenceWarning)  # a capped step is reported through n_iter_
+                model.set_params(C=float(C)).fit(F_train, y_codes)
             coef, intercept = model.coef_[0].copy(), float(model.intercept_[0])
             solutions.append((coef, intercept, int(model.n_iter_[0])))
             if F_eval.shape[0]:
