@@ -76,7 +76,8 @@ __all__ = ["MAX_TUNE_TRIALS", "ScalableAttributeClassifier"]
 #: (folds + 1) warm-started ``C`` paths), linear in this number, and with 30 attributes x 2 sensors it
 #: dominates a large run; the rule was the largest of 2,000 / 4,000 / 8,000 whose 100,000-trial
 #: DAP + ESZSL benchmark run (``make bench-scale SCALE_SIZES=100000``) fits issue 33's wall-time goal
-#: on 2 cores in CPU time (CPU seconds at most twice the goal's wall seconds).
+#: on 2 cores in CPU time (CPU seconds at most twice the goal's wall seconds); 8,000 was over it or
+#: at its edge (the run's method comparison and tables do not run in parallel), so 4,000.
 MAX_TUNE_TRIALS = 4_000
 
 #: Fitted preprocessors kept per process, keyed by (preprocessor parameters, training array digest).
