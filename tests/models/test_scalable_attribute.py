@@ -177,3 +177,17 @@ def test_a_fit_inside_a_dask_task_equals_the_local_fit():
     for fitted in remote:
         np.testing.assert_array_equal(fitted.oof_scores_, local.oof_scores_)
         np.testing.assert_array_equal(fitted.coef_, local.coef_)
+
+
+def test_default_search_uses_at_most_max_tune_trials():
+    """Above MAX_TUNE_TRIALS training trials the default search runs on a subset of about that many
+    (every object keeping trials) and the chosen model is refitted on its whole draw."""
+    from tzsl.models.attribute_training import MAX_TUNE_TRIALS
+
+    assert ScalableAttributeClassifier().max_tune_trials == MAX_TUNE_TRIALS
+    trials = MAX_TUNE_TRIALS // 40 + 10
+    X, A, g = make_problem(n_objects=40, trials=trials, n_sensors=1, seed=4)
+    m = ScalableAttributeClassifier(**SMALL, n_draws=1, random_state=0).fit(X[:, 0], A[:, 0], g)
+    assert X.shape[0] > MAX_TUNE_TRIALS >= m.tune_index_.size > 0.9 * MAX_TUNE_TRIALS
+    assert set(g[m.tune_index_]) == set(g)
+    assert m.n_fit_trials_ % trials == 0  # refitted on whole objects of the draw, not the search's share of them

@@ -2,7 +2,8 @@
 
 Used by :class:`tzsl.models.AttributeSVM`, :class:`tzsl.models.ScalableAttributeClassifier`
 and :class:`tzsl.models.AttributeClassifierBank`: the option values (:data:`GRIDS`,
-:data:`SOLVERS`, :data:`SEARCHES`, :data:`AUTO_MAX_EXACT_TRIALS`, :data:`MAX_GRID_EXTENSIONS`), the gamma grid
+:data:`SOLVERS`, :data:`SEARCHES`, :data:`AUTO_MAX_EXACT_TRIALS`, :data:`MAX_GRID_EXTENSIONS`,
+:data:`MAX_TUNE_TRIALS`: the approximate model's search subset), the gamma grid
 (:func:`gamma_grid`), the default preprocessor, class-balanced draws of whole objects
 (:func:`balanced_object_draws`), object-balanced trial weights (:func:`object_balanced_weights`),
 Platt scaling (:func:`fit_platt`, :func:`fit_platt_many`), and the detector families of an
@@ -22,6 +23,7 @@ from tzsl.models._attribute_training import (
     gamma_grid,
     object_balanced_weights,
 )
+from tzsl.models._scalable_attribute import MAX_TUNE_TRIALS
 from tzsl.models._detectors import AUTO_CANDIDATES, DETECTORS, STUDY_DETECTOR, choose_detector, detector_template
 
 __all__ = [
@@ -30,6 +32,7 @@ __all__ = [
     "DETECTORS",
     "GRIDS",
     "MAX_GRID_EXTENSIONS",
+    "MAX_TUNE_TRIALS",
     "SEARCHES",
     "SOLVERS",
     "STUDY_DETECTOR",
