@@ -36,8 +36,8 @@ from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
-from threadpoolctl import threadpool_limits
 
+from tzsl._threads import one_blas_thread
 from tzsl.models._attribute_search import MAX_GRID_EXTENSIONS, adaptive_grid_search
 from tzsl.models._attribute_training import (
     AttributeTrainingError,
@@ -256,7 +256,7 @@ class LinearAttribute(PlattBinaryClassifierMixin, ValidatedParamsMixin, Classifi
         self.classes_, yb, groups = binary_training_targets(y, groups, self._label())
         rng = check_random_state(self.random_state)
         fold_seed, fit_seed = (int(s) for s in rng.randint(np.iinfo(np.int32).max, size=2))
-        with threadpool_limits(limits=1):  # small dense problems, many of them in parallel
+        with one_blas_thread():  # small dense problems, many of them in parallel
             pre = StandardScaler() if self.preprocessor is None else clone(self.preprocessor)
             Z = np.asarray(pre.fit_transform(X), dtype=np.float64)
             folds = object_grouped_folds(self.cv, yb, groups, fold_seed)
