@@ -39,8 +39,8 @@ from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
-from threadpoolctl import threadpool_limits
 
+from tzsl._threads import one_blas_thread
 from tzsl._fit_store import array_digest
 from tzsl.models._attribute_training import (
     PLATT_WEIGHTING,
@@ -425,7 +425,7 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
         rng = check_random_state(self.random_state)
 
         # many small dense problems: more BLAS threads than one only spin (and do not change results)
-        with threadpool_limits(limits=1):
+        with one_blas_thread():
             pre, Z, D = _preprocessed(clone(self.preprocessor) if self.preprocessor is not None
                                       else default_preprocessor(), X)
             draws, draw_w = self._draws(yb, groups, rng)
