@@ -327,19 +327,22 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
         """
         _libsvm.set_verbosity_wrap(0)
         parts = [self._draw_parts(D, yb, groups, keep, fold_seed, cw) for keep in draws]
-        kernels: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
-        # every (draw, gamma) kernel is kept for the later rounds while they fit in HALVING_KERNEL_BYTES
-        keep_kernels = sum(p[3].nbytes for p in parts) * len(gammas) <= HALVING_KERNEL_BYTES
+        kernels: dict[tuple[int, int], np.ndarray] = {}
+        # every (draw, gamma) kernel among the draw's trials is kept for the later rounds while they fit in
+        # HALVING_KERNEL_BYTES; the kernel to the trials outside the draw is needed once (the last round)
+        keep_kernels = sum(p[0].size ** 2 * 8 for p in parts) * len(gammas) <= HALVING_KERNEL_BYTES
 
-        def kernel(di: int, gi: int) -> tuple[np.ndarray, np.ndarray]:
+        def kernel(di: int, gi: int, outside: bool = False) -> np.ndarray:
+            """RBF kernel of the draw's trials (n_draw, n_draw), or of the outside trials to them (n_out, n_draw)."""
+            n_draw = parts[di][0].size
+            if outside:
+                return np.exp(parts[di][3][n_draw:] * -gammas[gi])
             if (di, gi) in kernels:
                 return kernels[di, gi]
-            n_draw = parts[di][0].size
-            K = np.exp(parts[di][3] * -gammas[gi])
-            pair = np.ascontiguousarray(K[:n_draw]), np.ascontiguousarray(K[n_draw:])
+            K = np.exp(parts[di][3][:n_draw] * -gammas[gi])  # elementwise: the bits of the whole kernel's rows
             if keep_kernels:
-                kernels[di, gi] = pair
-            return pair
+                kernels[di, gi] = K
+            return K
 
         def fit(di: int, gi: int, cis: np.ndarray, folds: range, outside: bool) -> None:
             idx, out, y_draw, _, fold_index, fold_w, w_full = parts[di]
@@ -347,9 +350,9 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
                 keys = [(di, float(gammas[gi]), float(Cs[ci]), f) for ci in cis]
                 todo = [(ci, key) for ci, key in zip(cis, keys) if key not in fits]
                 if todo:
-                    Kd, K_out = kernel(di, gi)
+                    Kd = kernel(di, gi)
                     tr, te = fold_index[f] if f >= 0 else (None, None)
-                    K_fit, K_eval = (Kd, K_out) if f < 0 else (Kd[np.ix_(tr, tr)], Kd[np.ix_(te, tr)])
+                    K_fit, K_eval = (Kd, kernel(di, gi, True)) if f < 0 else (Kd[np.ix_(tr, tr)], Kd[np.ix_(te, tr)])
                     y_fit, w = (y_draw, w_full) if f < 0 else (y_draw[tr], fold_w[f])
                     for ci, key in todo:
                         fits[key] = svc_fit_decision(K_fit, y_fit, Cs[ci], w, K_eval)
