@@ -46,6 +46,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+from threadpoolctl import threadpool_limits
 
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import (
@@ -414,7 +415,7 @@ def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: ZeroShotSett
     if not splits:
         raise ConfigError("GZSL evaluation needs at least one split")
     rows: list[dict] = []
-    with compute_context(config):
+    with compute_context(config), threadpool_limits(limits=1):  # small fits: one BLAS thread (tzsl._threads)
         for i, split in enumerate(splits):
             why = ("" if has_unseen_class(features, split) else
                    "every test object shares its attribute row with a training object (no unseen class)")
