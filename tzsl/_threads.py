@@ -2,14 +2,15 @@
 
 tzsl fits many small models (an attribute classifier per attribute and sensor, its CV folds, the
 calibration folds, ESZSL's and SAE's closed forms). Threaded BLAS does not speed these up: on 2
-cores OpenBLAS spent 70 times the CPU of one thread on the SVD of a 2,000 x 72 feature matrix
-(ESZSL's closed form) and 5 times on the attribute-count sweep, its extra threads spinning; with
-one thread the results no longer depend on the machine's cores either.
+cores OpenBLAS spends many times the CPU of one thread on them (the SVD of ESZSL's closed form
+most of all), its extra threads spinning; with one thread the results no longer depend on the
+machine's cores either (docs/user_guide/performance.md, one BLAS thread).
 
 ``threadpoolctl.threadpool_limits`` finds the loaded BLAS and OpenMP libraries every time it is
-entered (about 3 ms); :func:`one_blas_thread` finds them once per process, at its first use, and
-then only sets and restores their thread counts (about 0.02 ms). A library loaded after that first
-use (e.g. torch's) is not limited by it: blocks that may load one use ``threadpool_limits``.
+entered, which costs more than a small fit's arithmetic; :func:`one_blas_thread` finds them once per
+process, at its first use, and then only sets and restores their thread counts. A library loaded
+after that first use (e.g. torch's) is not limited by it: blocks that may load one use
+``threadpool_limits``.
 """
 
 from __future__ import annotations

@@ -114,7 +114,7 @@ def _fit_every_method(features: FeatureSet, results: list[SplitPosteriors], meth
     jobs = [(i, spec) for i in range(len(results)) for spec in methods]
     shipped = [(i, spec) for i, spec in jobs if _is_builtin(spec)]
     # many small fits: one BLAS thread each (in this process; joblib's workers have one already), parallel
-    # over fits; on 2 cores threaded BLAS spent 70 times the CPU of one thread on ESZSL's SVD (tzsl._threads)
+    # over fits; on 2 cores threaded BLAS spent many times the CPU of one thread on ESZSL's SVD (tzsl._threads)
     with threadpool_limits(limits=1):
         with stage("fit"):  # the methods' fits (and their test scores), in joblib workers
             done = Parallel(n_jobs=n_jobs)(delayed(relayed(attempt))(fit_predict_split, spec, features,
