@@ -142,3 +142,17 @@ def test_halving_without_the_kernel_cache_gives_the_same_model(monkeypatch):
     np.testing.assert_array_equal(kept.cv_scores_, recomputed.cv_scores_)
     assert (kept.C_, kept.gamma_, kept.draw_, kept.platt_) == (recomputed.C_, recomputed.gamma_, recomputed.draw_,
                                                                 recomputed.platt_)
+
+
+
+def test_halving_scores_outside_the_draw_with_the_chosen_svm():
+    """Under-sampling leaves trials outside the chosen draw; their out-of-fold scores come from the SVM fitted
+    on the whole draw (the kernel of the outside trials to the draw's trials), i.e. the final model's scores."""
+    X, A, g = make_problem(n_objects=20, seed=6)
+    model = AttributeSVM(n_C=3, n_gamma=3, n_draws=2, cv=4, search="halving", undersampling="select",
+                         random_state=2).fit(X[:, 0], A[:, 0], g)
+    assert model.gamma_ != model.gamma_grid_[0]  # a kernel of the wrong gamma would show
+    Z = model.preprocessor_.transform(X[:, 0])
+    in_draw = (np.abs(Z[:, None, :] - model.train_features_[0][None]).sum(axis=2) < 1e-12).any(axis=1)
+    assert in_draw.any() and (~in_draw).any()
+    np.testing.assert_allclose(model.oof_scores_[~in_draw], model.svm_score(X[~in_draw, 0]), rtol=1e-6, atol=1e-8)

@@ -217,3 +217,25 @@ def test_the_untuned_logistic_family_is_the_per_ep_models_classifier_and_takes_n
     X, A, g, _ = bank_problem()
     chain = MultiLabelAttributeClassifier(detector="logistic-c1", random_state=0, memory=False).fit(X, A, g)
     assert chain.predict_proba(X).shape == (len(g), 2, A.shape[1])
+
+
+@pytest.mark.parametrize("detector", ["logistic", "logistic-c1"])
+def test_linear_detectors_fit_with_one_blas_thread(detector, monkeypatch):
+    """A detector's fit is a small dense problem: one BLAS thread (tzsl._parallel.one_blas_thread), whatever the caller's."""
+    from threadpoolctl import threadpool_info, threadpool_limits  # noqa: PLC0415
+    from sklearn.linear_model import LogisticRegression  # noqa: PLC0415
+
+    seen: list[int] = []
+    original = LogisticRegression.fit
+
+    def counting_fit(self, *args, **kwargs):
+        seen.extend(lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas")
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(LogisticRegression, "fit", counting_fit)
+    rng = np.random.default_rng(0)
+    X = rng.normal(size=(60, 4))
+    y = (X[:, 0] + 0.5 * rng.normal(size=60) > 0).astype(int)
+    with threadpool_limits(limits=2, user_api="blas"):
+        detector_template(detector).fit(X, y, np.repeat(np.arange(12), 5))
+    assert seen and set(seen) == {1}

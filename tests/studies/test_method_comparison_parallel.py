@@ -60,3 +60,34 @@ def test_every_random_part_of_a_study_estimator_is_seeded():
         params = study_estimator({"name": name}, 7).get_params(deep=True)
         unseeded = [k for k, v in params.items() if k.endswith("random_state") and v is None]
         assert not unseeded, (name, unseeded)
+
+
+#: BLAS threads each fit of :class:`_ThreadCounting` saw (tests only).
+_SEEN_THREADS: list[int] = []
+
+
+def test_the_methods_fits_in_this_process_use_one_blas_thread():
+    """Many small fits: threaded BLAS only spins (tzsl._parallel.one_blas_thread), so the comparison fits in one BLAS thread
+    in this process too (joblib's workers have one already), whatever the caller's limit."""
+    from threadpoolctl import threadpool_info, threadpool_limits  # noqa: PLC0415
+
+    from tests.studies.test_method_wiring import NearestMeanAttributes  # noqa: PLC0415
+    from tzsl.models import NearestAttributeRule, register_method, unregister_method  # noqa: PLC0415
+
+    class _ThreadCounting(NearestMeanAttributes):
+        def fit(self, X, Y, groups=None):
+            _SEEN_THREADS.extend(lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas")
+            return super().fit(X, Y, groups)
+
+    register_method("plugin-threads", family="embedding", paper="test only", attribute_model=_ThreadCounting,
+                    decision_rule=NearestAttributeRule, description="test")
+    try:
+        features = synthetic_features(n_objects=20)
+        config = _config(n_test=5, n_splits=1)
+        results = fit_splits(features, make_splits(features, "random", config)[0], config)
+        _SEEN_THREADS.clear()
+        with threadpool_limits(limits=2, user_api="blas"):
+            method_comparison(features, results, methods=({"name": "plugin-threads"},), n_jobs=1)
+    finally:
+        unregister_method("plugin-threads")
+    assert _SEEN_THREADS and set(_SEEN_THREADS) == {1}

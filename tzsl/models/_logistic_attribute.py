@@ -17,6 +17,8 @@ from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from tzsl._parallel import one_blas_thread
+
 __all__ = ["LogisticAttribute"]
 
 
@@ -60,7 +62,8 @@ class LogisticAttribute(ClassifierMixin, BaseEstimator):
         check_classification_targets(y)
         lr = LogisticRegression(C=self.C, class_weight=self.class_weight, max_iter=self.max_iter,
                                 solver="newton-cholesky")  # exact L2 fit, faster than lbfgs on ~50 columns
-        self.pipeline_ = make_pipeline(StandardScaler(), lr).fit(X, y)
+        with one_blas_thread():  # a small dense problem: extra BLAS threads only spin (tzsl._parallel.one_blas_thread)
+            self.pipeline_ = make_pipeline(StandardScaler(), lr).fit(X, y)
         self.classes_ = self.pipeline_.classes_
         self.n_iter_ = self.pipeline_[-1].n_iter_
         return self

@@ -47,6 +47,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from tzsl._parallel import one_blas_thread
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import (
     Split,
@@ -417,7 +418,7 @@ def run_gzsl(features: FeatureSet, splits: Sequence[Split], config: ZeroShotSett
     if not splits:
         raise ConfigError("GZSL evaluation needs at least one split")
     rows: list[dict] = []
-    with compute_context(config):
+    with compute_context(config), one_blas_thread():  # small fits: one BLAS thread
         for i, split in enumerate(splits):
             why = ("" if has_unseen_class(features, split) else
                    "every test object shares its attribute row with a training object (no unseen class)")
