@@ -20,9 +20,9 @@ from tzsl.studies.zero_shot.spread import (
     FUSION_PRIOR_TABLE,
     REFIT_TABLE,
     add_refit_spread,
-    dap_variant_label,
     model_seed,
 )
+from tzsl.studies.config import dap_label
 from tzsl.studies.papers.run_labels import StudyLabels
 from tzsl.studies.comparison.method_runs import COMPARISON_COLUMNS, combine_comparisons
 
@@ -83,7 +83,7 @@ def test_fusion_prior_table_pairs_every_variant_with_dap_avg(study):
     assert random.loc["dap-max", "accuracy"] == pytest.approx(t1.loc["mean", "maxdap"])
     assert random.loc["dap-avg", "sd_over_splits"] == pytest.approx(t1.loc["std", "avgdap"])
     t2 = tables["table2_priors"].set_index("split")
-    assert random.loc[dap_variant_label("avg", "train"), "accuracy"] == pytest.approx(t2.loc["mean", "train"])
+    assert random.loc[dap_label("avg", prior="train"), "accuracy"] == pytest.approx(t2.loc["mean", "train"])
 
 
 def test_refits_keep_the_split_and_change_the_model_seed(study):

@@ -64,7 +64,7 @@ Methods and model selection (training groups only)
   test samples and per-class mean accuracy over test groups.
 
 Outputs (through :class:`~tzsl.studies.outputs.results_folder.ResultsDir`)
-----------------------------------------------------------------
+---------------------------------------------------------------------------
 ``fabric_table1.csv`` (:func:`fabric_table`), ``fabric_runs.csv`` (one row per fit),
 ``fabric_lambda.png`` (accuracy vs lambda, ours and the paper's: Fig. 6),
 ``fabric_partitions.csv`` (with ``partitions``: ESZSL over repeated group partitions with >= 4
