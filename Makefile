@@ -47,7 +47,7 @@ browser:
 	  || echo "make: chromium is not installed; the report layout test needs it"
 
 test: install browser
-	$(BIN)/pytest -q -n $(TEST_WORKERS)
+	$(BIN)/pytest -q -n $(TEST_WORKERS) --dist loadgroup
 
 # The property tests over their full range (opt-in, many minutes on two cores): the template on datasets of
 # 8-100 classes, 3-40 attributes, 1-3 sensors, merged rows and real-data pathologies (the 100 x 40 x 3 corner

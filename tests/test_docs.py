@@ -27,6 +27,12 @@ def _text(page: Path) -> str:
     return html_escape.unescape(re.sub(r"<[^>]+>", "", page.read_text(encoding="utf-8")))
 
 
+#: One Sphinx build at a time: it writes the API stubs into the source tree (``docs/``), so two pytest-xdist
+#: workers building at once remove each other's files; ``make test`` runs this group in one worker
+#: (``--dist loadgroup``).
+pytestmark = pytest.mark.xdist_group("sphinx-build")
+
+
 @pytest.fixture(scope="module")
 def html(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("docs")
