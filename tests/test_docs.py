@@ -7,6 +7,7 @@ found by a glob, so pages added later are built too) and the gallery, whose exam
 
 from __future__ import annotations
 
+import fcntl
 import html as html_escape
 import importlib
 import os
@@ -28,8 +29,8 @@ def _text(page: Path) -> str:
 
 
 #: One Sphinx build at a time: it writes the API stubs into the source tree (``docs/``), so two pytest-xdist
-#: workers building at once remove each other's files; ``make test`` runs this group in one worker
-#: (``--dist loadgroup``).
+#: workers building at once remove each other's files. ``make test`` runs this group in one worker
+#: (``--dist loadgroup``), and the build holds a lock shared by the workers whatever the scheduling.
 pytestmark = pytest.mark.xdist_group("sphinx-build")
 
 
@@ -38,13 +39,20 @@ def html(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("docs")
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
            "MPLBACKEND": "Agg"}
-    build = subprocess.run(
+    lock_path = tmp_path_factory.getbasetemp().parent / "sphinx-build.lock"  # shared by the xdist workers
+    with open(lock_path, "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        build = _sphinx(out, env)
+    assert build.returncode == 0, f"sphinx-build -W failed:\n{build.stdout[-3000:]}\n{build.stderr[-6000:]}"
+    return out / "html"
+
+
+def _sphinx(out: Path, env: dict) -> subprocess.CompletedProcess:
+    return subprocess.run(
         [sys.executable, "-m", "sphinx", "-b", "html", "-W", "--keep-going", "-q", "-d", str(out / "doctrees"),
          str(DOCS), str(out / "html")],
         env=env, capture_output=True, text=True, cwd=REPO,
     )
-    assert build.returncode == 0, f"sphinx-build -W failed:\n{build.stdout[-3000:]}\n{build.stderr[-6000:]}"
-    return out / "html"
 
 
 @pytest.mark.slow
