@@ -25,8 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 from sklearn.exceptions import ConvergenceWarning
-from threadpoolctl import threadpool_limits
 
+from tzsl._parallel import one_blas_thread
 from tzsl.datasets import FabricSplit
 from tzsl.evaluation import per_class_mean_accuracy, select_embedding_alpha, trial_accuracy
 from tzsl.exceptions import ConfigError
@@ -248,7 +248,7 @@ def run_job(
         return model
 
     chosen = fit_registry if spec is not None else fit_eszsl if method == ESZSL_METHOD else fit_embedding
-    with threadpool_limits(limits=1):  # many small fits: one BLAS thread each, parallel over fits
+    with one_blas_thread():  # many small fits: one BLAS thread each, parallel over fits
         runs, error = attempt(zero_shot_runs, timed, samples_X, groups, A, splits)
     if runs is None:  # recorded in the runs table (NaN scores), reported at the end of the run
         rows = [{"method": method, "seed": seed, "accuracy": np.nan, "per_class_mean_accuracy": np.nan,
