@@ -37,7 +37,7 @@ Choices fixed before measuring
   absent in fewer than 2 trials of a fold's training part is left out of that fold); ties go to
   the smaller ``C``. The stage is refitted on all training trials at that ``C`` and applied to
   the test trials' fused logits of the final detectors. DAP: ``sum_a log p(a = K[c, a] | x)``
-  (uniform prior, :func:`tzsl.models.dap.dap_log_scores`), ties broken with the split's seed.
+  (uniform prior, :class:`tzsl.models.DAPRule`), ties broken with the split's seed.
 * ``stack-own`` (diagnostic, never adopted): the same stage with ``a``'s own logit as its only
   input, a per-attribute recalibration on held-out logits; ``stack`` minus ``stack-own`` is what
   the other attributes add.
@@ -97,8 +97,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from tzsl.evaluation import PURPOSES, within_object_error_correlation
 from tzsl.features import dataset_features
-from tzsl.models import AttributeClassifierBank, GridEdgeWarning
-from tzsl.models.dap import break_ties, dap_log_scores, fuse_attribute_posteriors
+from tzsl.models import AttributeClassifierBank, DAPRule, GridEdgeWarning
 from tzsl.models.protocol import class_grouped_folds
 from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.methods import fit_predict_split
@@ -224,9 +223,9 @@ def pinned(bank: AttributeClassifierBank) -> AttributeClassifierBank:
     return clone(bank).set_params(estimator_params=[[{"C_grid": (est.C_,)} for est in per] for per in bank.estimators_])
 
 
-def dap_predict(present: np.ndarray, K: np.ndarray, seed: int) -> np.ndarray:
-    """DAP (uniform prior) class rows (n,) of posteriors ``present`` (n, m) among ``K`` (k, m), ties seeded."""
-    return break_ties(dap_log_scores(present, K, np.full(K.shape[1], 0.5)), random_state=seed)
+def dap_predict(P: np.ndarray, A_train: np.ndarray, K: np.ndarray, seed: int) -> np.ndarray:
+    """AVGDAP (uniform prior) class rows (n,) of posteriors ``P`` (n, s, m) or (n, m) among ``K`` (k, m), ties seeded."""
+    return DAPRule(fusion="avg", prior="uni").fit(A_train).predict(P, K, random_state=seed)
 
 
 def fit_stage(Z: np.ndarray, y: np.ndarray, C: float) -> LogisticRegression:
@@ -309,8 +308,7 @@ def score_split(features, split, seed: int, references: bool, out: Path) -> tupl
     fit, y = fit_predict_split({"name": DETECTOR_METHOD, "calibration": "none"}, features, split, seed)
     bank = fit.model.attribute_model_
     rows = [(DETECTOR_METHOD, fit.predicted == y)]
-    present = fuse_attribute_posteriors(bank.predict_proba(X_test), "avg")[0]
-    info["c1_dap_agreement"] = float(np.mean(dap_predict(present, K, seed) == fit.predicted))
+    info["c1_dap_agreement"] = float(np.mean(dap_predict(bank.predict_proba(X_test), A_train, K, seed) == fit.predicted))
     cache = out / f"{split.name}.npz"
     if cache.exists():
         S_oof = np.load(cache)["S_oof"]
@@ -324,7 +322,7 @@ def score_split(features, split, seed: int, references: bool, out: Path) -> tupl
     start = time.process_time()
     for label, own in (("stack", False), ("stack-own", True)):
         st = stacked(np.nan_to_num(S_oof, nan=0.0), A_train, g_train, S_test, own)
-        rows.append((label, dap_predict(st["P_test"], K, seed) == y))
+        rows.append((label, dap_predict(st["P_test"], A_train, K, seed) == y))
         info[f"{label}_C"] = st["C"]
         info.update(structure(label, to_logits(st["P_oof"]), to_logits(st["P_fit"]), to_logits(st["P_test"]),
                               A_train, A_test, g_train, g_test))
@@ -333,7 +331,7 @@ def score_split(features, split, seed: int, references: bool, out: Path) -> tupl
     start = time.process_time()
     sparse = AttributeClassifierBank(estimator=SparseLogisticAttribute(), solver="exact", memory=False,
                                      random_state=seed).fit(X_train, A_train, g_train)
-    rows.append(("sparse", dap_predict(fuse_attribute_posteriors(sparse.predict_proba(X_test), "avg")[0], K, seed) == y))
+    rows.append(("sparse", dap_predict(sparse.predict_proba(X_test), A_train, K, seed) == y))
     chosen_C = np.array([[est.C_ for est in per] for per in sparse.estimators_])
     info.update({"sparse_C_median": float(np.median(chosen_C)),
                  "sparse_C_at_low_end": float(np.mean(chosen_C == SPARSE_C_GRID[0])),
