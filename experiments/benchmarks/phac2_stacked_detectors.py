@@ -62,6 +62,12 @@ higher criterion is adopted. Only an adopted method is run once on confirmation 
 (``--purpose confirm --seed 32 --n-random 50`` and every challenging split, ``--references``
 adding ``dap-avg`` and ``eszsl``, paired intervals). Nothing is registered by this script.
 
+Outcome: on the selection splits neither ``stack`` nor ``sparse`` passed the rule (both below
+``dap-avg-logistic-c1`` on random and challenging splits; ``stack-own`` too), so neither was run on
+confirmation splits nor registered; the numbers are in the issue's record, not typed here. The
+stage's ``C`` was the grid's smallest value on every selection split (an edge of the fixed grid):
+a smaller one was not tried, since the rule fixed the grid before the run.
+
 Measurements
 ------------
 (a) per method (``c1``: the reference's detectors, ``stack``, ``stack-own``, ``sparse``), the error
@@ -72,6 +78,12 @@ the class means of its held-out logits) as ``phac2_correlated_dap.py``'s ``error
 the chosen ``C`` values and the sparse detectors' mean number of nonzero coefficients.
 (b) per-trial correctness of every method; ``summary.csv`` (accuracy [two-level bootstrap 95%
 interval] per kind and method, paired difference to each reference), ``decision.csv``.
+
+Per-split held-out logits of the reference's detectors are cached in ``--out`` (``<split>.npz``, the
+correlated-DAP script's format); one BLAS thread keeps the many small fits from spinning a second core::
+
+    OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 nice -n 5 python experiments/benchmarks/phac2_stacked_detectors.py \
+        --out /tmp/lever32b-select --purpose select --seed 0 --n-random 20
 """
 
 from __future__ import annotations
