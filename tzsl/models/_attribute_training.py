@@ -43,7 +43,7 @@ __all__ = [
 
 UNDERSAMPLING = ("select", "bagging", "none")
 SOLVERS = ("exact", "approximate", "auto")
-AUTO_MAX_EXACT_TRIALS = 3000
+AUTO_MAX_EXACT_TRIALS = 2000
 SCORING = ("log_loss", "balanced_accuracy")
 PLATT_WEIGHTING = ("balanced", "empirical")
 #: ``grid`` options: the paper's log-spaced ``gamma`` grid, that grid with lower decades added, or
