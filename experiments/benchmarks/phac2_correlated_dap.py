@@ -79,6 +79,8 @@ Per-split held-out logits are cached in ``--out`` (``<split>.npz``)::
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import argparse
 import time
 import warnings
@@ -277,8 +279,13 @@ def decision(result: pd.DataFrame) -> pd.DataFrame:
     return wide.reset_index()
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def lever_main(description: str, score: Callable, progress: Callable[[dict], str],
+               decide: Callable[[pd.DataFrame], pd.DataFrame]) -> None:
+    """The command line of a PHAC-2 lever script (this one, ``phac2_stacked_detectors.py``): fit and score
+    every split of the chosen purpose with ``score(features, split, seed, references, out) -> (trials,
+    info)``, print one line per split (accuracies and ``progress(info)``), then write ``summary.csv``
+    and ``decision.csv`` (``decide(summary)``) and print them with the mean error structure."""
+    ap = argparse.ArgumentParser(description=description.splitlines()[0])
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--n-random", type=int, default=20)
     ap.add_argument("--seed", type=int, default=0)
@@ -294,25 +301,30 @@ def main() -> None:
                                                                  "n_splits": args.n_random})
         parts, infos = [], []
         for kind, index, split in splits_of(features, config, True):
-            table, info = score_split(features, split, config.study_seed + index, args.references, args.out)
+            table, info = score(features, split, config.study_seed + index, args.references, args.out)
             parts.append(table.assign(kind=kind))
             infos.append({"kind": kind, **info})
             pd.concat(parts, ignore_index=True).to_csv(args.out / "trials.csv", index=False)
             pd.DataFrame(infos).to_csv(args.out / "error_structure.csv", index=False)
             acc = table.groupby("method", sort=False)["correct"].mean()
-            print(f"{split.name}: " + ", ".join(f"{m} {a:.3f}" for m, a in acc.items())
-                  + f"; oof between-share {info['oof_between_share']:.2f}, obj err corr {info['oof_obj_err_corr']:.2f}"
-                  + f"; cpu {info['cpu_seconds']:.0f} s", flush=True)
+            print(f"{split.name}: " + ", ".join(f"{m} {a:.3f}" for m, a in acc.items()) + progress(info), flush=True)
     trials = pd.read_csv(args.out / "trials.csv")
     result = summary(trials, (DETECTOR_METHOD, "dap-avg", "eszsl"))
     result.to_csv(args.out / "summary.csv", index=False)
-    chosen = decision(result)
+    chosen = decide(result)
     chosen.to_csv(args.out / "decision.csv", index=False)
     structure = pd.read_csv(args.out / "error_structure.csv").drop(columns="split").groupby("kind", sort=False).mean()
-    with pd.option_context("display.width", 220, "display.max_columns", 30):
+    with pd.option_context("display.width", 220, "display.max_columns", 30, "display.max_rows", 200):
         print(result.round(3).to_string(index=False))
         print(chosen.round(3).to_string(index=False))
         print(structure.round(3).T.to_string())
+
+
+def main() -> None:
+    lever_main(__doc__, score_split,
+               lambda info: (f"; oof between-share {info['oof_between_share']:.2f}, obj err corr "
+                             f"{info['oof_obj_err_corr']:.2f}; cpu {info['cpu_seconds']:.0f} s"),
+               decision)
 
 
 if __name__ == "__main__":

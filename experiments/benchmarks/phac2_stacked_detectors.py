@@ -88,9 +88,7 @@ correlated-DAP script's format); one BLAS thread keeps the many small fits from 
 
 from __future__ import annotations
 
-import argparse
 import time
-import warnings
 from numbers import Integral, Real
 from pathlib import Path
 
@@ -107,11 +105,9 @@ from sklearn.utils._param_validation import Interval
 from sklearn.utils.class_weight import compute_sample_weight
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from tzsl.evaluation import PURPOSES, within_object_error_correlation
-from tzsl.features import dataset_features
-from tzsl.models import AttributeClassifierBank, DAPRule, GridEdgeWarning
+from tzsl.evaluation import within_object_error_correlation
+from tzsl.models import AttributeClassifierBank, DAPRule
 from tzsl.models.protocol import class_grouped_folds
-from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.methods import fit_predict_split
 from tzsl.studies.zero_shot.study import split_masks
 
@@ -123,10 +119,10 @@ from phac2_correlated_dap import (  # noqa: E402  (run from experiments/benchmar
     error_structure,
     fused_logits,
     held_out_logits,
+    lever_main,
     residuals,
-    summary,
 )
-from phac2_detectors_confirm import MEMBERS, splits_of  # noqa: E402
+from phac2_detectors_confirm import MEMBERS  # noqa: E402
 
 #: ``C`` grid of the stacking stage (one value per split, by object-grouped CV).
 STACK_C_GRID = (0.01, 0.1, 1.0)
@@ -372,42 +368,12 @@ def adopted(result: pd.DataFrame) -> pd.DataFrame:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, required=True)
-    ap.add_argument("--n-random", type=int, default=20)
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--purpose", choices=PURPOSES, default="select")
-    ap.add_argument("--references", action="store_true", help="also fit dap-avg (RBF-SVM) and eszsl")
-    ap.add_argument("--summarise", action="store_true", help="only summarise the trials.csv of --out")
-    args = ap.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
-    if not args.summarise:
-        features = dataset_features("phac2-penn")
-        warnings.simplefilter("ignore", GridEdgeWarning)
-        config = ZeroShotSettings.of_preset("phac2-dap", splits={"seed": args.seed, "purpose": args.purpose,
-                                                                 "n_splits": args.n_random})
-        parts, infos = [], []
-        for kind, index, split in splits_of(features, config, True):
-            table, info = score_split(features, split, config.study_seed + index, args.references, args.out)
-            parts.append(table.assign(kind=kind))
-            infos.append({"kind": kind, **info})
-            pd.concat(parts, ignore_index=True).to_csv(args.out / "trials.csv", index=False)
-            pd.DataFrame(infos).to_csv(args.out / "error_structure.csv", index=False)
-            acc = table.groupby("method", sort=False)["correct"].mean()
-            print(f"{split.name}: " + ", ".join(f"{m} {a:.3f}" for m, a in acc.items())
-                  + f"; between-share c1 {info['c1_test_between_share']:.2f}, stack {info['stack_test_between_share']:.2f},"
-                  + f" sparse {info['sparse_test_between_share']:.2f}; cpu c1 {info['cpu_c1']:.0f} s, stack"
-                  + f" {info['cpu_stack']:.0f} s, sparse {info['cpu_sparse']:.0f} s", flush=True)
-    trials = pd.read_csv(args.out / "trials.csv")
-    result = summary(trials, (DETECTOR_METHOD, "dap-avg", "eszsl"))
-    result.to_csv(args.out / "summary.csv", index=False)
-    chosen = adopted(result)
-    chosen.to_csv(args.out / "decision.csv", index=False)
-    structure_means = pd.read_csv(args.out / "error_structure.csv").drop(columns="split").groupby("kind", sort=False).mean()
-    with pd.option_context("display.width", 220, "display.max_columns", 30, "display.max_rows", 200):
-        print(result.round(3).to_string(index=False))
-        print(chosen.round(3).to_string(index=False))
-        print(structure_means.round(3).T.to_string())
+    lever_main(__doc__, score_split,
+               lambda info: (f"; between-share c1 {info['c1_test_between_share']:.2f}, stack "
+                             f"{info['stack_test_between_share']:.2f}, sparse {info['sparse_test_between_share']:.2f};"
+                             f" cpu c1 {info['cpu_c1']:.0f} s, stack {info['cpu_stack']:.0f} s, sparse "
+                             f"{info['cpu_sparse']:.0f} s"),
+               adopted)
 
 
 if __name__ == "__main__":
