@@ -44,10 +44,12 @@ Run::
 The first (selection splits) decides; the second gives the numbers shown for the choice (random
 confirmation splits of seed 1 and the 5 challenging splits, the only ones there are).
 
-Each writes ``experiment.toml``, the run's results folder ``results/`` and ``summary.csv`` (one row
-per split kind and solver: mean accuracy over splits, the paired mean difference approximate minus
-exact with a 95% percentile interval over splits from 10,000 bootstrap resamples of the splits,
-fit seconds; and the criterion rows) into ``--out``, and prints the guard's verdict.
+Each writes ``experiment.toml``, the run's results folder ``results/`` and
+``exact_solver_threshold_<data>_<purpose>_seed<seed>.csv`` (one row per split kind: each solver's
+mean accuracy over splits, the paired mean difference approximate minus exact with a 95% percentile
+interval from 10,000 bootstrap resamples of the splits; and the criterion row) into ``--out``, and
+prints the guard's verdict. ``make numbers BENCH_RESULTS=DIR`` (``DIR`` holding the ``--out``
+folders) generates the ``exact-solver-threshold-benchmark`` block of experiments/benchmarks/README.md.
 """
 
 from __future__ import annotations
@@ -65,6 +67,9 @@ from tzsl.studies.engine import run
 #: The guard's tolerance (accuracy, 0-1): the approximate model's criterion may be at most this much
 #: below the exact model's. Fixed before any measurement.
 MAX_CRITERION_LOSS = 0.03
+#: Start of the summary file's name (``<prefix><data>_<purpose>_seed<seed>.csv``), the one the
+#: ``exact-solver-threshold-benchmark`` block of experiments/benchmarks/README.md reads (``make numbers``).
+SUMMARY_PREFIX = "exact_solver_threshold_"
 #: The two solvers compared, as registry entries of the method comparison.
 SOLVERS = ("exact", "approximate")
 
@@ -113,8 +118,8 @@ def paired_summary(per_split: pd.DataFrame, *, n_boot: int = 10_000, seed: int =
     """Per split kind: each solver's mean accuracy and the paired difference approximate - exact.
 
     ``per_split``: ``methods_per_split.csv`` (one row per split, numbered, and the summary rows ``mean``
-    and ``std`` of each split kind, which are left out; columns ``split``, ``split_kind`` and one
-    accuracy column per method label). The interval is the 2.5/97.5 percentiles of the mean
+    and ``std`` of each split kind, which are left out; columns ``split``, ``split_kind``, ``chance``
+    and one accuracy column per method label; ``chance`` is averaged like the accuracies). The interval is the 2.5/97.5 percentiles of the mean
     difference over ``n_boot`` resamples of the splits (with replacement).
     """
     rows = per_split[per_split["split"].astype(str).str.isdigit()]
@@ -125,11 +130,12 @@ def paired_summary(per_split: pd.DataFrame, *, n_boot: int = 10_000, seed: int =
         approx = part[label("approximate")].to_numpy(float)
         diff = approx - exact
         boot = diff[rng.integers(0, diff.size, size=(n_boot, diff.size))].mean(axis=1)
-        out.append({"split_kind": kind, "n_splits": diff.size, "exact": exact.mean(), "approximate": approx.mean(),
+        out.append({"split_kind": kind, "n_splits": diff.size, "chance": part["chance"].astype(float).mean(),
+                    "exact": exact.mean(), "approximate": approx.mean(),
                     "difference": diff.mean(), "difference_ci95_low": np.percentile(boot, 2.5),
                     "difference_ci95_high": np.percentile(boot, 97.5)})
     table = pd.DataFrame(out)
-    criterion = {"split_kind": "criterion", "n_splits": int(table["n_splits"].sum()),
+    criterion = {"split_kind": "criterion", "n_splits": int(table["n_splits"].sum()), "chance": table["chance"].mean(),
                  "exact": table["exact"].mean(), "approximate": table["approximate"].mean()}
     criterion["difference"] = criterion["approximate"] - criterion["exact"]
     return pd.concat([table, pd.DataFrame([criterion])], ignore_index=True)
@@ -139,6 +145,16 @@ def guard_holds(summary: pd.DataFrame) -> bool:
     """Rule 1 of the module docstring on a :func:`paired_summary` table."""
     row = summary.set_index("split_kind").loc["criterion"]
     return bool(row["difference"] >= -MAX_CRITERION_LOSS)
+
+
+def write_summary(per_split: pd.DataFrame, out: Path, *, data: str, purpose: str, seed: int) -> pd.DataFrame:
+    """:func:`paired_summary` of ``per_split`` with the run's ``data``, ``purpose``, ``seed`` and the rule's
+    tolerance, written to ``out / <SUMMARY_PREFIX><data>_<purpose>_seed<seed>.csv``; returns it."""
+    summary = paired_summary(per_split).assign(data=data, purpose=purpose, seed=seed,
+                                               rule_max_criterion_loss=MAX_CRITERION_LOSS)
+    name = f"{SUMMARY_PREFIX}{data}_{purpose}_seed{seed}.csv"
+    atomic_write(out / name, lambda tmp: summary.to_csv(tmp, index=False, float_format="%.6g"))
+    return summary
 
 
 def main(argv: list[str] | None = None) -> pd.DataFrame:
@@ -154,18 +170,19 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
                         help="summarise the results folder of an earlier run in --out (no fit)")
     args = parser.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
-    folder = None
-    if args.data == "template":
-        from tzsl.benchmarks.bench_template import write_template_dataset  # noqa: PLC0415
-
-        folder = write_template_dataset(args.out / "dataset")
-    experiment = args.out / "experiment.toml"
-    text = experiment_text(args.data, folder, args.out / "results", args.n_jobs, purpose=args.purpose, seed=args.seed)
-    atomic_write(experiment, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     if not args.summary_only:
+        folder = None
+        if args.data == "template":
+            from tzsl.benchmarks.bench_template import write_template_dataset  # noqa: PLC0415
+
+            folder = write_template_dataset(args.out / "dataset")
+        experiment = args.out / "experiment.toml"
+        text = experiment_text(args.data, folder, args.out / "results", args.n_jobs, purpose=args.purpose,
+                               seed=args.seed)
+        atomic_write(experiment, lambda tmp: tmp.write_text(text, encoding="utf-8"))
         run(experiment, force=True)
-    summary = paired_summary(pd.read_csv(args.out / "results" / "methods_per_split.csv"))
-    atomic_write(args.out / "summary.csv", lambda tmp: summary.to_csv(tmp, index=False, float_format="%.6g"))
+    summary = write_summary(pd.read_csv(args.out / "results" / "methods_per_split.csv"), args.out,
+                            data=args.data, purpose=args.purpose, seed=args.seed)
     print(summary.to_string(index=False, float_format=lambda v: f"{v:.4f}"))
     if args.data == "phac2" and args.purpose == "select":
         print(f"guard ({'holds' if guard_holds(summary) else 'fails'}): approximate criterion at most "

@@ -9,6 +9,7 @@ from tests.benchmark_scripts import benchmark_script
 from tzsl.benchmarks.bench_template import TEMPLATE_SHAPE
 from tzsl.models import AttributeClassifierBank, ScalableAttributeClassifier
 from tzsl.models.attribute_training import AUTO_MAX_EXACT_TRIALS
+from tzsl.reporting.benchmark_blocks import MissingResults, exact_solver_threshold_block
 
 
 def test_no_built_in_dataset_reaches_the_threshold(data_dir):
@@ -51,7 +52,7 @@ def test_the_guard_reads_the_criterion_of_paired_splits():
 
     with benchmark_script("exact_solver_threshold.py") as bench:
         per_split = pd.DataFrame({"split": ["1", "2", "mean", "std", "1", "2"],
-                                  "split_kind": ["random"] * 4 + ["challenging"] * 2,
+                                  "split_kind": ["random"] * 4 + ["challenging"] * 2, "chance": 0.2,
                                   bench.label("exact"): [0.40, 0.30, 0.35, 0.05, 0.20, 0.30],
                                   bench.label("approximate"): [0.38, 0.28, 0.33, 0.90, 0.10, 0.20]})
         summary = bench.paired_summary(per_split, n_boot=200)
@@ -60,3 +61,29 @@ def test_the_guard_reads_the_criterion_of_paired_splits():
         assert not bench.guard_holds(summary)
         assert bench.guard_holds(bench.paired_summary(per_split.assign(**{bench.label("approximate"):
                                                                           per_split[bench.label("exact")]})))
+
+
+def _per_split(bench, challenging_loss: float):
+    import pandas as pd  # noqa: PLC0415
+
+    return pd.DataFrame({"split": ["1", "2", "3", "mean", "1", "2"],
+                         "split_kind": ["random"] * 4 + ["challenging"] * 2,
+                         "chance": [0.2] * 4 + [0.1, 0.125],
+                         bench.label("exact"): [0.40, 0.30, 0.50, 0.40, 0.20, 0.30],
+                         bench.label("approximate"): [0.42, 0.30, 0.52, 0.413, 0.20 - challenging_loss,
+                                                      0.30 - challenging_loss]})
+
+
+def test_the_readme_block_tabulates_both_purposes_and_states_the_rule(tmp_path):
+    with pytest.raises(MissingResults):
+        exact_solver_threshold_block(tmp_path)
+    (tmp_path / "confirm").mkdir()
+    (tmp_path / "select").mkdir()
+    with benchmark_script("exact_solver_threshold.py") as bench:
+        bench.write_summary(_per_split(bench, 0.0), tmp_path / "confirm", data="phac2", purpose="confirm", seed=1)
+        bench.write_summary(_per_split(bench, 0.10), tmp_path / "select", data="phac2", purpose="select", seed=0)
+    block = exact_solver_threshold_block(tmp_path)
+    rows = [line for line in block.splitlines() if line.startswith("| select") or line.startswith("| confirm")]
+    assert [r.split(" | ")[0] for r in rows] == ["| select"] * 3 + ["| confirm"] * 3  # selection first
+    assert "| select | 0 | challenging (2) | 0.113 | 0.250 | 0.150 | -0.100 [" in block
+    assert "(does not hold)" in block  # the criterion fell by 0.04 on selection: more than the tolerance

@@ -203,7 +203,8 @@ INHERITED_CHOICES: tuple[InheritedChoice, ...] = (
         "at most MAX_CRITERION_LOSS lower (rule in experiments/benchmarks/exact_solver_threshold.py, committed "
         "before the run); every built-in dataset stays below it, so the paper and evidence tables fit exactly",
         "PHAC-2 confirmation splits (5 random splits of seed 1, purpose confirm, and the 5 challenging splits: "
-        "also used for selection), paired approximate minus exact",
+        "also used for selection), paired approximate minus exact: the exact-solver-threshold-benchmark block of "
+        "experiments/benchmarks/README.md",
         "python experiments/benchmarks/exact_solver_threshold.py --data phac2 --out DIR"),
     InheritedChoice(
         "eszsl-grid",

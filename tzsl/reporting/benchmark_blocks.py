@@ -14,9 +14,9 @@ import pandas as pd
 from tzsl.exceptions import ConfigError
 from tzsl.reporting.markdown_cells import find_table, number, ours, signed
 
-__all__ = ["BEST_METHOD_FILE", "ENSEMBLE_CALIBRATION_FILES", "ESZSL_PUBLIC_FILE", "MissingResults",
+__all__ = ["BEST_METHOD_FILE", "ENSEMBLE_CALIBRATION_FILES", "ESZSL_PUBLIC_FILE", "EXACT_SOLVER_FILES", "MissingResults",
            "benchmark_accuracy_block", "benchmark_table", "best_method_block", "ensemble_calibration_block",
-           "eszsl_public_block", "search_benchmark_block"]
+           "eszsl_public_block", "exact_solver_threshold_block", "runs_by_purpose", "search_benchmark_block"]
 
 #: The decision CSV of ``experiments/benchmarks/phac2_best_method.py``.
 BEST_METHOD_FILE = "phac2_best_method.csv"
@@ -24,6 +24,8 @@ BEST_METHOD_FILE = "phac2_best_method.csv"
 ESZSL_PUBLIC_FILE = "eszsl_public.csv"
 #: The summary CSVs of ``experiments/benchmarks/calibration_refit.py --method ensemble`` (one per purpose and seed).
 ENSEMBLE_CALIBRATION_FILES = "calibration_refit_summary_phac2_ensemble_*.csv"
+#: The summary CSVs of ``experiments/benchmarks/exact_solver_threshold.py --data phac2`` (one per purpose and seed).
+EXACT_SOLVER_FILES = "exact_solver_threshold_phac2_*.csv"
 
 
 class MissingResults(ConfigError):
@@ -187,6 +189,24 @@ def eszsl_public_block(results: str | Path) -> str:
     return "\n".join(lines)
 
 
+def runs_by_purpose(results: str | Path, pattern: str, command: str) -> pd.DataFrame:
+    """Every CSV matching ``pattern`` under ``results``, one table: selection runs first, then confirmation
+    runs, each by seed (rows of one file keep their order).
+
+    Raises
+    ------
+    MissingResults
+        No such file under ``results`` (the message names ``experiments/benchmarks/<command>``).
+    """
+    root = Path(results)
+    found = sorted(root.rglob(pattern)) if root.is_dir() else []
+    if not found:
+        raise MissingResults(f"{root}: no {pattern}; run experiments/benchmarks/{command} --out {root}/<run> first")
+    table = pd.concat([pd.read_csv(f) for f in found], ignore_index=True)
+    order = table["purpose"].map({"select": 0, "confirm": 1})
+    return table.assign(order=order).sort_values(["order", "seed"], kind="stable")
+
+
 def ensemble_calibration_block(results: str | Path) -> str:
     """The ensemble's calibration folds, members pinned vs searching (``calibration_refit.py --method ensemble``).
 
@@ -197,13 +217,7 @@ def ensemble_calibration_block(results: str | Path) -> str:
     MissingResults
         No such file under ``results``.
     """
-    root = Path(results)
-    found = sorted(root.rglob(ENSEMBLE_CALIBRATION_FILES)) if root.is_dir() else []
-    if not found:
-        raise MissingResults(f"{root}: no {ENSEMBLE_CALIBRATION_FILES}; run experiments/benchmarks/calibration_refit.py "
-                             f"--method ensemble --out {root} first")
-    table = pd.concat([pd.read_csv(f) for f in found])
-    table = table.assign(order=table["purpose"].map({"select": 0, "confirm": 1})).sort_values(["order", "seed"])
+    table = runs_by_purpose(results, ENSEMBLE_CALIBRATION_FILES, "calibration_refit.py --method ensemble")
     lines = ["Generated from `calibration_refit_summary_phac2_ensemble_*.csv` by `make numbers`: ECE [95% interval] "
              "of the calibrated `ensemble` on PHAC-2 random splits with its calibration folds refitting the members "
              "with their chosen hyper-parameters (pinned) or searching them again (search), the paired difference "
@@ -228,4 +242,42 @@ def ensemble_calibration_block(results: str | Path) -> str:
                       f"the calibration CPU falls by at least {100 * saving:.0f}% "
                       f"({'holds' if cpu_ok else 'does not hold'}): "
                       + ("the members are pinned by default." if ece_ok and cpu_ok else "the members keep searching.")]
+    return "\n".join(lines)
+
+
+def exact_solver_threshold_block(results: str | Path) -> str:
+    """``dap-avg`` with approximate against exact attribute SVMs on PHAC-2 (``exact_solver_threshold.py``).
+
+    Reads every :data:`EXACT_SOLVER_FILES` under ``results``, selection splits first, and states the
+    rule's verdict from the selection file.
+
+    Raises
+    ------
+    MissingResults
+        No such file under ``results``.
+    """
+    table = runs_by_purpose(results, EXACT_SOLVER_FILES, "exact_solver_threshold.py --data phac2")
+    lines = ["Generated from `exact_solver_threshold_phac2_*.csv` by `make numbers`: PHAC-2 accuracy of the registered "
+             "`dap-avg` with exact RBF-SVMs and with the approximate model (`solver`), each the mean over splits, and "
+             "their paired difference approximate minus exact [95% percentile interval over splits]; the criterion "
+             "is the mean of the random and challenging means; chance is one over the unseen classes, averaged "
+             "the same way.", "",
+             "| purpose | seed | split kind (splits) | chance | exact | approximate | approximate - exact |",
+             "|---|---|---|---|---|---|---|"]
+    for _, r in table.iterrows():
+        if r["split_kind"] == "criterion":
+            diff = f"{float(r['difference']):+.3f}"
+        else:
+            diff = signed(r["difference"], r["difference_ci95_low"], r["difference_ci95_high"])
+        lines.append(f"| {r['purpose']} | {int(r['seed'])} | {r['split_kind']} ({int(r['n_splits'])}) | "
+                     f"{number(r['chance'])} | {number(r['exact'])} | {number(r['approximate'])} | {diff} |")
+    select = table[(table["purpose"] == "select") & (table["split_kind"] == "criterion")]
+    if len(select):
+        r = select.iloc[0]
+        loss = float(r["rule_max_criterion_loss"])
+        holds = float(r["difference"]) >= -loss
+        lines += ["", f"The rule, fixed before measuring: on the selection splits the approximate model's criterion may "
+                      f"be at most {loss:.2f} below the exact one's ({'holds' if holds else 'does not hold'}): "
+                      + ("the exact-solver threshold is set below the template's training sets."
+                         if holds else "the threshold stays where it was.")]
     return "\n".join(lines)

@@ -18,8 +18,8 @@ written by the shipped code:
   and methods per split kind on many splits with paired differences and the split and seed-refit
   spreads, and every method x study of ``method_comparison.csv``;
 * the benchmarks' blocks (:mod:`tzsl.reporting.benchmark_blocks`), each from its own CSV: ``phac2-accuracy-benchmark``,
-  ``phac2-best-method``, ``eszsl-public-benchmark``, ``ensemble-calibration-benchmark``
-  (``experiments/benchmarks/README.md``), ``attribute-search-benchmark`` (``docs/user_guide/performance.md``).
+  ``phac2-best-method``, ``eszsl-public-benchmark``, ``ensemble-calibration-benchmark``,
+  ``exact-solver-threshold-benchmark`` (``experiments/benchmarks/README.md``), ``attribute-search-benchmark`` (``docs/user_guide/performance.md``).
 
 A block whose CSVs are missing (the benchmarks', the evidence blocks') is left as it is and the run
 says so; the ``readme`` block needs its folder. The papers' and the evidence blocks name the
@@ -48,6 +48,7 @@ from tzsl.reporting.benchmark_blocks import (
     benchmark_accuracy_block,
     best_method_block,
     ensemble_calibration_block,
+    exact_solver_threshold_block,
     eszsl_public_block,
     search_benchmark_block,
 )
@@ -403,7 +404,8 @@ BLOCKS: dict[str, Callable[[Path], str]] = {"readme": results_block, "evidence":
                                             "attribute-search-benchmark": search_benchmark_block,
                                             "phac2-best-method": best_method_block,
                                             "eszsl-public-benchmark": eszsl_public_block,
-                                            "ensemble-calibration-benchmark": ensemble_calibration_block}
+                                            "ensemble-calibration-benchmark": ensemble_calibration_block,
+                                            "exact-solver-threshold-benchmark": exact_solver_threshold_block}
 
 
 def block_spans(text: str) -> list[tuple[int, int]]:
