@@ -148,10 +148,12 @@ def guard_holds(summary: pd.DataFrame) -> bool:
 
 
 def write_summary(per_split: pd.DataFrame, out: Path, *, data: str, purpose: str, seed: int) -> pd.DataFrame:
-    """:func:`paired_summary` of ``per_split`` with the run's ``data``, ``purpose``, ``seed`` and the rule's
-    tolerance, written to ``out / <SUMMARY_PREFIX><data>_<purpose>_seed<seed>.csv``; returns it."""
-    summary = paired_summary(per_split).assign(data=data, purpose=purpose, seed=seed,
-                                               rule_max_criterion_loss=MAX_CRITERION_LOSS)
+    """:func:`paired_summary` of ``per_split`` with the run's ``data``, ``purpose``, ``seed``, the rule's
+    tolerance and its verdict on these splits (:func:`guard_holds`; it decides only on selection splits),
+    written to ``out / <SUMMARY_PREFIX><data>_<purpose>_seed<seed>.csv``; returns it."""
+    summary = paired_summary(per_split)
+    summary = summary.assign(data=data, purpose=purpose, seed=seed, rule_max_criterion_loss=MAX_CRITERION_LOSS,
+                             rule_holds=guard_holds(summary))
     name = f"{SUMMARY_PREFIX}{data}_{purpose}_seed{seed}.csv"
     atomic_write(out / name, lambda tmp: summary.to_csv(tmp, index=False, float_format="%.6g"))
     return summary

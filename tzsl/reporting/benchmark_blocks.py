@@ -249,7 +249,7 @@ def exact_solver_threshold_block(results: str | Path) -> str:
     """``dap-avg`` with approximate against exact attribute SVMs on PHAC-2 (``exact_solver_threshold.py``).
 
     Reads every :data:`EXACT_SOLVER_FILES` under ``results``, selection splits first, and states the
-    rule's verdict from the selection file.
+    rule's verdict as the selection file records it (``rule_holds``, the script's ``guard_holds``).
 
     Raises
     ------
@@ -274,10 +274,10 @@ def exact_solver_threshold_block(results: str | Path) -> str:
     select = table[(table["purpose"] == "select") & (table["split_kind"] == "criterion")]
     if len(select):
         r = select.iloc[0]
-        loss = float(r["rule_max_criterion_loss"])
-        holds = float(r["difference"]) >= -loss
+        holds = bool(r["rule_holds"])
         lines += ["", f"The rule, fixed before measuring: on the selection splits the approximate model's criterion may "
-                      f"be at most {loss:.2f} below the exact one's ({'holds' if holds else 'does not hold'}): "
+                      f"be at most {float(r['rule_max_criterion_loss']):.2f} below the exact one's "
+                      f"({'holds' if holds else 'does not hold'}): "
                       + ("the exact-solver threshold is set below the template's training sets."
                          if holds else "the threshold stays where it was.")]
     return "\n".join(lines)
