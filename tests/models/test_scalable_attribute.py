@@ -191,3 +191,24 @@ def test_default_search_uses_at_most_max_tune_trials():
     assert X.shape[0] > MAX_TUNE_TRIALS >= m.tune_index_.size > 0.9 * MAX_TUNE_TRIALS
     assert set(g[m.tune_index_]) == set(g)
     assert m.n_fit_trials_ % trials == 0  # refitted on whole objects of the draw, not the search's share of them
+
+
+@pytest.mark.parametrize("positives", [40, 110, 150])
+def test_precomputed_balanced_weights_fit_like_class_weight_balanced(positives):
+    """The path passes ``balanced_class_weights`` as sample weights instead of ``class_weight="balanced"``:
+    the same floats as scikit-learn's, so the same coefficients bit for bit, on unbalanced classes too."""
+    from sklearn.linear_model import LogisticRegression
+
+    from tzsl.models._scalable_attribute import balanced_class_weights
+
+    rng = np.random.default_rng(positives)
+    F = rng.normal(size=(190, 12))
+    y = np.zeros(190, dtype=np.int8)
+    y[rng.choice(190, positives, replace=False)] = 1
+    F[y == 1, :3] += 0.7
+    reference = LogisticRegression(class_weight="balanced", C=3.0, tol=1e-4).fit(F, y)
+    fitted = LogisticRegression(class_weight=None, C=3.0, tol=1e-4).fit(F, y, sample_weight=balanced_class_weights(y))
+    np.testing.assert_array_equal(fitted.coef_, reference.coef_)
+    np.testing.assert_array_equal(fitted.intercept_, reference.intercept_)
+    counts = np.bincount(y)
+    assert balanced_class_weights(y)[y == 1][0] == 190 / (2 * counts[1])

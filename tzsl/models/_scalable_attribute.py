@@ -125,6 +125,18 @@ def share_of_objects(groups: np.ndarray, cap: int | None, rng) -> np.ndarray:
     return np.flatnonzero(rank < quota[codes])
 
 
+def balanced_class_weights(y_codes: np.ndarray) -> np.ndarray:
+    """Per-trial weights of ``class_weight="balanced"`` for 0/1 codes ``y_codes`` (n_trials,): ``n / (2 * count)``.
+
+    The same floats scikit-learn's ``compute_class_weight("balanced")`` gives each trial (``n /
+    (n_classes * bincount)``, not :func:`balanced_sample_weights`' ``0.5 / count * n``, which rounds
+    differently), computed once per path instead of once per fit; passed as ``sample_weight`` with
+    ``class_weight=None`` the fit is the same bit for bit (tests/models/test_scalable_attribute.py).
+    """
+    counts = np.maximum(np.bincount(y_codes, minlength=2), 1).astype(np.float64)  # an absent class indexes nothing
+    return (y_codes.size / (2 * counts))[y_codes]
+
+
 def _range_pair(value) -> bool:
     return (isinstance(value, tuple | list) and len(value) == 2
             and all(isinstance(v, Real) for v in value) and 0 < value[0] <= value[1])
@@ -247,17 +259,19 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
 
         ``start``: ``(coef, intercept)`` the first fit starts from (default: zeros).
         """
-        model = LogisticRegression(warm_start=True, class_weight="balanced", max_iter=self.max_iter, tol=1e-4)
+        model = LogisticRegression(warm_start=True, class_weight=None, max_iter=self.max_iter, tol=1e-4)
         if start is not None:
             model.coef_, model.intercept_ = start[0][None, :].copy(), np.array([start[1]])
         # 0/1 codes, not booleans: scikit-learn encodes non-numeric labels in a Python loop over the
         # trials on every fit (same classes order, same fit); features made here are finite
         y_codes = np.asarray(y_train, dtype=np.int8)
+        weights = balanced_class_weights(y_codes)
         solutions = []
         for ci, C in enumerate(Cs):
-            with warnings.catch_warnings(), config_context(assume_finite=True):
+            # parameters are this method's own (validated once, in fit): not validated again per fit of the path
+            with warnings.catch_warnings(), config_context(assume_finite=True, skip_parameter_validation=True):
                 warnings.simplefilter("ignore", ConvergenceWarning)  # a capped step is reported through n_iter_
-                model.set_params(C=float(C)).fit(F_train, y_codes)
+                model.set_params(C=float(C)).fit(F_train, y_codes, sample_weight=weights)
             coef, intercept = model.coef_[0].copy(), float(model.intercept_[0])
             solutions.append((coef, intercept, int(model.n_iter_[0])))
             if F_eval.shape[0]:
