@@ -207,3 +207,12 @@ def test_dap_arithmetic_only_through_its_rule():
             callers += [f"{rel}:{line}: calls dap_log_scores; score DAP through tzsl.models.DAPRule"
                         for line in _calls_of(ast.parse(path.read_text(encoding="utf-8")), "dap_log_scores")]
     assert not callers, "\n".join(callers)
+
+
+def test_scripts_outside_the_package_use_only_public_names():
+    """Rules (a) and (b) hold for the benchmark scripts and gallery examples too: they are what a user
+    copies, so they show the public API (``tzsl.files.atomic_write``, not ``tzsl._io``)."""
+    scripts = sorted((REPO_ROOT / "experiments").rglob("*.py")) + sorted((REPO_ROOT / "examples").rglob("*.py"))
+    assert scripts, "no scripts found under experiments/ or examples/"
+    problems = [p for path in scripts for p in _violations_in(path)]
+    assert not problems, "private imports in scripts:\n" + "\n".join(problems)

@@ -61,7 +61,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from tzsl._io import atomic_write
+from tzsl.files import atomic_write
 from tzsl.studies.engine import run
 
 #: The guard's tolerance (accuracy, 0-1): the approximate model's criterion may be at most this much

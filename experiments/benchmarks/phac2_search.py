@@ -29,7 +29,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from tzsl._io import atomic_write
+from tzsl.files import atomic_write
 from tzsl.evaluation import bootstrap_accuracy, paired_difference_interval
 from tzsl.features import dataset_features
 from tzsl.studies.config import ZeroShotSettings
