@@ -67,7 +67,7 @@ import numpy as np
 import pandas as pd
 from threadpoolctl import threadpool_limits
 
-from tzsl._io import atomic_write
+from tzsl.files import atomic_write
 from tzsl.datasets import write_synthetic_dataset
 from tzsl.evaluation import (
     DEFAULT_N_BINS,
@@ -269,13 +269,27 @@ def main() -> None:
               f"CPU pinned {s['pinned_cpu_s']:.1f} s, search {s['search_cpu_s']:.1f} s "
               f"(seed {args.seed}, {s['n_splits']} splits)")
     if args.out:
-        args.out.mkdir(parents=True, exist_ok=True)
-        tag = "_".join([label] + ([ENSEMBLE] if args.method == ENSEMBLE else []) + ([args.purpose] if args.purpose else [])
-                       + [f"seed{args.seed}"])
-        summary = summary.assign(method=args.method, purpose=config.splits.purpose, seed=args.seed,
-                                 rule_max_ece_difference=RULE_MAX_ECE_DIFFERENCE, rule_min_cpu_saving=RULE_MIN_CPU_SAVING)
-        atomic_write(args.out / f"calibration_refit_trials_{tag}.csv", lambda p: table.to_csv(p, index=False))
-        atomic_write(args.out / f"calibration_refit_summary_{tag}.csv", lambda p: summary.to_csv(p, index=False))
+        write_results(table, summary, args.out, label=label, method=args.method, purpose=config.splits.purpose,
+                      seed=args.seed, name_purpose=bool(args.purpose))
+
+
+def write_results(table: pd.DataFrame, summary: pd.DataFrame, out: Path, *, label: str, method: str, purpose: str,
+                  seed: int, name_purpose: bool = True,
+                  max_ece_difference: float = RULE_MAX_ECE_DIFFERENCE) -> pd.DataFrame:
+    """Write the per-trial ``table`` and :func:`summarise`'s ``summary`` (with the run's ``method``, ``purpose``,
+    ``seed`` and the rule's thresholds) into ``out`` as ``calibration_refit_{trials,summary}_<tag>.csv``.
+
+    ``<tag>``: ``label``, ``ensemble`` for the ensemble, ``purpose`` when ``name_purpose`` (a run that named its
+    purpose), ``seed<seed>``: the names the benchmark README's block reads. Returns the summary as written.
+    """
+    out.mkdir(parents=True, exist_ok=True)
+    tag = "_".join([label] + ([ENSEMBLE] if method == ENSEMBLE else []) + ([purpose] if name_purpose else [])
+                   + [f"seed{seed}"])
+    summary = summary.assign(method=method, purpose=purpose, seed=seed, rule_max_ece_difference=max_ece_difference,
+                             rule_min_cpu_saving=RULE_MIN_CPU_SAVING)
+    atomic_write(out / f"calibration_refit_trials_{tag}.csv", lambda p: table.to_csv(p, index=False))
+    atomic_write(out / f"calibration_refit_summary_{tag}.csv", lambda p: summary.to_csv(p, index=False))
+    return summary
 
 
 if __name__ == "__main__":

@@ -47,9 +47,9 @@ def test_the_summary_pairs_pinned_with_search_and_makes_the_block(bench, tmp_pat
         assert r["ece_difference_ci95_low"] <= r["ece_difference"] <= r["ece_difference_ci95_high"]
         assert r["search_ece"] != r["pinned_ece"]
         assert summary.loc[0, "pinned_cpu_s"] == 2.0 and summary.loc[0, "search_cpu_s"] == 6.0
-        summary.assign(method="ensemble", purpose=purpose, seed=seed, rule_max_ece_difference=margin,
-                       rule_min_cpu_saving=bench.RULE_MIN_CPU_SAVING).to_csv(
-            tmp_path / f"calibration_refit_summary_phac2_ensemble_{purpose}_seed{seed}.csv", index=False)
+        bench.write_results(table, summary, tmp_path, label="phac2", method=bench.ENSEMBLE, purpose=purpose,
+                            seed=seed)
+        assert (tmp_path / f"calibration_refit_summary_phac2_ensemble_{purpose}_seed{seed}.csv").is_file()
         high = summary.loc[0, "ece_difference_ci95_high"] if purpose == "select" else high
     block = ensemble_calibration_block(tmp_path)
     lines = [line for line in block.splitlines() if line.startswith("| select") or line.startswith("| confirm")]
@@ -63,9 +63,8 @@ def test_the_summary_pairs_pinned_with_search_and_makes_the_block(bench, tmp_pat
 @pytest.mark.parametrize("margin", [-1.0, 1.0])
 def test_the_block_states_the_rule_s_verdict_both_ways(bench, tmp_path, margin):
     table, summary = bench.summarise(_trials(bench), "phac2", 2)
-    summary.assign(method="ensemble", purpose="select", seed=0, rule_max_ece_difference=margin,
-                   rule_min_cpu_saving=bench.RULE_MIN_CPU_SAVING).to_csv(
-        tmp_path / "calibration_refit_summary_phac2_ensemble_select_seed0.csv", index=False)
+    bench.write_results(table, summary, tmp_path, label="phac2", method=bench.ENSEMBLE, purpose="select", seed=0,
+                        max_ece_difference=margin)
     block = ensemble_calibration_block(tmp_path)
     assert ("the members are pinned by default." in block) == (margin > 0)
     assert ("the members keep searching." in block) == (margin < 0)
