@@ -300,3 +300,24 @@ def test_every_problem_at_once(tmp_path):
     where = {(p.file, p.line) for p in problems}
     assert {("classes.csv", 3), ("classes.csv", 5), ("attribute_groups.csv", 5), ("trials.csv", 4),
             ("trials.csv", 10), ("splits.csv", 5)} <= where
+
+
+@pytest.mark.parametrize("file, separator", [("classes.csv", ";"), ("trials.csv", ";"), ("trials.csv", "\t"),
+                                             ("splits.csv", ";")])
+def test_a_file_separated_by_semicolons_or_tabs_is_named_with_its_separator(tmp_path, file, separator):
+    """A spreadsheet in a comma-decimal locale saves "CSV" with ';' (or a tab-separated export): the header is
+    one field then; say which separator it holds instead of listing the columns it seems to lack."""
+    texts = {"classes.csv": CLASSES, "trials.csv": TRIALS, "splits.csv": SPLITS}
+    texts[file] = texts[file].replace(",", separator)
+    folder = make_dataset(tmp_path, classes=texts["classes.csv"], trials=texts["trials.csv"],
+                          splits=texts["splits.csv"])
+    _one([p for p in validate_dataset(folder) if p.file == file], file, 1,
+         f"fields are separated by {separator!r}, not by commas; save the file as comma-separated CSV")
+
+
+@pytest.mark.parametrize("encode, shown", [(lambda t: t.encode("utf-16"), "(it is UTF-16)"),
+                                           (lambda t: t.encode("latin-1") + b"caf\xe9\n", "(byte 0xe9 at byte")])
+def test_a_file_that_is_not_utf8_says_what_it_is(tmp_path, encode, shown):
+    folder = make_dataset(tmp_path)
+    (folder / "trials.csv").write_bytes(encode(TRIALS))
+    _one(validate_dataset(folder), "trials.csv", None, f"cannot read the file as UTF-8 text {shown}")

@@ -112,6 +112,23 @@ def read_parquet_rows(path: Path, name: str, problems: list[Problem]
     return header, [(r + 2, row) for r, row in enumerate(cells)]
 
 
+def foreign_separator(header: list[str]) -> str | None:
+    """The separator of a header read as one comma-separated field that holds ``;`` or a tab (a spreadsheet's
+    "CSV" in a comma-decimal locale, or a tab-separated export), else None."""
+    if len(header) != 1:
+        return None
+    return next((sep for sep in (";", "\t") if sep in header[0]), None)
+
+
+def not_utf8(path: Path, exc: UnicodeDecodeError) -> str:
+    """What a file that failed to decode as UTF-8 holds instead: UTF-16 (its byte-order mark) or the first bad byte."""
+    with open(path, "rb") as fh:
+        start = fh.read(2)
+    if start in (b"\xff\xfe", b"\xfe\xff"):
+        return "it is UTF-16"
+    return f"byte 0x{exc.object[exc.start]:02x} at byte {exc.start} is not UTF-8"
+
+
 def read_rows(
     folder: Path, name: str, problems: list[Problem], required: bool = True
 ) -> tuple[list[str], list[tuple[int, list[str]]]] | None:
@@ -136,6 +153,11 @@ def read_rows(
                 problems.append(Problem(name, 1, "file is empty; expected a header line"))
                 return None
             header = [h.strip() for h in header]
+            separator = foreign_separator(header)
+            if separator is not None:
+                problems.append(Problem(name, 1, f"fields are separated by {separator!r}, not by commas; save the "
+                                                 "file as comma-separated CSV"))
+                return None
             for row in reader:
                 if not any(cell.strip() for cell in row):
                     continue
@@ -144,7 +166,10 @@ def read_rows(
                     problems.append(Problem(name, line, f"row has {len(row)} fields; the header has {len(header)}"))
                     continue
                 rows.append((line, [cell.strip() for cell in row]))
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+    except UnicodeDecodeError as exc:
+        problems.append(Problem(name, None, f"cannot read the file as UTF-8 text ({not_utf8(path, exc)}); save it as CSV UTF-8"))
+        return None
+    except (OSError, csv.Error) as exc:
         problems.append(Problem(name, None, f"cannot read the file: {exc}"))
         return None
     empty = [i + 1 for i, h in enumerate(header) if not h]
