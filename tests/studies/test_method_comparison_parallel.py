@@ -91,3 +91,29 @@ def test_the_methods_fits_in_this_process_use_one_blas_thread():
     finally:
         unregister_method("plugin-threads")
     assert _SEEN_THREADS and set(_SEEN_THREADS) == {1}
+
+
+
+def test_long_fits_are_dispatched_first_and_the_order_does_not_change_a_table(monkeypatch):
+    """Ensembles, then per-sensor attribute-bank methods, then feature methods (each in split order): the long
+    fits start first, so no worker runs one alone at the end; dispatching in the listed order instead gives the
+    same tables."""
+    from tzsl.studies.zero_shot import methods as comparison  # noqa: PLC0415
+
+    specs = [{"name": "eszsl"}, {"name": "dap-avg-logistic"}, {"name": "ensemble"}, {"name": "no-such-method"}]
+    jobs = sorted(((split, spec) for split in (1, 0) for spec in specs), key=comparison._longest_first)
+    assert [(split, spec["name"]) for split, spec in jobs] == [
+        (0, "ensemble"), (1, "ensemble"), (0, "dap-avg-logistic"), (1, "dap-avg-logistic"),
+        (0, "eszsl"), (0, "no-such-method"), (1, "eszsl"), (1, "no-such-method")]
+    features = synthetic_features(n_objects=20)
+    config = _config(n_test=5, n_splits=2)
+    results = fit_splits(features, make_splits(features, "random", config)[0], config)
+    methods = ({"name": "eszsl"}, {"name": "dap-avg-logistic"}, {"name": "sae"})
+    longest_first = method_comparison(features, results, seed=3, methods=methods, n_jobs=2)
+    monkeypatch.setattr(comparison, "_longest_first", lambda job: 0)  # a stable sort: the listed order
+    listed = method_comparison(features, results, seed=3, methods=methods, n_jobs=2)
+    assert longest_first.keys() == listed.keys()
+    for name, table in longest_first.items():
+        pd.testing.assert_frame_equal(table.drop(columns=["fit_seconds"], errors="ignore"),
+                                      listed[name].drop(columns=["fit_seconds"], errors="ignore"),
+                                      check_exact=True, obj=name)

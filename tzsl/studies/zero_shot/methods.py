@@ -111,7 +111,7 @@ def _fit_every_method(features: FeatureSet, results: list[SplitPosteriors], meth
     exists only in this process, so its fits run here.
     """
     jobs = [(i, spec) for i in range(len(results)) for spec in methods]
-    shipped = [(i, spec) for i, spec in jobs if _is_builtin(spec)]
+    shipped = sorted((job for job in jobs if _is_builtin(job[1])), key=_longest_first)
     # many small fits: one BLAS thread each (in this process; joblib's workers have one already), parallel
     # over fits; on 2 cores threaded BLAS spent many times the CPU of one thread on ESZSL's SVD
     with one_blas_thread():
@@ -124,6 +124,23 @@ def _fit_every_method(features: FeatureSet, results: list[SplitPosteriors], meth
             if (i, method_label(spec)) not in fits:
                 fits[(i, method_label(spec))] = attempt(fit_predict_split, spec, features, results[i].split, seed + i)
     return fits
+
+
+def _longest_first(job: tuple[int, dict]) -> tuple[int, int]:
+    """Dispatch order of a (split, method) fit: score ensembles, then the per-sensor attribute-bank methods (DAP
+    and its detector variants), then the feature methods, each in split order.
+
+    Their fits differ in length by two orders of magnitude (an ensemble refits all its members once per
+    pseudo-unseen calibration fold; ESZSL is one solve), so dispatching the long ones first keeps the last
+    worker from running one alone at the end of the run. Results do not depend on the order: every fit is
+    seeded by its split and read back by (split, method).
+    """
+    split, spec = job
+    try:
+        method = get_method(spec["name"])
+    except TzslError:  # an unknown name: its error is recorded whenever it runs
+        return 2, split
+    return (0 if method.family == "ensemble" else 1 if method.input_ndim == 3 else 2), split
 
 
 def _is_builtin(spec: dict) -> bool:
