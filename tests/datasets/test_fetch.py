@@ -315,7 +315,13 @@ def test_leftovers_of_a_killed_download_are_removed_by_the_next_fetch(tmp_path, 
 
 
 _FETCH_SCRIPT = """
-import sys, pooch
+import signal, sys, pooch
+# A user's Ctrl-C meets Python's own handler; a child of a test worker may inherit SIGINT ignored or blocked
+# (from whatever ran in that worker before), and then never sees the signal the test sends: record, then reset.
+print(f"child SIGINT: {signal.getsignal(signal.SIGINT)!r}, blocked: {sorted(signal.pthread_sigmask(signal.SIG_BLOCK, []))}",
+      file=sys.stderr, flush=True)
+signal.signal(signal.SIGINT, signal.default_int_handler)
+signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 from tzsl.datasets import fetch_datasets
 pup = pooch.create(path=".", base_url="", registry=None)
 pup.load_registry(sys.argv[1])
@@ -361,6 +367,7 @@ def test_ctrl_c_mid_download_leaves_no_file(tmp_path, server):
     child, _ = _fetch_until_downloading(tmp_path, tmp_path / "registry.txt", home)
     child.send_signal(signal.SIGINT)
     _, err = child.communicate(timeout=10)
+    (tmp_path / "child_stderr.txt").write_bytes(err)
     assert child.returncode != 0 and b"KeyboardInterrupt" in err
     assert _files_under(home) == []
 
@@ -375,6 +382,7 @@ def test_ctrl_c_during_several_downloads_stops_them_all_at_once_and_leaves_no_fi
     start = time.monotonic()
     child.send_signal(signal.SIGINT)
     _, err = child.communicate(timeout=10)  # not the drips' 60 s deadline
+    (tmp_path / "child_stderr.txt").write_bytes(err)
     assert time.monotonic() - start < 5 and child.returncode != 0 and b"KeyboardInterrupt" in err
     assert _files_under(home) == []
 
