@@ -316,8 +316,9 @@ def test_leftovers_of_a_killed_download_are_removed_by_the_next_fetch(tmp_path, 
 
 _FETCH_SCRIPT = """
 import signal, sys, pooch
-# A user's Ctrl-C meets Python's own handler; a child of a test worker may inherit SIGINT ignored or blocked
-# (from whatever ran in that worker before), and then never sees the signal the test sends: record, then reset.
+# A user's Ctrl-C meets Python's own handler. A test run started in the background by a non-interactive shell
+# (`pytest ... &`) has SIGINT ignored, and every child inherits that, so the child would never see the signal
+# the test sends (seen: both tests timed out in such a run): record what was inherited, then reset it.
 print(f"child SIGINT: {signal.getsignal(signal.SIGINT)!r}, blocked: {sorted(signal.pthread_sigmask(signal.SIG_BLOCK, []))}",
       file=sys.stderr, flush=True)
 signal.signal(signal.SIGINT, signal.default_int_handler)
