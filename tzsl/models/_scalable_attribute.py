@@ -62,6 +62,7 @@ from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_training import (
     AttributeTrainingError,
     balanced_object_draws,
+    balanced_sample_weights,
     default_preprocessor,
     fit_platt,
     fit_platt_many,
@@ -323,7 +324,7 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
     def _search(self, Z, yb, groups, draws, Cs, gammas, fold_seed: int, map_seed: int):
         """Grouped-CV search over draws x gammas x Cs on ``Z`` (n, d); the chosen setting and its parts."""
         n = yb.size
-        w_cal = np.where(yb, 0.5 / yb.sum(), 0.5 / (~yb).sum()) * n if self.platt_weighting == "balanced" else np.ones(n)
+        w_cal = balanced_sample_weights(yb) if self.platt_weighting == "balanced" else np.ones(n)
         oof = np.empty((len(draws), gammas.size, Cs.size, n))
         full: dict[tuple[int, int], tuple[Nystroem, list]] = {}
         for di, keep in enumerate(draws):
