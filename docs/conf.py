@@ -26,8 +26,9 @@ REPO = DOCS.parent
 sys.path.insert(0, str(REPO))  # document the checkout being built, not an installed copy
 sys.path.insert(0, str(DOCS / "_ext"))
 
-import tzsl  # noqa: E402
 from tzsl_docgen import generate  # noqa: E402
+
+import tzsl  # noqa: E402
 
 generate(DOCS)
 # A clean gallery on every build: pages of removed or renamed examples must not linger.
@@ -35,7 +36,7 @@ shutil.rmtree(DOCS / "auto_examples", ignore_errors=True)
 
 project = "tzsl"
 author = "tzsl contributors"
-copyright = "tzsl contributors"  # noqa: A001 - Sphinx's name
+copyright = "tzsl contributors"
 version = release = tzsl.__version__
 
 extensions = [

@@ -21,8 +21,12 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets import synthetic_dataset_arrays
-from tzsl.evaluation import (bootstrap_accuracy_columns, chance_accuracy, paired_difference_interval,
-                             random_object_splits)
+from tzsl.evaluation import (
+    bootstrap_accuracy_columns,
+    chance_accuracy,
+    paired_difference_interval,
+    random_object_splits,
+)
 from tzsl.models import build_method, get_method
 
 K, cls, X = synthetic_dataset_arrays(480, n_classes=30, n_attributes=12, n_sensors=2, n_features=8, seed=1)

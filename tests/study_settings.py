@@ -31,7 +31,7 @@ def study_settings(schema: type[BaseModel], preset: str | None = None, **flat: A
             raise KeyError(f"{key!r} is in the tables {owners} of {schema.__name__}, not exactly one")
         tables.setdefault(owners[0], {})[key] = list(value) if isinstance(value, tuple) else value
     if preset is not None:
-        from tzsl.studies.config import with_preset_defaults  # noqa: PLC0415
+        from tzsl.studies.config import with_preset_defaults
 
         tables = with_preset_defaults(tables, preset)
     return schema.model_validate(tables)

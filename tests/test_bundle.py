@@ -9,8 +9,8 @@ import pytest
 from sklearn.linear_model import LogisticRegression
 
 import tzsl
-from tzsl.inference.bundle import BUNDLE_KEY_ENV, load_bundle, read_bundle_header, save_bundle
 from tzsl.exceptions import ConfigError, ModelBundleError
+from tzsl.inference.bundle import BUNDLE_KEY_ENV, load_bundle, read_bundle_header, save_bundle
 
 
 @pytest.fixture(autouse=True)
@@ -98,6 +98,7 @@ def test_edited_metadata_is_rejected(tmp_path, fitted):
 def _forge(path, fitted_model):
     """Swap in another payload and recompute both checksums, as an attacker could."""
     import hashlib
+
     import skops.io as sio
 
     magic, header, _ = _split(path)
@@ -307,8 +308,8 @@ def test_arrays_round_trip_as_npz_and_pandas_inside_models(tmp_path):
 
 def test_tzsl_bundle_keeps_users_imports_working():
     """``tzsl.bundle`` (documented before the bundles moved to tzsl.inference) re-exports the same functions."""
-    import tzsl.bundle as old  # noqa: PLC0415
-    from tzsl.inference import bundle, skops_bundles  # noqa: PLC0415
+    import tzsl.bundle as old
+    from tzsl.inference import bundle, skops_bundles
 
     assert old.load_bundle is bundle.load_bundle and old.save_bundle is bundle.save_bundle
     assert old.read_bundle_header is bundle.read_bundle_header and old.is_trusted_type is skops_bundles.is_trusted_type

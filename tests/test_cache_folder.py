@@ -10,8 +10,18 @@ import platformdirs
 import pytest
 from click.testing import CliRunner
 
-from tzsl.cache import (CACHE_DIR_ENV, DEFAULT_MAX_SIZE_GB, IN_USE_SECONDS, MAX_SIZE_ENV, STUDY_CACHE_ENV,
-                        cache_entries, cache_info, get_cache_dir, prune, size_cap_gb)
+from tzsl.cache import (
+    CACHE_DIR_ENV,
+    DEFAULT_MAX_SIZE_GB,
+    IN_USE_SECONDS,
+    MAX_SIZE_ENV,
+    STUDY_CACHE_ENV,
+    cache_entries,
+    cache_info,
+    get_cache_dir,
+    prune,
+    size_cap_gb,
+)
 from tzsl.cli import cli
 from tzsl.exceptions import ConfigError
 from tzsl.fit_store import resolve_store

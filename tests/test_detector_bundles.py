@@ -66,7 +66,7 @@ def test_stored_dap_rule_gives_the_rules_class_scores(data, fusion, prior):
 
 
 def test_other_models_are_not_detector_arrays(data):
-    from tzsl.models import ESZSL, CompatibilityRule  # noqa: PLC0415
+    from tzsl.models import ESZSL, CompatibilityRule
 
     X, A, objects, _ = data
     zsl = ZeroShotClassifier(attribute_model=ESZSL(), decision_rule=CompatibilityRule()).fit(

@@ -31,10 +31,10 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tzsl.cli import cli
-from tzsl.cli import EXIT_TZSL_ERROR
+from tzsl.cli import EXIT_TZSL_ERROR, cli
 from tzsl.datasets import read_grasps, write_plain_dataset
 from tzsl.exceptions import TzslError
+
 # CI: 25 fixed examples per property; TZSL_FUZZ_EXAMPLES=500 explores with fresh random examples
 _EXPLORE = os.environ.get("TZSL_FUZZ_EXAMPLES")
 FUZZ = settings(max_examples=int(_EXPLORE or 25), deadline=None, suppress_health_check=[HealthCheck.too_slow],

@@ -30,8 +30,8 @@ def test_a_job_without_warnings_returns_its_result_unchanged():
 
 
 def test_one_blas_thread_limits_blas_in_the_block_and_restores_it():
-    import numpy  # noqa: F401, PLC0415 - its BLAS is loaded
-    from threadpoolctl import threadpool_info  # noqa: PLC0415
+    import numpy  # noqa: F401 - its BLAS is loaded
+    from threadpoolctl import threadpool_info
 
     def blas_threads() -> list[int]:
         return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]

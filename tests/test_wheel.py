@@ -16,7 +16,6 @@ sys.path.insert(0, str(REPO / "tests" / "studies"))
 from test_reproduce import TINY_HAND  # noqa: E402
 
 
-
 @pytest.mark.slow
 def test_wheel_install_runs_builtin_studies(tmp_path):
     source = tmp_path / "src"

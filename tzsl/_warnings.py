@@ -29,7 +29,7 @@ def one_line(message: Warning | str, category: type[Warning]) -> str:
     return f"tzsl: warning: {text}"
 
 
-class recorded_warnings:  # noqa: N801 - used as a context manager, like warnings.catch_warnings
+class recorded_warnings:
     """Record, as one-line texts, every warning shown while the block runs; still show them.
 
     ``with recorded_warnings() as log: ...`` then ``log.lines`` (in order, repeats kept once
@@ -99,7 +99,7 @@ class TerminalWarnings:
         self._echo = echo
         self._held: dict[str, int] = {}
 
-    def show(self, message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ARG002
+    def show(self, message, category, filename, lineno, file=None, line=None) -> None:
         kind = warning_kind(message, category)
         if kind in self._held:
             self._held[kind] += 1

@@ -67,10 +67,11 @@ import numpy as np
 import pandas as pd
 from threadpoolctl import threadpool_limits
 
-from tzsl.files import atomic_write
+from tzsl.cache import CACHE_DIR_ENV
 from tzsl.datasets import write_synthetic_dataset
 from tzsl.evaluation import (
     DEFAULT_N_BINS,
+    PURPOSES,
     bootstrap_cell_weights,
     calibration_intervals,
     calibration_terms,
@@ -80,12 +81,11 @@ from tzsl.evaluation import (
     paired_difference_interval,
 )
 from tzsl.features import dataset_features, load_plain_dataset
-from tzsl.cache import CACHE_DIR_ENV
-from tzsl.evaluation import PURPOSES
+from tzsl.files import atomic_write
 from tzsl.models.calibration import CALIBRATION_REFITS
-from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.comparison.calibration import dap_split_posteriors
 from tzsl.studies.comparison.method_runs import split_masks
+from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.methods import fit_predict_split
 from tzsl.studies.zero_shot.study import fit_split, make_splits
 

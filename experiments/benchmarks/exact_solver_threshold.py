@@ -175,7 +175,7 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
     if not args.summary_only:
         folder = None
         if args.data == "template":
-            from tzsl.benchmarks.bench_template import write_template_dataset  # noqa: PLC0415
+            from tzsl.benchmarks.bench_template import write_template_dataset
 
             folder = write_template_dataset(args.out / "dataset")
         experiment = args.out / "experiment.toml"

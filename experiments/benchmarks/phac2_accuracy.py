@@ -36,14 +36,13 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from phac2_posteriors import DEFAULT_PURPOSE, GRIDS, study_splits
 
 from tzsl.evaluation import PURPOSES, bootstrap_accuracy, paired_difference_interval
 from tzsl.features import dataset_features
-from tzsl.studies.zero_shot.study import split_masks
 from tzsl.models import build_method
 from tzsl.models.protocol import attribute_rows
-
-from phac2_posteriors import DEFAULT_PURPOSE, GRIDS, study_splits  # noqa: E402  (run from experiments/benchmarks/ or with it on sys.path)
+from tzsl.studies.zero_shot.study import split_masks
 
 EPS = 1e-6
 WEIGHTS = np.linspace(0.0, 1.0, 11)
@@ -130,7 +129,7 @@ def choose_weight(folds, first: str, other: str, hub: bool) -> float:
 
 def base_scores(features, split, index: int, cache: Path) -> dict | None:
     """Test and pseudo-ZSL scores of the base methods on one split (cached in ``cache``)."""
-    import pickle  # noqa: PLC0415
+    import pickle
 
     files = {g: cache / f"{g}_{split.name}.npz" for g in GRIDS}
     if not (files["paper"].exists() and files["extended"].exists()):

@@ -31,12 +31,12 @@ from pathlib import Path
 
 import pandas as pd
 
+from tzsl.features import dataset_features
 from tzsl.reporting.best_method import confirm_choice
 from tzsl.studies.config import ZeroShotSettings, every_feature_method
-from tzsl.features import dataset_features
+from tzsl.studies.papers.run_labels import StudyLabels
 from tzsl.studies.zero_shot.methods import method_comparison
 from tzsl.studies.zero_shot.study import fit_splits, make_splits
-from tzsl.studies.papers.run_labels import StudyLabels
 
 #: Split index offset of the challenging splits' fit seeds (as in run_zero_shot_tables).
 CHALLENGING_OFFSET = 100

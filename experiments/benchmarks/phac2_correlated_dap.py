@@ -79,15 +79,15 @@ Per-split held-out logits are cached in ``--out`` (``<split>.npz``)::
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import argparse
 import time
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from phac2_detectors_confirm import MEMBERS, splits_of
 from scipy.special import logit
 from sklearn.base import clone
 from sklearn.covariance import LedoitWolf
@@ -105,8 +105,6 @@ from tzsl.models.protocol import class_grouped_folds
 from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.methods import fit_predict_split
 from tzsl.studies.zero_shot.study import split_masks
-
-from phac2_detectors_confirm import MEMBERS, splits_of  # noqa: E402  (run from experiments/benchmarks/ or with it on sys.path)
 
 DETECTOR_METHOD = "dap-avg-logistic-c1"
 #: Object-grouped folds of the training objects for the held-out logits.

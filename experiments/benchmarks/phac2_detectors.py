@@ -33,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from phac2_posteriors import study_splits
 from sklearn.base import clone
 
 from tzsl.evaluation import (
@@ -48,8 +49,6 @@ from tzsl.models.dap import break_ties, dap_log_scores, fuse_attribute_posterior
 from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.spread import model_seed
 from tzsl.studies.zero_shot.study import attribute_bank, split_masks
-
-from phac2_posteriors import study_splits  # noqa: E402  (run from experiments/benchmarks/ or with it on sys.path)
 
 #: ``(label, bank parameters)`` of each detector compared; the first is the reference.
 DETECTORS = (

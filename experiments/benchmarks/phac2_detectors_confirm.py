@@ -42,20 +42,18 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from phac2_posteriors import CHALLENGING_OFFSET
 
-from tzsl.evaluation import PURPOSES, bootstrap_accuracy, paired_differences_table
 from tzsl.datasets import write_synthetic_dataset
+from tzsl.evaluation import PURPOSES, bootstrap_accuracy, paired_differences_table
 from tzsl.features import dataset_features, load_features
 from tzsl.models import AttributeSVM, GridEdgeWarning
 from tzsl.models.dap import break_ties
 from tzsl.models.protocol import zscore_rows
-from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.comparison.method_runs import method_input
+from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.methods import fit_predict_split
-
 from tzsl.studies.zero_shot.study import make_splits
-
-from phac2_posteriors import CHALLENGING_OFFSET  # noqa: E402  (run from experiments/benchmarks/ or with it on sys.path)
 
 #: Members fitted on every split: label -> registry entry (bare: no calibration).
 MEMBERS: dict[str, dict] = {

@@ -29,10 +29,10 @@ import pandas as pd
 
 from tzsl.evaluation import bootstrap_accuracy, paired_difference_interval
 from tzsl.features import dataset_features
-from tzsl.studies.config import ZeroShotSettings
-from tzsl.studies.zero_shot.study import make_splits, split_masks
 from tzsl.models import build_method
 from tzsl.models.protocol import attribute_rows
+from tzsl.studies.config import ZeroShotSettings
+from tzsl.studies.zero_shot.study import make_splits, split_masks
 
 PUBLIC_GRID = 10.0 ** np.arange(-3, 4)
 REFERENCE = "public-eszsl"

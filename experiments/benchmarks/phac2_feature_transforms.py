@@ -12,12 +12,16 @@ import warnings
 
 warnings.simplefilter("ignore")
 from pathlib import Path
-import numpy as np, pandas as pd
+
+import numpy as np
+import pandas as pd
+from phac2_accuracy import embedding_scores, zrows
+from phac2_posteriors import study_splits
 from sklearn.preprocessing import QuantileTransformer
+
 from tzsl.features import dataset_features
 from tzsl.studies.zero_shot.study import split_masks
-from phac2_posteriors import study_splits
-from phac2_accuracy import embedding_scores, zrows
+
 f = dataset_features('phac2-penn')
 o = f.objects
 X0 = f.X.reshape(len(o), -1)

@@ -31,11 +31,11 @@ from pathlib import Path
 import numpy as np
 from scipy.special import expit
 
-from tzsl.features import dataset_features
 from tzsl.evaluation import PURPOSES
+from tzsl.features import dataset_features
+from tzsl.models import GridEdgeWarning
 from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.study import fit_split, make_splits, split_masks
-from tzsl.models import GridEdgeWarning
 
 GRIDS = ("paper", "extended", "adaptive")
 #: ``--purpose`` when not given: the study schema's default ``[splits] purpose``.

@@ -29,12 +29,12 @@ from pathlib import Path
 
 import pandas as pd
 
-from tzsl.files import atomic_write
 from tzsl.evaluation import bootstrap_accuracy, paired_difference_interval
 from tzsl.features import dataset_features
+from tzsl.files import atomic_write
+from tzsl.models.attribute_training import SEARCHES
 from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.study import fit_split, make_splits
-from tzsl.models.attribute_training import SEARCHES
 
 
 def chosen(bank) -> list[tuple]:

@@ -94,6 +94,18 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from phac2_correlated_dap import (
+    DETECTOR_METHOD,
+    EPS,
+    class_means,
+    decision,
+    error_structure,
+    fused_logits,
+    held_out_logits,
+    lever_main,
+    residuals,
+)
+from phac2_detectors_confirm import MEMBERS
 from scipy.special import logit
 from sklearn.base import BaseEstimator, ClassifierMixin, _fit_context, clone
 from sklearn.linear_model import LogisticRegression
@@ -110,19 +122,6 @@ from tzsl.models import AttributeClassifierBank, DAPRule
 from tzsl.models.protocol import class_grouped_folds
 from tzsl.studies.zero_shot.methods import fit_predict_split
 from tzsl.studies.zero_shot.study import split_masks
-
-from phac2_correlated_dap import (  # noqa: E402  (run from experiments/benchmarks/ or with it on sys.path)
-    DETECTOR_METHOD,
-    EPS,
-    class_means,
-    decision,
-    error_structure,
-    fused_logits,
-    held_out_logits,
-    lever_main,
-    residuals,
-)
-from phac2_detectors_confirm import MEMBERS  # noqa: E402
 
 #: ``C`` grid of the stacking stage (one value per split, by object-grouped CV).
 STACK_C_GRID = (0.01, 0.1, 1.0)

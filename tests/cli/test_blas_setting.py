@@ -20,7 +20,7 @@ def _child(code: str, **env: str) -> str:
 def test_the_timeout_is_set_before_numpy_is_loaded():
     code = ("import sys, os; import tzsl.cli; "
             "print('numpy' in sys.modules, os.environ['OPENBLAS_THREAD_TIMEOUT'])")
-    from tzsl.cli import OPENBLAS_THREAD_TIMEOUT  # noqa: PLC0415
+    from tzsl.cli import OPENBLAS_THREAD_TIMEOUT
 
     assert _child(code) == f"False {OPENBLAS_THREAD_TIMEOUT}"
 

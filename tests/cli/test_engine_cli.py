@@ -10,8 +10,7 @@ import pytest
 from click.testing import CliRunner
 
 from tests.csv_compare import folder_csvs
-from tzsl.cli import cli
-from tzsl.cli import EXIT_TZSL_ERROR, EXIT_USAGE
+from tzsl.cli import EXIT_TZSL_ERROR, EXIT_USAGE, cli
 
 REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO / "tests" / "studies"))

@@ -6,8 +6,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from tzsl.cli import cli
-from tzsl.cli import EXIT_TZSL_ERROR
+from tzsl.cli import EXIT_TZSL_ERROR, cli
 
 
 def _run(*args: str):

@@ -20,12 +20,11 @@ import pytest
 from click.testing import CliRunner
 from pydantic import Field
 
+from tests.datasets.fetch_server import registry_of, serve_folder
 from tzsl.cli import cli
 from tzsl.studies.config import Compute, Output, register_study, unregister_study
 from tzsl.studies.config._common import Section
 from tzsl.studies.outputs.study_run import StudyRun
-
-from tests.datasets.fetch_server import registry_of, serve_folder
 
 PLUGIN = "fetch-test"
 #: The fake registry dataset "alpha" the plug-in study reads (``builtin = "alpha"``: every file of the folder).
@@ -49,7 +48,7 @@ class FetchStudy(Section):
 
 def run_fetch_test(exp, results, say) -> StudyRun:
     """Reads every registered file of the dataset through the registry (hash-checked), writes their sizes."""
-    from tzsl.datasets import builtin_data_files, fetch  # noqa: PLC0415
+    from tzsl.datasets import builtin_data_files, fetch
 
     ds = exp.config.dataset
     paths = [fetch(rel, exp.resolve(ds.data_dir)) for rel in builtin_data_files(ds.builtin)]
@@ -62,8 +61,8 @@ def run_fetch_test(exp, results, say) -> StudyRun:
 def setup(tmp_path, monkeypatch):
     """The plug-in study in an experiment file, the served files and tzsl's registry replaced by theirs;
     yields (experiment file, data home, served folder, base URL, requested paths)."""
-    import tzsl.datasets._fetch as fetch_module  # noqa: PLC0415
-    import tzsl.datasets._registry as registry_module  # noqa: PLC0415
+    import tzsl.datasets._fetch as fetch_module
+    import tzsl.datasets._registry as registry_module
 
     register_study(PLUGIN, schema=FetchStudy, runner=f"{__name__}:run_fetch_test", main_table="sizes",
                    description="reads the files of a registry folder")
@@ -168,7 +167,7 @@ def test_no_network_stops_in_one_line_naming_the_file(setup, tmp_path, monkeypat
 
 
 def test_a_full_disk_stops_in_one_line_and_leaves_no_temporary_file(setup, tmp_path, monkeypatch):
-    from tzsl.datasets._download import DeadlineDownloader  # noqa: PLC0415
+    from tzsl.datasets._download import DeadlineDownloader
 
     experiment, home, _, _, _ = setup
 

@@ -8,10 +8,10 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from tzsl.cli import cli
-from tzsl.cli import EXIT_TZSL_ERROR
+from tzsl.cli import EXIT_TZSL_ERROR, cli
 from tzsl.datasets import load_hand_table4, read_grasps
 from tzsl.studies.hand.study import HAND_OUTPUTS
+
 TABLE = load_hand_table4()
 
 
@@ -125,7 +125,7 @@ def test_train_hand_on_few_grasps_leaves_out_what_it_cannot_learn_and_predicts(t
     """Issue 31: a small grasp folder (3 grasps per object) trains as a study would relax it: attributes
     a BioTac sees fewer than 2 grasps of a label for are left out (a note each, recorded in the bundle),
     calibration folds and PCA components shrink to what the grasps allow (notes), and predict ranks."""
-    from tzsl.inference.bundle import read_bundle_header  # noqa: PLC0415
+    from tzsl.inference.bundle import read_bundle_header
 
     assert _run("simulate-grasps", "--out", tmp_path / "g", "--grasps-per-object", 3, "--seed", 2).exit_code == 0
     train = _run("train-hand", "--grasps", tmp_path / "g", "--out", tmp_path / "m.tzsl", "--seed", 0)

@@ -19,9 +19,8 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from tzsl.cli import EXIT_TZSL_ERROR, cli
-
 from tests.datasets.lab_recordings import bag_lab, hdf5_lab, reading_lab, series_lab
+from tzsl.cli import EXIT_TZSL_ERROR, cli
 
 
 def _labels(lab: Path) -> pd.DataFrame:

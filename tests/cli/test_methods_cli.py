@@ -7,7 +7,6 @@ import json
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-
 from tzsl.models import available_methods, get_method
 
 

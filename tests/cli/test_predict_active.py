@@ -13,7 +13,6 @@ import pytest
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-
 from tzsl.datasets import FeatureSet
 from tzsl.inference.predict_active import PER_EP_KIND, load_per_ep_model, train_per_ep_bundle
 from tzsl.models.active_touch import suggest_next_ep
@@ -73,8 +72,8 @@ def test_bundle_records_eps_and_schema(simulated):
 
 
 def test_bundle_round_trip_keeps_the_fitted_exponents(simulated, tmp_path):
-    from tzsl.inference.bundle import save_bundle
     from tzsl.exceptions import ModelBundleError
+    from tzsl.inference.bundle import save_bundle
 
     root, meta, _, _ = simulated
     model, loaded = load_per_ep_model(root / "per_ep.tzsl")

@@ -19,13 +19,13 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from tzsl.inference.bundle import read_bundle_header, save_bundle
 from tzsl.cli import cli
 from tzsl.datasets import FeatureSet, write_plain_dataset
 from tzsl.exceptions import ConfigError, ModelBundleError
 from tzsl.inference import Recogniser
-from tzsl.inference.zero_shot_bundles import load_predictor
+from tzsl.inference.bundle import read_bundle_header, save_bundle
 from tzsl.inference.predict_active import train_per_ep_bundle
+from tzsl.inference.zero_shot_bundles import load_predictor
 
 REPO = Path(__file__).resolve().parents[2]
 ATTRS = ["hard", "soft", "rough", "smooth"]
@@ -60,7 +60,7 @@ def five_fingers(tmp_path_factory):
     _ok(*common, "--method", "eszsl", "--out", root / "eszsl.tzsl")
     _ok(*common, "--method", "sae", "--out", root / "sae.tzsl")
     _ok(*common, "--method", "ale", "--out", root / "ale.tzsl")
-    import tzsl.inference.model_bundles as model_bundles  # noqa: PLC0415
+    import tzsl.inference.model_bundles as model_bundles
 
     save = model_bundles.save_zero_shot_bundle
 
@@ -118,10 +118,10 @@ def test_linear_bundles_are_arrays_and_rank_as_their_estimator(five_fingers, met
     assert predictor.rule.name == rule and "as arrays" in predictor.describe()
     assert read_bundle_header(root / "dap.tzsl").payload_format == "npz"
     # the arrays rank as the fitted estimator does: refit it in memory the way train-attributes does
-    from tzsl.features import load_features  # noqa: PLC0415
-    from tzsl.inference.model_bundles import training_subset  # noqa: PLC0415
-    from tzsl.models.protocol import attribute_rows  # noqa: PLC0415
-    from tzsl.studies.comparison.method_runs import method_input, study_estimator  # noqa: PLC0415
+    from tzsl.features import load_features
+    from tzsl.inference.model_bundles import training_subset
+    from tzsl.models.protocol import attribute_rows
+    from tzsl.studies.comparison.method_runs import method_input, study_estimator
 
     sub, _, _ = training_subset(load_features(plain=root / "five"), root / "five" / "splits.csv")
     attributes = list(sub.attributes.columns)
@@ -262,7 +262,7 @@ def test_the_user_guide_example_runs(tmp_path, monkeypatch, capsys):
 
 def test_command_line_defaults_are_the_apis():
     """``tzsl predict`` types its defaults in its options (its module stays light for ``tzsl --help``)."""
-    from tzsl.inference.recogniser import DEFAULT_FUSION, DEFAULT_K, FUSION_MODES  # noqa: PLC0415
+    from tzsl.inference.recogniser import DEFAULT_FUSION, DEFAULT_K, FUSION_MODES
 
     options = {p.name: p for p in cli.commands["predict"].params}
     assert options["mode"].default == DEFAULT_FUSION and list(options["mode"].type.choices) == list(FUSION_MODES)
@@ -272,7 +272,7 @@ def test_command_line_defaults_are_the_apis():
 # ---------------------------------------------------------------------------- DAP bundles as arrays
 def test_dap_bundle_is_arrays_with_its_estimators_posteriors(five_fingers):
     """The trained bundle's arrays give the fitted bank's posteriors and the calibrated class posteriors."""
-    from tzsl.inference.detector_bundles import DAPArrayRule, DetectorBank  # noqa: PLC0415
+    from tzsl.inference.detector_bundles import DAPArrayRule, DetectorBank
 
     root, candidates, X = five_fingers
     predictor = load_predictor(root / "dap.tzsl")
@@ -290,7 +290,7 @@ def test_dap_bundle_is_arrays_with_its_estimators_posteriors(five_fingers):
 
 
 def test_dap_bundle_written_with_skops_still_loads_and_ranks_as_the_arrays(five_fingers):
-    from tzsl.inference.detector_bundles import DetectorBank  # noqa: PLC0415
+    from tzsl.inference.detector_bundles import DetectorBank
 
     root, candidates, X = five_fingers
     assert read_bundle_header(root / "dap-skops.tzsl").payload_format == "skops"
@@ -303,7 +303,7 @@ def test_dap_bundle_written_with_skops_still_loads_and_ranks_as_the_arrays(five_
 
 
 def _tree(path: Path) -> dict:
-    from tzsl.inference.bundle import load_bundle  # noqa: PLC0415
+    from tzsl.inference.bundle import load_bundle
 
     return load_bundle(path)[0]
 
@@ -343,9 +343,9 @@ def test_tampered_dap_bundle_is_refused_in_one_line(five_fingers, tmp_path):
 def test_any_malformed_detector_array_is_a_bundle_error(five_fingers):
     """Every array of a DAP payload replaced by a group, a text or a wrong shape: a one-line ModelBundleError
     (only the display name falls back to its default), never another exception."""
-    import copy  # noqa: PLC0415
+    import copy
 
-    from tzsl.inference import zero_shot_bundles  # noqa: PLC0415
+    from tzsl.inference import zero_shot_bundles
 
     root, _, _ = five_fingers
     tree = _tree(root / "dap.tzsl")

@@ -14,10 +14,9 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from tzsl.inference.bundle import read_bundle_header
 from tzsl.cli import cli
-
 from tzsl.datasets import write_plain_dataset
+from tzsl.inference.bundle import read_bundle_header
 
 ATTRS = ["hard", "soft", "rough"]
 CLASSES = pd.DataFrame(list(itertools.product([0, 1], repeat=3)), columns=ATTRS,

@@ -8,10 +8,9 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from tzsl.cli import cli
-
-from tzsl.datasets import write_synthetic_dataset
 from tests.csv_compare import csv_bytes
+from tzsl.cli import cli
+from tzsl.datasets import write_synthetic_dataset
 
 distributed = pytest.importorskip("distributed")
 

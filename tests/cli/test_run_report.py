@@ -9,8 +9,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from tzsl.cli import cli
-from tzsl.cli import EXIT_TZSL_ERROR
+from tzsl.cli import EXIT_TZSL_ERROR, cli
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -78,9 +77,9 @@ def test_report_command(tmp_path):
 @pytest.mark.realdata
 def test_plain_folder_from_convert_gives_the_builtin_accuracies(tmp_path, data_dir):
     """Done when: convert PHAC-2 to a plain folder, validate it, run it from a TOML file -> same accuracies."""
-    from tzsl.studies.outputs.results_folder import ResultsDir
     from tzsl.features import dataset_features
     from tzsl.studies.config import ZeroShotSettings
+    from tzsl.studies.outputs.results_folder import ResultsDir
     from tzsl.studies.zero_shot.study import run_zero_shot_tables
 
     folder = tmp_path / "phac2_plain"

@@ -18,9 +18,9 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from tzsl.inference.bundle import read_bundle_header
 from tzsl.cli import EXIT_TZSL_ERROR, cli
 from tzsl.datasets import write_plain_dataset
+from tzsl.inference.bundle import read_bundle_header
 
 REPO = Path(__file__).resolve().parents[2]
 TEMPLATE = REPO / "experiments" / "my_dataset_template.toml"

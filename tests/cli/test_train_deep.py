@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from tzsl.cli import cli
-from tzsl.cli import EXIT_TZSL_ERROR
+from tzsl.cli import EXIT_TZSL_ERROR, cli
 
 SKIP_REASON = "PyTorch is not installed (the optional deep extra: pip install 'tzsl[deep]')"
 # A small run: random frozen CNN on 16 x 16 frames, a few epochs (checks plumbing, not accuracy).
@@ -157,9 +156,9 @@ def test_train_deep_on_user_gelsight_videos(torch, data_dir, tmp_path):
 def test_deep_fabric_study_table(torch, data_dir, tmp_path):
     """The study behind ``evaluate-fabric --model deep``: runs, table, manifest; refuses overwrites."""
     from tzsl.exceptions import ConfigError
-    from tzsl.studies.outputs.results_folder import ResultsDir
     from tzsl.studies.config import FabricDeepStudy
     from tzsl.studies.fabric.deep import format_deep_table, run_deep_fabric_study
+    from tzsl.studies.outputs.results_folder import ResultsDir
 
     params = {"backbone": "small-cnn", "image_size": 16, "hidden_size": 8, "epochs": 2, "n_threads": 1}
     settings = FabricDeepStudy(splits={"n_seeds": 2, "configs": [1]}, compute={"progress": False},

@@ -6,10 +6,9 @@ import numpy as np
 import pandas as pd
 from click.testing import CliRunner
 
-from tzsl.inference.bundle import read_bundle_header
 from tzsl.cli import cli
-
 from tzsl.datasets._feature_table import read_feature_table, write_feature_table
+from tzsl.inference.bundle import read_bundle_header
 from tzsl.inference.zero_shot_bundles import load_predictor
 
 

@@ -9,8 +9,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from tzsl.cli import cli
-from tzsl.cli import EXIT_TZSL_ERROR
+from tzsl.cli import EXIT_TZSL_ERROR, cli
 from tzsl.datasets import write_plain_dataset
 from tzsl.evaluation import random_object_splits, write_splits_csv
 from tzsl.features import SIGNAL_STATISTICS, load_plain_dataset
@@ -131,8 +130,7 @@ def test_convert_refuses_overwrite(penn_folder, data_dir):
 
 @pytest.mark.realdata
 def test_hold_signal_dataset_reproduces_time_averages(data_dir, tmp_path):
-    from tzsl.features import dataset_features
-    from tzsl.features import BIOTAC_CHANNELS
+    from tzsl.features import BIOTAC_CHANNELS, dataset_features
 
     out = tmp_path / "hold"
     out.mkdir()

@@ -135,7 +135,7 @@ def registry_of(path: Path, lines: list[str]) -> pooch.Pooch:
 def main(argv: list[str] | None = None) -> None:
     """``python -m tests.datasets.fetch_server FOLDER [--delay S]``: serve FOLDER (e.g. the shared
     data, as a mirror) until stopped, printing its base URL first (the fetch benchmark's server)."""
-    import argparse  # noqa: PLC0415
+    import argparse
 
     parser = argparse.ArgumentParser(description=main.__doc__)
     parser.add_argument("folder", type=Path)

@@ -9,7 +9,6 @@ import pandas as pd
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-
 from tzsl.datasets import card_lines, dataset_card, write_plain_dataset
 
 CLASSES = pd.DataFrame({"hard": [1, 1, 0, 0, 1], "soft": [0, 0, 1, 1, 0], "rare": [0, 0, 0, 0, 1]},

@@ -9,12 +9,11 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from tzsl.cli import cli
-
-from tzsl.datasets import read_grasps, read_plain_dataset, validate_dataset, write_grasps
-from tzsl.exceptions import DataFileError
 from tests.datasets.test_grasps import _grasps
 from tests.datasets.test_validate import SIGNAL_TRIALS, _signal, signal_dataset
+from tzsl.cli import cli
+from tzsl.datasets import read_grasps, read_plain_dataset, validate_dataset, write_grasps
+from tzsl.exceptions import DataFileError
 
 
 def _outside_npz(tmp_path: Path) -> Path:

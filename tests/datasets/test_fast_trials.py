@@ -6,8 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from tzsl.datasets import FeatureSet, feature_set_to_plain, write_plain_dataset, write_synthetic_dataset
-from tzsl.datasets import _validate
+from tzsl.datasets import FeatureSet, _validate, feature_set_to_plain, write_plain_dataset, write_synthetic_dataset
 
 pytest.importorskip("pyarrow")
 

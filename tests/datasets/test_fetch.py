@@ -17,12 +17,10 @@ import pooch
 import pytest
 from click.testing import CliRunner
 
+from tests.datasets.fetch_server import DRIP_S, registry_of, serve_folder
 from tzsl.cli import cli
-
 from tzsl.datasets import fetch_datasets, registered_datasets
 from tzsl.exceptions import ChecksumError, ConfigError, DataMissingError
-
-from tests.datasets.fetch_server import DRIP_S, registry_of, serve_folder
 
 FILES = {"alpha/one.csv": b"a,b\n1,2\n", "alpha/sub/two.bin": bytes(range(200)) * 50, "beta/three.txt": b"three\n"}
 
@@ -93,8 +91,8 @@ def test_cli_refuses_an_unknown_dataset_in_one_line():
 
 
 def test_a_missing_file_names_the_command_that_gets_it(tmp_path):
-    from tzsl.datasets import fetch  # noqa: PLC0415
-    from tzsl.exceptions import DataMissingError  # noqa: PLC0415
+    from tzsl.datasets import fetch
+    from tzsl.exceptions import DataMissingError
 
     with pytest.raises(DataMissingError, match=r"get it with `tzsl data fetch phac2`"):
         fetch("phac2/derived/phac2_labels_60x24.csv", tmp_path)
@@ -102,9 +100,9 @@ def test_a_missing_file_names_the_command_that_gets_it(tmp_path):
 
 def test_the_penn_label_table_is_rebuilt_byte_for_byte_from_the_pickles(data_dir):
     """The one locally built file phac2-penn needs: fetch builds it, identical to the registered one."""
-    from tzsl.datasets import fetch, registered_files  # noqa: PLC0415
-    from tzsl.datasets._phac2_penn import PENN_STATIC_DIR, labels_csv_bytes, read_penn_static_pickles  # noqa: PLC0415
-    from tzsl.datasets._registry import registered_hash  # noqa: PLC0415
+    from tzsl.datasets import fetch, registered_files
+    from tzsl.datasets._phac2_penn import PENN_STATIC_DIR, labels_csv_bytes, read_penn_static_pickles
+    from tzsl.datasets._registry import registered_hash
 
     data = read_penn_static_pickles([fetch(rel, data_dir) for rel in registered_files(PENN_STATIC_DIR)])
     built = hashlib.sha256(labels_csv_bytes(data.labels)).hexdigest()
@@ -126,8 +124,8 @@ GROUPS_CSV = b"fabric_id,fabric_name,group\n1,F0001,0\n2,F0002,1\n3,F0003,2\n4,F
 
 
 def test_fabric_groups_are_built_from_the_papers_group_lists(tmp_path):
-    from tzsl.datasets._fabric import fabric_groups_csv_bytes  # noqa: PLC0415
-    from tzsl.exceptions import DataFileError  # noqa: PLC0415
+    from tzsl.datasets._fabric import fabric_groups_csv_bytes
+    from tzsl.exceptions import DataFileError
 
     assert fabric_groups_csv_bytes(DATA2) == GROUPS_CSV
     for bad in ("no groups here", DATA2.replace("[3]", "[3, 4]"), DATA2.replace("[3]", "[__import__]")):
@@ -137,7 +135,7 @@ def test_fabric_groups_are_built_from_the_papers_group_lists(tmp_path):
 
 
 def test_fetch_builds_fabric_groups_and_leaves_reference_copies_out(tmp_path):
-    from tzsl.datasets import REFERENCE_ONLY  # noqa: PLC0415
+    from tzsl.datasets import REFERENCE_ONLY
 
     served = tmp_path / "served"
     (served / "fabric/sources").mkdir(parents=True)
@@ -237,8 +235,8 @@ def test_the_failure_of_one_file_of_several_says_where_the_fetch_stopped(tmp_pat
 
 
 def test_the_deadline_setting_is_read_once_and_checked(monkeypatch):
-    from tzsl.datasets import DEFAULT_FETCH_TIMEOUT_S, FETCH_TIMEOUT_ENV  # noqa: PLC0415
-    from tzsl.datasets._download import fetch_timeout  # noqa: PLC0415
+    from tzsl.datasets import DEFAULT_FETCH_TIMEOUT_S, FETCH_TIMEOUT_ENV
+    from tzsl.datasets._download import fetch_timeout
 
     monkeypatch.delenv(FETCH_TIMEOUT_ENV, raising=False)
     assert fetch_timeout() == DEFAULT_FETCH_TIMEOUT_S and fetch_timeout(7) == 7
@@ -291,7 +289,7 @@ def test_the_command_prints_one_line_per_failure(tmp_path, server, kind, progres
 
 def test_leftovers_of_a_killed_download_are_removed_by_the_next_fetch(tmp_path, server):
     """pooch's temporaries and tzsl's own (a build killed mid-write) go; files merely named alike stay."""
-    from tzsl._io import atomic_write  # noqa: PLC0415
+    from tzsl._io import atomic_write
 
     base, _ = server
     pup = _registry(tmp_path, base)
@@ -389,7 +387,7 @@ def test_ctrl_c_during_several_downloads_stops_them_all_at_once_and_leaves_no_fi
 
 
 def test_a_second_fetch_into_the_same_data_home_waits_for_the_first(tmp_path, server):
-    from tzsl.datasets._download import fetch_lock  # noqa: PLC0415
+    from tzsl.datasets._download import fetch_lock
 
     base, _ = server
     pup = _registry(tmp_path, base)
@@ -431,7 +429,7 @@ def test_the_installed_command_prints_one_line_on_a_real_stderr(tmp_path, server
 
 
 def test_a_refused_connection_is_named_in_a_few_words(tmp_path):
-    import socket  # noqa: PLC0415
+    import socket
 
     with socket.socket() as probe:  # a loopback port nobody listens on
         probe.bind(("127.0.0.1", 0))

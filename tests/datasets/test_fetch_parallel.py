@@ -14,12 +14,11 @@ import pooch
 import pytest
 from click.testing import CliRunner
 
+from tests.datasets.fetch_server import registry_of, serve_folder
 from tzsl.cli import cli
 from tzsl.datasets import DEFAULT_FETCH_WORKERS, FETCH_WORKERS_ENV, MAX_FETCH_WORKERS, fetch_datasets
 from tzsl.datasets._transfer import FetchProgress, fetch_workers
 from tzsl.exceptions import ChecksumError, ConfigError, DataMissingError
-
-from tests.datasets.fetch_server import registry_of, serve_folder
 
 #: Small files, as the fabric depth images are: (registered path, content).
 MANY = {f"many/f{i:03d}.bin": os.urandom(100 + 37 * i) for i in range(120)}
@@ -66,8 +65,8 @@ def test_many_files_arrive_verified_over_kept_alive_connections_under_one_bar(tm
             super().add_bytes(nbytes)
             self.received += nbytes
 
-    import tzsl.datasets._fetch as fetch_module  # noqa: PLC0415
-    import tzsl.datasets._registry as registry_module  # noqa: PLC0415
+    import tzsl.datasets._fetch as fetch_module
+    import tzsl.datasets._registry as registry_module
 
     monkeypatch.setattr(fetch_module, "FetchProgress", Recorded)
     monkeypatch.setattr(registry_module, "FetchProgress", Recorded)  # a bar per file would be made there

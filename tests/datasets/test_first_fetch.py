@@ -10,11 +10,10 @@ from pathlib import Path
 import pytest
 
 import tzsl.datasets
+from tests.datasets.fetch_server import serve_folder
 from tzsl.datasets import builtin_data_files, fetch_missing, registered_files
 from tzsl.datasets._registry import registered_size
 from tzsl.studies.reproduce import EVIDENCE_STUDIES, REPRODUCE_STUDIES, fetch_study_data, reproduce_experiments
-
-from tests.datasets.fetch_server import serve_folder
 
 PENN = "phac2/penn_bolt_ml_data/static_adjective_phase_set/"
 LABELS = "phac2/derived/phac2_labels_60x24.csv"
@@ -60,7 +59,7 @@ def test_every_registered_file_has_its_size_and_the_sizes_are_the_shared_datas(d
 def test_phac2_dap_files_are_fetched_from_a_mirror_and_the_label_table_is_built(data_dir, tmp_path, monkeypatch):
     """The real registry and the real Penn pickles, served on 127.0.0.1 without the label table (so it is built
     from them, hash-checked); then the study's reader loads the home, and a second call makes no request."""
-    from tzsl.datasets import load_phac2_penn  # noqa: PLC0415
+    from tzsl.datasets import load_phac2_penn
 
     served = tmp_path / "served"
     (served / PENN).parent.mkdir(parents=True)

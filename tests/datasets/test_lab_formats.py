@@ -15,16 +15,15 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from tzsl.cli import cli
-
-from tzsl.datasets import convert_lab_dataset, read_plain_dataset, read_signal_file, validate_dataset
-from tzsl.exceptions import ConfigError, DataFileError
-
 from tests.datasets.lab_recordings import CLASSES
 from tests.datasets.lab_recordings import bag_mapping as _bag_mapping
 from tests.datasets.lab_recordings import biotac_store as _store
 from tests.datasets.lab_recordings import hand_message as _hand_message
 from tests.datasets.lab_recordings import write_bag as _write_bag
+from tzsl.cli import cli
+from tzsl.datasets import convert_lab_dataset, read_plain_dataset, read_signal_file, validate_dataset
+from tzsl.exceptions import ConfigError, DataFileError
+
 
 @pytest.mark.parametrize("ros1", [False, True])
 def test_ros_bags_become_a_valid_plain_dataset_with_the_same_values(tmp_path, ros1):

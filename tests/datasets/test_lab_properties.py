@@ -18,10 +18,9 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from tests.datasets.lab_recordings import CLASSES, bag_lab, hdf5_lab, hdf5_mapping, reading_lab, series_lab
 from tzsl.cli import EXIT_TZSL_ERROR, cli
 from tzsl.datasets import read_signal_file
-
-from tests.datasets.lab_recordings import CLASSES, bag_lab, hdf5_lab, hdf5_mapping, reading_lab, series_lab
 
 SETTINGS = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 

@@ -8,9 +8,9 @@ import pytest
 
 from tzsl.datasets import (
     PHAC2_EPS,
-    iter_phac2_h5,
     BiotacSignals,
     RawTrial,
+    iter_phac2_h5,
     list_phac2_h5_trials,
     load_phac2_h5,
     require_eps,

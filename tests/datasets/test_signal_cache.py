@@ -9,8 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from tzsl.datasets import read_plain_dataset, read_signal_table, write_plain_dataset
-from tzsl.datasets import _signal_cache
+from tzsl.datasets import _signal_cache, read_plain_dataset, read_signal_table, write_plain_dataset
 from tzsl.exceptions import DataFileError
 from tzsl.features import load_plain_dataset
 

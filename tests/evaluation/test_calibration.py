@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+import tzsl.evaluation._calibration as calibration_module
 from tzsl.evaluation import (
     add_calibration_columns,
     bootstrap_accuracy,
@@ -23,7 +24,6 @@ from tzsl.evaluation import (
     expected_ece_if_calibrated,
     reliability_table,
 )
-import tzsl.evaluation._calibration as calibration_module
 from tzsl.exceptions import TzslError
 
 

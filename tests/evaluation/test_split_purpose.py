@@ -88,9 +88,9 @@ def test_bad_purpose_or_seed_is_one_clear_error():
 
 
 def test_the_study_schema_defaults_to_confirmation_and_refuses_other_purposes():
-    from pydantic import ValidationError  # noqa: PLC0415
+    from pydantic import ValidationError
 
-    from tzsl.studies.config import ZeroShotSplits, ZeroShotSplits  # noqa: PLC0415
+    from tzsl.studies.config import ZeroShotSplits
 
     assert ZeroShotSplits().purpose == ZeroShotSplits().purpose == "confirm"
     assert ZeroShotSplits(purpose="select").purpose == "select"
@@ -99,11 +99,11 @@ def test_the_study_schema_defaults_to_confirmation_and_refuses_other_purposes():
 
 
 def test_the_command_line_takes_the_purpose():
-    from click.testing import CliRunner  # noqa: PLC0415
+    from click.testing import CliRunner
 
-    from tzsl.cli import cli  # noqa: PLC0415
-    from tzsl.cli._dap_commands import evaluate_values  # noqa: PLC0415
-    from tzsl.studies.config import config_from_options  # noqa: PLC0415
+    from tzsl.cli import cli
+    from tzsl.cli._dap_commands import evaluate_values
+    from tzsl.studies.config import config_from_options
 
     for command in ("splits", "evaluate"):
         shown = CliRunner().invoke(cli, [command, "--help"])

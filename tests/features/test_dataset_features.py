@@ -8,9 +8,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from tzsl.datasets import FeatureSet
+from tzsl.datasets import FeatureSet, TactileDataset, dataset_names, get_dataset, register_dataset
 from tzsl.exceptions import ConfigError
-from tzsl.datasets import TactileDataset, dataset_names, get_dataset, register_dataset
 from tzsl.features import load_features
 
 
@@ -118,7 +117,7 @@ def test_a_dataset_class_must_implement_load():
 
 
 def test_the_experiment_schema_reads_the_dataset_names_from_the_registry(tmp_path):
-    from tzsl.studies.config import load_experiment  # noqa: PLC0415
+    from tzsl.studies.config import load_experiment
 
     toml = tmp_path / "x.toml"
     toml.write_text('study = "zero-shot"\n[dataset]\nbuiltin = "nope"\n')
@@ -130,11 +129,11 @@ def test_the_experiment_schema_reads_the_dataset_names_from_the_registry(tmp_pat
 
 
 def test_tzsl_datasets_lists_them(tmp_path):
-    import json  # noqa: PLC0415
+    import json
 
-    from click.testing import CliRunner  # noqa: PLC0415
+    from click.testing import CliRunner
 
-    from tzsl.cli import cli  # noqa: PLC0415
+    from tzsl.cli import cli
 
     result = CliRunner().invoke(cli, ["datasets", "--json"])
     assert result.exit_code == 0, result.output

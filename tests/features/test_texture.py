@@ -200,7 +200,7 @@ def test_real_depth_images(data_dir):
 
 @pytest.mark.parametrize(("points", "radius"), [(8, 1.0), (8, 3.0), (4, 2.0), (16, 2.5), (8, 1.5)])
 def test_uniform_lbp_histograms_equal_scikit_image_bit_for_bit(points, radius):
-    from skimage.feature import local_binary_pattern  # noqa: PLC0415
+    from skimage.feature import local_binary_pattern
 
     rng = np.random.default_rng(points)
     images = np.concatenate([rng.integers(0, 256, size=(3, 23, 31)),  # 8-bit levels, as the descriptor's
@@ -213,7 +213,7 @@ def test_uniform_lbp_histograms_equal_scikit_image_bit_for_bit(points, radius):
 
 
 def test_glcm_block_equals_scikit_image_per_image_bit_for_bit():
-    from skimage.feature import graycomatrix, graycoprops  # noqa: PLC0415
+    from skimage.feature import graycomatrix, graycoprops
 
     images = np.concatenate([_images(n=5, seed=3), np.full((1, 40, 40), 900, dtype=np.uint16)])  # and a flat one
     desc = TextureDescriptor(**SMALL, glcm_n_angles=3).fit(images)

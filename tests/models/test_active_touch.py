@@ -9,8 +9,7 @@ import pytest
 from sklearn.utils._param_validation import InvalidParameterError
 
 from tzsl.exceptions import ConfigError
-from tzsl.models.dap import dap_log_scores, fuse_attribute_posteriors
-from tzsl.models.active_touch import binned_confusion
+from tzsl.models._active_suggest import suggest_next_ep
 from tzsl.models._active_touch import (
     LogisticAttribute,
     PerEPAttributeModel,
@@ -21,7 +20,8 @@ from tzsl.models._active_touch import (
     sequential_log_posterior,
     stop_reasons,
 )
-from tzsl.models._active_suggest import suggest_next_ep
+from tzsl.models.active_touch import binned_confusion
+from tzsl.models.dap import dap_log_scores, fuse_attribute_posteriors
 
 EPS = ("noise_a", "info", "noise_b")
 SECONDS = {"noise_a": 1.0, "info": 2.0, "noise_b": 3.0}

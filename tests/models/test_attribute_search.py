@@ -6,15 +6,14 @@ import numpy as np
 import pytest
 
 import tzsl.models._attribute_svm as svm_module
+from tests.models.test_attribute_svm import make_problem
 from tzsl.exceptions import ConfigError
-from tzsl.studies.config import load_experiment
-from tzsl.studies.zero_shot.study import attribute_estimator
 from tzsl.models import AttributeClassifierBank, AttributeSVM
-from tzsl.models.attribute_training import gamma_grid
 from tzsl.models._attribute_search import halving_rounds, successive_halving
 from tzsl.models._validation import ParameterError
-
-from tests.models.test_attribute_svm import make_problem
+from tzsl.models.attribute_training import gamma_grid
+from tzsl.studies.config import load_experiment
+from tzsl.studies.zero_shot.study import attribute_estimator
 
 
 def test_rounds_multiply_the_folds_and_end_with_all_of_them():
@@ -127,8 +126,8 @@ def test_halving_leaves_bagging_to_the_grid_and_refuses_unknown_values():
 
 
 def test_schema_offers_exactly_the_estimators_searches():
-    from tzsl.studies.config._zero_shot import SvmSettings  # noqa: PLC0415
-    from tzsl.models.attribute_training import SEARCHES  # noqa: PLC0415
+    from tzsl.models.attribute_training import SEARCHES
+    from tzsl.studies.config._zero_shot import SvmSettings
 
     assert set(SvmSettings.model_fields["search"].annotation.__args__) == set(SEARCHES)
 

@@ -5,11 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tzsl.exceptions import ConfigError, SplitError
-from tzsl.models import AttributeClassifierBank, AttributeSVM, AttributeTrainingError
-from tzsl.models import GridEdgeWarning
-from tzsl.models.attribute_training import fit_platt
 from tzsl._fit_store import spawn_seeds
+from tzsl.exceptions import ConfigError, SplitError
+from tzsl.models import AttributeClassifierBank, AttributeSVM, AttributeTrainingError, GridEdgeWarning
+from tzsl.models.attribute_training import fit_platt
 
 TINY = dict(n_C=2, n_gamma=2, n_draws=2, cv=3)
 
@@ -305,7 +304,7 @@ def test_extended_grid_leaves_the_low_edge_when_a_wide_kernel_fits_best():
 def test_undersampling_keeps_two_majority_objects_for_grouped_cv():
     """Few objects of many trials each (a fabric group's depth images): one majority object could already
     match the minority's trial count, which would leave object-grouped CV one fold; every draw keeps two."""
-    from tzsl.models.attribute_training import balanced_object_draws  # noqa: PLC0415
+    from tzsl.models.attribute_training import balanced_object_draws
 
     groups = np.repeat(np.arange(5), [400, 400, 400, 100, 100])  # objects 0-2 negative, 3-4 positive
     yb = groups >= 3

@@ -10,12 +10,12 @@ import pytest
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.linear_model import LogisticRegression
 
+from tzsl._fit_store import FitStore, array_digest, fit_clone, parallel_context, spawn_seeds
 from tzsl._profile import profiling
 from tzsl.cache import CACHE_DIR_ENV
 from tzsl.exceptions import ConfigError
-from tzsl.models import AttributeClassifierBank, AttributeSVM
 from tzsl.fit_store import FITS_FOLDER, fit_cached, fit_store_counts, resolve_store
-from tzsl._fit_store import FitStore, array_digest, fit_clone, parallel_context, spawn_seeds
+from tzsl.models import AttributeClassifierBank, AttributeSVM
 
 
 # ---------------------------------------------------------------------------- resolve_store

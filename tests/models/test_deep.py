@@ -15,8 +15,8 @@ from sklearn.utils.estimator_checks import (
 )
 
 from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError, TzslError
-from tzsl.models import DeepAttributeEmbedding
 from tzsl.inference.deep_bundles import load_deep_bundle, save_deep_bundle
+from tzsl.models import DeepAttributeEmbedding
 from tzsl.models._embedding import _forward, _glorot_init, _layer_shapes, _loss_and_grad, loss_weights
 from tzsl.models._eszsl import ZSLInputError
 

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from tzsl.models import DeepAttributeEmbedding, ZSLInputError
-from tzsl.models.protocol import class_grouped_folds
 from tzsl.models._deep_training import best_epoch
+from tzsl.models.protocol import class_grouped_folds
 
 # 6 classes with distinct attribute rows: folds of 2 held-out rows
 A6 = np.array([[1, 0, 1, 0], [0, 1, 1, 0], [1, 1, 0, 1], [0, 0, 1, 1], [1, 0, 0, 1], [0, 1, 0, 0]], dtype=float)

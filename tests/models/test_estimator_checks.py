@@ -3,7 +3,6 @@ scikit-learn's check_estimator, except the checks listed (with reasons) in one p
 
 from __future__ import annotations
 
-import pytest
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from tzsl.models import all_estimators

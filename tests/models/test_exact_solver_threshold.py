@@ -15,9 +15,9 @@ from tzsl.reporting.benchmark_blocks import MissingResults, exact_solver_thresho
 def test_no_built_in_dataset_reaches_the_threshold(data_dir):
     """Every trial of a built-in dataset with an attribute table, training or not, stays below the threshold:
     the paper tables and the evidence fit their RBF-SVMs exactly whatever the split."""
-    from tzsl.datasets import load_fabric, load_hand_table4  # noqa: PLC0415
-    from tzsl.features import dataset_features  # noqa: PLC0415
-    from tzsl.studies.config import HandSimulation  # noqa: PLC0415
+    from tzsl.datasets import load_fabric, load_hand_table4
+    from tzsl.features import dataset_features
+    from tzsl.studies.config import HandSimulation
 
     sizes = {"phac2-penn": dataset_features("phac2-penn", data_dir=data_dir).X.shape[0],
              "fabric-depth": load_fabric(data_dir).image_labels().size,
@@ -48,7 +48,7 @@ def test_auto_fits_the_approximate_model_above_the_threshold_and_the_exact_one_b
 
 
 def test_the_guard_reads_the_criterion_of_paired_splits():
-    import pandas as pd  # noqa: PLC0415
+    import pandas as pd
 
     with benchmark_script("exact_solver_threshold.py") as bench:
         per_split = pd.DataFrame({"split": ["1", "2", "mean", "std", "1", "2"],
@@ -64,7 +64,7 @@ def test_the_guard_reads_the_criterion_of_paired_splits():
 
 
 def _per_split(bench, challenging_loss: float):
-    import pandas as pd  # noqa: PLC0415
+    import pandas as pd
 
     return pd.DataFrame({"split": ["1", "2", "3", "mean", "1", "2"],
                          "split_kind": ["random"] * 4 + ["challenging"] * 2,

@@ -12,6 +12,7 @@ from sklearn.utils._param_validation import InvalidParameterError
 from tzsl.models import ZSLInputError, build_method
 from tzsl.models._iap import IAP, default_iap_classifier
 
+
 def test_attribute_posteriors_are_class_posterior_weighted_rows(zero_shot_problem):
     p = zero_shot_problem(seed=0)
     model = IAP().fit(p.X_train, p.A_train)

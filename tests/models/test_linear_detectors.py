@@ -20,8 +20,8 @@ from tzsl.models import (
     get_method,
 )
 from tzsl.models._attribute_training import balanced_sample_weights
-from tzsl.models.attribute_training import DETECTORS, detector_template, object_balanced_weights
 from tzsl.models._linear_attribute import robust_object_weights
+from tzsl.models.attribute_training import DETECTORS, detector_template, object_balanced_weights
 
 
 def linear_objects(seed=0, n_obj=24, trials=5, d=6, noise=1.0):
@@ -222,8 +222,8 @@ def test_the_untuned_logistic_family_is_the_per_ep_models_classifier_and_takes_n
 @pytest.mark.parametrize("detector", ["logistic", "logistic-c1"])
 def test_linear_detectors_fit_with_one_blas_thread(detector, monkeypatch):
     """A detector's fit is a small dense problem: one BLAS thread (tzsl._parallel.one_blas_thread), whatever the caller's."""
-    from threadpoolctl import threadpool_info, threadpool_limits  # noqa: PLC0415
-    from sklearn.linear_model import LogisticRegression  # noqa: PLC0415
+    from sklearn.linear_model import LogisticRegression
+    from threadpoolctl import threadpool_info, threadpool_limits
 
     seen: list[int] = []
     original = LogisticRegression.fit

@@ -19,16 +19,17 @@ from sklearn.base import BaseEstimator, clone
 
 from tzsl.evaluation import calibration_terms, expected_calibration_error
 from tzsl.models import (
+    ESZSL,
+    AttributeClassifierBank,
+    AttributeSVM,
     CalibratedZeroShotClassifier,
     CalibrationWarning,
     CompatibilityRule,
     DAPRule,
-    ESZSL,
     ZeroShotClassifier,
     build_method,
     get_method,
 )
-from tzsl.models import AttributeClassifierBank, AttributeSVM
 from tzsl.models.calibration import (
     MAX_CALIBRATION_TRIALS,
     calibration_subsample,

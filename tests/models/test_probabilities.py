@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from sklearn.base import BaseEstimator
 
+from tzsl._scoring import ROUNDING_TOLERANCE, class_posteriors, valid_probabilities
 from tzsl.exceptions import ConfigError, TzslError
 from tzsl.models import IAP, DAPRule, ZeroShotClassifier, available_methods, build_method, get_method
-from tzsl._scoring import ROUNDING_TOLERANCE, class_posteriors, valid_probabilities
 from tzsl.models.dap import check_attribute_posteriors
 
 #: Class posteriors of one trial whose dot product with a row of ones is 1.0000000000000002 in float64.

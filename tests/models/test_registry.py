@@ -11,9 +11,9 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from tzsl.exceptions import ConfigError
 from tzsl.models import (
+    ESZSLCV,
     AttributeClassifierBank,
     DAPRule,
-    ESZSLCV,
     NearestAttributeRule,
     ZeroShotClassifier,
     all_estimators,

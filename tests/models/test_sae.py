@@ -13,8 +13,9 @@ from tzsl.models import (
     ZSLInputError,
     build_method,
 )
-from tzsl.models.protocol import class_grouped_folds, cosine_similarities
 from tzsl.models._sae import SAE, SAECV, sylvester_solution
+from tzsl.models.protocol import class_grouped_folds, cosine_similarities
+
 
 def sylvester_residual(A, X, W, lam):
     """Relative residual of ``A^T A W + lam W X^T X = (1 + lam) A^T X``."""

@@ -9,11 +9,10 @@ import numpy as np
 import pytest
 from sklearn.base import clone
 
-from tzsl.models import AttributeClassifierBank, AttributeSVM
-from tzsl.models import ScalableAttributeClassifier
+from tzsl.models import AttributeClassifierBank, AttributeSVM, ScalableAttributeClassifier
 
 sys.path.insert(0, str(Path(__file__).parent))
-from test_attribute_svm import make_problem  # noqa: E402
+from test_attribute_svm import make_problem
 
 SMALL = dict(n_gamma=2, n_C=2, n_components=32)
 

@@ -6,14 +6,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from tests.study_settings import study_settings
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import random_object_splits
 from tzsl.exceptions import ConfigError
-from tzsl.studies.outputs.results_folder import ResultsDir
-from tests.study_settings import study_settings
+from tzsl.studies.active_touch.stopping import DECIDED_COLUMNS, stop_outcomes
 from tzsl.studies.active_touch.study import evaluate_split, run_active_touch_study
 from tzsl.studies.config import ActiveTouchStudy
-from tzsl.studies.active_touch.stopping import DECIDED_COLUMNS, stop_outcomes
+from tzsl.studies.outputs.results_folder import ResultsDir
 
 EPS = ("squeeze", "hold", "slow_slide", "fast_slide")
 
@@ -94,8 +94,8 @@ def test_study_writes_table_and_figure(tmp_path, monkeypatch):
 
 def test_random_splits_belong_to_the_purpose_and_seed_nothing_else():
     """[splits] purpose: the random splits' test sets are that purpose's, and the purposes share none."""
-    from tzsl.evaluation import split_purpose  # noqa: PLC0415
-    from tzsl.studies.active_touch.study import make_active_splits  # noqa: PLC0415
+    from tzsl.evaluation import split_purpose
+    from tzsl.studies.active_touch.study import make_active_splits
 
     fs = _feature_set()
     made = {p: make_active_splits(fs, "random", study_settings(ActiveTouchStudy, n_splits=6, purpose=p))

@@ -6,12 +6,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from tests.study_settings import study_settings
 from tzsl.datasets import load_hand_table4
 from tzsl.exceptions import ConfigError
-from tzsl.studies.outputs.results_folder import ResultsDir
-from tests.study_settings import study_settings
 from tzsl.studies.active_touch.hand import GRASP_TYPES, grasp_type_of, run_active_hand
 from tzsl.studies.config import ActiveTouchStudy
+from tzsl.studies.outputs.results_folder import ResultsDir
 
 
 def test_grasp_type_by_touching_biotacs():

@@ -15,7 +15,7 @@ from tzsl.benchmarks.bench_reproduce import run_split_fit, run_study_list, split
 from tzsl.studies import engine
 
 sys.path.insert(0, str(Path(__file__).parent))
-from test_reproduce import TINY_HAND  # noqa: E402
+from test_reproduce import TINY_HAND
 
 #: The shared tiny hand study, without the registry methods.
 TINY_HAND_NO_COMPARE = TINY_HAND.replace("[splits]", "compare = []\n[splits]")

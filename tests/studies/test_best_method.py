@@ -84,8 +84,8 @@ def test_the_report_states_the_best_method_of_the_runs_own_comparison(tmp_path):
 
 def test_the_benchmark_block_shows_the_choice_and_the_verdict(tmp_path):
     """experiments/benchmarks/README.md's generated block, from the benchmark's decision CSV."""
-    from tzsl.reporting.benchmark_blocks import BEST_METHOD_FILE, MissingResults, best_method_block  # noqa: PLC0415
-    from tzsl.reporting.readme_results import update_file  # noqa: PLC0415
+    from tzsl.reporting.benchmark_blocks import BEST_METHOD_FILE, MissingResults, best_method_block
+    from tzsl.reporting.readme_results import update_file
 
     with pytest.raises(MissingResults, match="phac2_best_method.py"):  # no CSV: no block
         best_method_block(tmp_path)

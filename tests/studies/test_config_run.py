@@ -12,7 +12,7 @@ import pytest
 
 from tzsl.datasets import FeatureSet, feature_set_to_plain
 from tzsl.exceptions import ConfigError
-from tzsl.studies.config import builtin_names, study_names, load_experiment, to_toml, validate
+from tzsl.studies.config import builtin_names, load_experiment, study_names, to_toml, validate
 from tzsl.studies.engine import check_experiment, run_experiment
 
 REPO = Path(__file__).resolve().parents[2]

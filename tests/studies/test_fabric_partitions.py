@@ -10,6 +10,7 @@ import pandas as pd
 import pytest
 
 from tzsl.exceptions import ConfigError
+from tzsl.models.protocol import MIN_CV_CLASSES
 from tzsl.studies.config import validate
 from tzsl.studies.fabric.partitions import (
     PARTITION_COLUMNS,
@@ -18,7 +19,6 @@ from tzsl.studies.fabric.partitions import (
     run_partitions,
 )
 from tzsl.studies.fabric.samples import FabricSamples
-from tzsl.models.protocol import MIN_CV_CLASSES
 
 # the structure of a8 (8 groups x 8 attributes; groups 3, 4, 5 share a row), typed as a test fixture
 A8_STRUCTURE = np.array(

@@ -10,11 +10,12 @@ import pandas as pd
 import pytest
 from pydantic import ValidationError
 
+from tests.study_settings import study_settings
 from tzsl.datasets import fabric_zsl_split, load_fabric
 from tzsl.evaluation import seen_test_classes
 from tzsl.exceptions import ConfigError, DataFileError
-from tests.study_settings import study_settings
-from tzsl.studies.outputs.results_folder import ResultsDir
+from tzsl.models import ZSLInputError, build_method
+from tzsl.models.protocol import attribute_rows
 from tzsl.studies.config import FabricStudy
 from tzsl.studies.fabric.study import (
     depth_image_descriptors,
@@ -27,9 +28,8 @@ from tzsl.studies.fabric.study import (
     zero_shot_run,
 )
 from tzsl.studies.fabric.tables import fabric_protocols
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.papers.numbers import FABRIC_TABLE1
-from tzsl.models import ZSLInputError, build_method
-from tzsl.models.protocol import attribute_rows
 
 A8_LIKE = np.array(  # 8 groups x 4 attributes; groups 3, 4 and 5 share a row, like a8
     [[1, 0, 1, 0], [1, 0, 0, 1], [0, 1, 0, 0], [0, 1, 1, 1], [0, 1, 1, 1], [0, 1, 1, 1], [0, 0, 1, 0],
@@ -117,7 +117,7 @@ def test_zero_shot_run_fits_on_training_groups_only():
 
 
 def test_splits_with_the_same_training_groups_share_one_fit():
-    from tzsl.studies.fabric.methods import zero_shot_runs  # noqa: PLC0415
+    from tzsl.studies.fabric.methods import zero_shot_runs
 
     X, groups = _synthetic()
     paper, headline = fabric_protocols([1], pd.DataFrame(A8_LIKE))
@@ -364,7 +364,7 @@ def test_gelsight_layout_runs_through_the_study(gelsight_root, data_dir, tmp_pat
 
 
 def test_each_fit_is_done_and_counted_once(gelsight_root, data_dir, tmp_path):
-    from tzsl._profile import profiling  # noqa: PLC0415
+    from tzsl._profile import profiling
 
     with profiling("fabric") as profile:  # in this process (n_jobs=1): the jobs' events are counted once
         result = run_fabric_study(
@@ -413,8 +413,8 @@ def test_gelsight_groups_must_index_the_attribute_matrix(gelsight_root, data_dir
 
 
 def test_a_failing_fit_is_a_row_with_nan_and_its_error():
-    from tzsl.studies.fabric.study import ESZSL_METHOD  # noqa: PLC0415
-    from tzsl.studies.fabric.methods import run_job as _run_job  # noqa: PLC0415
+    from tzsl.studies.fabric.methods import run_job as _run_job
+    from tzsl.studies.fabric.study import ESZSL_METHOD
 
     X, groups = _synthetic()
     split = fabric_zsl_split(1)

@@ -7,9 +7,11 @@ import pandas as pd
 import pytest
 from pydantic import ValidationError
 
+from tests.study_settings import study_settings
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, gzsl_scores
 from tzsl.exceptions import ConfigError, SplitError
+from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.gzsl import (
     _pseudo_problem,
     choose_stacking_constant,
@@ -19,8 +21,6 @@ from tzsl.studies.zero_shot.gzsl import (
     run_gzsl,
     stacked_predict,
 )
-from tests.study_settings import study_settings
-from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.study import make_splits
 
 TINY_SVM = {"n_C": 1, "n_gamma": 1, "n_draws": 1, "cv": 3}
@@ -207,7 +207,7 @@ def test_bad_settings_are_refused():
 
 
 def test_a_failing_split_is_recorded_and_the_other_splits_complete():
-    from tzsl.studies.outputs.failures import table_failures  # noqa: PLC0415
+    from tzsl.studies.outputs.failures import table_failures
 
     features = synthetic_features()
     config = _config()
@@ -227,8 +227,8 @@ def test_a_failing_split_is_recorded_and_the_other_splits_complete():
 
 def test_a_split_without_an_unseen_class_is_left_out_with_a_note():
     """Merged attribute rows can leave a split no unseen class: a note, not a failure (issue 20)."""
-    from tzsl.studies.outputs.failures import table_failures  # noqa: PLC0415
-    from tzsl.studies.zero_shot.gzsl import RELAXED_COLUMN  # noqa: PLC0415
+    from tzsl.studies.outputs.failures import table_failures
+    from tzsl.studies.zero_shot.gzsl import RELAXED_COLUMN
 
     features = synthetic_features()
     config = _config()
@@ -247,8 +247,8 @@ def test_a_split_without_an_unseen_class_is_left_out_with_a_note():
 def test_training_objects_with_one_trial_are_kept_whole_with_a_note():
     """One trial per object, as a lab may record (issue 31): GZSL holds out seen-class trials of the
     objects that have two; with none, the split is left out with a note, not a failed fit."""
-    from tzsl.studies.outputs.failures import table_failures  # noqa: PLC0415
-    from tzsl.studies.zero_shot.gzsl import RELAXED_COLUMN  # noqa: PLC0415
+    from tzsl.studies.outputs.failures import table_failures
+    from tzsl.studies.zero_shot.gzsl import RELAXED_COLUMN
 
     features = synthetic_features(trials=2)
     split = make_splits(features, "random", _config())[0][0]
@@ -279,7 +279,7 @@ def test_pseudo_problem_relaxes_then_skips_with_a_note():
 
 def test_relaxation_notes_say_each_reason_once_with_its_splits():
     """A 9-class run printed the same GZSL relaxation once per split and once more inside a joined cell."""
-    from tzsl.studies.zero_shot.gzsl import relaxation_notes  # noqa: PLC0415
+    from tzsl.studies.zero_shot.gzsl import relaxation_notes
 
     cells = pd.Series(["split random-3: stacking of dap skipped: E: absent in 1 object(s); need 2",
                        "split random-3: stacking of dap skipped: E: absent in 1 object(s); need 2; "

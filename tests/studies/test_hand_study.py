@@ -7,9 +7,12 @@ import pandas as pd
 import pytest
 from pydantic import ValidationError
 
+from tests.study_settings import study_settings
 from tzsl.datasets import load_hand_table4, simulate_grasps
 from tzsl.exceptions import ConfigError, DataFileError
-from tzsl.studies.papers import numbers as paper
+from tzsl.models import HandDAPClassifier
+from tzsl.models.dap import break_ties
+from tzsl.studies.config import HandSettings
 from tzsl.studies.hand.study import (
     HAND_OUTPUTS,
     fit_hand_model,
@@ -17,10 +20,7 @@ from tzsl.studies.hand.study import (
     hand_features,
     run_hand_study,
 )
-from tests.study_settings import study_settings
-from tzsl.models import HandDAPClassifier
-from tzsl.studies.config import HandSettings
-from tzsl.models.dap import break_ties
+from tzsl.studies.papers import numbers as paper
 
 TABLE = load_hand_table4()
 CONFIG = study_settings(HandSettings, n_grasps_per_object=20, max_T=4, max_k=3, sequence_length=8, n_sequences=15,
@@ -153,7 +153,7 @@ def test_simulated_when_no_grasps_and_refuses_overwrite(tmp_path):
     assert "SIMULATED" in format_hand_summary(result)
     for csv in tmp_path.glob("*.csv"):
         assert (pd.read_csv(csv)["data"] == "simulated").all(), csv.name
-    from tzsl.reporting.report import write_report  # noqa: PLC0415
+    from tzsl.reporting.report import write_report
 
     page = write_report(tmp_path).read_text()
     hand = page[page.index('<section id="hand-table5">'):]
@@ -180,9 +180,9 @@ def test_bad_config(bad):
 
 
 def test_a_failing_seed_is_recorded_and_the_others_complete(folder, tmp_path, monkeypatch):
-    import tzsl.studies.hand.study as hand  # noqa: PLC0415
-    from tzsl.exceptions import SplitError  # noqa: PLC0415
-    from tzsl.studies.outputs.failures import table_failures  # noqa: PLC0415
+    import tzsl.studies.hand.study as hand
+    from tzsl.exceptions import SplitError
+    from tzsl.studies.outputs.failures import table_failures
 
     real = hand._evaluate_seed
 

@@ -28,9 +28,9 @@ def test_parallel_fits_give_the_serial_tables_and_record_failures_alike():
 
 
 def test_a_plugin_method_is_fitted_in_this_process_where_it_is_registered():
-    from tests.studies.test_method_wiring import NearestMeanAttributes  # noqa: PLC0415
-    from tzsl.models import NearestAttributeRule, register_method, unregister_method  # noqa: PLC0415
-    from tzsl.studies.zero_shot.methods import _is_builtin  # noqa: PLC0415
+    from tests.studies.test_method_wiring import NearestMeanAttributes
+    from tzsl.models import NearestAttributeRule, register_method, unregister_method
+    from tzsl.studies.zero_shot.methods import _is_builtin
 
     register_method("plugin-x", family="embedding", paper="test only", attribute_model=NearestMeanAttributes,
                     decision_rule=NearestAttributeRule, description="test")
@@ -51,8 +51,8 @@ def test_every_random_part_of_a_study_estimator_is_seeded():
     """ESZSL, SAE and IAP have no random step of their own, but their calibrator deals pseudo-unseen
     folds at random: a study seeds every ``random_state`` of what it fits, so a rerun reproduces
     every posterior (before, those three were left unseeded and their ECE moved between runs)."""
-    from tzsl.models import available_methods, get_method  # noqa: PLC0415
-    from tzsl.studies.comparison.method_runs import study_estimator  # noqa: PLC0415
+    from tzsl.models import available_methods, get_method
+    from tzsl.studies.comparison.method_runs import study_estimator
 
     for name in available_methods():
         if get_method(name).input_kind != "features":
@@ -69,10 +69,10 @@ _SEEN_THREADS: list[int] = []
 def test_the_methods_fits_in_this_process_use_one_blas_thread():
     """Many small fits: threaded BLAS only spins (tzsl._parallel.one_blas_thread), so the comparison fits in one BLAS thread
     in this process too (joblib's workers have one already), whatever the caller's limit."""
-    from threadpoolctl import threadpool_info, threadpool_limits  # noqa: PLC0415
+    from threadpoolctl import threadpool_info, threadpool_limits
 
-    from tests.studies.test_method_wiring import NearestMeanAttributes  # noqa: PLC0415
-    from tzsl.models import NearestAttributeRule, register_method, unregister_method  # noqa: PLC0415
+    from tests.studies.test_method_wiring import NearestMeanAttributes
+    from tzsl.models import NearestAttributeRule, register_method, unregister_method
 
     class _ThreadCounting(NearestMeanAttributes):
         def fit(self, X, Y, groups=None):
@@ -98,7 +98,7 @@ def test_long_fits_are_dispatched_first_and_the_order_does_not_change_a_table(mo
     """Ensembles, then per-sensor attribute-bank methods, then feature methods (each in split order): the long
     fits start first, so no worker runs one alone at the end; dispatching in the listed order instead gives the
     same tables."""
-    from tzsl.studies.zero_shot import methods as comparison  # noqa: PLC0415
+    from tzsl.studies.zero_shot import methods as comparison
 
     specs = [{"name": "eszsl"}, {"name": "dap-avg-logistic"}, {"name": "ensemble"}, {"name": "no-such-method"}]
     jobs = sorted(((split, spec) for split in (1, 0) for spec in specs), key=comparison._longest_first)

@@ -17,9 +17,9 @@ from sklearn.base import BaseEstimator
 
 from tzsl.datasets import FeatureSet, feature_set_to_plain
 from tzsl.exceptions import ConfigError
+from tzsl.models import NearestAttributeRule, register_method, unregister_method
 from tzsl.studies.config import load_experiment
 from tzsl.studies.engine import run_experiment
-from tzsl.models import NearestAttributeRule, register_method, unregister_method
 
 
 class NearestMeanAttributes(BaseEstimator):
@@ -212,8 +212,8 @@ def test_unknown_methods_and_parameters_are_refused_at_load_time(toy_method, tmp
 
 
 def test_input_shape_and_seed_come_from_the_registry(toy_method):
-    from tzsl.studies.comparison.method_runs import method_input, study_estimator, takes_seed
     from tzsl.models import get_method
+    from tzsl.studies.comparison.method_runs import method_input, study_estimator, takes_seed
 
     X = np.arange(24.0).reshape(4, 2, 3)
     assert get_method("dap-avg").input_ndim == 3 and get_method("toy").input_ndim == 2
@@ -258,9 +258,9 @@ def failing_method(monkeypatch, tmp_path):
 
 
 def test_a_failing_split_method_is_recorded_and_the_run_exits_1_at_the_end(toy_method, failing_method, tmp_path):
-    from click.testing import CliRunner  # noqa: PLC0415
+    from click.testing import CliRunner
 
-    from tzsl.cli import cli  # noqa: PLC0415
+    from tzsl.cli import cli
     _plain_dataset(tmp_path / "toyset")
     text = SMALL_PHAC2.format(dataset='plain = "toyset"', n_splits=3, n_test=4).replace(
         'compare = ["toy", {name = "toy", temperature = 0.5}]', 'compare = ["toy", "flaky"]')
@@ -287,7 +287,7 @@ def test_a_failing_split_method_is_recorded_and_the_run_exits_1_at_the_end(toy_m
 
 
 def test_python_run_returns_the_tables_of_a_partial_run_with_a_warning(toy_method, failing_method, tmp_path):
-    from tzsl.studies.engine import run  # noqa: PLC0415
+    from tzsl.studies.engine import run
 
     _plain_dataset(tmp_path / "toyset")
     text = SMALL_PHAC2.format(dataset='plain = "toyset"', n_splits=2, n_test=4).replace(
@@ -298,8 +298,8 @@ def test_python_run_returns_the_tables_of_a_partial_run_with_a_warning(toy_metho
 
 
 def test_a_failing_dap_split_is_recorded_and_the_run_exits_1(tmp_path, monkeypatch):
-    import tzsl.studies.zero_shot.study as dap  # noqa: PLC0415
-    from tzsl.exceptions import PartialRunError  # noqa: PLC0415
+    import tzsl.studies.zero_shot.study as dap
+    from tzsl.exceptions import PartialRunError
 
     real = dap.fit_split
 

@@ -65,7 +65,7 @@ def test_csv_numbers_have_one_format_and_counts_stay_integer(tmp_path):
 
 
 def test_staged_results_move_into_place_on_commit(tmp_path):
-    from tzsl.studies.outputs.results_folder import STAGING_FOLDER  # noqa: PLC0415
+    from tzsl.studies.outputs.results_folder import STAGING_FOLDER
 
     out = ResultsDir(tmp_path / "res", staging=True)
     out.write_csv("a.csv", pd.DataFrame({"x": [1]}))
@@ -83,11 +83,11 @@ def test_staged_results_move_into_place_on_commit(tmp_path):
 
 def test_a_crashed_run_does_not_block_the_rerun(tmp_path, monkeypatch):
     """A run killed before it completes leaves only the staging folder; the rerun (no --force) succeeds."""
-    from tzsl.datasets import FeatureSet, feature_set_to_plain  # noqa: PLC0415
-    from tzsl.studies.outputs.results_folder import STAGING_FOLDER  # noqa: PLC0415
-    from tzsl.studies.engine import run_experiment  # noqa: PLC0415
+    import numpy as np
 
-    import numpy as np  # noqa: PLC0415
+    from tzsl.datasets import FeatureSet, feature_set_to_plain
+    from tzsl.studies.engine import run_experiment
+    from tzsl.studies.outputs.results_folder import STAGING_FOLDER
 
     rng = np.random.default_rng(0)
     n, trials, m = 12, 3, 4
@@ -127,10 +127,10 @@ def test_a_crashed_run_does_not_block_the_rerun(tmp_path, monkeypatch):
 
 
 def test_staging_lock_refuses_a_live_writer_and_takes_over_a_dead_one(tmp_path):
-    import subprocess  # noqa: PLC0415
-    import sys  # noqa: PLC0415
+    import subprocess
+    import sys
 
-    from tzsl.studies.outputs.results_folder import STAGING_FOLDER, STAGING_LOCK  # noqa: PLC0415
+    from tzsl.studies.outputs.results_folder import STAGING_FOLDER, STAGING_LOCK
 
     staging = tmp_path / "res" / STAGING_FOLDER
     staging.mkdir(parents=True)
@@ -150,7 +150,7 @@ def test_staging_lock_refuses_a_live_writer_and_takes_over_a_dead_one(tmp_path):
 
 
 def test_commit_refuses_a_file_that_appeared_meanwhile(tmp_path):
-    from tzsl.studies.outputs.results_folder import STAGING_FOLDER  # noqa: PLC0415
+    from tzsl.studies.outputs.results_folder import STAGING_FOLDER
 
     out = ResultsDir(tmp_path / "res", staging=True)
     out.write_csv("a.csv", pd.DataFrame({"x": [1]}))
@@ -163,10 +163,10 @@ def test_commit_refuses_a_file_that_appeared_meanwhile(tmp_path):
 
 def test_manifest_names_the_commit_read_when_the_folder_opened(tmp_path, monkeypatch):
     """The commit of the code that ran, read before the run: a checkout moving on meanwhile changes nothing."""
-    import json  # noqa: PLC0415
-    import re  # noqa: PLC0415
+    import json
+    import re
 
-    from tzsl.studies.outputs import results_folder  # noqa: PLC0415
+    from tzsl.studies.outputs import results_folder
 
     commit = results_folder.source_commit()  # this checkout: a short sha (maybe -dirty), or None outside git
     assert commit is None or re.fullmatch(r"[0-9a-f]{12}(-dirty)?", commit), commit

@@ -6,11 +6,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from tests.study_settings import study_settings
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split
-from tests.study_settings import study_settings
-from tzsl.studies.outputs.results_folder import ResultsDir
+from tzsl.models.dap import dap_log_scores
 from tzsl.studies.config import ZeroShotSettings
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.papers.run_labels import StudyLabels
 from tzsl.studies.zero_shot.study import (
     SplitPosteriors,
@@ -22,7 +23,6 @@ from tzsl.studies.zero_shot.study import (
     table1_fusion,
     table2_priors,
 )
-from tzsl.models.dap import dap_log_scores
 
 TINY_SVM = {"n_C": 2, "n_gamma": 2, "n_draws": 1, "cv": 3}
 
@@ -86,13 +86,13 @@ def test_study_writes_every_table_with_paper_columns(tmp_path):
     assert "majority" not in t1.columns  # every test object has 4 trials: balanced, majority = chance
     assert pd.isna(t1.loc[t1["split"] == "std", "avgdap_ci95_low"]).all()
     # every split scored is written in the --splits format and reads back equal; the manifest lists its classes
-    from tzsl.evaluation import read_splits_csv  # noqa: PLC0415
+    from tzsl.evaluation import read_splits_csv
 
     back = read_splits_csv(tmp_path / "splits.csv", features.attributes)
     assert [(b.name, b.train_objects, b.test_objects, b.kept_attributes) for b in back] == [
         (n, tuple(v["train"]), tuple(v["test"]), tuple(v["attributes"])) for n, v in out.splits.items()]
     assert len(back) == 2 and all(len(b.test_objects) == 8 for b in back)
-    import json  # noqa: PLC0415
+    import json
 
     manifest = json.loads(out.write_manifest({}, data_files=[tmp_path / "table1_fusion.csv"]).read_text())
     assert manifest["splits"]["random-1"]["test"] == list(back[0].test_objects)

@@ -14,20 +14,20 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from tzsl.studies.comparison.method_runs import COMPARISON_COLUMNS, combine_comparisons
+from tzsl.studies.config import dap_label
 from tzsl.studies.outputs.results_folder import PrefixedResults, ResultsDir
-from tzsl.studies.zero_shot.study import fit_split, make_splits, run_zero_shot_tables
+from tzsl.studies.papers.run_labels import StudyLabels
 from tzsl.studies.zero_shot.spread import (
     FUSION_PRIOR_TABLE,
     REFIT_TABLE,
     add_refit_spread,
     model_seed,
 )
-from tzsl.studies.config import dap_label
-from tzsl.studies.papers.run_labels import StudyLabels
-from tzsl.studies.comparison.method_runs import COMPARISON_COLUMNS, combine_comparisons
+from tzsl.studies.zero_shot.study import fit_split, make_splits, run_zero_shot_tables
 
 sys.path.insert(0, str(Path(__file__).parent))
-from test_phac2_dap import _config, synthetic_features  # noqa: E402
+from test_phac2_dap import _config, synthetic_features
 
 REPO = Path(__file__).resolve().parents[2]
 METHODS = [{"name": "eszsl"}, {"name": "devise", "n_epochs": 5}]  # deterministic, seeded
@@ -129,9 +129,9 @@ def test_prefixed_results_write_every_file_under_the_prefix(tmp_path):
 
 
 def test_headlines_preset_is_the_paper_study_with_more_splits(tmp_path):
-    from tzsl.exceptions import ConfigError  # noqa: PLC0415
-    from tzsl.studies.config import load_experiment  # noqa: PLC0415
-    from tzsl.studies.zero_shot.runner import zero_shot_outputs  # noqa: PLC0415
+    from tzsl.exceptions import ConfigError
+    from tzsl.studies.config import load_experiment
+    from tzsl.studies.zero_shot.runner import zero_shot_outputs
 
     paper, headlines = load_experiment("phac2-dap"), load_experiment("phac2-headlines")
     evidence = load_experiment("phac2-evidence")  # the headlines' neighbour in the folder of `tzsl evidence`

@@ -7,19 +7,16 @@ import pandas as pd
 import pytest
 from scipy.special import softmax
 
-from tzsl.inference.bundle import load_bundle, save_bundle
 from tzsl.datasets import FeatureSet, load_hand_table4, read_grasps, simulate_grasps
 from tzsl.datasets._feature_table import write_feature_table
 from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
-from tzsl.studies.config import HandSettings
-from tzsl.studies.hand.study import feature_params
+from tzsl.features import grasp_features
+from tzsl.inference.bundle import load_bundle, save_bundle
 from tzsl.inference.bundle_kinds import ZERO_SHOT_KIND
 from tzsl.inference.model_bundles import train_hand_bundle
-from tzsl.inference.zero_shot_bundles import save_model_bundle, save_zero_shot_bundle
 from tzsl.inference.predict import format_prediction, read_class_table
-from tzsl.inference.zero_shot_bundles import load_predictor
 from tzsl.inference.recogniser import predict_grasps
-from tzsl.features import grasp_features
+from tzsl.inference.zero_shot_bundles import load_predictor, save_model_bundle, save_zero_shot_bundle
 from tzsl.models import (
     AttributeClassifierBank,
     AttributeSVM,
@@ -28,6 +25,8 @@ from tzsl.models import (
 )
 from tzsl.models.dap import attribute_prior, dap_log_scores, fuse_attribute_posteriors
 from tzsl.models.multigrasp import df_mdap_log_scores, sc_mdap
+from tzsl.studies.config import HandSettings
+from tzsl.studies.hand.study import feature_params
 
 TABLE = load_hand_table4()
 TABLE4_CSV = TABLE.source  # the shipped Table 4 file works as a class table

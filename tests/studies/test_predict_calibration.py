@@ -10,16 +10,14 @@ import pytest
 from click.testing import CliRunner
 from scipy.special import softmax
 
-from tzsl.inference.bundle import load_bundle, save_bundle
 from tzsl.cli import cli
-from tzsl.datasets import FeatureSet
-from tzsl.datasets import write_feature_table
+from tzsl.datasets import FeatureSet, write_feature_table
 from tzsl.exceptions import ModelBundleError
+from tzsl.inference.bundle import load_bundle, save_bundle
 from tzsl.inference.bundle_kinds import ZERO_SHOT_KIND
-from tzsl.inference.zero_shot_bundles import save_model_bundle, save_zero_shot_bundle
 from tzsl.inference.predict import read_class_table
-from tzsl.inference.zero_shot_bundles import load_predictor
 from tzsl.inference.recogniser import predict_grasps
+from tzsl.inference.zero_shot_bundles import load_predictor, save_model_bundle, save_zero_shot_bundle
 from tzsl.models import CalibratedZeroShotClassifier, build_method
 
 ATTRIBUTES = ["hard", "soft", "rough", "cold"]

@@ -8,15 +8,14 @@ import pytest
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-
 from tzsl.inference.predict import read_class_table
-from tzsl.inference.zero_shot_bundles import load_predictor
 from tzsl.inference.recogniser import predict_grasps
+from tzsl.inference.zero_shot_bundles import load_predictor
 
 torch = pytest.importorskip("torch", reason="PyTorch is not installed (the optional deep extra)")
 
-from tzsl.models import DeepAttributeEmbedding  # noqa: E402
 from tzsl.inference.deep_bundles import save_deep_bundle  # noqa: E402
+from tzsl.models import DeepAttributeEmbedding  # noqa: E402
 
 A = np.array([[1, 0, 1], [0, 1, 1], [1, 1, 0]], dtype=float)
 

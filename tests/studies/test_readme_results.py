@@ -26,7 +26,7 @@ from tzsl.reporting.readme_results import (
 from tzsl.studies.reproduce import reproduce_tables
 
 sys.path.insert(0, str(Path(__file__).parent))
-from test_reproduce import TINY_HAND  # noqa: E402
+from test_reproduce import TINY_HAND
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -141,7 +141,7 @@ def test_check_on_a_tiny_reproduce_run_passes_then_fails_on_drift(tmp_path):
 def accuracy_benchmark(monkeypatch):
     """The PHAC-2 accuracy benchmark's stage-2 module (experiments/benchmarks/phac2_accuracy.py)."""
     monkeypatch.syspath_prepend(str(REPO / "experiments" / "benchmarks"))
-    import phac2_accuracy  # noqa: PLC0415
+    import phac2_accuracy
 
     yield phac2_accuracy
     sys.modules.pop("phac2_accuracy", None)
@@ -182,7 +182,7 @@ def test_benchmark_block_from_the_benchmarks_own_summary(tmp_path, accuracy_benc
 
 def test_eszsl_public_block_from_the_benchmarks_summary(tmp_path):
     """eszsl_public.csv (the benchmark's summarise columns) -> its block; the public formulation has no difference."""
-    from tzsl.reporting.benchmark_blocks import ESZSL_PUBLIC_FILE, MissingResults, eszsl_public_block  # noqa: PLC0415
+    from tzsl.reporting.benchmark_blocks import ESZSL_PUBLIC_FILE, MissingResults, eszsl_public_block
 
     with pytest.raises(MissingResults, match="phac2_eszsl_public.py"):
         eszsl_public_block(tmp_path)
@@ -216,7 +216,7 @@ def test_block_tabulates_every_method_by_study_from_the_comparison(tmp_path):
 
 
 def test_one_file_holds_several_named_blocks(tmp_path, monkeypatch):
-    from tzsl.reporting import readme_results  # noqa: PLC0415
+    from tzsl.reporting import readme_results
 
     monkeypatch.setitem(readme_results.BLOCKS, "a", lambda root: f"A from {root.name}")
     monkeypatch.setitem(readme_results.BLOCKS, "a-b", lambda root: "AB")
@@ -229,7 +229,7 @@ def test_one_file_holds_several_named_blocks(tmp_path, monkeypatch):
 
 
 def test_search_benchmark_block_reads_every_summary(tmp_path):
-    from tzsl.reporting.benchmark_blocks import search_benchmark_block  # noqa: PLC0415
+    from tzsl.reporting.benchmark_blocks import search_benchmark_block
 
     with pytest.raises(ConfigError, match="phac2_search.py"):
         search_benchmark_block(tmp_path)
@@ -305,7 +305,7 @@ def test_the_readme_block_holds_the_headlines_and_the_evidence_block_the_rest(tm
 def test_grid_summary_and_pairs_report_the_share_at_a_grid_edge(tmp_path, accuracy_benchmark):
     """Stage 1's per-split files of three grids -> grid_summary.csv (share at an edge, CPU) -> the block; the
     adaptive grid is compared with the extended one on the same trials (grid_pairs)."""
-    from tzsl.reporting.benchmark_blocks import benchmark_accuracy_block  # noqa: PLC0415
+    from tzsl.reporting.benchmark_blocks import benchmark_accuracy_block
 
     edges = {"paper": [[1, 1], [1, 0]], "extended": [[1, 0], [0, 0]], "adaptive": [[0, 0], [0, 0]]}
     gamma = {"paper": 0.01, "extended": 1e-4, "adaptive": 1e-6}
@@ -408,9 +408,9 @@ def test_each_block_reads_its_own_folder(tmp_path):
 def test_detectors_block_pairs_the_chosen_detector_with_dap_avg_and_eszsl(tmp_path):
     """The README's detectors block: the run with the most splits comparing the chosen detector's DAP,
     its rows paired with dap-avg, and the chosen DAP minus ESZSL paired over the per-split table."""
-    from tzsl.models.attribute_training import STUDY_DETECTOR  # noqa: PLC0415
-    from tzsl.reporting.readme_results import detectors_block  # noqa: PLC0415
-    from tzsl.studies.config import dap_label  # noqa: PLC0415
+    from tzsl.models.attribute_training import STUDY_DETECTOR
+    from tzsl.reporting.readme_results import detectors_block
+    from tzsl.studies.config import dap_label
 
     chosen = dap_label("avg", STUDY_DETECTOR)
     with pytest.raises(MissingResults, match=f"no method comparison with {chosen}"):

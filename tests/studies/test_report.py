@@ -10,15 +10,15 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-import pytest  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+import pytest
 
-from tzsl import __version__  # noqa: E402
-from tzsl.exceptions import ConfigError, DataFileError  # noqa: E402
-from tzsl.reporting.report import render_report, write_report  # noqa: E402
-from tzsl.reporting.tables import FOLD_ROWS  # noqa: E402
+from tzsl import __version__
+from tzsl.exceptions import ConfigError, DataFileError
+from tzsl.reporting.report import render_report, write_report
+from tzsl.reporting.tables import FOLD_ROWS
 
 VOID = {"area", "base", "br", "col", "embed", "hr", "img", "input", "link", "meta", "source", "track", "wbr"}
 

@@ -24,16 +24,15 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-import pytest  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+import pytest
+from click.testing import CliRunner
 
-from click.testing import CliRunner  # noqa: E402
-
-from tzsl.cli import cli  # noqa: E402
-from tzsl.datasets import write_plain_dataset  # noqa: E402
-from tzsl.reporting.report import write_report  # noqa: E402
+from tzsl.cli import cli
+from tzsl.datasets import write_plain_dataset
+from tzsl.reporting.report import write_report
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -11,7 +11,9 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from tests.csv_compare import folder_csvs
 from tzsl.exceptions import ConfigError
+from tzsl.models import available_methods
 from tzsl.studies import engine, reproduce
 from tzsl.studies.config import load_experiment
 from tzsl.studies.reproduce import (
@@ -22,8 +24,6 @@ from tzsl.studies.reproduce import (
     reproduce_experiments,
     reproduce_tables,
 )
-from tzsl.models import available_methods
-from tests.csv_compare import folder_csvs
 
 
 def test_reproduce_runs_the_builtin_files_unchanged():

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from tests.benchmark_scripts import benchmark_script
-from tests.study_settings import study_settings
 from tests.studies.test_phac2_dap import synthetic_features
+from tests.study_settings import study_settings
 from tzsl.models import AttributeClassifierBank
 from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.study import make_splits

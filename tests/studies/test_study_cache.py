@@ -16,17 +16,16 @@ import platformdirs
 import pytest
 from pydantic import Field
 
-from tzsl.studies.config import Compute, Output, register_study, unregister_study
-from tzsl.studies.config._common import Section
-from tzsl.studies.engine import run_experiment
 from tzsl.cache import MAX_SIZE_ENV, STUDY_CACHE_ENV
 from tzsl.exceptions import ConfigError
-from tzsl.studies.config import load_experiment
+from tzsl.studies.config import Compute, Output, load_experiment, register_study, unregister_study
+from tzsl.studies.config._common import Section
+from tzsl.studies.engine import run_experiment
 from tzsl.studies.outputs.study_cache import study_cache_folder, study_key
 from tzsl.studies.outputs.study_run import StudyRun
 
 sys.path.insert(0, str(Path(__file__).parent))
-from test_reproduce import TINY_HAND  # noqa: E402
+from test_reproduce import TINY_HAND
 
 PLUGIN = "cache-test"
 #: How many times the plug-in's runner really ran (a restored study does not run it).

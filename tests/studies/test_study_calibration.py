@@ -10,8 +10,13 @@ import pandas as pd
 import pytest
 
 from tzsl.evaluation import Split
-from tzsl.models import AttributeClassifierBank, AttributeSVM, CalibratedZeroShotClassifier, CalibrationWarning
-from tzsl.models import ZSLInputError
+from tzsl.models import (
+    AttributeClassifierBank,
+    AttributeSVM,
+    CalibratedZeroShotClassifier,
+    CalibrationWarning,
+    ZSLInputError,
+)
 from tzsl.reporting.report import render_report
 from tzsl.studies.comparison import calibration as study_calibration
 from tzsl.studies.comparison.calibration import (

@@ -11,12 +11,11 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from tests.studies.test_zero_shot_study import TEMPLATE, simulated_dataset
 from tzsl.cli import cli
 from tzsl.exceptions import TzslError
 from tzsl.models.attribute_training import STUDY_DETECTOR
 from tzsl.studies.config import dap_label, load_experiment
-
-from tests.studies.test_zero_shot_study import TEMPLATE, simulated_dataset
 
 
 def _experiment(tmp_path, body: str, study: str = "zero-shot", dataset: str = 'builtin = "phac2-penn"'):
@@ -68,7 +67,7 @@ def test_the_paper_presets_generic_part_keeps_the_rbf_svm_beside_the_chosen_fami
     """fabric-evidence / hand-evidence compare dap-avg-logistic-c1 in their generic part, whose own DAP
     stays the RBF-SVM; listing the run's files builds that part with the preset's [svm] too (it failed
     with the generic study's default detector, whose DAP is dap-avg-logistic-c1 itself)."""
-    from tzsl.studies.zero_shot.preset import generic_experiment, preset_outputs  # noqa: PLC0415
+    from tzsl.studies.zero_shot.preset import generic_experiment, preset_outputs
 
     for name in ("fabric-evidence", "hand-evidence"):
         exp = load_experiment(name)

@@ -8,9 +8,9 @@ from pathlib import Path
 import pytest
 
 from tzsl.exceptions import ConfigError
+from tzsl.models import AttributeClassifierBank
 from tzsl.studies.config import load_experiment
 from tzsl.studies.zero_shot.study import attribute_bank
-from tzsl.models import AttributeClassifierBank
 
 
 def _experiment(tmp_path: Path, svm: str):
@@ -27,8 +27,8 @@ def test_defaults_are_the_banks():
 
 
 def test_schema_offers_exactly_the_banks_solvers():
-    from tzsl.studies.config._zero_shot import SvmSettings
     from tzsl.models._attribute_training import SOLVERS
+    from tzsl.studies.config._zero_shot import SvmSettings
 
     field = SvmSettings.model_fields["solver"]
     assert set(field.annotation.__args__) == set(SOLVERS)

@@ -6,8 +6,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from tzsl.evaluation import Split, bootstrap_accuracy, summarise_over_splits
-from tzsl.evaluation import Outcomes, add_trust_columns, attribute_intervals
+from tzsl.evaluation import (
+    Outcomes,
+    Split,
+    add_trust_columns,
+    attribute_intervals,
+    bootstrap_accuracy,
+    summarise_over_splits,
+)
 from tzsl.studies.zero_shot.study import SplitPosteriors, table3_challenging
 
 
@@ -92,12 +98,11 @@ def test_a_single_object_split_is_left_out_of_the_control():
 def test_splits_written_to_a_results_folder_read_back_exactly_with_their_rule(tmp_path):
     import json
 
-    from tzsl.evaluation import read_splits_csv
-    from tzsl.studies.outputs.results_folder import ResultsDir
-    from tzsl.studies.config import ZeroShotSettings
-    from tzsl.studies.zero_shot.study import make_splits
-
     from tests.studies.test_phac2_dap import synthetic_features
+    from tzsl.evaluation import read_splits_csv
+    from tzsl.studies.config import ZeroShotSettings
+    from tzsl.studies.outputs.results_folder import ResultsDir
+    from tzsl.studies.zero_shot.study import make_splits
 
     features = synthetic_features(n_objects=40, n_attributes=6, trials=2)
     config = ZeroShotSettings.of_preset("phac2-dap", splits={"n_splits": 2, "n_test": 5}, compute={"progress": False})

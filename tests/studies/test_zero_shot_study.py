@@ -20,7 +20,6 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from tzsl.cli import cli
-
 from tzsl.datasets import write_plain_dataset
 from tzsl.studies.config import load_experiment
 from tzsl.studies.papers.run_labels import paper_protocol
@@ -84,10 +83,9 @@ def test_template_is_the_generic_study_with_every_feature_method():
     exp = load_experiment(TEMPLATE)
     assert exp.study == "zero-shot" and paper_protocol(exp.study, exp.config) == (False, "")
     assert set(exp.config.splits.kinds) == {"random", "challenging"} and exp.config.methods.gzsl
-    from tzsl.models import available_methods, get_method  # noqa: PLC0415
-
-    from tzsl.models.attribute_training import STUDY_DETECTOR  # noqa: PLC0415
-    from tzsl.studies.config import dap_label  # noqa: PLC0415
+    from tzsl.models import available_methods, get_method
+    from tzsl.models.attribute_training import STUDY_DETECTOR
+    from tzsl.studies.config import dap_label
 
     compared = {spec["name"] for spec in exp.config.methods.method_specs()}
     expected = {m for m in available_methods() if get_method(m).input_kind == "features"}
@@ -171,7 +169,7 @@ def _check_template_run(tmp_path_factory, n_classes: int, n_attributes: int, n_s
     recorded = {re.sub(r" \(x\d+\)$", "", line) for line in manifest["warnings"]}
     closing = [line for line in shown if " more warnings of the kinds above " in line]
     assert set(shown) - set(closing) <= recorded and len(closing) <= 1
-    from tzsl._warnings import warning_kind  # noqa: PLC0415
+    from tzsl._warnings import warning_kind
 
     kinds = {warning_kind(line.split(" (")[0], UserWarning) for line in recorded}
     assert len(shown) <= len(recorded) and len(shown) - len(closing) <= max(len(kinds), 1) + 3, shown
@@ -198,7 +196,7 @@ def test_paper_preset_on_another_dataset_says_what_it_maps_to(tmp_path):
     ({"dataset": {"builtin": "phac2-hold-mat"}}, False),
 ])
 def test_paper_numbers_only_on_the_papers_dataset_and_protocol(changes, paper):
-    from tzsl.studies.config import validate  # noqa: PLC0415
+    from tzsl.studies.config import validate
 
     raw = {"study": "phac2-dap", "dataset": {"builtin": "phac2-penn"}}
     for key, value in changes.items():
@@ -224,7 +222,7 @@ def test_identical_rows_everywhere_fail_with_one_line(tmp_path):
 
 
 def test_recorded_warnings_are_one_line_and_counted():
-    from tzsl._warnings import one_line, recorded_warnings  # noqa: PLC0415
+    from tzsl._warnings import one_line, recorded_warnings
 
     assert one_line(RuntimeWarning("first\nsecond"), RuntimeWarning) == "tzsl: warning: first"
     assert one_line(DeprecationWarning("old"), DeprecationWarning) == "tzsl: warning: old (DeprecationWarning)"
@@ -239,8 +237,8 @@ def test_recorded_warnings_are_one_line_and_counted():
 
 
 def test_the_terminal_shows_each_kind_of_warning_once_then_counts_the_repeats():
-    from tzsl._warnings import TerminalWarnings, warning_kind  # noqa: PLC0415
-    from tzsl.models import GridEdgeWarning  # noqa: PLC0415
+    from tzsl._warnings import TerminalWarnings, warning_kind
+    from tzsl.models import GridEdgeWarning
 
     printed: list[str] = []
     terminal = TerminalWarnings(printed.append)
@@ -263,7 +261,7 @@ def test_the_terminal_shows_each_kind_of_warning_once_then_counts_the_repeats():
 
 def test_the_command_line_prints_warnings_on_one_line(tmp_path, monkeypatch):
     """A warning raised inside a command reaches the user as one line, without a source path."""
-    import tzsl.studies.zero_shot.runner as runners  # noqa: PLC0415
+    import tzsl.studies.zero_shot.runner as runners
 
     def warns(*args, **kwargs):
         warnings.warn("something to know\nwith a second line", RuntimeWarning, stacklevel=1)

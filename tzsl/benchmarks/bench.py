@@ -26,9 +26,9 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC
 
 from tzsl.datasets import FeatureSet
+from tzsl.models.dap import attribute_prior
 from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.zero_shot.study import SplitPosteriors, fit_split, make_splits, split_masks
-from tzsl.models.dap import attribute_prior
 
 
 def literal_posteriors(features: FeatureSet, train: np.ndarray, test: np.ndarray, attributes: list[str],

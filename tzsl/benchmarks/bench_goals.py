@@ -40,8 +40,14 @@ import pandas as pd
 
 from tzsl.benchmarks._common import MEASURE_COLUMNS, add_output_options, benchmark_main
 from tzsl.benchmarks.bench_predict import METHODS, run_predict
-from tzsl.benchmarks.bench_reproduce import (SPLIT_FIT_PART, STUDY_LIST_PARTS, run_split_fit, run_study_list,
-                                             split_fit_seconds, split_fit_stage)
+from tzsl.benchmarks.bench_reproduce import (
+    SPLIT_FIT_PART,
+    STUDY_LIST_PARTS,
+    run_split_fit,
+    run_study_list,
+    split_fit_seconds,
+    split_fit_stage,
+)
 from tzsl.benchmarks.bench_template import DEFAULT_TEMPLATE, run_template
 from tzsl.benchmarks.goals import GOALS, PARTS
 

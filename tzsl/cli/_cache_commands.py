@@ -34,8 +34,18 @@ def cache() -> None:
 def info() -> None:
     """Show the cache folder, the size cap and, per cache, its size, entries and oldest entry."""
     from tzsl.cache import (  # noqa: PLC0415
-        CACHE_DIR_ENV, CACHE_PARTS, MAX_SIZE_ENV, STUDIES_FOLDER, STUDY_CACHE_ENV, cache_info, format_age,
-        format_size, get_cache_dir, size_cap_gb, study_cache_on)
+        CACHE_DIR_ENV,
+        CACHE_PARTS,
+        MAX_SIZE_ENV,
+        STUDIES_FOLDER,
+        STUDY_CACHE_ENV,
+        cache_info,
+        format_age,
+        format_size,
+        get_cache_dir,
+        size_cap_gb,
+        study_cache_on,
+    )
 
     root, cap = get_cache_dir(), size_cap_gb()
     click.echo(f"cache folder: {root} (set {CACHE_DIR_ENV} to move it)")
@@ -61,7 +71,14 @@ def prune(older_than: float | None, max_size: float | None) -> None:
     the last minutes is never removed. Temporary names left by an interrupted run are removed.
     """
     from tzsl.cache import (  # noqa: PLC0415
-        CACHE_PARTS, IN_USE_SECONDS, STUDIES_FOLDER, format_age, format_size, get_cache_dir, size_cap_gb)
+        CACHE_PARTS,
+        IN_USE_SECONDS,
+        STUDIES_FOLDER,
+        format_age,
+        format_size,
+        get_cache_dir,
+        size_cap_gb,
+    )
     from tzsl.cache import prune as prune_cache  # noqa: PLC0415
 
     limit = size_cap_gb() if max_size is None else max_size

@@ -116,8 +116,8 @@ purpose_option = schema_option(
 def splits(kind, n_splits, n_test, purpose, out, dataset, features_file, plain_dir, path, seed, data_dir, force):
     """Write object splits as CSV (split, object, role), usable with 'tzsl evaluate --splits'."""
     from tzsl.evaluation import write_splits_csv  # noqa: PLC0415
-    from tzsl.studies.zero_shot.study import make_splits  # noqa: PLC0415
     from tzsl.studies.zero_shot.runner import load_study_features  # noqa: PLC0415
+    from tzsl.studies.zero_shot.study import make_splits  # noqa: PLC0415
 
     if out.exists() and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite")

@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import click
-
-import json
 
 from tzsl.cli._root import RegistryName, cli, data_dir_option, force_option, schema_option
 from tzsl.exceptions import ConfigError

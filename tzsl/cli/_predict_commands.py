@@ -67,8 +67,8 @@ def predict(model_path: Path, classes: Path, candidates: str | None, mode: str, 
     arrays declare more than 2 GiB is refused before loading; raise the limit (in bytes) with the
     environment variable TZSL_MAX_NPZ_BYTES.
     """
-    from tzsl.inference.bundle import read_bundle_header  # noqa: PLC0415
     from tzsl.inference import Recogniser  # noqa: PLC0415 - the Python API: the same result from Python
+    from tzsl.inference.bundle import read_bundle_header  # noqa: PLC0415
     from tzsl.inference.bundle_kinds import PER_EP_KIND  # noqa: PLC0415
 
     active = read_bundle_header(model_path).kind == PER_EP_KIND

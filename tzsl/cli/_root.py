@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import functools
 import re
-import sys
 import warnings
 from pathlib import Path
 
@@ -46,7 +45,7 @@ class TzslGroup(click.Group):
     warnings -> one line ``tzsl: warning: ...`` per kind, then one line counting the repeats
     (:class:`tzsl._warnings.TerminalWarnings`)."""
 
-    def invoke(self, ctx: click.Context):  # noqa: D401 - click API
+    def invoke(self, ctx: click.Context):
         printer = TerminalWarnings(_echo_error_stream)
         try:
             with warnings.catch_warnings():
@@ -166,7 +165,7 @@ class RegistryName(click.ParamType):
     def __init__(self, registry: str) -> None:
         self.registry = registry
 
-    def get_metavar(self, param, ctx=None) -> str:  # noqa: ARG002 (click's signature)
+    def get_metavar(self, param, ctx=None) -> str:
         return "KIND" if self.registry == "lab-format" else "NAME"
 
     def convert(self, value, param, ctx):

@@ -42,7 +42,7 @@ import requests
 from urllib3.exceptions import ReadTimeoutError
 
 from tzsl.datasets._transfer import STOP_POLL_S, Transfer, fetch_setting
-from tzsl.exceptions import ConfigError, first_line
+from tzsl.exceptions import first_line
 
 try:  # POSIX: an advisory lock on the data home, released by the system when its process dies
     import fcntl

@@ -28,10 +28,10 @@ import pooch
 
 from tzsl._io import atomic_write_bytes
 from tzsl.datasets._download import FETCH_STALL_S, fetch_lock, fetch_timeout, remove_leftovers
-from tzsl.datasets._transfer import FetchProgress, Transfer, download_all, fetch_workers
 from tzsl.datasets._fabric import FABRIC_GROUPS_CSV, FABRIC_GROUPS_SOURCE, fabric_groups_csv_bytes
 from tzsl.datasets._home import get_data_home
 from tzsl.datasets._registry import download_file, registered_size, registry, source_of, verify_file
+from tzsl.datasets._transfer import FetchProgress, Transfer, download_all, fetch_workers
 from tzsl.exceptions import ChecksumError, ConfigError, DataFileError, DataMissingError, first_line
 
 __all__ = ["MIRROR_ENV", "REFERENCE_ONLY", "FetchReport", "fetch_datasets", "fetch_missing", "registered_datasets"]

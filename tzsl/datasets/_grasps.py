@@ -48,10 +48,10 @@ The class-attribute matrix K of the paper's hand experiment (Table 4) ships with
 from __future__ import annotations
 
 import re
-from io import StringIO
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from importlib import resources
+from io import StringIO
 from pathlib import Path
 
 import numpy as np

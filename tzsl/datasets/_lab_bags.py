@@ -167,7 +167,7 @@ def _bag_messages(bag: Path, source: LabSource, store) -> tuple[int, dict[str, _
     finally:
         try:
             reader.close()
-        except Exception:  # noqa: BLE001, S110 - closing a broken bag; the read error is reported
+        except Exception:  # noqa: BLE001 - closing a broken bag; the read error is reported
             pass
     if first is None:
         raise lab_error(bag, f"no message on {sorted(topics)}")

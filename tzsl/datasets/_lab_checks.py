@@ -212,7 +212,7 @@ def read_label_table(source: LabSource, key: str, required: tuple[str, ...],
             raise lab_error(path, f"empty {', '.join(empty)}", line)
         if cells["class"] not in source.classes:
             raise lab_error(path, f"class {cells['class']!r} is not in the class table "
-                                  f"({getattr(source.mapping, 'classes')})", line)
+                                  f"({source.mapping.classes})", line)
         rows.append(LabelRow(line, cells))
     if not rows:
         raise lab_error(path, "no trial: the table has a header but no data lines", 1)

@@ -25,8 +25,8 @@ from tzsl.datasets._lab_checks import (
     check_size,
     has_control,
     lab_error,
-    progress_bar,
     one_line,
+    progress_bar,
     to_float,
 )
 from tzsl.datasets._lab_mapping import Hdf5Mapping, SensorFields

@@ -23,8 +23,8 @@ from typing import NamedTuple
 import pooch
 
 from tzsl.datasets._download import FETCH_STALL_S, DownloadFailed, download, fetch_timeout
-from tzsl.datasets._transfer import DownloadCancelled, FetchProgress, Transfer
 from tzsl.datasets._home import DATA_DIR_ENV, get_data_home
+from tzsl.datasets._transfer import DownloadCancelled, FetchProgress, Transfer
 from tzsl.exceptions import ChecksumError, DataMissingError, first_line
 
 #: Registry value meaning "listed, but no hash known" (the fabric depth PNGs).

@@ -46,7 +46,7 @@ class _RestrictedUnpickler(pickle.Unpickler):
         super().__init__(file, encoding="latin1")
         self._source = source
 
-    def find_class(self, module: str, name: str) -> Any:  # noqa: D401 - pickle API
+    def find_class(self, module: str, name: str) -> Any:
         if module in _BUILTIN_MODULES and name in _SAFE_BUILTINS:
             import builtins
 

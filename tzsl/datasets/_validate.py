@@ -23,7 +23,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from tzsl.datasets._signal_files import (  # noqa: F401 - re-exported for the reader
+from tzsl.datasets._fast_trials import read_clean_trials
+from tzsl.datasets._paths import check_inside
+from tzsl.datasets._signal_files import (
     check_signal_values,
     read_signal_file,
     resolve_signal_path,
@@ -47,13 +49,12 @@ from tzsl.datasets._tables import (  # noqa: F401 - the format's vocabulary, re-
     find_table,
     key_line,
     read_rows,
-    to_float,
     read_settings,
+    to_float,
     trials_file_name,
 )
-from tzsl.datasets._fast_trials import read_clean_trials
-from tzsl.datasets._paths import check_inside
 from tzsl.exceptions import DataFileError
+
 
 @dataclass
 class ScannedDataset:

@@ -11,6 +11,7 @@ classes only (:func:`select_embedding_alpha`). The studies in :mod:`tzsl.studies
 these from here.
 """
 
+from tzsl.evaluation._challenging_splits import challenging_splits
 from tzsl.evaluation._metrics import (
     gzsl_scores,
     per_attribute_balanced_accuracy,
@@ -19,7 +20,6 @@ from tzsl.evaluation._metrics import (
     summarise_over_splits,
     trial_accuracy,
 )
-from tzsl.evaluation._challenging_splits import challenging_splits
 from tzsl.evaluation._split_io import read_splits_csv, write_splits_csv
 from tzsl.evaluation._splits import (
     PURPOSES,
@@ -53,7 +53,7 @@ __all__: list[str] = [
 ]
 
 # Intervals: two-level bootstrap over splits and test classes, paired differences.
-from tzsl.evaluation._intervals import (  # noqa: E402
+from tzsl.evaluation._intervals import (
     Interval,
     bootstrap_accuracy,
     bootstrap_accuracy_columns,

@@ -34,7 +34,6 @@ in chunks so memory stays bounded (about ``CHUNK_CELLS`` cells per chunk).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from typing import Literal, NamedTuple
 
 import numpy as np

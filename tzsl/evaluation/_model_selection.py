@@ -15,9 +15,9 @@ import numpy as np
 from sklearn.exceptions import ConvergenceWarning
 
 from tzsl.exceptions import ConfigError
+from tzsl.fit_store import fit_cached
 from tzsl.models import build_method
 from tzsl.models.protocol import attribute_rows, class_grouped_folds
-from tzsl.fit_store import fit_cached
 
 __all__ = ["DEFAULT_ALPHAS", "select_embedding_alpha"]
 

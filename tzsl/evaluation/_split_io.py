@@ -42,13 +42,13 @@ import pandas as pd
 
 from tzsl._io import atomic_write
 from tzsl.evaluation._splits import (
-    split_purpose,
     Split,
-    check_min_counts,
-    kept_mask,
     attribute_exclusions,
     check_attribute_table,
+    check_min_counts,
     duplicate_attribute_groups,
+    kept_mask,
+    split_purpose,
 )
 from tzsl.exceptions import DataFileError, SplitError, problems_error
 

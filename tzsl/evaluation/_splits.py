@@ -34,7 +34,7 @@ import numpy as np
 import pandas as pd
 from sklearn.utils import check_random_state
 
-from tzsl._scoring import duplicate_attribute_groups  # noqa: F401 - numpy alone, shared with tzsl predict
+from tzsl._scoring import duplicate_attribute_groups
 from tzsl.exceptions import SplitError
 
 __all__ = [

@@ -27,6 +27,7 @@ from tzsl.features._grasp_features import (
     pack_grasp_features,
     unpack_grasp_features,
 )
+from tzsl.features._keyframes import KeyFrames, KeyFrameSelector, frame_differences, key_frame_indices
 from tzsl.features._kinesthetic import KinestheticFeatures, kinesthetic_ep_features
 from tzsl.features._pca import VariancePCA
 from tzsl.features._penn_columns import (
@@ -36,11 +37,15 @@ from tzsl.features._penn_columns import (
     select_penn_columns,
 )
 from tzsl.features._raw_features import RawTrialFeatures
-from tzsl.features._time_average import BIOTAC_CHANNELS, BiotacTimeAverage, biotac_ep_means
-from tzsl.features._keyframes import KeyFrames, KeyFrameSelector, frame_differences, key_frame_indices
-from tzsl.features._texture import TextureDescriptor, texture_feature_names
-from tzsl.features._signal_stats import DEFAULT_SIGNAL_STATISTICS, SIGNAL_STATISTICS, SignalStatistics, subtract_baseline
 from tzsl.features._signal_features import load_plain_dataset, plain_feature_set, raw_trial_signals
+from tzsl.features._signal_stats import (
+    DEFAULT_SIGNAL_STATISTICS,
+    SIGNAL_STATISTICS,
+    SignalStatistics,
+    subtract_baseline,
+)
+from tzsl.features._texture import TextureDescriptor, texture_feature_names
+from tzsl.features._time_average import BIOTAC_CHANNELS, BiotacTimeAverage, biotac_ep_means
 
 __all__: list[str] = [
     "DEFAULT_MIN_OBJECTS",

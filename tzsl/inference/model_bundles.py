@@ -144,10 +144,10 @@ def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | 
         draw and positive training objects; other methods: one row per attribute with its
         positive training objects.
     """
+    from tzsl.models.protocol import attribute_rows  # noqa: PLC0415
+    from tzsl.studies.comparison.method_runs import method_input, study_estimator  # noqa: PLC0415
     from tzsl.studies.zero_shot.relaxations import trainable_attribute_rule  # noqa: PLC0415
     from tzsl.studies.zero_shot.study import attribute_bank, check_cv_folds, compute_context  # noqa: PLC0415
-    from tzsl.studies.comparison.method_runs import method_input, study_estimator  # noqa: PLC0415
-    from tzsl.models.protocol import attribute_rows  # noqa: PLC0415
 
     sub, split_record, left_out = training_subset(features, splits_file, split_name,
                                                   **trainable_attribute_rule(config.splits))

@@ -23,9 +23,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from tzsl.inference.bundle import load_bundle, save_bundle
 from tzsl.datasets import FeatureSet
 from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError
+from tzsl.inference.bundle import load_bundle, save_bundle
 from tzsl.inference.bundle_kinds import PER_EP_KIND
 from tzsl.inference.predict_inputs import feature_schema, read_feature_rows
 from tzsl.models import PerEPAttributeModel

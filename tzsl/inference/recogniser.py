@@ -23,8 +23,8 @@ import numpy as np
 import pandas as pd
 
 from tzsl._scoring import sc_mdap
-from tzsl.inference.bundle import read_bundle_header
 from tzsl.exceptions import ConfigError, ModelBundleError
+from tzsl.inference.bundle import read_bundle_header
 from tzsl.inference.bundle_kinds import PER_EP_KIND, left_out_attributes
 from tzsl.inference.predict import Prediction, read_class_table
 from tzsl.inference.predict_inputs import grasp_model_input, read_inputs

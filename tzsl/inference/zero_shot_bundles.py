@@ -44,8 +44,8 @@ from typing import Any
 import numpy as np
 
 from tzsl._scoring import tempered_proba
-from tzsl.inference.bundle import load_bundle, read_bundle_header, save_bundle
 from tzsl.exceptions import ConfigError, ModelBundleError
+from tzsl.inference.bundle import load_bundle, read_bundle_header, save_bundle
 from tzsl.inference.bundle_kinds import DEEP_KIND, ZERO_SHOT_KIND
 from tzsl.inference.detector_bundles import DAPArrayRule, DetectorBank, detector_payload, read_detector_payload
 from tzsl.inference.linear_bundles import LinearAttributeModel, LinearRule, linear_payload, read_linear_payload
@@ -272,8 +272,8 @@ def load_predictor(path: str | Path, *, trust_pickle: bool = False) -> Predictor
     """
     kind = read_bundle_header(path).kind  # verified, nothing deserialised yet
     if kind == DEEP_KIND:
-        from tzsl.models import NearestAttributeRule  # noqa: PLC0415
         from tzsl.inference.deep_bundles import load_deep_bundle  # noqa: PLC0415 - needs the deep extra
+        from tzsl.models import NearestAttributeRule  # noqa: PLC0415
 
         model = load_deep_bundle(path, trust_pickle=trust_pickle)
         metadata = dict(read_bundle_header(path).metadata)

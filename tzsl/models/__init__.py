@@ -17,24 +17,22 @@ submodules, one per concept (as scikit-learn's ``sklearn.metrics.pairwise``):
 The fit store the estimators share is :mod:`tzsl.fit_store`.
 """
 
-from tzsl.models._attribute_svm import AttributeSVM
-from tzsl.models._linear_attribute import LinearAttribute
-from tzsl.models._attribute_bank import AttributeClassifierBank
-from tzsl.models._attribute_training import AttributeTrainingError, GridEdgeWarning
-from tzsl.models._scalable_attribute import ScalableAttributeClassifier
-from tzsl.models._decision import CompatibilityRule, DAPRule, DecisionRule, NearestAttributeRule
-from tzsl.models._embedding import EmbeddingZSL
-from tzsl.models._deep import DeepAttributeEmbedding
-from tzsl.models._hand_dap import HandDAPClassifier, NoContactError
-from tzsl.models._multilabel import MultiLabelAttributeClassifier
-from tzsl.models._eszsl import ESZSL, ESZSLCV
-from tzsl.models._iap import IAP
-from tzsl.models._sae import SAE, SAECV
-from tzsl.models._compatibility import ALE, SJE, DeViSE
+from tzsl.models import _builtin_methods  # noqa: F401  (registers the shipped methods)
 from tzsl.models._active_touch import LogisticAttribute, PerEPAttributeModel
-from tzsl.models._zsl_input import ZSLInputError
-from tzsl.models._validation import ParameterError
-from tzsl.models._zero_shot import ZeroShotClassifier
+from tzsl.models._attribute_bank import AttributeClassifierBank
+from tzsl.models._attribute_svm import AttributeSVM
+from tzsl.models._attribute_training import AttributeTrainingError, GridEdgeWarning
+from tzsl.models._choices import INHERITED_CHOICES
+from tzsl.models._compatibility import ALE, SJE, DeViSE
+from tzsl.models._decision import CompatibilityRule, DAPRule, DecisionRule, NearestAttributeRule
+from tzsl.models._deep import DeepAttributeEmbedding
+from tzsl.models._embedding import EmbeddingZSL
+from tzsl.models._eszsl import ESZSL, ESZSLCV
+from tzsl.models._hand_dap import HandDAPClassifier, NoContactError
+from tzsl.models._iap import IAP
+from tzsl.models._linear_attribute import LinearAttribute
+from tzsl.models._multilabel import MultiLabelAttributeClassifier
+from tzsl.models._posterior_calibration import CalibratedZeroShotClassifier, CalibrationWarning
 from tzsl.models._registry import (
     FAMILIES,
     INPUT_KINDS,
@@ -46,10 +44,12 @@ from tzsl.models._registry import (
     register_method,
     unregister_method,
 )
+from tzsl.models._sae import SAE, SAECV
+from tzsl.models._scalable_attribute import ScalableAttributeClassifier
 from tzsl.models._score_ensemble import ScoreEnsembleZSL
-from tzsl.models._posterior_calibration import CalibratedZeroShotClassifier, CalibrationWarning
-from tzsl.models import _builtin_methods  # noqa: F401,E402  (registers the shipped methods)
-from tzsl.models._choices import INHERITED_CHOICES  # noqa: E402
+from tzsl.models._validation import ParameterError
+from tzsl.models._zero_shot import ZeroShotClassifier
+from tzsl.models._zsl_input import ZSLInputError
 
 __all__: list[str] = [
     # the protocol and its decision rules

@@ -73,14 +73,14 @@ from tzsl.models._active_policy import (
     stop_reasons,
 )
 from tzsl.models._attribute_bank import AttributeClassifierBank
-from tzsl.models._logistic_attribute import LogisticAttribute
-from tzsl.value_lists import FUSIONS
 from tzsl.models._dap import (
     attribute_prior,
     check_class_attributes,
     fuse_attribute_posteriors,
 )
 from tzsl.models._decision import DAPRule
+from tzsl.models._logistic_attribute import LogisticAttribute
+from tzsl.value_lists import FUSIONS
 
 __all__ = [
     "PHAC2_EP_SECONDS",

@@ -15,17 +15,12 @@ import warnings
 from numbers import Integral
 
 import numpy as np
-from sklearn.base import BaseEstimator, clone
 from joblib import Parallel, delayed
+from sklearn.base import BaseEstimator, clone
 from sklearn.utils._param_validation import HasMethods, Interval, Options, StrOptions
 from sklearn.utils.validation import check_is_fitted
 from tqdm.auto import tqdm
 
-from tzsl._profile import timed
-from tzsl.exceptions import ConfigError
-from tzsl.models._attribute_training import AUTO_MAX_EXACT_TRIALS, SOLVERS, AttributeTrainingError, GridEdgeWarning
-from tzsl.models._detectors import AUTO_CANDIDATES, DETECTORS, choose_detector, detector_template
-from tzsl.models._scalable_attribute import ScalableAttributeClassifier
 from tzsl._fit_store import (
     array_digest,
     count_fits,
@@ -36,6 +31,11 @@ from tzsl._fit_store import (
     spawn_seeds,
     stored_fit,
 )
+from tzsl._profile import timed
+from tzsl.exceptions import ConfigError
+from tzsl.models._attribute_training import AUTO_MAX_EXACT_TRIALS, SOLVERS, AttributeTrainingError, GridEdgeWarning
+from tzsl.models._detectors import AUTO_CANDIDATES, DETECTORS, choose_detector, detector_template
+from tzsl.models._scalable_attribute import ScalableAttributeClassifier
 from tzsl.models._validation import ValidatedParamsMixin
 from tzsl.value_lists import JOBLIB_BACKENDS
 

@@ -28,7 +28,6 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from tzsl._scoring import linear_embedding
 
-
 __all__ = ["EmbeddingAttributeModel", "attribute_model_tags", "attribute_table_tags"]
 
 

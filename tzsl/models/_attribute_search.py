@@ -26,7 +26,7 @@ import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
-from sklearn.svm import _libsvm  # noqa: PLC2701 - see svc_fit_decision
+from sklearn.svm import _libsvm
 
 from tzsl.models._attribute_training import AttributeTrainingError
 from tzsl.models._zsl_input import extend_at_edge

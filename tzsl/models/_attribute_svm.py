@@ -33,30 +33,17 @@ import numpy as np
 from sklearn import config_context
 from sklearn.base import BaseEstimator, ClassifierMixin, clone
 from sklearn.metrics.pairwise import euclidean_distances, rbf_kernel
-from sklearn.svm import SVC
-from sklearn.svm import _libsvm  # noqa: PLC2701 - see svc_fit_decision
+from sklearn.svm import (
+    SVC,
+    _libsvm,
+)
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from tzsl._parallel import one_blas_thread
 from tzsl._fit_store import array_digest
-from tzsl.models._attribute_training import (
-    PLATT_WEIGHTING,
-    SCORING,
-    UNDERSAMPLING,
-    GRIDS,
-    AttributeTrainingError,
-    balanced_object_draws,
-    balanced_sample_weights,
-    binary_training_targets,
-    cv_criteria,
-    default_preprocessor,
-    gamma_grid,
-    grid_edges,
-    object_grouped_folds,
-)
+from tzsl._parallel import one_blas_thread
 from tzsl.models._attribute_search import (
     HALVING_KERNEL_BYTES,
     MAX_GRID_EXTENSIONS,
@@ -67,6 +54,21 @@ from tzsl.models._attribute_search import (
     fill_grid_lines,
     successive_halving,
     svc_fit_decision,
+)
+from tzsl.models._attribute_training import (
+    GRIDS,
+    PLATT_WEIGHTING,
+    SCORING,
+    UNDERSAMPLING,
+    AttributeTrainingError,
+    balanced_object_draws,
+    balanced_sample_weights,
+    binary_training_targets,
+    cv_criteria,
+    default_preprocessor,
+    gamma_grid,
+    grid_edges,
+    object_grouped_folds,
 )
 from tzsl.models._platt_binary import PlattBinaryClassifierMixin
 from tzsl.models._validation import ParameterError, ValidatedParamsMixin

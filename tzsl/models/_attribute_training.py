@@ -8,10 +8,10 @@ objects, balanced sample weights, Platt scaling and the grid-edge record, used b
 
 from __future__ import annotations
 
-import numpy as np
-from scipy.special import expit, log_expit
 from numbers import Integral
 
+import numpy as np
+from scipy.special import expit, log_expit
 from sklearn.base import BaseEstimator
 from sklearn.model_selection import LeaveOneGroupOut
 

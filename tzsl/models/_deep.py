@@ -54,18 +54,19 @@ from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted
 
+from tzsl._scoring import class_posteriors
 from tzsl.exceptions import ConfigError, ModelBundleError
 from tzsl.models._deep_input import (
     FEATURE_CHUNK,
     deep_nets,
+    require_torch,
     sha256_arrays,
     torch_threads,
     validate_frames,
-    require_torch,
 )
 from tzsl.models._deep_training import DeepTrainingMixin
 from tzsl.models._embedding import loss_weights
-from tzsl._scoring import class_posteriors
+from tzsl.models._validation import ValidatedParamsMixin
 from tzsl.models._zsl_input import (
     ZSLInputError,
     check_int,
@@ -74,7 +75,6 @@ from tzsl.models._zsl_input import (
     encode_training_classes,
     validate_class_table,
 )
-from tzsl.models._validation import ValidatedParamsMixin
 
 __all__ = [
     "DeepAttributeEmbedding",

@@ -32,8 +32,8 @@ import numpy as np
 
 from tzsl._io import atomic_write
 from tzsl.exceptions import ConfigError
+from tzsl.models._deep_input import FEATURE_CHUNK, deep_nets, pixel_stats, require_torch, sha256_arrays
 from tzsl.models._zsl_input import class_grouped_folds
-from tzsl.models._deep_input import FEATURE_CHUNK, deep_nets, pixel_stats, sha256_arrays, require_torch
 
 __all__ = ["DeepTrainingMixin", "best_epoch"]
 

@@ -42,9 +42,9 @@ from tzsl._scoring import linear_embedding
 from tzsl.models._attribute_model_base import attribute_table_tags
 from tzsl.models._validation import ParameterError, ValidatedParamsMixin
 from tzsl.models._zsl_input import (
+    DEFAULT_GRID_EXTENSIONS,
     ZSLInputError,
     attribute_rows,
-    DEFAULT_GRID_EXTENSIONS,
     class_grouped_folds,
     extend_at_edge,
     training_classes,
@@ -53,11 +53,11 @@ from tzsl.models._zsl_input import (
 )
 
 # Old private names, still imported by tzsl.models._deep.
-from tzsl.models._zsl_input import check_int as _check_int  # noqa: E402, F401
-from tzsl.models._zsl_input import check_no_duplicate_rows as _check_no_duplicate_rows  # noqa: E402, F401
-from tzsl.models._zsl_input import check_positive as _check_positive  # noqa: E402, F401
-from tzsl.models._zsl_input import encode_training_classes as _encode_training_classes  # noqa: E402, F401
-from tzsl.models._zsl_input import validate_class_table as _validate_attributes  # noqa: E402, F401
+from tzsl.models._zsl_input import check_int as _check_int  # noqa: F401
+from tzsl.models._zsl_input import check_no_duplicate_rows as _check_no_duplicate_rows  # noqa: F401
+from tzsl.models._zsl_input import check_positive as _check_positive  # noqa: F401
+from tzsl.models._zsl_input import encode_training_classes as _encode_training_classes  # noqa: F401
+from tzsl.models._zsl_input import validate_class_table as _validate_attributes  # noqa: F401
 
 __all__ = ["AttributeEmbeddingModel", "ESZSL", "ESZSLCV", "ZSLInputError", "attribute_rows", "training_classes"]
 

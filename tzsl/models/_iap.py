@@ -22,8 +22,8 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.utils._param_validation import HasMethods
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from tzsl.models._attribute_model_base import attribute_model_tags
 from tzsl._scoring import valid_probabilities
+from tzsl.models._attribute_model_base import attribute_model_tags
 from tzsl.models._zsl_input import training_classes, validate_features_and_rows
 
 __all__ = ["IAP", "default_iap_classifier"]

@@ -26,8 +26,8 @@ import numpy as np
 import pandas as pd
 from sklearn.utils import check_random_state
 
-from tzsl.exceptions import ConfigError
 from tzsl._scoring import sc_mdap
+from tzsl.exceptions import ConfigError
 from tzsl.models._decision import DAPRule
 
 __all__ = [

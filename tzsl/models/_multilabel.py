@@ -29,11 +29,11 @@ from sklearn.compose import ColumnTransformer
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import StrOptions
 
+from tzsl._fit_store import array_digest, resolve_store, spawn_seeds
 from tzsl._profile import timed
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_bank import AttributeClassifierBank
 from tzsl.models._detectors import AUTO_CANDIDATES, detector_preprocessor
-from tzsl._fit_store import array_digest, resolve_store, spawn_seeds
 
 __all__ = ["MultiLabelAttributeClassifier"]
 

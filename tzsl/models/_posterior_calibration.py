@@ -63,8 +63,8 @@ from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
 from tzsl._scoring import tempered_proba
-from tzsl.models._attribute_model_base import attribute_table_tags
 from tzsl.exceptions import ConfigError
+from tzsl.models._attribute_model_base import attribute_table_tags
 from tzsl.models._attribute_training import GridEdgeWarning
 from tzsl.models._scalable_attribute import share_of_objects
 from tzsl.models._validation import ValidatedParamsMixin

@@ -41,7 +41,6 @@ from collections import OrderedDict
 from numbers import Integral, Real
 
 import joblib
-
 import numpy as np
 from scipy.special import log_expit
 from sklearn import config_context
@@ -56,8 +55,8 @@ from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from tzsl._parallel import one_blas_thread
 from tzsl._fit_store import array_digest
+from tzsl._parallel import one_blas_thread
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_training import (
     AttributeTrainingError,

@@ -29,12 +29,12 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_array, check_is_fitted
 
-from tzsl.models._attribute_model_base import attribute_table_tags
-from tzsl.exceptions import ConfigError
-from tzsl.models._attribute_svm import AttributeSVM
 from tzsl._fit_store import fit_cached
-from tzsl.models._dap import break_ties
 from tzsl._scoring import class_posteriors
+from tzsl.exceptions import ConfigError
+from tzsl.models._attribute_model_base import attribute_table_tags
+from tzsl.models._attribute_svm import AttributeSVM
+from tzsl.models._dap import break_ties
 from tzsl.models._registry import get_method
 from tzsl.models._validation import ValidatedParamsMixin
 

@@ -26,8 +26,8 @@ from sklearn.base import BaseEstimator, clone
 from sklearn.utils._param_validation import HasMethods
 from sklearn.utils.validation import check_is_fitted
 
-from tzsl.models._attribute_model_base import attribute_table_tags
 from tzsl.exceptions import ConfigError
+from tzsl.models._attribute_model_base import attribute_table_tags
 from tzsl.models._decision import SCORE_KINDS
 from tzsl.models._validation import ValidatedParamsMixin
 

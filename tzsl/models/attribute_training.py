@@ -23,8 +23,8 @@ from tzsl.models._attribute_training import (
     gamma_grid,
     object_balanced_weights,
 )
-from tzsl.models._scalable_attribute import MAX_TUNE_TRIALS
 from tzsl.models._detectors import AUTO_CANDIDATES, DETECTORS, STUDY_DETECTOR, choose_detector, detector_template
+from tzsl.models._scalable_attribute import MAX_TUNE_TRIALS
 
 __all__ = [
     "AUTO_CANDIDATES",

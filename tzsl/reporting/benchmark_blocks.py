@@ -52,7 +52,7 @@ def benchmark_accuracy_block(results: str | Path) -> str:
     table = benchmark_table(root, "accuracy.csv", "phac2_accuracy.py")
     kinds = list(dict.fromkeys(table["kind"]))
     splits = {k: f"{int(table.loc[table['kind'] == k, 'n_splits'].max())} splits{_purpose(table, k)}" for k in kinds}
-    lines = [f"Generated from `accuracy.csv` by `make numbers`: accuracy [95% interval] and the paired difference "
+    lines = ["Generated from `accuracy.csv` by `make numbers`: accuracy [95% interval] and the paired difference "
              "to `dap-avg[paper]` on the same trials [95% interval].", "",
              "| method | " + " | ".join(f"{k} ({splits[k]}) | diff" for k in kinds) + " |",
              "|---|" + "---|---|" * len(kinds)]

@@ -48,8 +48,8 @@ from tzsl.reporting.benchmark_blocks import (
     benchmark_accuracy_block,
     best_method_block,
     ensemble_calibration_block,
-    exact_solver_threshold_block,
     eszsl_public_block,
+    exact_solver_threshold_block,
     search_benchmark_block,
 )
 from tzsl.reporting.markdown_cells import find_table, number, ours, signed

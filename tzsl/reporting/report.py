@@ -43,8 +43,15 @@ from tzsl._io import atomic_write
 from tzsl.evaluation import INTERVAL_DOC
 from tzsl.exceptions import ConfigError, DataFileError
 from tzsl.reporting.best_method import findings
-from tzsl.reporting.manifests import (config_items, dataset_names, deviations, is_paper_record, read_manifest,
-                                      relaxations, study_records)
+from tzsl.reporting.manifests import (
+    config_items,
+    dataset_names,
+    deviations,
+    is_paper_record,
+    read_manifest,
+    relaxations,
+    study_records,
+)
 from tzsl.reporting.sections import SECTIONS, Section, fill, table_facts
 from tzsl.reporting.summary import dataset_card_items, headline
 from tzsl.reporting.tables import read_table, table_entry

@@ -23,8 +23,8 @@ import pandas as pd
 from tzsl._profile import profiling
 from tzsl._warnings import recorded_warnings
 from tzsl.exceptions import ConfigError, PartialRunError, problems_error
-from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.config import DATASET_PATHS, Experiment, get_study, load_experiment, to_toml
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.outputs.study_cache import run_cached
 from tzsl.studies.outputs.study_run import StudyRun
 

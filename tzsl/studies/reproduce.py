@@ -46,9 +46,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from tzsl.exceptions import PartialRunError
 from tzsl._profile import profiling
 from tzsl._warnings import recorded_warnings
+from tzsl.exceptions import PartialRunError
 
 if TYPE_CHECKING:  # the module stays light: the command line reads its lists for --help
     from tzsl.studies.outputs.results_folder import ResultsDir
@@ -142,8 +142,8 @@ def run_studies(
         ``n_jobs``, ``seed``, ``backend``, ``scheduler``, ``progress``, ``data_dir`` (each applied to
         the studies that have the key).
     """
-    from tzsl.studies.engine import check_experiment, execute_study, manifest_record  # noqa: PLC0415
     from tzsl.studies.config import get_study  # noqa: PLC0415
+    from tzsl.studies.engine import check_experiment, execute_study, manifest_record  # noqa: PLC0415
     from tzsl.studies.outputs.results_folder import ResultsDir  # noqa: PLC0415
 
     default, stack = STUDY_LISTS[command]

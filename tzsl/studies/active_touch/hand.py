@@ -38,11 +38,11 @@ from sklearn.model_selection import StratifiedKFold
 from tzsl._parallel import reissued, relayed
 from tzsl.datasets import HandTable, simulate_grasps
 from tzsl.evaluation import bootstrap_accuracy_columns, paired_difference_interval
-from tzsl.studies.config import ActiveTouchStudy, HandSettings
-from tzsl.studies.hand.study import fit_hand_model, hand_features
+from tzsl.models.active_touch import binned_confusion, expected_information_gain, outcome_log_likelihoods
 from tzsl.models.dap import break_ties
 from tzsl.models.multigrasp import fuse_grasp_posteriors
-from tzsl.models.active_touch import binned_confusion, expected_information_gain, outcome_log_likelihoods
+from tzsl.studies.config import ActiveTouchStudy, HandSettings
+from tzsl.studies.hand.study import fit_hand_model, hand_features
 
 __all__ = ["GRASP_TYPES", "HAND_OUTPUTS", "grasp_type_of", "run_active_hand"]
 

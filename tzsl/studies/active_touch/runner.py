@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.config import Experiment
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.outputs.study_run import StudyRun, format_table
 
 __all__ = ["active_touch_outputs", "run_active_touch"]
@@ -23,10 +23,9 @@ def active_touch_outputs(config) -> list[str]:
 
 
 def run_active_touch(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
-    from tzsl.studies.active_touch.study import run_active_touch_study  # noqa: PLC0415
     from tzsl.features import load_features  # noqa: PLC0415
-
     from tzsl.studies.active_touch.hand import run_active_hand  # noqa: PLC0415
+    from tzsl.studies.active_touch.study import run_active_touch_study  # noqa: PLC0415
 
     hand = exp.config.hand
     results.check_free(active_touch_outputs(exp.config))

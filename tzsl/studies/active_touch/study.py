@@ -51,13 +51,13 @@ from tzsl.evaluation import (
     random_object_splits,
 )
 from tzsl.exceptions import ConfigError
-from tzsl.studies.outputs.results_folder import ResultsDir
-from tzsl.studies.active_touch.stopping import decided_table, stop_outcomes, stopping_figure
-from tzsl.studies.config import ActiveTouchStudy
-from tzsl.studies.zero_shot.study import object_map_features
+from tzsl.fit_store import count_fits, fit_cached, fit_store_counts
 from tzsl.models import PerEPAttributeModel
 from tzsl.models.active_touch import ep_column_blocks, run_policy
-from tzsl.fit_store import count_fits, fit_cached, fit_store_counts
+from tzsl.studies.active_touch.stopping import decided_table, stop_outcomes, stopping_figure
+from tzsl.studies.config import ActiveTouchStudy
+from tzsl.studies.outputs.results_folder import ResultsDir
+from tzsl.studies.zero_shot.study import object_map_features
 
 __all__ = ["ACTIVE_TOUCH_OUTPUTS", "evaluate_split", "run_active_touch_study", "summarise"]
 

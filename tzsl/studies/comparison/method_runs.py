@@ -35,11 +35,11 @@ from tzsl._profile import timed
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, bootstrap_accuracy, paired_differences_table
 from tzsl.exceptions import SplitError
-from tzsl.studies.config import method_label
-from tzsl.studies.comparison.calibration import CALIBRATION_COLUMNS, add_calibration, method_posteriors
+from tzsl.fit_store import fit_cached
 from tzsl.models import available_methods, get_method
 from tzsl.models.protocol import attribute_rows
-from tzsl.fit_store import fit_cached
+from tzsl.studies.comparison.calibration import CALIBRATION_COLUMNS, add_calibration, method_posteriors
+from tzsl.studies.config import method_label
 
 __all__ = [
     "COMPARISON_COLUMNS",

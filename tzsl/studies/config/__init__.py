@@ -36,20 +36,13 @@ from tzsl.studies.config._load import (
     to_toml,
     validate,
 )
-from tzsl.studies.config._zero_shot import (
-    PRESET_DEFAULTS,
-    DatasetSource,
-    GzslSettings,
-    PrefixedOutput,
-    PresetZeroShot,
-    SignalFeatures,
-    SvmSettings,
-    ZeroShotMethods,
-    ZeroShotSettings,
-    ZeroShotSplits,
-    ZeroShotStudy,
-    every_feature_method,
-    with_preset_defaults,
+from tzsl.studies.config._registry import (
+    StudyKind,
+    get_study,
+    register_study,
+    study_kinds,
+    study_names,
+    unregister_study,
 )
 from tzsl.studies.config._studies import (
     ActiveMethods,
@@ -64,13 +57,20 @@ from tzsl.studies.config._studies import (
     HandStudy,
     estimator_parameters,
 )
-from tzsl.studies.config._registry import (
-    StudyKind,
-    get_study,
-    register_study,
-    study_kinds,
-    study_names,
-    unregister_study,
+from tzsl.studies.config._zero_shot import (
+    PRESET_DEFAULTS,
+    DatasetSource,
+    GzslSettings,
+    PrefixedOutput,
+    PresetZeroShot,
+    SignalFeatures,
+    SvmSettings,
+    ZeroShotMethods,
+    ZeroShotSettings,
+    ZeroShotSplits,
+    ZeroShotStudy,
+    every_feature_method,
+    with_preset_defaults,
 )
 
 __all__ = [

@@ -30,8 +30,8 @@ from typing import get_args
 from pydantic import BaseModel
 
 from tzsl.exceptions import ConfigError
-from tzsl.studies.config._zero_shot import ZeroShotStudy
 from tzsl.studies.config._studies import ActiveTouchStudy, FabricDeepStudy, FabricStudy, HandStudy
+from tzsl.studies.config._zero_shot import ZeroShotStudy
 
 __all__ = ["StudyKind", "get_study", "register_study", "study_kinds", "study_names", "unregister_study"]
 

@@ -11,8 +11,6 @@ from typing import Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from tzsl.studies.config._zero_shot import PresetZeroShot
-from tzsl.value_lists import SPLIT_KINDS
 from tzsl.studies.config._common import (
     COMPARE_DESCRIPTION,
     Compute,
@@ -26,6 +24,8 @@ from tzsl.studies.config._common import (
     methods_ok,
     non_empty,
 )
+from tzsl.studies.config._zero_shot import PresetZeroShot
+from tzsl.value_lists import SPLIT_KINDS
 
 FABRIC_ATTRIBUTES = ("a8", "a4", "a12", "three_value_a8", "three_value_a8v2")
 FabricAttributes = Literal["a8", "a4", "a12", "three_value_a8", "three_value_a8v2"]

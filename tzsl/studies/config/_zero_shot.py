@@ -19,8 +19,6 @@ from typing import Any, Literal
 from pydantic import Field, field_validator, model_validator
 
 from tzsl.datasets import dataset_names, get_dataset
-from tzsl.value_lists import FUSIONS, PRIORS, SPLIT_KINDS, SPLIT_SOURCES
-
 from tzsl.studies.config._common import (
     COMPARE_DESCRIPTION,
     DaskCompute,
@@ -36,6 +34,8 @@ from tzsl.studies.config._common import (
     methods_ok,
     non_empty,
 )
+from tzsl.value_lists import FUSIONS, PRIORS, SPLIT_KINDS, SPLIT_SOURCES
+
 
 def _svm_default(name: str):
     """The default of :class:`~tzsl.models.AttributeSVM`'s parameter ``name``."""

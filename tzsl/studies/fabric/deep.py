@@ -32,12 +32,11 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets import FabricData, FabricSplit, fabric_zsl_split, load_fabric, load_gelsight_fabric_videos
-from tzsl.evaluation import per_class_mean_accuracy, summarise_over_splits, trial_accuracy
+from tzsl.evaluation import Outcomes, add_trust_columns, per_class_mean_accuracy, summarise_over_splits, trial_accuracy
 from tzsl.exceptions import ConfigError, DataFileError
-from tzsl.evaluation import Outcomes, add_trust_columns
+from tzsl.models import DeepAttributeEmbedding
 from tzsl.studies.config import FabricDeepStudy
 from tzsl.studies.fabric.tables import PAPER_LAMBDAS, fabric_protocols, lambda_label
-from tzsl.models import DeepAttributeEmbedding
 
 __all__ = [
     "PAPER_LAMBDAS",

@@ -30,9 +30,9 @@ from tzsl._parallel import one_blas_thread
 from tzsl.datasets import FabricSplit
 from tzsl.evaluation import per_class_mean_accuracy, select_embedding_alpha, trial_accuracy
 from tzsl.exceptions import ConfigError
-from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
-from tzsl.studies.fabric.samples import FabricSamples
-from tzsl.studies.fabric.tables import ESZSL_METHOD
+from tzsl.fit_store import fit_cached, fit_store_counts
+from tzsl.models import build_method
+from tzsl.models.protocol import attribute_rows
 from tzsl.studies.comparison.method_runs import (
     comparison_file,
     comparison_trials,
@@ -40,9 +40,9 @@ from tzsl.studies.comparison.method_runs import (
     method_summary,
     study_estimator,
 )
-from tzsl.models import build_method
-from tzsl.models.protocol import attribute_rows
-from tzsl.fit_store import fit_cached, fit_store_counts
+from tzsl.studies.fabric.samples import FabricSamples
+from tzsl.studies.fabric.tables import ESZSL_METHOD
+from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
 
 __all__ = ["COMPARISON_TABLE", "REFERENCE_LAMBDA", "ZeroShotRun", "fabric_comparison", "run_job", "zero_shot_run",
            "zero_shot_runs"]

@@ -44,16 +44,15 @@ from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
-
 from joblib import Parallel, delayed
 
 from tzsl.datasets import FabricSplit
 from tzsl.evaluation import bootstrap_accuracy
 from tzsl.exceptions import ConfigError
+from tzsl.models.protocol import MIN_CV_CLASSES
 from tzsl.studies.fabric.methods import run_job
 from tzsl.studies.fabric.samples import FabricSamples
 from tzsl.studies.fabric.tables import ESZSL_METHOD
-from tzsl.models.protocol import MIN_CV_CLASSES
 
 __all__ = ["PARTITION_COLUMNS", "group_partitions", "partition_census", "partition_outcomes", "partition_summary",
            "run_partitions"]

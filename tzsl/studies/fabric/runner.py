@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.config import Experiment
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.outputs.study_run import StudyRun
 from tzsl.studies.zero_shot.preset import PresetHooks
 

@@ -18,9 +18,9 @@ import numpy as np
 import pandas as pd
 from joblib import Parallel, delayed
 
+from tzsl._io import file_sha256
 from tzsl._parallel import reissued, relayed
 from tzsl._profile import stage
-from tzsl._io import file_sha256
 from tzsl.datasets import FabricData, load_gelsight_fabric_videos
 from tzsl.exceptions import ConfigError, DataFileError
 from tzsl.features import (

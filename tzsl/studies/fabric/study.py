@@ -83,7 +83,6 @@ from __future__ import annotations
 
 import os
 import warnings
-from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -93,9 +92,19 @@ from joblib import Parallel, delayed
 from tzsl._parallel import reissued, relayed
 from tzsl._profile import stage
 from tzsl.datasets import FABRIC_ATTRIBUTE_SETS, load_fabric
-from tzsl.evaluation import DEFAULT_ALPHAS, select_embedding_alpha
-from tzsl.studies.outputs.results_folder import ResultsDir
+from tzsl.evaluation import DEFAULT_ALPHAS, add_trust_columns, select_embedding_alpha
+from tzsl.features import TextureDescriptor
+from tzsl.fit_store import count_fits
+from tzsl.studies.comparison.method_runs import method_label, takes_seed
 from tzsl.studies.config import FabricStudy
+from tzsl.studies.fabric.methods import (
+    COMPARISON_TABLE,
+    ZeroShotRun,
+    fabric_comparison,
+    run_job,
+    zero_shot_run,
+)
+from tzsl.studies.fabric.partitions import run_partitions
 from tzsl.studies.fabric.samples import (
     N_KEY_FRAMES,
     FabricSamples,
@@ -106,7 +115,6 @@ from tzsl.studies.fabric.samples import (
     files_digest,
     gelsight_samples,
 )
-from tzsl.evaluation import add_trust_columns
 from tzsl.studies.fabric.tables import (
     ESZSL_METHOD,
     PAPER_LAMBDAS,
@@ -118,17 +126,7 @@ from tzsl.studies.fabric.tables import (
     format_fabric_table,
     lambda_label,
 )
-from tzsl.studies.fabric.methods import (
-    COMPARISON_TABLE,
-    ZeroShotRun,
-    fabric_comparison,
-    run_job,
-    zero_shot_run,
-)
-from tzsl.studies.fabric.partitions import run_partitions
-from tzsl.studies.comparison.method_runs import method_label, takes_seed
-from tzsl.features import TextureDescriptor
-from tzsl.fit_store import count_fits
+from tzsl.studies.outputs.results_folder import ResultsDir
 
 __all__ = [
     "DEFAULT_ALPHAS",

@@ -15,11 +15,10 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets import FabricSplit, fabric_zsl_split
-from tzsl.evaluation import summarise_over_splits, zero_shot_variant
-from tzsl.evaluation import Outcomes, add_trust_columns
+from tzsl.evaluation import Outcomes, add_trust_columns, summarise_over_splits, zero_shot_variant
+from tzsl.models.embedding import loss_weights
 from tzsl.studies.fabric.samples import FabricSamples
 from tzsl.studies.papers.numbers import FABRIC_TABLE1
-from tzsl.models.embedding import loss_weights
 
 __all__ = [
     "ESZSL_METHOD",

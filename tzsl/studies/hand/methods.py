@@ -18,9 +18,15 @@ import time
 import numpy as np
 import pandas as pd
 
-from tzsl.studies.papers.numbers import DAP_HAND_TABLE5
 from tzsl.studies.comparison.calibration import posterior_columns
-from tzsl.studies.comparison.method_runs import comparison_file, comparison_trials, fit_predict, method_label, method_summary
+from tzsl.studies.comparison.method_runs import (
+    comparison_file,
+    comparison_trials,
+    fit_predict,
+    method_label,
+    method_summary,
+)
+from tzsl.studies.papers.numbers import DAP_HAND_TABLE5
 
 __all__ = ["COMPARISON_TABLE", "REFERENCE_METHOD", "STUDY", "fusion_label", "hand_comparison", "registry_trials"]
 

@@ -38,10 +38,23 @@ from tzsl._profile import stage
 from tzsl.datasets import Grasp, HandTable, read_grasps, simulate_grasps
 from tzsl.evaluation import summarise_over_splits
 from tzsl.exceptions import ConfigError, SplitError
-from tzsl.studies.papers import numbers as paper
-from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
-from tzsl.studies.outputs.results_folder import ResultsDir
+from tzsl.features import GraspFeatures
+from tzsl.models.multigrasp import (
+    HAND_FUSIONS,
+    attribute_distance_matrix,
+    df_mdap,
+    fuse_grasp_posteriors,
+    sample_grasp_sequences,
+    sc_mdap,
+)
 from tzsl.studies.config import HandSettings
+from tzsl.studies.hand.figures import (
+    attribute_accuracy_figure,
+    attribute_distance_figure,
+    confusion_figure,
+    multigrasp_k_figure,
+    multigrasp_T_figure,
+)
 from tzsl.studies.hand.methods import (
     COMPARISON_TABLE,
     fusion_label,
@@ -52,13 +65,6 @@ from tzsl.studies.hand.methods import (
 )
 from tzsl.studies.hand.model import feature_params, fit_hand_model, hand_features
 from tzsl.studies.hand.results import HandStudyResult
-from tzsl.studies.hand.figures import (
-    attribute_accuracy_figure,
-    attribute_distance_figure,
-    confusion_figure,
-    multigrasp_k_figure,
-    multigrasp_T_figure,
-)
 from tzsl.studies.hand.tables import (
     SUBSETS,
     attribute_table,
@@ -67,15 +73,9 @@ from tzsl.studies.hand.tables import (
     table5,
     with_intervals,
 )
-from tzsl.features import GraspFeatures
-from tzsl.models.multigrasp import (
-    HAND_FUSIONS,
-    attribute_distance_matrix,
-    df_mdap,
-    fuse_grasp_posteriors,
-    sample_grasp_sequences,
-    sc_mdap,
-)
+from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
+from tzsl.studies.outputs.results_folder import ResultsDir
+from tzsl.studies.papers import numbers as paper
 
 __all__ = [
     "HAND_OUTPUTS",

@@ -11,9 +11,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from tzsl.evaluation import summarise_over_splits
+from tzsl.evaluation import Outcomes, add_trust_columns, summarise_over_splits
 from tzsl.studies.papers import numbers as paper
-from tzsl.evaluation import Outcomes, add_trust_columns
 
 if TYPE_CHECKING:
     from tzsl.studies.hand.results import HandStudyResult

@@ -31,8 +31,8 @@ from typing import Any
 
 import pandas as pd
 
-from tzsl._profile import timed
 from tzsl._io import atomic_write, ensure_folder, file_sha256
+from tzsl._profile import timed
 from tzsl.exceptions import ConfigError
 
 __all__ = [

@@ -52,11 +52,19 @@ import joblib
 from tzsl._io import ensure_folder
 from tzsl._profile import stage
 from tzsl._warnings import recorded_warnings
-from tzsl.cache import (STUDIES_FOLDER, STUDY_CACHE_ENV, enforce_size_cap, format_size, get_cache_dir, mark_used,
-                        size_cap_gb, study_cache_on)
+from tzsl.cache import (
+    STUDIES_FOLDER,
+    STUDY_CACHE_ENV,
+    enforce_size_cap,
+    format_size,
+    get_cache_dir,
+    mark_used,
+    size_cap_gb,
+    study_cache_on,
+)
 from tzsl.datasets import get_data_home
-from tzsl.studies.outputs.results_folder import ResultsDir, package_versions
 from tzsl.studies.config import DATASET_PATHS, get_study
+from tzsl.studies.outputs.results_folder import ResultsDir, package_versions
 from tzsl.studies.outputs.study_run import StudyRun
 
 __all__ = ["NEUTRAL_SETTINGS", "run_cached", "study_cache_folder", "study_key"]

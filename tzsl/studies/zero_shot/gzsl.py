@@ -50,7 +50,9 @@ import pandas as pd
 from tzsl._parallel import one_blas_thread
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import (
+    Outcomes,
     Split,
+    add_trust_columns,
     choose_stacking_constant,
     gzsl_scores,
     holdout_trials,
@@ -59,14 +61,13 @@ from tzsl.evaluation import (
     summarise_over_splits,
 )
 from tzsl.exceptions import ConfigError, SplitError
-from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
-from tzsl.evaluation import Outcomes, add_trust_columns
-from tzsl.studies.config import GzslSettings, ZeroShotSettings, dap_label
-from tzsl.studies.zero_shot.study import attribute_bank, compute_context
-from tzsl.studies.comparison.method_runs import method_input, study_estimator
-from tzsl.studies.zero_shot.tables import split_label
 from tzsl.models import DAPRule, get_method
 from tzsl.models.protocol import attribute_rows
+from tzsl.studies.comparison.method_runs import method_input, study_estimator
+from tzsl.studies.config import GzslSettings, ZeroShotSettings, dap_label
+from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
+from tzsl.studies.zero_shot.study import attribute_bank, compute_context
+from tzsl.studies.zero_shot.tables import split_label
 
 #: Column of gzsl.csv saying what a split relaxed to calibrate stacking (present only when one did).
 RELAXED_COLUMN = "relaxed"

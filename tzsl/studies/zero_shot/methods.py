@@ -26,11 +26,7 @@ from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, summarise_over_splits
 from tzsl.exceptions import TzslError
 from tzsl.models import get_method
-from tzsl.studies.config import dap_label
-from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
-from tzsl.studies.papers.numbers import DAP_MULTILABEL_ACCURACY, DAP_TABLE1, DAP_TABLE3
-from tzsl.studies.zero_shot.tables import split_label
-from tzsl.studies.papers.run_labels import StudyLabels
+from tzsl.studies.comparison.calibration import dap_split_posteriors, posterior_columns, reliability_by_method
 from tzsl.studies.comparison.method_runs import (
     comparison_file,
     comparison_trials,
@@ -40,7 +36,11 @@ from tzsl.studies.comparison.method_runs import (
     method_summary,
     split_masks,
 )
-from tzsl.studies.comparison.calibration import dap_split_posteriors, posterior_columns, reliability_by_method
+from tzsl.studies.config import dap_label
+from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
+from tzsl.studies.papers.numbers import DAP_MULTILABEL_ACCURACY, DAP_TABLE1, DAP_TABLE3
+from tzsl.studies.papers.run_labels import StudyLabels
+from tzsl.studies.zero_shot.tables import split_label
 
 if TYPE_CHECKING:
     from tzsl.studies.zero_shot.split_posteriors import SplitPosteriors

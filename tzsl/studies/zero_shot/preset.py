@@ -14,10 +14,16 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
-from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.config import Experiment, ZeroShotStudy
+from tzsl.studies.outputs.results_folder import ResultsDir
 from tzsl.studies.outputs.study_run import StudyRun
-from tzsl.studies.zero_shot.runner import SelectedColumns, dropped_columns, relaxation_notes, run_zero_shot, zero_shot_outputs
+from tzsl.studies.zero_shot.runner import (
+    SelectedColumns,
+    dropped_columns,
+    relaxation_notes,
+    run_zero_shot,
+    zero_shot_outputs,
+)
 
 __all__ = ["PRESET_DATASETS", "PresetHooks", "generic_experiment", "preset_outputs", "preset_relaxation_notes",
            "preset_results", "run_generic_part", "with_generic_part"]

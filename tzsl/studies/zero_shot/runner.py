@@ -16,8 +16,8 @@ import pandas as pd
 
 from tzsl._profile import stage
 from tzsl.datasets import FeatureSet
-from tzsl.studies.outputs.results_folder import PrefixedResults, ResultsDir, prefixed
 from tzsl.studies.config import Experiment
+from tzsl.studies.outputs.results_folder import PrefixedResults, ResultsDir, prefixed
 from tzsl.studies.outputs.study_run import StudyRun, format_table
 from tzsl.value_lists import FUSIONS, PRIORS
 
@@ -184,10 +184,10 @@ def relaxation_notes(exp: Experiment) -> list[str]:
 def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
     """``study = "zero-shot"`` and its paper preset ``"phac2-dap"``: one study, labelled by
     :func:`~tzsl.studies.papers.run_labels.study_labels` (the paper's numbers only on its data)."""
+    from tzsl.studies.papers.run_labels import study_labels  # noqa: PLC0415
     from tzsl.studies.zero_shot.gzsl import GZSL_FILE, RELAXED_COLUMN, relaxation_notes, run_gzsl  # noqa: PLC0415
     from tzsl.studies.zero_shot.study import run_zero_shot_tables, solver_lines  # noqa: PLC0415
     from tzsl.studies.zero_shot.tables import table_titles  # noqa: PLC0415
-    from tzsl.studies.papers.run_labels import study_labels  # noqa: PLC0415
 
     study = exp.study
     prepared = prepare(exp)

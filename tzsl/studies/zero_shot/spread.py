@@ -28,14 +28,14 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets import FeatureSet
-from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
+from tzsl.studies.comparison.calibration import CALIBRATION_COLUMNS
+from tzsl.studies.comparison.method_runs import comparison_trials, method_summary
 from tzsl.studies.config import dap_label, method_label
+from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
+from tzsl.studies.papers.run_labels import StudyLabels
 from tzsl.studies.zero_shot.methods import fit_predict_split, method_comparison, study_detector
 from tzsl.studies.zero_shot.tables import split_label
 from tzsl.value_lists import FUSIONS, PRIORS
-from tzsl.studies.comparison.calibration import CALIBRATION_COLUMNS
-from tzsl.studies.papers.run_labels import StudyLabels
-from tzsl.studies.comparison.method_runs import comparison_trials, method_summary
 
 if TYPE_CHECKING:
     from tzsl.evaluation import Split

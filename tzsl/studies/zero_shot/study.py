@@ -22,17 +22,22 @@ import pandas as pd
 
 from tzsl._profile import stage
 from tzsl.datasets import FeatureSet
-from tzsl.evaluation import Split, challenging_splits, purpose_seed, random_object_splits
-from tzsl.exceptions import ConfigError, SplitError
-from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
+from tzsl.evaluation import Split, challenging_splits, random_object_splits
+from tzsl.exceptions import ConfigError
+from tzsl.models import (
+    AttributeClassifierBank,
+    AttributeSVM,
+    MultiLabelAttributeClassifier,
+)
+from tzsl.models.dap import attribute_prior
+from tzsl.studies.comparison.calibration import write_reliability_figure
+from tzsl.studies.comparison.method_runs import split_masks
 from tzsl.studies.config import ZeroShotSettings
+from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
+from tzsl.studies.papers.run_labels import StudyLabels
 from tzsl.studies.zero_shot.split_posteriors import SplitPosteriors
 from tzsl.studies.zero_shot.spread import evidence_tables, model_seed
-from tzsl.studies.papers.run_labels import StudyLabels
-from tzsl.studies.comparison.method_runs import split_masks
-from tzsl.studies.comparison.calibration import write_reliability_figure
 from tzsl.studies.zero_shot.tables import (
-    table_titles,
     attribute_accuracy_summary,
     attribute_accuracy_table,
     attribute_subsets,
@@ -42,13 +47,8 @@ from tzsl.studies.zero_shot.tables import (
     table1_fusion,
     table2_priors,
     table3_challenging,
+    table_titles,
 )
-from tzsl.models import (
-    AttributeClassifierBank,
-    AttributeSVM,
-    MultiLabelAttributeClassifier,
-)
-from tzsl.models.dap import attribute_prior
 
 #: Table (``failed_splits.csv``) of the splits whose DAP fit failed; written only when one did.
 FAILED_SPLITS = "failed_splits"

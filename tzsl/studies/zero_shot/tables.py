@@ -16,20 +16,21 @@ import numpy as np
 import pandas as pd
 
 from tzsl.evaluation import (
+    Outcomes,
     Split,
+    add_trust_columns,
     bootstrap_accuracy,
     per_attribute_balanced_accuracy,
     per_class_mean_accuracy,
     shuffled_rows_control,
     summarise_over_splits,
 )
-from tzsl.evaluation import Outcomes, add_trust_columns
 from tzsl.models.dap import dap_accuracy_over_subsets
-from tzsl.value_lists import FUSIONS, PRIORS
+from tzsl.value_lists import PRIORS
 
 if TYPE_CHECKING:
-    from tzsl.studies.zero_shot.split_posteriors import SplitPosteriors
     from tzsl.studies.papers.run_labels import StudyLabels
+    from tzsl.studies.zero_shot.split_posteriors import SplitPosteriors
 
 __all__ = [
     "CONTROL_ROW",
