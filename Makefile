@@ -19,20 +19,30 @@ N_JOBS ?= 2
 # pytest-xdist workers of `make test`: the suite is mostly single-threaded, so two workers halve it on CI's 2 cores.
 TEST_WORKERS ?= 2
 
-.PHONY: install install-core browser test test-wide evidence reproduce-tables readme-results numbers numbers-check docs bench bench-evidence bench-fit bench-predict bench-scale data clean
+.PHONY: install install-core browser lint lock test test-wide evidence reproduce-tables readme-results numbers numbers-check docs bench bench-evidence bench-fit bench-predict bench-scale data clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
 
-# The core package alone: all that reproduce-tables, evidence and the number blocks need (no torch,
-# no test extras).
-$(VENV)/.installed-core: pyproject.toml $(BIN)/activate
-	$(BIN)/pip install --quiet -e .
+# The locked environment (requirements/*.lock.txt, written by `make lock`): every published number is generated
+# in it, and its manifest records the versions that ran (docs/user_guide/reproducing.md#the-locked-environment).
+CORE_LOCK := requirements/core.lock.txt
+DEV_LOCK := requirements/dev.lock.txt
+# the lock tool of `make lock`
+UV_VERSION := 0.13.8
+
+# The core package alone, at the locked versions: all that reproduce-tables, evidence and the number blocks
+# need (no torch, no test extras).
+$(VENV)/.installed-core: pyproject.toml $(CORE_LOCK) $(BIN)/activate
+	$(BIN)/pip install --quiet -r $(CORE_LOCK)
+	$(BIN)/pip install --quiet --no-deps -e .
 	touch $@
 
-# Everything: the test, Dask and deep (torch) extras, for the test suite and the documentation.
-$(VENV)/.installed: $(VENV)/.installed-core
-	$(BIN)/pip install --quiet -e '.[test,dask,deep]'
+# Everything: the test, Dask, docs and lint extras at the locked versions, and the deep extra (torch, pinned
+# exactly in pyproject.toml; torch's own dependencies are not in the lock), for the test suite and the docs.
+$(VENV)/.installed: $(VENV)/.installed-core $(DEV_LOCK)
+	$(BIN)/pip install --quiet -r $(DEV_LOCK)
+	$(BIN)/pip install --quiet -c $(DEV_LOCK) -e '.[deep]'
 	touch $@
 
 install-core: $(VENV)/.installed-core
@@ -46,8 +56,22 @@ browser:
 	  && apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; } \
 	  || echo "make: chromium is not installed; the report layout test needs it"
 
-test: install browser
+# Ruff (every Python file) and mypy (the package), configured in pyproject.toml; make test runs it first.
+lint: install
+	$(BIN)/ruff check .
+	$(BIN)/mypy
+
+test: install browser lint
 	$(BIN)/pytest -q -n $(TEST_WORKERS) --dist loadgroup
+
+# Resolve the locks again from pyproject.toml (CPython 3.11 on this platform, the versions the index serves
+# today); then run reproduce-tables and `make numbers`, and say in CHANGELOG.md what moved.
+lock: $(BIN)/activate
+	$(BIN)/pip install --quiet uv==$(UV_VERSION)
+	$(BIN)/uv pip compile pyproject.toml --python-version 3.11 --upgrade --no-header --annotation-style line \
+	  -o $(CORE_LOCK)
+	$(BIN)/uv pip compile pyproject.toml --extra test --extra dask --extra docs --extra lint -c $(CORE_LOCK) \
+	  --python-version 3.11 --upgrade --no-header --annotation-style line -o $(DEV_LOCK)
 
 # The property tests over their full range (opt-in, many minutes on two cores): the template on datasets of
 # 8-100 classes, 3-40 attributes, 1-3 sensors, merged rows and real-data pathologies (the 100 x 40 x 3 corner
