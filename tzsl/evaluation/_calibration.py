@@ -20,12 +20,12 @@ splits, then test classes with all their trials) through
 :func:`~tzsl.evaluation.bootstrap_cell_weights`; the bins are those of the point estimate
 (a resampled trial keeps its bin). A replicate is a row of cell counts (times each (split,
 class) cell was drawn), and its per-bin sums and Brier total are that row times the per-cell
-sums: one matrix product for all replicates, no (replicates, trials) matrix. ECE is an absolute value, biased upward on small samples,
-and a replicate drawn with replacement repeats objects, so the replicates sit above the point
-value (with 50 test objects the whole percentile range can lie above it). The ECE interval is
-therefore bias-corrected: the replicates are shifted by their mean minus the point value (the
-bootstrap estimate of that bias) before taking percentiles, and clipped at 0. The Brier score is
-a mean and uses the plain percentile interval.
+sums: one matrix product for all replicates, no (replicates, trials) matrix. ECE is an absolute
+value, biased upward on small samples, and a replicate drawn with replacement repeats objects,
+so the replicates sit above the point value (with 50 test objects the whole percentile range
+can lie above it). The ECE interval is therefore bias-corrected: the replicates are shifted by
+their mean minus the point value (the bootstrap estimate of that bias) before taking
+percentiles, and clipped at 0. The Brier score is a mean and uses the plain percentile interval.
 """
 
 from __future__ import annotations

@@ -219,7 +219,7 @@ def challenging_splits(
         splits.append(
             Split(
                 name=f"challenging-{p}",
-                train_objects=tuple(o for o, t in zip(objects, in_part) if not t),
+                train_objects=tuple(o for o, t in zip(objects, in_part, strict=True) if not t),
                 test_objects=tuple(objects[i] for i in test_idx if objects[i] not in dropped_names),
                 attributes=attributes,
                 excluded_attributes=excluded,

@@ -101,7 +101,11 @@ def write_splits_csv(splits: list[Split], path: str | os.PathLike) -> Path:
         for role, objs in (("train", s.train_objects), ("test", s.test_objects), ("dropped", dropped)):
             writer.writerows((s.name, o, role, s.kind, seed, *rule, purpose) for o in objs)
     text = buffer.getvalue()
-    atomic_write(path, lambda p: p.write_text(text, encoding="utf-8"))
+
+    def write(p: Path) -> None:
+        p.write_text(text, encoding="utf-8")
+
+    atomic_write(path, write)
     return path
 
 
@@ -216,7 +220,9 @@ def read_splits_csv(
             problems.append(f"{path}: split {name!r}: empty training set")
         kinds, seeds = entry["kind"] - {""}, entry["seed"] - {""}
         if len(kinds) > 1 or len(seeds) > 1 or (seeds and "" in entry["seed"]):
-            problems.append(f"{path}: split {name!r}: kind/seed differ between its rows ({sorted(kinds)}, {sorted(seeds)})")
+            problems.append(
+                f"{path}: split {name!r}: kind/seed differ between its rows ({sorted(kinds)}, {sorted(seeds)})"
+            )
             continue
         seed = None
         if seeds:
@@ -242,8 +248,8 @@ def read_splits_csv(
         splits.append(
             Split(
                 name=name,
-                train_objects=tuple(o for o, t in zip(objects, train) if t),
-                test_objects=tuple(o for o, t in zip(objects, test) if t),
+                train_objects=tuple(o for o, t in zip(objects, train, strict=True) if t),
+                test_objects=tuple(o for o, t in zip(objects, test, strict=True) if t),
                 attributes=attributes,
                 excluded_attributes=excluded,
                 dropped_objects=_dropped_reasons(A, objects, kept, test, dropped),
@@ -266,7 +272,7 @@ def _split_rule(entry: dict, default: tuple[int, int]) -> tuple[int, int] | str:
     non-negative integer.
     """
     rule = []
-    for column, fallback in zip(RULE_COLUMNS, default):
+    for column, fallback in zip(RULE_COLUMNS, default, strict=True):
         values = entry[column]
         if len(values) > 1:
             return f"{column} differs between its rows ({sorted(values)})"

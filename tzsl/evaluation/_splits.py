@@ -151,7 +151,7 @@ def check_attribute_table(object_attributes: pd.DataFrame) -> np.ndarray:
         cells = [
             f"object {object_attributes.index[r]!r}, attribute {object_attributes.columns[c]!r}: "
             f"{values[r, c]!r}"
-            for r, c in zip(rows[:5], cols[:5])
+            for r, c in zip(rows[:5], cols[:5], strict=True)
         ]
         more = f" (and {bad.sum() - 5} more)" if bad.sum() > 5 else ""
         raise SplitError(
@@ -361,8 +361,8 @@ def random_object_splits(
         splits.append(
             Split(
                 name=f"random-{k + 1}",
-                train_objects=tuple(o for o, t in zip(objects, test) if not t),
-                test_objects=tuple(o for o, t in zip(objects, test) if t),
+                train_objects=tuple(o for o, t in zip(objects, test, strict=True) if not t),
+                test_objects=tuple(o for o, t in zip(objects, test, strict=True) if t),
                 attributes=attributes,
                 excluded_attributes=excluded,
                 kind="random",

@@ -117,7 +117,7 @@ def interval_columns(column: str, single: bool) -> tuple[str, str]:
 
 def _row_mask(table: pd.DataFrame, split_column: str, by: Sequence[str], label, keys: tuple) -> np.ndarray:
     mask = table[split_column].astype(str).to_numpy() == str(label)
-    for b, k in zip(by, keys):
+    for b, k in zip(by, keys, strict=True):
         mask &= table[b].astype(str).to_numpy() == str(k)
     return mask
 

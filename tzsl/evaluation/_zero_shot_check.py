@@ -103,14 +103,14 @@ def seen_test_classes(
     train = _rows(class_attributes, train_classes, "training")
     test = _rows(class_attributes, test_classes, "test")
     same = (test[:, None, :] == train[None, :, :]).all(axis=2)  # (n_test, n_train)
-    return {t: tuple(train_classes[j] for j in np.flatnonzero(same[i]))
+    return {t: tuple(train_classes[int(j)] for j in np.flatnonzero(same[i]))
             for i, t in enumerate(test_classes) if same[i].any()}
 
 
 def _untrainable(class_attributes: pd.DataFrame, train_classes: Sequence[Hashable]) -> tuple[str, ...]:
     train = _rows(class_attributes, train_classes, "training").astype(bool)
     pos = train.sum(axis=0)
-    return tuple(str(a) for a, p in zip(class_attributes.columns, pos) if p == 0 or p == len(train))
+    return tuple(str(a) for a, p in zip(class_attributes.columns, pos, strict=True) if p == 0 or p == len(train))
 
 
 def zero_shot_variant(
