@@ -167,7 +167,7 @@ def read_fabric_groups(path: str | os.PathLike, *, n_groups: int | None = N_GROU
         raise DataMissingError(path, "fabric group table not found")
     try:
         table = pd.read_csv(path, dtype={"fabric_name": str})
-    except Exception as exc:  # pandas raises several parser errors
+    except Exception as exc:  # noqa: BLE001 - pandas raises several parser errors
         raise DataFileError(path, f"cannot read CSV ({type(exc).__name__}: {exc})") from None
     missing = [c for c in _GROUP_COLUMNS if c not in table.columns]
     if missing:
@@ -198,7 +198,7 @@ def _load_matrix(path: Path, n_cols: int) -> np.ndarray:
             # The files were saved by Python 2; numpy warns about the old header.
             warnings.simplefilter("ignore", UserWarning)
             mat = np.load(path, allow_pickle=False)
-    except Exception as exc:
+    except Exception as exc:  # noqa: BLE001 - numpy raises ValueError, OSError, EOFError... on a bad file
         raise DataFileError(path, f"cannot read .npy ({type(exc).__name__}: {exc})") from None
     if mat.shape != (N_GROUPS, n_cols):
         raise DataFileError(path, f"attribute matrix has shape {mat.shape}; expected ({N_GROUPS}, {n_cols})")
@@ -241,7 +241,7 @@ def read_depth_images(paths, dtype=np.uint16, *, shape: tuple[int, int] = DEPTH_
     DataFileError
         Unreadable file, wrong shape, or not a single-channel 16-bit image.
     """
-    import imageio.v3 as iio
+    import imageio.v3 as iio  # noqa: PLC0415 - imageio takes ~0.15 s to import; only image readers need it
 
     paths = [Path(p) for p in paths]
     out = np.empty((len(paths), *shape), dtype=dtype)
@@ -250,7 +250,7 @@ def read_depth_images(paths, dtype=np.uint16, *, shape: tuple[int, int] = DEPTH_
             raise DataMissingError(p, "depth image not found")
         try:
             img = iio.imread(p)
-        except Exception as exc:
+        except Exception as exc:  # noqa: BLE001 - imageio's plugins raise many types on a bad file
             raise DataFileError(p, f"cannot read image ({type(exc).__name__}: {exc})") from None
         if img.shape != tuple(shape):
             raise DataFileError(p, f"depth image has shape {img.shape}; expected {tuple(shape)}")

@@ -84,7 +84,8 @@ def load_gelsight_fabric_videos(root: str | os.PathLike, conditions=None) -> pd.
                     continue
                 raise DataFileError(fdir, "expected only fabric folders (<condition>/<fabric_name>/<press>.avi)")
             if fdir.name not in by_name.index:
-                raise DataFileError(fdir, f"fabric folder {fdir.name!r} is not a fabric_name in {root / 'fabric_groups.csv'}")
+                raise DataFileError(
+                    fdir, f"fabric folder {fdir.name!r} is not a fabric_name in {root / 'fabric_groups.csv'}")
             fab = by_name.loc[fdir.name]
             videos = sorted(
                 (p for p in fdir.iterdir() if p.is_file() and p.suffix.lower() == ".avi"),

@@ -105,7 +105,8 @@ def read_clean_trials(path: Path, classes: set | None) -> CleanTrials | None:
     obj = cols.get("object", cols["class"])
     sensor = cols.get("sensor")
     frame = pd.DataFrame({"trial_id": cols["trial_id"], "class": cols["class"], "object": obj,
-                          "sensor": sensor if sensor is not None else "", **{k: cols[k] for k in _INT_COLUMNS if k in cols}})
+                          "sensor": sensor if sensor is not None else "",
+                          **{k: cols[k] for k in _INT_COLUMNS if k in cols}})
     if frame.duplicated(["trial_id", "sensor"]).any():
         return None
     if (frame.groupby("object", sort=False)["class"].nunique() > 1).any():

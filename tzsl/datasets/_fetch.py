@@ -5,7 +5,8 @@ each missing file to a temporary name, checks its sha256 and only then moves it 
 an interrupted fetch leaves no half file and a rerun goes on where it stopped (files present and
 verified are skipped). Several files download at a time (``workers``, ``$TZSL_FETCH_WORKERS``,
 else :data:`~tzsl.datasets._transfer.DEFAULT_FETCH_WORKERS`; :mod:`tzsl.datasets._transfer`),
-under one progress bar per dataset; the first file that fails stops the others. Every file has a deadline (``timeout``, ``$TZSL_FETCH_TIMEOUT``, else
+under one progress bar per dataset; the first file that fails stops the others. Every file has a
+deadline (``timeout``, ``$TZSL_FETCH_TIMEOUT``, else
 :data:`~tzsl.datasets._download.DEFAULT_FETCH_TIMEOUT_S`), failed attempts are retried silently
 within it, pooch prints nothing, and the temporary files a killed fetch left in the dataset's
 folders are removed first (:mod:`tzsl.datasets._download`). One fetch at a time writes to a data

@@ -298,7 +298,8 @@ def _validate(arrays: dict[str, np.ndarray], path: str | Path | None, grasp_id: 
     expected = [f"f{i}_{name}" for i in range(len(FINGER_NAMES)) for name in BIOTAC_ARRAYS] + ["joints"]
     missing = [name for name in expected if name not in arrays]
     if missing:
-        fail(f"missing array(s) {missing}; a grasp needs {len(FINGER_NAMES)} fingers x {list(BIOTAC_ARRAYS)} + 'joints'")
+        fail(f"missing array(s) {missing}; a grasp needs {len(FINGER_NAMES)} fingers x {list(BIOTAC_ARRAYS)} "
+             "+ 'joints'")
     for i in range(len(FINGER_NAMES)):
         n_rows = None
         for name, tail in BIOTAC_ARRAYS.items():
@@ -311,7 +312,8 @@ def _validate(arrays: dict[str, np.ndarray], path: str | Path | None, grasp_id: 
             if n_rows is None:
                 n_rows = a.shape[0]
             elif a.shape[0] != n_rows:
-                fail(f"finger {i} ({FINGER_NAMES[i]}) arrays differ in length: {key} has {a.shape[0]} rows, f{i}_tdc {n_rows}")
+                fail(f"finger {i} ({FINGER_NAMES[i]}) arrays differ in length: {key} has {a.shape[0]} rows, "
+                     f"f{i}_tdc {n_rows}")
             if a.shape[0] == 0:
                 fail(f"array {key} has no rows")
             if not np.isfinite(a).all():

@@ -326,7 +326,7 @@ def write_phac2_h5(path: str | os.PathLike, trials: Sequence[RawTrial]) -> Path:
         with h5py.File(tmp, "w") as fh:
             for t in trials:
                 g = fh.create_group(t.trial_id)
-                for finger, sig in zip(FINGERS, t.fingers):
+                for finger, sig in zip(FINGERS, t.fingers, strict=True):
                     fg = g.create_group(f"biotacs/{finger}")
                     for name in BIOTAC_SIGNALS:
                         fg.create_dataset(name, data=np.asarray(getattr(sig, name)))

@@ -93,7 +93,7 @@ def read_phac2_labels_csv(path: str | os.PathLike) -> pd.DataFrame:
         ids = raw["object_id"].astype(np.int64).to_numpy()
     except (TypeError, ValueError):
         raise DataFileError(path, "label CSV object_id column is not integer") from None
-    names = [f"{name}_{oid:03d}" for name, oid in zip(raw["object_name"].astype(str), ids)]
+    names = [f"{name}_{oid:03d}" for name, oid in zip(raw["object_name"].astype(str), ids, strict=True)]
     dup_ids = pd.Index(ids)[pd.Index(ids).duplicated()]
     if len(dup_ids):
         raise DataFileError(path, f"duplicate object_id {int(dup_ids[0])} in label CSV")
@@ -184,7 +184,7 @@ def read_hold_mat(path: str | os.PathLike) -> RawTrial:
             path, "MATLAB v7.3 (HDF5) MAT files are not supported; re-save as MATLAB 5 (-v7)",
             trial=trial_id,
         ) from None
-    except Exception as exc:  # scipy raises ValueError, TypeError, OSError, ... on corrupt files
+    except Exception as exc:  # noqa: BLE001 - scipy raises ValueError, TypeError, OSError, ... on corrupt files
         raise DataFileError(
             path, f"cannot read MAT file, truncated or corrupt ({type(exc).__name__}: {exc})",
             trial=trial_id,

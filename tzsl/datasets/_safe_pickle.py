@@ -9,11 +9,17 @@ else *before* it is imported or called.
 
 from __future__ import annotations
 
+import builtins
+import codecs
+import collections
+import importlib
 import io
 import os
 import pickle
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from tzsl.exceptions import DataFileError
 
@@ -48,17 +54,11 @@ class _RestrictedUnpickler(pickle.Unpickler):
 
     def find_class(self, module: str, name: str) -> Any:
         if module in _BUILTIN_MODULES and name in _SAFE_BUILTINS:
-            import builtins
-
             return getattr(builtins, _PY2_BUILTIN_ALIASES.get(name, name))
         if module == "_codecs" and name == "encode":
             # Python 3 writes bytes in protocol <= 2 as _codecs.encode(str, "latin1").
-            import codecs
-
             return codecs.encode
         if module == "collections" and name == "defaultdict":
-            import collections
-
             return collections.defaultdict
         if (module, name) in _SAFE_NUMPY:
             return _import_numpy_global(module, name)
@@ -70,10 +70,6 @@ class _Forbidden(Exception):
 
 
 def _import_numpy_global(module: str, name: str) -> Any:
-    import importlib
-
-    import numpy as np
-
     if module == "numpy":
         return getattr(np, name)
     # numpy 2 keeps numpy.core as a deprecated alias of numpy._core; import the real one.
@@ -126,7 +122,7 @@ def safe_load_pickle(path: str | os.PathLike) -> Any:
         ) from None
     except EOFError:
         raise DataFileError(path, "truncated pickle (ended before its STOP opcode)") from None
-    except Exception as exc:  # pickle raises many types on corrupt input
+    except Exception as exc:  # noqa: BLE001 - pickle raises many types on corrupt input
         raise DataFileError(
             path, f"corrupt or unreadable pickle ({type(exc).__name__}: {exc})"
         ) from None

@@ -149,7 +149,8 @@ def _read_chunk(folder: Path, root: str, rels: list[str], trial_ids: list[str], 
                 min_rows: int) -> list[np.ndarray | None]:
     """Read consecutive signal files in threads (file I/O and zlib release the GIL); None for a failing file."""
     with ThreadPoolExecutor(max_workers=READ_THREADS) as pool:
-        return list(pool.map(lambda rt: _read_one(folder, root, *rt, channels, min_rows), zip(rels, trial_ids)))
+        return list(pool.map(lambda rt: _read_one(folder, root, *rt, channels, min_rows),
+                             zip(rels, trial_ids, strict=True)))
 
 
 def _read_all(data, min_rows: int, n_jobs: int | None) -> list[np.ndarray]:

@@ -101,7 +101,7 @@ def _read_signal_csv(path: Path) -> tuple[tuple[str, ...], np.ndarray]:
         raise DataFileError(path, f"channel names must be non-empty and distinct, got {list(channels)}", line=1)
     if frame.empty:
         raise DataFileError(path, "has a header line but no data lines", line=1)
-    for c, col in zip(channels, frame.columns):
+    for c, col in zip(channels, frame.columns, strict=True):
         if not pd.api.types.is_numeric_dtype(frame[col]):
             values = pd.to_numeric(frame[col], errors="coerce")
             bad = np.flatnonzero(values.isna() & frame[col].notna())

@@ -167,7 +167,8 @@ def read_rows(
                     continue
                 rows.append((line, [cell.strip() for cell in row]))
     except UnicodeDecodeError as exc:
-        problems.append(Problem(name, None, f"cannot read the file as UTF-8 text ({not_utf8(path, exc)}); save it as CSV UTF-8"))
+        problems.append(Problem(name, None, f"cannot read the file as UTF-8 text ({not_utf8(path, exc)}); "
+                                            "save it as CSV UTF-8"))
         return None
     except (OSError, csv.Error) as exc:
         problems.append(Problem(name, None, f"cannot read the file: {exc}"))

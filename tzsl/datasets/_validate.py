@@ -4,9 +4,9 @@ The format itself is described in ``data/README.md`` ("Plain-file dataset format
 ``tzsl formats``; :mod:`tzsl.datasets._plain` reads and writes it. The format's vocabulary
 (file names, reserved columns, ``dataset.toml`` keys) and table readers are in
 :mod:`tzsl.datasets._tables`, signal files in :mod:`tzsl.datasets._signal_files` (both
-re-exported here). This module holds the one scan both the validator and the reader use: :func:`scan_dataset` parses every file, collects a
-:class:`Problem` for everything wrong (it never stops at the first) and returns what it
-could parse.
+re-exported here). This module holds the one scan both the validator and the reader use:
+:func:`scan_dataset` parses every file, collects a :class:`Problem` for everything wrong (it
+never stops at the first) and returns what it could parse.
 
 Line numbers are those of the text file, 1-based, the header being line 1 (blank lines are
 skipped but counted). Rows must not contain line breaks inside quoted cells.
@@ -132,7 +132,7 @@ def scan_classes(folder: Path, settings: dict, problems: list[Problem], scan: Sc
             continue
         scan.class_lines[name] = line
         row = []
-        for attr, text in zip(attributes, cells[1:]):
+        for attr, text in zip(attributes, cells[1:], strict=True):
             if text not in BINARY_TEXT:
                 shown = "empty" if not text else repr(text)
                 problems.append(Problem(file, line, f"class {name!r}, attribute {attr!r}: entry is "

@@ -267,9 +267,10 @@ def _detector_arrays(est: Any) -> dict | None:
     if type(est) is AttributeSVM:
         if any(svc.kernel != "precomputed" for svc in est.estimators_):
             return None
-        vectors = [Z[svc.support_] for svc, Z in zip(est.estimators_, est.train_features_)]
-        coef = [w * svc.dual_coef_[0] for w, svc in zip(est.estimator_weights_, est.estimators_)]
-        intercept = sum(float(w * svc.intercept_[0]) for w, svc in zip(est.estimator_weights_, est.estimators_))
+        vectors = [Z[svc.support_] for svc, Z in zip(est.estimators_, est.train_features_, strict=True)]
+        coef = [w * svc.dual_coef_[0] for w, svc in zip(est.estimator_weights_, est.estimators_, strict=True)]
+        intercept = sum(float(w * svc.intercept_[0])
+                        for w, svc in zip(est.estimator_weights_, est.estimators_, strict=True))
         return {**out, "family": "rbf", "vectors": np.concatenate(vectors), "dual_coef": np.concatenate(coef),
                 "gamma": float(est.gamma_), "intercept": intercept}
     if type(est) is ScalableAttributeClassifier and est.feature_map_.kernel == "rbf":
@@ -440,8 +441,9 @@ def read_detector_payload(tree: dict, n_attributes: int, where: str) -> tuple[De
         if not np.all(gamma > 0):
             raise fail("gamma must be positive")
         starts = np.concatenate([[0], np.cumsum(counts)])
-        vectors = _pad([stacked[a:b] for a, b in zip(starts[:-1], starts[1:])], int(counts.max()))
-        dual_padded = _pad([dual[a:b, None] for a, b in zip(starts[:-1], starts[1:])], int(counts.max()))[:, :, 0]
+        vectors = _pad([stacked[a:b] for a, b in zip(starts[:-1], starts[1:], strict=True)], int(counts.max()))
+        dual_padded = _pad([dual[a:b, None] for a, b in zip(starts[:-1], starts[1:], strict=True)],
+                           int(counts.max()))[:, :, 0]
     rule = _read_rule(tree.get("rule"), m, fail)
     name = stored_name(tree, "AttributeClassifierBank")
     calibration = read_calibration(tree, fail)

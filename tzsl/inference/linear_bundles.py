@@ -30,8 +30,8 @@ import numpy as np
 from tzsl._scoring import compatibility_scores, cosine_similarities, linear_embedding, squared_distances
 from tzsl.exceptions import ConfigError, ModelBundleError
 
-__all__ = ["LINEAR_RULES", "LinearAttributeModel", "LinearRule", "linear_payload", "read_calibration", "read_linear_payload",
-           "stored_name"]
+__all__ = ["LINEAR_RULES", "LinearAttributeModel", "LinearRule", "linear_payload", "read_calibration",
+           "read_linear_payload", "stored_name"]
 
 #: Decision rules a linear bundle can hold: :class:`~tzsl.models.CompatibilityRule` and the two
 #: metrics of :class:`~tzsl.models.NearestAttributeRule`.

@@ -294,7 +294,8 @@ def _signal_features(path: Path, schema: dict, arrays: dict | None = None) -> np
                                   f"the file has {list(channels)}")
     values = values[:, [list(channels).index(c) for c in want]]
     if not np.isfinite(values).all():
-        raise DataFileError(path, f"NaN or infinite signal value in time step {int(np.argwhere(~np.isfinite(values))[0, 0])}")
+        raise DataFileError(
+            path, f"NaN or infinite signal value in time step {int(np.argwhere(~np.isfinite(values))[0, 0])}")
     extractor = SignalStatistics(statistics=tuple(signals["statistics"]),
                                  baseline_rows=int(signals.get("baseline_rows", 0)) or None, channels=want)
     try:

@@ -190,7 +190,8 @@ class Predictor:
         return float(self.calibration["temperature"]) if self.calibration else 1.0
 
     def posteriors(self, class_scores: np.ndarray) -> np.ndarray:
-        """Class posteriors ``softmax(class_scores / temperature)`` along the last axis (calibrated when the bundle is)."""
+        """Class posteriors ``softmax(class_scores / temperature)`` along the last axis (calibrated when the
+        bundle is)."""
         return tempered_proba(np.atleast_2d(class_scores), self.temperature).reshape(np.shape(class_scores))
 
     def calibration_report(self) -> dict:
@@ -219,7 +220,8 @@ def _checked(payload: Any, metadata: dict) -> Predictor:
     if calibration is not None:
         t = calibration.get("temperature") if isinstance(calibration, dict) else None
         if not (isinstance(t, float | int) and np.isfinite(t) and t > 0):
-            raise ModelBundleError(f"{where}: the calibration is not a dict with a positive temperature ({calibration!r})")
+            raise ModelBundleError(
+                f"{where}: the calibration is not a dict with a positive temperature ({calibration!r})")
     if not callable(getattr(model, "attribute_scores", None)):
         raise ModelBundleError(f"{where}: the model ({type(model).__name__}) has no attribute_scores(X)")
     if not isinstance(rule, _ARRAY_RULES):
@@ -281,11 +283,12 @@ def load_predictor(path: str | Path, *, trust_pickle: bool = False) -> Predictor
         names = metadata.get("attribute_names") or [f"attr_{j}" for j in range(int(model.n_attributes_))]
         rule = NearestAttributeRule().fit(np.asarray(model.class_attributes_, dtype=float))
         return _checked({"model": model, "decision_rule": rule},
-                        {**metadata, "method": "cnn-lstm", "attribute_names": list(names), "input": {"format": "frames"}})
+                        {**metadata, "method": "cnn-lstm", "attribute_names": list(names),
+                         "input": {"format": "frames"}})
     if kind not in PREDICT_KINDS:
         hint = " (a per-EP model: give --eps-done)" if kind == "per-ep" else ""
-        raise ModelBundleError(f"{path}: no predictor for bundles of kind {kind!r}{hint} (known: {list(PREDICT_KINDS)}); "
-                               "re-save models of older tzsl versions with this one")
+        raise ModelBundleError(f"{path}: no predictor for bundles of kind {kind!r}{hint} "
+                               f"(known: {list(PREDICT_KINDS)}); re-save models of older tzsl versions with this one")
     payload, metadata = load_bundle(path, expected_kind=kind, trust_pickle=trust_pickle)
     if metadata["bundle"]["payload_format"] == "npz":  # arrays: numpy alone
         return _checked(_read_arrays(payload, metadata, str(path)), metadata)
