@@ -1,12 +1,12 @@
 """Where a run's time goes: wall and CPU seconds per (study, stage), recorded by the run itself.
 
-Code marks its stages with ``with stage("fit"): ...`` (load, features, simulate, splits, fit, predict,
-tables, sweep, bootstrap, figures, write; docs/user_guide/performance.md); a run wraps each study in ``with profiling("phac2-dap") as profile:``
-and records ``profile.rows()`` in its manifest. Time is counted once: a stage opened inside
-another pauses it (so a bootstrap inside table building counts as bootstrap), and what no stage
-claims is ``other``. Outside :func:`profiling` a stage costs one attribute look-up. CPU seconds
-are this process's (:func:`time.process_time`); work in joblib worker processes shows as wall
-time of the stage that waits for it.
+Code marks its stages with ``with stage("fit"): ...`` (load, features, simulate, splits, fit,
+predict, tables, sweep, bootstrap, figures, write; docs/user_guide/performance.md); a run wraps each
+study in ``with profiling("phac2-dap") as profile:`` and records ``profile.rows()`` in its manifest.
+Time is counted once: a stage opened inside another pauses it (so a bootstrap inside table building
+counts as bootstrap), and what no stage claims is ``other``. Outside :func:`profiling` a stage costs
+one attribute look-up. CPU seconds are this process's (:func:`time.process_time`); work in joblib
+worker processes shows as wall time of the stage that waits for it.
 """
 
 from __future__ import annotations

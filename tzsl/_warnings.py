@@ -87,7 +87,8 @@ class TerminalWarnings:
 
     ``show`` has the signature of :func:`warnings.showwarning`; ``summary()`` is the closing line
     (None when nothing was held back), e.g. ``tzsl: warning: 22 more warnings of the kinds above
-    (GridEdgeWarning: 21, UserWarning "attribute … is rare: # objects": 1); a run lists every one in its manifest.json``.
+    (GridEdgeWarning: 21, UserWarning "attribute … is rare: # objects": 1); a run lists every one in
+    its manifest.json``.
 
     Parameters
     ----------

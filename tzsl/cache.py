@@ -290,7 +290,8 @@ def cache_entries(root: str | os.PathLike | None = None) -> list[CacheEntry]:
 
 
 def cache_info(root: str | os.PathLike | None = None, now: float | None = None) -> list[CachePartInfo]:
-    """Size, number of entries and the oldest entry's age (seconds) of each managed part, in :data:`CACHE_PARTS` order."""
+    """Size, number of entries and the oldest entry's age (seconds) of each managed part, in
+    :data:`CACHE_PARTS` order."""
     root = get_cache_dir(root)
     now = time.time() if now is None else now
     infos = []

@@ -426,7 +426,8 @@ class TextureDescriptor(TransformerMixin, BaseEstimator):
             )
         flat = X.reshape(-1, *X.shape[-2:])
         chunks = [flat[i : i + DESCRIPTOR_CHUNK] for i in range(0, flat.shape[0], DESCRIPTOR_CHUNK)]
-        parts = [reissued(r) for r in Parallel(n_jobs=self.n_jobs)(delayed(relayed(_describe))(c, params) for c in chunks)]
+        results = Parallel(n_jobs=self.n_jobs)(delayed(relayed(_describe))(c, params) for c in chunks)
+        parts = [reissued(r) for r in results]
         out = np.concatenate(parts, axis=0)
         return out.reshape(X.shape[0], -1)
 

@@ -1,4 +1,5 @@
-"""What a robot should do next with a fitted per-EP model: ranking, decision, next EP (``tzsl predict --suggest-next``)."""
+"""What a robot should do next with a fitted per-EP model: ranking, decision, next EP
+(``tzsl predict --suggest-next``)."""
 
 from __future__ import annotations
 

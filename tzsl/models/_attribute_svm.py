@@ -137,8 +137,8 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
     cv : None, int or splitter, default=None
         Object-grouped cross-validation on the training trials. ``None``: leave-one-object-out
         (``LeaveOneGroupOut``); int: ``StratifiedGroupKFold(min(cv, n), shuffle=True)`` with ``n``
-        the number of objects of the rarer class in the draw (so every fold keeps both classes); or any splitter with ``split(X, y, groups)`` whose
-        test folds partition the trials.
+        the number of objects of the rarer class in the draw (so every fold keeps both classes); or
+        any splitter with ``split(X, y, groups)`` whose test folds partition the trials.
     undersampling : {"select", "bagging", "none"}, default="select"
         ``"select"``: ``n_draws`` random balanced draws, keep the (draw, C, gamma) with the best
         grouped-CV score. ``"bagging"``: average the SVM scores of all draws (tuned jointly on the
@@ -372,7 +372,8 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
 
         return successive_halving(oof.shape[:3], [len(p[4]) for p in parts], fit, score)
 
-    def _search_oof(self, D, yb, groups, draws, fold_seed, Cs, gammas, cw, known: dict) -> tuple[np.ndarray, np.ndarray]:
+    def _search_oof(self, D, yb, groups, draws, fold_seed, Cs, gammas, cw,
+                    known: dict) -> tuple[np.ndarray, np.ndarray]:
         """Out-of-fold scores (n_draws, n_gammas, n_C, n_train) and the configurations searched to the end (bool).
 
         ``known`` carries an earlier search of this fit on a smaller grid (``grid="adaptive"``): the

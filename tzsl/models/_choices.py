@@ -157,8 +157,9 @@ INHERITED_CHOICES: tuple[InheritedChoice, ...] = (
         _default(ScoreEnsembleZSL, "pin_members"),
         "PHAC-2 (Penn features), 5 random splits of seed 0 (purpose 'select', 10 test objects), by a rule written "
         "before measuring: pin if the paired ECE difference pinned minus search has its 95% interval's upper end at "
-        "most the script's RULE_MAX_ECE_DIFFERENCE and the calibration CPU falls by at least a third (issue 33 item 4). The CPU criterion held and the "
-        "ECE one did not (the selection rows of the same block), so the members keep searching",
+        "most the script's RULE_MAX_ECE_DIFFERENCE and the calibration CPU falls by at least a third (issue 33 item "
+        "4). The CPU criterion held and the ECE one did not (the selection rows of the same block), so the members "
+        "keep searching",
         "5 random confirmation splits of seed 1 (purpose 'confirm'): the ensemble-calibration-benchmark block of "
         "experiments/benchmarks/README.md",
         ENSEMBLE_CALIBRATION_COMMAND),
@@ -174,7 +175,8 @@ INHERITED_CHOICES: tuple[InheritedChoice, ...] = (
         "'adaptive' against 'extended': grid_pairs.csv and grid_summary.csv of the accuracy benchmark on 10 "
         "confirmation splits of seed 1 (purpose 'confirm'; the block in experiments/benchmarks/README.md)",
         "python experiments/benchmarks/phac2_posteriors.py --out DIR --seed 0|1 --purpose select|confirm && python "
-        "experiments/benchmarks/phac2_accuracy.py --cache DIR --out DIR/accuracy.csv --seed 0|1 --purpose select|confirm"),
+        "experiments/benchmarks/phac2_accuracy.py --cache DIR --out DIR/accuracy.csv --seed 0|1 --purpose "
+        "select|confirm"),
     InheritedChoice(
         "attribute-svm-protocol",
         "tuning protocol of tzsl.models.AttributeSVM: criterion, balanced draws, Platt weighting",

@@ -437,8 +437,8 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
                 "n_training_trials": int(A.shape[0]),
                 "fitted_on": "pseudo-unseen classes of the training objects (class-grouped folds)"}
         if info["method"] == "temperature":
-            info.update(self._fit_temperature(_pinned(clone(self.estimator), self.estimator_, self.calibration_refit), X, A, groups,
-                                              n_classes))
+            pinned = _pinned(clone(self.estimator), self.estimator_, self.calibration_refit)
+            info.update(self._fit_temperature(pinned, X, A, groups, n_classes))
         self.temperature_ = float(info["temperature"])
         self.calibration_info_ = info
         for name in ("class_attributes_", "n_features_in_"):

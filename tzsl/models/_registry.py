@@ -176,7 +176,8 @@ class Method:
             model_keys, rule_keys = _init_defaults(self.attribute_model), _init_defaults(self.decision_rule)
             model = self.attribute_model(**{k: v for k, v in merged.items() if k in model_keys})
             rule = self.decision_rule(**{k: v for k, v in merged.items() if k in rule_keys and k not in model_keys})
-            bare = ZeroShotClassifier(attribute_model=model, decision_rule=rule, random_state=merged.get("random_state"))
+            bare = ZeroShotClassifier(attribute_model=model, decision_rule=rule,
+                                      random_state=merged.get("random_state"))
         if not self.calibratable:
             return bare
         wrapped = calibrator(estimator=bare, random_state=merged.get("random_state"), **calibration)

@@ -165,8 +165,8 @@ class SAECV(EmbeddingAttributeModel):
 
     The training classes (distinct rows of ``A``) are split by
     :func:`~tzsl.models.protocol.class_grouped_folds` (each fold validates on >= 2 and trains on >= 2
-    classes; classes sharing a row are one class, never alone in a fold); for every fold and every ``lam`` the encoder is
-    fitted on the other classes (one pair of eigendecompositions per fold serves the whole grid)
+    classes; classes sharing a row are one class, never alone in a fold); for every fold and every
+    ``lam`` the encoder is fitted on the other classes (one pair of eigendecompositions per fold serves the whole grid)
     and scored by zero-shot accuracy among the fold's held-out classes (cosine to their rows), the
     situation of the test. Holding out classes holds out whole objects; test objects are never
     used. The best ``lam`` (mean accuracy over folds; ties: the first in ``lams``) is refitted on

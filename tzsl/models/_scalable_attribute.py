@@ -148,7 +148,8 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
     Parameters
     ----------
     preprocessor : transformer or None, default=None
-        Fitted on the training trials (no labels). ``None``: :func:`tzsl.models.attribute_training.default_preprocessor`.
+        Fitted on the training trials (no labels). ``None``:
+        :func:`tzsl.models.attribute_training.default_preprocessor`.
     n_components : int, default=256
         Nystroem landmarks (columns of the approximate RBF feature map); capped at the draw size.
     gamma_range : (float, float), default=(0.001, 1.0)

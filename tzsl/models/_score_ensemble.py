@@ -183,8 +183,10 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
             params = {k: v for k, v in spec.items() if k != "name"}
             if method.calibratable:  # the ensemble's posterior is calibrated as a whole, not per member
                 params.setdefault("calibration", "none")
-            if self.random_state is not None and "random_state" in method.parameters() and "random_state" not in params:
-                params["random_state"] = int(np.random.SeedSequence([int(self.random_state), i]).generate_state(1)[0] >> 1)
+            if (self.random_state is not None and "random_state" in method.parameters()
+                    and "random_state" not in params):
+                seed = np.random.SeedSequence([int(self.random_state), i]).generate_state(1)[0]
+                params["random_state"] = int(seed >> 1)
             self.member_input_ndims_.append(method.input_ndim)
             est = method.build(**params)  # a new instance
             self.estimators_.append(fit_cached(est, self._member_input(method.input_ndim, X), A, groups))

@@ -183,7 +183,8 @@ def class_grouped_folds(
     ]
 
 
-#: Default bound on the log-scale steps the CV models (:class:`ESZSLCV`, :class:`SAECV`) add beyond a grid edge that was selected.
+#: Default bound on the log-scale steps the CV models (:class:`ESZSLCV`, :class:`SAECV`) add beyond a grid edge
+#: that was selected.
 DEFAULT_GRID_EXTENSIONS = 3
 
 

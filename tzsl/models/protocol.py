@@ -6,7 +6,8 @@ classes are the distinct rows (:func:`training_classes`), and its internal cross
 deals whole classes into folds (:func:`class_grouped_folds`, at least :data:`MIN_CV_CLASSES`
 classes). An attribute model declares what its scores are (:func:`score_kind`); the decision
 rules compare them with class rows (:func:`compatibility_scores`, :func:`squared_distances`,
-:func:`cosine_similarities`; the linear models' scores are :func:`linear_embedding`) and the score ensemble puts its members on one scale (:func:`zscore_rows`).
+:func:`cosine_similarities`; the linear models' scores are :func:`linear_embedding`) and the score ensemble puts
+its members on one scale (:func:`zscore_rows`).
 """
 
 from tzsl._scoring import compatibility_scores, cosine_similarities, linear_embedding, squared_distances
