@@ -116,7 +116,7 @@ _AXES = {1: ("trial",), 2: ("trial", "attribute"), 3: ("trial", "sensor", "attri
 
 def _position(index: tuple[int, ...], axes: tuple[str, ...]) -> str:
     """``"trial 115, attribute 1"``: an array index in words, plain integers."""
-    return ", ".join(f"{name} {int(i)}" for name, i in zip(axes, index))
+    return ", ".join(f"{name} {int(i)}" for name, i in zip(axes, index, strict=True))
 
 
 def valid_probabilities(P, what: str = "attribute posteriors", *, axes: tuple[str, ...] | None = None) -> np.ndarray:

@@ -146,7 +146,7 @@ def fabric_depth_feature_set(fabric: FabricData, min_objects: int = 3) -> Featur
     groups = images["group"].to_numpy(dtype=np.int64)
     names_of = pd.Series([f"group-{g}" for g in groups])
     trials = pd.DataFrame({
-        "trial_id": [f"{n}-{i}" for n, i in zip(images["fabric_name"], images["capture_index"])],
+        "trial_id": [f"{n}-{i}" for n, i in zip(images["fabric_name"], images["capture_index"], strict=True)],
         "object_id": groups,
         "object_name": names_of.to_numpy(),
         "trial_index": names_of.groupby(names_of).cumcount().to_numpy(dtype=np.int64) + 1,

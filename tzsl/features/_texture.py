@@ -178,7 +178,7 @@ def _uniform_lbp_histograms(images: np.ndarray, points: int, radius: float) -> n
     # interpolation weights (r + dr_i) - floor(r + dr_i) are computed per row / column exactly as
     # scikit-image computes them per pixel (they differ in the last bit between rows).
     neighbours = []
-    for dr_i, dc_i in zip(np.round(-radius * np.sin(angles), 5), np.round(radius * np.cos(angles), 5)):
+    for dr_i, dc_i in zip(np.round(-radius * np.sin(angles), 5), np.round(radius * np.cos(angles), 5), strict=True):
         r, c = r_pos + dr_i, c_pos + dc_i
         wr, wc = (r - np.floor(r))[:, None], (c - np.floor(c))[None, :]
         r0, c0 = int(np.floor(dr_i)) + pad, int(np.floor(dc_i)) + pad

@@ -285,16 +285,16 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         store = resolve_store(self.memory)
         if not store.enabled:
             count_fits("off", len(templates))
-            return self._run_fits([delayed(fit_clone)(t, *d) for t, d in zip(templates, data)], desc)
-        keys = [store.key(t, *dg) for t, dg in zip(templates, digests)]
-        fitted = [stored_fit(store, k, t) for k, t in zip(keys, templates)]
+            return self._run_fits([delayed(fit_clone)(t, *d) for t, d in zip(templates, data, strict=True)], desc)
+        keys = [store.key(t, *dg) for t, dg in zip(templates, digests, strict=True)]
+        fitted = [stored_fit(store, k, t) for k, t in zip(keys, templates, strict=True)]
         todo = [i for i, f in enumerate(fitted) if f is None]
 
         def save(n: int, result) -> None:
             store.save(keys[todo[n]], *result)
 
         done = self._run_fits([delayed(fit_recorded)(templates[i], *data[i]) for i in todo], desc, save)
-        for i, (est, _, _) in zip(todo, done):
+        for i, (est, _, _) in zip(todo, done, strict=True):
             fitted[i] = est
         return fitted
 
@@ -444,7 +444,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
             columns = self._run_fits(tasks, "attribute posteriors")
         else:
             columns = (_positive_posterior(self.estimators_[j][k], X[:, k, :]) for j, k in pairs)
-        for (j, k), column in zip(pairs, columns):
+        for (j, k), column in zip(pairs, columns, strict=True):
             P[:, k, j] = column
         return P
 

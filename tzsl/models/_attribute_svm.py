@@ -292,7 +292,7 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
                 for ci, C in enumerate(Cs):
                     if out.size:
                         oof[di, gi, ci, out] = svc_fit_decision(Kd_c, y_draw, C, w_full, K_out_c)
-                for (tr, te), w in zip(fold_index, fold_w):
+                for (tr, te), w in zip(fold_index, fold_w, strict=True):
                     Ktr = Kd[np.ix_(tr, tr)]
                     Kte = Kd[np.ix_(te, tr)]
                     y_tr = y_draw[tr]
@@ -350,7 +350,7 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
             idx, out, y_draw, _, fold_index, fold_w, w_full = parts[di]
             for f in ([-1] if outside and out.size else []) + list(folds):
                 keys = [(di, float(gammas[gi]), float(Cs[ci]), f) for ci in cis]
-                todo = [(ci, key) for ci, key in zip(cis, keys) if key not in fits]
+                todo = [(ci, key) for ci, key in zip(cis, keys, strict=True) if key not in fits]
                 if todo:
                     Kd = kernel(di, gi, False)
                     tr, te = fold_index[f] if f >= 0 else (None, None)
@@ -359,7 +359,7 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
                     for ci, key in todo:
                         fits[key] = svc_fit_decision(K_fit, y_fit, Cs[ci], w, K_eval)
                 rows = out if f < 0 else idx[fold_index[f][1]]
-                for ci, key in zip(cis, keys):
+                for ci, key in zip(cis, keys, strict=True):
                     oof[di, gi, ci, rows] = fits[key]
 
         def score(di: int, cells: np.ndarray, n_seen: int) -> np.ndarray:
@@ -485,6 +485,6 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
         X = validate_data(self, X, dtype=np.float64, reset=False)
         Z = np.asarray(self.preprocessor_.transform(X), dtype=np.float64)
         out = np.zeros(Z.shape[0])
-        for w, svc, Ztr in zip(self.estimator_weights_, self.estimators_, self.train_features_):
+        for w, svc, Ztr in zip(self.estimator_weights_, self.estimators_, self.train_features_, strict=True):
             out += w * svc.decision_function(rbf_kernel(Z, Ztr, gamma=self.gamma_))
         return out

@@ -81,7 +81,7 @@ def stratified_group_fold_masks(y: np.ndarray, groups: np.ndarray, n_splits: int
         evals = np.mean(np.std(trial / scale, axis=1), axis=1).tolist()  # Python floats: the same values
         sizes = np.sum(per_fold, axis=1).tolist()
         best, min_eval, min_size = -1, math.inf, math.inf
-        for i, (e, s) in enumerate(zip(evals, sizes)):
+        for i, (e, s) in enumerate(zip(evals, sizes, strict=True)):
             close = math.isfinite(min_eval) and abs(e - min_eval) <= _ATOL + _RTOL * abs(min_eval)
             if e < min_eval or (close and s < min_size):
                 best, min_eval, min_size = i, e, s

@@ -143,12 +143,12 @@ def fit_temperature(scores: list[np.ndarray], y_true: list[np.ndarray], *,
     if not S or sum(len(y) for y in Y) == 0:
         raise ConfigError("fit_temperature: no held-out trials to fit the temperature on")
     if not all(not np.isnan(s).any() and not np.isposinf(s).any() and np.isfinite(s[np.arange(len(y)), y]).all()
-               for s, y in zip(S, Y)):
+               for s, y in zip(S, Y, strict=True)):
         raise ConfigError("fit_temperature: class scores hold NaN or +inf values, or a true class scored -inf")
 
     def nll(log_t: float) -> float:
         t = np.exp(log_t)
-        return -float(sum(log_softmax(s / t, axis=1)[np.arange(len(y)), y].sum() for s, y in zip(S, Y)))
+        return -float(sum(log_softmax(s / t, axis=1)[np.arange(len(y)), y].sum() for s, y in zip(S, Y, strict=True)))
 
     best = minimize_scalar(nll, bounds=log_bounds, method="bounded", options={"xatol": 1e-4})
     return float(np.exp(best.x))
@@ -258,7 +258,7 @@ _PER_ATTRIBUTE = ("attribute_names", PER_CLASSIFIER_PARAMS)
 def _cut_to(params: dict, keep: np.ndarray) -> dict:
     """The per-attribute entries (:data:`_PER_ATTRIBUTE`) of ``params`` (names possibly nested with ``__``),
     each cut to the kept attributes."""
-    return {key: [value for value, k in zip(values, keep) if k] for key, values in params.items()
+    return {key: [value for value, k in zip(values, keep, strict=True) if k] for key, values in params.items()
             if key.split("__")[-1] in _PER_ATTRIBUTE and values is not None and len(values) == len(keep)}
 
 
@@ -311,7 +311,7 @@ def _pinned_summary(fitted, refit: str = CALIBRATION_REFITS[0]) -> str:
             return ""
         pinned, own = fitted.pinned_methods(selected_params), fitted.pinned_methods(lambda model: {})
         return "; ".join(f"{p['name']}: {_pinned_text({k: v for k, v in p.items() if k not in q})}"
-                         for p, q in zip(pinned, own) if len(p) > len(q))
+                         for p, q in zip(pinned, own, strict=True) if len(p) > len(q))
     return _pinned_text(selected_params(getattr(fitted, "attribute_model_", None), refit))
 
 
@@ -460,7 +460,8 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
         n = sum(len(y) for y in ys)
 
         def loss(temp: float) -> float:
-            return -sum(log_softmax(s / temp, axis=1)[np.arange(len(y)), y].sum() for s, y in zip(scores, ys)) / n
+            return -sum(log_softmax(s / temp, axis=1)[np.arange(len(y)), y].sum()
+                        for s, y in zip(scores, ys, strict=True)) / n
 
         return {"fitted": True, "temperature": t, "n_folds": len(folds), "n_held_out_trials": n,
                 "pinned": _pinned_summary(self.estimator_, self.calibration_refit),

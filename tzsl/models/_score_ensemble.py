@@ -217,7 +217,7 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
         """
         check_is_fitted(self)
         return [{**_spec(entry), **(pick(getattr(est, "attribute_model_", None)) if self.pin_members else {})}
-                for entry, est in zip(self.methods, self.estimators_)]
+                for entry, est in zip(self.methods, self.estimators_, strict=True)]
 
     def decision_function(self, X, class_attributes=None) -> np.ndarray:
         """Ensemble class scores.
@@ -242,7 +242,7 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
             raise ValueError(f"X has {X.shape[1]} sensors; {type(self).__name__} was fitted on {self.n_sensors_}")
         K = self.class_attributes_ if class_attributes is None else np.asarray(class_attributes, dtype=np.float64)
         total = 0.0
-        for ndim, est, w in zip(self.member_input_ndims_, self.estimators_, self.weights_):
+        for ndim, est, w in zip(self.member_input_ndims_, self.estimators_, self.weights_, strict=True):
             Xm = self._member_input(ndim, X)
             total = total + w * zscore_rows(est.decision_function(Xm, K))
         return np.asarray(total)
