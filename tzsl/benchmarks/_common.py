@@ -14,11 +14,12 @@ import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+from typing import TypedDict
 
 import pandas as pd
 
-__all__ = ["MEASURE_COLUMNS", "add_output_options", "benchmark_main", "cold_and_warm", "manifest_rows",
-           "measurement", "run_tzsl", "timed_process"]
+__all__ = ["MEASURE_COLUMNS", "MeasureOptions", "add_output_options", "benchmark_main", "cold_and_warm",
+           "manifest_rows", "measurement", "run_tzsl", "timed_process"]
 
 #: Columns of one measurement of ``make bench`` (:mod:`tzsl.benchmarks.bench_goals` adds the goal columns):
 #: ``part`` (``--only``), ``study``, ``stage`` (``total``: the whole study or, for study ``total``,
@@ -30,6 +31,15 @@ MEASURE_COLUMNS = ("part", "study", "stage", "run", "quantity", "unit", "value",
                    "n_jobs", "load_1min", "note")
 
 _CLI = "import sys; from tzsl.cli import main; main(sys.argv[1:])"
+
+
+class MeasureOptions(TypedDict, total=False):
+    """The keywords of :func:`measurement` that several of its rows share (passed as ``**common``)."""
+
+    simulated: bool
+    n_jobs: int | None
+    load: float | None
+    note: str
 
 
 def timed_process(cmd: Sequence[str], *, env: Mapping[str, str] | None = None,
@@ -85,7 +95,8 @@ def measurement(part: str, study: str, stage: str, run: str, quantity: str, unit
 
     ``load``: the 1-minute load average before the measure (default: now).
     """
-    values = [float(values)] if isinstance(values, numbers.Real) else [float(v) for v in values]
+    # float named too (a no-op at run time): mypy does not see float as a numbers.Real, so would not narrow
+    values = [float(values)] if isinstance(values, (float, numbers.Real)) else [float(v) for v in values]
     return {"part": part, "study": study, "stage": stage, "run": run, "quantity": quantity, "unit": unit,
             "value": statistics.median(values), "min": min(values), "max": max(values), "n": len(values),
             "simulated": bool(simulated), "n_jobs": n_jobs, "load_1min": os.getloadavg()[0] if load is None else load,
@@ -165,7 +176,7 @@ def cold_and_warm(part: str, args: Sequence[object], work: Path, *, n_jobs: int,
         wall, cpu, _ = run_tzsl([*args, "--out", out, "--n-jobs", n_jobs, "--force", "--no-progress"],
                                 cache_dir=cache, log=work / f"{part}-{run}.log")
         echo(f"  {wall:.1f} s wall, {cpu:.1f} s CPU" + (" (SIMULATED data)" if simulated else ""))
-        common = {"simulated": simulated, "n_jobs": n_jobs, "load": load}
+        common: MeasureOptions = {"simulated": simulated, "n_jobs": n_jobs, "load": load}
         rows.append(measurement(part, "total", "total", run, "wall", "s", wall, **common))
         rows.append(measurement(part, "total", "total", run, "cpu", "s", cpu, **common))
         manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))

@@ -1,4 +1,5 @@
-"""``make bench-fit`` (``tzsl bench``): time one full random PHAC-2 split three ways (issue: speed of the attribute fits).
+"""``make bench-fit`` (``tzsl bench``): time one full random PHAC-2 split three ways (issue: speed of the
+attribute fits).
 
 1. **literal**: what a user would write from the paper's text (section 4.4): per attribute and
    BioTac, z-score + PCA(95%), under-sample class 0 once at random to balance, then
@@ -75,10 +76,12 @@ def run_bench(features: FeatureSet, config: ZeroShotSettings | None = None, spli
                      "avgdap_accuracy": result.accuracy("avg", "uni")})
         if echo:
             echo(f"tzsl n_jobs={n_jobs}: {elapsed:.1f} s, AVGDAP accuracy {rows[-1]['avgdap_accuracy']:.3f}")
+    assert template is not None  # the loop above ran (n_jobs 1 and 2)
     if not skip_literal:
         train, test = split_masks(features, split)
         start = time.perf_counter()
-        P = literal_posteriors(features, train, test, list(split.kept_attributes), seed=config.splits.seed, progress=echo)
+        P = literal_posteriors(features, train, test, list(split.kept_attributes), seed=config.splits.seed,
+                               progress=echo)
         elapsed = time.perf_counter() - start
         literal = SplitPosteriors(split=split, attributes=template.attributes, P=P, K=template.K, y=template.y,
                                   train_prior=attribute_prior("uni", class_attributes=template.K))

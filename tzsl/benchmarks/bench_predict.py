@@ -72,7 +72,7 @@ def simulated_dataset(folder: Path, seed: int = 0) -> tuple[Path, Path, np.ndarr
     return folder, one, X
 
 
-def cold_times(args: Sequence[str], repeats: int) -> tuple[list[float], list[float], str]:
+def cold_times(args: Sequence[object], repeats: int) -> tuple[list[float], list[float], str]:
     """Wall and CPU seconds of ``repeats`` cold runs of ``tzsl ARGS``, and what such a process imports."""
     walls, cpus = [], []
     for _ in range(repeats):

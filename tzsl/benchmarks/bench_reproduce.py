@@ -24,7 +24,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from tzsl.benchmarks._common import cold_and_warm, measurement, run_tzsl
+from tzsl.benchmarks._common import MeasureOptions, cold_and_warm, measurement, run_tzsl
 from tzsl.studies.reproduce import STUDY_LISTS
 
 __all__ = ["SPLIT_FIT_PART", "STUDY_LIST_PARTS", "run_split_fit", "run_study_list", "split_fit_seconds",
@@ -90,7 +90,7 @@ def run_split_fit(work: Path, *, n_jobs: int = 2, data_dir: str | None = None,
     args = ["bench", "--skip-literal", "--out", out, "--force"] + ([] if data_dir is None else ["--data-dir", data_dir])
     echo("one PHAC-2 split's attribute fits (tzsl bench --skip-literal) ...")
     wall, cpu, _ = run_tzsl(args, log=work / "split_fit.log")
-    common = {"n_jobs": n_jobs, "note": "tzsl bench --skip-literal"}
+    common: MeasureOptions = {"n_jobs": n_jobs, "note": "tzsl bench --skip-literal"}
     rows = [measurement(SPLIT_FIT_PART, "total", "total", "cold", "wall", "s", wall, **common),
             measurement(SPLIT_FIT_PART, "total", "total", "cold", "cpu", "s", cpu, **common)]
     for r in pd.read_csv(out).itertuples(index=False):

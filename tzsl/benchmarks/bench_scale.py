@@ -99,7 +99,8 @@ def _rss(pid: int) -> int:
 
 @contextlib.contextmanager
 def _cluster(backend: str, n_workers: int):
-    """``(scheduler address, worker pids)`` of a fresh local Dask cluster for ``backend="dask"``, else ``(None, [])``."""
+    """``(scheduler address, worker pids)`` of a fresh local Dask cluster for ``backend="dask"``, else
+    ``(None, [])``."""
     if backend != "dask":
         yield None, []
         return
@@ -145,6 +146,7 @@ def run_one(n: int, work: Path, *, n_jobs: int, backend: str, table_format: str,
                 worker_peak[pid] = max(worker_peak[pid], _rss(pid))
             time.sleep(0.2)
         wall = time.perf_counter() - start
+    assert proc.stdout is not None  # stdout=subprocess.PIPE
     log = proc.stdout.read()
     if proc.returncode != 0:
         raise RuntimeError(f"tzsl run failed for N={n} (exit {proc.returncode}):\n{log[-3000:]}")
@@ -222,7 +224,8 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
     table = pd.DataFrame(rows)
     print("\n" + table.to_string(index=False, float_format=lambda v: f"{v:.3f}"))
     print(f"growth exponent above 4k trials: wall {growth_exponent(table.trials, table.wall_s):.2f}, "
-          f"CPU {growth_exponent(table.trials, table.cpu_s):.2f}, memory {growth_exponent(table.trials, table.peak_tree_gb):.2f}")
+          f"CPU {growth_exponent(table.trials, table.cpu_s):.2f}, "
+          f"memory {growth_exponent(table.trials, table.peak_tree_gb):.2f}")
     if args.out is not None:
         table.to_csv(args.out, index=False)
     return table
