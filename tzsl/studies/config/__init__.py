@@ -81,5 +81,6 @@ __all__ = [
     "PRESET_DEFAULTS", "DatasetSource", "GzslSettings", "PrefixedOutput", "PresetZeroShot", "SignalFeatures",
     "SvmSettings", "ZeroShotMethods", "ZeroShotSettings", "ZeroShotSplits", "ZeroShotStudy", "every_feature_method",
     "with_preset_defaults", "builtin_names", "builtin_text", "check_n_jobs", "config_from_options", "defaults",
-    "estimator_parameters", "load_experiment", "OPTION_KEYS", "option_values", "to_toml", "dap_label", "method_label", "validate",
+    "estimator_parameters", "load_experiment", "OPTION_KEYS", "option_values", "to_toml", "dap_label", "method_label",
+    "validate",
 ]

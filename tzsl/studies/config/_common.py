@@ -29,12 +29,13 @@ class Section(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True, validate_default=False, frozen=False)
 
 
-Seed = Field(0, ge=0, lt=SEED_LIMIT, description="random seed, 0 <= seed < 2**32")
+Seed = Field(default=0, ge=0, lt=SEED_LIMIT, description="random seed, 0 <= seed < 2**32")
 
 #: ``[splits] purpose`` (tzsl.evaluation.PURPOSES): which random splits a seed draws, and the fits' seed.
-Purpose = Field("confirm", description="'select': splits that make a choice (a method, a grid); 'confirm': splits "
-                                       "that report it. No seed of one purpose draws a random split of the other; "
-                                       "the purpose also seeds the fits")
+Purpose: Literal["select", "confirm"] = Field(
+    default="confirm", description="'select': splits that make a choice (a method, a grid); 'confirm': splits "
+                                   "that report it. No seed of one purpose draws a random split of the other; "
+                                   "the purpose also seeds the fits")
 
 
 def distinct(values: list) -> list:
@@ -61,8 +62,8 @@ def check_n_jobs(value: int) -> int:
 class Compute(Section):
     """``[compute]``: parallel fits and progress bars."""
 
-    n_jobs: int = Field(1, description="parallel fits (joblib); -1 = every core; never 0")
-    progress: bool = Field(True, description="progress bars")
+    n_jobs: int = Field(default=1, description="parallel fits (joblib); -1 = every core; never 0")
+    progress: bool = Field(default=True, description="progress bars")
 
     _n_jobs = field_validator("n_jobs")(check_n_jobs)
 
@@ -70,17 +71,17 @@ class Compute(Section):
 class DaskCompute(Compute):
     """``[compute]`` of studies that can run their fits on a Dask cluster, with a fit cache."""
 
-    backend: Literal[STUDY_BACKENDS] = Field("loky", description="joblib backend")
-    scheduler: str | None = Field(None, description="Dask scheduler address (tcp://host:port) for backend = 'dask'; "
-                                                   "unset = a local cluster")
-    connect_timeout: float = Field(10.0, gt=0, description="seconds to wait for the Dask scheduler")
-    cache: bool = Field(True, description="cache fitted attribute models (resumable runs)")
+    backend: Literal[STUDY_BACKENDS] = Field(default="loky", description="joblib backend")  # type: ignore[valid-type]  # Literal of a value list: pydantic reads it at run time, mypy cannot
+    scheduler: str | None = Field(default=None, description="Dask scheduler address (tcp://host:port) for backend = "
+                                                           "'dask'; unset = a local cluster")
+    connect_timeout: float = Field(default=10.0, gt=0, description="seconds to wait for the Dask scheduler")
+    cache: bool = Field(default=True, description="cache fitted attribute models (resumable runs)")
 
 
 class Output(Section):
     """``[output]``: where the results go."""
 
-    folder: str = Field("results", description="results folder, relative to the current directory")
+    folder: str = Field(default="results", description="results folder, relative to the current directory")
 
 
 def lambdas_ok(values: list) -> list:

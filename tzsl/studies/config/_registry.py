@@ -131,10 +131,24 @@ _ZERO_SHOT_HOOKS = {"runner": f"{_ZERO_SHOT}:run_zero_shot", "results": f"{_ZERO
                     "outputs": f"{_ZERO_SHOT}:zero_shot_outputs", "notes": f"{_ZERO_SHOT}:relaxation_notes",
                     "main_table": "table1_fusion"}
 
-register_study("zero-shot", schema=ZeroShotStudy, **_ZERO_SHOT_HOOKS, description="any dataset x DAP and every registered method x random and challenging unseen-object splits, GZSL, attribute tables")
-register_study("phac2-dap", schema=ZeroShotStudy, **_ZERO_SHOT_HOOKS, preset_of="zero-shot", description="the DAP paper's PHAC-2 protocol (Tables 1-3), with the paper's numbers beside ours")
+register_study("zero-shot", schema=ZeroShotStudy, **_ZERO_SHOT_HOOKS,
+               description="any dataset x DAP and every registered method x random and challenging unseen-object "
+                           "splits, GZSL, attribute tables")
+register_study("phac2-dap", schema=ZeroShotStudy, **_ZERO_SHOT_HOOKS, preset_of="zero-shot",
+               description="the DAP paper's PHAC-2 protocol (Tables 1-3), with the paper's numbers beside ours")
 _FABRIC, _HAND = "tzsl.studies.fabric.runner", "tzsl.studies.hand.runner"
-register_study("fabric", schema=FabricStudy, runner=f"{_FABRIC}:run_fabric", results=f"{_FABRIC}:fabric_results", outputs=f"{_FABRIC}:fabric_outputs", notes=f"{_FABRIC}:fabric_notes", main_table="table1", preset_of="zero-shot", description="the generic study on fabric-depth, then the fabric paper: embedding models on fabric groups (Table 1 analogue), group partitions")
-register_study("fabric-deep", schema=FabricDeepStudy, runner="tzsl.studies.fabric.runner:run_fabric_deep", main_table="table", requires=("torch",), extra="deep", description="the fabric paper's CNN + LSTM over key frames, over the lambda grid (needs torch)")
-register_study("hand", schema=HandStudy, runner=f"{_HAND}:run_hand", results=f"{_HAND}:hand_results", outputs=f"{_HAND}:hand_outputs", notes=f"{_HAND}:hand_notes", main_table="table5", preset_of="zero-shot", description="the generic study on hand-simulated, then the DAP paper's Shadow-hand study (Tables 4-5, multi-grasp), on SIMULATED grasps unless given real ones")
-register_study("active-touch", schema=ActiveTouchStudy, runner="tzsl.studies.active_touch.runner:run_active_touch", outputs="tzsl.studies.active_touch.runner:active_touch_outputs", main_table="active_touch", description="choosing the next exploratory procedure and when to stop, on PHAC-2 EPs")
+register_study("fabric", schema=FabricStudy, runner=f"{_FABRIC}:run_fabric", results=f"{_FABRIC}:fabric_results",
+               outputs=f"{_FABRIC}:fabric_outputs", notes=f"{_FABRIC}:fabric_notes", main_table="table1",
+               preset_of="zero-shot",
+               description="the generic study on fabric-depth, then the fabric paper: embedding models on fabric "
+                           "groups (Table 1 analogue), group partitions")
+register_study("fabric-deep", schema=FabricDeepStudy, runner="tzsl.studies.fabric.runner:run_fabric_deep",
+               main_table="table", requires=("torch",), extra="deep",
+               description="the fabric paper's CNN + LSTM over key frames, over the lambda grid (needs torch)")
+register_study("hand", schema=HandStudy, runner=f"{_HAND}:run_hand", results=f"{_HAND}:hand_results",
+               outputs=f"{_HAND}:hand_outputs", notes=f"{_HAND}:hand_notes", main_table="table5", preset_of="zero-shot",
+               description="the generic study on hand-simulated, then the DAP paper's Shadow-hand study (Tables 4-5, "
+                           "multi-grasp), on SIMULATED grasps unless given real ones")
+register_study("active-touch", schema=ActiveTouchStudy, runner="tzsl.studies.active_touch.runner:run_active_touch",
+               outputs="tzsl.studies.active_touch.runner:active_touch_outputs", main_table="active_touch",
+               description="choosing the next exploratory procedure and when to stop, on PHAC-2 EPs")

@@ -29,7 +29,7 @@ from tzsl.value_lists import SPLIT_KINDS
 
 FABRIC_ATTRIBUTES = ("a8", "a4", "a12", "three_value_a8", "three_value_a8v2")
 FabricAttributes = Literal["a8", "a4", "a12", "three_value_a8", "three_value_a8v2"]
-PAPER_LAMBDAS = [0.0, 0.1, 1.0, 10.0, "inf"]
+PAPER_LAMBDAS: list[float | Literal["inf"]] = [0.0, 0.1, 1.0, 10.0, "inf"]
 
 
 def estimator_parameters(name: str) -> dict[str, Any]:
@@ -57,15 +57,16 @@ def _known_parameters(params: dict, estimator: str, refused: tuple[str, ...]) ->
 
 class FabricDataset(Section):
     builtin: Literal["fabric"] = "fabric"
-    data_dir: str | None = Field(None, description="data home (default: $TZSL_DATA_DIR or the user data folder)")
-    attributes: FabricAttributes = Field("a8", description="group x attribute matrix")
-    gelsight_root: str | None = Field(None, description="your GelSight fabric videos (adds gelsight-* rows)")
+    data_dir: str | None = Field(default=None,
+                                 description="data home (default: $TZSL_DATA_DIR or the user data folder)")
+    attributes: FabricAttributes = Field(default="a8", description="group x attribute matrix")
+    gelsight_root: str | None = Field(default=None, description="your GelSight fabric videos (adds gelsight-* rows)")
 
 
 class FabricFeatures(Section):
-    conditions: list[Literal["depth-sequence", "depth-image"]] = Field(["depth-sequence", "depth-image"])
-    gelsight_conditions: list[str] | None = Field(None, description="condition folders of gelsight_root "
-                                                                    "(unset: all)")
+    conditions: list[Literal["depth-sequence", "depth-image"]] = Field(default=["depth-sequence", "depth-image"])
+    gelsight_conditions: list[str] | None = Field(default=None, description="condition folders of gelsight_root "
+                                                                            "(unset: all)")
 
     _conditions = field_validator("conditions")(distinct)
 
@@ -73,10 +74,10 @@ class FabricFeatures(Section):
 class FabricMethods(Section):
     """The embedding model over a lambda grid; ESZSL (closed form) always runs beside."""
 
-    embedding_lambdas: list[float | Literal["inf"]] = Field(PAPER_LAMBDAS, description="the paper's grid")
-    alphas: list[float] = Field([1.0, 0.1, 0.01, 0.001], description="weight decay, chosen by class-grouped CV")
-    max_iter: int = Field(500, ge=1, description="L-BFGS iterations per fit")
-    compare: list[MethodEntry] = Field([], description=COMPARE_DESCRIPTION + " (runs rows beside ESZSL)")
+    embedding_lambdas: list[float | Literal["inf"]] = Field(default=PAPER_LAMBDAS, description="the paper's grid")
+    alphas: list[float] = Field(default=[1.0, 0.1, 0.01, 0.001], description="weight decay, chosen by class-grouped CV")
+    max_iter: int = Field(default=500, ge=1, description="L-BFGS iterations per fit")
+    compare: list[MethodEntry] = Field(default=[], description=COMPARE_DESCRIPTION + " (runs rows beside ESZSL)")
 
     _lams = field_validator("embedding_lambdas")(lambdas_ok)
     _compare = field_validator("compare")(lambda v: methods_ok(v, ("ESZSL",)))
@@ -90,8 +91,8 @@ class FabricMethods(Section):
 
 
 class FabricSplits(Section):
-    configs: list[Literal[1, 2]] = Field([1, 2], description="1: test groups 0,5,7 (the paper's); 2: 0,4,7")
-    n_seeds: int = Field(5, ge=1, description="embedding-model seeds seed .. seed + n_seeds - 1")
+    configs: list[Literal[1, 2]] = Field(default=[1, 2], description="1: test groups 0,5,7 (the paper's); 2: 0,4,7")
+    n_seeds: int = Field(default=5, ge=1, description="embedding-model seeds seed .. seed + n_seeds - 1")
     seed: int = Seed
 
     _configs = field_validator("configs")(lambda v: distinct(non_empty(v)))
@@ -100,12 +101,12 @@ class FabricSplits(Section):
 class FabricPartitions(Section):
     """Repeated group partitions (:mod:`tzsl.studies.fabric.partitions`): ESZSL over every valid split."""
 
-    enabled: bool = Field(False, description="run the protocol (writes fabric_partitions.csv)")
-    attributes: FabricAttributes | None = Field(None, description="group x attribute matrix of the partitions "
-                                                                  "(unset: [dataset] attributes)")
-    min_test: int = Field(4, ge=2, le=7, description="fewest test groups per partition")
-    both_signs: bool = Field(True, description="every attribute positive and negative in some training group")
-    max_partitions: int | None = Field(None, ge=1, description="random sample of this many (unset: all)")
+    enabled: bool = Field(default=False, description="run the protocol (writes fabric_partitions.csv)")
+    attributes: FabricAttributes | None = Field(default=None, description="group x attribute matrix of the partitions "
+                                                                          "(unset: [dataset] attributes)")
+    min_test: int = Field(default=4, ge=2, le=7, description="fewest test groups per partition")
+    both_signs: bool = Field(default=True, description="every attribute positive and negative in some training group")
+    max_partitions: int | None = Field(default=None, ge=1, description="random sample of this many (unset: all)")
 
 
 class FabricStudy(Section):
@@ -135,7 +136,7 @@ class FabricStudy(Section):
 
 
 class DeepMethods(Section):
-    embedding_lambdas: list[float | Literal["inf"]] = Field(PAPER_LAMBDAS, description="the paper's grid")
+    embedding_lambdas: list[float | Literal["inf"]] = Field(default=PAPER_LAMBDAS, description="the paper's grid")
     model: dict[str, Any] = Field(default_factory=dict, description="DeepAttributeEmbedding parameters "
                                                                     "(backbone, epochs, ...); unset: its defaults")
 
@@ -148,22 +149,23 @@ class DeepMethods(Section):
 
 
 class DeepFeatures(Section):
-    gelsight_conditions: list[str] | None = Field(None, description="condition folders of gelsight_root "
-                                                                    "(unset: all)")
+    gelsight_conditions: list[str] | None = Field(default=None, description="condition folders of gelsight_root "
+                                                                            "(unset: all)")
 
 
 class DeepSplits(FabricSplits):
-    n_seeds: int = Field(1, ge=1, description="seeds per (condition, config, lambda): seed .. seed + n_seeds - 1")
+    n_seeds: int = Field(default=1, ge=1,
+                         description="seeds per (condition, config, lambda): seed .. seed + n_seeds - 1")
 
 
 class DeepCompute(Section):
-    progress: bool = Field(True, description="progress bars (features, epochs)")
+    progress: bool = Field(default=True, description="progress bars (features, epochs)")
 
 
 class DeepOutput(Output):
-    model: str | None = Field(None, description="also save the trained network as a model bundle (tzsl "
-                                                "predict); needs exactly one fit: one config, lambda, seed "
-                                                "and condition")
+    model: str | None = Field(default=None, description="also save the trained network as a model bundle (tzsl "
+                                                        "predict); needs exactly one fit: one config, lambda, seed "
+                                                        "and condition")
 
 
 class FabricDeepStudy(Section):
@@ -201,9 +203,9 @@ class FabricDeepStudy(Section):
 
 
 class HandDataset(Section):
-    builtin: Literal["hand-simulated"] | None = Field(None, description="simulated grasps from Table 4")
-    grasps: str | None = Field(None, description="a grasp folder (grasps.csv + .npz)")
-    table: str | None = Field(None, description="class-attribute table in Table 4's layout (default: Table 4)")
+    builtin: Literal["hand-simulated"] | None = Field(default=None, description="simulated grasps from Table 4")
+    grasps: str | None = Field(default=None, description="a grasp folder (grasps.csv + .npz)")
+    table: str | None = Field(default=None, description="class-attribute table in Table 4's layout (default: Table 4)")
 
     @model_validator(mode="after")
     def _one_source(self):
@@ -215,17 +217,17 @@ class HandDataset(Section):
 class HandSimulation(Section):
     """Simulator settings (builtin = "hand-simulated" only)."""
 
-    n_grasps_per_object: int = Field(30, ge=1)
-    noise: float = Field(1.0, ge=0)
-    difficulty: float = Field(0.5, ge=0)
-    shape_miss_rate: float = Field(0.3, ge=0, le=1)
+    n_grasps_per_object: int = Field(default=30, ge=1)
+    noise: float = Field(default=1.0, ge=0)
+    difficulty: float = Field(default=0.5, ge=0)
+    shape_miss_rate: float = Field(default=0.3, ge=0, le=1)
 
 
 class HandFeatures(Section):
-    contact_threshold: float = Field(20.0, ge=0, description="ADC counts")
-    baseline_rows: int = Field(10, ge=1)
-    hold_fraction: float = Field(0.5, gt=0, le=1)
-    end_rows: int = Field(5, ge=1)
+    contact_threshold: float = Field(default=20.0, ge=0, description="ADC counts")
+    baseline_rows: int = Field(default=10, ge=1)
+    hold_fraction: float = Field(default=0.5, gt=0, le=1)
+    end_rows: int = Field(default=5, ge=1)
 
 
 def _paper(name: str) -> int:
@@ -235,16 +237,16 @@ def _paper(name: str) -> int:
 
 
 class HandMethods(Section):
-    max_T: int = Field(10, ge=1, description="DF-MDAP over T = 1..max_T grasps")
-    max_k: int = Field(7, ge=1, description="SC-MDAP stops at k equal decisions, k = 1..max_k")
+    max_T: int = Field(default=10, ge=1, description="DF-MDAP over T = 1..max_T grasps")
+    max_k: int = Field(default=7, ge=1, description="SC-MDAP stops at k equal decisions, k = 1..max_k")
     sequence_length: int = Field(default_factory=lambda: _paper("DAP_HAND_MAX_TEST_GRASPS"), ge=1,
                                  description="grasps per random sequence (paper: up to 15)")
-    n_sequences: int = Field(200, ge=1, description="random grasp orders per test object and seed")
+    n_sequences: int = Field(default=200, ge=1, description="random grasp orders per test object and seed")
     confusion_T: int = Field(default_factory=lambda: _paper("DAP_HAND_CONFUSION_T"), ge=1)
     confusion_k: int = Field(default_factory=lambda: _paper("DAP_HAND_CONFUSION_K"), ge=1)
     model: dict[str, Any] = Field(default_factory=dict, description="HandDAPClassifier parameters; "
                                                                     "unset: its defaults")
-    compare: list[MethodEntry] = Field([], description=COMPARE_DESCRIPTION + " (on the packed grasp "
+    compare: list[MethodEntry] = Field(default=[], description=COMPARE_DESCRIPTION + " (on the packed grasp "
                                        "features, beside MAXDAP/AVGDAP/LDAP)")
 
     _compare = field_validator("compare")(lambda v: methods_ok(v))
@@ -256,7 +258,7 @@ class HandMethods(Section):
 
 
 class HandSplits(Section):
-    seeds: list[int] = Field([0, 1, 2, 3, 4], description="one simulated data set and model fit per seed")
+    seeds: list[int] = Field(default=[0, 1, 2, 3, 4], description="one simulated data set and model fit per seed")
 
     @field_validator("seeds")
     @classmethod
@@ -301,27 +303,30 @@ class HandStudy(HandSettings):
 
 
 class ActiveDataset(Section):
-    builtin: Literal["phac2-penn"] = Field("phac2-penn", description="EP-prefixed per-trial features "
+    builtin: Literal["phac2-penn"] = Field(default="phac2-penn", description="EP-prefixed per-trial features "
                                            "(Penn static features: squeeze, hold, slow and fast slide)")
-    data_dir: str | None = Field(None, description="data home (default: $TZSL_DATA_DIR or the user data folder)")
+    data_dir: str | None = Field(default=None,
+                                 description="data home (default: $TZSL_DATA_DIR or the user data folder)")
 
 
 class ActiveMethods(Section):
     """Per-EP attribute models, the active policy and the stopping rule (tzsl.models.PerEPAttributeModel)."""
 
-    update: Literal["dap", "confusion"] = Field("dap", description="per-EP class scores: DAP log-scores, or the "
-                                                "log-likelihood under the grouped-CV confusion model")
-    cv: int = Field(5, ge=2, description="object-grouped folds of the confusion estimate (training objects only)")
-    n_samples: int = Field(128, ge=1, description="Monte-Carlo outcomes per class for the expected gain")
-    thresholds: list[float] = Field([0.7, 0.9, 0.99], description="stopping rule: stop once the top class "
+    update: Literal["dap", "confusion"] = Field(default="dap", description="per-EP class scores: DAP log-scores, or "
+                                                "the log-likelihood under the grouped-CV confusion model")
+    cv: int = Field(default=5, ge=2,
+                    description="object-grouped folds of the confusion estimate (training objects only)")
+    n_samples: int = Field(default=128, ge=1, description="Monte-Carlo outcomes per class for the expected gain")
+    thresholds: list[float] = Field(default=[0.7, 0.9, 0.99], description="stopping rule: stop once the top class "
                                     "posterior is >= a threshold (one row per threshold)")
     tempering: Literal["subset", "count", "none"] = Field(
-        "subset", description="exponents of the sequential posterior, fitted on pseudo-unseen training objects: one "
-        "per set of EPs done, one per number of EPs done, or none (the plain product of the EPs' evidence)")
+        default="subset", description="exponents of the sequential posterior, fitted on pseudo-unseen training "
+        "objects: one per set of EPs done, one per number of EPs done, or none (the plain product of the EPs' "
+        "evidence)")
     decided_thresholds: list[float] = Field(
-        [0.5, 0.6, 0.7, 0.8, 0.85, 0.9, 0.95, 0.99], description="thresholds of the decided-at-t table: accuracy "
-        "of the trials whose top posterior reached t, against t")
-    n_boot: int = Field(2000, ge=1, description="bootstrap replicates of the 95% intervals")
+        default=[0.5, 0.6, 0.7, 0.8, 0.85, 0.9, 0.95, 0.99], description="thresholds of the decided-at-t table: "
+        "accuracy of the trials whose top posterior reached t, against t")
+    n_boot: int = Field(default=2000, ge=1, description="bootstrap replicates of the 95% intervals")
 
     @field_validator("thresholds", "decided_thresholds")
     @classmethod
@@ -332,9 +337,9 @@ class ActiveMethods(Section):
 
 
 class ActiveSplits(Section):
-    kinds: list[Literal[SPLIT_KINDS]] = Field(list(SPLIT_KINDS))
-    n_splits: int = Field(10, ge=1, description="random splits (the challenging splits are always 5)")
-    n_test: int = Field(10, ge=2, description="test objects per random split")
+    kinds: list[Literal[SPLIT_KINDS]] = Field(default=list(SPLIT_KINDS))  # type: ignore[valid-type]  # Literal of a value list: pydantic reads it at run time, mypy cannot
+    n_splits: int = Field(default=10, ge=1, description="random splits (the challenging splits are always 5)")
+    n_test: int = Field(default=10, ge=2, description="test objects per random split")
     seed: int = Seed
     purpose: Literal["select", "confirm"] = Purpose
 
@@ -344,11 +349,12 @@ class ActiveSplits(Section):
 class ActiveHand(Section):
     """``[hand]``: the same policy choosing the next grasp type on SIMULATED Shadow-hand grasps (Table 4)."""
 
-    simulated: bool = Field(True, description="run the simulated-hand part (grasp types pinch / tripod / power)")
-    seeds: list[int] = Field([0, 1, 2], description="one simulated data set and model fit per seed")
-    n_sequences: int = Field(20, ge=1, description="grasp sequences per test object and seed")
-    max_grasps: int = Field(6, ge=1, description="grasps per sequence")
-    cv: int = Field(3, ge=2, description="folds over training grasps for the grasp-type confusion model")
+    simulated: bool = Field(default=True,
+                            description="run the simulated-hand part (grasp types pinch / tripod / power)")
+    seeds: list[int] = Field(default=[0, 1, 2], description="one simulated data set and model fit per seed")
+    n_sequences: int = Field(default=20, ge=1, description="grasp sequences per test object and seed")
+    max_grasps: int = Field(default=6, ge=1, description="grasps per sequence")
+    cv: int = Field(default=3, ge=2, description="folds over training grasps for the grasp-type confusion model")
 
     @field_validator("seeds")
     @classmethod

@@ -14,7 +14,7 @@ method and no sweep). Where a default belongs to an estimator (the SVM grids), i
 from __future__ import annotations
 
 import inspect
-from typing import Any, Literal
+from typing import Any, Literal, cast
 
 from pydantic import Field, field_validator, model_validator
 
@@ -62,13 +62,14 @@ def _bank_default(name: str):
 class DatasetSource(Section):
     """``[dataset]``: exactly one of a built-in dataset, a plain-file folder or a feature table."""
 
-    builtin: str | None = Field(None, description=f"a built-in dataset ({', '.join(dataset_names())})")
-    plain: str | None = Field(None, description="a plain-file dataset folder (tzsl formats)")
-    features: str | None = Field(None, description="a feature table written by tzsl extract --out")
-    path: str | None = Field(None, description="the file of a built-in dataset that reads one (phac2-h5: the HDF5 "
-                                               "release)")
-    data_dir: str | None = Field(None, description="data home (default: $TZSL_DATA_DIR or the user data folder)")
-    min_objects: int | None = Field(None, ge=1, description="keep attributes present in >= this many objects "
+    builtin: str | None = Field(default=None, description=f"a built-in dataset ({', '.join(dataset_names())})")
+    plain: str | None = Field(default=None, description="a plain-file dataset folder (tzsl formats)")
+    features: str | None = Field(default=None, description="a feature table written by tzsl extract --out")
+    path: str | None = Field(default=None, description="the file of a built-in dataset that reads one (phac2-h5: the "
+                                                       "HDF5 release)")
+    data_dir: str | None = Field(default=None,
+                                 description="data home (default: $TZSL_DATA_DIR or the user data folder)")
+    min_objects: int | None = Field(default=None, ge=1, description="keep attributes present in >= this many objects "
                                     "(built-in: the extractor's default; plain folders: keep all)")
 
     @model_validator(mode="after")
@@ -96,9 +97,9 @@ class DatasetSource(Section):
 class SignalFeatures(Section):
     """For plain folders with signal files; unset = the folder's dataset.toml [signals]."""
 
-    statistics: list[str] | None = Field(None, description="per-channel statistics of signal files")
-    baseline_rows: int | None = Field(None, ge=0, description="baseline rows subtracted from signal files")
-    channels: list[str] | None = Field(None, description="signal channels to use, in order")
+    statistics: list[str] | None = Field(default=None, description="per-channel statistics of signal files")
+    baseline_rows: int | None = Field(default=None, ge=0, description="baseline rows subtracted from signal files")
+    channels: list[str] | None = Field(default=None, description="signal channels to use, in order")
 
 
 #: Registry methods read from the zero-shot study's own DAP posteriors (no fit of their own).
@@ -114,33 +115,38 @@ def every_feature_method() -> list[dict]:
             if get_method(name).input_kind == "features" and name not in FROM_DAP_POSTERIORS]
 
 
+def _every_feature_entry() -> list[MethodEntry]:
+    """:func:`every_feature_method` as ``[methods] compare`` entries (that field's default)."""
+    return [*every_feature_method()]
+
+
 class ZeroShotMethods(Section):
     """``[methods]``: DAP always; every registered feature method beside it (``compare``), the
     attribute-count sweep and GZSL by default."""
 
-    dap: Literal[True] = Field(True, description="DAP with independent attribute models (always runs)")
-    fusions: list[Literal[FUSIONS]] = Field(list(FUSIONS), description="Table 1 columns")
-    priors: list[Literal[PRIORS]] = Field(list(PRIORS), description="Table 2 columns")
-    multilabel: bool = Field(False, description="joint multi-label attribute model (random splits)")
-    sweep: bool = Field(True, description="attribute-count sweep (random splits)")
-    sweep_min_attributes: int = Field(3, ge=1)
-    sweep_max_subsets: int = Field(200, ge=1)
-    eszsl: bool = Field(False, description="ESZSL on the random splits (the method comparison)")
-    embedding: bool = Field(False, description="the fabric paper's embedding model (the method comparison)")
-    embedding_lambdas: list[float] = Field([0.1, 1.0], description="lambdas of the embedding model")
-    compare: list[MethodEntry] = Field(default_factory=every_feature_method,
+    dap: Literal[True] = Field(default=True, description="DAP with independent attribute models (always runs)")
+    fusions: list[Literal[FUSIONS]] = Field(default=list(FUSIONS), description="Table 1 columns")  # type: ignore[valid-type]  # Literal of a value list: pydantic reads it at run time, mypy cannot
+    priors: list[Literal[PRIORS]] = Field(default=list(PRIORS), description="Table 2 columns")  # type: ignore[valid-type]  # Literal of a value list: pydantic reads it at run time, mypy cannot
+    multilabel: bool = Field(default=False, description="joint multi-label attribute model (random splits)")
+    sweep: bool = Field(default=True, description="attribute-count sweep (random splits)")
+    sweep_min_attributes: int = Field(default=3, ge=1)
+    sweep_max_subsets: int = Field(default=200, ge=1)
+    eszsl: bool = Field(default=False, description="ESZSL on the random splits (the method comparison)")
+    embedding: bool = Field(default=False, description="the fabric paper's embedding model (the method comparison)")
+    embedding_lambdas: list[float] = Field(default=[0.1, 1.0], description="lambdas of the embedding model")
+    compare: list[MethodEntry] = Field(default_factory=_every_feature_entry,
                                        description=COMPARE_DESCRIPTION + " (default: every feature method)")
-    gzsl: bool = Field(True, description="generalised zero-shot evaluation (gzsl.csv, see [gzsl])")
-    compare_on: list[Literal[SPLIT_KINDS]] = Field(
-        ["random"], description="split kinds the compared methods run on (rows of the method comparison by "
-                                "split_kind); 'challenging' needs it in [splits] kinds")
+    gzsl: bool = Field(default=True, description="generalised zero-shot evaluation (gzsl.csv, see [gzsl])")
+    compare_on: list[Literal[SPLIT_KINDS]] = Field(  # type: ignore[valid-type]  # Literal of a value list: pydantic reads it at run time, mypy cannot
+        default=["random"], description="split kinds the compared methods run on (rows of the method comparison by "
+                                        "split_kind); 'challenging' needs it in [splits] kinds")
 
     _lists = field_validator("fusions", "priors", "compare_on")(lambda v: distinct(non_empty(v)))
     _lams = field_validator("embedding_lambdas")(lambdas_ok)
 
     def _from_switches(self) -> list[dict]:
         """The methods ``eszsl`` and ``embedding`` (+ ``embedding_lambdas``) switch on."""
-        specs = [{"name": "eszsl"}] if self.eszsl else []
+        specs: list[dict[str, Any]] = [{"name": "eszsl"}] if self.eszsl else []
         if self.embedding:
             specs += [{"name": "embedding", "lam": float(lam)} for lam in self.embedding_lambdas]
         return specs
@@ -160,20 +166,21 @@ class ZeroShotMethods(Section):
 
         Each as ``{"name": registry name, **parameters}`` (see :func:`tzsl.models.build_method`).
         """
-        return self._from_switches() + [dict(s) for s in self.compare]
+        compare = cast("list[dict[str, Any]]", self.compare)  # methods_ok (_registry) made every entry a dict
+        return self._from_switches() + [dict(s) for s in compare]
 
 
 class GzslSettings(Section):
     """``[gzsl]``: generalised zero-shot evaluation (seen and unseen classes at test time)."""
 
-    holdout_fraction: float = Field(0.3, gt=0, lt=1, description="fraction of each training object's trials "
-                                                               "held out as seen-class test trials")
-    methods: list[str] = Field(["dap", "eszsl"], description="'dap' (the study's attribute models, the fusion "
+    holdout_fraction: float = Field(default=0.3, gt=0, lt=1, description="fraction of each training object's trials "
+                                                                       "held out as seen-class test trials")
+    methods: list[str] = Field(default=["dap", "eszsl"], description="'dap' (the study's attribute models, the fusion "
                                "and prior below) and registered methods on feature vectors (tzsl methods)")
-    fusion: Literal[FUSIONS] = "avg"
-    prior: Literal[PRIORS] = "uni"
+    fusion: Literal[FUSIONS] = "avg"  # type: ignore[valid-type]  # Literal of a value list: pydantic reads it at run time, mypy cannot
+    prior: Literal[PRIORS] = "uni"  # type: ignore[valid-type]  # Literal of a value list: pydantic reads it at run time, mypy cannot
     calibrated_stacking: bool = True
-    max_draws: int = Field(1000, ge=1, description="draws of pseudo-unseen training classes")
+    max_draws: int = Field(default=1000, ge=1, description="draws of pseudo-unseen training classes")
 
     @field_validator("methods")
     @classmethod
@@ -198,23 +205,23 @@ class GzslSettings(Section):
 class ZeroShotSplits(Section):
     """``[splits]``: unseen-class splits (random object splits, the challenging partitions, or a file)."""
 
-    kinds: list[Literal[SPLIT_SOURCES]] = Field(list(SPLIT_KINDS))
-    n_splits: int = Field(5, ge=1, description="random splits")
-    n_test: int = Field(5, ge=1, description="test (unseen) objects per random split")
+    kinds: list[Literal[SPLIT_SOURCES]] = Field(default=list(SPLIT_KINDS))  # type: ignore[valid-type]  # Literal of a value list: pydantic reads it at run time, mypy cannot
+    n_splits: int = Field(default=5, ge=1, description="random splits")
+    n_test: int = Field(default=5, ge=1, description="test (unseen) objects per random split")
     seed: int = Seed
     purpose: Literal["select", "confirm"] = Purpose
-    file: str | None = Field(None, description="split CSV for kinds = ['file'] (default: the plain folder's "
-                                               "splits.csv)")
-    random_min_train_positives: int = Field(2, ge=1)
-    challenging_min_train_positives: int = Field(3, ge=1)
-    min_train_negatives: int = Field(1, ge=1, description="a split leaves out an attribute with fewer negative "
-                                                          "training objects")
-    refit_seeds: int = Field(0, ge=0, description="refit each of the first refit_splits splits of every kind with "
-                                                  "this many other model seeds (SVM folds, under-sampling draws, "
-                                                  "seeded methods): refit_accuracy.csv and the sd_over_refit_seeds "
-                                                  "columns; 0 = no refits")
-    refit_splits: int | None = Field(None, ge=1, description="splits of each kind refitted (the first ones; "
-                                                             "unset = all)")
+    file: str | None = Field(default=None, description="split CSV for kinds = ['file'] (default: the plain folder's "
+                                                       "splits.csv)")
+    random_min_train_positives: int = Field(default=2, ge=1)
+    challenging_min_train_positives: int = Field(default=3, ge=1)
+    min_train_negatives: int = Field(default=1, ge=1, description="a split leaves out an attribute with fewer negative "
+                                                                  "training objects")
+    refit_seeds: int = Field(default=0, ge=0, description="refit each of the first refit_splits splits of every kind "
+                                                          "with this many other model seeds (SVM folds, under-sampling "
+                                                          "draws, seeded methods): refit_accuracy.csv and the "
+                                                          "sd_over_refit_seeds columns; 0 = no refits")
+    refit_splits: int | None = Field(default=None, ge=1, description="splits of each kind refitted (the first ones; "
+                                                                     "unset = all)")
 
     @field_validator("kinds")
     @classmethod
@@ -234,7 +241,7 @@ class ZeroShotSplits(Section):
 class SvmSettings(Section):
     """Per-(attribute, sensor) RBF-SVM (:class:`~tzsl.models.AttributeSVM`); unset keys take its defaults."""
 
-    cv: int = Field(5, ge=0, description="object-grouped folds; 0 = leave-one-object-out")
+    cv: int = Field(default=5, ge=0, description="object-grouped folds; 0 = leave-one-object-out")
     undersampling: Literal["select", "bagging", "none"] = Field(default_factory=lambda: _svm_default("undersampling"))
     C_range: list[float] = Field(default_factory=lambda: _svm_default("C_range"))
     gamma_range: list[float] = Field(default_factory=lambda: _svm_default("gamma_range"))
@@ -260,8 +267,9 @@ class SvmSettings(Section):
                                   description="largest training set (trials) that solver = 'auto' fits exactly")
     detector: str = Field(
         default_factory=lambda: _study_detector(),
-        description="family of the per-(attribute, sensor) classifier of the study's DAP (tzsl.models.attribute_training."
-                    "DETECTORS): 'rbf-svm' (these SVMs: the DAP paper's), 'logistic', 'linear-svm', 'robust-logistic' "
+        description="family of the per-(attribute, sensor) classifier of the study's DAP "
+                    "(tzsl.models.attribute_training.DETECTORS): 'rbf-svm' (these SVMs: the DAP paper's), 'logistic', "
+                    "'linear-svm', 'robust-logistic' "
                     "(linear, C by object-grouped CV), 'logistic-c1' (class-balanced L2 logistic regression, C = 1) or "
                     "'auto' (rbf-svm or logistic, chosen on pseudo-unseen training classes); the other keys of [svm] "
                     "apply to 'rbf-svm' (and 'auto''s RBF-SVM). The DAP rows are labelled with it: dap-avg for "
@@ -308,10 +316,10 @@ class SvmSettings(Section):
 
 
 class PrefixedOutput(Output):
-    prefix: str = Field("", pattern=r"^([a-z0-9]+([_-][a-z0-9]+)*)?$",
+    prefix: str = Field(default="", pattern=r"^([a-z0-9]+([_-][a-z0-9]+)*)?$",
                         description="written before every file name of the run (``PREFIX_table1_fusion.csv``) "
-                                    "and after its study label in method comparisons, so two runs can share "
-                                    "one folder (reproduce-tables); lower-case letters, digits, '-', '_'")
+                                            "and after its study label in method comparisons, so two runs can share "
+                                            "one folder (reproduce-tables); lower-case letters, digits, '-', '_'")
 
 
 class ZeroShotSettings(Section):
@@ -443,8 +451,8 @@ class PresetZeroShot(Section):
     written as ``<dataset>_<name>``.
     """
 
-    enabled: bool = Field(True, description="run the generic zero-shot tables before the paper protocol's")
-    min_objects: int | None = Field(None, ge=1, description="keep attributes present in >= this many objects "
+    enabled: bool = Field(default=True, description="run the generic zero-shot tables before the paper protocol's")
+    min_objects: int | None = Field(default=None, ge=1, description="keep attributes present in >= this many objects "
                                     "(unset: the extractor's default)")
     methods: ZeroShotMethods = Field(default_factory=ZeroShotMethods)
     gzsl: GzslSettings = Field(default_factory=GzslSettings)
