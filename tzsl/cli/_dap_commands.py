@@ -189,7 +189,8 @@ def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep
         get_method(method)  # an unknown name fails before any data is read
     exp = _experiment({**_dataset_values(dataset, features_file, plain_dir, path, data_dir),
                        **({} if min_objects is None else {"dataset.min_objects": min_objects}),
-                       **_study_values(seed, n_jobs, backend, scheduler, undersampling, cv, grid, no_progress, no_cache)})
+                       **_study_values(seed, n_jobs, backend, scheduler, undersampling, cv, grid, no_progress,
+                                       no_cache)})
     check_experiment(exp)  # paths and the Dask scheduler, before any data is read
     features = load_study_features(exp)
     start = time.perf_counter()

@@ -127,6 +127,7 @@ def validate(dataset_dir: Path, as_json: bool) -> None:
         for problem in problems:
             click.echo(str(problem))
         raise DataFileError(dataset_dir, f"{len(problems)} problem(s); see the list above")
+    assert data is not None  # no problems: the folder was read above
     if data.kind == "columns":
         dims = f"{len(data.feature_names)} feature columns per sensor"
     else:
@@ -207,6 +208,7 @@ def convert(source: str | None, mapping: Path | None, allow_outside: bool, datas
     from tzsl.datasets import feature_set_to_plain, get_dataset, write_plain_dataset  # noqa: PLC0415
     from tzsl.features import BIOTAC_CHANNELS, dataset_features, raw_trial_signals  # noqa: PLC0415
 
+    assert dataset is not None  # exactly one of --from and --dataset, checked above
     if out.exists() and (not out.is_dir() or any(out.iterdir())) and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite")
     features = dataset_features(dataset, data_dir=data_dir, min_objects=min_objects)

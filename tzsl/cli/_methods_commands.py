@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from typing import Any
 
 import click
 
@@ -28,7 +29,7 @@ def methods(as_json: bool) -> None:
     """
     from tzsl.models import available_methods, get_method  # noqa: PLC0415 (keep --help fast)
 
-    records = []
+    records: list[dict[str, Any]] = []
     for name in available_methods():
         m = get_method(name)
         records.append({

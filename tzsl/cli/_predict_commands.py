@@ -77,7 +77,8 @@ def predict(model_path: Path, classes: Path, candidates: str | None, mode: str, 
                           "need a per-EP bundle (tzsl train-attributes --per-ep)")
     if active:
         if not _names(eps_done):
-            raise ConfigError(f"{model_path}: a per-EP bundle needs --eps-done (the EPs done so far, e.g. squeeze,hold)")
+            raise ConfigError(f"{model_path}: a per-EP bundle needs --eps-done (the EPs done so far, "
+                              "e.g. squeeze,hold)")
         if len(grasp) != 1:
             raise ConfigError(f"a per-EP bundle reads one feature file (one trial), got {len(grasp)} files")
     recogniser = Recogniser.load(model_path, classes, candidates=_names(candidates), mode=mode, k=k,
@@ -88,11 +89,13 @@ def predict(model_path: Path, classes: Path, candidates: str | None, mode: str, 
         return
     from tzsl.inference.predict import format_prediction, prediction_report  # noqa: PLC0415
 
+    predictor = recogniser.predictor
+    assert predictor is not None  # None only for a per-EP bundle, handled above
     result = recogniser.classify(list(grasp))
     if as_json:
-        click.echo(json.dumps(prediction_report(result, recogniser.predictor, top=top), sort_keys=False))
+        click.echo(json.dumps(prediction_report(result, predictor, top=top), sort_keys=False))
         return
-    click.echo(f"model: {recogniser.predictor.describe()}")
+    click.echo(f"model: {predictor.describe()}")
     click.echo(f"classes: {len(recogniser.classes)} from {classes}")
     click.echo(format_prediction(result, top=top))
 

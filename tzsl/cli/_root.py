@@ -20,6 +20,7 @@ import functools
 import re
 import warnings
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -77,7 +78,8 @@ class TzslGroup(click.Group):
 def _study_defaults(study: str):
     from tzsl.studies.config import defaults  # noqa: PLC0415
 
-    required = {"phac2-dap": {"dataset": {"builtin": "phac2-penn"}}, "zero-shot": {"dataset": {"builtin": "phac2-penn"}},
+    required = {"phac2-dap": {"dataset": {"builtin": "phac2-penn"}},
+                "zero-shot": {"dataset": {"builtin": "phac2-penn"}},
                 "hand": {"dataset": {"builtin": "hand-simulated"}}}.get(study, {})
     return defaults(study, **required)
 
@@ -136,7 +138,7 @@ def _check_seed(ctx, param, value):
     return value
 
 
-def parse_seeds(ctx, param, text):
+def parse_seeds(ctx: click.Context | None, param: click.Parameter | None, text: object) -> list[int] | None:
     """'0,1,2' or '0-4' (or a mix) -> distinct seeds in 0 .. 2**32 - 1."""
     if text is None or isinstance(text, list | tuple):
         return None if text is None else list(text)
@@ -206,6 +208,7 @@ def n_jobs_option(func=None, *, study: str | None = "phac2-dap", override: bool 
 
 def seed_option(func=None, *, study: str | None = "phac2-dap", override: bool = False, help: str = "Random seed."):
     """``--seed``: one integer in 0 .. 2**32 - 1 (``override``: default None = as in the file)."""
+    extra: dict[str, Any]  # click.option's keywords
     if override:
         extra = {"default": None, "help": help + " Overrides [splits] seed."}
     elif study is None:  # a command outside the studies (simulator, single model fit)
