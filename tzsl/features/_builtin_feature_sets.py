@@ -19,6 +19,7 @@ import joblib
 import numpy as np
 import pandas as pd
 from joblib import Parallel, delayed
+from tqdm.auto import tqdm
 
 from tzsl._io import file_sha256
 from tzsl._parallel import reissued, relayed
@@ -103,8 +104,6 @@ def depth_image_descriptors(
     digest = files_digest(paths)
     cached = descriptor_memory(cache_dir).cache(_describe_depth_files, ignore=["paths", "n_jobs"])
     if progress and not cached.check_call_in_cache(digest, paths, params, n_jobs):
-        from tqdm.auto import tqdm
-
         tqdm.write(f"computing texture descriptors of {len(paths)} depth images (cached afterwards)")
     return cached(digest, paths, params, n_jobs)
 

@@ -48,6 +48,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from skimage.color import rgb2gray, rgba2rgb
+from skimage.util import img_as_float
 from sklearn.base import BaseEstimator, TransformerMixin
 
 from tzsl.datasets import read_video
@@ -382,9 +384,6 @@ class KeyFrameSelector(TransformerMixin, BaseEstimator):
 
 def _to_gray(frames: np.ndarray) -> np.ndarray:
     """(n, H, W[, 3|4]) -> (n, H, W) float grey; integer input scaled to [0, 1]."""
-    from skimage.color import rgb2gray, rgba2rgb
-    from skimage.util import img_as_float
-
     if frames.ndim == 4:
         if frames.shape[-1] == 4:
             frames = np.stack([rgba2rgb(f) for f in frames])

@@ -55,6 +55,9 @@ from __future__ import annotations
 import numpy as np
 from joblib import Parallel, delayed
 from scipy import fft as sfft
+from skimage.feature import graycomatrix, graycoprops
+from skimage.filters import gabor_kernel
+from skimage.measure import block_reduce
 from sklearn.base import BaseEstimator, TransformerMixin
 from sklearn.utils.validation import check_is_fitted
 
@@ -115,9 +118,6 @@ def _quantise(x: np.ndarray, levels: int) -> np.ndarray:
 
 def _gabor_features(x: np.ndarray, params: dict) -> np.ndarray:
     """(n, H, W) in [0, 1] -> (n, 2 * n_freq * n_orient): mean, std of |response|."""
-    from skimage.filters import gabor_kernel
-    from skimage.measure import block_reduce
-
     f = int(params["gabor_downsample"])
     if f > 1:
         h, w = (x.shape[1] // f) * f, (x.shape[2] // f) * f
@@ -216,8 +216,6 @@ def _uniform_lbp_histograms(images: np.ndarray, points: int, radius: float) -> n
 
 def _describe(images: np.ndarray, params: dict) -> np.ndarray:
     """(n, H, W) raw -> (n, d) descriptors (one joblib task)."""
-    from skimage.feature import graycomatrix, graycoprops
-
     x = _normalise(images, params)
     n = x.shape[0]
     stats = np.concatenate(
