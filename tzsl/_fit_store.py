@@ -352,7 +352,7 @@ def parallel_context(backend: str):
         raise ConfigError(f"backend must be one of {JOBLIB_BACKENDS}, got {backend!r}")
     if backend == "dask":
         try:
-            from distributed import get_client
+            from distributed import get_client  # noqa: PLC0415  # optional: the dask extra
         except ImportError as exc:  # pragma: no cover - optional dependency
             raise ConfigError("backend='dask' needs the 'dask[distributed]' package") from exc
         try:

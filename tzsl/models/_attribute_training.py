@@ -86,14 +86,14 @@ def cv_criteria(oof: np.ndarray, yb: np.ndarray, w_cal: np.ndarray, scoring: str
     platt : ndarray of shape (..., 2)
         Each configuration's ``(a, b)`` (:func:`fit_platt_many`).
     """
-    O = oof.reshape(-1, oof.shape[-1])
-    a, b = fit_platt_many(O, yb, w_cal)
-    z = a[:, None] * O + b[:, None]
+    flat = oof.reshape(-1, oof.shape[-1])
+    a, b = fit_platt_many(flat, yb, w_cal)
+    z = a[:, None] * flat + b[:, None]
     ll = -(w_cal * np.where(yb, log_expit(z), log_expit(-z))).sum(axis=1) / w_cal.sum()
     if scoring == "log_loss":
         crit = np.stack([ll, np.zeros_like(ll)], axis=1)
     else:
-        pred = O > 0
+        pred = flat > 0
         bacc = 0.5 * (pred[:, yb].mean(axis=1) + (~pred[:, ~yb]).mean(axis=1))
         crit = np.stack([-bacc, ll], axis=1)
     shape = oof.shape[:-1] + (2,)

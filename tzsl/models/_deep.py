@@ -313,7 +313,7 @@ class DeepAttributeEmbedding(DeepTrainingMixin, ValidatedParamsMixin, BaseEstima
     def _make_optimizer(self, net):
         torch = require_torch()
         decay, no_decay = [], []
-        for name, p in net.named_parameters():
+        for p in net.parameters():
             if not p.requires_grad:
                 continue
             (decay if p.ndim >= 2 else no_decay).append(p)

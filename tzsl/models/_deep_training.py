@@ -196,7 +196,7 @@ class DeepTrainingMixin:
         if path is not None and path.is_file():
             try:
                 feats = torch.load(path, map_location="cpu", weights_only=True)
-            except Exception:  # a damaged cache file is recomputed, never trusted
+            except Exception:  # noqa: BLE001  # torch.load raises many kinds; a damaged cache file is recomputed
                 feats = None
             if feats is not None and tuple(feats.shape[:2]) == X.shape[:2]:
                 cache.clear()
@@ -244,7 +244,7 @@ class DeepTrainingMixin:
         try:
             state = torch.load(path, map_location="cpu", weights_only=True)
             saved = state["fingerprint"]
-        except Exception as exc:
+        except Exception as exc:  # noqa: BLE001  # torch.load raises many kinds; each is reported with the file
             raise ConfigError(f"{name}: cannot read checkpoint {path} ({type(exc).__name__}: {exc}); "
                               "delete it or train without resume") from None
         if saved != fingerprint:

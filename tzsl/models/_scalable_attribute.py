@@ -349,9 +349,9 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
                 if out.size:
                     oof[di, gi, :, out] = scores.T
                 full[di, gi] = (feature_map, solutions)
-        O = oof.reshape(-1, n)
-        a, b = fit_platt_many(O, yb, w_cal)  # every configuration's sigmoid in one Newton solve
-        z = a[:, None] * O + b[:, None]
+        flat = oof.reshape(-1, n)
+        a, b = fit_platt_many(flat, yb, w_cal)  # every configuration's sigmoid in one Newton solve
+        z = a[:, None] * flat + b[:, None]
         crit = (-(w_cal * np.where(yb, log_expit(z), log_expit(-z))).sum(axis=1) / w_cal.sum()).reshape(oof.shape[:3])
         di, gi, ci = np.unravel_index(int(np.argmin(crit)), crit.shape)
         return int(di), int(gi), int(ci), crit, oof[di, gi, ci].copy(), w_cal, full[di, gi]
