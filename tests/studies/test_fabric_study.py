@@ -131,7 +131,7 @@ def test_splits_with_the_same_training_groups_share_one_fit():
 
     both = zero_shot_runs(fit_model, X, groups, A8_LIKE, [paper.split, headline.split])
     assert len(fits) == 1 and both[0].model is both[1].model  # one fit for the two protocols
-    for run, split in zip(both, (paper.split, headline.split)):  # each scored as if fitted alone
+    for run, split in zip(both, (paper.split, headline.split), strict=True):  # each scored as if fitted alone
         alone = zero_shot_run(fit_model, X, groups, A8_LIKE, split)
         assert set(run.y_true) == set(split.test_groups)
         np.testing.assert_array_equal(run.y_pred, alone.y_pred)
@@ -153,8 +153,12 @@ def test_select_embedding_alpha_uses_held_out_classes():
     alpha, scores = select_embedding_alpha(X[train], groups[train], S, lam=0.1, alphas=(1.0, 0.01), random_state=0)
     assert alpha in (1.0, 0.01)
     assert scores.shape == (2, 2)  # 4 distinct rows (3 and 4 merged) -> 2 folds
-    assert ((scores >= 0) & (scores <= 1)).all()
-    assert alpha == (1.0, 0.01)[int(np.argmax(scores.mean(axis=1)))]
+    assert ((scores >= -np.log(2) - 1e-12) & (scores <= 0)).all()  # minus a log-loss over 2 held-out classes
+    mean = scores.mean(axis=1)
+    assert alpha == max(a for a, m in zip((1.0, 0.01), mean, strict=True) if m >= mean.max() - 1e-6)
+    accuracy, by_count = select_embedding_alpha(X[train], groups[train], S, lam=0.1, alphas=(1.0, 0.01),
+                                                random_state=0, scoring="accuracy")
+    assert ((by_count >= 0) & (by_count <= 1)).all() and accuracy in (1.0, 0.01)
     assert select_embedding_alpha(X[train], groups[train], S, lam=0, alphas=(0.5,)) == (0.5, None)
     few = np.isin(groups, [1, 2, 3])
     with pytest.raises(ZSLInputError, match="at least 4 training classes"):
@@ -222,12 +226,15 @@ def test_real_study_table_layout(real_study):
     assert table.loc[table["protocol"] == "paper", "note"].str.contains("NOT zero-shot").all()
     # sample counts: 27 / 30 test fabrics; 282 / 312 test images (groups 0 + 5 + 7, 0 + 4 + 7); variants 0 + 7
     n_test = table.set_index(["condition", "config", "protocol"])["n_test"]
-    assert [n_test[(c, cfg, "paper")] for c in ("depth-sequence", "depth-image") for cfg in (1, 2)] == [27, 30, 282, 312]
+    assert ([n_test[(c, cfg, "paper")] for c in ("depth-sequence", "depth-image") for cfg in (1, 2)]
+            == [27, 30, 282, 312])
     assert (table.loc[table["protocol"] == "zero-shot-drop", "test_groups"] == "0 7").all()
     assert table["n_seeds"].eq(1).all() and table["lam_0_std"].isna().all() and table["ESZSL_std"].eq(0).all()
     assert len(runs) == 8 * 3
-    assert {"accuracy_ci95_low", "accuracy_ci95_high", "per_class_mean_accuracy_ci95_low", "chance"} <= set(runs.columns)
-    assert ((runs["accuracy_ci95_low"] <= runs["accuracy"] + 1e-9) & (runs["accuracy"] <= runs["accuracy_ci95_high"] + 1e-9)).all()
+    assert ({"accuracy_ci95_low", "accuracy_ci95_high", "per_class_mean_accuracy_ci95_low", "chance"}
+            <= set(runs.columns))
+    assert ((runs["accuracy_ci95_low"] <= runs["accuracy"] + 1e-9)
+            & (runs["accuracy"] <= runs["accuracy_ci95_high"] + 1e-9)).all()
     text = format_fabric_table(table)
     assert "depth-sequence" in text and "[75.45]" in text  # paper Average, lambda = 0
 
@@ -386,7 +393,8 @@ def test_partitions_add_a_table_and_leave_the_others_unchanged(gelsight_root, da
     plain = run_fabric_study(ResultsDir(tmp_path / "plain"), _settings(**flat), **paths)
     parts = {"attributes": "a12", "min_test": 4, "both_signs": False, "max_partitions": 3}
     both = run_fabric_study(ResultsDir(tmp_path / "both"), _settings(partitions=parts, **flat), **paths)
-    assert (tmp_path / "plain" / "fabric_table1.csv").read_bytes() == (tmp_path / "both" / "fabric_table1.csv").read_bytes()
+    assert ((tmp_path / "plain" / "fabric_table1.csv").read_bytes()
+            == (tmp_path / "both" / "fabric_table1.csv").read_bytes())
     comparisons = [pd.read_csv(tmp_path / d / "fabric_method_comparison.csv").drop(columns="fit_seconds")
                    for d in ("plain", "both")]  # fit_seconds is a timing
     pd.testing.assert_frame_equal(*comparisons)

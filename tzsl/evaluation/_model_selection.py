@@ -17,11 +17,17 @@ from sklearn.exceptions import ConvergenceWarning
 from tzsl.exceptions import ConfigError
 from tzsl.fit_store import fit_cached
 from tzsl.models import build_method
-from tzsl.models.protocol import attribute_rows, class_grouped_folds
+from tzsl.models.protocol import (
+    DEFAULT_SCORING,
+    attribute_rows,
+    class_grouped_folds,
+    heldout_scores,
+    most_regularised_best,
+)
 
 __all__ = ["DEFAULT_ALPHAS", "select_embedding_alpha"]
 
-#: Weight-decay grid of the embedding model, strongest first (ties go to the stronger one).
+#: Weight-decay grid of the embedding model, strongest first (ties go to the strongest).
 DEFAULT_ALPHAS: tuple[float, ...] = (1.0, 0.1, 0.01, 0.001)
 
 
@@ -34,16 +40,19 @@ def select_embedding_alpha(
     alphas: Sequence[float] = DEFAULT_ALPHAS,
     random_state=None,
     max_iter: int = 500,
+    scoring: str = DEFAULT_SCORING,
 ) -> tuple[float, np.ndarray | None]:
     """Weight decay of :class:`EmbeddingZSL` by class-grouped CV on training classes only.
 
     Classes with identical attribute rows are one CV group. :func:`tzsl.models.protocol.class_grouped_folds`
     makes ``min(5, n_groups // 2)`` folds holding out whole groups (at least 2 per fold, at
     least 2 trained on; a merged group never alone); each fold
-    trains ``EmbeddingZSL(lam, alpha, early_stopping=False)`` on the rest and scores the
-    accuracy of recognising the held-out samples among the held-out groups' attribute rows
-    (the zero-shot situation). The alpha with the best mean score wins; ties go to the first
-    in ``alphas`` (order them strongest first).
+    trains ``EmbeddingZSL(lam, alpha, early_stopping=False)`` on the rest and scores how well it
+    recognises the held-out samples among the held-out groups' attribute rows (the zero-shot
+    situation) by ``scoring`` (:func:`tzsl.models.protocol.heldout_scores` on the class scores: by
+    default the smooth ``neg_log_loss``, which a last-bit difference cannot flip). The alpha with the
+    best mean score wins; scores within :data:`tzsl.models.protocol.TIE_TOLERANCE` of the best are
+    tied and the largest tied alpha (the strongest weight decay) is chosen.
 
     Parameters
     ----------
@@ -61,12 +70,14 @@ def select_embedding_alpha(
         Seed of the fold models.
     max_iter : int
         L-BFGS iterations of each fit.
+    scoring : {"neg_log_loss", "accuracy", "balanced_accuracy"}
+        The held-out criterion (higher is better).
 
     Returns
     -------
     alpha : float
     scores : ndarray of shape (n_alphas, n_folds) or None
-        Held-out accuracies (None without CV).
+        Held-out criterion of each alpha in each fold (None without CV).
 
     Raises
     ------
@@ -101,6 +112,6 @@ def select_embedding_alpha(
                     "embedding", lam=lam, alpha=alpha, early_stopping=False, max_iter=max_iter,
                     random_state=random_state, calibration="none",
                 ), X[tr], attribute_rows(y[tr], S_tr), y[tr])
-            scores[a, f] = float(np.mean(model.predict(X[va], S_u[va_groups]) == y_va.ravel()))
-    best = int(np.argmax(scores.mean(axis=1)))
+            scores[a, f] = heldout_scores(model.decision_function(X[va], S_u[va_groups]), y_va.ravel(), scoring)
+    best = most_regularised_best(scores.mean(axis=1), (np.asarray(alphas),))[0]
     return alphas[best], scores

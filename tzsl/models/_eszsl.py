@@ -40,6 +40,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from tzsl._scoring import linear_embedding
 from tzsl.models._attribute_model_base import attribute_table_tags
+from tzsl.models._selection_criteria import DEFAULT_SCORING, SCORINGS, heldout_scores, most_regularised_best
 from tzsl.models._validation import ParameterError, ValidatedParamsMixin
 from tzsl.models._zsl_input import (
     DEFAULT_GRID_EXTENSIONS,
@@ -258,8 +259,10 @@ class ESZSLCV(_ESZSLBase):
         more than ``n_classes // 2``). Otherwise any object with ``split(X, y, groups)``; it receives ``groups`` = class (row of
         ``class_attributes_``), and every fold must hold out whole classes, at least 2 of them,
         and train on at least 2.
-    scoring : {"accuracy", "balanced_accuracy"}, default="accuracy"
-        Per-sample accuracy or mean per-class accuracy on the held-out classes.
+    scoring : {"neg_log_loss", "accuracy", "balanced_accuracy"}, default="neg_log_loss"
+        Criterion on the held-out classes (:mod:`tzsl.models.protocol`'s selection criteria): minus the
+        log-loss of a softmax over the held-out classes' scores at its best temperature (smooth, so a
+        last-bit difference cannot flip the choice), per-sample accuracy, or mean per-class accuracy.
     standardize : bool, default=True
         As in :class:`ESZSL`; the scaler is refitted on each fold's training part.
     grid_extensions : int >= 0, default=3 (``DEFAULT_GRID_EXTENSIONS``)
@@ -271,7 +274,8 @@ class ESZSLCV(_ESZSLBase):
     Attributes
     ----------
     best_gamma_, best_lam_ : float
-        Chosen regularisers (ties: first in grid order, gammas outer; grids are sorted).
+        Chosen regularisers. Mean CV scores within ``TIE_TOLERANCE`` (1e-6) of the best are tied and the
+        most regularised of them is chosen: the largest ``gamma``, then the largest ``lam``.
     gammas_, lams_ : ndarray
         The final (sorted, possibly extended) grids that were scored.
     at_grid_edge_ : bool
@@ -290,7 +294,7 @@ class ESZSLCV(_ESZSLBase):
         "gammas": ["array-like"],
         "lams": ["array-like"],
         "cv": [None, Interval(Integral, 2, None, closed="left"), HasMethods(["split"])],
-        "scoring": [StrOptions({"accuracy", "balanced_accuracy"})],
+        "scoring": [StrOptions(set(SCORINGS))],
         "grid_extensions": [Interval(Integral, 0, None, closed="left")],
     }
 
@@ -300,7 +304,7 @@ class ESZSLCV(_ESZSLBase):
         gammas: Sequence[float] = DEFAULT_GRID,
         lams: Sequence[float] = DEFAULT_GRID,
         cv=None,
-        scoring="accuracy",
+        scoring=DEFAULT_SCORING,
         standardize=True,
         grid_extensions=DEFAULT_GRID_EXTENSIONS,
     ):
@@ -382,7 +386,7 @@ class ESZSLCV(_ESZSLBase):
 
         self.cv_scores_ = np.stack(scores, axis=-1)
         self.mean_cv_scores_ = self.cv_scores_.mean(axis=-1)
-        gi, li = np.unravel_index(np.argmax(self.mean_cv_scores_), self.mean_cv_scores_.shape)
+        gi, li = most_regularised_best(self.mean_cv_scores_, (gammas, lams))
         for _ in range(int(self.grid_extensions)):  # adaptive: step beyond an edge that was selected
             new_g, new_l = extend_at_edge(gammas, gi), extend_at_edge(lams, li)
             if new_g is None and new_l is None:
@@ -393,7 +397,7 @@ class ESZSLCV(_ESZSLBase):
                 [self._score_fold(X[tr], y_u[tr], X[va], y_u[va], S_u, gammas, lams) for tr, va in folds], axis=-1
             )
             self.mean_cv_scores_ = self.cv_scores_.mean(axis=-1)
-            gi, li = np.unravel_index(np.argmax(self.mean_cv_scores_), self.mean_cv_scores_.shape)
+            gi, li = most_regularised_best(self.mean_cv_scores_, (gammas, lams))
         self.gammas_, self.lams_ = gammas, lams
         self.at_grid_edge_ = extend_at_edge(gammas, gi) is not None or extend_at_edge(lams, li) is not None
         self.best_gamma_ = float(gammas[gi])
@@ -412,7 +416,7 @@ class ESZSLCV(_ESZSLBase):
         return {"gammas": (self.best_gamma_,), "lams": (self.best_lam_,)}
 
     def _score_fold(self, X_tr, y_tr, X_va, y_va, S_u, gammas, lams) -> np.ndarray:
-        """Zero-shot score on the held-out classes for every grid point: (n_gammas, n_lams)."""
+        """The CV criterion on the held-out classes for every grid point (higher is better): (n_gammas, n_lams)."""
         tr_rows = np.unique(y_tr)
         va_rows, y_va_local = np.unique(y_va, return_inverse=True)
         S_tr, S_va = S_u[tr_rows], S_u[va_rows]
@@ -428,8 +432,4 @@ class ESZSLCV(_ESZSLBase):
         # scores[g, l, i, c] = sum_{r, j} A[i, r] u[g, r] C[r, j] v[l, j] B[c, j]
         AUC = np.einsum("ir,gr,rj->gij", A, u, C, optimize=True)
         scores = np.einsum("gij,lj,cj->glic", AUC, v, B, optimize=True)
-        correct = np.argmax(scores, axis=-1) == y_va_local  # (G, L, n_va)
-        if self.scoring == "accuracy":
-            return correct.mean(axis=-1)
-        onehot = np.eye(va_rows.size)[y_va_local]  # (n_va, k_va)
-        return (correct @ onehot / onehot.sum(axis=0)).mean(axis=-1)
+        return heldout_scores(scores, y_va_local, self.scoring)

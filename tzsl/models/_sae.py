@@ -34,11 +34,12 @@ from numbers import Integral, Real
 import numpy as np
 from sklearn.base import _fit_context
 from sklearn.preprocessing import StandardScaler
-from sklearn.utils._param_validation import Interval, InvalidParameterError
+from sklearn.utils._param_validation import Interval, InvalidParameterError, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
 from tzsl.models._attribute_model_base import EmbeddingAttributeModel
 from tzsl.models._decision import cosine_similarities
+from tzsl.models._selection_criteria import DEFAULT_SCORING, SCORINGS, heldout_scores, most_regularised_best
 from tzsl.models._zsl_input import (
     DEFAULT_GRID_EXTENSIONS,
     class_grouped_folds,
@@ -167,15 +168,21 @@ class SAECV(EmbeddingAttributeModel):
     :func:`~tzsl.models.protocol.class_grouped_folds` (each fold validates on >= 2 and trains on >= 2
     classes; classes sharing a row are one class, never alone in a fold); for every fold and every
     ``lam`` the encoder is fitted on the other classes (one pair of eigendecompositions per fold serves the whole grid)
-    and scored by zero-shot accuracy among the fold's held-out classes (cosine to their rows), the
-    situation of the test. Holding out classes holds out whole objects; test objects are never
-    used. The best ``lam`` (mean accuracy over folds; ties: the first in ``lams``) is refitted on
-    all training trials.
+    and scored among the fold's held-out classes (cosine to their rows), the situation of the test,
+    by ``scoring`` (default: the smooth :func:`~tzsl.models.protocol.neg_log_loss`, which a last-bit
+    difference cannot flip). Holding out classes holds out whole objects; test objects are never
+    used. The best ``lam`` (mean criterion over folds; scores within
+    :data:`~tzsl.models.protocol.TIE_TOLERANCE` of the best are tied and the smallest tied ``lam`` is
+    kept: SAE's ``lam`` weighs the encoder against the decoder, neither end is simpler, and the
+    smallest is the order the search always used) is refitted on all training trials.
 
     Parameters
     ----------
     lams : array-like of float, default=(1e-2, 1e-1, ..., 1e5)
         Candidate lambdas (each > 0), see :class:`SAE`.
+    scoring : {"neg_log_loss", "accuracy", "balanced_accuracy"}, default="neg_log_loss"
+        Criterion on the held-out classes (:func:`~tzsl.models.protocol.heldout_scores`), on the
+        cosine similarities.
     n_splits : int, default=5
         Folds of classes, capped at ``n_classes // 2`` so that each fold holds out >= 2 classes
         (see Notes for fewer than 4 classes).
@@ -194,9 +201,9 @@ class SAECV(EmbeddingAttributeModel):
     at_grid_edge_ : bool
         Whether ``best_lam_`` is still at an edge of ``lams_`` (extension bound reached).
     best_score_ : float
-        Mean held-out zero-shot accuracy of ``best_lam_``.
+        Mean held-out criterion of ``best_lam_`` (higher is better).
     cv_scores_ : ndarray of shape (n_lams, n_splits)
-        Held-out accuracy of every lambda in every fold.
+        Held-out criterion of every lambda in every fold.
     coef_, class_attributes_, scaler_, n_attributes_, n_features_in_
         As in :class:`SAE`, refitted with ``best_lam_``.
 
@@ -208,16 +215,18 @@ class SAECV(EmbeddingAttributeModel):
 
     _parameter_constraints: dict = {
         "lams": ["array-like"],
+        "scoring": [StrOptions(set(SCORINGS))],
         "n_splits": [Interval(Integral, 2, None, closed="left")],
         "standardize": ["boolean"],
         "grid_extensions": [Interval(Integral, 0, None, closed="left")],
     }
 
     def __init__(
-        self, *, lams=DEFAULT_LAMS, n_splits: int = 5, standardize: bool = True,
+        self, *, lams=DEFAULT_LAMS, scoring: str = DEFAULT_SCORING, n_splits: int = 5, standardize: bool = True,
         grid_extensions: int = DEFAULT_GRID_EXTENSIONS,
     ):
         self.lams = lams
+        self.scoring = scoring
         self.n_splits = n_splits
         self.standardize = standardize
         self.grid_extensions = grid_extensions
@@ -247,13 +256,11 @@ class SAECV(EmbeddingAttributeModel):
         """Fill ``cv_scores_`` (n_lams, n_folds) for ``lams`` on the prepared folds; index of the best lambda."""
         scores = []
         for parts, X_va, candidate_rows, truth in prepared:
-            fold = []
-            for lam in lams:
-                E = X_va @ _solve_parts(parts, lam).T  # (n_held_out, n_attributes)
-                fold.append(np.mean(np.argmax(cosine_similarities(E, candidate_rows), axis=1) == truth))
-            scores.append(fold)
+            similarities = np.stack([cosine_similarities(X_va @ _solve_parts(parts, lam).T, candidate_rows)
+                                     for lam in lams])  # (n_lams, n_held_out, n_candidates)
+            scores.append(heldout_scores(similarities, truth, self.scoring))
         self.cv_scores_ = np.asarray(scores).T
-        return int(np.argmax(self.cv_scores_.mean(axis=1)))
+        return most_regularised_best(self.cv_scores_.mean(axis=1), (-lams,))[0]  # ties: the smallest lam
 
     @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X, y, groups=None):

@@ -21,6 +21,7 @@ import time
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any, Protocol
 
 import numpy as np
 import pandas as pd
@@ -51,6 +52,12 @@ __all__ = ["COMPARISON_TABLE", "REFERENCE_LAMBDA", "ZeroShotRun", "fabric_compar
 COMPARISON_TABLE = comparison_file("fabric")[: -len(".csv")]
 #: Lambda of the reference row (the paper's best on average, Table 1); the first lambda run if absent.
 REFERENCE_LAMBDA = "0.1"
+
+
+class _Predictor(Protocol):
+    """A fitted zero-shot model: ``predict(X, class_attributes)`` -> row indices of ``class_attributes``."""
+
+    def predict(self, X: np.ndarray, class_attributes: np.ndarray, /) -> Any: ...
 
 
 @dataclass(frozen=True)
@@ -87,7 +94,7 @@ class ZeroShotRun:
 
 
 def zero_shot_run(
-    fit_model: Callable[[np.ndarray, np.ndarray, np.ndarray], object],
+    fit_model: Callable[[np.ndarray, np.ndarray, np.ndarray], _Predictor],
     X: np.ndarray,
     groups: np.ndarray,
     attribute_matrix: np.ndarray,
@@ -122,7 +129,7 @@ def zero_shot_run(
 
 
 def zero_shot_runs(
-    fit_model: Callable[[np.ndarray, np.ndarray, np.ndarray], object],
+    fit_model: Callable[[np.ndarray, np.ndarray, np.ndarray], _Predictor],
     X: np.ndarray,
     groups: np.ndarray,
     attribute_matrix: np.ndarray,
@@ -171,7 +178,7 @@ def zero_shot_runs(
     train_classes = np.unique(groups[train])
     model = fit_model(X[train], groups[train], A[train_classes])
     runs = []
-    for split, test in zip(splits, tests):
+    for split, test in zip(splits, tests, strict=True):
         test_classes = np.asarray(split.test_groups)
         rows = model.predict(X[test], A[test_classes])
         runs.append(ZeroShotRun(model=model, train_classes=train_classes, test_classes=test_classes,
@@ -225,7 +232,7 @@ def run_job(
             ), X_tr, attribute_rows(y_tr, S_tr), y_tr)
         info.update(
             alpha=alpha,
-            cv_score=np.nan if scores is None else float(scores.mean(axis=1).max()),
+            cv_score=np.nan if scores is None else float(scores.mean(axis=1)[list(alphas).index(alpha)]),
             n_iter=model.attribute_model_.n_iter_,
             converged=not any(issubclass(w.category, ConvergenceWarning) for w in caught),
         )
@@ -255,7 +262,7 @@ def run_job(
                  "n_train": int(split.is_train(groups).sum()), "n_test": int(split.is_test(groups).sum()),
                  "train_classes": "", "predicted_counts": "", **info, ERROR_COLUMN: error} for split in splits]
     else:
-        rows = [_run_row(run, method, seed, split, groups, info) for run, split in zip(runs, splits)]
+        rows = [_run_row(run, method, seed, split, groups, info) for run, split in zip(runs, splits, strict=True)]
     rows[0]["_fit_store"] = (os.getpid(), fit_store_counts(since=before))  # not a runs column
     return rows
 
@@ -319,7 +326,8 @@ def fabric_comparison(runs: pd.DataFrame, correct: list[np.ndarray], samples: Se
     blocks = []
     for s in samples:
         fabric_ids = s.samples["fabric_id"].to_numpy()
-        trials, seconds = [], {}
+        trials: list[pd.DataFrame] = []
+        seconds: dict[str, list[float]] = {}
         for i in np.flatnonzero(runs["condition"].to_numpy() == s.condition):
             row = runs.iloc[i]
             clusters = fabric_ids[splits[int(row["config"])].is_test(s.groups)]
