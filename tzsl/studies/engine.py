@@ -15,7 +15,7 @@ import os
 import socket
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 from urllib.parse import urlparse
 
 import pandas as pd
@@ -42,7 +42,9 @@ def _check_scheduler(address: str, timeout: float, source: str) -> None:
     try:
         from distributed import Client  # noqa: PLC0415 - the Dask handshake, not only a TCP port
     except ImportError:
-        raise ConfigError(f"{source}: compute.backend: 'dask' needs dask.distributed: pip install 'tzsl[dask]'") from None
+        raise ConfigError(
+            f"{source}: compute.backend: 'dask' needs dask.distributed: pip install 'tzsl[dask]'"
+        ) from None
     try:
         Client(address, timeout=f"{timeout}s", set_as_default=False).close()
     except Exception as exc:  # noqa: BLE001 - whatever answered there is not a working Dask scheduler
@@ -56,12 +58,12 @@ def _unreachable(source: str, address: str, timeout: float, reason: str) -> None
 
 def _path_problems(exp: Experiment) -> list[str]:
     c = exp.config
-    wanted: list[tuple[str, str | None, str]] = []
+    wanted: list[tuple[str, str | None, Literal["file", "folder"]]] = []
     ds = getattr(c, "dataset", None)  # a registered study may read no dataset
     for key, kind in DATASET_PATHS.items():
         wanted.append((f"dataset.{key}", getattr(ds, key, None), kind))
     if "file" in getattr(getattr(c, "splits", None), "kinds", ()):
-        split_file = c.splits.file if c.splits.file is not None else os.path.join(ds.plain, "splits.csv")
+        split_file = c.splits.file if c.splits.file is not None else os.path.join(c.dataset.plain, "splits.csv")
         wanted.append(("splits.file" if c.splits.file else "splits.kinds", split_file, "file"))
     problems = []
     for key, value, kind in wanted:
@@ -138,9 +140,9 @@ def run_experiment(
     """Run an experiment file, a built-in study (by name) or a checked :class:`Experiment`.
 
     ``overrides``: ``out``, ``n_jobs``, ``seed``, ``backend``, ``scheduler``, ``progress``,
-    ``data_dir`` (see :data:`tzsl.studies.config.OPTION_KEYS`; None = as in the file). Writes the study's tables and
-    ``manifest.json`` (resolved settings, the file's text and checksum, data checksums, failures,
-    warnings, and ``config.profile``: wall and CPU seconds per stage, :mod:`tzsl._profile`).
+    ``data_dir`` (see :data:`tzsl.studies.config.OPTION_KEYS`; None = as in the file). Writes the study's
+    tables and ``manifest.json`` (resolved settings, the file's text and checksum, data checksums,
+    failures, warnings, and ``config.profile``: wall and CPU seconds per stage, :mod:`tzsl._profile`).
 
     Raises
     ------
@@ -167,7 +169,7 @@ def run_experiment(
     results.commit()
     if failures:
         error = PartialRunError(results.root, failures)
-        error.results, error.run = results, run
+        error.results, error.run = results, run  # type: ignore[attr-defined]  # carried to run(); undeclared
         raise error
     return results, run
 
@@ -201,7 +203,7 @@ def run(config_or_path: str | os.PathLike | Experiment, *, table: str | None = N
         import warnings  # noqa: PLC0415
 
         warnings.warn(str(exc), RuntimeWarning, stacklevel=2)
-        results, done = exc.results, exc.run
+        results, done = exc.results, exc.run  # type: ignore[attr-defined]  # set by run_experiment; undeclared
     name = table or get_study(done.record["study_kind"]).main_table
     if name not in done.tables:
         raise ConfigError(f"no table {name!r}; this run wrote {sorted(done.tables)}")

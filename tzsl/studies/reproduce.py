@@ -105,7 +105,8 @@ def fetch_study_data(experiments: list, names: tuple[str, ...], echo: Callable[[
     wanted: dict[Path, tuple[set[str], list[str]]] = {}
     for name, exp in zip(names, experiments, strict=True):
         dataset = getattr(exp.config, "dataset", None)  # a registered study may read no dataset
-        files = builtin_data_files(dataset.builtin) if getattr(dataset, "builtin", None) else []
+        builtin = getattr(dataset, "builtin", None)
+        files = builtin_data_files(builtin) if builtin else []
         if files:
             home = get_data_home(exp.resolve(getattr(dataset, "data_dir", None)))
             paths, readers = wanted.setdefault(home, (set(), []))

@@ -14,7 +14,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, overload
 
 from pydantic import BaseModel, ValidationError
 
@@ -63,6 +63,11 @@ class Experiment:
     @property
     def study(self) -> str:
         return self.config.study
+
+    @overload
+    def resolve(self, value: str | os.PathLike) -> Path: ...
+    @overload
+    def resolve(self, value: None) -> None: ...
 
     def resolve(self, value: str | os.PathLike | None) -> Path | None:
         """A path of the experiment, relative to :attr:`base`."""

@@ -25,7 +25,7 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import get_args
+from typing import Literal, get_args, overload
 
 from pydantic import BaseModel
 
@@ -73,6 +73,11 @@ class StudyKind:
     preset_of: str | None = None
     requires: tuple[str, ...] = ()
     extra: str | None = None
+
+    @overload
+    def hook(self, which: Literal["runner"]) -> Callable: ...
+    @overload
+    def hook(self, which: str) -> Callable | None: ...
 
     def hook(self, which: str) -> Callable | None:
         """The imported ``runner`` / ``results`` / ``outputs`` / ``notes`` function (None when not set)."""

@@ -234,7 +234,11 @@ class ResultsDir:
         """Write ``payload`` as indented JSON."""
         target = self._target(name)
         text = json.dumps(payload, indent=2, sort_keys=True, default=str)
-        return self._record(atomic_write(target, lambda p: p.write_text(text + "\n")))
+
+        def write(p: Path) -> None:
+            p.write_text(text + "\n")
+
+        return self._record(atomic_write(target, write))
 
     def write_splits(self, name: str, splits: Iterable[Any]) -> Path:
         """Write object splits in the format ``--splits`` reads back (:func:`tzsl.evaluation.write_splits_csv`).
@@ -255,12 +259,16 @@ class ResultsDir:
     def copy_file(self, name: str, source: str | Path) -> Path:
         """Write a copy of the file ``source`` as ``name`` (a study restored from the study cache)."""
         target = self._target(name)
-        return self._record(atomic_write(target, lambda p: shutil.copyfile(source, p)))
+
+        def write(p: Path) -> None:
+            shutil.copyfile(source, p)
+
+        return self._record(atomic_write(target, write))
 
     @timed("figures")
     def write_figure(self, name: str, figure: Any, dpi: int = 120) -> Path:
         """Save a matplotlib figure as PNG and close it."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # noqa: PLC0415  # matplotlib is heavy, imported only to save a figure
 
         target = self._target(name)
         try:

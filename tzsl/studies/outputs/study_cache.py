@@ -109,7 +109,13 @@ def _plugin_digest(exp) -> tuple[str | None, str]:
     for module in sorted(m for m in modules if m != "tzsl" and not m.startswith("tzsl.")):
         try:
             loaded = sys.modules.get(module)
-            source = loaded.__file__ if loaded is not None else importlib.util.find_spec(module).origin
+            if loaded is not None:
+                source = loaded.__file__
+            else:
+                spec = importlib.util.find_spec(module)
+                source = None if spec is None else spec.origin
+            if source is None:  # no source file
+                return None, module
             digest.update(f"{module}\0".encode() + Path(source).read_bytes())
         except (AttributeError, ImportError, OSError, TypeError, ValueError):  # no source file (a notebook)
             return None, module
