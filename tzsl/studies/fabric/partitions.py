@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -58,9 +59,9 @@ __all__ = ["PARTITION_COLUMNS", "group_partitions", "partition_census", "partiti
            "run_partitions"]
 
 #: Columns of :func:`partition_summary`.
-PARTITION_COLUMNS = ("condition", "method", "metric", "n_partitions", "n_failed", "n_test_groups", "accuracy", "ci95_low",
-                     "ci95_high", "chance", "majority_baseline", "majority_ci95_low", "majority_ci95_high",
-                     "unit")
+PARTITION_COLUMNS = ("condition", "method", "metric", "n_partitions", "n_failed", "n_test_groups", "accuracy",
+                     "ci95_low", "ci95_high", "chance", "majority_baseline", "majority_ci95_low",
+                     "majority_ci95_high", "unit")
 
 
 def _valid(A: np.ndarray, test: tuple[int, ...], both_signs: bool) -> bool:
@@ -192,8 +193,9 @@ def partition_outcomes(runs: Sequence[dict], meta: Sequence[dict]) -> pd.DataFra
         One row per test sample per successful fit (meta columns, ``method``, ``y_true``,
         ``y_pred``) and ``n_failed``: failed fits of the same (condition, method).
     """
-    frames, failed = [], {}
-    for r, m in zip(runs, meta):
+    frames: list[pd.DataFrame] = []
+    failed: dict[tuple[Any, Any], int] = {}
+    for r, m in zip(runs, meta, strict=True):
         key = (m["condition"], r["method"])
         failed[key] = failed.get(key, 0) + int("_y" not in r)
         if "_y" in r:
@@ -202,7 +204,7 @@ def partition_outcomes(runs: Sequence[dict], meta: Sequence[dict]) -> pd.DataFra
     if not frames:
         return pd.DataFrame(columns=[*(meta[0] if meta else {}), "method", "y_true", "y_pred", "n_failed"])
     out = pd.concat(frames, ignore_index=True)
-    out["n_failed"] = [failed[k] for k in zip(out["condition"], out["method"])]
+    out["n_failed"] = [failed[k] for k in zip(out["condition"], out["method"], strict=True)]
     return out
 
 

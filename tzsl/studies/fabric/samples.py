@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from joblib import Parallel, delayed
+from skimage.transform import resize
+from tqdm.auto import tqdm
 
 from tzsl._io import file_sha256
 from tzsl._parallel import reissued, relayed
@@ -174,8 +176,6 @@ def _shrink(frames: np.ndarray, max_side: int | None) -> np.ndarray:
     """(k, H, W) -> (k, h, w) with ``max(h, w) <= max_side`` (anti-aliased resize)."""
     if max_side is None or max(frames.shape[1:]) <= max_side:
         return frames
-    from skimage.transform import resize
-
     scale = max_side / max(frames.shape[1:])
     shape = tuple(max(2, round(s * scale)) for s in frames.shape[1:])
     return np.stack([resize(f, shape, anti_aliasing=True, preserve_range=True) for f in frames])
@@ -248,8 +248,6 @@ def gelsight_samples(
     cached = descriptor_memory(cache_dir).cache(_describe_video, ignore=["path"])
     paths = videos["path"].tolist()
     if progress:
-        from tqdm.auto import tqdm
-
         tqdm.write(f"key frames and descriptors of {len(paths)} GelSight videos (cached afterwards)")
     with stage("features"):  # key frames and descriptors, in joblib workers (cached)
         results = [reissued(r) for r in Parallel(n_jobs=n_jobs)(

@@ -84,10 +84,12 @@ from __future__ import annotations
 import os
 import warnings
 from pathlib import Path
+from typing import Any, cast
 
 import numpy as np
 import pandas as pd
 from joblib import Parallel, delayed
+from tqdm.auto import tqdm
 
 from tzsl._parallel import reissued, relayed
 from tzsl._profile import stage
@@ -205,7 +207,9 @@ def run_fabric_study(
     sp, me, fe = settings.splits, settings.methods, settings.features
     seeds, configs, seed = sp.n_seeds, [int(c) for c in sp.configs], sp.seed
     attributes, lams, alphas, max_iter = settings.dataset.attributes, list(me.embedding_lambdas), me.alphas, me.max_iter
-    methods, conditions, gelsight_conditions = me.compare, list(fe.conditions), fe.gelsight_conditions
+    # the compare validator (methods_ok) made every entry a dict
+    methods = cast("list[dict[str, Any]]", me.compare)
+    conditions, gelsight_conditions = list(fe.conditions), fe.gelsight_conditions
     n_jobs, progress = settings.compute.n_jobs, settings.compute.progress
     partitions = settings.partitions.model_dump(exclude={"enabled"}) if settings.partitions.enabled else None
     data_dir = settings.dataset.data_dir if data_dir is None else data_dir
@@ -242,7 +246,10 @@ def run_fabric_study(
 
     seed_list = list(range(int(seed), int(seed) + seeds))
     # the fits of one data condition: (method, lam, seed, alphas, registry spec), in the runs table's order
-    fits = [(f"lam_{label}", lam, sd, tuple(alphas), None) for lam, label in zip(lams, labels) for sd in seed_list]
+    fits: list[tuple[str, float | str | None, int | None, tuple[float, ...], dict[str, Any] | None]] = [
+        (f"lam_{label}", lam, sd, tuple(alphas), None)
+        for lam, label in zip(lams, labels, strict=True) for sd in seed_list
+    ]
     fits.append((ESZSL_METHOD, None, None, (), None))
     fits += [(method_label(spec), None, sd, (), spec)  # registry methods: every seed if random, else once
              for spec in methods for sd in (seed_list if takes_seed(spec) else [None])]
@@ -251,15 +258,14 @@ def run_fabric_study(
     families: dict[tuple[int, ...], list[int]] = {}
     for p, proto in enumerate(protocols):
         families.setdefault(tuple(proto.split.train_groups), []).append(p)
-    jobs, first_job = [], {}  # (sample index, family) -> its first job; one job per fit
+    jobs: list[Any] = []
+    first_job: dict[tuple[int, tuple[int, ...]], int] = {}  # (sample index, family) -> its first job; one job per fit
     for i, s in enumerate(samples):
         for family in families.values():
             first_job[i, tuple(family)] = len(jobs)
             splits = [protocols[p].split for p in family]
             jobs += [delayed(relayed(run_job))(s.X, s.groups, A, splits, method, lam, sd, alphas_, max_iter, spec)
                      for method, lam, sd, alphas_, spec in fits]
-
-    from tqdm.auto import tqdm
 
     with stage("fit"):  # the embedding and ESZSL fits, in joblib workers
         results = map(reissued, Parallel(n_jobs=n_jobs, return_as="generator")(jobs))
@@ -299,7 +305,7 @@ def run_fabric_study(
     headline = {p.split.config: p for p in protocols if p.zero_shot}
     with stage("tables"):  # the method comparison: paired intervals (its bootstrap is a stage of its own)
         keep = np.flatnonzero([c is not None and r["protocol"] == headline[int(r["config"])].name
-                               for c, (_, r) in zip(correct, runs.iterrows())])
+                               for c, (_, r) in zip(correct, runs.iterrows(), strict=True)])
         comparison = fabric_comparison(runs.iloc[keep].reset_index(drop=True), [correct[i] for i in keep], samples,
                                        {c: p.split for c, p in headline.items()}, seed_list, labels)
     out.write_csv(f"{COMPARISON_TABLE}.csv", comparison)
@@ -321,7 +327,8 @@ def run_fabric_study(
     config = {
         "study": "fabric zero-shot (F18)",
         "attributes": attributes,
-        "configs": {f"{p.split.config}/{p.name}": {"train": list(p.split.train_groups), "test": list(p.split.test_groups),
+        "configs": {f"{p.split.config}/{p.name}": {"train": list(p.split.train_groups),
+                                                   "test": list(p.split.test_groups),
                                                    "zero_shot": p.zero_shot, "note": p.note} for p in protocols},
         "conditions": [s.condition for s in samples],
         "units": {s.condition: s.unit for s in samples},

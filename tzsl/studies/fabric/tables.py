@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 import pandas as pd
@@ -48,7 +49,7 @@ PAPER_CONFIG = 1
 PAPER_PROTOCOL = "paper"
 #: How the headline zero-shot variant is made (:func:`tzsl.evaluation.zero_shot_variant`):
 #: test groups whose attribute row a training group has are dropped (training unchanged).
-ZERO_SHOT_STRATEGY = "drop"
+ZERO_SHOT_STRATEGY: Literal["drop", "merge"] = "drop"
 
 
 @dataclass(frozen=True)
@@ -217,7 +218,7 @@ def fabric_table(runs: pd.DataFrame, lams: Sequence = PAPER_LAMBDAS, outcomes: O
                 if m == ESZSL_METHOD:
                     std = 0.0 if len(got) else np.nan  # deterministic: identical for every seed
                 else:
-                    std = float(summary.loc["std", metric]) if len(got) > 1 else np.nan
+                    std = float(summary.loc["std", metric]) if summary is not None and len(got) > 1 else np.nan
                 stats[f"{m}{suffix}_std"] = std
         for m in methods:
             row[m] = stats[m]
@@ -230,7 +231,8 @@ def fabric_table(runs: pd.DataFrame, lams: Sequence = PAPER_LAMBDAS, outcomes: O
         paper_row = first["paper_row"] if isinstance(first["paper_row"], str) and first["paper_row"] else None
         for m in methods:
             value = np.nan
-            if paper_row is not None and int(config) == PAPER_CONFIG and row.get("protocol", PAPER_PROTOCOL) == PAPER_PROTOCOL:
+            if (paper_row is not None and int(config) == PAPER_CONFIG
+                    and row.get("protocol", PAPER_PROTOCOL) == PAPER_PROTOCOL):
                 value = FABRIC_TABLE1[paper_row].get(paper_key(m), np.nan)
             row[f"paper_{m}"] = value
         with_paper = paper_row and int(config) == PAPER_CONFIG and row.get("protocol", PAPER_PROTOCOL) == PAPER_PROTOCOL
@@ -264,7 +266,7 @@ def format_fabric_table(table: pd.DataFrame) -> str:
             cells.append(cell)
         lines.append(cells)
     widths = [max(len(h), *(len(c[i]) for c in lines)) for i, h in enumerate(head)] if lines else [len(h) for h in head]
-    fmt = lambda cells: "  ".join(c.ljust(w) for c, w in zip(cells, widths))  # noqa: E731
+    fmt = lambda cells: "  ".join(c.ljust(w) for c, w in zip(cells, widths, strict=True))  # noqa: E731
     out = [
         f"Fabric zero-shot accuracy (%) on unseen groups: ours mean±std over {n_seeds} seed(s), "
         "[paper Table 1] beside (GelSight videos; Average row beside depth rows)",
@@ -289,10 +291,10 @@ def fabric_lambda_figure(table: pd.DataFrame, lams: Sequence = PAPER_LAMBDAS):
     -------
     matplotlib.figure.Figure
     """
-    import matplotlib
+    import matplotlib  # noqa: PLC0415  # matplotlib is heavy: imported only to draw the figure
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # noqa: PLC0415  # after matplotlib.use("Agg")
 
     methods = method_names(lams)
     labels = [lambda_label(lam) for lam in lams]
@@ -301,7 +303,7 @@ def fabric_lambda_figure(table: pd.DataFrame, lams: Sequence = PAPER_LAMBDAS):
     configs = list(dict.fromkeys(table["config"].tolist()))
     fig, axes = plt.subplots(1, len(configs), figsize=(6 * len(configs), 4.5), sharey=True, squeeze=False)
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for ax, config in zip(axes[0], configs):
+    for ax, config in zip(axes[0], configs, strict=True):
         sub = table[table["config"] == config]
         for i, (_, r) in enumerate(sub.iterrows()):
             c = colours[i % len(colours)]
