@@ -181,7 +181,7 @@ def run_active_hand(table: HandTable, results_dir, config: ActiveTouchStudy,
     strategies = ["active", *(f"fixed:{t}" for t in GRASP_TYPES), "random_type", "random_grasp"]
     runs = [reissued(r) for r in Parallel(n_jobs=config.compute.n_jobs)(
         delayed(relayed(_evaluate_seed))(table, study, config, seed, strategies) for seed in config.hand.seeds)]
-    for seed, r in zip(config.hand.seeds, runs):
+    for seed, r in zip(config.hand.seeds, runs, strict=True):
         log(f"simulated hand, seed {seed}: active after 1..{config.hand.max_grasps} grasps "
             f"{np.round(r['strategies']['active']['correct'].mean(axis=0), 3).tolist()}")
     classes = np.concatenate([r["objects"] for r in runs])
@@ -214,7 +214,7 @@ def run_active_hand(table: HandTable, results_dir, config: ActiveTouchStudy,
     for name, t in out.items():
         results_dir.write_csv(f"{name}.csv", t)
     results_dir.write_figure("active_touch_hand.png", _figure(curves))
-    shares = np.mean([r["type_share"] for r in runs], axis=0)
+    shares: np.ndarray = np.mean([r["type_share"] for r in runs], axis=0)  # per grasp type
     for t in out.values():
-        t.attrs["type_share"] = dict(zip(GRASP_TYPES, np.round(shares, 3).tolist()))
+        t.attrs["type_share"] = dict(zip(GRASP_TYPES, np.round(shares, 3).tolist(), strict=True))
     return out

@@ -134,7 +134,7 @@ def evaluate_split(features: FeatureSet, split: Split, *, seed: int, update: str
     names = [_order_name(eps, o) for o in orders]
     fixed, fixed_top = _run_orders(S, y, orders, sec, model.exponents_)
     correct, seconds, top = {}, {}, {}
-    for o, (order, name) in enumerate(zip(orders, names)):
+    for o, (order, name) in enumerate(zip(orders, names, strict=True)):
         correct[name], top[name] = fixed[:, o].astype(float), fixed_top[:, o]
         seconds[name] = np.broadcast_to(np.cumsum(sec[list(order)]), fixed[:, o].shape)
     correct["random"] = fixed.mean(axis=1)  # expected correctness of a uniformly random order
@@ -147,7 +147,7 @@ def evaluate_split(features: FeatureSet, split: Split, *, seed: int, update: str
         correct[alias], seconds[alias], top[alias] = correct[name], seconds[name], top[name]
     L = model.outcome_log_likelihoods(K, n_samples=n_samples, random_state=seed)
     first_ep = {}
-    plain = {"correct": {}, "seconds": {}, "top": {}}
+    plain: dict[str, dict[str, np.ndarray]] = {"correct": {}, "seconds": {}, "top": {}}
     _, plain_top = _run_orders(S, y, orders, sec)  # tempering does not change a fixed order's argmax
     for o, name in enumerate(names):
         plain["correct"][name], plain["seconds"][name], plain["top"][name] = correct[name], seconds[name], \
@@ -206,7 +206,7 @@ def summarise(results: list[dict], kind: str, *, thresholds, n_boot: int, seed: 
     base = {"split_kind": kind, "data": "real", "n_splits": len(results), "n_trials": int(classes.size),
             "chance": float(np.mean([1.0 / r["n_classes"] for r in results]))}
     table = pd.DataFrame([{**base, "strategy": s, "x_kind": xk, "x": x, "accuracy": a, "ci95_low": lo,
-                           "ci95_high": hi} for (s, xk, x), a, lo, hi in zip(keys, acc, low, high)])
+                           "ci95_high": hi} for (s, xk, x), a, lo, hi in zip(keys, acc, low, high, strict=True)])
     orders = table[table["strategy"].str.startswith("order:")]
     best = orders.loc[orders.groupby(["x_kind", "x"])["accuracy"].idxmax()].copy()
     best["chosen_order"], best["strategy"] = best["strategy"], "best_fixed_test_optimistic"
@@ -352,8 +352,8 @@ def run_active_touch_study(features: FeatureSet, results_dir: ResultsDir, config
             results = [reissued(r) for r in Parallel(n_jobs=config.compute.n_jobs)(
                 delayed(relayed(evaluate_split))(features, split, seed=s, update=methods.update, cv=methods.cv,
                                                  n_samples=methods.n_samples, tempering=methods.tempering)
-                for split, s in zip(splits, seeds))]
-        for split, r in zip(splits, results):
+                for split, s in zip(splits, seeds, strict=True))]
+        for split, r in zip(splits, results, strict=True):
             for name, n in r.pop("fit_store").items():  # the workers' fit-store events, into the profile
                 count_fits(name, n)
             chosen[split.name] = r["chosen"]

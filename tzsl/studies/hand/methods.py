@@ -71,7 +71,8 @@ def registry_trials(specs, X_train: np.ndarray, objects_train: np.ndarray, K: pd
     names = np.asarray(list(test_objects))
     class_rows = K.loc[np.unique(objects_train)].to_numpy(dtype=float)
     K_test = K.loc[names].to_numpy(dtype=float)
-    trials, seconds = [], {}
+    trials: list[pd.DataFrame] = []
+    seconds: dict[str, list[float]] = {}
     for spec in specs:
         fit = fit_predict(spec, X_train, np.asarray(objects_train), class_rows, X_test, K_test, seed)
         label = method_label(spec)
@@ -94,11 +95,11 @@ def hand_comparison(trials: list[pd.DataFrame], per_seed_seconds: list[dict[str,
             seconds.setdefault(label, []).append(value)
     paper = {fusion_label(f): row["all"] for f, row in DAP_HAND_TABLE5.items()}
     where = "SIMULATED grasps" if simulated else "grasps"
-    trials = pd.concat(trials, ignore_index=True)
-    notes = {label: f"{where}; packed grasp features" for label in trials["method"].unique()}
+    pooled = pd.concat(trials, ignore_index=True)
+    notes = {label: f"{where}; packed grasp features" for label in pooled["method"].unique()}
     notes.update({label: f"{where}; paper: Table 5 (all test objects, Shadow hand)" for label in paper})
     notes[REFERENCE_METHOD] = f"{where}; the paper's method (reference); paper: Table 5"
-    return method_summary(trials, seconds, chance, REFERENCE_METHOD, study=STUDY,
+    return method_summary(pooled, seconds, chance, REFERENCE_METHOD, study=STUDY,
                           data="simulated" if simulated else "real", paper=paper, notes=notes, split_kind="paper")
 
 

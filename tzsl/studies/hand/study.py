@@ -153,8 +153,8 @@ def _evaluate_seed(features: GraspFeatures, table: HandTable, config: HandSettin
     out["trials"] = hand_fusion_trials(pred, y, seed)
     out["seconds"] = [{fusion_label(fusion): fit_seconds for fusion in pred}]
     train = np.isin(features.objects, table.train_objects)
-    trials, seconds = registry_trials(config.methods.compare, features.subset(train).to_array(), features.objects[train],
-                                      table.K[columns], te.to_array(), y, names, seed)
+    trials, seconds = registry_trials(config.methods.compare, features.subset(train).to_array(),
+                                      features.objects[train], table.K[columns], te.to_array(), y, names, seed)
     out["trials"] += trials
     out["seconds"].append({k: v[0] for k, v in seconds.items()})
     for f in HAND_FUSIONS:
@@ -281,20 +281,23 @@ def run_hand_study(
     data_files: list[Path] = []
     fixed: GraspFeatures | None = None
     source = "simulated"
-    if not simulated:
+    if grasps is not None:  # not simulated
+        given: Sequence[Grasp]
         if isinstance(grasps, str | Path):
             source = str(grasps)
             data_files.append(Path(grasps) / "grasps.csv")
-            grasps = read_grasps(grasps)
+            given = read_grasps(grasps)
         else:
             source = "in-memory grasps"
+            given = grasps
         with stage("features"):
-            fixed = hand_features(grasps, table, config)
+            fixed = hand_features(given, table, config)
     data_label = (f"SIMULATED grasps (tzsl simulator, seeds {seeds}) - not the paper's data"
                   if simulated else f"grasps: {source}")
 
     notes: list[str] = []
-    parts: dict[str, list] = {k: [] for k in ("table5", "T", "k", "attr", "S", "confusion", "trust", "trials", "seconds")}
+    parts: dict[str, list] = {k: [] for k in ("table5", "T", "k", "attr", "S", "confusion", "trust", "trials",
+                                              "seconds")}
     simulation: dict[str, dict] = {}
     failed: list[tuple[int, str]] = []
     for seed in seeds:
@@ -306,6 +309,7 @@ def run_hand_study(
                 features = hand_features(sim.grasps, table, config)
             log(f"seed {seed}: simulated {len(sim.grasps)} grasps of {len(table.K)} objects")
         else:
+            assert fixed is not None  # the given grasps' features, computed above
             features = fixed
         res, error = attempt(_evaluate_seed, features, table, config, seed, notes)
         if res is None:  # NaN rows in Table 5 with the reason; reported at the end of the run
@@ -351,10 +355,12 @@ def run_hand_study(
     results.write_csv("hand_confusion.csv", result.confusion)
     results.write_figure("hand_confusion.png", confusion_figure(result.confusion, names, data_label))
     results.write_csv("hand_attribute_accuracy.csv", result.attribute_accuracy)
-    results.write_figure("hand_attribute_accuracy.png", attribute_accuracy_figure(result.attribute_accuracy, data_label))
+    results.write_figure("hand_attribute_accuracy.png",
+                         attribute_accuracy_figure(result.attribute_accuracy, data_label))
     results.write_csv(f"{COMPARISON_TABLE}.csv", result.method_comparison)
     results.write_csv("hand_attribute_distance.csv", result.attribute_distance)
-    results.write_figure("hand_attribute_distance.png", attribute_distance_figure(result.attribute_distance, data_label))
+    results.write_figure("hand_attribute_distance.png",
+                         attribute_distance_figure(result.attribute_distance, data_label))
     result.record = {  # for the run's one manifest (the engine's manifest.json)
         "hand": {"study": "hand (DAP paper section 5.8)", "seeds": list(seeds), "grasps": source,
                  "simulated": simulated, "table": table.source, "train_objects": table.train_objects,

@@ -101,7 +101,8 @@ def format_hand_summary(result: HandStudyResult) -> str:
     for label, row in objects:
         if len(row):
             lines.append(f"{label}: test objects with all grasps/sequences correct "
-                         f"{row['objects_all_correct'].item():.1f}/{n_objects}, with most correct {row['objects_majority_correct'].item():.1f}/{n_objects} "
+                         f"{row['objects_all_correct'].item():.1f}/{n_objects}, with most correct "
+                         f"{row['objects_majority_correct'].item():.1f}/{n_objects} "
                          "(mean over seeds)")
     lines.append(f"paper: LDAP {pct(paper.DAP_HAND_SINGLE_GRASP_BEST).strip()}, SC-MDAP (k=4) all correct on "
                  f"{paper.DAP_HAND_SC_OBJECTS_PERFECT[0]}/{paper.DAP_HAND_SC_OBJECTS_PERFECT[1]} objects")
