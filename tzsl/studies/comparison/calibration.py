@@ -171,10 +171,12 @@ def reliability_figure(table: pd.DataFrame, comparison: pd.DataFrame | None = No
     if comparison is not None:
         for kind, column in (("calibrated", "ece"), ("uncalibrated", "ece_uncalibrated")):
             if column in comparison.columns:
-                ece.update({(kind, m): float(v) for m, v in zip(comparison["method"], comparison[column])})
+                ece.update({(kind, m): float(v)
+                            for m, v in zip(comparison["method"], comparison[column], strict=True)})
     skipped = set(calibration_skipped(table))
-    styles = {"uncalibrated": {"color": "0.45", "ls": "--", "marker": "s"}, "calibrated": {"color": "C0", "marker": "o"}}
-    for ax, method in zip(axes.flat, methods):
+    styles = {"uncalibrated": {"color": "0.45", "ls": "--", "marker": "s"},
+              "calibrated": {"color": "C0", "marker": "o"}}
+    for ax, method in zip(axes.flat, methods, strict=False):  # the grid may hold more panels than methods
         ax.plot([0, 1], [0, 1], color="grey", ls=":", lw=1)
         for kind, style in styles.items():
             points = table[(table["method"] == method) & (table["posterior"] == kind)]
@@ -212,10 +214,11 @@ def dap_split_posteriors(r, X_train, A_train, groups_train, *, fusions: Sequence
     The temperature of each DAP variant (uniform prior) is fitted on pseudo-unseen classes of the
     split's training objects: the study's attribute model (``r.model``, cloned with its settings,
     cache, chosen solver and, with the calibrator's default ``calibration_refit="pinned"``, each
-    attribute classifier's chosen hyper-parameters) is refitted on the training objects minus a held-out group of classes, and the
-    held-out trials are scored among the held-out classes (:func:`tzsl.models.calibration.pseudo_unseen_scores`),
-    on at most the calibrator's default ``calibration_max_trials`` training trials (a seeded
-    subsample of a larger split, every object keeping its share).
+    attribute classifier's chosen hyper-parameters) is refitted on the training objects minus a held-out
+    group of classes, and the held-out trials are scored among the held-out classes
+    (:func:`tzsl.models.calibration.pseudo_unseen_scores`), on at most the calibrator's default
+    ``calibration_max_trials`` training trials (a seeded subsample of a larger split, every object
+    keeping its share).
     The multi-label model (when the split has its posteriors) is refitted the same way.
 
     Parameters

@@ -147,7 +147,8 @@ def fit_predict(spec: dict, X_train: np.ndarray, classes_train: np.ndarray, clas
                        attribute_rows(classes_train, class_rows), classes_train)
     seconds = time.perf_counter() - start
     X_in = method_input(spec, X_test)
-    return MethodFit(model, np.asarray(model.predict(X_in, test_rows)), seconds, *method_posteriors(model, X_in, test_rows))
+    return MethodFit(model, np.asarray(model.predict(X_in, test_rows)), seconds,
+                     *method_posteriors(model, X_in, test_rows))
 
 
 # --------------------------------------------------------------------------- scoring, shared by every study

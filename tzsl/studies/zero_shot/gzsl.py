@@ -207,8 +207,9 @@ def _pseudo_problem(features: FeatureSet, problem: GzslProblem, min_train_positi
     Asks for as many pseudo-unseen classes as the split has unseen ones, each attribute keeping
     ``min_train_positives`` positive (and one negative) training objects. Where no draw allows
     that, the number of pseudo-unseen classes goes down to 1, each draw keeping two negative
-    training objects per attribute (:mod:`tzsl.studies.zero_shot.relaxations`, step 5). Returns the problem (None when even that
-    fails: the split is scored uncalibrated only) and a note of what was relaxed ("" if nothing).
+    training objects per attribute (:mod:`tzsl.studies.zero_shot.relaxations`, step 5). Returns the
+    problem (None when even that fails: the split is scored uncalibrated only) and a note of what
+    was relaxed ("" if nothing).
     """
     split = problem.split
     train_objects = np.array(split.train_objects)

@@ -1,5 +1,5 @@
-"""Registry methods vs DAP on the same splits of the zero-shot study (``methods_per_split.csv``, ``method_comparison.csv``;
-``phac2_methods.csv`` and ``phac2_method_comparison.csv`` in the PHAC-2 paper preset).
+"""Registry methods vs DAP on the same splits of the zero-shot study (``methods_per_split.csv``,
+``method_comparison.csv``; ``phac2_methods.csv`` and ``phac2_method_comparison.csv`` in the PHAC-2 paper preset).
 
 Every method of ``[methods]`` (``eszsl``, ``embedding`` and ``compare``, see
 :meth:`~tzsl.studies.config.ZeroShotMethods.method_specs`) is fitted on each random split's
@@ -172,8 +172,9 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
     -------
     dict of DataFrame
         ``labels.methods_table`` (``"phac2_methods"`` for the paper preset): one row per split
-        (purpose, the study's DAP (``dap-avg``, or ``dap-avg-<detector>``) and one column per method label, e.g. ``eszsl``, ``embedding_lam_0.1``; NaN where that fit failed, the reason in the
-        ``error`` column), then mean and std rows;
+        (purpose, the study's DAP (``dap-avg``, or ``dap-avg-<detector>``) and one column per
+        method label, e.g. ``eszsl``, ``embedding_lam_0.1``; NaN where that fit failed, the reason
+        in the ``error`` column), then mean and std rows;
         ``labels.comparison_table``: :func:`~tzsl.studies.comparison.method_runs.method_summary`
         with ``dap-avg`` as the reference (with ECE and Brier score, calibrated and not);
         ``labels.reliability_table``: the reliability diagram's points of every method; ``dap-max``

@@ -77,7 +77,8 @@ def preset_outputs(exp_config, paper_outputs: list[str]) -> list[str]:
     names = ["manifest.json", *paper_outputs]
     if exp_config.zero_shot.enabled and getattr(exp_config.dataset, "grasps", None) is None:
         generic = ZeroShotStudy.model_validate({
-            "dataset": {"builtin": PRESET_DATASETS[exp_config.study]}, "methods": exp_config.zero_shot.methods.model_dump(),
+            "dataset": {"builtin": PRESET_DATASETS[exp_config.study]},
+            "methods": exp_config.zero_shot.methods.model_dump(),
             "splits": exp_config.zero_shot.splits.model_dump(), "svm": exp_config.zero_shot.svm.model_dump(),
             "output": {"folder": exp_config.output.folder, "prefix": PRESET_DATASETS[exp_config.study]}})
         names += zero_shot_outputs(generic)

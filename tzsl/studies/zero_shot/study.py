@@ -59,7 +59,8 @@ SPLITS_FILE = "splits.csv"
 
 __all__ = [
     "SPLITS_FILE", "SplitPosteriors", "attribute_accuracy_summary",
-    "attribute_accuracy_table", "attribute_bank", "attribute_estimator", "check_cv_folds", "detector_params", "attribute_subsets",
+    "attribute_accuracy_table", "attribute_bank", "attribute_estimator", "check_cv_folds", "detector_params",
+    "attribute_subsets",
     "attribute_sweep", "compute_context", "fit_split", "fit_splits", "make_splits", "multilabel_table",
     "object_map_features", "run_zero_shot_tables", "solver_lines", "split_masks", "table1_fusion", "table2_priors",
     "table3_challenging",
@@ -78,15 +79,16 @@ def make_splits(features: FeatureSet, kind: str, config: ZeroShotSettings) -> tu
     """Random (F5) or challenging (F6) object splits of ``features``; the map for challenging."""
     if kind == "random":
         splits = random_object_splits(
-            features.attributes, n_test=config.splits.n_test, n_splits=config.splits.n_splits, random_state=config.splits.seed,
-            min_train_positives=config.splits.random_min_train_positives, min_train_negatives=config.splits.min_train_negatives,
-            purpose=config.splits.purpose,
+            features.attributes, n_test=config.splits.n_test, n_splits=config.splits.n_splits,
+            random_state=config.splits.seed, min_train_positives=config.splits.random_min_train_positives,
+            min_train_negatives=config.splits.min_train_negatives, purpose=config.splits.purpose,
         )
         return splits, None
     if kind == "challenging":
         return challenging_splits(
             object_map_features(features), features.attributes,
-            min_train_positives=config.splits.challenging_min_train_positives, min_train_negatives=config.splits.min_train_negatives,
+            min_train_positives=config.splits.challenging_min_train_positives,
+            min_train_negatives=config.splits.min_train_negatives,
         )
     raise ConfigError(f"unknown split kind {kind!r}; choose random or challenging")
 
@@ -313,7 +315,8 @@ def run_zero_shot_tables(
             if config.methods.sweep:
                 with stage("sweep"):
                     tables["attribute_sweep"] = attribute_sweep(random_results, config.methods.sweep_min_attributes,
-                                                                config.methods.sweep_max_subsets, seed=config.study_seed)
+                                                                config.methods.sweep_max_subsets,
+                                                                seed=config.study_seed)
                 out.write_figure("attribute_sweep.png", attribute_sweep_figure(tables["attribute_sweep"]))
         used = [r.split for r in random_results]
         results: list[SplitPosteriors] = []

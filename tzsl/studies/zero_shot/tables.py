@@ -168,7 +168,10 @@ def table1_fusion(results: list[SplitPosteriors], paper: bool = False) -> pd.Dat
 
 
 def table2_priors(results: list[SplitPosteriors], paper: bool = False) -> pd.DataFrame:
-    """Table 2: AVGDAP with uni / test / train attribute priors, intervals, chance, control (``paper``: the paper's beside)."""
+    """Table 2: AVGDAP with uni / test / train attribute priors, intervals, chance, control.
+
+    ``paper``: the paper's numbers beside.
+    """
     from tzsl.studies.papers.numbers import DAP_TABLE2  # noqa: PLC0415
 
     rows = [{"split": split_label(r.split), **{p: r.accuracy("avg", p) for p in PRIORS}} for r in results]
@@ -358,7 +361,10 @@ def attribute_sweep(results: list[SplitPosteriors], min_attributes: int = 7, max
 def table_titles(labels: StudyLabels) -> dict[str, str]:
     """Titles of the tables a run echoes (the paper's table names only beside its numbers)."""
     beside = " - ours beside the paper" if labels.paper else ""
-    named = (lambda paper_name, name: paper_name if labels.paper else name)
+
+    def named(paper_name: str, name: str) -> str:
+        return paper_name if labels.paper else name
+
     return {
         "table1_fusion": f"{named('Table 1: ', '')}MAXDAP vs AVGDAP (uni-prior), random splits{beside}",
         "table2_priors": f"{named('Table 2: ', '')}AVGDAP by attribute prior, random splits{beside}",
