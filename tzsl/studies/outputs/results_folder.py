@@ -34,6 +34,7 @@ import pandas as pd
 from tzsl._io import atomic_write, ensure_folder, file_sha256
 from tzsl._profile import timed
 from tzsl.exceptions import ConfigError
+from tzsl.studies.outputs.environment import environment_record
 
 __all__ = [
     "CSV_FLOAT_FORMAT", "RECORDED_PACKAGES", "STAGING_FOLDER", "STAGING_LOCK", "PrefixedResults", "ResultsDir",
@@ -300,6 +301,7 @@ class ResultsDir:
             "python": sys.version.split()[0],
             "platform": platform.platform(),
             "packages": package_versions(),
+            "environment": environment_record(),
             "config": config,
             "data_files": dict(sorted(self.data_files.items())),
             "splits": self.splits,
