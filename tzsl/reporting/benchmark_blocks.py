@@ -14,9 +14,10 @@ import pandas as pd
 from tzsl.exceptions import ConfigError
 from tzsl.reporting.markdown_cells import find_table, number, ours, signed
 
-__all__ = ["BEST_METHOD_FILE", "ENSEMBLE_CALIBRATION_FILES", "ESZSL_PUBLIC_FILE", "EXACT_SOLVER_FILES", "MissingResults",
-           "benchmark_accuracy_block", "benchmark_table", "best_method_block", "ensemble_calibration_block",
-           "eszsl_public_block", "exact_solver_threshold_block", "runs_by_purpose", "search_benchmark_block"]
+__all__ = ["BEST_METHOD_FILE", "ENSEMBLE_CALIBRATION_FILES", "ESZSL_PUBLIC_FILE", "EXACT_SOLVER_FILES",
+           "MissingResults", "benchmark_accuracy_block", "benchmark_table", "best_method_block",
+           "ensemble_calibration_block", "eszsl_public_block", "exact_solver_threshold_block", "runs_by_purpose",
+           "search_benchmark_block"]
 
 #: The decision CSV of ``experiments/benchmarks/phac2_best_method.py``.
 BEST_METHOD_FILE = "phac2_best_method.csv"
@@ -64,7 +65,8 @@ def benchmark_accuracy_block(results: str | Path) -> str:
             if r is None:
                 row += ["", ""]
                 continue
-            diff = "-" if pd.isna(r["diff_ci95_low"]) or r["method"] == "dap-avg[paper]" else signed(r["diff_vs_avgdap"], r["diff_ci95_low"], r["diff_ci95_high"])
+            diff = ("-" if pd.isna(r["diff_ci95_low"]) or r["method"] == "dap-avg[paper]"
+                    else signed(r["diff_vs_avgdap"], r["diff_ci95_low"], r["diff_ci95_high"]))
             row += [ours(r, "accuracy", "ci95_low", "ci95_high"), diff]
         lines.append(f"| `{method}` | " + " | ".join(row) + " |")
     grid = find_table(root, "grid_summary.csv")
@@ -86,12 +88,14 @@ def benchmark_accuracy_block(results: str | Path) -> str:
         lines += ["", "Each grid against the previous one on the same trials (`grid_pairs.csv`):", "",
                   "| grid | minus | splits | difference [95% interval] |", "|---|---|---|---|"]
         lines += [f"| `{r['method']}` | `{r['reference']}` | {int(r['n_splits'])} | {float(r['diff']):+.3f} "
-                  f"[{float(r['diff_ci95_low']):+.3f}, {float(r['diff_ci95_high']):+.3f}] |" for _, r in pairs.iterrows()]
+                  f"[{float(r['diff_ci95_low']):+.3f}, {float(r['diff_ci95_high']):+.3f}] |"
+                  for _, r in pairs.iterrows()]
     return "\n".join(lines)
 
 
 def _purpose(table: pd.DataFrame, kind: str) -> str:
-    """``", confirm, seed 1"``: which random splits the rows of ``kind`` in ``accuracy.csv`` are ("" when it does not say)."""
+    """``", confirm, seed 1"``: which random splits the rows of ``kind`` in ``accuracy.csv`` are ("" when it
+    does not say)."""
     if "purpose" not in table.columns:
         return ""
     rows = table[table["kind"] == kind]
@@ -275,8 +279,8 @@ def exact_solver_threshold_block(results: str | Path) -> str:
     if len(select):
         r = select.iloc[0]
         holds = bool(r["rule_holds"])
-        lines += ["", f"The rule, fixed before measuring: on the selection splits the approximate model's criterion may "
-                      f"be at most {float(r['rule_max_criterion_loss']):.2f} below the exact one's "
+        lines += ["", "The rule, fixed before measuring: on the selection splits the approximate model's criterion "
+                      f"may be at most {float(r['rule_max_criterion_loss']):.2f} below the exact one's "
                       f"({'holds' if holds else 'does not hold'}): "
                       + ("the exact-solver threshold is set below the template's training sets."
                          if holds else "the threshold stays where it was.")]

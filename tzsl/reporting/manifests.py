@@ -15,7 +15,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-__all__ = ["config_items", "dataset_names", "deviations", "is_paper_record", "read_manifest", "relaxations",
+__all__ = ["config_items", "dataset_names", "deviations", "dict_at", "is_paper_record", "read_manifest", "relaxations",
            "study_records"]
 
 #: The manifest key of the zero-shot study's settings by table (``"dap_settings"`` in manifests written
@@ -33,10 +33,16 @@ def read_manifest(path: Path) -> tuple[dict, str]:
         return {}, text
 
 
+def dict_at(record: dict, key: str) -> dict:
+    """``record[key]`` when it is a dict (a JSON object), else an empty dict."""
+    value = record.get(key)
+    return value if isinstance(value, dict) else {}
+
+
 def study_records(manifest: dict) -> dict[str, dict]:
     """Study name -> its record: the ``studies`` of a multi-study manifest, or the one study of a run
     (empty when the manifest names no study)."""
-    config = manifest.get("config") if isinstance(manifest.get("config"), dict) else {}
+    config = dict_at(manifest, "config")
     studies = config.get("studies")
     if isinstance(studies, dict):
         return {str(k): v for k, v in studies.items() if isinstance(v, dict)}
@@ -47,7 +53,7 @@ def is_paper_record(record: dict) -> bool:
     """Whether a study record is of a paper study (see the module docstring)."""
     from tzsl.studies.config import study_kinds  # noqa: PLC0415 (the registry imports the schemas)
 
-    labels = record.get("labels") if isinstance(record.get("labels"), dict) else {}
+    labels = dict_at(record, "labels")
     if labels.get("paper") is False:
         return False
     generic = {kind.preset_of for kind in study_kinds()} - {None}
@@ -58,7 +64,7 @@ def dataset_names(records: dict[str, dict]) -> list[str]:
     """The datasets the records ran on (``dataset`` or ``labels.data``), in order, once each."""
     names = []
     for record in records.values():
-        labels = record.get("labels") if isinstance(record.get("labels"), dict) else {}
+        labels = dict_at(record, "labels")
         name = record.get("dataset") or labels.get("data")
         if isinstance(name, str) and name:
             names.append(name)
@@ -70,7 +76,7 @@ def relaxations(records: dict[str, dict]) -> list[str]:
     those of a preset's generic part under ``zero_shot``)."""
     out = []
     for record in records.values():
-        nested = record.get("zero_shot") if isinstance(record.get("zero_shot"), dict) else {}
+        nested = dict_at(record, "zero_shot")
         for item in [*(record.get("relaxations") or []), *(nested.get("relaxations") or [])]:
             if not isinstance(item, dict):
                 continue
@@ -127,7 +133,7 @@ def _record_deviations(c: dict[str, Any], where: str) -> list[str]:
     if c.get("dataset"):
         out.append(f"Dataset and features: {c['dataset']} {where}.")
     if isinstance(c.get("n_features"), dict):
-        units = c.get("units") if isinstance(c.get("units"), dict) else {}
+        units = dict_at(c, "units")
         described = "; ".join(f"{k}: {v} features per {units.get(k, 'sample')}" for k, v in c["n_features"].items())
         out.append(f"Features used: {described} {where}.")
     if c.get("lams") is not None and c.get("alphas") is not None:
@@ -146,7 +152,7 @@ def deviations(manifests: dict[str, dict]) -> list[str]:
     """
     out: list[str] = []
     for name, manifest in manifests.items():
-        config = manifest.get("config") if isinstance(manifest.get("config"), dict) else {}
+        config = dict_at(manifest, "config")
         studies = study_records(manifest)
         for study, record in (studies if "studies" in config else {"": config}).items():
             out += _record_deviations(config_items(record), f"({name}: {study})" if study else f"({name})")

@@ -115,8 +115,9 @@ def _is_simulated_section(section: Section, tables: list[dict], manifests: dict[
 def _blocks(tables: list[dict], stems: list[str], figure_stems: list[str], png_by_stem: dict[str, Path],
             root: Path) -> list[dict]:
     """Tables with the figure of the same name beside them; other figures beside the first table."""
-    blocks = [{"tables": [t], "figures": [_figure_entry(png_by_stem[s], root)] if s in figure_stems else []}
-              for t, s in zip(tables, stems)]
+    blocks: list[dict[str, Any]] = [
+        {"tables": [t], "figures": [_figure_entry(png_by_stem[s], root)] if s in figure_stems else []}
+        for t, s in zip(tables, stems, strict=True)]
     loose = [_figure_entry(png_by_stem[s], root) for s in figure_stems if s not in stems]
     if blocks:
         blocks[0]["figures"] += loose
@@ -155,10 +156,10 @@ def _opening(root: Path, paper: bool, records: dict[str, dict], manifests: dict[
     """Title, the dataset card and the summary of a generic study (the title only, for the papers)."""
     names = dataset_names(records)
     if paper:
-        lists = [m.get("reproduce_studies") for m in manifests.values() if m.get("reproduce_studies")]
+        lists = [s for s in (m.get("reproduce_studies") for m in manifests.values()) if s]
         studies = ", ".join(lists[0] if lists else records) or root.resolve().name
-        return {"title": f"tzsl results: {studies}", "dataset": None, "description": None, "card": [], "card_note": None,
-                "summary": [], "relaxed": []}
+        return {"title": f"tzsl results: {studies}", "dataset": None, "description": None, "card": [],
+                "card_note": None, "summary": [], "relaxed": []}
     data_files = {k: v for m in manifests.values() for k, v in (m.get("data_files") or {}).items()}
     card, note = dataset_card_items(next(iter(records.values())), data_files) if len(records) == 1 else ([], None)
     descriptions = [m.get("description") for m in manifests.values() if m.get("description")]
@@ -253,4 +254,8 @@ def write_report(folder: str | os.PathLike, out: str | os.PathLike | None = None
     if target.exists() and not force:
         raise ConfigError(f"{target} already exists; use --force to overwrite it or choose another --out")
     page = render_report(folder, exclude=[target])
-    return atomic_write(target, lambda p: p.write_text(page, encoding="utf-8"))
+
+    def write(p: Path) -> None:  # atomic_write's writer returns nothing
+        p.write_text(page, encoding="utf-8")
+
+    return atomic_write(target, write)

@@ -72,9 +72,9 @@ SECTIONS: tuple[Section, ...] = (
             "one region of the map ({n_objects} unseen classes per split); MAXDAP and AVGDAP.",
             tables=("table3_challenging", "object_map"), figures=("object_map",),
             paper_title="DAP paper, Table 3 and Fig. 3: challenging splits",
-            paper_what="{n_splits} splits from a 2-D PCA map of the objects' haptic features, each testing on one region "
-                       "of the map ({n_objects} test objects per split); MAXDAP and AVGDAP; partition numbering is "
-                       "arbitrary, so only the means compare with the paper (which reports AVGDAP only)."),
+            paper_what="{n_splits} splits from a 2-D PCA map of the objects' haptic features, each testing on one "
+                       "region of the map ({n_objects} test objects per split); MAXDAP and AVGDAP; partition "
+                       "numbering is arbitrary, so only the means compare with the paper (which reports AVGDAP only)."),
     Section("attributes", "Attribute accuracy: how well each attribute is recognised on unseen classes",
             "Test accuracy of every attribute classifier over the random splits and sensors; balanced "
             "accuracy is the headline, beside the per-attribute majority baseline.",

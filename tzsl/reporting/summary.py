@@ -15,11 +15,13 @@ whether any method's interval clears chance; the settings the run relaxed follow
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
 from tzsl._io import file_sha256
 from tzsl.reporting.best_method import KIND_COLUMN, best_rows, split_kinds
+from tzsl.reporting.manifests import dict_at
 from tzsl.reporting.sections import POOLED_ROWS
 
 __all__ = ["dataset_card_items", "headline"]
@@ -28,12 +30,12 @@ __all__ = ["dataset_card_items", "headline"]
 PLAIN_FILES = ("classes.csv", "trials.csv", "trials.parquet", "dataset.toml")
 
 
-def _setting(record: dict, section: str, key: str, default: object) -> object:
+def _setting(record: dict, section: str, key: str, default: Any) -> Any:
     """A run's setting ``section.key``, as relaxed when the run relaxed it."""
     for item in record.get("relaxations") or []:
         if isinstance(item, dict) and item.get("setting") == f"{section}.{key}" and "used" in item:
             return item["used"]
-    settings = record.get("settings") if isinstance(record.get("settings"), dict) else {}
+    settings = dict_at(record, "settings")
     return (settings.get(section) or {}).get(key, default)
 
 

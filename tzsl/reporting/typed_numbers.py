@@ -46,7 +46,8 @@ DEFINITIONS = re.compile(r"\b95\s?%|\b50% (?:attribute )?prior|\bdefault\b|Pytho
 #: ``(file, fragment of the line)`` -> why the number there is not a measurement of tzsl's.
 ALLOWED: dict[tuple[str, str], str] = {
     ("examples/plot_3_calibration.py", "about 80% should be right"): "what calibration means (definition)",
-    ("tzsl/datasets/_hand_simulator.py", "in [20%, 40%] of the recording"): "the simulator's contact window (definition)",
+    ("tzsl/datasets/_hand_simulator.py", "in [20%, 40%] of the recording"):
+        "the simulator's contact window (definition)",
     ("tzsl/datasets/_hand_simulator.py", "first 20% of rows"): "the simulator's baseline rows (definition)",
     ("tzsl/datasets/_phac2_hold_mat.py", "hold the 10 s thermal-hold EP"): "the recording protocol of the data",
     ("tzsl/benchmarks/bench_scale.py", "0.2 s with psutil"): "the benchmark's sampling period (definition)",
@@ -55,15 +56,18 @@ ALLOWED: dict[tuple[str, str], str] = {
     ("tzsl/features/_grasp_features.py", "(0.1 s at 100 Hz)"): "the baseline window (definition)",
     ("tzsl/features/_keyframes.py", "10 % onset criterion"): "the onset criterion (definition)",
     ("tzsl/features/_texture.py", "(0.1 at downsample 2 = 0.05 cycles"): "filter frequencies (definition)",
-    ("tzsl/features/_texture.py", "dropouts, ~0.4 % of pixels"): "a property of the data files that motivates the robust range",
+    ("tzsl/features/_texture.py", "dropouts, ~0.4 % of pixels"):
+        "a property of the data files that motivates the robust range",
     ("tzsl/features/_texture.py", "ignores up to 1 % outliers"): "the robust range's quantiles (definition)",
     ("tzsl/models/_attribute_svm.py", "``gamma`` in [0.01, 1] tuned by"): "the DAP paper's protocol (citation)",
     ("tzsl/models/_attribute_svm.py", "gives the decades 1, 10, 100 and 0.01, 0.1, 1"): "grid points (definition)",
     ("tzsl/models/_attribute_svm.py", "(0.001, 0.0001 for the"): "grid points (definition)",
     ("tzsl/models/_attribute_training.py", "(0.001 and"): "grid points (definition)",
     ("tzsl/models/_attribute_training.py", "0.0001 for the paper's range"): "grid points (definition)",
-    ("tzsl/models/_attribute_training.py", "edge 0.01, and with about 25"): "the grid's edge and PCA's cap (definitions)",
-    ("tzsl/models/_posterior_calibration.py", "T from about 0.007 to 150"): "the search bounds of the constant (definition)",
+    ("tzsl/models/_attribute_training.py", "edge 0.01, and with about 25"):
+        "the grid's edge and PCA's cap (definitions)",
+    ("tzsl/models/_posterior_calibration.py", "T from about 0.007 to 150"):
+        "the search bounds of the constant (definition)",
 }
 
 #: Where numbers are published (globs relative to the repository root).
@@ -92,7 +96,7 @@ def scanned_files(root: Path) -> list[Path]:
 def _markdown_prose(text: str) -> list[tuple[int, str]]:
     """(line number, line) of Markdown outside fenced code, indented code and generated blocks."""
     lines = text.splitlines()
-    skip = set()
+    skip: set[int] = set()
     for start, stop in block_spans(text):
         skip.update(range(start, stop + 1))
     fenced = False
