@@ -180,8 +180,9 @@ class FitStore:
         text = repr((code_digest(), described, data_digests))
         return hashlib.sha256(text.encode()).hexdigest()
 
-    def _path(self, key: str) -> Path:
-        return self.folder / key[:2] / f"{key}{STORE_SUFFIX}"
+    @staticmethod
+    def _path(folder: Path, key: str) -> Path:
+        return folder / key[:2] / f"{key}{STORE_SUFFIX}"
 
     def load(self, key: str | None, template=None):
         """The stored fit of ``key`` (its warnings raised again), or None when there is none.
@@ -190,7 +191,7 @@ class FitStore:
         """
         if key is None or self.folder is None:
             return None
-        path = self._path(key)
+        path = self._path(self.folder, key)
         try:
             with open(path, "rb") as fh:
                 entry = pickle.load(fh)
@@ -211,7 +212,7 @@ class FitStore:
         if key is None or self.folder is None:
             return
         entry = {"estimator": fitted, "warnings": caught, "seconds": float(seconds)}
-        atomic_write(self._path(key), lambda p: p.write_bytes(pickle.dumps(entry, protocol=5)))
+        atomic_write(self._path(self.folder, key), lambda p: p.write_bytes(pickle.dumps(entry, protocol=5)))
 
 
 def resolve_store(memory=None) -> FitStore:

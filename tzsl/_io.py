@@ -50,7 +50,7 @@ def ensure_folder(folder: str | Path, what: str = "output folder") -> Path:
     return folder
 
 
-def atomic_write(path: str | Path, write: Callable[[Path], None]) -> Path:
+def atomic_write(path: str | Path, write: Callable[[Path], object]) -> Path:
     """Call ``write(tmp_path)`` and move the result to ``path`` atomically.
 
     The file gets the permissions a plain ``open(path, "w")`` would give (``0o666`` minus the
@@ -94,7 +94,7 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
     return atomic_write(path, lambda tmp: Path(tmp).write_bytes(data))
 
 
-def file_sha256(path: str | Path) -> str:
+def file_sha256(path: str | os.PathLike[str]) -> str:
     """Hex sha256 of a file's bytes."""
     digest = hashlib.sha256()
     with open(path, "rb") as fh:
@@ -142,7 +142,8 @@ def _declared(fh: IO[bytes]) -> tuple[tuple[int, ...], bool, np.dtype, int]:
     return shape, fortran, dtype, fh.tell()
 
 
-def _read_member(fh: IO[bytes], info: zipfile.ZipInfo, where, before: int, limit: int) -> tuple[str, np.ndarray, int]:
+def _read_member(fh: IO[bytes], info: zipfile.ZipInfo, where: str | Path, before: int,
+                 limit: int) -> tuple[str, np.ndarray, int]:
     """Key, array and byte size of one open ``.npz`` member, its header checked before any allocation.
 
     ``before``: bytes of the members already read (the ``limit`` is on the total).
@@ -162,7 +163,7 @@ def _read_member(fh: IO[bytes], info: zipfile.ZipInfo, where, before: int, limit
                             f"({nbytes:,} bytes) but holds {info.file_size - header_size:,}: the file "
                             "is truncated or corrupt")
     data = bytearray(nbytes)  # writable, like np.load's arrays
-    if fh.readinto(data) != nbytes:
+    if fh.readinto(data) != nbytes:  # type: ignore[attr-defined]  # buffered readers; typeshed's IO lacks it
         raise EOFError(f"array {info.filename!r} ends before its {nbytes:,} bytes")
     key = info.filename[: -len(".npy")] if info.filename.endswith(".npy") else info.filename
     return key, np.frombuffer(data, dtype=dtype).reshape(shape, order="F" if fortran else "C"), nbytes
@@ -196,7 +197,8 @@ def read_npz(source: str | Path | IO[bytes], *, name: str | Path | None = None,
     DataFileError
         Missing, not a zip archive, truncated, corrupt, pickled or too large (one line).
     """
-    where = name if name is not None else source
+    # a file object has no path: messages name it as str() shows it (what DataFileError prints)
+    where = name if name is not None else source if isinstance(source, (str, Path)) else str(source)
     limit = max_npz_bytes() if limit is None else limit
     try:
         arrays, total = {}, 0

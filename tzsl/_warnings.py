@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import re
 import warnings
+from collections.abc import Callable
 from types import TracebackType
 
 __all__ = ["TerminalWarnings", "one_line", "recorded_warnings", "warning_kind"]
@@ -39,22 +40,23 @@ class recorded_warnings:
 
     def __init__(self) -> None:
         self._counts: dict[str, int] = {}
-        self._previous = None
+        self._previous: Callable[..., None] | None = None  # warnings.showwarning while the block runs
 
     def __enter__(self) -> recorded_warnings:
-        self._previous = warnings.showwarning
+        previous = self._previous = warnings.showwarning
 
         def show(message, category, filename, lineno, file=None, line=None):
             text = one_line(message, category)[len("tzsl: warning: "):]
             self._counts[text] = self._counts.get(text, 0) + 1
-            self._previous(message, category, filename, lineno, file, line)
+            previous(message, category, filename, lineno, file, line)
 
         warnings.showwarning = show
         return self
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
                  tb: TracebackType | None) -> None:
-        warnings.showwarning = self._previous
+        if self._previous is not None:
+            warnings.showwarning = self._previous
 
     @property
     def lines(self) -> list[str]:

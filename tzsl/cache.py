@@ -234,7 +234,7 @@ class PruneReport:
     now: float
 
 
-def _folder_size(path: str | os.PathLike) -> int:
+def _folder_size(path: str | os.PathLike[str]) -> int:
     total = 0
     for folder, _dirs, files in os.walk(path):
         for name in files:
@@ -264,7 +264,7 @@ def _scan_part(root: Path, part: str) -> list[CacheEntry]:
     return entries
 
 
-def _scandir(folder: str | os.PathLike) -> list[os.DirEntry]:
+def _scandir(folder: str | os.PathLike[str]) -> list[os.DirEntry[str]]:
     try:
         with os.scandir(folder) as items:
             return list(items)
