@@ -143,7 +143,7 @@ def ep_masks(trial: RawTrial, eps: Sequence[str]) -> np.ndarray:
     if (counts == 0).any():
         absent = ", ".join(
             f"{eps[e]!r} (controller_detail_state {str(states[e])!r})"
-            for e in np.flatnonzero(counts == 0)
+            for e in np.flatnonzero(counts == 0).tolist()
         )
         raise trial_error(
             trial, f"exploratory procedure {absent} is absent: no row of the trial carries that state"
@@ -158,7 +158,7 @@ def check_baseline_rows(baseline_rows: object) -> int:
     return int(baseline_rows)
 
 
-def biotac_baseline(finger: BiotacSignals, baseline_rows: int = 100) -> dict[str, np.ndarray]:
+def biotac_baseline(finger: BiotacSignals, baseline_rows: int = 100) -> dict[str, np.float64 | np.ndarray]:
     """Baseline of every signal of one BioTac: the mean of its first ``baseline_rows`` rows.
 
     Parameters

@@ -101,6 +101,7 @@ def load_features(builtin: str | None = None, *, features_file: str | os.PathLik
         features = read_feature_table(Path(features_file))
         features.info.setdefault("data_files", [str(features_file)])
         return features
+    assert plain is not None  # exactly one source is given (checked above)
     features = load_plain_dataset(Path(plain), min_objects=min_objects, **plain_options)
     features.info.setdefault("data_files", sorted(str(p) for p in Path(plain).rglob("*") if p.is_file()))
     return features

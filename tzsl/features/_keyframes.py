@@ -315,8 +315,10 @@ class KeyFrameSelector(TransformerMixin, BaseEstimator):
         self._validate()
         if isinstance(video, (str, os.PathLike)):
             source = source or str(video)
-            video = read_video(Path(video))
-        video = _check_video(video, source)
+            frames = read_video(Path(video))
+        else:
+            frames = video
+        video = _check_video(frames, source)
         diff = frame_differences(video, self.measure, source=source)
         idx = key_frame_indices(
             diff,

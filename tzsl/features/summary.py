@@ -2,12 +2,27 @@
 
 from __future__ import annotations
 
+from typing import TypedDict
+
 from tzsl.datasets import FeatureSet
 
-__all__ = ["format_summary", "summarise"]
+__all__ = ["FeatureSummary", "format_summary", "summarise"]
 
 
-def summarise(features: FeatureSet) -> dict[str, object]:
+class FeatureSummary(TypedDict):
+    """What :func:`summarise` returns (a plain dict with these keys)."""
+
+    dataset: str
+    trials: int
+    objects: int
+    sensors: int
+    sensor_names: list[str]
+    dimensions: int
+    kept_attributes: list[str]
+    dropped_attributes: list[str]
+
+
+def summarise(features: FeatureSet) -> FeatureSummary:
     """What ``tzsl extract`` prints: counts, dimensions, kept and dropped attributes."""
     return {
         "dataset": features.dataset,
@@ -21,7 +36,7 @@ def summarise(features: FeatureSet) -> dict[str, object]:
     }
 
 
-def format_summary(summary: dict[str, object]) -> str:
+def format_summary(summary: FeatureSummary) -> str:
     """Human-readable lines of :func:`summarise`."""
     kept = summary["kept_attributes"]
     dropped = summary["dropped_attributes"]
@@ -34,4 +49,3 @@ def format_summary(summary: dict[str, object]) -> str:
         f"attributes: {len(kept)} kept: {', '.join(kept)}",
         f"dropped:    {len(dropped)} ({', '.join(dropped) if dropped else 'none'})",
     ])
-
