@@ -148,7 +148,7 @@ def _vgg16_modules() -> tuple[nn.Sequential, nn.Sequential]:
     layers: list[nn.Module] = []
     channels = 3
     for v in _VGG16_CFG:
-        if v == "M":
+        if isinstance(v, str):  # "M": max pooling
             layers.append(nn.MaxPool2d(2, 2))
         else:
             layers += [nn.Conv2d(channels, v, 3, padding=1), nn.ReLU(inplace=True)]
@@ -293,7 +293,7 @@ def build_backbone(name: str, weights_path=None, *, load_weights: bool = True) -
             path = Path(weights_path)
         elif bundled:
             path = bundled_weights_path(name)
-        else:
+        if path is None:
             raise ConfigError(
                 f"backbone {name!r} has no weights shipped with tzsl: give weights_path, a local "
                 "file with the ImageNet weights (torchvision key names)"

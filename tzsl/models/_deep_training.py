@@ -25,10 +25,13 @@ Pixel and CNN-feature standardisation statistics are computed once on all traini
 from __future__ import annotations
 
 import hashlib
+import os
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from tzsl._io import atomic_write
 from tzsl.exceptions import ConfigError
@@ -55,9 +58,25 @@ class DeepTrainingMixin:
     """Training of :class:`~tzsl.models.DeepAttributeEmbedding` (see the module docstring) and its
     frozen CNN features (computed once per fit, cached in memory and on disk)."""
 
-    def _fit_torch(self, torch, X, y_u, S_u, weights, seed, fingerprint) -> None:
-        from tqdm.auto import tqdm  # noqa: PLC0415
+    if TYPE_CHECKING:  # what the estimator provides: its parameters and network helpers (declared, never set here)
+        backbone: str
+        epochs: int
+        batch_size: int
+        early_stopping: bool
+        checkpoint_dir: str | os.PathLike[str] | None
+        cache_dir: str | os.PathLike[str] | None
+        resume: bool
+        verbose: bool
+        device: str
 
+        def _build_net(self, n_attributes: int, n_channels: int, *, load_weights: bool = True) -> Any: ...
+        def _n_trainable(self, net: Any) -> int: ...
+        def _train_mode(self, net: Any) -> None: ...
+        def _make_optimizer(self, net: Any) -> Any: ...
+        def _stored_state(self, net: Any) -> dict: ...
+        def _load_stored_state(self, net: Any, state: dict, what: str, error: type[Exception] = ...) -> None: ...
+
+    def _fit_torch(self, torch, X, y_u, S_u, weights, seed, fingerprint) -> None:
         net = self._build_net(S_u.shape[1], X.shape[-1]).to(self.device)
         mean, std = pixel_stats(X)
         net.pixel_mean.copy_(torch.as_tensor(mean, dtype=torch.float32).reshape(1, -1, 1, 1))
@@ -211,8 +230,6 @@ class DeepTrainingMixin:
 
     def _compute_features(self, net, X: np.ndarray):
         torch = require_torch()
-        from tqdm.auto import tqdm  # noqa: PLC0415
-
         n, t = X.shape[:2]
         out = torch.empty(n, t, net.backbone.out_features)
         net.eval()

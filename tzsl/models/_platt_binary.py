@@ -4,6 +4,8 @@ posterior with a Platt sigmoid (:class:`~tzsl.models.AttributeSVM`,
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from scipy.special import expit
 from sklearn.utils.validation import check_is_fitted
@@ -20,6 +22,13 @@ class PlattBinaryClassifierMixin:
     before :class:`~sklearn.base.ClassifierMixin` in the bases. ``name`` (an attribute name or
     None) labels messages.
     """
+
+    if TYPE_CHECKING:  # what the class provides (declared, never set here)
+        name: str | None
+        platt_: tuple[float, float]
+        classes_: np.ndarray
+
+        def svm_score(self, X) -> np.ndarray: ...
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
