@@ -114,10 +114,11 @@ def ep_column_blocks(feature_names: Sequence[str], eps: Sequence[str] | None = N
     dict of str -> int ndarray
         Column indices of each EP's block.
     """
-    prefixes = [str(n).partition(":")[0] if ":" in str(n) else None for n in feature_names]
-    if None in prefixes:
-        bad = feature_names[prefixes.index(None)]
-        raise ConfigError(f"feature name {bad!r} has no '<ep>:' prefix; per-EP models need EP-prefixed features")
+    unprefixed = [n for n in feature_names if ":" not in str(n)]
+    if unprefixed:
+        raise ConfigError(f"feature name {unprefixed[0]!r} has no '<ep>:' prefix; per-EP models need EP-prefixed "
+                          "features")
+    prefixes = [str(n).partition(":")[0] for n in feature_names]
     order = list(dict.fromkeys(prefixes)) if eps is None else list(eps)
     blocks = {ep: np.flatnonzero(np.array(prefixes) == ep) for ep in order}
     empty = [ep for ep, cols in blocks.items() if cols.size == 0]

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import os
 import warnings
+from collections.abc import Iterable
 from numbers import Integral
 
 import numpy as np
@@ -441,7 +442,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         if X.shape[0] >= PARALLEL_PREDICT_TRIALS and self.n_jobs not in (None, 1):
             per_sensor = [np.ascontiguousarray(X[:, k, :]) for k in range(self.n_sensors_)]  # each shipped once
             tasks = [delayed(_positive_posterior)(self.estimators_[j][k], per_sensor[k]) for j, k in pairs]
-            columns = self._run_fits(tasks, "attribute posteriors")
+            columns: Iterable[np.ndarray] = self._run_fits(tasks, "attribute posteriors")
         else:
             columns = (_positive_posterior(self.estimators_[j][k], X[:, k, :]) for j, k in pairs)
         for (j, k), column in zip(pairs, columns, strict=True):

@@ -143,7 +143,7 @@ def successive_halving(
         The survivors, whose out-of-fold scores cover every training trial. Ties keep the
         earliest configuration in (draw, gamma, C) order.
     """
-    alive = np.ones(shape, dtype=bool)
+    alive: np.ndarray = np.ones(shape, dtype=bool)  # its shape changes: flat, then ``shape`` again
     schedules = [halving_rounds(f, factor) for f in n_folds]
     seen = np.zeros(shape[0], dtype=int)
     for step in range(max(len(s) for s in schedules)):

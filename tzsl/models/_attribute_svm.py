@@ -353,9 +353,12 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
                 todo = [(ci, key) for ci, key in zip(cis, keys, strict=True) if key not in fits]
                 if todo:
                     Kd = kernel(di, gi, False)
-                    tr, te = fold_index[f] if f >= 0 else (None, None)
-                    K_fit, K_eval = (Kd, kernel(di, gi, True)) if f < 0 else (Kd[np.ix_(tr, tr)], Kd[np.ix_(te, tr)])
-                    y_fit, w = (y_draw, w_full) if f < 0 else (y_draw[tr], fold_w[f])
+                    if f < 0:  # the trials outside the draw, by a fit on the whole draw
+                        K_fit, K_eval, y_fit, w = Kd, kernel(di, gi, True), y_draw, w_full
+                    else:
+                        tr, te = fold_index[f]
+                        K_fit, K_eval = Kd[np.ix_(tr, tr)], Kd[np.ix_(te, tr)]
+                        y_fit, w = y_draw[tr], fold_w[f]
                     for ci, key in todo:
                         fits[key] = svc_fit_decision(K_fit, y_fit, Cs[ci], w, K_eval)
                 rows = out if f < 0 else idx[fold_index[f][1]]

@@ -74,9 +74,10 @@ def loss_weights(lam, owner: str | None = None) -> tuple[float, float]:
         if lam.strip().lower() in ("inf", "infinity"):
             return 0.0, 1.0
         raise ConfigError(f'{prefix}lam must be a number >= 0 or "inf", got {lam!r}')
-    if not isinstance(lam, numbers.Real) or isinstance(lam, bool) or np.isnan(lam) or lam < 0:
+    if (not isinstance(lam, numbers.Real) or isinstance(lam, bool)
+            or np.isnan(lam) or lam < 0):  # type: ignore[call-overload]  # numpy's stub omits numbers.Real
         raise ConfigError(f'{prefix}lam must be a number >= 0 or "inf", got {lam!r}')
-    if np.isinf(lam):
+    if np.isinf(lam):  # type: ignore[call-overload]  # numpy's stub omits numbers.Real
         return 0.0, 1.0
     return 1.0, float(lam)
 

@@ -321,7 +321,8 @@ class HandDAPClassifier(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         self.classes_ = np.array(pd.unique(y), dtype=object)
         groups = self._touching(contact)
         # what the training grasps can teach: an attribute a label of which has < 2 grasps somewhere is left out
-        self.left_out_attributes_, self.relaxations_ = {}, []
+        self.left_out_attributes_: dict[str, str] = {}
+        self.relaxations_: list[str] = []
         rows = K.loc[self.classes_, mat_attrs + shape_attrs].astype(int)
         A = rows.loc[y].to_numpy()
         folds = {name: [self._calibration_folds(A[grasp, j], name, where) for grasp, _, where in groups]
@@ -341,7 +342,8 @@ class HandDAPClassifier(ValidatedParamsMixin, ClassifierMixin, BaseEstimator):
         seeds = rng.randint(np.iinfo(np.int32).max, size=4)
 
         # material: one PCA + calibrated linear SVM per attribute, per finger (or pooled)
-        jobs, self._material_keys = [], []
+        jobs: list[tuple] = []
+        self._material_keys: list[object] = []  # never filled nor read (fitted models carry it)
         for g, (grasp, finger, where) in enumerate(groups):
             Xb, Ab = material[grasp, finger], A[grasp, : len(mat_attrs)]
             for j, name in enumerate(mat_attrs):

@@ -59,7 +59,8 @@ LINEAR_LOSSES = ("log_loss", "squared_hinge")
 TRIAL_WEIGHTINGS = ("class", "object", "robust")
 
 
-def _linear_fit(loss: str, C: float, Z: np.ndarray, yb: np.ndarray, w: np.ndarray, seed: int):
+def _linear_fit(loss: str, C: float, Z: np.ndarray, yb: np.ndarray, w: np.ndarray,
+                seed: int) -> LogisticRegression | LinearSVC:
     """The fitted sklearn linear model of ``loss`` on ``Z`` (n, d) with 0/1 targets and trial weights ``w``."""
     if loss == "log_loss":
         model = LogisticRegression(C=C, solver="newton-cholesky", max_iter=1000)
@@ -222,7 +223,8 @@ class LinearAttribute(PlattBinaryClassifierMixin, ValidatedParamsMixin, Classifi
         rounds = self.robust_rounds if robust and self.weighting == "robust" else 0
         return robust_object_weights(self.loss, C, Z, yb, groups, rounds, self.robust_step, seed)
 
-    def _fit_weighted(self, C: float, Z, yb, groups, seed: int, robust: bool = True) -> tuple[object, np.ndarray]:
+    def _fit_weighted(self, C: float, Z, yb, groups, seed: int,
+                      robust: bool = True) -> tuple[LogisticRegression | LinearSVC, np.ndarray]:
         w = self._weights(C, Z, yb, groups, seed, robust)
         return _linear_fit(self.loss, C, Z, yb, w, seed), w
 

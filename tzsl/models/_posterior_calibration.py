@@ -53,6 +53,7 @@ from __future__ import annotations
 
 import warnings
 from numbers import Integral
+from typing import Any
 
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -190,7 +191,7 @@ def calibration_subsample(codes: np.ndarray, groups, max_trials: int | None, rng
 
 
 def pseudo_unseen_scores(estimator, X, Y, groups=None, *, n_folds: int = 3, random_state=None,
-                         score=None, max_trials: int | None = None) -> list[tuple[object, np.ndarray]]:
+                         score=None, max_trials: int | None = None) -> list[tuple[Any, np.ndarray, int]]:
     """Refit on training classes minus a held-out group; score the held-out classes among themselves.
 
     Parameters

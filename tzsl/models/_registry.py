@@ -66,7 +66,7 @@ ESZSL_PAPER = "Romera-Paredes, Torr (2015): An embarrassingly simple approach to
 _REGISTRY: dict[str, Method] = {}
 
 
-def _init_defaults(cls: type) -> dict[str, object]:
+def _init_defaults(cls: type[object]) -> dict[str, object]:
     """Keyword parameters of ``cls.__init__`` with their defaults, in signature order."""
     sig = inspect.signature(cls.__init__)
     return {
@@ -122,6 +122,7 @@ class Method:
         """Classes whose parameters the method exposes (estimator, or model then rule)."""
         if self.estimator is not None:
             return [self.estimator]
+        assert self.attribute_model is not None and self.decision_rule is not None  # register_method checks it
         return [self.attribute_model, self.decision_rule]
 
     def parameters(self) -> dict[str, object]:
@@ -173,9 +174,10 @@ class Method:
         else:
             from tzsl.models._zero_shot import ZeroShotClassifier  # noqa: PLC0415 (import cycle)
 
-            model_keys, rule_keys = _init_defaults(self.attribute_model), _init_defaults(self.decision_rule)
-            model = self.attribute_model(**{k: v for k, v in merged.items() if k in model_keys})
-            rule = self.decision_rule(**{k: v for k, v in merged.items() if k in rule_keys and k not in model_keys})
+            model_cls, rule_cls = self.components()
+            model_keys, rule_keys = _init_defaults(model_cls), _init_defaults(rule_cls)
+            model = model_cls(**{k: v for k, v in merged.items() if k in model_keys})
+            rule = rule_cls(**{k: v for k, v in merged.items() if k in rule_keys and k not in model_keys})
             bare = ZeroShotClassifier(attribute_model=model, decision_rule=rule,
                                       random_state=merged.get("random_state"))
         if not self.calibratable:

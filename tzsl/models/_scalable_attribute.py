@@ -353,15 +353,16 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
         a, b = fit_platt_many(flat, yb, w_cal)  # every configuration's sigmoid in one Newton solve
         z = a[:, None] * flat + b[:, None]
         crit = (-(w_cal * np.where(yb, log_expit(z), log_expit(-z))).sum(axis=1) / w_cal.sum()).reshape(oof.shape[:3])
-        di, gi, ci = np.unravel_index(int(np.argmin(crit)), crit.shape)
-        return int(di), int(gi), int(ci), crit, oof[di, gi, ci].copy(), w_cal, full[di, gi]
+        di, gi, ci = (int(i) for i in np.unravel_index(int(np.argmin(crit)), crit.shape))
+        return di, gi, ci, crit, oof[di, gi, ci].copy(), w_cal, full[di, gi]
 
     def _fit(self, X, yb, groups, rng) -> None:
         n = yb.size
         pre = _fitted_preprocessor(self.preprocessor if self.preprocessor is not None else default_preprocessor(), X)
         Z = np.asarray(pre.transform(X), dtype=np.float64)
-        Cs = np.geomspace(*self.C_range, self.n_C)
-        gammas = np.geomspace(*self.gamma_range, self.n_gamma)
+        (C_low, C_high), (gamma_low, gamma_high) = self.C_range, self.gamma_range  # pairs (checked in fit)
+        Cs = np.geomspace(C_low, C_high, self.n_C)
+        gammas = np.geomspace(gamma_low, gamma_high, self.n_gamma)
         draws, _ = balanced_object_draws(yb, groups, self.n_draws if self.undersampling == "select" else 0, rng)
         fold_seed = int(rng.randint(np.iinfo(np.int32).max))
         map_seed = int(rng.randint(np.iinfo(np.int32).max))

@@ -136,7 +136,11 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
             raise ConfigError("ScoreEnsembleZSL: methods is empty")
         if self.weights is not None:
             w = np.asarray(self.weights, dtype=object).ravel()
-            if w.size != len(self.methods) or not all(isinstance(v, Real) and v >= 0 for v in w) or not sum(w) > 0:
+            if (w.size != len(self.methods)
+                    or not all(isinstance(v, Real)
+                               and v >= 0  # type: ignore[operator]  # typeshed's numbers.Real lacks __ge__
+                               for v in w)
+                    or not sum(w) > 0):
                 raise ConfigError(f"ScoreEnsembleZSL: weights must be {len(self.methods)} non-negative numbers "
                                   f"with a positive sum, got {self.weights!r}")
 

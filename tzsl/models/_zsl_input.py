@@ -330,7 +330,7 @@ def check_positive(value, name: str, est_name: str, *, allow_zero: bool = False)
     if (
         not isinstance(value, numbers.Real)
         or isinstance(value, bool)
-        or not np.isfinite(value)
+        or not np.isfinite(value)  # type: ignore[call-overload]  # numpy's stub omits numbers.Real
         or value < 0
         or (value == 0 and not allow_zero)
     ):
