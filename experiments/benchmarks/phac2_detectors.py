@@ -15,8 +15,9 @@ uniform prior:
 Per split and detector: trial accuracy, the accuracy with each attribute's errors made independent
 of the other attributes' (:func:`accuracy_if_independent`), mean attribute balanced accuracy on the test objects,
 the within-object correlation of attribute errors (:func:`tzsl.evaluation.within_object_error_correlation`,
-0/1 errors of the sensor-averaged posterior; over objects and, ``_trial``, over trials), the share of (attribute, sensor) fits whose ``C``
-sits at an end of the final grid, CPU seconds of the fits, and for ``auto`` the family chosen.
+0/1 errors of the sensor-averaged posterior; over objects and, ``_trial``, over trials), the share of
+(attribute, sensor) fits whose ``C`` sits at an end of the final grid, CPU seconds of the fits, and for
+``auto`` the family chosen.
 Output: ``detectors.csv`` (one row per split and detector) and ``detectors_summary.csv`` (mean
 per split kind and detector, with the paired difference to ``rbf-svm`` and its two-level
 bootstrap 95% interval)::
@@ -140,11 +141,12 @@ def summary(rows: pd.DataFrame) -> pd.DataFrame:
         ref = sub[sub["detector"] == reference].set_index("split")
         for label, part in sub.groupby("detector", sort=False):
             part = part.set_index("split").loc[ref.index]
-            cat = lambda col: np.concatenate(part[col].to_list())  # noqa: E731
-            splits = np.concatenate([np.full(len(c), s) for s, c in zip(part.index, part["correct"])])
-            acc = bootstrap_accuracy(cat("correct"), classes=cat("classes"), splits=splits)
-            diff = paired_difference_interval(cat("correct"), np.concatenate(ref["correct"].to_list()),
-                                              classes=cat("classes"), splits=splits)
+            correct = np.concatenate(part["correct"].to_list())
+            classes = np.concatenate(part["classes"].to_list())
+            splits = np.concatenate([np.full(len(c), s) for s, c in zip(part.index, part["correct"], strict=True)])
+            acc = bootstrap_accuracy(correct, classes=classes, splits=splits)
+            diff = paired_difference_interval(correct, np.concatenate(ref["correct"].to_list()),
+                                              classes=classes, splits=splits)
             out.append({"kind": kind, "detector": label, "splits": len(part), "accuracy": acc[0],
                         "ci95_low": acc[1], "ci95_high": acc[2], f"minus_{reference}": diff[0],
                         "diff_low": diff[1], "diff_high": diff[2], "attribute_bacc": part["attribute_bacc"].mean(),
@@ -175,8 +177,10 @@ def main() -> None:
     for kind, index, split in study_splits(features, args.n_random, args.seed, args.purpose):
         if (args.no_challenging and kind == "challenging") or (args.no_random and kind == "random"):
             continue
-        config = ZeroShotSettings.of_preset("phac2-dap", splits={"n_splits": args.n_random, "seed": args.seed, "purpose": args.purpose},
-                             compute={"cache": False, "n_jobs": 1, "progress": False}, svm={"cv": 5})
+        config = ZeroShotSettings.of_preset("phac2-dap",
+                                            splits={"n_splits": args.n_random, "seed": args.seed,
+                                                    "purpose": args.purpose},
+                                            compute={"cache": False, "n_jobs": 1, "progress": False}, svm={"cv": 5})
         rows += [{"kind": kind, **r} for r in score_split(features, split, config, index, args.detectors, args.out)]
         table = pd.DataFrame(rows)
         table.drop(columns=["correct", "classes"]).to_csv(args.out / "detectors.csv", index=False)  # after each split
