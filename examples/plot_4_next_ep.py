@@ -34,7 +34,7 @@ n_classes, n_features = 24, 6
 K, cls, X_views = synthetic_dataset_arrays(480, n_classes=n_classes, n_attributes=10, n_sensors=len(eps),
                                            n_features=n_features, seed=0)
 # Extra noise makes the EPs unequally informative (the cheap fast slide the noisiest).
-extra_noise = dict(zip(eps, [0.0, 0.5, 1.0, 2.0]))
+extra_noise = dict(zip(eps, [0.0, 0.5, 1.0, 2.0], strict=True))
 rng = np.random.default_rng(0)
 X_views = X_views + np.array([extra_noise[ep] for ep in eps])[None, :, None] * rng.normal(size=X_views.shape)
 X = X_views.reshape(len(X_views), 1, -1)  # (n_trials, 1 sensor, 4 EPs x 6 features)

@@ -2,8 +2,9 @@
 
 Nothing here is typed by hand: the API reference lists every public name (``__all__`` of every
 public package and module of tzsl), the command reference is ``tzsl COMMAND --help``, the method
-list is ``tzsl methods --json``, the inherited choices are ``tzsl.models.choices.inherited_choices()``, the plain format is ``tzsl formats`` and the experiment-file
-reference is ``tzsl run NAME --print-config``. Everything is written under ``docs/_generated/``
+list is ``tzsl methods --json``, the inherited choices are ``tzsl.models.choices.inherited_choices()``, the
+plain format is ``tzsl formats`` and the experiment-file reference is ``tzsl run NAME --print-config``.
+Everything is written under ``docs/_generated/``
 (not tracked by git) before Sphinx reads the sources, so the pages follow the code.
 """
 

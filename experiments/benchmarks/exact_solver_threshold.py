@@ -119,8 +119,8 @@ def paired_summary(per_split: pd.DataFrame, *, n_boot: int = 10_000, seed: int =
 
     ``per_split``: ``methods_per_split.csv`` (one row per split, numbered, and the summary rows ``mean``
     and ``std`` of each split kind, which are left out; columns ``split``, ``split_kind``, ``chance``
-    and one accuracy column per method label; ``chance`` is averaged like the accuracies). The interval is the 2.5/97.5 percentiles of the mean
-    difference over ``n_boot`` resamples of the splits (with replacement).
+    and one accuracy column per method label; ``chance`` is averaged like the accuracies). The interval is the
+    2.5/97.5 percentiles of the mean difference over ``n_boot`` resamples of the splits (with replacement).
     """
     rows = per_split[per_split["split"].astype(str).str.isdigit()]
     rng = np.random.default_rng(seed)

@@ -23,7 +23,8 @@ at an end of its final grid, the share of fits at each gamma and the mean fit CP
 split) and ``grid_pairs.csv`` (each grid against the previous one, ``extended`` - ``paper`` and
 ``adaptive`` - ``extended``: paired AVGDAP difference on the same trials with its interval)::
 
-    nice -n 5 python experiments/benchmarks/phac2_accuracy.py --cache /tmp/tzsl_accuracy --out /tmp/tzsl_accuracy/accuracy.csv
+    nice -n 5 python experiments/benchmarks/phac2_accuracy.py --cache /tmp/tzsl_accuracy \
+        --out /tmp/tzsl_accuracy/accuracy.csv
 
 ``make numbers BENCH_RESULTS=/tmp/tzsl_accuracy`` writes both into ``experiments/benchmarks/README.md``.
 """
@@ -32,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import warnings
+from itertools import pairwise
 from pathlib import Path
 
 import numpy as np
@@ -71,7 +73,8 @@ def reliability(P_oof: np.ndarray, A: np.ndarray) -> np.ndarray:
     """Per-attribute weight ``max(0, 2 * bacc - 1)`` of the fused out-of-fold posteriors; (m,)."""
     pred = P_oof.mean(axis=1) >= 0.5
     pos = A.astype(bool)
-    bacc = 0.5 * ((pred & pos).sum(0) / np.maximum(pos.sum(0), 1) + (~pred & ~pos).sum(0) / np.maximum((~pos).sum(0), 1))
+    bacc = 0.5 * ((pred & pos).sum(0) / np.maximum(pos.sum(0), 1)
+                  + (~pred & ~pos).sum(0) / np.maximum((~pos).sum(0), 1))
     return np.clip(2 * bacc - 1, 0.0, None)
 
 
@@ -98,7 +101,7 @@ def pseudo_zsl(features, split, train, P_oof, attrs, methods: dict, n_folds=5, s
     objects = features.objects[train]
     uniq = np.unique(objects)
     rng = np.random.default_rng(seed)
-    fold_of = dict(zip(uniq, rng.permutation(np.arange(uniq.size) % n_folds)))
+    fold_of = dict(zip(uniq, rng.permutation(np.arange(uniq.size) % n_folds), strict=True))
     fold = np.array([fold_of[o] for o in objects])
     X = features.X[train].reshape(train.sum(), -1)
     table = features.attributes.loc[:, attrs]
@@ -178,7 +181,8 @@ def candidates(base: dict) -> tuple[dict, dict]:
     S["mean-eszsl-sae"] = zrows(S["eszsl"]) + zrows(S["sae"])
     S["mean-dap-eszsl-sae+hub"] = sum(zcols(S[k]) for k in ("dap-avg[paper]", "eszsl", "sae"))
     w3 = choose_simplex(folds)
-    S["wmean-dap-eszsl-sae"] = sum(w * zrows(S[k]) for w, k in zip(w3, ("dap-avg[paper]", "eszsl", "sae")))
+    S["wmean-dap-eszsl-sae"] = sum(w * zrows(S[k])
+                                   for w, k in zip(w3, ("dap-avg[paper]", "eszsl", "sae"), strict=True))
     chosen["wmean-dap-eszsl-sae"] = w3[0]
     for name in ("dap-avg[paper]", "eszsl", "sae"):
         S[f"{name}+hub"] = zcols(S[name])
@@ -229,7 +233,7 @@ def grid_pairs(trials: pd.DataFrame) -> pd.DataFrame:
     rows = []
     for kind in dict.fromkeys(trials["kind"]):
         t = trials[trials.kind == kind]
-        for before, after in zip(GRIDS, GRIDS[1:]):
+        for before, after in pairwise(GRIDS):
             a, b = t[t.method == f"dap-avg[{after}]"], t[t.method == f"dap-avg[{before}]"]
             common = np.intersect1d(a.split.unique(), b.split.unique())
             if not common.size:

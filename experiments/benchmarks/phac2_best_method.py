@@ -59,7 +59,8 @@ def comparison(features, purpose: str, seed: int, n_splits: int, kinds, methods:
     """
     given = {"splits": {"n_splits": n_splits, "seed": seed, "purpose": purpose}, "svm": dict(SVM_PARAMS),
              "compute": {"n_jobs": n_jobs, "progress": False}}
-    config = ZeroShotSettings.of_preset("phac2-dap", **{t: {**given.get(t, {}), **tables.get(t, {})} for t in {*given, *tables}})
+    config = ZeroShotSettings.of_preset("phac2-dap", **{t: {**given.get(t, {}), **tables.get(t, {})}
+                                                        for t in {*given, *tables}})
     tables = []
     for kind in kinds:
         start = time.perf_counter()
@@ -79,7 +80,7 @@ def decide(selection: pd.DataFrame, confirmation: pd.DataFrame, seed: int) -> pd
     table = confirm_choice(selection, confirmation)
     table.insert(0, "seed", seed)
     table["note"] = ["; ".join(n for n in (note, CHALLENGING_NOTE if kind == "challenging" else "") if n)
-                     for note, kind in zip(table["note"].fillna(""), table["kind"])]
+                     for note, kind in zip(table["note"].fillna(""), table["kind"], strict=True)]
     return table
 
 

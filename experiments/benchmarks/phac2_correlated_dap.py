@@ -72,9 +72,10 @@ interval] per kind and method and the paired difference to each reference
 
 Per-split held-out logits are cached in ``--out`` (``<split>.npz``)::
 
-    nice -n 5 python experiments/benchmarks/phac2_correlated_dap.py --out /tmp/lever32-select --purpose select --seed 0 --n-random 20
-    nice -n 5 python experiments/benchmarks/phac2_correlated_dap.py --out /tmp/lever32-confirm --purpose confirm --seed 32 \
-        --n-random 50 --references
+    nice -n 5 python experiments/benchmarks/phac2_correlated_dap.py --out /tmp/lever32-select --purpose select \
+        --seed 0 --n-random 20
+    nice -n 5 python experiments/benchmarks/phac2_correlated_dap.py --out /tmp/lever32-confirm --purpose confirm \
+        --seed 32 --n-random 50 --references
 """
 
 from __future__ import annotations
@@ -156,7 +157,7 @@ def class_means(S: np.ndarray, A: np.ndarray, groups: np.ndarray, S_fit: np.ndar
         A_obj = object_means(A.astype(float), groups)[0]
         mu = np.stack([[np.nanmean(S_obj[A_obj[:, a] == v, a]) for a in range(A.shape[1])] for v in (0, 1)])
     missing = np.isnan(mu)
-    for v, a in zip(*np.nonzero(missing)):
+    for v, a in zip(*np.nonzero(missing), strict=True):
         mu[v, a] = S_fit[A[:, a] == v, a].mean()
     return mu, int(missing.sum())
 
@@ -199,7 +200,8 @@ def error_dispersion(S: np.ndarray, A: np.ndarray) -> float:
 
 
 def error_structure(S: np.ndarray, R: np.ndarray, A: np.ndarray, groups: np.ndarray) -> dict[str, float]:
-    """Measurement (a) of logits ``S`` (n, m), their residuals ``R`` and the trials' objects ``groups`` and attributes ``A``."""
+    """Measurement (a) of logits ``S`` (n, m), their residuals ``R`` and the trials' objects ``groups`` and
+    attributes ``A``."""
     R_obj, codes = object_means(R, groups)
     A_obj = object_means(A.astype(float), groups)[0]
     within = R - R_obj[codes]
@@ -228,7 +230,8 @@ def score_split(features, split, seed: int, references: bool, out: Path) -> tupl
         S_oof = held_out_logits(fit.model.attribute_model_, features.X[train], A[train], groups[train])
         np.savez(cache, S_oof=S_oof)
     S_test = fused_logits(fit.model.attribute_model_, features.X[test])
-    mu, fallbacks = class_means(S_oof, A[train], groups[train], fused_logits(fit.model.attribute_model_, features.X[train]))
+    mu, fallbacks = class_means(S_oof, A[train], groups[train],
+                                fused_logits(fit.model.attribute_model_, features.X[train]))
     R_oof = residuals(S_oof, A[train], mu)
     for label, kind in RULES.items():
         scores = gaussian_scores(S_test, K, mu, covariance(R_oof, groups[train], kind))
@@ -255,9 +258,11 @@ def summary(trials: pd.DataFrame, references: tuple[str, ...]) -> pd.DataFrame:
     out = []
     for kind, sub in trials.groupby("kind", sort=False):
         present = [r for r in references if r in set(sub["method"])]
-        diffs = {r: paired_differences_table(sub.drop(columns="kind"), reference=r).set_index("method") for r in present}
+        diffs = {r: paired_differences_table(sub.drop(columns="kind"), reference=r).set_index("method")
+                 for r in present}
         for method, t in sub.groupby("method", sort=False):
-            iv = bootstrap_accuracy(t["correct"].to_numpy(), classes=t["class"].to_numpy(), splits=t["split"].to_numpy())
+            iv = bootstrap_accuracy(t["correct"].to_numpy(), classes=t["class"].to_numpy(),
+                                    splits=t["split"].to_numpy())
             row = {"kind": kind, "method": method, "n_splits": t["split"].nunique(), "accuracy": iv.mean,
                    "ci95_low": iv.ci95_low, "ci95_high": iv.ci95_high}
             for r, d in diffs.items():

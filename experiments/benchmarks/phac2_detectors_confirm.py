@@ -28,7 +28,8 @@ interval, and the paired difference to ``dap-avg`` and to ``eszsl`` on the same 
 intervals)::
 
     nice -n 5 python experiments/benchmarks/phac2_detectors_confirm.py --out DIR --purpose select --seed 0 --n-random 5
-    nice -n 5 python experiments/benchmarks/phac2_detectors_confirm.py --out DIR --purpose confirm --seed 32 --n-random 50
+    nice -n 5 python experiments/benchmarks/phac2_detectors_confirm.py --out DIR --purpose confirm --seed 32 \
+        --n-random 50
     nice -n 5 python experiments/benchmarks/phac2_detectors_confirm.py --out DIR --dataset fabric-depth --n-test 3 \
         --n-random 3 --no-challenging --min-train-negatives 2
 """
@@ -119,7 +120,8 @@ def summary(trials: pd.DataFrame) -> pd.DataFrame:
         diffs = {ref: paired_differences_table(sub.drop(columns="kind"), reference=ref).set_index("method")
                  for ref in REFERENCES}
         for method, t in sub.groupby("method", sort=False):
-            iv = bootstrap_accuracy(t["correct"].to_numpy(), classes=t["class"].to_numpy(), splits=t["split"].to_numpy())
+            iv = bootstrap_accuracy(t["correct"].to_numpy(), classes=t["class"].to_numpy(),
+                                    splits=t["split"].to_numpy())
             row = {"kind": kind, "method": method, "n_splits": t["split"].nunique(), "accuracy": iv.mean,
                    "ci95_low": iv.ci95_low, "ci95_high": iv.ci95_high}
             for ref, d in diffs.items():
@@ -149,8 +151,10 @@ def main() -> None:
     if not args.summarise:
         features = features_of(args.dataset, args.out)
         warnings.simplefilter("ignore", GridEdgeWarning)
-        config = ZeroShotSettings.of_preset("phac2-dap", splits={"seed": args.seed, "purpose": args.purpose, "n_splits": args.n_random,
-                                     "n_test": args.n_test, "min_train_negatives": args.min_train_negatives})
+        config = ZeroShotSettings.of_preset("phac2-dap",
+                                            splits={"seed": args.seed, "purpose": args.purpose,
+                                                    "n_splits": args.n_random, "n_test": args.n_test,
+                                                    "min_train_negatives": args.min_train_negatives})
         study_seed = config.study_seed
         parts, cpu_rows = [], []
         for kind, index, split in splits_of(features, config, not args.no_challenging):

@@ -76,8 +76,8 @@ def tzsl_eszsl(X_tr, objects_tr, rows_tr, X_te, K, **params) -> tuple[np.ndarray
 
 def run(features, purpose: str, seed: int, n_splits: int) -> pd.DataFrame:
     """Per-trial correctness of every method on ``n_splits`` random splits of ``seed``."""
-    splits, _ = make_splits(features, "random", ZeroShotSettings.of_preset("phac2-dap", splits={"n_splits": n_splits, "seed": seed,
-                                                                         "purpose": purpose}))
+    config = ZeroShotSettings.of_preset("phac2-dap", splits={"n_splits": n_splits, "seed": seed, "purpose": purpose})
+    splits, _ = make_splits(features, "random", config)
     objects = features.objects
     X = features.X.reshape(len(objects), -1)
     records = []
@@ -94,9 +94,9 @@ def run(features, purpose: str, seed: int, n_splits: int) -> pd.DataFrame:
             "tzsl-eszsl[fixed grid]": tzsl_eszsl(X[train], objects[train], rows_tr, X[test], K, grid_extensions=0),
         }
         for name, (scores, edge) in methods.items():
-            records.append(pd.DataFrame({"purpose": purpose, "seed": seed, "split": f"{purpose}-{seed}-{index}", "method": name,
-                                         "class": objects[test], "correct": (scores.argmax(1) == y).astype(float),
-                                         "at_edge": edge}))
+            records.append(pd.DataFrame({"purpose": purpose, "seed": seed, "split": f"{purpose}-{seed}-{index}",
+                                         "method": name, "class": objects[test],
+                                         "correct": (scores.argmax(1) == y).astype(float), "at_edge": edge}))
         print(purpose, split.name, {k: round(float((s.argmax(1) == y).mean()), 3) for k, (s, _) in methods.items()},
               flush=True)
     return pd.concat(records, ignore_index=True)

@@ -82,14 +82,18 @@ def main() -> None:
             path = args.out / f"{grid}_{split.name}.npz"
             if path.exists():
                 continue
-            config = ZeroShotSettings.of_preset("phac2-dap", splits={"n_splits": args.n_random, "seed": args.seed, "purpose": args.purpose},
-                                 compute={"cache": False, "n_jobs": args.n_jobs}, svm={"cv": 5, "grid": grid})
+            config = ZeroShotSettings.of_preset("phac2-dap",
+                                                splits={"n_splits": args.n_random, "seed": args.seed,
+                                                        "purpose": args.purpose},
+                                                compute={"cache": False, "n_jobs": args.n_jobs},
+                                                svm={"cv": 5, "grid": grid})
             start = time.process_time()
             r = fit_split(features, split, config, index)
             cpu = time.process_time() - start
             bank = r.model
             train, _ = split_masks(features, split)
-            ll = np.array([[np.nanmin(est.cv_scores_) for est in per] for per in bank.estimators_])  # NaN: pruned by halving
+            # NaN: pruned by halving
+            ll = np.array([[np.nanmin(est.cv_scores_) for est in per] for per in bank.estimators_])
             gam = np.array([[est.gamma_ for est in per] for per in bank.estimators_])
             C = np.array([[est.C_ for est in per] for per in bank.estimators_])
             # a fit whose chosen C or gamma sits at an end of its (final) grid

@@ -14,8 +14,10 @@ the CPU seconds of all attribute fits of each search. ``--out DIR`` writes
 BENCH_RESULTS=DIR`` publishes in ``docs/user_guide/performance.md``::
 
     export TZSL_DATA_DIR=/path/to/data
-    nice -n 10 python experiments/benchmarks/phac2_search.py --seed 0 --n-splits 10 --out /tmp/tzsl_search   # selection
-    nice -n 10 python experiments/benchmarks/phac2_search.py --seed 1 --n-splits 10 --out /tmp/tzsl_search   # confirmation
+    # selection
+    nice -n 10 python experiments/benchmarks/phac2_search.py --seed 0 --n-splits 10 --out /tmp/tzsl_search
+    # confirmation
+    nice -n 10 python experiments/benchmarks/phac2_search.py --seed 1 --n-splits 10 --out /tmp/tzsl_search
 
 A choice made on one seed's splits is confirmed on another seed's (``--seed 1``).
 """
@@ -52,7 +54,8 @@ def run(seed: int, n_splits: int, grid: str) -> tuple[pd.DataFrame, dict]:
     for i, split in enumerate(splits):
         fitted = {}
         for search in SEARCHES:
-            config = ZeroShotSettings.of_preset("phac2-dap", splits=base.splits, compute=compute, svm={"grid": grid, "search": search})
+            config = ZeroShotSettings.of_preset("phac2-dap", splits=base.splits, compute=compute,
+                                                svm={"grid": grid, "search": search})
             start, wall = time.process_time(), time.perf_counter()
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
@@ -63,7 +66,7 @@ def run(seed: int, n_splits: int, grid: str) -> tuple[pd.DataFrame, dict]:
                       "correct": correct[t], "cpu_s": cpu, "wall_s": wall} for t in range(len(r.y))]
             print(f"seed {seed} split {i} {search:8s} cpu {cpu:6.1f} s  AVGDAP {correct.mean():.3f}", flush=True)
         a, b = chosen(fitted["grid"].model), chosen(fitted["halving"].model)
-        same += sum(x == y for x, y in zip(a, b))
+        same += sum(x == y for x, y in zip(a, b, strict=True))
         total += len(a)
     table = pd.DataFrame(rows)
     wide = table.pivot_table(index=["split", "class", "trial"], columns="search", values="correct")

@@ -136,7 +136,8 @@ CANDIDATES = ("stack", "sparse")
 
 
 def balanced_log_loss(y: np.ndarray, p: np.ndarray) -> float:
-    """Class-balanced log-loss (nats) of posteriors ``p`` (n,) of 0/1 targets ``y`` (n,), clipped to ``[EPS, 1 - EPS]``."""
+    """Class-balanced log-loss (nats) of posteriors ``p`` (n,) of 0/1 targets ``y`` (n,), clipped to
+    ``[EPS, 1 - EPS]``."""
     return float(log_loss(y, np.clip(p, EPS, 1 - EPS), sample_weight=compute_sample_weight("balanced", y),
                           labels=[0, 1]))
 
@@ -231,7 +232,8 @@ def pinned(bank: AttributeClassifierBank) -> AttributeClassifierBank:
 
 
 def dap_predict(P: np.ndarray, A_train: np.ndarray, K: np.ndarray, seed: int) -> np.ndarray:
-    """AVGDAP (uniform prior) class rows (n,) of posteriors ``P`` (n, s, m) or (n, m) among ``K`` (k, m), ties seeded."""
+    """AVGDAP (uniform prior) class rows (n,) of posteriors ``P`` (n, s, m) or (n, m) among ``K`` (k, m), ties
+    seeded."""
     return DAPRule(fusion="avg", prior="uni").fit(A_train).predict(P, K, random_state=seed)
 
 
@@ -295,7 +297,8 @@ def to_logits(P: np.ndarray) -> np.ndarray:
 
 def structure(label: str, S_oof: np.ndarray, S_fit: np.ndarray, S_test: np.ndarray, A_train: np.ndarray,
               A_test: np.ndarray, g_train: np.ndarray, g_test: np.ndarray) -> dict[str, float]:
-    """Measurement (a) of one method's held-out (n_train, m), in-sample and test (n_test, m) logits, keys ``<label>_...``."""
+    """Measurement (a) of one method's held-out (n_train, m), in-sample and test (n_test, m) logits, keys
+    ``<label>_...``."""
     mu, _ = class_means(S_oof, A_train, g_train, S_fit)
     oof = error_structure(S_oof, residuals(S_oof, A_train, mu), A_train, g_train)
     test = error_structure(S_test, residuals(S_test, A_test, mu), A_test, g_test)
@@ -315,7 +318,8 @@ def score_split(features, split, seed: int, references: bool, out: Path) -> tupl
     fit, y = fit_predict_split({"name": DETECTOR_METHOD, "calibration": "none"}, features, split, seed)
     bank = fit.model.attribute_model_
     rows = [(DETECTOR_METHOD, fit.predicted == y)]
-    info["c1_dap_agreement"] = float(np.mean(dap_predict(bank.predict_proba(X_test), A_train, K, seed) == fit.predicted))
+    info["c1_dap_agreement"] = float(np.mean(dap_predict(bank.predict_proba(X_test), A_train, K, seed)
+                                             == fit.predicted))
     cache = out / f"{split.name}.npz"
     if cache.exists():
         S_oof = np.load(cache)["S_oof"]
