@@ -289,7 +289,8 @@ def test_arrays_round_trip_as_npz_and_pandas_inside_models(tmp_path):
     import pandas as pd
     from sklearn.dummy import DummyClassifier
 
-    arrays = {"state_dict": {"conv.weight": np.arange(6.0).reshape(2, 3)}, "classes": np.array(["a", "b"], dtype=object)}
+    arrays = {"state_dict": {"conv.weight": np.arange(6.0).reshape(2, 3)},
+              "classes": np.array(["a", "b"], dtype=object)}
     path = save_bundle(tmp_path / "a.tzsl", arrays, kind="deep")
     got, meta = load_bundle(path)
     assert meta["bundle"]["payload_format"] == "npz"

@@ -186,7 +186,8 @@ def _rechecksum(raw: bytes, edit: dict) -> bytes:
     header = json.loads(line)
     header.update(edit)
     fields = {k: v for k, v in header.items() if k not in ("header_sha256", "hmac_sha256")}
-    header["header_sha256"] = hashlib.sha256(json.dumps(fields, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+    header["header_sha256"] = hashlib.sha256(
+        json.dumps(fields, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
     return magic + b"\n" + json.dumps(header).encode() + b"\n" + payload
 
 

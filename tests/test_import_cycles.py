@@ -2,8 +2,9 @@
 
 Every ``import`` and ``from ... import`` counts, inside functions and under ``if TYPE_CHECKING:`` too
 (a lazy import ties two modules together as firmly as a top-level one, and a type-only import says
-that one module's types belong to the other: issue 34 put result types in modules of their own). A module importing its own package or subpackage (``tzsl.models`` from ``tzsl.models._dap``
-to reach a sibling through the package) is not counted: packages re-export their modules, so that
+that one module's types belong to the other: issue 34 put result types in modules of their own). A module
+importing its own package or subpackage (``tzsl.models`` from ``tzsl.models._dap`` to reach a sibling through
+the package) is not counted: packages re-export their modules, so that
 edge says nothing about the design.
 
 The modules are the nodes of a directed graph, imports its edges; a cycle is a strongly connected

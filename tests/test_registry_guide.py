@@ -14,6 +14,7 @@ import importlib
 import inspect
 import re
 import tomllib
+from itertools import pairwise
 from pathlib import Path
 from typing import get_args
 
@@ -209,5 +210,5 @@ def test_the_guide_is_in_the_toctree_and_no_user_guide_page_jumps_a_heading_leve
         text = re.sub(r"^(```|~~~).*?^\1", "", page.read_text(encoding="utf-8"), flags=re.M | re.S)
         levels = [len(m.group(1)) for m in re.finditer(r"^(#{1,6}) ", text, flags=re.M)]
         assert levels and levels[0] == 1, f"{page.name} does not open with one H1"
-        jumps = [(a, b) for a, b in zip(levels, levels[1:]) if b > a + 1]
+        jumps = [(a, b) for a, b in pairwise(levels) if b > a + 1]
         assert not jumps, f"{page.name} jumps heading levels {jumps} (Sphinx -W fails)"

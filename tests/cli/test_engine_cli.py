@@ -136,7 +136,8 @@ def test_run_check_finds_missing_paths_and_split_file(tmp_path):
     path.write_text("study = 'phac2-dap'\n[dataset]\nplain = 'missing'\n")
     result = _run("run", path, "--check")
     assert result.exit_code == EXIT_TZSL_ERROR and f"{path}: dataset.plain: folder" in result.output
-    path.write_text("study = 'phac2-dap'\n[dataset]\nplain = 'toy'\n[splits]\nkinds = ['file']\n[compute]\nn_jobs = 0\n")
+    path.write_text("study = 'phac2-dap'\n[dataset]\nplain = 'toy'\n[splits]\nkinds = ['file']\n"
+                    "[compute]\nn_jobs = 0\n")
     result = _run("run", path, "--check")
     assert result.exit_code == EXIT_TZSL_ERROR and f"{path}: compute.n_jobs: n_jobs = 0" in result.output
     path.write_text("study = 'phac2-dap'\n[dataset]\nplain = 'toy'\n[splits]\nkinds = ['file']\n")

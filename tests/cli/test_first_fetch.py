@@ -161,7 +161,8 @@ def test_no_network_stops_in_one_line_naming_the_file(setup, tmp_path, monkeypat
     assert result.stdout.splitlines() == [f"first use: fetching 2 data files of alpha for {experiment} into {home}, "
                                           f"from {closed} (--no-fetch: stop instead)"]
     [line] = result.stderr.strip().splitlines()  # both files fail at once: the line names the first that did
-    assert re.match(re.escape(f"tzsl: error: fetching the data of {experiment}: alpha file ") + r"(one\.csv|sub/two\.bin)"
+    assert re.match(re.escape(f"tzsl: error: fetching the data of {experiment}: alpha file ")
+                    + r"(one\.csv|sub/two\.bin)"
                     + re.escape(f": no complete download within 1 s from {closed}/alpha/") + r"\1 \(", line), line
     assert "Connection refused" in line and _files_under(home) == []
 

@@ -74,7 +74,8 @@ def five_fingers(tmp_path_factory):
     # the same model as tzsl wrote DAP bundles before they were arrays: the estimator, with skops
     zsl = TRAINED["dap"].estimator_
     calibration = {k: v if isinstance(v, str | int) else float(v) for k, v in TRAINED["dap"].calibration_info_.items()}
-    save_bundle(root / "dap-skops.tzsl", {"model": zsl, "decision_rule": zsl.decision_rule_, "calibration": calibration},
+    save_bundle(root / "dap-skops.tzsl",
+                {"model": zsl, "decision_rule": zsl.decision_rule_, "calibration": calibration},
                 kind="zero-shot", metadata=read_bundle_header(root / "dap.tzsl").metadata)
     new = trials[trials["class"].isin(UNSEEN)].index
     rows = [{"trial_id": trials.at[i, "trial_id"], "sensor": s, **dict(zip(FEATURES, X[i, j], strict=True))}
@@ -161,7 +162,8 @@ def test_loading_and_ranking_does_not_import_torch(five_fingers, tmp_path, bundl
 
 
 def test_skops_import_leaves_torch_importable_afterwards(tmp_path):
-    code = ("import sys; from tzsl.inference.skops_bundles import skops_io; skops_io(); assert 'torch' not in sys.modules; "
+    code = ("import sys; from tzsl.inference.skops_bundles import skops_io; skops_io(); "
+            "assert 'torch' not in sys.modules; "
             "import importlib.util; print(importlib.util.find_spec('torch') is not None and 'ok')")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO,
                           env={"PYTHONPATH": str(REPO), "PATH": ""}, check=False)

@@ -94,8 +94,8 @@ def test_plain_folder_from_convert_gives_the_builtin_accuracies(tmp_path, data_d
     assert ran.exit_code == 0, ran.output
     ours = pd.read_csv(tmp_path / "plain_results" / "table1_fusion.csv")
 
-    config = ZeroShotSettings.of_preset("phac2-dap", splits={"n_splits": 2, "n_test": 10, "seed": 0}, svm=dict(TINY), methods={"multilabel": False},
-                         compute={"progress": False, "cache": False})
+    config = ZeroShotSettings.of_preset("phac2-dap", splits={"n_splits": 2, "n_test": 10, "seed": 0}, svm=dict(TINY),
+                                        methods={"multilabel": False}, compute={"progress": False, "cache": False})
     builtin = run_zero_shot_tables(dataset_features("phac2-penn", data_dir=data_dir), ResultsDir(tmp_path / "builtin"),
                                    config)["table1_fusion"]
     assert list(ours["split"].astype(str)) == ["1", "2", "mean", "std", "control"]

@@ -148,7 +148,8 @@ def test_train_deep_on_user_gelsight_videos(torch, data_dir, tmp_path):
     assert result.exit_code == 0, result.output
     runs = _runs(tmp_path)
     # the saved model's fit is the zero-shot protocol of config 1 (group 5 shares a training row: dropped)
-    assert runs[["condition", "protocol", "n_train", "n_test"]].values.tolist() == [["gelsight-Flat", "zero-shot-drop", 10, 4]]
+    assert (runs[["condition", "protocol", "n_train", "n_test"]].values.tolist()
+            == [["gelsight-Flat", "zero-shot-drop", 10, 4]])
     assert load_deep_bundle(out).sequence_shape_ == (5, 32, 32, 3)
 
 

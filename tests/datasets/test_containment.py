@@ -151,7 +151,8 @@ def test_constant_attribute_is_flagged(tmp_path):
     folder = signal_dataset(tmp_path, classes=classes.replace("disc,1,0,0", "disc,1,1,0"))
     problems = validate_dataset(folder)
     assert [(p.file, p.line) for p in problems] == [("classes.csv", 1)]
-    assert "attribute 'round' is 0 for every class" in problems[0].message and "remove the column" in problems[0].message
+    assert ("attribute 'round' is 0 for every class" in problems[0].message
+            and "remove the column" in problems[0].message)
 
 
 def test_data_file_error_uses_path_colon_line():

@@ -51,7 +51,8 @@ def test_objects_ids_and_shuffled_sensor_rows(tmp_path, monkeypatch):
 
 def test_signal_files(tmp_path, monkeypatch):
     rng = np.random.default_rng(1)
-    classes = pd.DataFrame({"hard": [1, 0, 1], "flat": [1, 0, 0]}, index=pd.Index(["cube", "ball", "disc"], name="class"))
+    classes = pd.DataFrame({"hard": [1, 0, 1], "flat": [1, 0, 0]},
+                           index=pd.Index(["cube", "ball", "disc"], name="class"))
     trials = pd.DataFrame({"trial_id": [f"t{i}" for i in range(6)], "class": ["cube", "ball", "disc"] * 2})
     folder = write_plain_dataset(tmp_path / "s", classes, trials, sensors=("l", "r"), channels=("p", "q"),
                                  signals=[[rng.normal(size=(4, 2)) for _ in range(2)] for _ in range(6)])

@@ -317,7 +317,8 @@ import signal, sys, pooch
 # A user's Ctrl-C meets Python's own handler. A test run started in the background by a non-interactive shell
 # (`pytest ... &`) has SIGINT ignored, and every child inherits that, so the child would never see the signal
 # the test sends (seen: both tests timed out in such a run): record what was inherited, then reset it.
-print(f"child SIGINT: {signal.getsignal(signal.SIGINT)!r}, blocked: {sorted(signal.pthread_sigmask(signal.SIG_BLOCK, []))}",
+print(f"child SIGINT: {signal.getsignal(signal.SIGINT)!r}, "
+      f"blocked: {sorted(signal.pthread_sigmask(signal.SIG_BLOCK, []))}",
       file=sys.stderr, flush=True)
 signal.signal(signal.SIGINT, signal.default_int_handler)
 signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})

@@ -32,7 +32,7 @@ def test_ros_bags_become_a_valid_plain_dataset_with_the_same_values(tmp_path, ro
     store, rng = _store(), np.random.default_rng(0)
     messages = {}
     rows = []
-    for b, cls in enumerate(CLASSES.index):
+    for cls in CLASSES.index:
         name = f"bags/{cls}.bag" if ros1 else f"bags/{cls}"
         msgs = [_hand_message(store, rng, t) for t in range(10)]
         (lab / "bags").mkdir(exist_ok=True)
@@ -45,7 +45,8 @@ def test_ros_bags_become_a_valid_plain_dataset_with_the_same_values(tmp_path, ro
     mapping = _bag_mapping(lab, "bags/*.bag" if ros1 else "bags/*", ros1=ros1)
     folder, summary = convert_lab_dataset("ros-bag", mapping, tmp_path / "out", progress=False)
     assert validate_dataset(folder) == []
-    assert summary["sensors"] == ["finger_0", "finger_1"] and summary["channels"] == ["pdc_data", "tdc_data", "tac_data"]
+    assert (summary["sensors"] == ["finger_0", "finger_1"]
+            and summary["channels"] == ["pdc_data", "tdc_data", "tac_data"])
     data = read_plain_dataset(folder)
     assert data.n_trials == 8 and list(data.sensors) == ["finger_0", "finger_1"]
     trials = pd.read_csv(folder / "trials.csv")
@@ -65,13 +66,15 @@ def test_bag_problems_are_one_line_naming_file_and_record(tmp_path):
     pd.DataFrame([{"bag": "bags/mug", "trial_id": "t1", "class": "mug"}]).to_csv(lab / "labels.csv", index=False)
     mapping = _bag_mapping(lab, "bags/*")
     text = mapping.read_text()
-    mapping.write_text(text.replace('topic = "/biotac_pub"\nfields = ["bt_data[1]', 'topic = "/other"\nfields = ["bt_data[1]'))
+    mapping.write_text(text.replace('topic = "/biotac_pub"\nfields = ["bt_data[1]',
+                                    'topic = "/other"\nfields = ["bt_data[1]'))
     with pytest.raises(DataFileError) as info:
         convert_lab_dataset("ros-bag", mapping, tmp_path / "out", progress=False)
     assert str(info.value).splitlines() == [f"{lab / 'bags' / 'mug'}: topic(s) ['/other'] not in the bag "
                                             "(it has ['/biotac_pub'])"]
     mapping.write_text(text.replace("bt_data[1]", "bt_data[5]"))  # the hand has 2 fingers
-    with pytest.raises(DataFileError, match=r"mug: message 0 on /biotac_pub: field 'bt_data\[5\].pdc_data' of sensor 'finger_1'"):
+    with pytest.raises(DataFileError,
+                       match=r"mug: message 0 on /biotac_pub: field 'bt_data\[5\].pdc_data' of sensor 'finger_1'"):
         convert_lab_dataset("ros-bag", mapping, tmp_path / "out", progress=False)
     mapping.write_text(text)
     pd.DataFrame([{"bag": "bags/nope", "trial_id": "t1", "class": "mug"}]).to_csv(lab / "labels.csv", index=False)

@@ -60,10 +60,10 @@ def test_round_trip(h5file):
     path, trials = h5file
     back = load_phac2_h5(path, eps=PHAC2_EPS)
     assert [t.trial_id for t in back] == [t.trial_id for t in trials]
-    for a, b in zip(trials, back):
+    for a, b in zip(trials, back, strict=True):
         assert (b.object_name, b.object_id, b.trial_index) == (a.object_name, a.object_id, a.trial_index)
         assert b.source == str(path)
-        for fa, fb in zip(a.fingers, b.fingers):
+        for fa, fb in zip(a.fingers, b.fingers, strict=True):
             for sig in ("pdc", "pac", "tac", "tdc", "electrodes"):
                 np.testing.assert_array_equal(getattr(fb, sig), getattr(fa, sig))
                 assert getattr(fb, sig).dtype == np.float64

@@ -209,7 +209,7 @@ def test_real_penn_features(data_dir):
     assert trials["trial_id"].is_unique and len(trials) == 600
     assert trials["object_name"].nunique() == 60
     assert (trials.groupby("object_name").size() == 10).all()
-    key = list(zip(trials["object_id"], trials["trial_index"]))
+    key = list(zip(trials["object_id"], trials["trial_index"], strict=True))
     assert key == sorted(key)
     assert data.labels.shape == (60, 24)
     assert list(data.labels.columns) == sorted(data.labels.columns)

@@ -123,7 +123,7 @@ def test_cell_counts_are_the_loops_draws_exactly(seed, n, n_classes, n_splits, s
     _, classes, splits = _data(seed, n, n_classes, n_splits, string_labels)
     _, counts = _reference_samples(classes, splits, _N_BOOT, seed)
     labels, class_lists = _structure(classes, splits)
-    cells = [(s, c) for s, names in zip(labels, class_lists) for c in names]  # split, then class order
+    cells = [(s, c) for s, names in zip(labels, class_lists, strict=True) for c in names]  # split, then class order
     expected = np.array([[count.get(key, 0) for key in cells] for count in counts], dtype=float)
     w = np.vstack(list(bootstrap_cell_weights(classes, splits, n_boot=_N_BOOT, random_state=seed)))
     np.testing.assert_array_equal(w, expected)

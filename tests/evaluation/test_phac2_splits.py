@@ -23,7 +23,7 @@ def phac2(data_dir):
     derived = data_dir / "phac2" / "derived"
     with np.load(derived / "phac2_penn_static_features.npz") as z:
         X = z["X"][:, :, :23].reshape(len(z["X"]), -1)  # 4 EPs x features 0-22
-        trial_objects = [f"{n}_{i}" for n, i in zip(z["object_names"], z["object_ids"])]
+        trial_objects = [f"{n}_{i}" for n, i in zip(z["object_names"], z["object_ids"], strict=True)]
     labels = pd.read_csv(derived / "phac2_labels_60x24.csv")
     labels.index = labels["object_name"] + "_" + labels["object_id"].astype(str)
     table = labels.drop(columns=["object_id", "object_name"])
@@ -76,7 +76,8 @@ def test_phac2_challenging_splits(phac2, tmp_path, record_property):
         )
     print(f"halved wedge {halved}, wedge counts {counts}, PCA variance ratio {m.attrs['explained_variance_ratio']}")
     print("\n".join(rows))
-    print(f"ours {sizes} (total {sum(sizes)}) vs paper Table 3 {PAPER_TABLE3_N_OBJECTS} (total {sum(PAPER_TABLE3_N_OBJECTS)})")
+    print(f"ours {sizes} (total {sum(sizes)}) vs paper Table 3 {PAPER_TABLE3_N_OBJECTS} "
+          f"(total {sum(PAPER_TABLE3_N_OBJECTS)})")
     record_property("challenging_sizes", sizes)
     record_property("paper_table3_sizes", list(PAPER_TABLE3_N_OBJECTS))
     # a written split file reads back to the same train/test sets
@@ -97,4 +98,4 @@ def test_challenging_split_file_keeps_its_rule(phac2, tmp_path):
     assert [s.dropped_objects for s in back] == [s.dropped_objects for s in splits]
     # the random rule would keep more attributes on at least one split: the test can fail
     relaxed, _ = challenging_splits(features, table, min_train_positives=2)
-    assert any(a.kept_attributes != b.kept_attributes for a, b in zip(relaxed, splits))
+    assert any(a.kept_attributes != b.kept_attributes for a, b in zip(relaxed, splits, strict=True))

@@ -63,7 +63,8 @@ def test_purpose_column_says_which_splits_may_choose(tmp_path):
 
 def test_minimal_user_file_reads_and_reports_exclusion(tmp_path):
     # training objects o0, o1, o2 have no positive of "c": c is excluded, not an error
-    path = _write(tmp_path, "split,object,role\nmine,o0,train\nmine,o1,train\nmine,o3,train\nmine,o2,test\nmine,o4,test\n")
+    path = _write(tmp_path, "split,object,role\nmine,o0,train\nmine,o1,train\nmine,o3,train\n"
+                            "mine,o2,test\nmine,o4,test\n")
     (s,) = read_splits_csv(path, TABLE, min_train_positives=1)
     assert s.name == "mine" and s.kind == "file" and s.seed is None
     assert s.train_objects == ("o0", "o1", "o3") and s.test_objects == ("o2", "o4")
@@ -86,7 +87,8 @@ def test_object_in_train_and_test(tmp_path):
 
 def test_duplicate_test_vectors(tmp_path):
     path = _write(tmp_path, "split,object,role\nx,o0,train\nx,o1,train\nx,o6,test\nx,o7,test\n")
-    with pytest.raises(SplitError, match=r"test objects \['o6', 'o7'\] \(lines \[4, 5\]\) have the same attribute vector"):
+    with pytest.raises(SplitError,
+                       match=r"test objects \['o6', 'o7'\] \(lines \[4, 5\]\) have the same attribute vector"):
         read_splits_csv(path, TABLE, min_train_positives=0)
 
 
@@ -118,7 +120,8 @@ def test_empty_test_set_and_other_problems_listed_together(tmp_path):
         ("split,object\nx,o0\n", DataFileError, r"\.csv:1: header .* lacks column\(s\) \['role'\]"),
         ("split,object,role\n", DataFileError, "no rows"),
         ("split,object,role,kind,seed\nx,o0,train,random,1\nx,o1,test,random,2\n", SplitError, "kind/seed differ"),
-        ("split,object,role,kind,seed\nx,o0,train,random,one\nx,o1,test,random,one\n", SplitError, "seed 'one' is not an integer"),
+        ("split,object,role,kind,seed\nx,o0,train,random,one\nx,o1,test,random,one\n", SplitError,
+         "seed 'one' is not an integer"),
     ],
 )
 def test_malformed_files(tmp_path, text, exc, match):

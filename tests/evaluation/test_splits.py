@@ -229,7 +229,8 @@ TOP_POINTS = {
 @pytest.mark.parametrize(
     "points, halved, order",
     [
-        ({n: (-x, y) for n, (x, y) in POINTS.items()}, "right", ["right-lower", "right-upper", "top", "left", "bottom"]),
+        ({n: (-x, y) for n, (x, y) in POINTS.items()}, "right",
+         ["right-lower", "right-upper", "top", "left", "bottom"]),
         (TOP_POINTS, "top", ["top-right", "top-left", "left", "bottom", "right"]),
     ],
 )
@@ -244,7 +245,8 @@ def test_challenging_densest_wedge_is_halved(points, halved, order):
     if halved != "right":
         return
     # the paper's choice can be forced
-    _, m_left = challenging_splits(feats, attrs, standardize=False, halve="left", min_train_positives=0, min_train_negatives=0)
+    _, m_left = challenging_splits(feats, attrs, standardize=False, halve="left", min_train_positives=0,
+                                   min_train_negatives=0)
     assert m_left.attrs["halved_wedge"] == "left"
 
 
@@ -320,7 +322,8 @@ def test_challenging_bad_input():
     feats, attrs = _geometry(POINTS)
     kw = dict(standardize=False, min_train_positives=0, min_train_negatives=0)
     with pytest.raises(SplitError, match=r"not in the attribute table: \['ghost'\]"):
-        challenging_splits(pd.concat([feats, pd.DataFrame([[0.0, 0.0]], index=["ghost"], columns=feats.columns)]), attrs, **kw)
+        challenging_splits(pd.concat([feats, pd.DataFrame([[0.0, 0.0]], index=["ghost"], columns=feats.columns)]),
+                           attrs, **kw)
     with pytest.raises(SplitError, match=r"have no features: \['t1'\]"):
         challenging_splits(feats.drop(index="t1"), attrs, **kw)
     with pytest.raises(SplitError, match=r"NaN or infinite .*'b1'"):

@@ -67,7 +67,7 @@ def four_ep_phase(pre: int = 100, lengths: tuple[int, int, int, int] = (10, 20, 
     """``pre`` rows of start position, then the 4 EPs with the given lengths, then 5 rows open."""
     states = ["SQUEEZE_SET_PRESSURE_SLOW", "HOLD_FOR_10_SECONDS", "SLIDE_5CM", "MOVE_DOWN_5CM"]
     phase = [PRE] * pre
-    for state, length in zip(states, lengths):
+    for state, length in zip(states, lengths, strict=True):
         phase += [state] * length
     return phase + ["OPEN_GRIPPER_BY_2CM_FAST"] * 5
 

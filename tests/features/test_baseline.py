@@ -99,7 +99,8 @@ def test_ep_masks(make_trial):
     masks = ep_masks(trial, ("hold", "A"))
     np.testing.assert_array_equal(masks[0], [0, 0, 0, 1, 1, 0, 1])
     np.testing.assert_array_equal(masks[1], [1, 1, 1, 0, 0, 1, 0])
-    with pytest.raises(DataFileError, match=r"'squeeze' \(controller_detail_state 'SQUEEZE_SET_PRESSURE_SLOW'\) is absent"):
+    with pytest.raises(DataFileError,
+                       match=r"'squeeze' \(controller_detail_state 'SQUEEZE_SET_PRESSURE_SLOW'\) is absent"):
         ep_masks(trial, ("hold", "squeeze"))
 
 

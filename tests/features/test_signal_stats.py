@@ -24,7 +24,7 @@ def test_hand_computed_values():
     # one trial, channel a = 1, 3, 2, 6 ; channel b = 0, 0, 0, 4
     sig = np.array([[1.0, 0.0], [3.0, 0.0], [2.0, 0.0], [6.0, 4.0]])
     est = SignalStatistics(statistics=ALL, channels=("a", "b")).fit([sig])
-    got = dict(zip(est.get_feature_names_out(), est.transform([sig])[0]))
+    got = dict(zip(est.get_feature_names_out(), est.transform([sig])[0], strict=True))
     # channel a: mean 3, deviations -2, 0, -1, 3 -> m2 = 14/4, m3 = (-8 + 0 - 1 + 27)/4 = 4.5,
     # m4 = (16 + 0 + 1 + 81)/4 = 24.5
     assert got["a_mean"] == 3.0

@@ -189,7 +189,8 @@ def test_real_depth_images(data_dir):
     assert F.shape == (40, 99) and np.isfinite(F).all()
     assert (F.std(axis=0) > 0).sum() >= 90  # descriptors vary across fabrics
     # two captures of one fabric are closer than captures of different fabrics (on average)
-    same = data.read_images(np.flatnonzero(data.images["fabric_id"].to_numpy() == data.images["fabric_id"][rows[0]])[:2])
+    same = data.read_images(
+        np.flatnonzero(data.images["fabric_id"].to_numpy() == data.images["fabric_id"][rows[0]])[:2])
     Fs = TextureDescriptor().fit_transform(same)
     z = (F - F.mean(0)) / np.where(F.std(0) > 0, F.std(0), 1)
     zs = (Fs - F.mean(0)) / np.where(F.std(0) > 0, F.std(0), 1)
@@ -206,7 +207,7 @@ def test_uniform_lbp_histograms_equal_scikit_image_bit_for_bit(points, radius):
     images = np.concatenate([rng.integers(0, 256, size=(3, 23, 31)),  # 8-bit levels, as the descriptor's
                              np.repeat(rng.integers(0, 4, size=(1, 23, 1)), 31, axis=2)])  # ties and flat rows
     hists = _uniform_lbp_histograms(images.astype(np.uint8), points, radius)
-    for image, hist in zip(images, hists):
+    for image, hist in zip(images, hists, strict=True):
         codes = local_binary_pattern(image.astype(np.uint8), points, radius, method="uniform")
         expected = np.bincount(codes.astype(np.int64).ravel(), minlength=points + 2) / codes.size
         np.testing.assert_array_equal(hist, expected)
@@ -221,6 +222,6 @@ def test_glcm_block_equals_scikit_image_per_image_bit_for_bit():
     out = desc.transform(images)
     glcm = out[:, [i for i, name in enumerate(desc.feature_names_per_image_) if name.startswith("glcm_")]]
     levels = int(params["glcm_levels"])
-    for q, row in zip(_quantise(_normalise(images, params), levels), glcm):
+    for q, row in zip(_quantise(_normalise(images, params), levels), glcm, strict=True):
         mat = graycomatrix(q, params["glcm_distances"], _angles(3), levels=levels, symmetric=True, normed=True)
         np.testing.assert_array_equal(row, np.concatenate([graycoprops(mat, p).ravel() for p in _GLCM_PROPS]))

@@ -103,7 +103,8 @@ def test_padded_candidate_pools_are_respected():
 
 
 def test_per_ep_model_detects_a_duplicated_ep(monkeypatch):
-    """SIMULATED: EP ``copy`` has exactly the features of EP ``info``; EP ``other`` senses the attributes independently."""
+    """SIMULATED: EP ``copy`` has exactly the features of EP ``info``; EP ``other`` senses the attributes
+    independently."""
     monkeypatch.delenv("TZSL_CACHE_DIR", raising=False)
     rng = np.random.default_rng(0)
     n_objects, n_trials, m = 40, 5, 6

@@ -35,11 +35,12 @@ def test_the_driver_keeps_a_third_and_finishes_the_survivors():
                 outside.add((di, gi, ci))
 
     def score(di, cells, n_seen):  # configuration (1, 2, 0) is best, then by flat index
-        return np.array([[0.0 if (di, gi, ci) == (1, 2, 0) else 1.0 + ci, 0.0] for gi, ci in zip(*np.nonzero(cells))])
+        return np.array([[0.0 if (di, gi, ci) == (1, 2, 0) else 1.0 + ci, 0.0]
+                         for gi, ci in zip(*np.nonzero(cells), strict=True)])
 
     alive = successive_halving(shape, folds, fit, score)
     assert alive[1, 2, 0] and alive.sum() == 3  # 18 -> 6 -> 3 (never fewer than the factor)
-    for key in zip(*np.nonzero(alive)):
+    for key in zip(*np.nonzero(alive), strict=True):
         assert fitted[key] == set(range(folds[key[0]])) and key in outside
     assert len(fitted) == 18 and all(len(v) >= 1 for v in fitted.values())
     assert sum(len(v) for v in fitted.values()) < 18 * 4  # fewer fold fits than the full grid

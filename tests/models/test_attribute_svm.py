@@ -114,8 +114,8 @@ def test_test_objects_never_influence_fitted_parameters():
         bank = AttributeClassifierBank(estimator=AttributeSVM(**TINY), n_jobs=1, memory=None, random_state=0)
         bank.fit(XX[tr], AA[tr], g[tr])
         fits.append(bank)
-    for row_a, row_b in zip(fits[0].estimators_, fits[1].estimators_):
-        for a, b in zip(row_a, row_b):
+    for row_a, row_b in zip(fits[0].estimators_, fits[1].estimators_, strict=True):
+        for a, b in zip(row_a, row_b, strict=True):
             assert (a.C_, a.gamma_, a.draw_, a.platt_) == (b.C_, b.gamma_, b.draw_, b.platt_)
             np.testing.assert_array_equal(a.oof_scores_, b.oof_scores_)
             np.testing.assert_array_equal(a.cv_scores_, b.cv_scores_)
@@ -141,7 +141,8 @@ def test_seeds_are_deterministic_and_distinct():
 
 def test_bank_shapes_and_errors():
     X, A, g = make_problem()
-    bank = AttributeClassifierBank(estimator=AttributeSVM(**TINY), attribute_names=["hard", "soft", "cool"], random_state=0)
+    bank = AttributeClassifierBank(estimator=AttributeSVM(**TINY), attribute_names=["hard", "soft", "cool"],
+                                   random_state=0)
     bank.fit(X, A, g)
     P = bank.predict_proba(X[:5])
     assert P.shape == (5, 2, 3) and np.all((P >= 0) & (P <= 1))
@@ -159,8 +160,10 @@ def test_bank_shapes_and_errors():
 
 def test_bank_n_jobs_1_equals_2():
     X, A, g = make_problem()
-    P1 = AttributeClassifierBank(estimator=AttributeSVM(**TINY), n_jobs=1, memory=None, random_state=0).fit(X, A, g).predict_proba(X)
-    P2 = AttributeClassifierBank(estimator=AttributeSVM(**TINY), n_jobs=2, memory=None, random_state=0).fit(X, A, g).predict_proba(X)
+    P1 = AttributeClassifierBank(estimator=AttributeSVM(**TINY), n_jobs=1, memory=None,
+                                 random_state=0).fit(X, A, g).predict_proba(X)
+    P2 = AttributeClassifierBank(estimator=AttributeSVM(**TINY), n_jobs=2, memory=None,
+                                 random_state=0).fit(X, A, g).predict_proba(X)
     np.testing.assert_array_equal(P1, P2)
 
 
@@ -205,7 +208,8 @@ def test_dask_equals_loky():
     X, A, g = make_problem(n_attributes=2)
     ref = AttributeClassifierBank(estimator=AttributeSVM(**TINY), n_jobs=2, memory=None, random_state=0)
     P_loky = ref.fit(X, A, g).predict_proba(X)
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cluster:
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                                  dashboard_address=None) as cluster:
         with distributed.Client(cluster):
             bank = AttributeClassifierBank(estimator=AttributeSVM(**TINY), backend="dask", memory=None, random_state=0)
             P_dask = bank.fit(X, A, g).predict_proba(X)
@@ -257,14 +261,16 @@ def test_grid_edge_choices_are_recorded_and_warned_once_per_batch():
     # a one-point C grid never counts as an edge; gamma far too large must sit on the low edge
     est = AttributeSVM(n_C=1, gamma_range=(30.0, 300.0), n_gamma=2, grid="paper", n_draws=1, cv=3)
     with pytest.warns(GridEdgeWarning) as record:
-        bank = AttributeClassifierBank(estimator=est, attribute_names=["a", "b", "c"], memory=None, random_state=0).fit(X, A, g)
+        bank = AttributeClassifierBank(estimator=est, attribute_names=["a", "b", "c"], memory=None,
+                                       random_state=0).fit(X, A, g)
     assert len([w for w in record if issubclass(w.category, GridEdgeWarning)]) == 1
     hits = bank.grid_edge_hits_
     assert {h["parameter"] for h in hits} == {"gamma"}
     assert all(h["edge"] == "low" and h["value"] == 30.0 for h in hits)
     assert len(hits) == 6  # every (attribute, sensor)
     for h in hits:
-        assert ("gamma", 30.0, "low") in bank.estimators_[["a", "b", "c"].index(h["attribute"])][h["sensor"]].grid_edges_
+        edges = bank.estimators_[["a", "b", "c"].index(h["attribute"])][h["sensor"]].grid_edges_
+        assert ("gamma", 30.0, "low") in edges
 
 
 def test_gamma_grids():

@@ -1,4 +1,5 @@
-"""AttributeSVM's grid="adaptive": a chosen grid end is widened one log step (up to a bound), an interior choice is not."""
+"""AttributeSVM's grid="adaptive": a chosen grid end is widened one log step (up to a bound), an interior choice
+is not."""
 
 from __future__ import annotations
 

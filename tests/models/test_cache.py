@@ -1,4 +1,5 @@
-"""tzsl/_fit_store.py (public: tzsl.fit_store): the fit store (keys, hits, warnings, counts), seed spawning, backends."""
+"""tzsl/_fit_store.py (public: tzsl.fit_store): the fit store (keys, hits, warnings, counts), seed spawning,
+backends."""
 
 from __future__ import annotations
 
@@ -108,7 +109,8 @@ def test_the_key_is_parameters_data_and_code_not_labels_or_parallelism(tmp_path,
     d = (array_digest(X), array_digest(y))
     base = store.key(AttributeSVM(C_range=(1.0, 10.0)), *d)
     assert base == store.key(AttributeSVM(C_range=(1.0, 10.0), name="hard (sensor 0)"), *d)  # a label
-    assert base == store.key(AttributeClassifierBank(estimator=AttributeSVM(C_range=(1.0, 10.0)), n_jobs=1).estimator, *d)
+    assert base == store.key(AttributeClassifierBank(estimator=AttributeSVM(C_range=(1.0, 10.0)), n_jobs=1).estimator,
+                             *d)
     bank = AttributeClassifierBank(estimator=AttributeSVM(), n_jobs=1)
     assert store.key(bank, *d) == store.key(bank.set_params(n_jobs=4, progress=True), *d)
     assert base != store.key(AttributeSVM(C_range=(1.0, 100.0)), *d)  # a parameter
@@ -118,7 +120,8 @@ def test_the_key_is_parameters_data_and_code_not_labels_or_parallelism(tmp_path,
     assert base != store.key(AttributeSVM(C_range=(1.0, 10.0)), array_digest(X2), d[1])  # the data
     assert base != store.key(AttributeSVM(C_range=(1.0, 10.0)), d[0], array_digest(y.astype(float)))  # its dtype
     groups = np.repeat(np.arange(8), 10)
-    assert store.key(AttributeSVM(), *d, array_digest(groups)) != store.key(AttributeSVM(), *d, array_digest(groups % 4))
+    assert (store.key(AttributeSVM(), *d, array_digest(groups))
+            != store.key(AttributeSVM(), *d, array_digest(groups % 4)))
 
 
 def test_a_generator_instance_is_never_stored(tmp_path, data):
@@ -133,7 +136,7 @@ def test_a_generator_instance_is_never_stored(tmp_path, data):
 
 class WarningLR(LogisticRegression):
     def fit(self, X, y, sample_weight=None):
-        warnings.warn("did not converge", ConvergenceWarning)
+        warnings.warn("did not converge", ConvergenceWarning, stacklevel=2)
         return super().fit(X, y, sample_weight)
 
 

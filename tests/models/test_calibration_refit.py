@@ -50,7 +50,7 @@ def _fold_settings(estimator, X, rows, y, refit):
 
     def score(fitted, Xv, K):
         bank = fitted.attribute_model_
-        for name, row in zip(bank.attribute_names, bank.estimators_):
+        for name, row in zip(bank.attribute_names, bank.estimators_, strict=True):
             seen.append((name, row[0].C_grid_.size, row[0].gamma_grid_.size, row[0].C_, row[0].gamma_))
         return fitted.decision_function(Xv, K)
 
@@ -63,7 +63,7 @@ def _fold_settings(estimator, X, rows, y, refit):
                selected_params(est.estimator_.attribute_model_, refit).items()})
         pseudo_unseen_scores(template, X, rows[y], y, random_state=0, score=score)
     bank = est.estimator_.attribute_model_
-    final = {name: (row[0].C_, row[0].gamma_) for name, row in zip(bank.attribute_names, bank.estimators_)}
+    final = {name: (row[0].C_, row[0].gamma_) for name, row in zip(bank.attribute_names, bank.estimators_, strict=True)}
     return seen, final, est
 
 
@@ -88,7 +88,8 @@ def test_pinned_and_search_give_the_same_predictions():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         fits = {refit: CalibratedZeroShotClassifier(estimator=_dap(), calibration_refit=refit,
-                                                    random_state=0).fit(X, rows[y], y) for refit in ("pinned", "search")}
+                                                    random_state=0).fit(X, rows[y], y)
+                for refit in ("pinned", "search")}
     np.testing.assert_array_equal(fits["pinned"].predict(X, rows), fits["search"].predict(X, rows))
     for est in fits.values():
         assert est.calibration_info_["fitted"] and np.isfinite(est.temperature_)
@@ -154,7 +155,8 @@ def test_ensemble_pins_each_member_s_choice_in_its_calibration_folds_when_asked(
     assert all(est.C_grid_.size == 1 and est.gamma_grid_.size == 1 for row in bank.estimators_ for est in row)
     assert [est.C_ for row in bank.estimators_ for est in row] == [est.C_ for row in fitted_bank.estimators_
                                                                      for est in row]
-    assert refit.estimators_[1].attribute_model_.best_gamma_ == fits["pinned"].estimator_.estimators_[1].attribute_model_.best_gamma_
+    assert (refit.estimators_[1].attribute_model_.best_gamma_
+            == fits["pinned"].estimator_.estimators_[1].attribute_model_.best_gamma_)
 
 
 def test_ensemble_pinned_and_search_folds_give_the_same_predictions():

@@ -78,7 +78,7 @@ def test_folds_always_fittable(seed):
     per_fold = [np.unique(groups[va]).size for _, va in folds]
     assert max(per_fold) - min(per_fold) <= 1
     again = class_grouped_folds(groups, n_splits, "test")
-    assert all(np.array_equal(a[1], b[1]) for a, b in zip(folds, again))  # deterministic
+    assert all(np.array_equal(a[1], b[1]) for a, b in zip(folds, again, strict=True))  # deterministic
 
 
 def test_too_few_groups_and_strict_fold_count_say_why():

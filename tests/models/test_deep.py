@@ -41,7 +41,8 @@ def sequences(n_per_class=6, size=16, n_frames=5, seed=0, channels=None):
     xx = np.arange(size)[None, None, None, :]
     t = np.arange(n_frames)[None, :, None, None]
     k = y[:, None, None, None]
-    X = 100 + 30 * k * (t + 1) / n_frames + 40 * np.sin(xx * (k + 1) * 0.5) + rng.normal(0, 5, (len(y), n_frames, size, size))
+    X = (100 + 30 * k * (t + 1) / n_frames + 40 * np.sin(xx * (k + 1) * 0.5)
+         + rng.normal(0, 5, (len(y), n_frames, size, size)))
     X = np.clip(X, 0, 255).astype(np.uint8)
     if channels:
         X = np.repeat(X[..., None], channels, axis=-1)

@@ -99,8 +99,9 @@ def test_grid_edge_share_reads_models_and_fills_the_comparison_column():
     assert "share_at_grid_edge" in COMPARISON_COLUMNS
     rng = np.random.default_rng(0)
     trials = pd.concat([
-        pd.DataFrame({"method": m, "split": np.repeat(["s0", "s1"], 10), "class": np.tile(np.arange(5), 4), "trial": np.tile(np.arange(10), 2),
-                      "correct": rng.integers(0, 2, 20).astype(float)}) for m in ("ref", "eszsl")
+        pd.DataFrame({"method": m, "split": np.repeat(["s0", "s1"], 10), "class": np.tile(np.arange(5), 4),
+                      "trial": np.tile(np.arange(10), 2), "correct": rng.integers(0, 2, 20).astype(float)})
+        for m in ("ref", "eszsl")
     ], ignore_index=True)
     table = method_summary(trials, {"ref": [1.0], "eszsl": [1.0]}, 0.2, "ref", study="t",
                            grid_edge={"eszsl": [1.0, 0.0, 0.0, 1.0]})

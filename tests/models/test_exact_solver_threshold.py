@@ -57,7 +57,8 @@ def test_the_guard_reads_the_criterion_of_paired_splits():
                                   bench.label("approximate"): [0.38, 0.28, 0.33, 0.90, 0.10, 0.20]})
         summary = bench.paired_summary(per_split, n_boot=200)
         criterion = summary.set_index("split_kind").loc["criterion"]
-        assert criterion["difference"] == pytest.approx(-0.06)  # (-0.02 + -0.10) / 2: the "mean" and "std" rows left out
+        # (-0.02 + -0.10) / 2: the "mean" and "std" rows left out
+        assert criterion["difference"] == pytest.approx(-0.06)
         assert not bench.guard_holds(summary)
         assert bench.guard_holds(bench.paired_summary(per_split.assign(**{bench.label("approximate"):
                                                                           per_split[bench.label("exact")]})))

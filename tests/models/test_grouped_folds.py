@@ -44,7 +44,7 @@ def test_same_folds_as_sklearn(seed):
         ours = stratified_group_fold_masks(y, groups, n_splits, fold_seed)
         theirs = _sklearn(y, groups, n_splits, fold_seed)
         assert len(ours) == len(theirs) == n_splits
-        for a, b in zip(ours, theirs):
+        for a, b in zip(ours, theirs, strict=True):
             np.testing.assert_array_equal(a, b)
         checked += 1
     assert checked > 30
@@ -55,7 +55,8 @@ def test_string_groups_and_many_classes_match_sklearn():
     groups = np.repeat(np.array([f"object {i}" for i in range(30)]), 5)
     y = np.repeat(rng.integers(0, 3, 30), 5)
     for fold_seed in range(20):
-        for a, b in zip(stratified_group_fold_masks(y, groups, 4, fold_seed), _sklearn(y, groups, 4, fold_seed)):
+        for a, b in zip(stratified_group_fold_masks(y, groups, 4, fold_seed), _sklearn(y, groups, 4, fold_seed),
+                        strict=True):
             np.testing.assert_array_equal(a, b)
 
 

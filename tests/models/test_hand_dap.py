@@ -132,7 +132,8 @@ def test_conventions_and_determinism(hand_data):
         clf.predict(test.to_array())
     assert clf.fit(train.to_array(), train.objects, TABLE.K) is clf
     again = clone(clf).fit(train.to_array(), train.objects, TABLE.K)
-    np.testing.assert_array_equal(clf.predict_attribute_proba(test.to_array()), again.predict_attribute_proba(test.to_array()))
+    np.testing.assert_array_equal(clf.predict_attribute_proba(test.to_array()),
+                                  again.predict_attribute_proba(test.to_array()))
     pooled = clone(clf).set_params(per_finger=False).fit(train.to_array(), train.objects, TABLE.K)
     assert len(pooled.material_models_) == 1
 

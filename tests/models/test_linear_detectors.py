@@ -221,7 +221,8 @@ def test_the_untuned_logistic_family_is_the_per_ep_models_classifier_and_takes_n
 
 @pytest.mark.parametrize("detector", ["logistic", "logistic-c1"])
 def test_linear_detectors_fit_with_one_blas_thread(detector, monkeypatch):
-    """A detector's fit is a small dense problem: one BLAS thread (tzsl._parallel.one_blas_thread), whatever the caller's."""
+    """A detector's fit is a small dense problem: one BLAS thread (tzsl._parallel.one_blas_thread), whatever the
+    caller's."""
     from sklearn.linear_model import LogisticRegression
     from threadpoolctl import threadpool_info, threadpool_limits
 

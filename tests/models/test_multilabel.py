@@ -30,7 +30,8 @@ def test_chain_shapes_order_and_inputs():
 
 def test_chain_posteriors_depend_on_earlier_attributes():
     X, A, g = make_problem(n_attributes=3, seed=3)
-    ml = MultiLabelAttributeClassifier(estimator=AttributeSVM(**TINY), order=[0, 1, 2], memory=None, random_state=0).fit(X, A, g)
+    ml = MultiLabelAttributeClassifier(estimator=AttributeSVM(**TINY), order=[0, 1, 2], memory=None,
+                                       random_state=0).fit(X, A, g)
     P = ml.predict_proba(X)
     # recompute the last link by hand with the chained inputs replaced by zeros: it must differ
     last = ml.estimators_[2][0]
@@ -46,7 +47,8 @@ def test_random_order_is_seeded_and_dap_ready(tmp_path):
     b = MultiLabelAttributeClassifier(estimator=AttributeSVM(**TINY), memory=None, random_state=4).fit(X, A, g)
     np.testing.assert_array_equal(a.order_, b.order_)
     np.testing.assert_array_equal(a.predict_proba(X), b.predict_proba(X))
-    dap = ZeroShotClassifier(attribute_model=a, decision_rule=DAPRule(prior="uni")).fit(X, A, g)  # clone refit: from cache
+    # clone refit: from cache
+    dap = ZeroShotClassifier(attribute_model=a, decision_rule=DAPRule(prior="uni")).fit(X, A, g)
     K = np.unique(A, axis=0)
     proba = dap.predict_proba(X, K)
     np.testing.assert_allclose(proba.sum(1), 1.0)

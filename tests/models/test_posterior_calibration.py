@@ -130,9 +130,9 @@ def test_folds_hold_out_classes_and_are_seeded(data):
     assert sum(len(k) for k in seen) == 30  # every training class held out once
     again = pseudo_unseen_scores(dap(1.0), X, A, groups, n_folds=3, random_state=1)
     other = pseudo_unseen_scores(dap(1.0), X, A, groups, n_folds=3, random_state=2)
-    assert all(np.array_equal(a[1], b[1]) for a, b in zip(folds, again))
+    assert all(np.array_equal(a[1], b[1]) for a, b in zip(folds, again, strict=True))
     assert all(d == 0 for _, _, d in folds)
-    assert not all(len(a[1]) == len(b[1]) and np.array_equal(a[1], b[1]) for a, b in zip(folds, other))
+    assert not all(len(a[1]) == len(b[1]) and np.array_equal(a[1], b[1]) for a, b in zip(folds, other, strict=True))
 
 
 def test_fit_temperature_recovers_a_known_power():
@@ -203,7 +203,7 @@ def test_a_fold_leaves_out_an_attribute_its_training_classes_cannot_learn():
     eszsl = ZeroShotClassifier(attribute_model=ESZSL(), decision_rule=CompatibilityRule())
     folds = pseudo_unseen_scores(eszsl, X, rows[y], y, n_folds=4, random_state=0, score=score)
     dropped = [d for _, _, d in folds]
-    assert max(dropped) >= 1 and all(k == rows.shape[1] - d for k, d in zip(seen, dropped))
+    assert max(dropped) >= 1 and all(k == rows.shape[1] - d for k, d in zip(seen, dropped, strict=True))
     est = CalibratedZeroShotClassifier(estimator=eszsl, calibration_folds=4, random_state=0).fit(X, rows[y], y)
     assert est.calibration_info_["n_attributes_left_out"] == sum(dropped)
 

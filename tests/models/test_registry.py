@@ -108,7 +108,8 @@ def test_all_estimators_lists_public_estimator_classes():
     assert names == sorted(names)
     assert {"ESZSL", "ESZSLCV", "EmbeddingZSL", "ZeroShotClassifier", "AttributeSVM",
             "AttributeClassifierBank", "MultiLabelAttributeClassifier", "HandDAPClassifier",
-            "DeepAttributeEmbedding", "IAP", "SAE", "SAECV", "ALE", "SJE", "DeViSE", "LogisticAttribute", "LinearAttribute",
+            "DeepAttributeEmbedding", "IAP", "SAE", "SAECV", "ALE", "SJE", "DeViSE", "LogisticAttribute",
+            "LinearAttribute",
             "PerEPAttributeModel", "ScalableAttributeClassifier", "ScoreEnsembleZSL",
             "CalibratedZeroShotClassifier"} == set(names)
     for _, cls in all_estimators():  # keyword-only __init__ everywhere

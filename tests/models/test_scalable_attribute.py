@@ -60,12 +60,13 @@ def test_bad_parameters_raise_sklearn_errors():
 
 
 @pytest.mark.parametrize(("solver", "limit", "expected"), [
-    ("auto", 10_000, "exact"), ("auto", 10, "approximate"), ("exact", 10, "exact"), ("approximate", 10_000, "approximate"),
+    ("auto", 10_000, "exact"), ("auto", 10, "approximate"), ("exact", 10, "exact"),
+    ("approximate", 10_000, "approximate"),
 ])
 def test_bank_solver_choice_is_recorded(solver, limit, expected, capsys):
     X, A, g = make_problem(n_attributes=1, n_sensors=1)
-    bank = AttributeClassifierBank(estimator=AttributeSVM(n_C=2, n_gamma=2, n_draws=1, cv=3), memory=None, random_state=0,
-                                   solver=solver, max_exact_trials=limit, progress=True)
+    bank = AttributeClassifierBank(estimator=AttributeSVM(n_C=2, n_gamma=2, n_draws=1, cv=3), memory=None,
+                                   random_state=0, solver=solver, max_exact_trials=limit, progress=True)
     bank.fit(X, A, g)
     choice = bank.solver_choice_
     assert choice["solver"] == expected and choice["n_trials"] == X.shape[0]
@@ -170,7 +171,8 @@ def test_a_fit_inside_a_dask_task_equals_the_local_fit():
     model = ScalableAttributeClassifier(n_gamma=2, n_C=2, n_components=128, max_tune_trials=300, max_fit_trials=400,
                                         random_state=0)
     local = fit_clone(model, X[:, 0], A[:, 1], g)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
             distributed.Client(cluster), joblib.parallel_backend("dask"):
         remote = Parallel(n_jobs=2)(delayed(fit_clone)(model, X[:, 0], A[:, 1], g) for _ in range(2))
     for fitted in remote:

@@ -22,7 +22,8 @@ def make_zsl(n_objects=16, trials=6, n_sensors=2, n_features=6, n_attributes=8, 
     rows = rows[rng.permutation(len(rows))[:n_objects]]
     W = rng.normal(size=(n_sensors, n_attributes, n_features))
     objects = np.repeat(np.arange(n_objects), trials)
-    X = np.einsum("om,smd->osd", rows.astype(float), W)[objects] + noise * rng.normal(size=(objects.size, n_sensors, n_features))
+    X = (np.einsum("om,smd->osd", rows.astype(float), W)[objects]
+         + noise * rng.normal(size=(objects.size, n_sensors, n_features)))
     return X, rows, objects
 
 

@@ -29,7 +29,8 @@ def _feature_set(n_objects=24, n_trials=3, n_attributes=6, seed=0) -> FeatureSet
     X = rng.normal(size=(codes.size, 2, 4 * n_attributes))
     hold = slice(n_attributes, 2 * n_attributes)
     X[:, :, hold] += 3.0 * (K[codes] - 0.5)[:, None, :]
-    trials = pd.DataFrame({"trial_id": [f"{o}_{t}" for o, t in zip(objects, np.tile(np.arange(n_trials), n_objects))],
+    trial_ids = [f"{o}_{t}" for o, t in zip(objects, np.tile(np.arange(n_trials), n_objects), strict=True)]
+    trials = pd.DataFrame({"trial_id": trial_ids,
                            "object_id": codes, "object_name": objects,
                            "trial_index": np.tile(np.arange(1, n_trials + 1), n_objects)})
     attributes = pd.DataFrame(K, index=pd.Index([f"obj_{i:03d}" for i in range(n_objects)], name="object_name"),
@@ -63,7 +64,7 @@ def test_study_writes_table_and_figure(tmp_path, monkeypatch):
     # each first:<ep> order starts with its EP
     chosen = table.attrs["chosen"]
     assert all(chosen[split][f"first:{ep}"].startswith(f"order:{short}")
-               for split in chosen for ep, short in zip(EPS, ("sq", "ho", "ss", "fs")))
+               for split in chosen for ep, short in zip(EPS, ("sq", "ho", "ss", "fs"), strict=True))
     # the hold block is the informative one: the active policy explores it first and beats chance
     first = eps_rows[(eps_rows["strategy"] == "active") & (eps_rows["x"] == 1)]
     assert first["first_hold"].iloc[0] == 1.0

@@ -33,7 +33,8 @@ def test_simulated_hand_tables(tmp_path):
     assert set(curves["strategy"]) == {"active", "fixed:pinch", "fixed:tripod", "fixed:power", "random_type",
                                        "random_grasp"}
     assert (curves.groupby("strategy")["grasps"].apply(list) == [[1, 2, 3]] * 6).all()
-    assert ((curves["ci95_low"] <= curves["accuracy"] + 1e-12) & (curves["accuracy"] <= curves["ci95_high"] + 1e-12)).all()
+    assert ((curves["ci95_low"] <= curves["accuracy"] + 1e-12)
+            & (curves["accuracy"] <= curves["ci95_high"] + 1e-12)).all()
     active = curves[curves["strategy"] == "active"].set_index("grasps")["accuracy"]
     assert active[3] > 2 * curves["chance"].iloc[0]  # the simulated attributes are learnable
     assert ((stop["mean_grasps"] >= 1) & (stop["mean_grasps"] <= 3)).all()

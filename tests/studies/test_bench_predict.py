@@ -1,4 +1,5 @@
-"""``make bench``'s predict part: the machinery on the smallest run (one method, one repeat, a few grasps), not a timing."""
+"""``make bench``'s predict part: the machinery on the smallest run (one method, one repeat, a few grasps), not a
+timing."""
 
 from __future__ import annotations
 

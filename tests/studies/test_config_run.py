@@ -36,7 +36,8 @@ def test_builtin_studies_ship_inside_the_package_only():
     assert sorted(p.name for p in (REPO / "experiments").iterdir()) == ["README.md", "benchmarks",
                                                                          "my_dataset_template.toml"]
     assert not list((REPO / "experiments" / "benchmarks").glob("*.toml"))
-    assert load_experiment(REPO / "experiments" / "my_dataset_template.toml").study == "zero-shot"  # the generic study, no paper preset
+    # the generic study, no paper preset
+    assert load_experiment(REPO / "experiments" / "my_dataset_template.toml").study == "zero-shot"
 
 
 def test_studies_read_the_schema_defaults():

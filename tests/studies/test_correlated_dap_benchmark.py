@@ -1,4 +1,5 @@
-"""experiments/benchmarks/phac2_correlated_dap.py on SIMULATED data (it measures nothing here): its pieces do what they say."""
+"""experiments/benchmarks/phac2_correlated_dap.py on SIMULATED data (it measures nothing here): its pieces do what
+they say."""
 
 from __future__ import annotations
 
@@ -45,7 +46,8 @@ def test_the_correlated_rule_beats_the_diagonal_one_when_errors_are_shared(bench
     S_test, _, _, y = _simulated_logits(rng, K_test, 1, 10, shared=2.0)
     mu, _ = bench.class_means(S, A, objects, S_fit=S)
     R = bench.residuals(S, A, mu)
-    accuracy = {kind: np.mean(bench.gaussian_scores(S_test, K_test, mu, bench.covariance(R, objects, kind)).argmax(1) == y)
+    accuracy = {kind: np.mean(bench.gaussian_scores(S_test, K_test, mu, bench.covariance(R, objects, kind)).argmax(1)
+                              == y)
                 for kind in ("trial", "diagonal")}
     assert accuracy["trial"] > accuracy["diagonal"] + 0.1, accuracy
 

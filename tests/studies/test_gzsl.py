@@ -52,8 +52,9 @@ def synthetic_features(n_objects: int = 24, n_attributes: int = 6, trials: int =
 
 def _config(**kw) -> ZeroShotSettings:
     """Study settings for the GZSL tests (``[gzsl]`` keys as ``**{"gzsl.key": value}``)."""
-    return study_settings(ZeroShotSettings, "phac2-dap", **{"n_splits": 2, "n_test": 5, "progress": False, "cache": False,
-                                          "svm_params": dict(TINY_SVM), "multilabel": False, **kw})
+    return study_settings(ZeroShotSettings, "phac2-dap", **{"n_splits": 2, "n_test": 5, "progress": False,
+                                                            "cache": False, "svm_params": dict(TINY_SVM),
+                                                            "multilabel": False, **kw})
 
 
 def _split(features: FeatureSet, test: list[str]) -> Split:
@@ -190,7 +191,7 @@ def test_stacking_constant_never_depends_on_test_objects():
     test = np.isin(changed.objects, split.test_objects)
     changed.X[test] = np.random.default_rng(9).normal(size=changed.X[test].shape) * 5
     rows2 = gzsl_split(changed, split, config, 0)
-    for a, b in zip(rows, rows2):
+    for a, b in zip(rows, rows2, strict=True):
         assert a["stacking_constant"] == b["stacking_constant"]
         assert a["seen"] == pytest.approx(b["seen"]) or a["calibrated"]  # seen trials unchanged when uncalibrated
     assert [r["unseen"] for r in rows] != [r["unseen"] for r in rows2]

@@ -61,7 +61,8 @@ def test_every_file_is_written_with_its_columns(study, folder):
     k = pd.read_csv(out / "hand_multigrasp_k.csv")
     assert {"seed", "k", "accuracy", "mean_grasps_used", "decided_fraction", "objects_all_correct"} <= set(k.columns)
     att = pd.read_csv(out / "hand_attribute_accuracy.csv")
-    assert {"seed", "attribute", "kind", "accuracy", "balanced_accuracy", "paper_accuracy", "ci95_low"} <= set(att.columns)
+    assert ({"seed", "attribute", "kind", "accuracy", "balanced_accuracy", "paper_accuracy", "ci95_low"}
+            <= set(att.columns))
     assert "chance" not in att.columns  # attribute accuracy: no test-class chance
     assert set(att["attribute"]) == set(TABLE.K.columns) | {"mean"}
     S = pd.read_csv(out / "hand_attribute_distance.csv")

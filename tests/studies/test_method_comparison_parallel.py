@@ -67,8 +67,8 @@ _SEEN_THREADS: list[int] = []
 
 
 def test_the_methods_fits_in_this_process_use_one_blas_thread():
-    """Many small fits: threaded BLAS only spins (tzsl._parallel.one_blas_thread), so the comparison fits in one BLAS thread
-    in this process too (joblib's workers have one already), whatever the caller's limit."""
+    """Many small fits: threaded BLAS only spins (tzsl._parallel.one_blas_thread), so the comparison fits in one
+    BLAS thread in this process too (joblib's workers have one already), whatever the caller's limit."""
     from threadpoolctl import threadpool_info, threadpool_limits
 
     from tests.studies.test_method_wiring import NearestMeanAttributes

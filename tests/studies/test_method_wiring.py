@@ -107,7 +107,8 @@ def _check_comparison(folder: Path, n_splits: int, data: str) -> pd.DataFrame:
 
 @pytest.mark.slow  # about 25 s: attribute SVMs on the real data
 def test_toy_method_runs_in_a_phac2_study(toy_method, data_dir, tmp_path):
-    path = _write(tmp_path, SMALL_PHAC2.format(dataset='builtin = "phac2-penn"\nmin_objects = 15  # 7 attributes: a quick run',
+    path = _write(tmp_path, SMALL_PHAC2.format(dataset='builtin = "phac2-penn"\n'
+                                                       'min_objects = 15  # 7 attributes: a quick run',
                                                  n_splits=1, n_test=10))
     run_experiment(path, out=tmp_path / "res", data_dir=str(data_dir))
     table = _check_comparison(tmp_path / "res", n_splits=1, data="real")  # min_objects = 15: not the paper's
@@ -193,7 +194,8 @@ progress = false
     assert (comparison["reference"] == "embedding_lam_0").all()  # 0.1 not run: the first lambda
     # the comparison runs on the zero-shot protocol of the split (the headline)
     headline = toy[toy["zero_shot"].astype(bool)]
-    assert comparison.set_index("method").loc["toy", "accuracy"] == pytest.approx(headline["accuracy"].iloc[0], abs=1e-5)
+    assert (comparison.set_index("method").loc["toy", "accuracy"]
+            == pytest.approx(headline["accuracy"].iloc[0], abs=1e-5))
     manifest = json.loads((tmp_path / "res" / "manifest.json").read_text())  # the run's one manifest
     assert manifest["config"]["fabric"]["methods"] == [{"name": "toy"}]
     assert not (tmp_path / "res" / "fabric_manifest.json").exists()
@@ -316,7 +318,8 @@ def test_a_failing_dap_split_is_recorded_and_the_run_exits_1(tmp_path, monkeypat
         run_experiment(_write(tmp_path, text), out=tmp_path / "res")
     assert info.value.failures == ["failed_splits: split=2, method=dap: RuntimeError: simulated solver failure"]
     failed = pd.read_csv(tmp_path / "res" / "failed_splits.csv")
-    assert failed.to_dict("records") == [{"split": 2, "method": "dap", "error": "RuntimeError: simulated solver failure"}]
+    assert failed.to_dict("records") == [{"split": 2, "method": "dap",
+                                          "error": "RuntimeError: simulated solver failure"}]
     table1 = pd.read_csv(tmp_path / "res" / "table1_fusion.csv")
     assert table1["split"].astype(str).tolist() == ["1", "3", "mean", "std", "control"]  # the other splits completed
     def always_fails(*args, **kwargs):

@@ -73,7 +73,8 @@ def test_staged_results_move_into_place_on_commit(tmp_path):
     assert not (tmp_path / "res" / "a.csv").exists() and (tmp_path / "res" / STAGING_FOLDER / "a.csv").exists()
     out.commit()
     assert sorted(p.name for p in (tmp_path / "res").iterdir()) == ["a.csv", "manifest.json"]
-    assert out.root == tmp_path / "res" and out.written == [tmp_path / "res" / "a.csv", tmp_path / "res" / "manifest.json"]
+    assert (out.root == tmp_path / "res"
+            and out.written == [tmp_path / "res" / "a.csv", tmp_path / "res" / "manifest.json"])
     manifest = json.loads((tmp_path / "res" / "manifest.json").read_text())
     assert manifest["outputs"]["a.csv"] == file_sha256(tmp_path / "res" / "a.csv")
     again = ResultsDir(tmp_path / "res", staging=True)

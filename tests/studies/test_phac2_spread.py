@@ -70,14 +70,15 @@ def test_comparison_has_both_split_kinds_with_split_and_refit_spread(study):
 def test_fusion_prior_table_pairs_every_variant_with_dap_avg(study):
     _, _, _, tables = study
     table = tables[FUSION_PRIOR_TABLE]
-    for kind, sub in table.groupby("split_kind", sort=False):
+    for _kind, sub in table.groupby("split_kind", sort=False):
         assert len(sub) == 6 and sub["method"].iloc[0] == "dap-avg" and pd.isna(sub["difference"].iloc[0])
         reference = sub["accuracy"].iloc[0]
         others = sub.iloc[1:]
         assert np.allclose(others["difference"], others["accuracy"] - reference)
         assert (others["difference_ci95_low"] <= others["difference"] + 1e-12).all()
         assert (others["difference"] <= others["difference_ci95_high"] + 1e-12).all()
-        assert set(zip(sub["fusion"], sub["prior"])) == {(f, p) for f in ("avg", "max") for p in ("uni", "test", "train")}
+        assert (set(zip(sub["fusion"], sub["prior"], strict=True))
+                == {(f, p) for f in ("avg", "max") for p in ("uni", "test", "train")})
     random = table[table["split_kind"] == "random"].set_index("method")
     t1 = tables["table1_fusion"].set_index("split")
     assert random.loc["dap-max", "accuracy"] == pytest.approx(t1.loc["mean", "maxdap"])
@@ -136,7 +137,8 @@ def test_headlines_preset_is_the_paper_study_with_more_splits(tmp_path):
     paper, headlines = load_experiment("phac2-dap"), load_experiment("phac2-headlines")
     evidence = load_experiment("phac2-evidence")  # the headlines' neighbour in the folder of `tzsl evidence`
     assert headlines.config.splits.n_splits >= 50 and paper.config.splits.n_splits < headlines.config.splits.n_splits
-    assert headlines.config.splits.refit_seeds >= 1 and set(headlines.config.methods.compare_on) == {"random", "challenging"}
+    assert (headlines.config.splits.refit_seeds >= 1
+            and set(headlines.config.methods.compare_on) == {"random", "challenging"})
     assert headlines.config.svm == paper.config.svm and headlines.config.splits.seed == paper.config.splits.seed
     assert not set(zero_shot_outputs(evidence.config)) & set(zero_shot_outputs(headlines.config)) - {"manifest.json"}
     paper = evidence  # a file with every key the checks below change

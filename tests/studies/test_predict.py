@@ -345,7 +345,8 @@ def test_predict_cli_old_pickle_bundle_needs_trust_pickle(phac2, tmp_path):
     header = {k: v for k, v in header.items() if k not in ("header_sha256", "hmac_sha256", "payload_format")}
     header.update(format_version=1, tzsl_version=tzsl.__version__, payload_bytes=len(payload),
                   payload_sha256=hashlib.sha256(payload).hexdigest())
-    header["header_sha256"] = hashlib.sha256(json.dumps(header, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+    header["header_sha256"] = hashlib.sha256(
+        json.dumps(header, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
     old = tmp_path / "old.tzsl"
     old.write_bytes(b"TZSL-MODEL-BUNDLE\n" + json.dumps(header).encode() + b"\n" + payload)
     message = _one_line_error(_cli("predict", "--model", old, "--classes", classes, root / "test.npz"), old)
@@ -369,7 +370,8 @@ def test_predict_cli_refuses_crafted_bundle(phac2, tmp_path):
     header = {k: v for k, v in header.items() if k not in ("header_sha256", "hmac_sha256")}
     header.update(payload_bytes=len(payload), payload_sha256=hashlib.sha256(payload).hexdigest(),
                   payload_format="skops")
-    header["header_sha256"] = hashlib.sha256(json.dumps(header, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+    header["header_sha256"] = hashlib.sha256(
+        json.dumps(header, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
     evil = tmp_path / "evil.tzsl"
     evil.write_bytes(b"TZSL-MODEL-BUNDLE\n" + json.dumps(header).encode() + b"\n" + payload)
     assert "does not trust: posix.system" in _one_line_error(

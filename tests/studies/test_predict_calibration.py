@@ -32,8 +32,8 @@ def _features(seed: int, rows: pd.DataFrame, n_trials: int) -> FeatureSet:
     trials = pd.DataFrame({"trial_id": [f"{o}_{i % n_trials}" for i, o in enumerate(objects)],
                            "object_id": [list(rows.index).index(o) for o in objects], "object_name": objects,
                            "trial_index": [i % n_trials for i in range(len(objects))]})
-    return FeatureSet(X=X[:, None, :], trials=trials, sensors=("finger_0",), feature_names=tuple(f"f{i}" for i in range(6)),
-                      attributes=rows, dataset="simulated")
+    return FeatureSet(X=X[:, None, :], trials=trials, sensors=("finger_0",),
+                      feature_names=tuple(f"f{i}" for i in range(6)), attributes=rows, dataset="simulated")
 
 
 @pytest.fixture(scope="module")
@@ -82,7 +82,8 @@ def test_old_bundle_without_calibrator_loads_and_says_uncalibrated(bundle, tmp_p
     assert "uncalibrated" in predictor.calibration_report()["reason"] and "uncalibrated" in predictor.describe()
     K = read_class_table(classes, predictor.attribute_names)
     pred = predict_grasps(predictor, K, [root / "test.npz"])
-    np.testing.assert_allclose(pred.grasp_posteriors, softmax(clf.decision_function(test.X[:, 0], K.to_numpy(float)), axis=1))
+    np.testing.assert_allclose(pred.grasp_posteriors,
+                               softmax(clf.decision_function(test.X[:, 0], K.to_numpy(float)), axis=1))
 
 
 @pytest.mark.parametrize("stored", ["arrays", "estimator"])

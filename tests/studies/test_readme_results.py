@@ -60,7 +60,8 @@ def test_block_shows_ours_with_interval_baseline_and_paper(tmp_path):
     block = results_block(_results(tmp_path / "results"))
     assert "| PHAC-2 Table 1, AVGDAP (uniform prior), mean of 2 random splits | 0.310 [0.241, 0.379] | chance 0.100; " \
            "shuffled-rows control 0.099 [0.070, 0.130] | 0.39 |" in block
-    assert "zero-shot variant (zero-shot-drop: test groups 0 7), per-class mean accuracy | 0.580 [0.410, 0.770]" in block
+    assert ("zero-shot variant (zero-shot-drop: test groups 0 7), per-class mean accuracy | 0.580 [0.410, 0.770]"
+            in block)
     assert "NOT zero-shot" in block and "majority 0.480" in block and "0.7545" in block
     assert "Hand Table 5 (SIMULATED grasps), LDAP" in block and "0.500 [0.410, 0.590]" in block
 
@@ -74,7 +75,8 @@ def test_update_rewrites_only_the_block_and_check_reports_drift(tmp_path):
     assert main([str(results), str(readme), "--check"]) == 1
     assert main([str(results), str(readme)]) == 0
     text = readme.read_text()
-    assert "old numbers" not in text and text.startswith("# title\n\n## Results\n") and text.endswith("## After\ntext\n")
+    assert ("old numbers" not in text and text.startswith("# title\n\n## Results\n")
+            and text.endswith("## After\ntext\n"))
     assert "0.310 [0.241, 0.379]" in text
     assert main([str(results), str(readme), "--check"]) == 0  # up to date: no drift
     assert not update_file(readme, results)
@@ -241,7 +243,8 @@ def test_search_benchmark_block_reads_every_summary(tmp_path):
                        "grid_cpu_s": 47.5, "halving_cpu_s": 28.9, "cpu_ratio": 1.64}]).to_csv(
             tmp_path / f"search_summary_seed{seed}_paper.csv", index=False)
     block = search_benchmark_block(tmp_path)
-    assert "| paper | 0 | 10 | 0.300 [0.200, 0.400] | 0.290 [0.200, 0.390] | -0.010 [-0.020, +0.010] | yes | 50% |" in block
+    assert ("| paper | 0 | 10 | 0.300 [0.200, 0.400] | 0.290 [0.200, 0.390] | -0.010 [-0.020, +0.010] | yes | 50% |"
+            in block)
     assert "| paper | 1 | 10 |" in block and "-0.020 [-0.040, -0.001] | no |" in block
     assert "| 47.5 | 28.9 | 1.64 |" in block
 def test_headlines_come_from_the_run_with_the_most_random_splits(tmp_path):
@@ -284,7 +287,8 @@ def test_comparison_columns_are_study_and_split_kind(tmp_path):
                   "chance": [0.1, 0.1, 0.105], "reference": "dap-avg"}).to_csv(root / "method_comparison.csv",
                                                                               index=False)
     block = evidence_block(root)
-    assert ("| method | phac2, random splits, ref. dap-avg, chance 0.10 | phac2-headlines, random splits, ref. dap-avg, "
+    assert ("| method | phac2, random splits, ref. dap-avg, chance 0.10 | "
+            "phac2-headlines, random splits, ref. dap-avg, "
             "chance 0.10 | phac2-headlines, challenging splits, ref. dap-avg, chance 0.10 |") in block
     assert "| `dap-avg` | 0.31 (0.20-0.40) | 0.30 (0.25-0.35) | 0.20 (0.10-0.30) |" in block
 
@@ -311,8 +315,8 @@ def test_grid_summary_and_pairs_report_the_share_at_a_grid_edge(tmp_path, accura
     gamma = {"paper": 0.01, "extended": 1e-4, "adaptive": 1e-6}
     for grid, cpu in (("paper", 4.0), ("extended", 6.0), ("adaptive", 15.0)):
         for split in ("random-1", "random-2"):
-            np.savez(tmp_path / f"{grid}_{split}.npz", log_loss=np.full((2, 2), 0.5), gamma=np.full((2, 2), gamma[grid]),
-                     at_edge=np.array(edges[grid], dtype=bool), cpu_seconds=cpu)
+            np.savez(tmp_path / f"{grid}_{split}.npz", log_loss=np.full((2, 2), 0.5),
+                     gamma=np.full((2, 2), gamma[grid]), at_edge=np.array(edges[grid], dtype=bool), cpu_seconds=cpu)
     summary = accuracy_benchmark.grid_summary(tmp_path).set_index("grid")
     assert summary.loc["paper", "share_at_edge"] == 0.75 and summary.loc["adaptive", "share_at_edge"] == 0.0
     assert summary.loc["adaptive", "cpu_seconds_per_split"] == 15.0 and summary.loc["adaptive", "gamma<1e-4"] == 1.0

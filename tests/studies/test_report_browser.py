@@ -173,7 +173,8 @@ n_draws = 1
 
 @pytest.fixture(scope="module")
 def lab_report(tmp_path_factory) -> Path:
-    """`tzsl run` of the template on 9 SIMULATED objects x 5 fingers (signals follow the attributes), then `tzsl report`."""
+    """`tzsl run` of the template on 9 SIMULATED objects x 5 fingers (signals follow the attributes), then
+    `tzsl report`."""
     root = tmp_path_factory.mktemp("lab")
     classes = pd.DataFrame.from_dict(ROWS, orient="index", columns=["hard", "rough", "cold", "soft", "solid", "paper"])
     classes.index.name = "class"

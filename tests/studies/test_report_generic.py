@@ -69,7 +69,8 @@ def lab(tmp_path) -> Path:
     record = {"study": "zero-shot", "study_kind": "zero-shot", "dataset": "my-lab",
               "labels": {"study": "zero-shot", "data": "my-lab", "paper": False},
               "settings": {"dataset": {"plain": str(dataset)}, "splits": {"n_test": 4, "min_train_negatives": 2}},
-              "relaxations": [{"setting": "svm.cv", "asked": 5, "used": 3, "why": "a split has only 3 training objects"}]}
+              "relaxations": [{"setting": "svm.cv", "asked": 5, "used": 3,
+                               "why": "a split has only 3 training objects"}]}
     (root / "manifest.json").write_text(json.dumps({"config": record, "data_files": files,
                                                     "description": "our gripper, our words"}))
     return root
@@ -87,7 +88,8 @@ def test_generic_report_opens_with_the_dataset_card_and_summary(lab):
     assert "2 of 3 methods have an interval above chance (dap-avg, eszsl)." in text
     assert "svm.cv: asked 5, used 3 (a split has only 3 training objects)" in text
     # named for what they show; the counts come from the table
-    assert "Sensor fusion on random unseen-class splits" in text and "(4 random splits of 4 unseen classes each)" in text
+    assert ("Sensor fusion on random unseen-class splits" in text
+            and "(4 random splits of 4 unseen classes each)" in text)
     for paper in ("DAP paper", "PHAC-2", "Deviations from the paper", "[paper]"):
         assert paper not in text
 

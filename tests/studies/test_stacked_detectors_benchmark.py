@@ -1,4 +1,5 @@
-"""experiments/benchmarks/phac2_stacked_detectors.py on SIMULATED data (it measures nothing here): its pieces do what they say."""
+"""experiments/benchmarks/phac2_stacked_detectors.py on SIMULATED data (it measures nothing here): its pieces do
+what they say."""
 
 from __future__ import annotations
 
@@ -74,6 +75,7 @@ def test_one_split_scores_every_method_and_its_dap_is_the_registered_one(bench, 
     split = make_splits(features, "random", study_settings(ZeroShotSettings, "phac2-dap", n_splits=1, n_test=5))[0][0]
     table, info = bench.score_split(features, split, 0, False, tmp_path)
     assert set(table["method"]) == {bench.DETECTOR_METHOD, "stack", "stack-own", "sparse"}
-    assert info["c1_dap_agreement"] == 1.0  # the script's DAP on the reference's detectors predicts as the registered method
+    # the script's DAP on the reference's detectors predicts as the registered method
+    assert info["c1_dap_agreement"] == 1.0
     assert (tmp_path / f"{split.name}.npz").exists()
     assert 0.0 <= info["sparse_test_between_share"] <= 1.0 and info["stack_C"] in bench.STACK_C_GRID
