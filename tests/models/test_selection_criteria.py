@@ -11,13 +11,13 @@ from scipy.optimize import minimize_scalar
 from scipy.special import log_softmax
 
 from tzsl.models import ESZSL, ESZSLCV, CompatibilityRule, ZeroShotClassifier
+from tzsl.models._selection_criteria import BETA_MAX
 from tzsl.models.protocol import (
     TIE_TOLERANCE,
     heldout_scores,
     most_regularised_best,
     neg_log_loss,
 )
-from tzsl.models._selection_criteria import BETA_MAX
 
 
 def brute_force_neg_log_loss(scores: np.ndarray, y: np.ndarray) -> float:
