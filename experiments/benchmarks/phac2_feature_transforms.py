@@ -26,7 +26,7 @@ o = f.objects
 X0 = f.X.reshape(len(o), -1)
 res = []
 for kind, _i, s in study_splits(f, 20, 0):
-    base = pickle.loads(Path(sys.argv[1]) / f'scores_{s.name}.pkl'.read_bytes())
+    base = pickle.loads((Path(sys.argv[1]) / f'scores_{s.name}.pkl').read_bytes())
     a = list(s.kept_attributes)
     tr, te = split_masks(f, s)
     rows = f.attributes.loc[np.unique(o[tr]), a].to_numpy(float)

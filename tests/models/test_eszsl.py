@@ -257,7 +257,7 @@ def test_bad_cv_settings_rejected():
 
 def test_keyword_only_init():
     with pytest.raises(TypeError):
-        ESZSL(1.0, 1.0)  # noqa: the parameters are keyword-only
+        ESZSL(1.0, 1.0)  # the parameters are keyword-only
 
 
 # ------------------------------------------------------------------------ scikit-learn contract
