@@ -256,9 +256,9 @@ class ESZSLCV(_ESZSLBase):
         ``None``: :func:`~tzsl.models.protocol.class_grouped_folds` with ``min(5, n_classes // 2)``
         folds, each validating on >= 2 and training on >= 2 classes (classes sharing an attribute
         row are one class, never alone in a fold). An int: that many such folds (an error if
-        more than ``n_classes // 2``). Otherwise any object with ``split(X, y, groups)``; it receives ``groups`` = class (row of
-        ``class_attributes_``), and every fold must hold out whole classes, at least 2 of them,
-        and train on at least 2.
+        more than ``n_classes // 2``). Otherwise any object with ``split(X, y, groups)``; it
+        receives ``groups`` = class (row of ``class_attributes_``), and every fold must hold out
+        whole classes, at least 2 of them, and train on at least 2.
     scoring : {"neg_log_loss", "accuracy", "balanced_accuracy"}, default="neg_log_loss"
         Criterion on the held-out classes (:mod:`tzsl.models.protocol`'s selection criteria): minus the
         log-loss of a softmax over the held-out classes' scores at its best temperature (smooth, so a
