@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
@@ -11,6 +12,7 @@ import pytest
 
 from tzsl.exceptions import ConfigError
 from tzsl.reporting.benchmark_blocks import MissingResults
+from tzsl.reporting.manifests import produced_by
 from tzsl.reporting.readme_results import (
     BEGIN,
     END,
@@ -19,7 +21,6 @@ from tzsl.reporting.readme_results import (
     evidence_block,
     evidence_summary_block,
     main,
-    produced_by,
     results_block,
     update_file,
 )
@@ -378,9 +379,27 @@ def test_evidence_summary_pairs_each_study_reference_with_its_most_accurate_meth
 def test_produced_by_names_the_command_and_commit_or_says_what_is_missing(tmp_path):
     assert produced_by(tmp_path) == "no manifest.json: command and commit not recorded"
     (tmp_path / "manifest.json").write_text('{"study_list": "reproduce-tables", "commit": null}')
-    assert produced_by(tmp_path) == "`tzsl reproduce-tables`, commit not recorded"
+    assert produced_by(tmp_path) == "`tzsl reproduce-tables`, commit not recorded, environment not recorded"
     (tmp_path / "manifest.json").write_text('{"commit": "abc-dirty"}')
-    assert produced_by(tmp_path) == "a command not recorded at commit `abc-dirty`"
+    assert produced_by(tmp_path) == "a command not recorded at commit `abc-dirty`, environment not recorded"
+
+
+def test_produced_by_says_whether_the_run_was_in_the_locked_environment(tmp_path):
+    def manifest(environment):
+        (tmp_path / "manifest.json").write_text(json.dumps(
+            {"study_list": "reproduce-tables", "commit": "abc", "environment": environment}))
+        return produced_by(tmp_path)
+
+    lock = {"lock_file": "requirements/core.lock.txt", "lock_sha256": "fb3f068277de28f9"}
+    assert manifest({**lock, "matches_lock": True, "differs": {}}) == (
+        "`tzsl reproduce-tables` at commit `abc`, in the locked environment (`requirements/core.lock.txt`, "
+        "sha256 `fb3f0682`)")
+    moved = manifest({**lock, "matches_lock": False, "differs": {
+        "numpy": {"locked": "2.4.6", "installed": "2.5.0"}, "h5py": {"locked": "3.16.0", "installed": None}}})
+    assert moved.endswith("NOT in the locked environment (`requirements/core.lock.txt`, sha256 `fb3f0682`): "
+                          "h5py missing (locked 3.16.0), numpy 2.5.0 (locked 2.4.6)")
+    assert manifest({"lock_file": None, "matches_lock": None, "differs": {}}).endswith(
+        "outside a checkout with a lock (versions in its manifest)")
 
 
 def test_each_block_reads_its_own_folder(tmp_path):

@@ -15,8 +15,10 @@ import json
 from pathlib import Path
 from typing import Any
 
-__all__ = ["config_items", "dataset_names", "deviations", "dict_at", "is_paper_record", "read_manifest", "relaxations",
-           "study_records"]
+__all__ = [
+    "config_items", "dataset_names", "deviations", "dict_at", "environment_phrase", "is_paper_record",
+    "produced_by", "read_manifest", "relaxations", "study_records"
+]
 
 #: The manifest key of the zero-shot study's settings by table (``"dap_settings"`` in manifests written
 #: before it was renamed: still read, so older results folders report the same).
@@ -37,6 +39,27 @@ def dict_at(record: dict, key: str) -> dict:
     """``record[key]`` when it is a dict (a JSON object), else an empty dict."""
     value = record.get(key)
     return value if isinstance(value, dict) else {}
+
+
+def environment_phrase(manifest: dict) -> str:
+    """How a manifest's environment stands to the lock, for a generated block's first line.
+
+    ``"in the locked environment (`requirements/core.lock.txt`, sha256 `fb3f0682`)"``; or which locked
+    packages differed; or that the run recorded no environment (a manifest older than the lock) or
+    had no lock (an installed wheel).
+    """
+    env = manifest.get("environment")
+    if not isinstance(env, dict):
+        return "environment not recorded"
+    lock, sha = env.get("lock_file"), str(env.get("lock_sha256") or "")[:8]
+    if not lock:
+        return "outside a checkout with a lock (versions in its manifest)"
+    if env.get("matches_lock"):
+        return f"in the locked environment (`{lock}`, sha256 `{sha}`)"
+    differs = dict_at(env, "differs")
+    listed = ", ".join(f"{name} {(v or {}).get('installed') or 'missing'} (locked {(v or {}).get('locked')})"
+                       for name, v in sorted(differs.items()))
+    return f"NOT in the locked environment (`{lock}`, sha256 `{sha}`): {listed}"
 
 
 def study_records(manifest: dict) -> dict[str, dict]:
@@ -161,3 +184,21 @@ def deviations(manifests: dict[str, dict]) -> list[str]:
             if manifest.get(key):
                 out.append(f"Selected hyper-parameters on a grid edge: {manifest[key]} {where}.")
     return list(dict.fromkeys(out))
+
+
+def produced_by(root: Path) -> str:
+    """Which command and commit wrote the results folder ``root``, from its ``manifest.json``.
+
+    ``"`tzsl reproduce-tables` at commit `0123abcd4567`, in the locked environment (...)"``; says what
+    is not recorded (no manifest, a manifest of a single study, a run outside a git checkout).
+    """
+    path = root / "manifest.json"
+    try:
+        manifest = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return "no manifest.json: command and commit not recorded"
+    command = manifest.get("study_list")
+    commit = manifest.get("commit")
+    text = f"`tzsl {command}`" if command else "a command not recorded"
+    text += f" at commit `{commit}`" if commit else ", commit not recorded"
+    return f"{text}, {environment_phrase(manifest)}"

@@ -35,7 +35,6 @@ results give. Tables that are missing are left out; nothing is typed by hand
 from __future__ import annotations
 
 import argparse
-import json
 import re
 import sys
 from collections.abc import Callable
@@ -54,6 +53,7 @@ from tzsl.reporting.benchmark_blocks import (
     exact_solver_threshold_block,
     search_benchmark_block,
 )
+from tzsl.reporting.manifests import produced_by
 from tzsl.reporting.markdown_cells import find_table, number, ours, signed
 from tzsl.value_lists import SPLIT_KINDS
 
@@ -81,23 +81,6 @@ Row = tuple[str, str, str, str]  # result, ours [interval], baseline, paper
 
 #: Fabric methods shown in the README (every lambda is in fabric_table1.csv and the report).
 README_FABRIC_METHODS = ("lam_0", "ESZSL")
-
-
-def produced_by(root: Path) -> str:
-    """Which command and commit wrote the results folder ``root``, from its ``manifest.json``.
-
-    ``"`tzsl reproduce-tables` at commit `0123abcd4567`"``; says what is not recorded (no
-    manifest, a manifest of a single study, a run outside a git checkout).
-    """
-    path = root / "manifest.json"
-    try:
-        manifest = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return "no manifest.json: command and commit not recorded"
-    command = manifest.get("study_list")
-    commit = manifest.get("commit")
-    text = f"`tzsl {command}`" if command else "a command not recorded"
-    return text + (f" at commit `{commit}`" if commit else ", commit not recorded")
 
 
 def _first(table: pd.DataFrame, column: str, value) -> pd.Series | None:
