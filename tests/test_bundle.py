@@ -279,7 +279,7 @@ def test_old_pickle_bundle_is_refused_unless_trusted(tmp_path, fitted):
     del_format = json.loads(path.read_bytes().split(b"\n")[1])
     assert del_format["format_version"] == 1
     with pytest.raises(ModelBundleError, match=r"old\.tzsl: old bundle format \(version 1\) holding a pickle.*"
-                       r"re-run the train command with --save.*--trust-pickle"):
+                       r"re-run the train command with --out.*--trust-pickle"):
         load_bundle(path)
     model, meta = load_bundle(path, trust_pickle=True)
     assert model.C == fitted[0].C and meta["bundle"]["payload_format"] == "pickle"

@@ -288,7 +288,9 @@ def _serialise(model: Any) -> tuple[str, bytes]:
     """``(payload_format, bytes)`` of a model: an array tree as ``.npz``, anything else with skops."""
     if _is_array_tree(model) and not isinstance(model, np.ndarray):
         buffer = io.BytesIO()
-        np.savez_compressed(buffer, **_flatten(model))
+        # numpy's stub: a top-level array named allow_pickle would not be stored; tzsl's payloads name theirs
+        # detectors/..., linear/..., rule/...
+        np.savez_compressed(buffer, **_flatten(model))  # type: ignore[arg-type]
         return "npz", buffer.getvalue()
     return "skops", skops_payload(model)
 
@@ -356,11 +358,11 @@ def _read(path: Path) -> tuple[dict, bytes]:
             f"model payload checksum mismatch ({len(payload)} bytes read, {header.get('payload_bytes')} "
             "written): the file is corrupt, truncated or was tampered with"
         )
-    key = _key()
-    if key is not None:
+    secret = _key()
+    if secret is not None:
         if "hmac_sha256" not in header:
             raise fail(f"bundle is not signed, but {BUNDLE_KEY_ENV} is set: refusing to load an unsigned bundle")
-        expected_mac = hmac.new(key, signed, hashlib.sha256).hexdigest()
+        expected_mac = hmac.new(secret, signed, hashlib.sha256).hexdigest()
         if not hmac.compare_digest(expected_mac.encode(), str(header["hmac_sha256"]).encode()):
             raise fail(f"bundle signature does not match {BUNDLE_KEY_ENV}: wrong key or tampered file")
     version = header["format_version"]
@@ -458,7 +460,7 @@ def _load_pickle(path: Path, payload: bytes, trust_pickle: bool) -> Any:
     if not trust_pickle:
         raise ModelBundleError(
             f"{path}: old bundle format (version 1) holding a pickle, which can run code when loaded; "
-            "re-save the model with this tzsl (re-run the train command with --save), or, only if you trust "
+            "re-save the model with this tzsl (re-run the train command with --out), or, only if you trust "
             "whoever wrote the file, load it with 'tzsl predict --trust-pickle'")
     import joblib  # noqa: PLC0415 - only for explicitly trusted old bundles
 

@@ -116,7 +116,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         (the exact model's time grows as trials^2). The choice and its reason are in
         ``solver_choice_`` and printed when ``progress`` is on. Only ``detector="rbf-svm"`` has an
         approximate solver: the linear detectors are fitted exactly (their time is linear in trials).
-    max_exact_trials : int, default=3000
+    max_exact_trials : int, default=AUTO_MAX_EXACT_TRIALS
         Largest training set fitted exactly by ``solver="auto"`` (the exact model's cost against
         trials is measured by ``make bench-scale``).
     estimator_params : list of list of dict or None, default=None
