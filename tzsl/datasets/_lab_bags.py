@@ -66,7 +66,7 @@ def _numbers(value: object) -> tuple[np.ndarray, bool]:
     raise TypeError(f"holds {type(value).__name__}, not a number or a list of numbers; name one of its fields")
 
 
-def _typestore(source: LabSource):
+def _typestore(source: LabSource[BagMapping]):
     try:
         from rosbags.typesys import Stores, get_types_from_msg, get_typestore  # noqa: PLC0415
     except ImportError:
@@ -131,12 +131,12 @@ class _SensorRows:
         return [name for path, w in zip(self.sensor.fields, shape, strict=True) for name in channel_names(path, w)]
 
 
-def _bag_messages(bag: Path, source: LabSource, store) -> tuple[int, dict[str, _SensorRows]]:
+def _bag_messages(bag: Path, source: LabSource[BagMapping], store) -> tuple[int, dict[str, _SensorRows]]:
     """(first timestamp ns, sensor name -> its checked messages) of one bag."""
     from rosbags.highlevel import AnyReader  # noqa: PLC0415
 
     mapping: BagMapping = source.mapping
-    topics = {s.topic for s in mapping.sensors}
+    topics = {s.topic for s in mapping.sensors if s.topic is not None}  # BagMapping requires every sensor's topic
     rows = {s.name: _SensorRows(s) for s in mapping.sensors}
     first, index, total = None, -1, 0
     try:
@@ -177,12 +177,12 @@ def _bag_messages(bag: Path, source: LabSource, store) -> tuple[int, dict[str, _
     return first, rows
 
 
-def _cut(bag: Path, rows: list, read: tuple[int, dict[str, _SensorRows]], source: LabSource, labels_path: Path,
-         channels: ChannelCheck) -> Trials:
+def _cut(bag: Path, rows: list, read: tuple[int, dict[str, _SensorRows]], source: LabSource[BagMapping],
+         labels_path: Path, channels: ChannelCheck) -> Trials:
     """The trials of one bag: each label row's time window (start, end) of every sensor's messages."""
     first, messages = read
-    for sensor, sensor_rows in messages.items():
-        channels(sensor_rows.channels(), bag, f"sensor {sensor!r}")
+    for sensor_name, sensor_rows in messages.items():
+        channels(sensor_rows.channels(), bag, f"sensor {sensor_name!r}")
     stacked = {name: ((np.asarray(r.stamps, dtype=np.int64) - first) / 1e9, np.stack(r.values), r.channels())
                for name, r in messages.items()}
     trials: Trials = {}
@@ -200,7 +200,7 @@ def _cut(bag: Path, rows: list, read: tuple[int, dict[str, _SensorRows]], source
     return trials
 
 
-def read_bags(source: LabSource) -> tuple[Trials, pd.DataFrame]:
+def read_bags(source: LabSource[BagMapping]) -> tuple[Trials, pd.DataFrame]:
     """Trials (trial -> sensor -> (channels, values (n_messages, n_channels))) and their labels, in label order."""
     mapping: BagMapping = source.mapping
     store = _typestore(source)
@@ -213,12 +213,12 @@ def read_bags(source: LabSource) -> tuple[Trials, pd.DataFrame]:
     per_bag: dict[Path, list] = {}
     ids = TrialIds()
     for row in labels:
-        bag = by_real.get(os.path.realpath(source.path(row.cells["bag"], "bag", labels_path, row.line)))
-        if bag is None:
+        listed = by_real.get(os.path.realpath(source.path(row.cells["bag"], "bag", labels_path, row.line)))
+        if listed is None:
             raise lab_error(labels_path, f"bag {row.cells['bag']!r} is not among the files the mapping's bags "
                                          f"{mapping.bags} match", row.line)
         ids.add(row.cells["trial_id"], f"trial {row.cells['trial_id']!r}", labels_path, "", row.line)
-        per_bag.setdefault(bag, []).append((row, seconds(row, labels_path)))
+        per_bag.setdefault(listed, []).append((row, seconds(row, labels_path)))
     unused = [b for b in bags if b not in per_bag]
     if unused:
         raise lab_error(source.mapping_file, f"bags: {unused[0]} matches {mapping.bags} but no line of "

@@ -18,13 +18,14 @@ import stat
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TypeVar
+from typing import Generic, TypeVar
 
 import numpy as np
 import pandas as pd
 from tqdm.auto import tqdm
 
 from tzsl._io import MAX_NPZ_BYTES_ENV
+from tzsl.datasets._lab_mapping import LabMapping
 from tzsl.datasets._paths import resolve_inside
 from tzsl.datasets._tables import Problem, read_rows
 from tzsl.datasets._validate import ScannedDataset, scan_classes
@@ -38,6 +39,8 @@ __all__ = ["ChannelCheck", "LabSource", "LabelRow", "TrialIds", "Trials", "chann
 Trials = dict[str, dict[str, tuple[list[str], np.ndarray]]]
 
 T = TypeVar("T")
+#: The mapping type of a :class:`LabSource` (each reader reads one kind).
+M = TypeVar("M", bound=LabMapping, covariant=True)
 _CONTROL = re.compile(r"[\x00-\x1f\x7f]")
 
 
@@ -70,7 +73,7 @@ def lab_error(path: str | os.PathLike, problem: str, line: int | None = None) ->
 
 
 @dataclass(frozen=True)
-class LabSource:
+class LabSource(Generic[M]):
     """What every lab reader reads: the checked mapping, its file, the class names and the limits.
 
     Attributes
@@ -89,7 +92,7 @@ class LabSource:
     """
 
     mapping_file: Path
-    mapping: object
+    mapping: M
     classes: frozenset[str]
     limit: int
     allow_outside: bool = False
@@ -112,10 +115,11 @@ class LabSource:
             path = Path(os.path.expanduser(text))
             path = path if path.is_absolute() else self.mapping_file.parent / path
         else:
-            path, reason = resolve_inside(self.root, text, what, self.root)
-            if reason is not None:
+            resolved, reason = resolve_inside(self.root, text, what, self.root)
+            if reason is not None or resolved is None:  # resolve_inside gives a reason whenever it gives no path
                 raise lab_error(named_in, f"{reason}; the mapping reads only inside {self.root} "
                                           "(pass --allow-outside to read it)", line)
+            path = resolved
         try:
             mode = os.stat(path).st_mode
         except OSError:
@@ -180,7 +184,7 @@ def _first_problem(path: Path, problems: list[Problem]) -> DataFileError:
     return lab_error(path, first.message + more, first.line)
 
 
-def read_label_table(source: LabSource, key: str, required: tuple[str, ...],
+def read_label_table(source: LabSource[LabMapping], key: str, required: tuple[str, ...],
                      optional: tuple[str, ...] = ()) -> tuple[Path, list[LabelRow]]:
     """The rows of the label table named by the mapping's ``key``, every cell checked.
 
@@ -191,7 +195,7 @@ def read_label_table(source: LabSource, key: str, required: tuple[str, ...],
     path = source.path(getattr(source.mapping, key), key, source.mapping_file)
     problems: list[Problem] = []
     parsed = read_rows(path.parent, path.name, problems)
-    if problems:
+    if problems or parsed is None:  # read_rows reports a problem whenever it returns None
         raise _first_problem(path, problems)
     header, lines = parsed
     missing = [c for c in required if c not in header]
@@ -219,16 +223,16 @@ def read_label_table(source: LabSource, key: str, required: tuple[str, ...],
     return path, rows
 
 
-def read_class_table(source: LabSource) -> pd.DataFrame:
+def read_class_table(source: LabSource[LabMapping]) -> pd.DataFrame:
     """``classes.csv`` checked as ``tzsl validate`` checks a dataset's: (n_classes, n_attributes) int 0/1."""
     path = source.path(source.mapping.classes, "classes", source.mapping_file)
     problems: list[Problem] = []
     scan = ScannedDataset(path.parent)
     scan_classes(path.parent, {"classes": {"allow_identical_rows": bool(source.mapping.allow_identical_rows)}},
                  problems, scan, path.name, source.mapping_file.name)
-    if problems:
-        raise _first_problem(path, problems)
     table = scan.classes
+    if problems or table is None:  # scan_classes reports a problem whenever it stores no table
+        raise _first_problem(path, problems)
     for name in (*table.index, *table.columns):
         if _CONTROL.search(name):
             raise lab_error(path, f"{one_line(repr(name))} holds a control character", 1)

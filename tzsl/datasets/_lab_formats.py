@@ -27,7 +27,7 @@ from tzsl._io import max_npz_bytes
 from tzsl.datasets._lab_bags import read_bags
 from tzsl.datasets._lab_checks import LabSource, Trials, read_class_table
 from tzsl.datasets._lab_hdf5 import read_hdf5
-from tzsl.datasets._lab_mapping import BagMapping, Hdf5Mapping, SeriesMapping, load_lab_mapping
+from tzsl.datasets._lab_mapping import BagMapping, Hdf5Mapping, LabMapping, SeriesMapping, load_lab_mapping
 from tzsl.datasets._lab_series import UNNAMED_SENSOR, read_series
 from tzsl.datasets._plain_write import write_plain_dataset
 from tzsl.datasets._tables import DEFAULT_SENSOR
@@ -37,7 +37,7 @@ __all__ = ["LAB_FORMATS", "LAB_READERS", "convert_lab_dataset"]
 
 #: Every lab format ``tzsl convert --from`` reads: its mapping file's model and its reader. A new format
 #: is a mapping model (:mod:`tzsl.datasets._lab_mapping`), a reader module, and one line in this table.
-LAB_READERS: dict[str, tuple[type, Callable[[LabSource], tuple[Trials, pd.DataFrame]]]] = {
+LAB_READERS: dict[str, tuple[type[LabMapping], Callable[[LabSource], tuple[Trials, pd.DataFrame]]]] = {
     "ros-bag": (BagMapping, read_bags),
     "hdf5": (Hdf5Mapping, read_hdf5),
     "series": (SeriesMapping, read_series),

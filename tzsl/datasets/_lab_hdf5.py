@@ -89,10 +89,11 @@ def _class_text(value: object, path: Path, record: str) -> str:
     if isinstance(value, np.ndarray):
         value = value.reshape(-1)[0]
     if isinstance(value, (bytes, np.bytes_)):
+        raw = bytes(value)
         try:
-            value = bytes(value).decode("utf-8")
+            value = raw.decode("utf-8")
         except UnicodeDecodeError:
-            raise lab_error(path, f"{record}: the label {bytes(value)[:40]!r} is not UTF-8 text") from None
+            raise lab_error(path, f"{record}: the label {raw[:40]!r} is not UTF-8 text") from None
     if isinstance(value, (np.generic, bool, int, float)) and not isinstance(value, (np.str_, np.void)):
         value = np.asarray(value).item()
         if not isinstance(value, (bool, int, float)):
@@ -180,7 +181,7 @@ def _groups(handle, path: Path, pattern: str) -> list[str]:
     return matching
 
 
-def _file_trials(path: Path, source: LabSource, ids: TrialIds, channels: ChannelCheck) -> list[tuple]:
+def _file_trials(path: Path, source: LabSource[Hdf5Mapping], ids: TrialIds, channels: ChannelCheck) -> list[tuple]:
     """[(trial id, class, sensor -> (channels, values))] of one HDF5 file, every group checked."""
     import h5py  # noqa: PLC0415
 
@@ -217,7 +218,7 @@ def _file_trials(path: Path, source: LabSource, ids: TrialIds, channels: Channel
     return found
 
 
-def read_hdf5(source: LabSource) -> tuple[Trials, pd.DataFrame]:
+def read_hdf5(source: LabSource[Hdf5Mapping]) -> tuple[Trials, pd.DataFrame]:
     """Trials (trial -> sensor -> (channels, values (time, n_channels))) and their classes, file by file."""
     trials: Trials = {}
     rows = []

@@ -158,7 +158,7 @@ class SeriesMapping(_Common):
 LabMapping = BagMapping | Hdf5Mapping | SeriesMapping
 
 
-def load_lab_mapping(path: str | os.PathLike, kind: str, model: type[BaseModel]) -> LabMapping:
+def load_lab_mapping(path: str | os.PathLike, kind: str, model: type[LabMapping]) -> LabMapping:
     """The checked mapping of ``kind`` in ``path``, validated by ``model``.
 
     Raises

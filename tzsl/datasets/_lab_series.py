@@ -37,7 +37,8 @@ UNNAMED_SENSOR = ""
 SERIES_SUFFIXES = (".csv", ".npy", ".npz")
 
 
-def _read(path: Path, source: LabSource, labels_path: Path, row: LabelRow) -> tuple[list[str], np.ndarray]:
+def _read(path: Path, source: LabSource[SeriesMapping], labels_path: Path,
+          row: LabelRow) -> tuple[list[str], np.ndarray]:
     """Channels and values (n_rows, n_channels) of one series file, checked."""
     mapping: SeriesMapping = source.mapping
     suffix = path.suffix.lower()
@@ -73,7 +74,7 @@ def _read(path: Path, source: LabSource, labels_path: Path, row: LabelRow) -> tu
     return list(channels), values
 
 
-def read_series(source: LabSource) -> tuple[Trials, pd.DataFrame]:
+def read_series(source: LabSource[SeriesMapping]) -> tuple[Trials, pd.DataFrame]:
     """Trials (trial -> sensor -> (channels, values (time, n_channels))) and their classes, in label order."""
     labels_path, labels = read_label_table(source, "labels", ("file", "trial_id", "class"), ("sensor",))
     trials: Trials = {}
