@@ -169,7 +169,7 @@ class FabricDepth(TactileDataset):
             warnings.filterwarnings("ignore", message="fabric attribute matrix", category=UserWarning)
             return load_fabric(data_dir, images=True)
 
-    def data_files(self, loaded: FabricData) -> list[str]:
+    def data_files(self, loaded: FabricData) -> list[str]:  # type: ignore[override]  # given only its own load()
         return sorted(str(p) for p in loaded.images["path"])
 
 
@@ -197,7 +197,7 @@ class HandSimulated(TactileDataset):
     def labels(self, data_dir=None) -> pd.DataFrame:
         return load_hand_table4().K
 
-    def data_files(self, loaded: SimulatedGrasps) -> list[str]:
+    def data_files(self, loaded: SimulatedGrasps) -> list[str]:  # type: ignore[override]  # given only its own load()
         return []
 
 

@@ -51,7 +51,7 @@ def dataset_card(classes: pd.DataFrame, trial_classes: Sequence[str], *, n_test:
     inverse = inverse.ravel()
     names = classes.index.astype(str)
     first = {r: i for i, r in reversed(list(enumerate(inverse)))}  # a row's first class, table order
-    groups = [list(names[inverse == r]) for r in sorted(first, key=first.get) if (inverse == r).sum() > 1]
+    groups = [list(names[inverse == r]) for r in sorted(first, key=first.__getitem__) if (inverse == r).sum() > 1]
     too_rare = [a for a, p in positives.items() if p < min_train_positives or n_classes - p < min_train_negatives]
     n_split = max(0, min(n_test, len(rows)))
     return {

@@ -131,7 +131,8 @@ class DeadlineDownloader:
         """The response (status and headers read) within the deadline, however slowly the server
         sends them: the request runs in a daemon thread that is abandoned at the deadline (or when
         the fetch stops)."""
-        box: dict[str, object] = {}
+        box: dict[str, requests.Response] = {}  # "response", set by the request thread
+        failure: dict[str, Exception] = {}  # "error", set by the request thread
         done, abandoned = threading.Event(), threading.Event()
         wait = min(self.stall, self._remaining())
         session = self.transfer.session()
@@ -140,11 +141,11 @@ class DeadlineDownloader:
             try:
                 box["response"] = session.get(url, stream=True, timeout=(wait, wait))
             except Exception as exc:  # noqa: BLE001 - reported by the caller's thread
-                box["error"] = exc
+                failure["error"] = exc
             finally:
                 done.set()
                 if abandoned.is_set() and "response" in box:
-                    box["response"].close()  # type: ignore[union-attr]
+                    box["response"].close()
 
         threading.Thread(target=request, name="tzsl-fetch-request", daemon=True).start()
         try:  # wake up at the deadline, and every STOP_POLL_S to see whether the fetch stopped
@@ -153,16 +154,16 @@ class DeadlineDownloader:
         except BaseException:
             abandoned.set()
             if done.is_set() and "response" in box:
-                box["response"].close()  # type: ignore[union-attr]
+                box["response"].close()
             raise
-        error = box.get("error")
+        error = failure.get("error")
         if isinstance(error, requests.Timeout):
             raise DownloadFailed(f"no response for {wait:g} s", retry=True)
         if isinstance(error, requests.RequestException):
             raise DownloadFailed(_connection_reason(error), retry=True)
         if error is not None:
-            raise error  # type: ignore[misc]
-        response: requests.Response = box["response"]  # type: ignore[assignment]
+            raise error
+        response = box["response"]
         if response.status_code >= 400:
             response.close()
             retry = response.status_code >= 500 or response.status_code in (408, 429)

@@ -75,7 +75,7 @@ def load_gelsight_fabric_videos(root: str | os.PathLike, conditions=None) -> pd.
         for d in cond_dirs:
             if not d.is_dir():
                 raise DataMissingError(d, "condition folder not found")
-    rows = []
+    rows: list[tuple[str, int, str, int, str, int, str]] = []
     for cdir in cond_dirs:
         n_before = len(rows)
         for fdir in sorted(cdir.iterdir(), key=lambda p: _natural_key(p.name)):

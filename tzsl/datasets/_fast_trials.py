@@ -30,7 +30,7 @@ class CleanTrials:
     """A checked trials table, in the checker's layout (see ``ScannedDataset``)."""
 
     trials: pd.DataFrame  # trial_id, class, object, trial_index, object_id, line
-    sensors: tuple[str, ...]
+    sensors: tuple[str, ...] | None  # None: the table has no sensor column
     lines: np.ndarray  # (n_trials, n_sensors) line of each row
     kind: str  # "columns" or "signals"
     feature_names: tuple[str, ...] | None = None

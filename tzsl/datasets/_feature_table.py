@@ -122,9 +122,9 @@ def read_feature_table(path: str | Path, dataset: str = "") -> FeatureSet:
         names = tuple(str(s) for s in data["feature_names"])
     elif path.suffix == ".csv":
         frame = read_csv_table(path)
-        missing = [c for c in (*TRIAL_COLUMNS, "sensor") if c not in frame.columns]
-        if missing:
-            raise DataFileError(path, f"missing columns {missing}")
+        absent = [c for c in (*TRIAL_COLUMNS, "sensor") if c not in frame.columns]
+        if absent:
+            raise DataFileError(path, f"missing columns {absent}")
         sensors = tuple(pd.unique(frame["sensor"]).astype(str))
         names = tuple(c for c in frame.columns if c not in (*TRIAL_COLUMNS, "sensor"))
         trial_order = pd.unique(frame["trial_id"])

@@ -280,7 +280,7 @@ def write_grasps(
 
         def _write(tmp: Path, arrays: dict[str, np.ndarray] = arrays) -> None:
             with open(tmp, "wb") as fh:
-                save(fh, **arrays)
+                save(fh, **arrays)  # type: ignore[arg-type]  # the keys (f0_pdc, ..., joints) never hit allow_pickle
 
         atomic_write(folder / name, _write)
     table = pd.DataFrame(rows, columns=list(GRASP_COLUMNS))

@@ -125,9 +125,12 @@ def _check_params(K, n_grasps_per_object, noise, difficulty, shape_miss_rate, n_
     if not isinstance(n_grasps_per_object, Integral) or n_grasps_per_object < 1:
         raise ConfigError(f"n_grasps_per_object must be a positive integer, got {n_grasps_per_object!r}")
     for name, value in (("noise", noise), ("difficulty", difficulty)):
-        if not isinstance(value, Real) or not np.isfinite(value) or value < 0:
+        if (not isinstance(value, Real)
+                or not np.isfinite(value)  # type: ignore[call-overload]  # numpy's stub omits numbers.Real
+                or value < 0):
             raise ConfigError(f"{name} must be a finite number >= 0, got {value!r}")
-    if not isinstance(shape_miss_rate, Real) or not 0 <= shape_miss_rate <= 1:
+    if (not isinstance(shape_miss_rate, Real)
+            or not 0 <= shape_miss_rate <= 1):  # type: ignore[operator]  # typeshed's numbers.Real lacks __ge__
         raise ConfigError(f"shape_miss_rate must be in [0, 1], got {shape_miss_rate!r}")
     if not isinstance(n_rows, Integral) or n_rows < 20:
         raise ConfigError(f"n_rows must be an integer >= 20, got {n_rows!r}")

@@ -15,7 +15,7 @@ from pathlib import Path
 
 
 def resolve_inside(folder: str | os.PathLike, text: str, what: str,
-                   root: str | None = None) -> tuple[Path | None, str | None]:
+                   root: str | None = None) -> tuple[Path, None] | tuple[None, str]:
     """A path named inside ``folder`` -> its resolved absolute path, or None and why it is refused.
 
     Parameters

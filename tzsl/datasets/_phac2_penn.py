@@ -231,7 +231,7 @@ def read_penn_static_pickles(
         for a, adj in enumerate(adjectives):
             path = grid[(adj, ep)]
             feats, labels, names = _read_one(path)
-            if X is None:
+            if X is None or L is None:  # the first file: both are made together
                 meta = [(*parse_trial_id(t, path), t) for t in names]
                 order = sorted(range(len(names)), key=lambda i: (meta[i][1], meta[i][2]))
                 ref_names = [names[i] for i in order]

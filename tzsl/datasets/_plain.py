@@ -225,7 +225,7 @@ class PlainDataset:
             ``attribute_groups``, ``features`` (kind), ``splits_file`` and ``settings``.
         """
         if X is None:
-            if self.X is None:
+            if self.X is None or self.feature_names is None:  # set together
                 raise ConfigError(f"{self.folder}: a signal dataset needs its features computed "
                                   "(tzsl.features.load_plain_dataset)")
             X, feature_names = self.X, self.feature_names
@@ -255,8 +255,10 @@ class PlainDataset:
 def _problem_error(folder: Path, problems: list) -> TzslError:
     """The error of a dataset's problems: each names its file inside ``folder`` and its line."""
     errors = [DataFileError(Path(folder) / p.file, p.message, line=p.line) for p in problems]
-    return problems_error(errors, folder, error=lambda message: DataFileError(None, message),
-                          hint=f" (all: tzsl validate {folder})")
+    error = problems_error(errors, folder, error=lambda message: DataFileError(None, message),
+                           hint=f" (all: tzsl validate {folder})")
+    assert error is not None  # the callers pass at least one problem
+    return error
 
 
 def read_plain_dataset(folder: str | os.PathLike) -> PlainDataset:
@@ -285,6 +287,7 @@ def read_plain_dataset(folder: str | os.PathLike) -> PlainDataset:
     if problems:
         raise _problem_error(folder, problems)
     meta = scan.trials
+    assert meta is not None  # scan_dataset reads the trials of a folder without problems
     objects = pd.unique(meta["object"])
     object_pos = {o: i for i, o in enumerate(objects)}
     object_id = meta["object_id"].copy()

@@ -152,7 +152,11 @@ def write_plain_dataset(
     if missing:
         raise ConfigError(f"trials table lacks column(s) {missing}")
     n_trials = len(trials)
-    n_sensors = X.shape[1] if X is not None else len(signals[0])
+    if X is not None:
+        n_sensors = X.shape[1]
+    else:
+        assert signals is not None  # exactly one of X and signals is given (checked above)
+        n_sensors = len(signals[0])
     if sensors is None and n_sensors != 1:
         raise ConfigError(f"{n_sensors} sensors need names (sensors=...)")
     if sensors is not None and len(sensors) != n_sensors:
@@ -178,6 +182,7 @@ def write_plain_dataset(
                                   columns=list(feature_names))
             _write_trials(tmp, pd.concat([long, values], axis=1), table_format)
         else:
+            assert signals is not None  # exactly one of X and signals is given (checked above)
             if channels is None:
                 raise ConfigError("signals need channel names (channels=...)")
             (tmp / "signals").mkdir()
@@ -219,7 +224,8 @@ def _write_signal(path: Path, values: np.ndarray, channels: Sequence[str]) -> No
         raise ConfigError(f"signal for {path.name} has shape {values.shape}; expected (n_rows, {len(channels)})")
     if path.suffix == ".npz":
         with open(path, "wb") as fh:
-            np.savez_compressed(fh, **{c: values[:, j] for j, c in enumerate(channels)})
+            # numpy's stub is right that a channel named allow_pickle (or file) would not become an array
+            np.savez_compressed(fh, **{c: values[:, j] for j, c in enumerate(channels)})  # type: ignore[arg-type]
     else:
         pd.DataFrame(values, columns=list(channels)).to_csv(path, index=False)
 

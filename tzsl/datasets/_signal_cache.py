@@ -149,7 +149,7 @@ def _read_chunk(folder: Path, root: str, rels: list[str], trial_ids: list[str], 
                 min_rows: int) -> list[np.ndarray | None]:
     """Read consecutive signal files in threads (file I/O and zlib release the GIL); None for a failing file."""
     with ThreadPoolExecutor(max_workers=READ_THREADS) as pool:
-        return list(pool.map(lambda rt: _read_one(folder, root, *rt, channels, min_rows),
+        return list(pool.map(lambda rt: _read_one(folder, root, rt[0], rt[1], channels, min_rows),
                              zip(rels, trial_ids, strict=True)))
 
 
@@ -168,10 +168,11 @@ def _read_all(data, min_rows: int, n_jobs: int | None) -> list[np.ndarray]:
         chunks = [(lo, min(lo + step, len(rels))) for lo in range(0, len(rels), step)]
         results = Parallel(n_jobs=workers)(delayed(_read_chunk)(data.folder, root, rels[lo:hi], tids[lo:hi],
                                                                 data.channels, min_rows) for lo, hi in chunks)
-    signals = [signal for part in results for signal in part]
-    for k, signal in enumerate(signals):
-        if signal is None:  # the first failing file raises its own error here
-            read_checked_signal(data.folder, rels[k], tids[k], data.channels, min_rows, root)
+    signals: list[np.ndarray] = []
+    for k, signal in enumerate(signal for part in results for signal in part):
+        # a failing file (None) is read again here: the first one raises its own error
+        signals.append(signal if signal is not None
+                       else read_checked_signal(data.folder, rels[k], tids[k], data.channels, min_rows, root))
     return signals
 
 
@@ -230,7 +231,7 @@ def read_signal_table(data, min_rows: int = 1, *, n_jobs: int | None = None,
     offsets = np.zeros(n_files + 1, dtype=np.int64)
     np.cumsum([len(s) for s in signals], out=offsets[1:])
     values = np.concatenate(signals) if signals else np.empty((0, len(data.channels)))
-    if key is not None and key == _key(data):  # no file changed while it was read
+    if key is not None and entry is not None and key == _key(data):  # no file changed while it was read
         try:
             _store_entry(entry, key, values, offsets)
         except (ConfigError, OSError) as exc:  # a cache that cannot be written costs time, not the run

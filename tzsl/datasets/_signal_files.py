@@ -54,15 +54,18 @@ def signal_from_arrays(path: str | os.PathLike, arrays: dict[str, np.ndarray]) -
     ``path`` names the file in errors. One 1-D numeric array per channel, all of one length.
     """
     if not arrays:
-        raise DataFileError(path, "archive holds no channel arrays")
+        raise DataFileError(path,  # type: ignore[arg-type]  # it str()s any path-like
+                            "archive holds no channel arrays")
     lengths = {}
     for name, arr in arrays.items():
         if arr.ndim != 1 or arr.dtype.kind not in "iufb":
-            raise DataFileError(path, f"channel {name!r} has shape {arr.shape} and dtype {arr.dtype}; "
+            raise DataFileError(path,  # type: ignore[arg-type]  # it str()s any path-like
+                                f"channel {name!r} has shape {arr.shape} and dtype {arr.dtype}; "
                                 "expected a 1-D numeric array per channel")
         lengths[name] = arr.shape[0]
     if len(set(lengths.values())) > 1:
-        raise DataFileError(path, f"channels have different lengths: {lengths}")
+        raise DataFileError(path,  # type: ignore[arg-type]  # it str()s any path-like
+                            f"channels have different lengths: {lengths}")
     channels = tuple(arrays)
     return channels, np.column_stack([arrays[c].astype(np.float64) for c in channels])
 
@@ -132,7 +135,7 @@ def check_signal_values(
     return problems
 
 
-def resolve_signal_path(folder: Path, text: str, root: str | None = None) -> tuple[Path | None, str | None]:
+def resolve_signal_path(folder: Path, text: str, root: str | None = None) -> tuple[Path, None] | tuple[None, str]:
     """``signal_file`` cell -> resolved absolute path inside ``folder``, or None and why it is refused.
 
     ``root``: ``os.path.realpath(folder)``, when resolving many cells of one folder.
@@ -168,9 +171,10 @@ def read_checked_signal(folder: Path, rel: str, trial_id: str, channels: Sequenc
         Path outside the folder, unreadable file, channels missing, fewer than ``min_rows``
         rows, NaN/inf (names the file, the trial and, for CSV files, the line).
     """
-    path, reason = resolve_signal_path(folder, rel, root)
-    if path is None:
-        raise DataFileError(folder / TRIALS_FILE, reason, trial=trial_id)
+    resolved = resolve_signal_path(folder, rel, root)
+    if resolved[0] is None:
+        raise DataFileError(folder / TRIALS_FILE, resolved[1], trial=trial_id)
+    path = resolved[0]
     found, values = read_signal_file(path)
     absent = [c for c in channels if c not in found]
     if absent:

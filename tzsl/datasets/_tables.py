@@ -97,8 +97,9 @@ def read_parquet_rows(path: Path, name: str, problems: list[Problem]
     try:
         frame = pq.read_table(path).to_pandas()
     except Exception as exc:  # noqa: BLE001 - pyarrow raises many types for corrupt files
-        text = str(exc).strip().splitlines()
-        problems.append(Problem(name, None, f"not a readable Parquet file ({text[0] if text else type(exc).__name__})"))
+        lines = str(exc).strip().splitlines()
+        problems.append(Problem(name, None,
+                                f"not a readable Parquet file ({lines[0] if lines else type(exc).__name__})"))
         return None
     header = [str(c).strip() for c in frame.columns]
     columns = []

@@ -159,14 +159,14 @@ def scan_classes(folder: Path, settings: dict, problems: list[Problem], scan: Sc
                                     "(or add a class that has the other value)"))
     if not settings.get("classes", {}).get("allow_identical_rows", False):
         first: dict[tuple, int] = {}
-        for i in np.flatnonzero(valid):
+        for i in np.flatnonzero(valid).tolist():
             key = tuple(table.iloc[i])
             if key in first:
-                j = first[key]
+                earlier = first[key]
                 problems.append(Problem(file, lines[i], f"class {names[i]!r} has the same attribute row "
-                                        f"as class {names[j]!r} (line {lines[j]}); zero-shot learning cannot tell "
-                                        f"them apart (set [classes] allow_identical_rows = true in {settings_file} "
-                                        "if this is intended)"))
+                                        f"as class {names[earlier]!r} (line {lines[earlier]}); zero-shot learning "
+                                        "cannot tell them apart (set [classes] allow_identical_rows = true in "
+                                        f"{settings_file} if this is intended)"))
             else:
                 first[key] = i
     scan.classes = table
@@ -198,7 +198,7 @@ def _scan_groups(folder: Path, problems: list[Problem], scan: ScannedDataset) ->
             problems.append(Problem(GROUPS_FILE, line, f"unknown attribute {attr!r}: not a column of {CLASSES_FILE}"))
             continue
         groups[attr] = group
-    if known is not None:
+    if scan.classes is not None:  # known is not None
         ungrouped = [a for a in scan.classes.columns if a not in seen]
         if ungrouped:
             problems.append(Problem(GROUPS_FILE, None, f"attribute(s) {ungrouped} of {CLASSES_FILE} have no group"))
@@ -222,7 +222,7 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
         scan.kind, scan.trials, scan.signal_lines = clean.kind, clean.trials, clean.lines
         scan.sensors = clean.sensors or (DEFAULT_SENSOR,)
         scan.X, scan.feature_names = clean.X, clean.feature_names
-        if clean.kind == "signals":
+        if clean.kind == "signals" and clean.signal_files is not None:  # set together
             present = np.ones(clean.signal_files.shape, dtype=bool)
             _scan_signal_files(folder, settings, problems, scan, clean.signal_files, present, check_signals, tname)
         return
@@ -261,9 +261,9 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
     object_class: dict[str, tuple[str, int]] = {}
     object_ids: dict[str, tuple[int, int]] = {}
     for line, cells in rows:
-        tid, cls = cell(cells, "trial_id"), cell(cells, "class")
+        tid, cls = cells[col["trial_id"]], cells[col["class"]]  # required columns (checked above)
         obj = cell(cells, "object")
-        sensor = cell(cells, "sensor") if "sensor" in col else DEFAULT_SENSOR
+        sensor = cells[col["sensor"]] if "sensor" in col else DEFAULT_SENSOR
         empty = [n for n, v in (("trial_id", tid), ("class", cls), ("object", obj), ("sensor", sensor))
                  if v is not None and not v]
         if empty:
@@ -331,12 +331,12 @@ def _scan_trials(folder: Path, settings: dict, problems: list[Problem], scan: Sc
 
     if scan.kind == "columns":
         idx = [col[f] for f in features]
-        cells = np.array([[kept_rows[k][1][j] for j in idx] if k >= 0 else [""] * len(idx)
-                          for k in where.reshape(-1)], dtype=str)
-        values, bad = to_float(cells)
+        table_cells = np.array([[kept_rows[k][1][j] for j in idx] if k >= 0 else [""] * len(idx)
+                                for k in where.reshape(-1)], dtype=str)
+        values, bad = to_float(table_cells)
         present = (where.reshape(-1) >= 0)[:, None]
         for r, j in np.argwhere((bad | ~np.isfinite(values)) & present):
-            text = str(cells[r, j])
+            text = str(table_cells[r, j])
             line = int(lines.reshape(-1)[r])
             if not text:
                 msg = "is empty"
@@ -359,6 +359,7 @@ def _scan_signal_files(folder: Path, settings: dict, problems: list[Problem], sc
                        files: np.ndarray, present: np.ndarray, check_signals: bool, tname: str) -> None:
     """Check the signal files (n_trials, n_sensors) of the trials table where ``present``; fills ``scan``."""
     scan.signal_files = files
+    assert scan.signal_lines is not None and scan.trials is not None  # _scan_trials fills both first
     lines, meta = scan.signal_lines, scan.trials["trial_id"].to_numpy()
     configured = settings.get("signals", {}).get("channels")
     scan.channels = tuple(configured) if configured else None
