@@ -135,26 +135,30 @@ class DetectorBank:
         Z = (X[:, sensor, :].transpose(1, 0, 2) - self.mean[:, None, :]) / self.scale[:, None, :]
         if self.components is None:
             return Z
+        assert self.pca_offset is not None and self.whiten is not None  # stored with the components
         Z = Z @ self.components.transpose(0, 2, 1)
         Z -= self.pca_offset[:, None, :]
         return Z / self.whiten[:, None, :]
 
     def _rbf_scores(self, Z: np.ndarray) -> np.ndarray:
         """``sum_i dual_coef_i exp(-gamma ||z - v_i||^2)`` of (E, n, k) features, in blocks; shape (E, n)."""
+        vectors, vector_norms, gamma, dual_coef = self.vectors, self.vector_norms, self.gamma, self.dual_coef
+        # an RBF bank stores all four
+        assert vectors is not None and vector_norms is not None and gamma is not None and dual_coef is not None
         E, n, _ = Z.shape
-        rows = max(1, _KERNEL_BLOCK // max(1, E * self.vectors.shape[1]))
-        norms = self.vector_norms[:, None, :]
+        rows = max(1, _KERNEL_BLOCK // max(1, E * vectors.shape[1]))
+        norms = vector_norms[:, None, :]
         out = np.empty((E, n))
         for start in range(0, n, rows):
             block = Z[:, start : start + rows]
-            D = block @ self.vectors.transpose(0, 2, 1)  # squared distances as scikit-learn's rbf_kernel
+            D = block @ vectors.transpose(0, 2, 1)  # squared distances as scikit-learn's rbf_kernel
             D *= -2.0
             D += np.einsum("enk,enk->en", block, block)[:, :, None]
             D += norms
             np.maximum(D, 0.0, out=D)
-            D *= -self.gamma[:, None, None]
+            D *= -gamma[:, None, None]
             np.exp(D, out=D)
-            D *= self.dual_coef[:, None, :]
+            D *= dual_coef[:, None, :]
             # summed vector by vector (cumsum adds in order, unlike sum), as libsvm sums: the SVM's scores
             out[:, start : start + rows] = np.cumsum(D, axis=2)[:, :, -1]
         return out
@@ -175,6 +179,7 @@ class DetectorBank:
         X = self._check(X)
         Z = self._features(X)
         if self.family == "linear":
+            assert self.coef is not None  # a linear bank stores its coef
             score = np.einsum("enk,ek->en", Z, self.coef)
         else:
             score = self._rbf_scores(Z)
@@ -320,8 +325,9 @@ def detector_payload(model: Any, decision_rule: Any, calibration: dict | None = 
     bank = getattr(model, "attribute_model_", None)
     if type(bank) is not AttributeClassifierBank or type(decision_rule) is not DAPRule:
         return None
-    rows = [_detector_arrays(est) for per_sensor in bank.estimators_ for est in per_sensor]
-    if any(r is None for r in rows) or len({r["family"] for r in rows}) != 1:
+    found = [_detector_arrays(est) for per_sensor in bank.estimators_ for est in per_sensor]
+    rows = [r for r in found if r is not None]
+    if len(rows) != len(found) or len({r["family"] for r in rows}) != 1:
         return None
     if len({"components" in r for r in rows}) != 1:
         return None
@@ -410,7 +416,7 @@ def read_detector_payload(tree: dict, n_attributes: int, where: str) -> tuple[De
     E = m * s
     projected = "components" in det
     k = np.shape(det["components"])[1] if projected and np.ndim(det["components"]) == 3 else d
-    width = {"E": E, "d": d, "k": k}
+    width: dict[str | int, int] = {"E": E, "d": d, "k": k}  # a dimension's name -> its size (a number: itself)
     wanted = {"mean": ("E", "d"), "scale": ("E", "d"), "intercept": ("E",), "platt": ("E", 2)}
     if projected:
         wanted.update(components=("E", "k", "d"), pca_mean=("E", "d"), whiten=("E", "k"))

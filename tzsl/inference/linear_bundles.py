@@ -207,7 +207,7 @@ def read_linear_payload(tree: dict, n_attributes: int, where: str) -> tuple[Line
     mean, scale = linear.get("mean"), linear.get("scale")
     if (mean is None) != (scale is None):
         raise fail("mean and scale come together")
-    if mean is not None and not (np.shape(mean) == np.shape(scale) == (weights.shape[0],)
+    if mean is not None and scale is not None and not (np.shape(mean) == np.shape(scale) == (weights.shape[0],)
                                  and np.all(np.asarray(scale) > 0)):
         raise fail(f"mean {np.shape(mean)} and scale {np.shape(scale)} must be ({weights.shape[0]},), scale > 0")
     if not all(np.isfinite(a).all() for a in (weights, mean, scale) if a is not None):

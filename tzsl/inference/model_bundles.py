@@ -84,9 +84,10 @@ def training_subset(features: FeatureSet, splits_file=None, split_name: str | No
                        attribute_exclusions(A.loc[list(objects)].to_numpy(dtype=bool), list(A.columns), **rule))
     else:
         splits = read_splits_csv(splits_file, A, **rule)
-        chosen = splits[0] if split_name is None else next((s for s in splits if s.name == split_name), None)
-        if chosen is None:
+        named = splits[0] if split_name is None else next((s for s in splits if s.name == split_name), None)
+        if named is None:
             raise ConfigError(f"{splits_file}: no split named {split_name!r}; have {[s.name for s in splits]}")
+        chosen = named
     info = features.info or {}
     filtered = (f"present in fewer than {info['min_objects']} objects (min_objects = {info['min_objects']})"
                 if "min_objects" in info else "dropped by the dataset's attribute filter")
@@ -151,8 +152,9 @@ def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | 
 
     sub, split_record, left_out = training_subset(features, splits_file, split_name,
                                                   **trainable_attribute_rule(config.splits))
-    for note in left_out_notes(left_out) if echo is not None else []:
-        echo(f"note: {note}")
+    if echo is not None:
+        for note in left_out_notes(left_out):
+            echo(f"note: {note}")
     attributes = list(sub.attributes.columns)
     A = sub.trial_attributes()
     provenance = {"training_objects": sorted(set(sub.objects)), "split": split_record, "seed": config.splits.seed,

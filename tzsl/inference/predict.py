@@ -229,6 +229,7 @@ def format_prediction(pred: Prediction, top: int = 5) -> str:
             lines.append(f"SC-MDAP (k={pred.k}): NOT decided after {n} grasp{'s' if n > 1 else ''}: no class reached "
                          f"{pred.k} equal classifications (most frequent so far: {name(pred.final)}, {count} of {n})")
     else:
+        assert pred.running is not None and pred.final_posteriors is not None  # DF-MDAP sets both
         seq = ", ".join(pred.classes[int(d)] for d in pred.running)
         lines.append(f"DF-MDAP decision after each grasp: {seq}")
         lines.append(f"DF-MDAP: decided {name(pred.final)} from all {n} grasp{'s' if n > 1 else ''} (eqs. 11-12):")

@@ -88,7 +88,8 @@ def load_per_ep_model(path: str | Path, *, trust_pickle: bool = False) -> tuple[
     if not isinstance(model, PerEPAttributeModel) or not hasattr(model, "banks_"):
         raise ModelBundleError(f"{path}: a per-ep bundle must hold a fitted PerEPAttributeModel, "
                                f"found {type(model).__name__}")
-    if np.shape(getattr(model, "exponents_", None)) != (2 ** len(model.eps_),):
+    exponents = getattr(model, "exponents_", None)
+    if exponents is None or np.shape(exponents) != (2 ** len(model.eps_),):
         raise ModelBundleError(f"{path}: per-ep bundle has no fitted posterior exponents (written before the "
                                "tempered update); re-run 'tzsl train-attributes --per-ep'")
     schema, names = metadata.get("input"), metadata.get("attribute_names")

@@ -340,7 +340,7 @@ def _hand_grasps(schema: dict, inputs: Sequence[str | Path]) -> Grasps:
     if not grasps:
         raise DataFileError(None, "no grasps given")
     feats = grasp_features(grasps, **schema["feature_params"])
-    touched = feats.contact.any(axis=1)
+    touched = np.asarray(feats.contact.any(axis=1))  # an array: numpy's stub also allows a scalar
     notes = [f"skipped grasp {gid} ({g.source}): no BioTac touched the object"
              for gid, g, t in zip(feats.grasp_ids, grasps, touched, strict=True) if not t]
     if not touched.any():

@@ -88,7 +88,11 @@ class Recogniser:
         if not isinstance(k, int | np.integer) or isinstance(k, bool) or k < 1:
             raise ConfigError(f"k must be a positive integer, got {k!r}")
         self.predictor, self.per_ep, self.mode, self.k = predictor, per_ep, mode, int(k)
-        names = predictor.attribute_names if predictor is not None else list(per_ep[1]["attribute_names"])
+        if predictor is not None:
+            names = predictor.attribute_names
+        else:
+            assert per_ep is not None  # exactly one of them (checked above)
+            names = list(per_ep[1]["attribute_names"])
         self.attribute_names = [str(a) for a in names]
         if list(classes.columns) != self.attribute_names:
             raise ConfigError("class table columns are not in the model's attribute order; read it with "

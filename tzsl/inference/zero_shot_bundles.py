@@ -254,7 +254,7 @@ def _read_arrays(tree: dict, metadata: dict, where: str) -> dict:
         raise ModelBundleError(f"{where}: zero-shot bundle metadata lacks ['attribute_names']")
     read = read_detector_payload if "detectors" in tree else read_linear_payload
     model, rule, calibration = read(tree, len(names), where)
-    payload = {"model": model, "decision_rule": rule}
+    payload: dict[str, Any] = {"model": model, "decision_rule": rule}
     if calibration is not None:
         payload["calibration"] = calibration
     return payload
