@@ -15,9 +15,9 @@ from tzsl.exceptions import ConfigError
 from tzsl.reporting.markdown_cells import find_table, number, ours, signed
 
 __all__ = ["BEST_METHOD_FILE", "ENSEMBLE_CALIBRATION_FILES", "ESZSL_PUBLIC_FILE", "EXACT_SOLVER_FILES",
-           "MissingResults", "benchmark_accuracy_block", "benchmark_table", "best_method_block",
-           "ensemble_calibration_block", "eszsl_public_block", "exact_solver_threshold_block", "runs_by_purpose",
-           "search_benchmark_block"]
+           "SELECTION_CRITERION_FILES", "MissingResults", "benchmark_accuracy_block", "benchmark_table",
+           "best_method_block", "ensemble_calibration_block", "eszsl_public_block", "exact_solver_threshold_block",
+           "runs_by_purpose", "search_benchmark_block", "selection_criterion_block"]
 
 #: The decision CSV of ``experiments/benchmarks/phac2_best_method.py``.
 BEST_METHOD_FILE = "phac2_best_method.csv"
@@ -27,6 +27,8 @@ ESZSL_PUBLIC_FILE = "eszsl_public.csv"
 ENSEMBLE_CALIBRATION_FILES = "calibration_refit_summary_phac2_ensemble_*.csv"
 #: The summary CSVs of ``experiments/benchmarks/exact_solver_threshold.py --data phac2`` (one per purpose and seed).
 EXACT_SOLVER_FILES = "exact_solver_threshold_phac2_*.csv"
+#: The summary CSVs of ``experiments/benchmarks/selection_criterion.py`` (one per purpose and seed).
+SELECTION_CRITERION_FILES = "selection_criterion_summary_*.csv"
 
 
 class MissingResults(ConfigError):
@@ -284,4 +286,58 @@ def exact_solver_threshold_block(results: str | Path) -> str:
                       f"({'holds' if holds else 'does not hold'}): "
                       + ("the exact-solver threshold is set below the template's training sets."
                          if holds else "the threshold stays where it was.")]
+    return "\n".join(lines)
+
+
+def selection_criterion_block(results: str | Path) -> str:
+    """The zero-shot searches' criterion, neg_log_loss against accuracy (``selection_criterion.py``).
+
+    Reads every :data:`SELECTION_CRITERION_FILES` under ``results``: the selection splits with the
+    rule's verdict per method (``rule_a_holds``, ``rule_b_holds`` as the selection file records
+    them), then the confirmation splits.
+
+    Raises
+    ------
+    MissingResults
+        No such file under ``results``.
+    """
+    table = runs_by_purpose(results, SELECTION_CRITERION_FILES, "selection_criterion.py --purpose select")
+    lines = ["Generated from `selection_criterion_summary_*.csv` by `make numbers`: PHAC-2 trial accuracy "
+             "[95% interval] of each method with its regularisers chosen by accuracy and by neg_log_loss (same "
+             "tie rule), chance (one over the unseen classes), the paired difference neg_log_loss minus accuracy "
+             "on the same trials [95% interval], and, over the fits repeated on the features times "
+             "`1 + 1e-12 u`, the fits whose chosen regulariser changed and the test predictions that changed "
+             "(accuracy / neg_log_loss)."]
+    for purpose, part in table.groupby("purpose", sort=False):
+        seeds = ", ".join(str(int(v)) for v in dict.fromkeys(part["seed"]))
+        lines += ["", f"{'Selection' if purpose == 'select' else 'Confirmation'} splits (seed {seeds}):", "",
+                  "| method | splits | chance | by accuracy | by neg_log_loss | neg_log_loss - accuracy | "
+                  "changed choices (of fits) | changed predictions (of trials) |", "|---|---|---|---|---|---|---|---|"]
+        for (_, method), rows in part.groupby(["seed", "method"], sort=False):
+            by = rows.set_index("scoring")
+            acc, nll = by.loc["accuracy"], by.loc["neg_log_loss"]
+            lines.append(f"| `{method}` | {int(nll['n_splits'])} | {number(nll['chance'])} | "
+                         f"{ours(acc, 'accuracy', 'ci95_low', 'ci95_high')} | "
+                         f"{ours(nll, 'accuracy', 'ci95_low', 'ci95_high')} | "
+                         f"{signed(nll['diff_vs_accuracy'], nll['diff_ci95_low'], nll['diff_ci95_high'])} | "
+                         f"{int(acc['n_choice_flips'])} / {int(nll['n_choice_flips'])} ({int(nll['n_fits'])}) | "
+                         f"{int(acc['n_changed_predictions'])} / {int(nll['n_changed_predictions'])} "
+                         f"({int(nll['n_test_trials'])}) |")
+        if purpose != "select" or "rule_holds" not in part.columns:
+            continue
+        verdicts = part[part["scoring"] == "neg_log_loss"]
+        bound = float(verdicts["rule_min_lower_bound"].iloc[0])
+        lines += ["", "The rule, fixed before measuring: neg_log_loss becomes a method's default if on the selection "
+                      "splits (a) no choice by neg_log_loss changed under the perturbation while one by accuracy did, "
+                      f"and (b) the interval of neg_log_loss minus accuracy has its lower bound above {bound:+.2f}.",
+                  ""]
+        flips = part.set_index(["method", "scoring"])["n_choice_flips"]
+        for _, r in verdicts.iterrows():
+            a, b = bool(r["rule_a_holds"]), bool(r["rule_b_holds"])
+            changed = (f"changed choices: accuracy {int(flips[(r['method'], 'accuracy')])}, neg_log_loss "
+                       f"{int(r['n_choice_flips'])}")
+            lines.append(f"* `{r['method']}`: (a) {'holds' if a else 'does not hold'} ({changed}), (b) "
+                         f"{'holds' if b else 'does not hold'} (lower bound {float(r['diff_ci95_low']):+.3f}): "
+                         + ("neg_log_loss becomes its default." if a and b else
+                            "accuracy stays its default; its published numbers can move with the last bit."))
     return "\n".join(lines)
