@@ -132,7 +132,7 @@ def held_out_accuracy_by_hand(X, A, lams, n_splits):
 def test_cv_scores_equal_plain_sae_fits_on_held_out_classes(zero_shot_problem):
     p = zero_shot_problem(seed=5, noise=3.0)
     lams = (0.01, 1.0, 100.0)
-    model = SAECV(lams=lams, n_splits=4, scoring="accuracy").fit(p.X_train, p.A_train)
+    model = SAECV(lams=lams, n_splits=4).fit(p.X_train, p.A_train)  # scoring="accuracy", the default
     expected = held_out_accuracy_by_hand(p.X_train, p.A_train, lams, 4)
     np.testing.assert_allclose(model.cv_scores_, expected)
     best = int(np.argmax(expected.mean(axis=1)))  # ties (within 1e-6) keep the smallest lam: argmax's first
@@ -160,8 +160,10 @@ def test_cv_with_few_classes_holds_out_one_class_against_all_rows():
     X = A @ rng.normal(size=(2, 4)) + 0.1 * rng.normal(size=(30, 4))
     model = SAECV(lams=(0.1, 10.0), grid_extensions=0).fit(X, A)
     assert model.cv_scores_.shape == (2, 3)  # leave-one-class-out
+    assert np.all((model.cv_scores_ >= 0) & (model.cv_scores_ <= 1))
+    smooth = SAECV(lams=(0.1, 10.0), grid_extensions=0, scoring="neg_log_loss").fit(X, A)
     # minus a log-loss among all 3 rows: 0 at best, chance (-log 3) at worst
-    assert np.all((model.cv_scores_ >= -np.log(3) - 1e-12) & (model.cv_scores_ <= 0))
+    assert np.all((smooth.cv_scores_ >= -np.log(3) - 1e-12) & (smooth.cv_scores_ <= 0))
 
 
 @pytest.mark.parametrize(

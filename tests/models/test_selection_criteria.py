@@ -1,4 +1,4 @@
-"""The zero-shot searches' smooth CV criterion and tie rule (tzsl.models.protocol; issue 41)."""
+"""The zero-shot searches' CV criteria and tie rule (tzsl.models.protocol; issue 41)."""
 
 from __future__ import annotations
 
@@ -14,8 +14,8 @@ from tzsl.models import ESZSL, ESZSLCV, CompatibilityRule, ZeroShotClassifier
 from tzsl.models._selection_criteria import BETA_MAX
 from tzsl.models.protocol import (
     TIE_TOLERANCE,
+    best_within_tolerance,
     heldout_scores,
-    most_regularised_best,
     neg_log_loss,
 )
 
@@ -73,17 +73,29 @@ def test_balanced_accuracy_is_the_mean_per_class_accuracy():
         heldout_scores(scores, y, "f1")
 
 
-def test_ties_go_to_the_most_regularised_configuration():
+def test_ties_go_to_the_preferred_configuration():
     gammas, lams = np.array([0.1, 1.0, 10.0]), np.array([1.0, 10.0])
     scores = np.array([[0.5, 0.7], [0.7 - TIE_TOLERANCE / 2, 0.6], [0.2, np.nan]])
-    assert most_regularised_best(scores, (gammas, lams)) == (1, 0)  # gamma 1 ties with gamma 0.1 and is larger
+    most_regularised = (gammas, lams)
+    assert best_within_tolerance(scores, most_regularised) == (1, 0)  # gamma 1 ties with 0.1 and is larger
+    assert best_within_tolerance(scores, (-gammas, -lams)) == (0, 1)  # preferring small values: gamma 0.1
     scores[1, 0] = 0.7 - 2 * TIE_TOLERANCE  # no longer tied: the best alone
-    assert most_regularised_best(scores, (gammas, lams)) == (0, 1)
+    assert best_within_tolerance(scores, most_regularised) == (0, 1)
     flat = np.full((3, 2), -0.3)
-    assert most_regularised_best(flat, (gammas, lams)) == (2, 1)  # a flat grid: the largest of both
-    assert most_regularised_best(np.array([0.1, 0.4, 0.4]), (np.array([3.0, 1.0, 2.0]),)) == (2,)
-    with pytest.raises(ValueError, match="regularisers"):
-        most_regularised_best(flat, (gammas,))
+    assert best_within_tolerance(flat, most_regularised) == (2, 1)  # a flat grid: the largest of both
+    assert best_within_tolerance(flat, (-gammas, -lams)) == (0, 0)  # ... or the first of both
+    assert best_within_tolerance(np.array([0.1, 0.4, 0.4]), (np.array([3.0, 1.0, 2.0]),)) == (2,)
+    with pytest.raises(ValueError, match="preference keys"):
+        best_within_tolerance(flat, (gammas,))
+
+
+def test_accuracy_searches_choose_as_an_argmax_over_the_grid_did():
+    """With accuracy (the default) only equal scores tie: the first of them in grid order, as np.argmax chose."""
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        scores = rng.integers(0, 6, size=(4, 3)) / 5  # accuracies of 5 trials: many exact ties
+        first = np.unravel_index(np.argmax(scores), scores.shape)
+        assert best_within_tolerance(scores, (-np.arange(4.0), -np.arange(3.0))) == first
 
 
 def _synthetic():
@@ -96,9 +108,10 @@ def _synthetic():
 def test_eszslcv_scores_its_grid_with_the_criterion_and_survives_a_last_bit():
     X, y, A = _synthetic()
     train = y < 7
-    model = ESZSLCV(gammas=(0.01, 1.0, 100.0), lams=(0.1, 10.0), grid_extensions=0).fit(X[train], A[y[train]],
-                                                                                          y[train])
-    assert model.scoring == "neg_log_loss" and np.all(model.mean_cv_scores_ <= 0)
+    assert ESZSLCV().scoring == "accuracy"  # the default, chosen on selection splits (tzsl.models.protocol)
+    model = ESZSLCV(gammas=(0.01, 1.0, 100.0), lams=(0.1, 10.0), grid_extensions=0, scoring="neg_log_loss")
+    model.fit(X[train], A[y[train]], y[train])
+    assert np.all(model.mean_cv_scores_ <= 0)
     # one cell by hand: the fold's fit, its compatibility scores among the held-out classes, the criterion
     folds = model._folds(X[train], y[train])
     tr, va = folds[0]
@@ -110,11 +123,12 @@ def test_eszslcv_scores_its_grid_with_the_criterion_and_survives_a_last_bit():
 
     rng = np.random.default_rng(4)
     wiggled = X * (1 + 1e-12 * rng.uniform(-1, 1, X.shape))
-    again = ESZSLCV().fit(wiggled[train], A[y[train]], y[train])
-    first = ESZSLCV().fit(X[train], A[y[train]], y[train])
+    again = ESZSLCV(scoring="neg_log_loss").fit(wiggled[train], A[y[train]], y[train])
+    first = ESZSLCV(scoring="neg_log_loss").fit(X[train], A[y[train]], y[train])
     assert (again.best_gamma_, again.best_lam_) == (first.best_gamma_, first.best_lam_)
-    clf = ZeroShotClassifier(attribute_model=ESZSLCV(), decision_rule=CompatibilityRule())
-    clf_wiggled = ZeroShotClassifier(attribute_model=ESZSLCV(), decision_rule=CompatibilityRule())
+    clf = ZeroShotClassifier(attribute_model=ESZSLCV(scoring="neg_log_loss"), decision_rule=CompatibilityRule())
+    clf_wiggled = ZeroShotClassifier(attribute_model=ESZSLCV(scoring="neg_log_loss"),
+                                     decision_rule=CompatibilityRule())
     clf.fit(X[train], A[y[train]], y[train])
     clf_wiggled.fit(wiggled[train], A[y[train]], y[train])
     np.testing.assert_array_equal(clf.predict(X[~train], A[7:]), clf_wiggled.predict(wiggled[~train], A[7:]))

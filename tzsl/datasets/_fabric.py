@@ -241,7 +241,7 @@ def read_depth_images(paths, dtype=np.uint16, *, shape: tuple[int, int] = DEPTH_
     DataFileError
         Unreadable file, wrong shape, or not a single-channel 16-bit image.
     """
-    import imageio.v3 as iio  # noqa: PLC0415 - imageio takes ~0.15 s to import; only image readers need it
+    import imageio.v3 as iio  # noqa: PLC0415 - imageio is slow to import; only image readers need it
 
     paths = [Path(p) for p in paths]
     out = np.empty((len(paths), *shape), dtype=dtype)

@@ -100,7 +100,7 @@ def read_video(path: str | os.PathLike) -> np.ndarray:
         file shorter than its header declares or a decoded frame count that differs
         from the header's. The message names the file.
     """
-    import imageio.v3 as iio  # noqa: PLC0415 - imageio takes ~0.15 s to import; only video readers need it
+    import imageio.v3 as iio  # noqa: PLC0415 - imageio is slow to import; only video readers need it
 
     path = Path(path)
     if not path.is_file():

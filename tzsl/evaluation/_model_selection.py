@@ -20,9 +20,9 @@ from tzsl.models import build_method
 from tzsl.models.protocol import (
     DEFAULT_SCORING,
     attribute_rows,
+    best_within_tolerance,
     class_grouped_folds,
     heldout_scores,
-    most_regularised_best,
 )
 
 __all__ = ["DEFAULT_ALPHAS", "select_embedding_alpha"]
@@ -49,8 +49,8 @@ def select_embedding_alpha(
     least 2 trained on; a merged group never alone); each fold
     trains ``EmbeddingZSL(lam, alpha, early_stopping=False)`` on the rest and scores how well it
     recognises the held-out samples among the held-out groups' attribute rows (the zero-shot
-    situation) by ``scoring`` (:func:`tzsl.models.protocol.heldout_scores` on the class scores: by
-    default the smooth ``neg_log_loss``, which a last-bit difference cannot flip). The alpha with the
+    situation) by ``scoring`` (:func:`tzsl.models.protocol.heldout_scores` on the class scores; by
+    default accuracy). The alpha with the
     best mean score wins; scores within :data:`tzsl.models.protocol.TIE_TOLERANCE` of the best are
     tied and the largest tied alpha (the strongest weight decay) is chosen.
 
@@ -70,7 +70,7 @@ def select_embedding_alpha(
         Seed of the fold models.
     max_iter : int
         L-BFGS iterations of each fit.
-    scoring : {"neg_log_loss", "accuracy", "balanced_accuracy"}
+    scoring : {"accuracy", "balanced_accuracy", "neg_log_loss"}
         The held-out criterion (higher is better).
 
     Returns
@@ -113,5 +113,5 @@ def select_embedding_alpha(
                     random_state=random_state, calibration="none",
                 ), X[tr], attribute_rows(y[tr], S_tr), y[tr])
             scores[a, f] = heldout_scores(model.decision_function(X[va], S_u[va_groups]), y_va.ravel(), scoring)
-    best = most_regularised_best(scores.mean(axis=1), (np.asarray(alphas),))[0]
+    best = best_within_tolerance(scores.mean(axis=1), (np.asarray(alphas),))[0]
     return alphas[best], scores

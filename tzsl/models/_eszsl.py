@@ -40,7 +40,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from tzsl._scoring import linear_embedding
 from tzsl.models._attribute_model_base import attribute_table_tags
-from tzsl.models._selection_criteria import DEFAULT_SCORING, SCORINGS, heldout_scores, most_regularised_best
+from tzsl.models._selection_criteria import DEFAULT_SCORING, SCORINGS, best_within_tolerance, heldout_scores
 from tzsl.models._validation import ParameterError, ValidatedParamsMixin
 from tzsl.models._zsl_input import (
     DEFAULT_GRID_EXTENSIONS,
@@ -259,10 +259,11 @@ class ESZSLCV(_ESZSLBase):
         more than ``n_classes // 2``). Otherwise any object with ``split(X, y, groups)``; it
         receives ``groups`` = class (row of ``class_attributes_``), and every fold must hold out
         whole classes, at least 2 of them, and train on at least 2.
-    scoring : {"neg_log_loss", "accuracy", "balanced_accuracy"}, default="neg_log_loss"
-        Criterion on the held-out classes (:mod:`tzsl.models.protocol`'s selection criteria): minus the
-        log-loss of a softmax over the held-out classes' scores at its best temperature (smooth, so a
-        last-bit difference cannot flip the choice), per-sample accuracy, or mean per-class accuracy.
+    scoring : {"accuracy", "balanced_accuracy", "neg_log_loss"}, default="accuracy"
+        Criterion on the held-out classes (:func:`tzsl.models.protocol.heldout_scores`): per-sample
+        accuracy, mean per-class accuracy, or minus the log-loss of a softmax over the held-out
+        classes' scores at its best temperature (smooth: a last-bit difference cannot flip the choice;
+        not the default, see :mod:`tzsl.models.protocol`).
     standardize : bool, default=True
         As in :class:`ESZSL`; the scaler is refitted on each fold's training part.
     grid_extensions : int >= 0, default=3 (``DEFAULT_GRID_EXTENSIONS``)
@@ -274,8 +275,8 @@ class ESZSLCV(_ESZSLBase):
     Attributes
     ----------
     best_gamma_, best_lam_ : float
-        Chosen regularisers. Mean CV scores within ``TIE_TOLERANCE`` (1e-6) of the best are tied and the
-        most regularised of them is chosen: the largest ``gamma``, then the largest ``lam``.
+        Chosen regularisers. Mean CV scores within ``TIE_TOLERANCE`` of the best are tied and the first
+        of them in grid order is chosen: the smallest ``gamma``, then the smallest ``lam``.
     gammas_, lams_ : ndarray
         The final (sorted, possibly extended) grids that were scored.
     at_grid_edge_ : bool
@@ -386,7 +387,7 @@ class ESZSLCV(_ESZSLBase):
 
         self.cv_scores_ = np.stack(scores, axis=-1)
         self.mean_cv_scores_ = self.cv_scores_.mean(axis=-1)
-        gi, li = most_regularised_best(self.mean_cv_scores_, (gammas, lams))
+        gi, li = best_within_tolerance(self.mean_cv_scores_, (-gammas, -lams))
         for _ in range(int(self.grid_extensions)):  # adaptive: step beyond an edge that was selected
             new_g, new_l = extend_at_edge(gammas, gi), extend_at_edge(lams, li)
             if new_g is None and new_l is None:
@@ -397,7 +398,7 @@ class ESZSLCV(_ESZSLBase):
                 [self._score_fold(X[tr], y_u[tr], X[va], y_u[va], S_u, gammas, lams) for tr, va in folds], axis=-1
             )
             self.mean_cv_scores_ = self.cv_scores_.mean(axis=-1)
-            gi, li = most_regularised_best(self.mean_cv_scores_, (gammas, lams))
+            gi, li = best_within_tolerance(self.mean_cv_scores_, (-gammas, -lams))
         self.gammas_, self.lams_ = gammas, lams
         self.at_grid_edge_ = extend_at_edge(gammas, gi) is not None or extend_at_edge(lams, li) is not None
         self.best_gamma_ = float(gammas[gi])

@@ -39,7 +39,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from tzsl.models._attribute_model_base import EmbeddingAttributeModel
 from tzsl.models._decision import cosine_similarities
-from tzsl.models._selection_criteria import DEFAULT_SCORING, SCORINGS, heldout_scores, most_regularised_best
+from tzsl.models._selection_criteria import DEFAULT_SCORING, SCORINGS, best_within_tolerance, heldout_scores
 from tzsl.models._zsl_input import (
     DEFAULT_GRID_EXTENSIONS,
     class_grouped_folds,
@@ -167,11 +167,11 @@ class SAECV(EmbeddingAttributeModel):
     The training classes (distinct rows of ``A``) are split by
     :func:`~tzsl.models.protocol.class_grouped_folds` (each fold validates on >= 2 and trains on >= 2
     classes; classes sharing a row are one class, never alone in a fold); for every fold and every
-    ``lam`` the encoder is fitted on the other classes (one pair of eigendecompositions per fold serves the whole grid)
-    and scored among the fold's held-out classes (cosine to their rows), the situation of the test,
-    by ``scoring`` (default: the smooth :func:`~tzsl.models.protocol.neg_log_loss`, which a last-bit
-    difference cannot flip). Holding out classes holds out whole objects; test objects are never
-    used. The best ``lam`` (mean criterion over folds; scores within
+    ``lam`` the encoder is fitted on the other classes (one pair of eigendecompositions per fold serves
+    the whole grid) and scored among the fold's held-out classes (cosine to their rows), the situation
+    of the test, by ``scoring`` (default: accuracy; :func:`~tzsl.models.protocol.heldout_scores`).
+    Holding out classes holds out whole objects; test objects are never used. The best ``lam`` (mean
+    criterion over folds; scores within
     :data:`~tzsl.models.protocol.TIE_TOLERANCE` of the best are tied and the smallest tied ``lam`` is
     kept: SAE's ``lam`` weighs the encoder against the decoder, neither end is simpler, and the
     smallest is the order the search always used) is refitted on all training trials.
@@ -180,7 +180,7 @@ class SAECV(EmbeddingAttributeModel):
     ----------
     lams : array-like of float, default=(1e-2, 1e-1, ..., 1e5)
         Candidate lambdas (each > 0), see :class:`SAE`.
-    scoring : {"neg_log_loss", "accuracy", "balanced_accuracy"}, default="neg_log_loss"
+    scoring : {"accuracy", "balanced_accuracy", "neg_log_loss"}, default="accuracy"
         Criterion on the held-out classes (:func:`~tzsl.models.protocol.heldout_scores`), on the
         cosine similarities.
     n_splits : int, default=5
@@ -260,7 +260,7 @@ class SAECV(EmbeddingAttributeModel):
                                      for lam in lams])  # (n_lams, n_held_out, n_candidates)
             scores.append(heldout_scores(similarities, truth, self.scoring))
         self.cv_scores_ = np.asarray(scores).T
-        return most_regularised_best(self.cv_scores_.mean(axis=1), (-lams,))[0]  # ties: the smallest lam
+        return best_within_tolerance(self.cv_scores_.mean(axis=1), (-lams,))[0]  # ties: the smallest lam
 
     @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X, y, groups=None):

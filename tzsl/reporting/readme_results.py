@@ -19,7 +19,8 @@ written by the shipped code:
   spreads, and every method x study of ``method_comparison.csv``;
 * the benchmarks' blocks (:mod:`tzsl.reporting.benchmark_blocks`), each from its own CSV:
   ``phac2-accuracy-benchmark``, ``phac2-best-method``, ``eszsl-public-benchmark``,
-  ``ensemble-calibration-benchmark``, ``exact-solver-threshold-benchmark`` (``experiments/benchmarks/README.md``),
+  ``ensemble-calibration-benchmark``, ``exact-solver-threshold-benchmark``, ``selection-criterion-benchmark``
+  (``experiments/benchmarks/README.md``),
   ``attribute-search-benchmark`` (``docs/user_guide/performance.md``).
 
 A block whose CSVs are missing (the benchmarks', the evidence blocks') is left as it is and the run
@@ -52,6 +53,7 @@ from tzsl.reporting.benchmark_blocks import (
     eszsl_public_block,
     exact_solver_threshold_block,
     search_benchmark_block,
+    selection_criterion_block,
 )
 from tzsl.reporting.manifests import produced_by
 from tzsl.reporting.markdown_cells import find_table, number, ours, signed
@@ -131,17 +133,19 @@ def _fabric(root: Path) -> list[Row]:
     rows: list[Row] = []
     methods = [m for m in README_FABRIC_METHODS if f"paper_{m}" in table.columns]
     for _, r in table[table["config"] == 1].iterrows():  # the paper's config and its zero-shot variant
+        # the study's note says when its choices scored a count (tzsl.models.protocol.LAST_BIT_NOTE)
+        moves = " (can move with the last bit)" if "last-bit" in str(r.get("note", "")) else ""
         for m in methods:
             if r["zero_shot"]:
                 rows.append((f"Fabric {r['condition']}, {m}, zero-shot variant ({r['protocol']}: test groups "
-                             f"{r['test_groups']}), per-class mean accuracy", ours(r, f"{m}_pcma"),
+                             f"{r['test_groups']}), per-class mean accuracy{moves}", ours(r, f"{m}_pcma"),
                              f"chance {number(r['chance'])}", "- (other test set)"))
             else:
                 base = f"chance {number(r['chance'])}"
                 if "majority" in r.index and not pd.isna(r["majority"]):
                     base += f"; majority {number(r['majority'])}"
                 rows.append((f"Fabric {r['condition']}, {m}, paper split (NOT zero-shot: group 5's row is "
-                             "seen in training), accuracy", ours(r, m), base, number(r.get(f"paper_{m}"), 4)))
+                             f"seen in training), accuracy{moves}", ours(r, m), base, number(r.get(f"paper_{m}"), 4)))
     return rows
 
 
@@ -386,7 +390,8 @@ BLOCKS: dict[str, Callable[[Path], str]] = {
     "results-evidence": evidence_block, "phac2-accuracy-benchmark": benchmark_accuracy_block,
     "attribute-search-benchmark": search_benchmark_block, "phac2-best-method": best_method_block,
     "eszsl-public-benchmark": eszsl_public_block, "ensemble-calibration-benchmark": ensemble_calibration_block,
-    "exact-solver-threshold-benchmark": exact_solver_threshold_block}
+    "exact-solver-threshold-benchmark": exact_solver_threshold_block,
+    "selection-criterion-benchmark": selection_criterion_block}
 
 
 def block_spans(text: str) -> list[tuple[int, int]]:

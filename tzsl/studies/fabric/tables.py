@@ -18,6 +18,7 @@ import pandas as pd
 from tzsl.datasets import FabricSplit, fabric_zsl_split
 from tzsl.evaluation import Outcomes, add_trust_columns, summarise_over_splits, zero_shot_variant
 from tzsl.models.embedding import loss_weights
+from tzsl.models.protocol import LAST_BIT_NOTE, moves_with_last_bit
 from tzsl.studies.fabric.samples import FabricSamples
 from tzsl.studies.papers.numbers import FABRIC_TABLE1
 
@@ -135,6 +136,8 @@ def fabric_note(samples: FabricSamples, config: int, duplicates: list[tuple[int,
     if duplicates:
         dup = "; ".join(",".join(map(str, d)) for d in duplicates)
         parts.append(f"{attributes}: groups {dup} share one attribute vector (merged in training)")
+    if moves_with_last_bit():
+        parts.append(f"ESZSL and every lam_* column: {LAST_BIT_NOTE}")
     return "; ".join(parts)
 
 
