@@ -10,6 +10,7 @@ import os
 import re
 import shutil
 import tempfile
+import zipfile
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -185,6 +186,7 @@ def write_plain_dataset(
             assert signals is not None  # exactly one of X and signals is given (checked above)
             if channels is None:
                 raise ConfigError("signals need channel names (channels=...)")
+            _check_channel_names(channels, signal_format)
             (tmp / "signals").mkdir()
             names, used = [], set()
             for i, tid in enumerate(meta["trial_id"]):
@@ -219,13 +221,55 @@ def _write_trials(tmp: Path, table: pd.DataFrame, table_format: str) -> None:
         table.to_csv(tmp / TRIALS_FILE, index=False)
 
 
+def _check_channel_names(channels: Sequence[str], signal_format: str) -> None:
+    """Refuse, in one line, channel names a signal file cannot give back exactly.
+
+    Both formats: empty, repeated, or holding a NUL character (a zip member name ends at a NUL).
+    CSV also: spaces around a name and pandas' ``Unnamed:`` prefix (the reader strips the one and
+    refuses the other).
+    """
+    for k, name in enumerate(channels, start=1):
+        if not isinstance(name, str):
+            raise ConfigError(f"channel {k}, {name!r}, is not text; channel names are strings")
+        if not name:
+            raise ConfigError(f"channel {k} has an empty name; every channel needs a name")
+        if "\0" in name:
+            raise ConfigError(f"channel {k}, {name!r}, holds a NUL character, which no signal file can store")
+        if signal_format == "csv" and name != name.strip():
+            raise ConfigError(f"channel {k}, {name!r}, begins or ends with a space, which a CSV signal file "
+                              "does not keep; rename it or use signal_format='npz'")
+        if signal_format == "csv" and name.startswith("Unnamed:"):
+            raise ConfigError(f"channel {k}, {name!r}, reads back from a CSV signal file as an unnamed column; "
+                              "rename it or use signal_format='npz'")
+    repeated = sorted({c for c in channels if channels.count(c) > 1})
+    if repeated:
+        raise ConfigError(f"channel name(s) {repeated} appear more than once; every channel needs its own name")
+
+
+def _write_npz(path: Path, arrays: Sequence[tuple[str, np.ndarray]]) -> None:
+    """Write ``arrays`` as a compressed ``.npz`` archive, whatever their names.
+
+    The format of :func:`numpy.savez_compressed` (one deflated ``<name>.npy`` member per array,
+    in order, read back by :func:`tzsl._io.read_npz` and :func:`numpy.load`), written member by
+    member: ``savez_compressed(file, **arrays)`` takes the names as keyword arguments, so an
+    array named ``file`` clashes with its first parameter and one named ``allow_pickle`` is
+    taken as that option and never written.
+    """
+    with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_DEFLATED, allowZip64=True) as zf:
+        for name, array in arrays:
+            member = zipfile.ZipInfo(name + ".npy")
+            if member.filename != name + ".npy":  # a NUL (anywhere), a path separator other than / (Windows)
+                raise ConfigError(f"array name {name!r} cannot be stored in an .npz archive")
+            member.compress_type = zipfile.ZIP_DEFLATED
+            with zf.open(member, "w", force_zip64=True) as fh:
+                np.lib.format.write_array(fh, np.ascontiguousarray(array), allow_pickle=False)
+
+
 def _write_signal(path: Path, values: np.ndarray, channels: Sequence[str]) -> None:
     if values.ndim != 2 or values.shape[1] != len(channels):
         raise ConfigError(f"signal for {path.name} has shape {values.shape}; expected (n_rows, {len(channels)})")
     if path.suffix == ".npz":
-        with open(path, "wb") as fh:
-            # numpy's stub is right that a channel named allow_pickle (or file) would not become an array
-            np.savez_compressed(fh, **{c: values[:, j] for j, c in enumerate(channels)})  # type: ignore[arg-type]
+        _write_npz(path, [(c, values[:, j]) for j, c in enumerate(channels)])
     else:
         pd.DataFrame(values, columns=list(channels)).to_csv(path, index=False)
 
