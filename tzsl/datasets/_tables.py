@@ -102,6 +102,10 @@ def read_parquet_rows(path: Path, name: str, problems: list[Problem]
                                 f"not a readable Parquet file ({lines[0] if lines else type(exc).__name__})"))
         return None
     header = [str(c).strip() for c in frame.columns]
+    if not header:
+        problems.append(Problem(name, 1, "table has no columns; expected a header naming its columns"))
+        return None
+    check_header(name, header, problems)
     columns = []
     for c in frame.columns:
         col = frame[c]
@@ -174,13 +178,18 @@ def read_rows(
     except (OSError, csv.Error) as exc:
         problems.append(Problem(name, None, f"cannot read the file: {exc}"))
         return None
+    check_header(name, header, problems)
+    return header, rows
+
+
+def check_header(name: str, header: list[str], problems: list[Problem]) -> None:
+    """Problems of a table's header (line 1): columns without a name, names given twice."""
     empty = [i + 1 for i, h in enumerate(header) if not h]
     if empty:
         problems.append(Problem(name, 1, f"header column(s) {empty} have no name"))
     dup = sorted({h for h in header if h and header.count(h) > 1})
     if dup:
         problems.append(Problem(name, 1, f"header names column(s) {dup} more than once"))
-    return header, rows
 
 
 def to_float(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
