@@ -6,6 +6,7 @@ catches these and prints their message (never a traceback) with a non-zero exit 
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -23,8 +24,8 @@ class DataFileError(TzslError):
 
     Parameters
     ----------
-    path : str or Path or None
-        The file concerned.
+    path : str or path-like or None
+        The file concerned (shown as ``str(path)``).
     problem : str
         What is wrong, in words a user can act on.
     trial : str or None
@@ -34,9 +35,9 @@ class DataFileError(TzslError):
     """
 
     def __init__(
-        self, path: str | Path | None, problem: str, trial: str | None = None, line: int | None = None
+        self, path: str | os.PathLike[str] | None, problem: str, trial: str | None = None, line: int | None = None
     ) -> None:
-        self.path = None if path is None else str(path)
+        self.path = None if path is None else os.fspath(path) if isinstance(path, os.PathLike) else str(path)
         self.problem = problem
         self.trial = trial
         self.line = line

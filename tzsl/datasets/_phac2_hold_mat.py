@@ -46,10 +46,7 @@ def parse_trial_id(trial_id: str, source: str | os.PathLike | None = None) -> tu
     """
     match = TRIAL_ID_RE.match(trial_id)
     if match is None:
-        raise DataFileError(
-            source,  # type: ignore[arg-type]  # it str()s any path-like
-            f"trial name {trial_id!r} does not follow <object>_<id3>_<trial2>",
-        )
+        raise DataFileError(source, f"trial name {trial_id!r} does not follow <object>_<id3>_<trial2>")
     return (
         f"{match['object']}_{match['id']}",
         int(match["id"]),

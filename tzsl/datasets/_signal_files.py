@@ -54,18 +54,15 @@ def signal_from_arrays(path: str | os.PathLike, arrays: dict[str, np.ndarray]) -
     ``path`` names the file in errors. One 1-D numeric array per channel, all of one length.
     """
     if not arrays:
-        raise DataFileError(path,  # type: ignore[arg-type]  # it str()s any path-like
-                            "archive holds no channel arrays")
+        raise DataFileError(path, "archive holds no channel arrays")
     lengths = {}
     for name, arr in arrays.items():
         if arr.ndim != 1 or arr.dtype.kind not in "iufb":
-            raise DataFileError(path,  # type: ignore[arg-type]  # it str()s any path-like
-                                f"channel {name!r} has shape {arr.shape} and dtype {arr.dtype}; "
+            raise DataFileError(path, f"channel {name!r} has shape {arr.shape} and dtype {arr.dtype}; "
                                 "expected a 1-D numeric array per channel")
         lengths[name] = arr.shape[0]
     if len(set(lengths.values())) > 1:
-        raise DataFileError(path,  # type: ignore[arg-type]  # it str()s any path-like
-                            f"channels have different lengths: {lengths}")
+        raise DataFileError(path, f"channels have different lengths: {lengths}")
     channels = tuple(arrays)
     return channels, np.column_stack([arrays[c].astype(np.float64) for c in channels])
 
