@@ -11,6 +11,7 @@ import pandas as pd
 import pytest
 
 from tzsl.exceptions import ConfigError
+from tzsl.models.protocol import LAST_BIT_NOTE
 from tzsl.reporting.benchmark_blocks import MissingResults
 from tzsl.reporting.manifests import produced_by
 from tzsl.reporting.readme_results import (
@@ -81,6 +82,30 @@ def test_update_rewrites_only_the_block_and_check_reports_drift(tmp_path):
     assert "0.310 [0.241, 0.379]" in text
     assert main([str(results), str(readme), "--check"]) == 0  # up to date: no drift
     assert not update_file(readme, results)
+
+
+def test_rows_that_can_move_with_the_last_bit_say_so_and_check_lets_only_them_differ(tmp_path):
+    results = _results(tmp_path / "results")
+    table = results / "fabric" / "fabric_table1.csv"
+    fabric = pd.read_csv(table)
+    fabric["note"] = f"public depth images; ESZSL and every lam_* column: {LAST_BIT_NOTE}"
+    fabric.to_csv(table, index=False)
+    readme = tmp_path / "README.md"
+    readme.write_text(f"{BEGIN}\nold\n{END}\n")
+    assert main([str(results), str(readme)]) == 0
+    text = readme.read_text()
+    fabric_rows = [line for line in text.splitlines() if line.startswith("| Fabric")]
+    assert fabric_rows and all("(can move with the last bit)" in line for line in fabric_rows)
+    assert not any("(can move" in line for line in text.splitlines() if line.startswith(("| PHAC-2", "| Hand")))
+    fabric["lam_0"] = [0.47, 0.62]  # another machine's last bit: only the marked rows change
+    fabric.to_csv(table, index=False)
+    left: list[str] = []
+    assert not update_file(readme, results, check=True, left=left)
+    assert any("only rows marked" in line for line in left)
+    hand = pd.read_csv(results / "hand_table5.csv")
+    hand["all"] = [0.6, 0.6]  # an unmarked row that moves is drift
+    hand.to_csv(results / "hand_table5.csv", index=False)
+    assert main([str(results), str(readme), "--check"]) == 1
 
 
 def test_errors(tmp_path):

@@ -56,7 +56,14 @@ from tzsl.reporting.benchmark_blocks import (
     selection_criterion_block,
 )
 from tzsl.reporting.manifests import produced_by
-from tzsl.reporting.markdown_cells import find_table, number, ours, signed
+from tzsl.reporting.markdown_cells import (
+    MOVES_WITH_LAST_BIT,
+    find_table,
+    number,
+    only_movable_rows_differ,
+    ours,
+    signed,
+)
 from tzsl.value_lists import SPLIT_KINDS
 
 __all__ = ["BEGIN", "BLOCKS", "END", "begin", "block_spans", "comparison_lines", "detectors_block", "end",
@@ -134,7 +141,7 @@ def _fabric(root: Path) -> list[Row]:
     methods = [m for m in README_FABRIC_METHODS if f"paper_{m}" in table.columns]
     for _, r in table[table["config"] == 1].iterrows():  # the paper's config and its zero-shot variant
         # the study's note says when its choices scored a count (tzsl.models.protocol.LAST_BIT_NOTE)
-        moves = " (can move with the last bit)" if "last-bit" in str(r.get("note", "")) else ""
+        moves = f" {MOVES_WITH_LAST_BIT}" if "last-bit" in str(r.get("note", "")) else ""
         for m in methods:
             if r["zero_shot"]:
                 rows.append((f"Fabric {r['condition']}, {m}, zero-shot variant ({r['protocol']}: test groups "
@@ -452,6 +459,10 @@ def update_file(target: str | Path, results: str | Path, check: bool = False,
             continue
         new = new[:hits[0].start()] + block + new[hits[0].end():]
     changed = new != text
+    if changed and check and only_movable_rows_differ(text, new):
+        if left is not None:
+            left.append(f"{path}: only rows marked {MOVES_WITH_LAST_BIT!r} differ from these results (not drift)")
+        return False
     if changed and not check:
         def write(p: Path) -> None:  # atomic_write's writer returns nothing
             p.write_text(new, encoding="utf-8")
