@@ -19,7 +19,7 @@ N_JOBS ?= 2
 # pytest-xdist workers of `make test`: the suite is mostly single-threaded, so two workers halve it on CI's 2 cores.
 TEST_WORKERS ?= 2
 
-.PHONY: install install-core browser lint lock test test-wide evidence reproduce-tables readme-results numbers numbers-check docs bench bench-evidence bench-fit bench-predict bench-scale data clean
+.PHONY: install install-core browser lint lock test test-wide test-last-bit evidence reproduce-tables readme-results numbers numbers-check docs bench bench-evidence bench-fit bench-predict bench-scale data clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -80,6 +80,11 @@ lock: $(BIN)/activate
 test-wide: install
 	TZSL_WIDE_PROPERTY_TEST=1 $(BIN)/pytest -q -p no:cacheprovider tests/studies/test_zero_shot_study.py \
 	  tests/models/test_methods_on_lab_data.py -k "full_range or lab_like"
+
+# The last-bit test over every paper study (tests/studies/test_last_bit.py with the fabric study; the suite runs it
+# on PHAC-2 and the hand study): reproduce-tables three times on the real data, several minutes on two cores.
+test-last-bit: install
+	TZSL_LAST_BIT_ALL=1 $(BIN)/pytest -q -p no:cacheprovider tests/studies/test_last_bit.py
 
 # The papers' data into the data home (or TZSL_DATA_DIR), downloaded and checked against the registry.
 data: install-core
