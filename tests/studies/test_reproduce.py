@@ -72,7 +72,7 @@ def recorded(monkeypatch):
     """Replace the study execution by a recorder of the experiments it receives."""
     seen: list = []
 
-    def fake_execute(exp, results, echo=None):
+    def fake_execute(exp, results, echo=None, study_echo=None):
         seen.append((exp.source, exp.config))
         name = re.sub(r"[^\w-]", "_", exp.source)  # one file per study (two evidence studies share a kind)
         results.write_csv(f"{name}.csv", pd.DataFrame({"x": [1]}))

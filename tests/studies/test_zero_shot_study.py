@@ -183,7 +183,8 @@ def test_paper_preset_on_another_dataset_says_what_it_maps_to(tmp_path):
                     f'[output]\nfolder = "{tmp_path / "out"}"\n')
     result = _run("run", path)
     assert result.exit_code == 0, result.output
-    notes = [line for line in result.output.splitlines() if line.startswith("note: study 'phac2-dap'")]
+    said = result.output.replace("\n    ", " ")  # a note is wrapped at 100 characters, its other lines indented
+    notes = [line for line in said.splitlines() if line.startswith("note: study 'phac2-dap'")]
     assert len(notes) == 1 and "preset of study 'zero-shot'" in notes[0] and "plain folder" in notes[0]
     t1 = pd.read_csv(tmp_path / "out" / "table1_fusion.csv")
     assert not [c for c in t1.columns if c.startswith("paper")]

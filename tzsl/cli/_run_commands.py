@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import click
@@ -20,7 +21,16 @@ from tzsl.cli._root import (
     scheduler_option,
     seed_option,
 )
+from tzsl.exceptions import PartialRunError
 from tzsl.studies.reproduce import EVIDENCE_STUDIES, REPRODUCE_STUDIES  # light: the default lists for --help
+
+#: ``--verbose`` of ``run``, ``reproduce-tables`` and ``evidence``.
+verbose_option = click.option(
+    "--verbose", is_flag=True,
+    help="Also print every table the study writes (the CSVs) as it is computed, before the summary. Without it "
+         "the run prints its notes and one screen: the dataset, what was relaxed, the most accurate methods against "
+         "chance with their 95% intervals, the method to deploy and where the CSVs and the report are. The files "
+         "are the same either way.")
 
 
 def override_options(func):
@@ -47,8 +57,9 @@ def _overrides(out, n_jobs, seed, backend, scheduler, no_progress, data_dir) -> 
               "and stop.")
 @click.option("--profile", is_flag=True, help="Print where the time went: wall and CPU seconds per study and stage "
               "(always recorded in manifest.json).")
+@verbose_option
 def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, no_fetch, data_dir, force, check: bool,
-        print_config: bool, profile: bool) -> None:
+        print_config: bool, profile: bool, verbose: bool) -> None:
     """Run a study: an experiment file (TOML) or a built-in study by NAME.
 
     Built-in studies: phac2-dap, phac2-evidence, phac2-gzsl, phac2-headlines, fabric, fabric-evidence,
@@ -59,6 +70,11 @@ def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, no_
 
     A study on a built-in dataset first fetches the registered files it reads that are missing
     from the data home (one line says what, where to and how big; --no-fetch: stop instead).
+
+    The run ends with one screen (at most 40 lines of at most 100 characters): the dataset, what
+    was relaxed, per split kind the most accurate methods against chance with their 95% intervals
+    and whether any interval clears chance, the method to deploy, and where the CSVs and the report
+    are. --verbose also prints every table, before it. Progress bars show only on a terminal.
     """
     from tzsl.studies.config import get_study, load_experiment, to_toml  # noqa: PLC0415
     from tzsl.studies.engine import check_experiment, run_experiment  # noqa: PLC0415
@@ -75,15 +91,52 @@ def run(experiment: str, out, n_jobs, seed, backend, scheduler, no_progress, no_
         click.echo(f"{exp.source}: valid ({exp.study}); 'tzsl run {experiment} --print-config' shows every value")
         return
     start = time.perf_counter()
+    screen = _Screen(verbose)
     if not no_fetch:
         from tzsl.studies.reproduce import fetch_study_data  # noqa: PLC0415
 
         check_experiment(exp)
-        fetch_study_data([exp], (experiment,), click.echo, progress=not no_progress)
-    results, done = run_experiment(exp, force=force, echo=click.echo)
+        fetch_study_data([exp], (experiment,), screen.echo, progress=not no_progress)
+    try:
+        results, done = run_experiment(exp, force=force, echo=screen.echo, study_echo=screen.study_echo())
+    except PartialRunError as exc:  # everything is written: the summary, then the failures (exit 1)
+        screen.summary(exc.results, exc.run)  # type: ignore[attr-defined]  # set by run_experiment
+        raise
+    screen.summary(results, done)
     click.echo(f"\nwrote {len(results.written)} files to {results.root} in {time.perf_counter() - start:.0f} s")
     if profile:
         _echo_profile(done.record["profile"])
+
+
+class _Screen:
+    """What a run prints: the study's ``note:`` lines (with --verbose every line of the study, its tables
+    too), then the summary (:mod:`tzsl.reporting.terminal`), fitted into one screen with the lines
+    printed before it (with --verbose: after the tables, in full)."""
+
+    def __init__(self, verbose: bool) -> None:
+        self.verbose = verbose
+        self.lines = 0
+
+    def echo(self, message: str) -> None:
+        click.echo(message)
+        self.lines += message.count("\n") + 1
+
+    def study_echo(self) -> Callable[[str], None]:
+        """Where the study's own lines go."""
+        if self.verbose:
+            return self.echo
+        from tzsl.reporting.terminal import notes_only  # noqa: PLC0415
+
+        return notes_only(self.echo)
+
+    def summary(self, results, done) -> None:
+        """The summary after a run (:func:`tzsl.reporting.terminal.run_summary`)."""
+        from tzsl.reporting.terminal import run_summary  # noqa: PLC0415
+
+        click.echo("")
+        printed = 0 if self.verbose else self.lines  # --verbose: the screen holds the tables already
+        for line in run_summary(done.tables, done.record, results.final_root, results.written, printed=printed):
+            click.echo(line)
 
 
 def _study_list_options(default_out: Path, studies: tuple[str, ...]):
@@ -95,7 +148,7 @@ def _study_list_options(default_out: Path, studies: tuple[str, ...]):
                          f"{', '.join(studies)}."),
             click.option("--profile", is_flag=True, help="Print where the time went: wall and CPU seconds per study "
                          "and stage (always recorded in manifest.json)."),
-            force_option, data_dir_option, no_fetch_option, no_progress_option, scheduler_option,
+            verbose_option, force_option, data_dir_option, no_fetch_option, no_progress_option, scheduler_option,
             backend_option(override=True),
             n_jobs_option(override=True),
             click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=default_out,
@@ -106,22 +159,35 @@ def _study_list_options(default_out: Path, studies: tuple[str, ...]):
     return decorate
 
 
+def _echo_study_lines(name: str, done) -> None:
+    """A few lines after each study of a study list (:func:`tzsl.reporting.terminal.study_lines`)."""
+    from tzsl.reporting.terminal import study_lines  # noqa: PLC0415
+
+    for line in study_lines(done.tables):
+        click.echo(line)
+
+
 def _run_study_list(command: str, out, n_jobs, backend, scheduler, no_progress, no_fetch, data_dir, force, profile,
-                    studies) -> None:
+                    studies, verbose: bool) -> None:
     from tzsl.studies.reproduce import run_studies  # noqa: PLC0415
 
     start = time.perf_counter()
+    screen = _Screen(verbose)
     results = run_studies(command, out, force=force, echo=click.echo, studies=tuple(studies) or None,
                           fetch=not no_fetch, n_jobs=n_jobs, backend=backend, scheduler=scheduler,
-                          progress=False if no_progress else None, data_dir=data_dir)
+                          progress=False if no_progress else None, data_dir=data_dir,
+                          study_echo=screen.study_echo(), on_study=_echo_study_lines)
     click.echo(f"\nwrote {len(results.written)} files to {out} in {time.perf_counter() - start:.0f} s")
+    hint = "" if verbose else "; --verbose prints every table"
+    click.echo(f"report: tzsl report {out} (writes report.html there){hint}")
     if profile:
         _echo_profile(json.loads((Path(out) / "manifest.json").read_text())["profile"])
 
 
 @cli.command("reproduce-tables")
 @_study_list_options(Path("results"), REPRODUCE_STUDIES)
-def reproduce_tables(out, n_jobs, backend, scheduler, no_progress, no_fetch, data_dir, force, profile, studies):
+def reproduce_tables(out, n_jobs, backend, scheduler, no_progress, no_fetch, data_dir, force, profile, studies,
+                     verbose):
     """Every table (CSV) and figure (PNG) the two papers report, from the real data, paper numbers beside ours.
 
     Runs the built-in studies of the papers (the default of --study), in that order, exactly as
@@ -134,12 +200,12 @@ def reproduce_tables(out, n_jobs, backend, scheduler, no_progress, no_fetch, dat
     registry's URLs, hash checks and progress bars of 'tzsl data fetch'). --no-fetch: stop instead.
     """
     _run_study_list("reproduce-tables", out, n_jobs, backend, scheduler, no_progress, no_fetch, data_dir, force,
-                    profile, studies)
+                    profile, studies, verbose)
 
 
 @cli.command("evidence")
 @_study_list_options(Path("results") / "evidence", EVIDENCE_STUDIES)
-def evidence(out, n_jobs, backend, scheduler, no_progress, no_fetch, data_dir, force, profile, studies):
+def evidence(out, n_jobs, backend, scheduler, no_progress, no_fetch, data_dir, force, profile, studies, verbose):
     """The evidence beyond the papers: every method on every dataset, GZSL, calibration, active touch, headlines.
 
     Runs the built-in studies beyond the papers (the default of --study), in that order, exactly as
@@ -149,7 +215,7 @@ def evidence(out, n_jobs, backend, scheduler, no_progress, no_fetch, data_dir, f
     reproduce-tables (--no-fetch: stop instead).
     """
     _run_study_list("evidence", out, n_jobs, backend, scheduler, no_progress, no_fetch, data_dir, force, profile,
-                    studies)
+                    studies, verbose)
 
 
 def _echo_profile(rows: list[dict]) -> None:

@@ -22,9 +22,9 @@ from typing import Generic, TypeVar
 
 import numpy as np
 import pandas as pd
-from tqdm.auto import tqdm
 
 from tzsl._io import MAX_NPZ_BYTES_ENV
+from tzsl._progress import progress_bar as progress_bar_of
 from tzsl.datasets._lab_mapping import LabMapping
 from tzsl.datasets._paths import resolve_inside
 from tzsl.datasets._tables import Problem, read_rows
@@ -51,7 +51,7 @@ def progress_bar(items: Sequence[T], desc: str, show: bool) -> Iterator[Iterable
     A context manager: the bar is closed when an error leaves the block, so the error line
     stands on a line of its own.
     """
-    with tqdm(items, desc=desc, disable=None if show else True) as bar:
+    with progress_bar_of(items, show=show, desc=desc) as bar:
         yield bar
 
 

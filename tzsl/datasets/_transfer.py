@@ -24,8 +24,8 @@ from concurrent.futures import FIRST_EXCEPTION, Future, ThreadPoolExecutor, wait
 from typing import Any, TypeVar
 
 import requests
-from tqdm import tqdm
 
+from tzsl._progress import progress_bar
 from tzsl.exceptions import ConfigError
 
 __all__ = ["DEFAULT_FETCH_WORKERS", "FETCH_WORKERS_ENV", "MAX_FETCH_WORKERS", "DownloadCancelled",
@@ -109,8 +109,8 @@ class FetchProgress:
         self._lock = threading.Lock()
         self._files = files
         self._done = 0
-        self._bar = tqdm(total=total_bytes, unit="B", unit_scale=True, ncols=79, leave=False, desc=label,
-                         disable=not enabled, postfix=self._postfix())
+        self._bar = progress_bar(total=total_bytes, unit="B", unit_scale=True, ncols=79, leave=False, desc=label,
+                                 show=enabled, postfix=self._postfix())
 
     def _postfix(self) -> str:
         return f"{self._done}/{self._files} files"

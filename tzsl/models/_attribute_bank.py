@@ -33,6 +33,7 @@ from tzsl._fit_store import (
     stored_fit,
 )
 from tzsl._profile import timed
+from tzsl._progress import progress_bar
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_training import AUTO_MAX_EXACT_TRIALS, SOLVERS, AttributeTrainingError, GridEdgeWarning
 from tzsl.models._detectors import AUTO_CANDIDATES, DETECTORS, choose_detector, detector_template
@@ -270,7 +271,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
             backend = None if self.backend == "dask" else self.backend
             results = Parallel(n_jobs=self.n_jobs, backend=backend, return_as="generator")(tasks)
             out = []
-            for i, result in enumerate(tqdm(results, total=len(tasks), desc=desc, disable=not self.progress)):
+            for i, result in enumerate(progress_bar(results, show=self.progress, total=len(tasks), desc=desc)):
                 if on_result is not None:
                     on_result(i, result)
                 out.append(result)

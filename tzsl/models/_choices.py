@@ -29,10 +29,13 @@ from tzsl.models._scalable_attribute import ScalableAttributeClassifier
 from tzsl.models._score_ensemble import DEFAULT_MEMBERS, ScoreEnsembleZSL
 from tzsl.models._selection_criteria import DEFAULT_SCORING
 
-__all__ = ["INHERITED_CHOICES", "NO_SELECTION_SPLITS", "InheritedChoice", "inherited_choices"]
+__all__ = ["DEFAULT_METHOD", "INHERITED_CHOICES", "NO_SELECTION_SPLITS", "InheritedChoice", "inherited_choices"]
 
 #: The selection entry of a choice made on no recorded splits.
 NO_SELECTION_SPLITS = "none recorded"
+
+#: The registry method `tzsl train-attributes` trains without --method (the choice "default-method" below).
+DEFAULT_METHOD = "dap-avg"
 
 #: The benchmark that makes the method choice on selection splits and reports it on confirmation splits.
 BEST_METHOD_COMMAND = "python experiments/benchmarks/phac2_best_method.py --out phac2_best_method.csv"
@@ -116,7 +119,7 @@ INHERITED_CHOICES: tuple[InheritedChoice, ...] = (
         "the method of `tzsl train-attributes` without --method, and the reference of every comparison of the "
         "paper presets: registry method `dap-avg` (AVGDAP over sensors, RBF-SVM detectors) with these fixed "
         "settings (the generic study's reference is its own DAP, of the detector family `study-detector`)",
-        lambda: dict(get_method("dap-avg").preset),
+        lambda: dict(get_method(DEFAULT_METHOD).preset),
         "none: the DAP paper's method (Abderrahmane et al. 2018), kept as the reference; the uniform prior was "
         "reasoned from the balanced Platt posteriors and checked on a Platt ablation whose splits were not "
         "recorded. The best-method benchmark (25 random selection splits of seed 0 and the 5 challenging "

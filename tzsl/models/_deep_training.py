@@ -31,9 +31,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from tqdm.auto import tqdm
 
 from tzsl._io import atomic_write
+from tzsl._progress import progress_bar
 from tzsl.exceptions import ConfigError
 from tzsl.models._deep_input import FEATURE_CHUNK, deep_nets, pixel_stats, require_torch, sha256_arrays
 from tzsl.models._zsl_input import class_grouped_folds
@@ -113,8 +113,8 @@ class DeepTrainingMixin:
             first_epoch = self._restore_checkpoint(torch, ckpt, net, opt, gen, fingerprint)
 
         rows = torch.arange(X.shape[0])
-        bar = tqdm(range(first_epoch, epochs), desc="epochs", unit="epoch",
-                   disable=not self.verbose, initial=first_epoch, total=epochs)
+        bar = progress_bar(range(first_epoch, epochs), show=self.verbose, desc="epochs", unit="epoch",
+                           initial=first_epoch, total=epochs)
         for epoch in bar:
             t0 = time.perf_counter()
             self.loss_curve_.append(self._epoch(torch, net, opt, gen, X, feats, rows, y_t, L, weights))
@@ -235,7 +235,7 @@ class DeepTrainingMixin:
         net.eval()
         starts = range(0, n, FEATURE_CHUNK)
         with torch.no_grad():
-            for lo in tqdm(starts, desc="CNN features", unit="chunk", disable=not self.verbose, leave=False):
+            for lo in progress_bar(starts, show=self.verbose, desc="CNN features", unit="chunk", leave=False):
                 chunk = torch.from_numpy(np.ascontiguousarray(X[lo : lo + FEATURE_CHUNK], dtype=np.float32))
                 b = chunk.shape[0]
                 feats = net.frame_features(chunk.reshape(b * t, *chunk.shape[2:]).to(self.device))

@@ -9,11 +9,13 @@ otherwise the card says why it is not shown. A built-in dataset is described by 
 :func:`headline` says, per split kind, which method is most accurate, with its 95% interval,
 against chance and the trivial baseline (always answering the most frequent test class), and
 whether any method's interval clears chance; the settings the run relaxed follow
-(:func:`tzsl.reporting.manifests.relaxations`).
+(:func:`tzsl.reporting.manifests.relaxations`). It reads the tables through :func:`chance_verdicts`,
+which the command line's summary after a run reads too (:mod:`tzsl.reporting.terminal`).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -24,7 +26,7 @@ from tzsl.reporting.best_method import KIND_COLUMN, best_rows, split_kinds
 from tzsl.reporting.manifests import dict_at
 from tzsl.reporting.sections import POOLED_ROWS
 
-__all__ = ["dataset_card_items", "headline"]
+__all__ = ["ChanceVerdict", "chance_verdicts", "dataset_card_items", "headline", "trivial_baseline"]
 
 #: Files of a plain dataset folder whose recorded checksums must still hold before the card is read from it.
 PLAIN_FILES = ("classes.csv", "trials.csv", "trials.parquet", "dataset.toml")
@@ -122,8 +124,9 @@ def _interval(row: pd.Series, low: str = "ci95_low", high: str = "ci95_high") ->
     return text
 
 
-def _fusion_rows(table: pd.DataFrame) -> pd.DataFrame:
-    """The mean row of a sensor-fusion table as comparison rows (MAXDAP, AVGDAP)."""
+def _fusion_rows(table: pd.DataFrame, kind: str = "random") -> pd.DataFrame:
+    """The mean row of a sensor-fusion table (``table1_fusion``, ``table3_challenging``) as comparison
+    rows (MAXDAP, AVGDAP) on splits of ``kind``."""
     mean = table[table.iloc[:, 0].astype(str) == "mean"]
     rows = []
     for column, name in (("maxdap", "MAXDAP"), ("avgdap", "AVGDAP")):
@@ -131,11 +134,11 @@ def _fusion_rows(table: pd.DataFrame) -> pd.DataFrame:
             row = mean.iloc[0]
             rows.append({"study": "", "method": name, "accuracy": row[column], "reference": "AVGDAP",
                          "ci95_low": row.get(f"{column}_ci95_low"), "ci95_high": row.get(f"{column}_ci95_high"),
-                         "chance": row.get("chance"), KIND_COLUMN: "random"})
+                         "chance": row.get("chance"), KIND_COLUMN: kind})
     return pd.DataFrame(rows)
 
 
-def _baseline(fusion: pd.DataFrame | None) -> str:
+def trivial_baseline(fusion: pd.DataFrame | None) -> str:
     """The trivial baseline in words, from the fusion table's mean row (written with its ``majority``
     column only when test classes have unequal trial counts, :mod:`tzsl.evaluation`)."""
     if fusion is None or "chance" not in fusion.columns:
@@ -144,6 +147,78 @@ def _baseline(fusion: pd.DataFrame | None) -> str:
     if "majority" in fusion.columns and len(mean) and not pd.isna(mean.iloc[0]["majority"]):
         return f"trivial baseline (always the most frequent test class) {mean.iloc[0]['majority']:.3f}"
     return "trivial baseline (always the most frequent test class) equal to chance: every test class has as many trials"
+
+
+@dataclass(frozen=True)
+class ChanceVerdict:
+    """The methods of one comparison group (study, split kind) against chance.
+
+    Attributes
+    ----------
+    best : Series
+        The group's most accurate row (:func:`tzsl.reporting.best_method.best_rows`: ties in table
+        order), with its ``kind`` and ``beats_reference``.
+    group : DataFrame
+        Every row of the group that ran, in table order.
+    clear : DataFrame
+        The rows of ``group`` whose 95% interval lies above chance (``ci95_low > chance``).
+    """
+
+    best: pd.Series
+    group: pd.DataFrame
+    clear: pd.DataFrame
+
+    @property
+    def kind(self) -> str:
+        return str(self.best[KIND_COLUMN])
+
+
+def chance_verdicts(tables: dict[str, pd.DataFrame], every_kind: bool = False) -> list[ChanceVerdict]:
+    """Per comparison group, the most accurate method and the methods whose interval clears chance.
+
+    Parameters
+    ----------
+    tables : dict
+        File stem -> table of a run: the method comparisons (stems ending ``method_comparison``)
+        when there are any, else the sensor-fusion table ``table1_fusion`` (its mean row).
+    every_kind : bool
+        Also a split kind no comparison covers, from its DAP-only table (``table1_fusion`` for random
+        splits, ``table3_challenging`` for challenging ones): MAXDAP and AVGDAP.
+
+    Returns
+    -------
+    list of ChanceVerdict
+        Empty when the tables hold neither comparisons nor a fusion table.
+    """
+    fusion = tables.get("table1_fusion")
+    compared = [t for stem, t in tables.items() if stem.endswith("method_comparison")
+                and {"method", "accuracy", "chance", "study", "reference"} <= set(t.columns)]
+    if not compared and fusion is not None:
+        compared = [_fusion_rows(fusion)]
+    out = [verdict for table in compared for verdict in _verdicts_of(table)]
+    if every_kind:
+        covered = {v.kind for v in out}
+        for stem, kind in (("table1_fusion", "random"), ("table3_challenging", "challenging")):
+            if kind not in covered and stem in tables:
+                out += _verdicts_of(_fusion_rows(tables[stem], kind))
+    return out
+
+
+def _verdicts_of(table: pd.DataFrame) -> list[ChanceVerdict]:
+    """The verdicts of one comparison table, a group per (study, split kind, purpose) best row."""
+    if not {"method", "accuracy"} <= set(table.columns):
+        return []
+    ran = table[table["accuracy"].notna() & ~table["method"].astype(str).isin(POOLED_ROWS)]
+    if ran.empty:
+        return []
+    kinds = split_kinds(ran)
+    out = []
+    for _, best in best_rows(ran).iterrows():
+        group = ran[(ran["study"] == best["study"]) & (kinds == best[KIND_COLUMN])]
+        clear = group[group["ci95_low"].astype(float) > group["chance"].astype(float)] \
+            if "ci95_low" in group.columns else group.iloc[:0]
+        out.append(ChanceVerdict(best, group, clear))
+    return out
 
 
 def headline(tables: dict[str, pd.DataFrame]) -> list[str]:
@@ -160,33 +235,17 @@ def headline(tables: dict[str, pd.DataFrame]) -> list[str]:
     list of str
         Empty when the folder has neither.
     """
-    fusion = tables.get("table1_fusion")
-    compared = [t for stem, t in tables.items() if stem.endswith("method_comparison")
-                and {"method", "accuracy", "chance", "study", "reference"} <= set(t.columns)]
-    if not compared and fusion is not None:
-        compared = [_fusion_rows(fusion)]
-    baseline = _baseline(fusion)
+    baseline = trivial_baseline(tables.get("table1_fusion"))
     out = []
-    for table in compared:
-        if not {"method", "accuracy"} <= set(table.columns):
-            continue
-        ran = table[table["accuracy"].notna() & ~table["method"].astype(str).isin(POOLED_ROWS)]
-        if ran.empty:
-            continue
-        kinds = split_kinds(ran)
-        for _, best in best_rows(ran).iterrows():
-            kind = best[KIND_COLUMN]
-            group = ran[(ran["study"] == best["study"]) & (kinds == kind)]
-            clear = group[group["ci95_low"].astype(float) > group["chance"].astype(float)] \
-                if "ci95_low" in group.columns else group.iloc[:0]
-            text = (f"On {kind} splits the most accurate method is {best['method']}: accuracy {_interval(best)}, "
-                    f"against chance {best['chance']:.3f} and the {baseline}. ")
-            if clear.empty:
-                text += (f"No method's interval clears chance ({len(group)} compared): these results do not show "
-                         "any method recognising unseen classes better than guessing.")
-            else:
-                text += (f"{len(clear)} of {len(group)} methods have an interval above chance"
-                         + (f" ({', '.join(map(str, clear['method']))})." if len(clear) <= 6 else "."))
-            out.append(text)
+    for verdict in chance_verdicts(tables):
+        best, group, clear = verdict.best, verdict.group, verdict.clear
+        text = (f"On {verdict.kind} splits the most accurate method is {best['method']}: accuracy {_interval(best)}, "
+                f"against chance {best['chance']:.3f} and the {baseline}. ")
+        if clear.empty:
+            text += (f"No method's interval clears chance ({len(group)} compared): these results do not show "
+                     "any method recognising unseen classes better than guessing.")
+        else:
+            text += (f"{len(clear)} of {len(group)} methods have an interval above chance"
+                     + (f" ({', '.join(map(str, clear['method']))})." if len(clear) <= 6 else "."))
+        out.append(text)
     return out
-

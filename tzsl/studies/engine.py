@@ -99,15 +99,20 @@ def check_experiment(exp: Experiment) -> None:
 # --------------------------------------------------------------------------- running
 
 
-def execute_study(exp: Experiment, results: ResultsDir, echo: Callable[[str], None] | None = None) -> StudyRun:
+def execute_study(exp: Experiment, results: ResultsDir, echo: Callable[[str], None] | None = None,
+                  study_echo: Callable[[str], None] | None = None) -> StudyRun:
     """Run the study of ``exp`` into ``results`` (no manifest.json; see :func:`run_experiment`).
+
+    ``echo`` receives the run's own lines (the study cache's notes); ``study_echo`` the study's (its
+    notes, tables and per-split lines; default ``echo``). What is printed never changes what is written.
 
     A study run before with the same settings, code and data is restored from the study cache
     (:mod:`tzsl.studies.outputs.study_cache`; on unless ``TZSL_STUDY_CACHE=0`` or ``[compute] cache = false``).
     """
     check_experiment(exp)
     runner = get_study(exp.study).hook("runner")
-    return run_cached(exp, results, lambda say: runner(exp, results, say), echo or (lambda _msg: None))
+    return run_cached(exp, results, lambda say: runner(exp, results, say), echo or (lambda _msg: None),
+                      study_echo=study_echo)
 
 
 def results_folder(exp: Experiment, force: bool) -> ResultsDir:
@@ -135,9 +140,14 @@ def run_experiment(
     experiment: str | os.PathLike | Experiment,
     force: bool = False,
     echo: Callable[[str], None] | None = None,
+    *,
+    study_echo: Callable[[str], None] | None = None,
     **overrides: Any,
 ) -> tuple[ResultsDir, StudyRun]:
     """Run an experiment file, a built-in study (by name) or a checked :class:`Experiment`.
+
+    ``echo`` receives the run's lines; ``study_echo`` the study's own (its notes and tables; default
+    ``echo``: ``tzsl run`` without ``--verbose`` passes one that keeps the notes only).
 
     ``overrides``: ``out``, ``n_jobs``, ``seed``, ``backend``, ``scheduler``, ``progress``,
     ``data_dir`` (see :data:`tzsl.studies.config.OPTION_KEYS`; None = as in the file). Writes the study's
@@ -159,7 +169,7 @@ def run_experiment(
     results = results_folder(exp, force)
     say(f"{exp.source}: study {exp.study} -> {results.final_root}")
     with recorded_warnings() as shown, profiling(exp.study) as profile:  # warnings and time per stage
-        run = execute_study(exp, results, echo)  # checks the experiment (check_experiment) before any fit
+        run = execute_study(exp, results, echo, study_echo)  # checks the experiment (check_experiment) before any fit
     run.record["profile"] = profile.rows()
     failures = run.failures  # one scan of the tables' error columns
     results.write_manifest(manifest_record(exp, run), data_files=run.data_files,

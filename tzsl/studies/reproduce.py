@@ -52,6 +52,7 @@ from tzsl.exceptions import PartialRunError
 
 if TYPE_CHECKING:  # the module stays light: the command line reads its lists for --help
     from tzsl.studies.outputs.results_folder import ResultsDir
+    from tzsl.studies.outputs.study_run import StudyRun
 
 __all__ = ["EVIDENCE_STUDIES", "REPRODUCE_STUDIES", "STUDY_LISTS", "evidence", "fetch_study_data",
            "reproduce_experiments", "reproduce_tables", "run_studies"]
@@ -123,6 +124,9 @@ def run_studies(
     echo: Callable[[str], None] | None = None,
     studies: tuple[str, ...] | None = None,
     fetch: bool = True,
+    *,
+    study_echo: Callable[[str], None] | None = None,
+    on_study: Callable[[str, StudyRun], None] | None = None,
     **overrides: Any,
 ) -> ResultsDir:
     """Run the studies of ``command`` (a key of :data:`STUDY_LISTS`) into ``out``; returns the results folder.
@@ -139,6 +143,10 @@ def run_studies(
     fetch : bool
         Before the first study, fetch the registered data files the studies read that are missing
         (:func:`fetch_study_data`); False: a missing file stops its study with the usual error.
+    study_echo : callable or None
+        Where each study's own lines go (its notes and tables); default ``echo``.
+    on_study : callable or None
+        ``on_study(name, run)`` after each study (the command line prints its summary lines).
     overrides
         ``n_jobs``, ``seed``, ``backend``, ``scheduler``, ``progress``, ``data_dir`` (each applied to
         the studies that have the key).
@@ -168,7 +176,7 @@ def run_studies(
         say(f"\n== {name} ({exp.source}) ==")
         start = time.perf_counter()
         with recorded_warnings() as shown, profiling(name) as profile:
-            done = execute_study(exp, results, echo)
+            done = execute_study(exp, results, echo, study_echo)
         warned[name] = shown.lines
         done.record["profile"] = profile.rows()
         profiles += done.record["profile"]
@@ -178,6 +186,8 @@ def run_studies(
         tables += sorted(done.tables)
         failures += [f"{name}: {line}" for line in done.failures]
         done_tables += [t for key, t in done.tables.items() if key.endswith("method_comparison")]
+        if on_study is not None:
+            on_study(name, done)
     if stack and done_tables:
         dap = {name: FEW_CLASSES for name in ("dap-avg", "dap-max", "multilabel-dap")}
         results.write_csv(COMPARISON_FILE, combine_comparisons(done_tables, {"fabric": dap, "hand": dap}))

@@ -89,10 +89,10 @@ from typing import Any, cast
 import numpy as np
 import pandas as pd
 from joblib import Parallel, delayed
-from tqdm.auto import tqdm
 
 from tzsl._parallel import reissued, relayed
 from tzsl._profile import stage
+from tzsl._progress import progress_bar
 from tzsl.datasets import FABRIC_ATTRIBUTE_SETS, load_fabric
 from tzsl.evaluation import DEFAULT_ALPHAS, add_trust_columns, select_embedding_alpha
 from tzsl.features import TextureDescriptor
@@ -269,7 +269,7 @@ def run_fabric_study(
 
     with stage("fit"):  # the embedding and ESZSL fits, in joblib workers
         results = map(reissued, Parallel(n_jobs=n_jobs, return_as="generator")(jobs))
-        job_rows = list(tqdm(results, total=len(jobs), desc="fabric fits", disable=not progress))
+        job_rows = list(progress_bar(results, show=progress, total=len(jobs), desc="fabric fits"))
     for first, *_ in job_rows:  # the fit-store events of jobs run in workers, into this run's profile
         pid, counts = first.pop("_fit_store")
         for name, n in counts.items() if pid != os.getpid() else ():  # in this process: counted already

@@ -176,7 +176,7 @@ def _cacheable(exp) -> bool:
 
 
 def run_cached(exp, results: ResultsDir, runner: Callable[[Callable[[str], None]], StudyRun],
-               echo: Callable[[str], None]) -> StudyRun:
+               echo: Callable[[str], None], study_echo: Callable[[str], None] | None = None) -> StudyRun:
     """Restore the study of ``exp`` from the cache into ``results``, or run it and store what it wrote.
 
     Parameters
@@ -188,35 +188,39 @@ def run_cached(exp, results: ResultsDir, runner: Callable[[Callable[[str], None]
     runner : callable
         ``runner(say)`` runs the study, printing through ``say``, and returns its :class:`StudyRun`.
     echo : callable
-        Where the study's lines are printed.
+        Where the cache's own notes are printed (restored, not kept, size cap).
+    study_echo : callable or None
+        Where the study's lines (its tables; replayed when restored) are printed; default ``echo``.
+        They are stored in the cache entry whatever is printed.
 
     Returns
     -------
     StudyRun
         The study's run; ``record["study_cache"]`` says whether it was restored, with the key.
     """
+    study_say = echo if study_echo is None else study_echo
     folder = study_cache_folder()
     if folder is None or not _cacheable(exp):
-        return runner(echo)
+        return runner(study_say)
     size_cap_gb()  # a bad $TZSL_CACHE_MAX_GB fails now, not after the study has run
     key = study_key(exp)
     if key is None:
         echo(f"note: not kept in the study cache: the plug-in module {_plugin_digest(exp)[1]} has no source file, "
              "so a change to it could not be seen")
-        return runner(echo)
+        return runner(study_say)
     entry = folder / key
     if (entry / _RUN_FILE).is_file():
         mark_used(entry)  # before reading it: a prune running now keeps the entry (tzsl.cache)
         with stage("restore"):
             payload = _load(entry)
             if payload is not None:
-                return _restore(payload, entry, key, results, echo)
+                return _restore(payload, entry, key, results, echo, study_say)
     n_written, splits_before, data_before = len(results.written), set(results.splits), set(results.data_files)
     lines: list[str] = []
 
     def say(message: str) -> None:
         lines.append(message)
-        echo(message)
+        study_say(message)
 
     start = time.perf_counter()
     with recorded_warnings() as shown:
@@ -281,8 +285,8 @@ def _load(entry: Path) -> dict[str, Any] | None:
 
 
 def _restore(payload: dict[str, Any], entry: Path, key: str, results: ResultsDir,
-             echo: Callable[[str], None]) -> StudyRun:
-    """Copy an entry's files into ``results`` and replay its lines and warnings."""
+             echo: Callable[[str], None], study_echo: Callable[[str], None]) -> StudyRun:
+    """Copy an entry's files into ``results`` and replay its lines (through ``study_echo``) and warnings."""
     for name in payload["files"]:
         results.copy_file(name, entry / _FILES / name)
     results.splits.update(payload["splits"])
@@ -290,7 +294,7 @@ def _restore(payload: dict[str, Any], entry: Path, key: str, results: ResultsDir
     echo(f"note: restored from the study cache (the run of {payload['created']}, computed in "
          f"{payload['seconds']:.1f} s); {STUDY_CACHE_ENV}=0 computes it again")
     for line in payload["lines"]:
-        echo(line)
+        study_echo(line)
     for line in payload["warnings"]:
         warnings.warn(line, UserWarning, stacklevel=2)
     run: StudyRun = payload["run"]

@@ -194,9 +194,10 @@ def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], Non
     exp, features, split_file, relaxed = prepared.exp, prepared.features, prepared.split_file, prepared.relaxations
     c = exp.config
     labels = study_labels(study, c, features)
-    say(f"{features.dataset}: {features.n_trials} trials, {features.n_objects} objects, "
-        f"{len(features.sensors)} sensor(s), {features.X.shape[2]} features per sensor, "
-        f"{features.attributes.shape[1]} attributes")
+    size = {"trials": features.n_trials, "objects": features.n_objects, "sensors": len(features.sensors),
+            "features_per_sensor": features.X.shape[2], "attributes": features.attributes.shape[1]}
+    say(f"{features.dataset}: {size['trials']} trials, {size['objects']} objects, {size['sensors']} sensor(s), "
+        f"{size['features_per_sensor']} features per sensor, {size['attributes']} attributes")
     notes = [labels.note] if labels.note else []
     notes += [f"relaxed {r.line()}" for r in relaxed]
     for note in notes:
@@ -233,6 +234,6 @@ def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], Non
               "method_options": options, "labels": {"study": labels.study, "data": labels.data,
                                                     "paper": labels.paper, "note": labels.note},
               "relaxations": [r.record() for r in relaxed] + [{"setting": "gzsl", "why": n} for n in gzsl_notes],
-              "dataset": features.dataset, **solver_record}
+              "dataset": features.dataset, "dataset_size": {k: int(v) for k, v in size.items()}, **solver_record}
     data_files = list(features.info.get("data_files", [])) + ([] if split_file is None else [split_file])
     return StudyRun(shown, record, data_files)
