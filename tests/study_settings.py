@@ -11,6 +11,25 @@ from typing import Any
 
 from pydantic import BaseModel
 
+#: Appended to experiments/my_dataset_template.toml, the template made fast: one compared method, two random
+#: splits, a one-point SVM grid, DAP-only GZSL (the command-line tests of a small dataset).
+FAST_TEMPLATE = """
+[methods]
+compare = ["eszsl"]
+sweep = false
+
+[gzsl]
+methods = ["dap"]
+
+[splits]
+n_splits = 2
+
+[svm]
+n_C = 1
+n_gamma = 1
+n_draws = 1
+"""
+
 
 def study_settings(schema: type[BaseModel], preset: str | None = None, **flat: Any) -> BaseModel:
     """``schema`` validated from ``flat`` keys sorted into its tables (tuples as lists, as TOML gives),

@@ -18,6 +18,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from tests.study_settings import FAST_TEMPLATE
 from tzsl.cli import EXIT_TZSL_ERROR, cli
 from tzsl.datasets import write_plain_dataset
 from tzsl.inference.bundle import read_bundle_header
@@ -35,23 +36,6 @@ RARE = {"paper": "1 positive training object(s) < 2", "solid": "1 negative train
 KEPT = ["hard", "rough", "cold", "soft"]
 FINGERS = [f"finger_{i}" for i in range(5)]
 GRASPS_PER_OBJECT = 4
-#: The template, made fast: one compared method, two random splits, a one-point SVM grid.
-FAST = """
-[methods]
-compare = ["eszsl"]
-sweep = false
-
-[gzsl]
-methods = ["dap"]
-
-[splits]
-n_splits = 2
-
-[svm]
-n_C = 1
-n_gamma = 1
-n_draws = 1
-"""
 
 
 def _run(*args):
@@ -114,7 +98,8 @@ def test_the_readme_own_data_steps_run_end_to_end_on_a_small_dataset(lab_dataset
     assert "my_dataset: valid" in _ok("validate", lab_dataset)
     experiment = tmp_path / "my_experiment.toml"
     text = TEMPLATE.read_text().replace('plain = "my_dataset"', f'plain = "{lab_dataset}"')
-    experiment.write_text(text.replace('folder = "results/my_dataset"', f'folder = "{tmp_path / "results"}"') + FAST)
+    experiment.write_text(text.replace('folder = "results/my_dataset"', f'folder = "{tmp_path / "results"}"')
+                          + FAST_TEMPLATE)
     _ok("run", experiment, "--no-progress")
     manifest = json.loads((tmp_path / "results" / "manifest.json").read_text())
     assert manifest["config"]["study_kind"] == "zero-shot"

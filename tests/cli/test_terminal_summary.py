@@ -19,6 +19,7 @@ import pytest
 from click.testing import CliRunner
 
 from tests.csv_compare import folder_csvs
+from tests.study_settings import FAST_TEMPLATE
 from tzsl._progress import bars_wanted, progress_bar
 from tzsl.cli import cli
 from tzsl.datasets import write_plain_dataset
@@ -27,23 +28,6 @@ from tzsl.reporting.terminal import MAX_LINES, WIDTH, notes_only, run_summary, s
 
 REPO = Path(__file__).resolve().parents[2]
 TEMPLATE = REPO / "experiments" / "my_dataset_template.toml"
-#: The template, made fast: one compared method, two random splits, a one-point grid, DAP-only GZSL.
-FAST = """
-[methods]
-compare = ["eszsl"]
-sweep = false
-
-[gzsl]
-methods = ["dap"]
-
-[splits]
-n_splits = 2
-
-[svm]
-n_C = 1
-n_gamma = 1
-n_draws = 1
-"""
 ROWS = {  # hard rough cold soft
     "mug": [1, 0, 1, 0], "sponge": [0, 1, 0, 1], "can": [1, 0, 1, 1], "towel": [0, 1, 0, 0],
     "stone": [1, 1, 1, 0], "tissue": [0, 0, 0, 1], "bottle": [1, 0, 0, 0], "brush": [0, 1, 1, 1],
@@ -65,7 +49,8 @@ def _template_runs(root: Path) -> dict:
     out: dict = {}
     for name, extra in (("plain", []), ("verbose", ["--verbose"])):
         folder = f"results/{name}"  # relative, as a user types it (the caller runs in root)
-        (root / f"{name}.toml").write_text(TEMPLATE.read_text().replace('"results/my_dataset"', f'"{folder}"') + FAST)
+        (root / f"{name}.toml").write_text(TEMPLATE.read_text().replace('"results/my_dataset"', f'"{folder}"')
+                                           + FAST_TEMPLATE)
         result = CliRunner().invoke(cli, ["run", f"{name}.toml", *extra])
         assert result.exit_code == 0, result.output + result.stderr
         out[name] = result
