@@ -350,7 +350,7 @@ def test_predict_cli_old_pickle_bundle_needs_trust_pickle(phac2, tmp_path):
     old = tmp_path / "old.tzsl"
     old.write_bytes(b"TZSL-MODEL-BUNDLE\n" + json.dumps(header).encode() + b"\n" + payload)
     message = _one_line_error(_cli("predict", "--model", old, "--classes", classes, root / "test.npz"), old)
-    assert "--save" in message and "--trust-pickle" in message
+    assert "--out" in message and "--trust-pickle" in message
     trusted = _cli("predict", "--model", old, "--classes", classes, "--trust-pickle", root / "test.npz")
     assert trusted.exit_code == 0, trusted.output
     fresh = _cli("predict", "--model", model, "--classes", classes, root / "test.npz")
