@@ -81,8 +81,8 @@ test-wide: install
 	TZSL_WIDE_PROPERTY_TEST=1 $(BIN)/pytest -q -p no:cacheprovider tests/studies/test_zero_shot_study.py \
 	  tests/models/test_methods_on_lab_data.py -k "full_range or lab_like"
 
-# The last-bit test over every paper study (tests/studies/test_last_bit.py with the fabric study; the suite runs it
-# on PHAC-2 and the hand study): reproduce-tables three times on the real data, several minutes on two cores.
+# The last-bit test over every paper study (tests/studies/test_last_bit.py, which make test skips for CI's time):
+# reproduce-tables three times on the real data, several minutes on two cores.
 test-last-bit: install
 	TZSL_LAST_BIT_ALL=1 $(BIN)/pytest -q -p no:cacheprovider tests/studies/test_last_bit.py
 

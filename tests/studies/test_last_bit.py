@@ -130,6 +130,10 @@ STABLE_STUDIES = ("phac2-dap", "hand-simulated")
 #: ``make test-last-bit`` (this variable set): every paper study, the fabric study in the reference and the
 #: one-thread run (it checks that every fabric number from a fit says it can move and nothing else moves).
 ALL_STUDIES_ENV = "TZSL_LAST_BIT_ALL"
+#: Set (to anything but 0) to run the test on the stable studies only; ``make test-last-bit`` sets ALL_STUDIES_ENV.
+#: Without either, the test is skipped: its three reproduce-tables cost about five minutes of one CI worker,
+#: more than the suite's time allows (CI runs under a quarter of an hour).
+STABLE_STUDIES_ENV = "TZSL_LAST_BIT"
 
 
 def run(out: Path, n_jobs: int, studies: tuple[str, ...] = REPRODUCE_STUDIES) -> dict[str, pd.DataFrame]:
@@ -147,12 +151,14 @@ def isolated_caches(tmp_path, monkeypatch, data_dir):
 
 
 def test_every_paper_number_survives_a_last_bit_perturbation_and_the_blas_thread_count(isolated_caches, monkeypatch):
-    """In the suite (CI): PHAC-2 and the hand study, three runs; ``make test-last-bit``: the fabric study too.
+    """``TZSL_LAST_BIT=1``: PHAC-2 and the hand study, three runs; ``make test-last-bit``: the fabric study too.
 
     The fabric study is most of reproduce-tables' cost and every number its tables compute from a fit says
-    that it can move; within CI's time the suite checks the studies that promise not to move.
+    that it can move. The suite skips the test unless one of the two variables is set (CI's time).
     """
     everything = os.environ.get(ALL_STUDIES_ENV, "").strip() not in ("", "0")
+    if not everything and os.environ.get(STABLE_STUDIES_ENV, "").strip() in ("", "0"):
+        pytest.skip("three reproduce-tables runs: make test-last-bit (or TZSL_LAST_BIT=1 for PHAC-2 and hand only)")
     first = REPRODUCE_STUDIES if everything else STABLE_STUDIES
     reference = run(isolated_caches / "reference", n_jobs=2, studies=first)
     assert {"table1_fusion.csv", "hand_table5.csv"} <= set(reference)
