@@ -45,6 +45,7 @@ import pandas as pd
 
 from tzsl._io import atomic_write
 from tzsl.exceptions import ConfigError
+from tzsl.models.protocol import LAST_BIT_NOTE
 from tzsl.reporting.benchmark_blocks import (
     MissingResults,
     benchmark_accuracy_block,
@@ -140,8 +141,7 @@ def _fabric(root: Path) -> list[Row]:
     rows: list[Row] = []
     methods = [m for m in README_FABRIC_METHODS if f"paper_{m}" in table.columns]
     for _, r in table[table["config"] == 1].iterrows():  # the paper's config and its zero-shot variant
-        # the study's note says when its choices scored a count (tzsl.models.protocol.LAST_BIT_NOTE)
-        moves = f" {MOVES_WITH_LAST_BIT}" if "last-bit" in str(r.get("note", "")) else ""
+        moves = f" {MOVES_WITH_LAST_BIT}" if LAST_BIT_NOTE in str(r.get("note", "")) else ""
         for m in methods:
             if r["zero_shot"]:
                 rows.append((f"Fabric {r['condition']}, {m}, zero-shot variant ({r['protocol']}: test groups "
