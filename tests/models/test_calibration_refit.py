@@ -25,7 +25,7 @@ from tzsl.models import (
     ZeroShotClassifier,
 )
 from tzsl.models._attribute_bank import chosen_settings
-from tzsl.models._posterior_calibration import _on_attributes
+from tzsl.models._pseudo_unseen import on_attributes
 from tzsl.models.calibration import pseudo_unseen_scores, selected_params
 
 
@@ -175,7 +175,7 @@ def test_a_fold_that_leaves_out_an_attribute_cuts_the_ensemble_member_s_pinned_c
     entries = fitted.pinned_methods(selected_params)
     assert "estimator_params" in entries[0]
     keep = np.array([True, False, True, True, True])
-    cut = _on_attributes(ScoreEnsembleZSL(methods=entries), keep).methods
+    cut = on_attributes(ScoreEnsembleZSL(methods=entries), keep).methods
     assert len(cut[0]["estimator_params"]) == 4
     assert cut[0]["estimator_params"] == [entries[0]["estimator_params"][j] for j in (0, 2, 3, 4)]
     assert cut[1:] == entries[1:]  # no per-attribute parameter: as they were

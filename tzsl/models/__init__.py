@@ -21,7 +21,7 @@ from tzsl.models import _builtin_methods  # noqa: F401  (registers the shipped m
 from tzsl.models._active_touch import LogisticAttribute, PerEPAttributeModel
 from tzsl.models._attribute_bank import AttributeClassifierBank
 from tzsl.models._attribute_svm import AttributeSVM
-from tzsl.models._attribute_training import AttributeTrainingError, GridEdgeWarning
+from tzsl.models._attribute_training import AttributeTrainingError
 from tzsl.models._choices import INHERITED_CHOICES
 from tzsl.models._compatibility import ALE, SJE, DeViSE
 from tzsl.models._decision import CompatibilityRule, DAPRule, DecisionRule, NearestAttributeRule
@@ -49,7 +49,7 @@ from tzsl.models._scalable_attribute import ScalableAttributeClassifier
 from tzsl.models._score_ensemble import ScoreEnsembleZSL
 from tzsl.models._validation import ParameterError
 from tzsl.models._zero_shot import ZeroShotClassifier
-from tzsl.models._zsl_input import ZSLInputError
+from tzsl.models._zsl_input import GridEdgeWarning, ZSLInputError
 
 __all__: list[str] = [
     # the protocol and its decision rules

@@ -35,10 +35,11 @@ from tzsl._fit_store import (
 from tzsl._profile import timed
 from tzsl._progress import progress_bar
 from tzsl.exceptions import ConfigError
-from tzsl.models._attribute_training import AUTO_MAX_EXACT_TRIALS, SOLVERS, AttributeTrainingError, GridEdgeWarning
+from tzsl.models._attribute_training import AUTO_MAX_EXACT_TRIALS, SOLVERS, AttributeTrainingError
 from tzsl.models._detectors import AUTO_CANDIDATES, DETECTORS, choose_detector, detector_template
 from tzsl.models._scalable_attribute import ScalableAttributeClassifier
 from tzsl.models._validation import ValidatedParamsMixin
+from tzsl.models._zsl_input import GridEdgeWarning
 from tzsl.value_lists import JOBLIB_BACKENDS
 
 __all__ = ["AttributeClassifierBank"]

@@ -27,7 +27,6 @@ __all__ = [
     "UNDERSAMPLING",
     "AttributeTrainingError",
     "GRIDS",
-    "GridEdgeWarning",
     "balanced_object_draws",
     "balanced_sample_weights",
     "binary_training_targets",
@@ -51,10 +50,6 @@ PLATT_WEIGHTING = ("balanced", "empirical")
 GRIDS = ("paper", "extended", "adaptive")
 #: Decades of ``gamma`` that ``grid="extended"`` adds below the low end of ``gamma_range``.
 EXTENDED_GAMMA_DECADES = 2
-
-
-class GridEdgeWarning(UserWarning):
-    """A tuned hyper-parameter was chosen at the low or high end of its grid (the optimum may lie outside)."""
 
 
 def grid_edges(chosen: dict[str, tuple[np.ndarray, int]]) -> list[tuple[str, float, str]]:

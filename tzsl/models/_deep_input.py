@@ -9,7 +9,7 @@ import importlib
 import numpy as np
 
 from tzsl.exceptions import TzslError
-from tzsl.models._eszsl import ZSLInputError
+from tzsl.models._zsl_input import ZSLInputError
 
 _INSTALL_HINT = 'install the deep extra: pip install "tzsl[deep]"'
 # Sequences per chunk when extracting frozen features (bounds memory to chunk x T frames).

@@ -26,10 +26,11 @@ from sklearn.preprocessing import StandardScaler
 
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_svm import AttributeSVM
-from tzsl.models._attribute_training import GridEdgeWarning, default_preprocessor
+from tzsl.models._attribute_training import default_preprocessor
 from tzsl.models._linear_attribute import LinearAttribute
 from tzsl.models._logistic_attribute import LogisticAttribute
-from tzsl.models._zsl_input import ZSLInputError
+from tzsl.models._pseudo_unseen import pseudo_unseen_scores
+from tzsl.models._zsl_input import GridEdgeWarning, ZSLInputError
 
 __all__ = ["AUTO_CANDIDATES", "AUTO_FOLDS", "DETECTORS", "FIXED_DETECTORS", "LINEAR_DETECTORS", "STUDY_DETECTOR",
            "choose_detector", "detector_preprocessor", "detector_template"]
@@ -148,7 +149,6 @@ def choose_detector(bank, X: np.ndarray, A: np.ndarray, groups, candidates=AUTO_
         "attribute_log_loss"}}}``; accuracy in [0, 1], log-loss in nats per (trial, attribute).
     """
     from tzsl.models._decision import DAPRule  # noqa: PLC0415 (the decision rules import the bank's package)
-    from tzsl.models._posterior_calibration import pseudo_unseen_scores  # noqa: PLC0415
     from tzsl.models._zero_shot import ZeroShotClassifier  # noqa: PLC0415
 
     if not candidates or "auto" in candidates or not set(candidates) <= set(DETECTORS):

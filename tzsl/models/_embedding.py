@@ -46,8 +46,8 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval, StrOptions
 
+from tzsl._scoring import squared_distances
 from tzsl.exceptions import ConfigError
-from tzsl.models._decision import squared_distances
 from tzsl.models._eszsl import AttributeEmbeddingModel
 from tzsl.models._zsl_input import ZSLInputError, training_classes, validate_features_and_rows
 

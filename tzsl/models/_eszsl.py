@@ -53,13 +53,6 @@ from tzsl.models._zsl_input import (
     validate_features_and_rows,
 )
 
-# Old private names, still imported by tzsl.models._deep.
-from tzsl.models._zsl_input import check_int as _check_int  # noqa: F401
-from tzsl.models._zsl_input import check_no_duplicate_rows as _check_no_duplicate_rows  # noqa: F401
-from tzsl.models._zsl_input import check_positive as _check_positive  # noqa: F401
-from tzsl.models._zsl_input import encode_training_classes as _encode_training_classes  # noqa: F401
-from tzsl.models._zsl_input import validate_class_table as _validate_attributes  # noqa: F401
-
 __all__ = ["AttributeEmbeddingModel", "ESZSL", "ESZSLCV", "ZSLInputError", "attribute_rows", "training_classes"]
 
 #: Default regulariser grid of :class:`ESZSLCV` (the paper's 10^-3 .. 10^3).

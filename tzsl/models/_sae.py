@@ -37,8 +37,8 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.utils._param_validation import Interval, InvalidParameterError, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
+from tzsl._scoring import cosine_similarities
 from tzsl.models._attribute_model_base import EmbeddingAttributeModel
-from tzsl.models._decision import cosine_similarities
 from tzsl.models._selection_criteria import DEFAULT_SCORING, SCORINGS, best_within_tolerance, heldout_scores
 from tzsl.models._zsl_input import (
     DEFAULT_GRID_EXTENSIONS,

@@ -67,6 +67,7 @@ from tzsl.models._attribute_training import (
     fit_platt_many,
 )
 from tzsl.models._platt_binary import PlattBinaryClassifierMixin
+from tzsl.models._zsl_input import share_of_objects
 
 __all__ = ["MAX_TUNE_TRIALS", "ScalableAttributeClassifier"]
 
@@ -105,24 +106,6 @@ def _fitted_preprocessor(template, X: np.ndarray):
             while len(_PREPROCESSOR_MEMO) > _PREPROCESSOR_MEMO_SIZE:
                 _PREPROCESSOR_MEMO.popitem(last=False)
     return copy.deepcopy(fitted)
-
-
-def share_of_objects(groups: np.ndarray, cap: int | None, rng) -> np.ndarray:
-    """Sorted indices of about ``cap`` trials taken from every object in proportion (all if ``n <= cap``).
-
-    ``groups`` (n_trials,): object of each trial. Each object keeps ``max(1, floor(count * cap / n))``
-    of its trials, chosen at random (one ``rng.permutation(n)``, drawn only when ``n > cap``).
-    """
-    n = groups.size
-    if cap is None or n <= cap:
-        return np.arange(n)
-    _, codes, counts = np.unique(groups, return_inverse=True, return_counts=True)
-    perm = rng.permutation(n)
-    order = perm[np.argsort(codes[perm], kind="stable")]  # trials by object, random within
-    rank = np.empty(n, dtype=np.int64)
-    rank[order] = np.arange(n) - np.concatenate([[0], np.cumsum(counts)[:-1]])[codes[order]]
-    quota = np.maximum(1, np.floor(counts * cap / n)).astype(np.int64)
-    return np.flatnonzero(rank < quota[codes])
 
 
 def balanced_class_weights(y_codes: np.ndarray) -> np.ndarray:

@@ -37,8 +37,9 @@ from tzsl.models._attribute_svm import AttributeSVM
 from tzsl.models._dap import break_ties
 from tzsl.models._registry import get_method
 from tzsl.models._validation import ValidatedParamsMixin
+from tzsl.models._zero_shot import zscore_rows
 
-__all__ = ["ScoreEnsembleZSL", "zscore_rows"]
+__all__ = ["ScoreEnsembleZSL"]
 
 #: Members of the shipped ensemble (registry entries): AVGDAP with the uniform prior and the PHAC-2
 #: study's attribute SVMs (5 object-grouped folds, the paper's gamma grid: the configuration
@@ -47,22 +48,6 @@ __all__ = ["ScoreEnsembleZSL", "zscore_rows"]
 #: beside it (issue 32; INHERITED_CHOICES, "ensemble-members"): the RBF-SVM DAP stayed.
 DEFAULT_MEMBERS: tuple = ({"name": "dap-avg", "estimator": AttributeSVM(cv=5, grid="paper")},
                           "eszsl", "sae")
-
-
-def zscore_rows(S: np.ndarray) -> np.ndarray:
-    """Each row z-scored across its columns (a constant row becomes 0).
-
-    Parameters
-    ----------
-    S : ndarray of shape (n_trials, n_classes)
-
-    Returns
-    -------
-    ndarray of shape (n_trials, n_classes)
-    """
-    S = np.asarray(S, dtype=np.float64)
-    sd = S.std(axis=1, keepdims=True)
-    return (S - S.mean(axis=1, keepdims=True)) / np.where(sd > 0, sd, 1.0)
 
 
 def _spec(entry) -> dict:

@@ -31,7 +31,7 @@ from tzsl.models._attribute_model_base import attribute_table_tags
 from tzsl.models._decision import SCORE_KINDS
 from tzsl.models._validation import ValidatedParamsMixin
 
-__all__ = ["ZeroShotClassifier", "score_kind"]
+__all__ = ["ZeroShotClassifier", "score_kind", "zscore_rows"]
 
 
 def score_kind(attribute_model) -> str:
@@ -49,6 +49,22 @@ def score_kind(attribute_model) -> str:
             f"score_kind in {SCORE_KINDS} (got {kind!r})"
         )
     return kind
+
+
+def zscore_rows(S: np.ndarray) -> np.ndarray:
+    """Each row z-scored across its columns (a constant row becomes 0).
+
+    Parameters
+    ----------
+    S : ndarray of shape (n_trials, n_classes)
+
+    Returns
+    -------
+    ndarray of shape (n_trials, n_classes)
+    """
+    S = np.asarray(S, dtype=np.float64)
+    sd = S.std(axis=1, keepdims=True)
+    return (S - S.mean(axis=1, keepdims=True)) / np.where(sd > 0, sd, 1.0)
 
 
 class ZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):

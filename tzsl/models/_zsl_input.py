@@ -17,6 +17,7 @@ from tzsl.exceptions import ConfigError, TzslError
 
 __all__ = [
     "DEFAULT_GRID_EXTENSIONS",
+    "GridEdgeWarning",
     "MIN_CV_CLASSES",
     "ZSLInputError",
     "attribute_rows",
@@ -26,6 +27,7 @@ __all__ = [
     "class_grouped_folds",
     "encode_training_classes",
     "extend_at_edge",
+    "share_of_objects",
     "training_classes",
     "validate_class_table",
     "validate_features",
@@ -181,6 +183,10 @@ def class_grouped_folds(
     return [
         (np.flatnonzero(fold_of_sample != f), np.flatnonzero(fold_of_sample == f)) for f in range(k)
     ]
+
+
+class GridEdgeWarning(UserWarning):
+    """A tuned hyper-parameter was chosen at the low or high end of its grid (the optimum may lie outside)."""
 
 
 #: Default bound on the log-scale steps the CV models (:class:`ESZSLCV`, :class:`SAECV`) add beyond a grid edge
@@ -345,3 +351,21 @@ def check_int(value, name: str, low: int, est_name: str) -> int:
     if not isinstance(value, numbers.Integral) or isinstance(value, bool) or value < low:
         raise ConfigError(f"{est_name}: {name} must be an integer >= {low}, got {value!r}")
     return int(value)
+
+
+def share_of_objects(groups: np.ndarray, cap: int | None, rng) -> np.ndarray:
+    """Sorted indices of about ``cap`` trials taken from every object in proportion (all if ``n <= cap``).
+
+    ``groups`` (n_trials,): object of each trial. Each object keeps ``max(1, floor(count * cap / n))``
+    of its trials, chosen at random (one ``rng.permutation(n)``, drawn only when ``n > cap``).
+    """
+    n = groups.size
+    if cap is None or n <= cap:
+        return np.arange(n)
+    _, codes, counts = np.unique(groups, return_inverse=True, return_counts=True)
+    perm = rng.permutation(n)
+    order = perm[np.argsort(codes[perm], kind="stable")]  # trials by object, random within
+    rank = np.empty(n, dtype=np.int64)
+    rank[order] = np.arange(n) - np.concatenate([[0], np.cumsum(counts)[:-1]])[codes[order]]
+    quota = np.maximum(1, np.floor(counts * cap / n)).astype(np.int64)
+    return np.flatnonzero(rank < quota[codes])

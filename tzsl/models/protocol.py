@@ -14,7 +14,6 @@ on request) and keeps its preferred one among those within :data:`TIE_TOLERANCE`
 """
 
 from tzsl._scoring import compatibility_scores, cosine_similarities, linear_embedding, squared_distances
-from tzsl.models._score_ensemble import zscore_rows
 from tzsl.models._selection_criteria import (
     DEFAULT_SCORING,
     LAST_BIT_NOTE,
@@ -25,7 +24,7 @@ from tzsl.models._selection_criteria import (
     moves_with_last_bit,
     neg_log_loss,
 )
-from tzsl.models._zero_shot import score_kind
+from tzsl.models._zero_shot import score_kind, zscore_rows
 from tzsl.models._zsl_input import MIN_CV_CLASSES, attribute_rows, class_grouped_folds, training_classes
 
 __all__ = [
