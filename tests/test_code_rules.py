@@ -147,7 +147,7 @@ def test_rule_checker_sees_the_forbidden_forms():
     code = ("from tzsl.datasets._types import Trials\n"
             "from tzsl.features._pca import _private\n"
             "from ._pca import _helper\n"
-            "from tzsl.models import _deep as deep\n"
+            "from tzsl.models import _dap as dap\n"
             "def f():\n"
             "    from tzsl.datasets import _types\n"
             "    return _types._hidden\n"
@@ -188,7 +188,7 @@ def test_size_allow_list_names_existing_files():
 
 
 #: The modules that may call ``dap_log_scores`` (rule (d)).
-DAP_ARITHMETIC_CALLERS = frozenset({"tzsl/models/_decision.py", "tzsl/inference/detector_bundles.py"})
+DAP_ARITHMETIC_CALLERS = frozenset({"tzsl/models/rules/_decision.py", "tzsl/inference/detector_bundles.py"})
 
 
 def _calls_of(tree: ast.AST, name: str) -> list[int]:

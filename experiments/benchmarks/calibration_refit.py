@@ -5,7 +5,7 @@ pseudo-unseen folds of the split's training objects
 (:func:`tzsl.studies.comparison.calibration.dap_split_posteriors`). With ``calibration_refit="search"``
 (the former behaviour) each fold refits every (attribute, sensor) classifier with its whole
 hyper-parameter search; with ``"pinned"`` (the default) each fold refits it once with the ``C`` /
-``gamma`` the split's fit chose (:func:`tzsl.models._attribute_bank.chosen_settings`). For each
+``gamma`` the split's fit chose (:func:`tzsl.models.detectors._attribute_bank.chosen_settings`). For each
 seeded random split the study's attribute bank is fitted once (as ``tzsl run`` fits it, no cache)
 and both calibrations are computed from it, so every difference is the calibration's alone.
 Printed per split: the CPU seconds of each calibration and each temperature; at the end, per

@@ -38,7 +38,7 @@ folder = "unused"
 @pytest.mark.slow
 @pytest.mark.parametrize("solver_size", [240, 4800])  # SIMULATED; 3200 training trials > 3000: approximate
 def test_run_on_a_dask_scheduler_equals_the_local_run(tmp_path, solver_size, monkeypatch):
-    from tzsl.models import _attribute_bank
+    from tzsl.models.detectors import _attribute_bank
 
     monkeypatch.setattr(_attribute_bank, "PARALLEL_PREDICT_TRIALS", 1000)  # the 4800-trial run predicts on the workers
     write_synthetic_dataset(tmp_path / "syn", solver_size, n_classes=12, n_attributes=6, n_features=4,

@@ -9,8 +9,8 @@ import pytest
 from sklearn.utils._param_validation import InvalidParameterError
 
 from tzsl.exceptions import ConfigError
-from tzsl.models._active_suggest import suggest_next_ep
-from tzsl.models._active_touch import (
+from tzsl.models.active_touch import binned_confusion
+from tzsl.models.active_touch._per_ep import (
     LogisticAttribute,
     PerEPAttributeModel,
     ep_column_blocks,
@@ -20,7 +20,7 @@ from tzsl.models._active_touch import (
     sequential_log_posterior,
     stop_reasons,
 )
-from tzsl.models.active_touch import binned_confusion
+from tzsl.models.active_touch._suggest import suggest_next_ep
 from tzsl.models.dap import dap_log_scores, fuse_attribute_posteriors
 
 EPS = ("noise_a", "info", "noise_b")

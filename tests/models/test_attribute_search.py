@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import tzsl.models._attribute_svm as svm_module
+import tzsl.models.detectors._attribute_svm as svm_module
 from tests.models.test_attribute_svm import make_problem
 from tzsl.exceptions import ConfigError
 from tzsl.models import AttributeClassifierBank, AttributeSVM
-from tzsl.models._attribute_search import halving_rounds, successive_halving
 from tzsl.models._validation import ParameterError
 from tzsl.models.attribute_training import gamma_grid
+from tzsl.models.detectors._attribute_search import halving_rounds, successive_halving
 from tzsl.studies.config import load_experiment
 from tzsl.studies.zero_shot.study import attribute_estimator
 

@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
-import tzsl.models._attribute_svm as svm_module
+import tzsl.models.detectors._attribute_svm as svm_module
 from tests.models.test_attribute_svm import TINY, make_problem
 from tzsl.models import AttributeSVM
-from tzsl.models._attribute_search import adaptive_grid_search, fill_grid_lines
 from tzsl.models._estimator_checks import check_instance
 from tzsl.models.attribute_training import MAX_GRID_EXTENSIONS, gamma_grid
+from tzsl.models.detectors._attribute_search import adaptive_grid_search, fill_grid_lines
 
 START_GAMMAS = gamma_grid((0.01, 1.0), 3, "extended")
 START_CS = np.array([1.0, 10.0, 100.0])

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from tzsl.models import AttributeSVM, _attribute_svm
+from tzsl.models import AttributeSVM
+from tzsl.models.detectors import _attribute_svm
 
 TINY = dict(n_C=2, n_gamma=2, n_draws=2, cv=3)
 

@@ -24,9 +24,9 @@ from tzsl.models import (
     ScoreEnsembleZSL,
     ZeroShotClassifier,
 )
-from tzsl.models._attribute_bank import chosen_settings
 from tzsl.models._pseudo_unseen import on_attributes
 from tzsl.models.calibration import pseudo_unseen_scores, selected_params
+from tzsl.models.detectors._attribute_bank import chosen_settings
 
 
 def _data(seed=3, n_classes=12, trials=12, n_attributes=5):

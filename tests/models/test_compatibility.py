@@ -7,7 +7,7 @@ import pytest
 from sklearn.utils._param_validation import InvalidParameterError
 
 from tzsl.models import CompatibilityRule, ZeroShotClassifier, build_method
-from tzsl.models._compatibility import (
+from tzsl.models.embedding._compatibility import (
     ALE,
     SJE,
     DeViSE,

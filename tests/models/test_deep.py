@@ -17,8 +17,8 @@ from sklearn.utils.estimator_checks import (
 from tzsl.exceptions import ConfigError, DataFileError, ModelBundleError, TzslError
 from tzsl.inference.deep_bundles import load_deep_bundle, save_deep_bundle
 from tzsl.models import DeepAttributeEmbedding
-from tzsl.models._embedding import _forward, _glorot_init, _layer_shapes, _loss_and_grad, loss_weights
-from tzsl.models._eszsl import ZSLInputError
+from tzsl.models.embedding._embedding import _forward, _glorot_init, _layer_shapes, _loss_and_grad, loss_weights
+from tzsl.models.embedding._eszsl import ZSLInputError
 
 SKIP_REASON = "PyTorch is not installed (the optional deep extra: pip install 'tzsl[deep]')"
 
@@ -86,7 +86,7 @@ def test_missing_torch_is_a_clear_error(monkeypatch):
 def test_torch_loss_equals_numpy_loss_and_gradient(torch, lam):
     """The torch F15 loss equals EmbeddingZSL's on the same f and attribute vectors, and autograd
     reproduces its analytic gradient."""
-    from tzsl.models._deep_backbones import f15_loss
+    from tzsl.models.embedding.deep._backbones import f15_loss
 
     rng = np.random.default_rng(1)
     n, d, k, m = 30, 7, 5, 6
@@ -110,7 +110,7 @@ def test_torch_loss_equals_numpy_loss_and_gradient(torch, lam):
 
 
 def test_loss_terms_by_hand(torch):
-    from tzsl.models._deep_backbones import f15_loss
+    from tzsl.models.embedding.deep._backbones import f15_loss
 
     F = torch.tensor([[0.2, 0.9], [0.6, 0.1]], dtype=torch.float64)
     L = torch.tensor([[0.0, 1.0], [1.0, 0.0]], dtype=torch.float64)
@@ -125,7 +125,7 @@ def test_loss_terms_by_hand(torch):
 
 # ------------------------------------------------------------------------- network
 def test_forward_backward_shapes(torch):
-    from tzsl.models._deep_backbones import DeepZSLNet, build_backbone, f15_loss
+    from tzsl.models.embedding.deep._backbones import DeepZSLNet, build_backbone, f15_loss
 
     torch.manual_seed(0)
     net = DeepZSLNet(build_backbone("small-cnn"), n_attributes=4, hidden_size=8, n_channels=1, image_size=None)
@@ -145,7 +145,7 @@ def test_forward_backward_shapes(torch):
 def test_pretrained_backbone_is_loaded_offline_and_checksummed(torch):
     import hashlib
 
-    from tzsl.models._deep_backbones import build_backbone, bundled_weights_path
+    from tzsl.models.embedding.deep._backbones import build_backbone, bundled_weights_path
 
     path = bundled_weights_path("efficientnet-lite0")
     bb = build_backbone("efficientnet-lite0").eval()
@@ -163,7 +163,7 @@ def test_pretrained_backbone_is_loaded_offline_and_checksummed(torch):
 
 
 def test_foreign_weights_file_is_refused(torch, tmp_path):
-    from tzsl.models._deep_backbones import build_backbone
+    from tzsl.models.embedding.deep._backbones import build_backbone
 
     bad = tmp_path / "vgg.pth"
     torch.save({"features.0.weight": torch.zeros(2, 2)}, bad)
@@ -286,7 +286,7 @@ def test_bundle_round_trip_and_tampering(torch, tmp_path, monkeypatch):
         load_deep_bundle(tmp_path / "other.tzsl-deep")
 
     other_weights = tmp_path / "other.pth"
-    from tzsl.models._deep_backbones import bundled_weights_path
+    from tzsl.models.embedding.deep._backbones import bundled_weights_path
 
     state = torch.load(bundled_weights_path("efficientnet-lite0"), weights_only=True)
     state["_conv_stem.weight"] = state["_conv_stem.weight"] * 2

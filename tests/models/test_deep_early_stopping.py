@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from tzsl.models import DeepAttributeEmbedding, ZSLInputError
-from tzsl.models._deep_training import best_epoch
+from tzsl.models.embedding.deep._training import best_epoch
 from tzsl.models.protocol import class_grouped_folds
 
 # 6 classes with distinct attribute rows: folds of 2 held-out rows

@@ -12,7 +12,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from tzsl.exceptions import ConfigError, TzslError
 from tzsl.models import EmbeddingZSL, NearestAttributeRule, ZeroShotClassifier, ZSLInputError
-from tzsl.models._embedding import _glorot_init, _layer_shapes, _loss_and_grad, loss_weights
+from tzsl.models.embedding._embedding import _glorot_init, _layer_shapes, _loss_and_grad, loss_weights
 from tzsl.models.protocol import attribute_rows
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from sklearn.model_selection import StratifiedGroupKFold
 
-from tzsl.models._grouped_folds import stratified_group_fold_masks
+from tzsl.models.detectors._grouped_folds import stratified_group_fold_masks
 
 
 def _sklearn(y, groups, n_splits, seed):

@@ -20,7 +20,7 @@ from tzsl.datasets._hand_simulator import simulate_grasps
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.features._grasp_features import grasp_features
 from tzsl.models._dap import break_ties, dap_log_scores
-from tzsl.models._hand_dap import FUSIONS, HandDAPClassifier, NoContactError, fuse_grasp_posteriors
+from tzsl.models.hand._hand_dap import FUSIONS, HandDAPClassifier, NoContactError, fuse_grasp_posteriors
 
 TABLE = load_hand_table4()
 

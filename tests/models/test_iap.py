@@ -10,7 +10,7 @@ from sklearn.svm import LinearSVC
 from sklearn.utils._param_validation import InvalidParameterError
 
 from tzsl.models import ZSLInputError, build_method
-from tzsl.models._iap import IAP, default_iap_classifier
+from tzsl.models.detectors._iap import IAP, default_iap_classifier
 
 
 def test_attribute_posteriors_are_class_posterior_weighted_rows(zero_shot_problem):

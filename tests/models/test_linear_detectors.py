@@ -8,7 +8,7 @@ import pytest
 from sklearn.preprocessing import StandardScaler
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
-import tzsl.models._linear_attribute as linear_module
+import tzsl.models.detectors._linear_attribute as linear_module
 from tzsl.exceptions import ConfigError
 from tzsl.models import (
     AttributeClassifierBank,
@@ -19,9 +19,9 @@ from tzsl.models import (
     build_method,
     get_method,
 )
-from tzsl.models._attribute_training import balanced_sample_weights
-from tzsl.models._linear_attribute import robust_object_weights
 from tzsl.models.attribute_training import DETECTORS, detector_template, object_balanced_weights
+from tzsl.models.detectors._attribute_training import balanced_sample_weights
+from tzsl.models.detectors._linear_attribute import robust_object_weights
 
 
 def linear_objects(seed=0, n_obj=24, trials=5, d=6, noise=1.0):

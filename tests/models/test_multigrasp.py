@@ -8,8 +8,8 @@ import pytest
 
 from tzsl.exceptions import ConfigError
 from tzsl.models._dap import dap_log_scores
-from tzsl.models._hand_dap import fuse_grasp_posteriors
-from tzsl.models._multigrasp import (
+from tzsl.models.hand._hand_dap import fuse_grasp_posteriors
+from tzsl.models.hand._multigrasp import (
     attribute_distance_matrix,
     df_mdap,
     df_mdap_log_scores,

@@ -291,7 +291,7 @@ def test_folds_keep_the_attribute_bank_s_solver():
         assert est.estimator_.attribute_model_.solver_choice_["solver"] == "approximate"  # 180 > 150 trials
         assert est.calibration_info_["pinned"] == ("solver=approximate, estimator_params=<chosen hyper-parameters "
                                                    "of 4 attribute classifiers>")
-        from tzsl.models._posterior_calibration import _pinned  # the template the folds refit
+        from tzsl.models.calibration._posterior_calibration import _pinned  # the template the folds refit
 
         template = _pinned(clone(clf), est.estimator_)
         pseudo_unseen_scores(template, X[:, None, :], rows[y], y, random_state=0, score=score)

@@ -13,7 +13,7 @@ from tzsl.models import (
     ZSLInputError,
     build_method,
 )
-from tzsl.models._sae import SAE, SAECV, sylvester_solution
+from tzsl.models.embedding._sae import SAE, SAECV, sylvester_solution
 from tzsl.models.protocol import class_grouped_folds, cosine_similarities
 
 

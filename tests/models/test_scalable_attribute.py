@@ -129,7 +129,7 @@ def test_scores_fold_the_feature_map_into_the_weights():
 
 
 def test_a_reused_preprocessor_gives_the_same_model_as_a_fresh_one():
-    from tzsl.models import _scalable_attribute
+    from tzsl.models.detectors import _scalable_attribute
 
     X, A, g = make_problem(n_objects=20, trials=5, seed=4)
     _scalable_attribute._PREPROCESSOR_MEMO.clear()
@@ -146,7 +146,7 @@ def test_a_reused_preprocessor_gives_the_same_model_as_a_fresh_one():
 
 @pytest.mark.parametrize("solver", ["exact", "approximate"])
 def test_bank_predicts_large_inputs_in_parallel_with_the_same_bits(solver, monkeypatch):
-    from tzsl.models import _attribute_bank
+    from tzsl.models.detectors import _attribute_bank
 
     X, A, g = make_problem(n_attributes=2, n_sensors=2)
     bank = AttributeClassifierBank(estimator=AttributeSVM(n_C=2, n_gamma=2, n_draws=1, cv=3), memory=None,
@@ -200,7 +200,7 @@ def test_precomputed_balanced_weights_fit_like_class_weight_balanced(positives):
     the same floats as scikit-learn's, so the same coefficients bit for bit, on unbalanced classes too."""
     from sklearn.linear_model import LogisticRegression
 
-    from tzsl.models._scalable_attribute import balanced_class_weights
+    from tzsl.models.detectors._scalable_attribute import balanced_class_weights
 
     rng = np.random.default_rng(positives)
     F = rng.normal(size=(190, 12))

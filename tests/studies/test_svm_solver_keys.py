@@ -27,7 +27,7 @@ def test_defaults_are_the_banks():
 
 
 def test_schema_offers_exactly_the_banks_solvers():
-    from tzsl.models._attribute_training import SOLVERS
+    from tzsl.models.detectors._attribute_training import SOLVERS
     from tzsl.studies.config._zero_shot import SvmSettings
 
     field = SvmSettings.model_fields["solver"]

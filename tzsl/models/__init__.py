@@ -2,37 +2,34 @@
 
 One protocol (:class:`ZeroShotClassifier` = attribute model + decision rule), the estimators,
 a method registry (:func:`build_method`, :func:`available_methods`), :func:`all_estimators`,
-the models' exceptions and warnings and :data:`INHERITED_CHOICES`. Helpers live in public
-submodules, one per concept (as scikit-learn's ``sklearn.metrics.pairwise``):
+the models' exceptions and warnings and :data:`INHERITED_CHOICES`.
 
-* :mod:`tzsl.models.protocol`: attribute rows, training classes, class-grouped folds, score kinds;
-* :mod:`tzsl.models.dap`: the DAP arithmetic (priors, fusion, log-scores, ties);
-* :mod:`tzsl.models.multigrasp`: fusion over a hand's fingers and grasps (DF-/SC-MDAP);
-* :mod:`tzsl.models.active_touch`: the next-EP policy, its posterior and stopping rule;
+The estimators live in subpackages by role, as scikit-learn's do (the room of a new method is found
+by what it is); each room's ``__init__`` lists its estimators and helpers:
+
+* :mod:`tzsl.models.detectors`: attribute detectors and the attribute models built on them (banks,
+  the classifier chain, IAP), grids, solvers, searches, Platt scaling, detector families;
+* :mod:`tzsl.models.rules`: the decision rules (DAP, compatibility, nearest attribute row);
+* :mod:`tzsl.models.embedding`: embedding and compatibility methods (ESZSL, SAE, ALE/SJE/DeViSE,
+  the lambda embedding) and, in :mod:`tzsl.models.embedding.deep`, the deep embedding;
 * :mod:`tzsl.models.calibration`: the temperature fitted on pseudo-unseen classes;
-* :mod:`tzsl.models.attribute_training`: grids, solvers, searches, Platt scaling;
-* :mod:`tzsl.models.embedding`: loss weights and the deep model's files;
-* :mod:`tzsl.models.choices`: the inherited choices as records.
+* :mod:`tzsl.models.ensemble`: the score ensemble of registry methods;
+* :mod:`tzsl.models.hand`: a robot hand's single- and multi-grasp DAP;
+* :mod:`tzsl.models.active_touch`: the per-EP model, the next-EP policy, its posterior and stopping rule.
+
+The package core, at this level: :mod:`tzsl.models.base` (what a method author builds on: the
+contracts, input checks, tags helpers, the decision-rule base, ``register_method``),
+:mod:`tzsl.models.protocol` (attribute rows, training classes, class-grouped folds, score kinds),
+:mod:`tzsl.models.dap` (the DAP arithmetic every DAP rule and room shares) and
+:mod:`tzsl.models.choices` (the inherited choices as records). :mod:`tzsl.models.attribute_training`
+and :mod:`tzsl.models.multigrasp` are the old names of :mod:`~tzsl.models.detectors`' and
+:mod:`~tzsl.models.hand`'s helpers, kept so that older code imports.
 
 The fit store the estimators share is :mod:`tzsl.fit_store`.
 """
 
 from tzsl.models import _builtin_methods  # noqa: F401  (registers the shipped methods)
-from tzsl.models._active_touch import LogisticAttribute, PerEPAttributeModel
-from tzsl.models._attribute_bank import AttributeClassifierBank
-from tzsl.models._attribute_svm import AttributeSVM
-from tzsl.models._attribute_training import AttributeTrainingError
 from tzsl.models._choices import INHERITED_CHOICES
-from tzsl.models._compatibility import ALE, SJE, DeViSE
-from tzsl.models._decision import CompatibilityRule, DAPRule, DecisionRule, NearestAttributeRule
-from tzsl.models._deep import DeepAttributeEmbedding
-from tzsl.models._embedding import EmbeddingZSL
-from tzsl.models._eszsl import ESZSL, ESZSLCV
-from tzsl.models._hand_dap import HandDAPClassifier, NoContactError
-from tzsl.models._iap import IAP
-from tzsl.models._linear_attribute import LinearAttribute
-from tzsl.models._multilabel import MultiLabelAttributeClassifier
-from tzsl.models._posterior_calibration import CalibratedZeroShotClassifier, CalibrationWarning
 from tzsl.models._registry import (
     FAMILIES,
     INPUT_KINDS,
@@ -44,12 +41,25 @@ from tzsl.models._registry import (
     register_method,
     unregister_method,
 )
-from tzsl.models._sae import SAE, SAECV
-from tzsl.models._scalable_attribute import ScalableAttributeClassifier
-from tzsl.models._score_ensemble import ScoreEnsembleZSL
 from tzsl.models._validation import ParameterError
 from tzsl.models._zero_shot import ZeroShotClassifier
 from tzsl.models._zsl_input import GridEdgeWarning, ZSLInputError
+from tzsl.models.active_touch import PerEPAttributeModel
+from tzsl.models.calibration import CalibratedZeroShotClassifier, CalibrationWarning
+from tzsl.models.detectors import (
+    IAP,
+    AttributeClassifierBank,
+    AttributeSVM,
+    AttributeTrainingError,
+    LinearAttribute,
+    LogisticAttribute,
+    MultiLabelAttributeClassifier,
+    ScalableAttributeClassifier,
+)
+from tzsl.models.embedding import ALE, ESZSL, ESZSLCV, SAE, SAECV, SJE, DeepAttributeEmbedding, DeViSE, EmbeddingZSL
+from tzsl.models.ensemble import ScoreEnsembleZSL
+from tzsl.models.hand import HandDAPClassifier, NoContactError
+from tzsl.models.rules import CompatibilityRule, DAPRule, DecisionRule, NearestAttributeRule
 
 __all__: list[str] = [
     # the protocol and its decision rules

@@ -2,18 +2,12 @@
 
 from __future__ import annotations
 
-from tzsl.models._attribute_bank import AttributeClassifierBank
-from tzsl.models._compatibility import ALE, SJE, DeViSE
-from tzsl.models._decision import CompatibilityRule, DAPRule, NearestAttributeRule
-from tzsl.models._deep import DeepAttributeEmbedding
-from tzsl.models._embedding import EmbeddingZSL
-from tzsl.models._eszsl import ESZSLCV
-from tzsl.models._hand_dap import HandDAPClassifier
-from tzsl.models._iap import IAP
-from tzsl.models._multilabel import MultiLabelAttributeClassifier
 from tzsl.models._registry import DAP_PAPER, ESZSL_PAPER, FABRIC_PAPER, register_method
-from tzsl.models._sae import SAECV
-from tzsl.models._score_ensemble import ScoreEnsembleZSL
+from tzsl.models.detectors import IAP, AttributeClassifierBank, MultiLabelAttributeClassifier
+from tzsl.models.embedding import ALE, ESZSLCV, SAECV, SJE, DeepAttributeEmbedding, DeViSE, EmbeddingZSL
+from tzsl.models.ensemble import ScoreEnsembleZSL
+from tzsl.models.hand import HandDAPClassifier
+from tzsl.models.rules import CompatibilityRule, DAPRule, NearestAttributeRule
 
 IAP_PAPER = (
     "Lampert, Nickisch, Harmeling (2009): Learning to detect unseen object classes by between-class attribute "

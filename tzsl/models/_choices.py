@@ -18,16 +18,11 @@ import inspect
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from tzsl.models._attribute_svm import AttributeSVM
-from tzsl.models._attribute_training import AUTO_MAX_EXACT_TRIALS
-from tzsl.models._compatibility import ALE, SJE, DeViSE
-from tzsl.models._detectors import STUDY_DETECTOR
-from tzsl.models._eszsl import ESZSLCV
 from tzsl.models._registry import get_method
-from tzsl.models._sae import SAECV
-from tzsl.models._scalable_attribute import ScalableAttributeClassifier
-from tzsl.models._score_ensemble import DEFAULT_MEMBERS, ScoreEnsembleZSL
 from tzsl.models._selection_criteria import DEFAULT_SCORING
+from tzsl.models.detectors import AUTO_MAX_EXACT_TRIALS, STUDY_DETECTOR, AttributeSVM, ScalableAttributeClassifier
+from tzsl.models.embedding import ALE, ESZSLCV, SAECV, SJE, DeViSE
+from tzsl.models.ensemble import DEFAULT_MEMBERS, ScoreEnsembleZSL
 
 __all__ = ["DEFAULT_METHOD", "INHERITED_CHOICES", "NO_SELECTION_SPLITS", "InheritedChoice", "inherited_choices"]
 
@@ -132,7 +127,7 @@ INHERITED_CHOICES: tuple[InheritedChoice, ...] = (
     InheritedChoice(
         "study-detector",
         "the attribute detector family of the generic zero-shot study's DAP (`[svm] detector` of study = "
-        "'zero-shot'; tzsl.models.attribute_training.STUDY_DETECTOR); the paper presets (phac2-dap, its evidence "
+        "'zero-shot'; tzsl.models.detectors.STUDY_DETECTOR); the paper presets (phac2-dap, its evidence "
         "and headlines studies, the fabric and hand presets) and AttributeClassifierBank keep 'rbf-svm'",
         lambda: STUDY_DETECTOR,
         DETECTOR_SELECTION + ": the family with the highest mean of its random-split and its challenging-split "
@@ -205,7 +200,7 @@ INHERITED_CHOICES: tuple[InheritedChoice, ...] = (
         "make bench-scale (cost only)"),
     InheritedChoice(
         "auto-solver-threshold",
-        "largest training set that solver='auto' fits exactly (tzsl.models.attribute_training.AUTO_MAX_EXACT_TRIALS)",
+        "largest training set that solver='auto' fits exactly (tzsl.models.detectors.AUTO_MAX_EXACT_TRIALS)",
         lambda: AUTO_MAX_EXACT_TRIALS,
         "chosen for cost (issue 33: the template's mid-size dataset, make bench part template, SIMULATED), "
         "guarded by accuracy on PHAC-2 selection splits (5 random splits of seed 0, purpose select, and the 5 "

@@ -35,7 +35,7 @@ from types import MappingProxyType
 from sklearn.base import BaseEstimator
 
 from tzsl.exceptions import ConfigError
-from tzsl.models._posterior_calibration import CalibratedZeroShotClassifier
+from tzsl.models.calibration import CalibratedZeroShotClassifier
 
 __all__ = [
     "FAMILIES",

@@ -11,7 +11,7 @@ Every zero-shot method of tzsl that learns attributes from features is a
   ``predict_proba(X)`` = ``p(a_m = 1 | x)`` of shape (n, m) or (n, s, m) (AttributeSVM bank,
   classifier chain); ``"embedding"`` models give ``decision_function(X)`` = attribute-space
   scores (n, m) (ESZSL's ``x V``, the lambda embedding's estimated attribute vector).
-* the **decision rule** (:mod:`tzsl.models._decision`) maps those scores and a class-attribute
+* the **decision rule** (:mod:`tzsl.models.rules._decision`) maps those scores and a class-attribute
   table given at predict time to class scores; priors, fusion and tie-breaking live there.
 
 Studies that apply several rules to the same attribute scores (the DAP tables: max/avg fusion x
@@ -28,8 +28,8 @@ from sklearn.utils.validation import check_is_fitted
 
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_model_base import attribute_table_tags
-from tzsl.models._decision import SCORE_KINDS
 from tzsl.models._validation import ValidatedParamsMixin
+from tzsl.models.rules import SCORE_KINDS
 
 __all__ = ["ZeroShotClassifier", "score_kind", "zscore_rows"]
 

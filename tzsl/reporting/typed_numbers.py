@@ -59,14 +59,16 @@ ALLOWED: dict[tuple[str, str], str] = {
     ("tzsl/features/_texture.py", "dropouts, ~0.4 % of pixels"):
         "a property of the data files that motivates the robust range",
     ("tzsl/features/_texture.py", "ignores up to 1 % outliers"): "the robust range's quantiles (definition)",
-    ("tzsl/models/_attribute_svm.py", "``gamma`` in [0.01, 1] tuned by"): "the DAP paper's protocol (citation)",
-    ("tzsl/models/_attribute_svm.py", "gives the decades 1, 10, 100 and 0.01, 0.1, 1"): "grid points (definition)",
-    ("tzsl/models/_attribute_svm.py", "(0.001, 0.0001 for the"): "grid points (definition)",
-    ("tzsl/models/_attribute_training.py", "(0.001 and"): "grid points (definition)",
-    ("tzsl/models/_attribute_training.py", "0.0001 for the paper's range"): "grid points (definition)",
-    ("tzsl/models/_attribute_training.py", "edge 0.01, and with about 25"):
+    ("tzsl/models/detectors/_attribute_svm.py", "``gamma`` in [0.01, 1] tuned by"):
+        "the DAP paper's protocol (citation)",
+    ("tzsl/models/detectors/_attribute_svm.py", "gives the decades 1, 10, 100 and 0.01, 0.1, 1"):
+        "grid points (definition)",
+    ("tzsl/models/detectors/_attribute_svm.py", "(0.001, 0.0001 for the"): "grid points (definition)",
+    ("tzsl/models/detectors/_attribute_training.py", "(0.001 and"): "grid points (definition)",
+    ("tzsl/models/detectors/_attribute_training.py", "0.0001 for the paper's range"): "grid points (definition)",
+    ("tzsl/models/detectors/_attribute_training.py", "edge 0.01, and with about 25"):
         "the grid's edge and PCA's cap (definitions)",
-    ("tzsl/models/_posterior_calibration.py", "T from about 0.007 to 150"):
+    ("tzsl/models/calibration/_posterior_calibration.py", "T from about 0.007 to 150"):
         "the search bounds of the constant (definition)",
 }
 

@@ -44,7 +44,7 @@ Methods and model selection (training groups only)
 * ``lam_<lambda>``: :class:`~tzsl.models.EmbeddingZSL` (``f = sigmoid(W x + b)`` on z-scored
   features, the paper's last layer on our descriptors) with ``lam`` in ``lams``. ``lam="inf"``
   is the regression term R alone - a documented deviation: the paper's caption literally says
-  "C only", which would repeat the lambda = 0 column (see :mod:`tzsl.models._embedding`). Its
+  "C only", which would repeat the lambda = 0 column (see :mod:`tzsl.models.embedding._embedding`). Its
   weight decay ``alpha`` is chosen per fit by class-grouped cross-validation on the training
   groups (:func:`select_embedding_alpha`: held-out groups are recognised among themselves, as
   :class:`~tzsl.models.ESZSLCV` tunes ESZSL), then the model is refitted on all training

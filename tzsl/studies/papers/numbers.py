@@ -53,7 +53,7 @@ DAP_ATTRIBUTE_ACCURACY_QUOTED: dict[str, float] = {"solid": 0.92, "smooth": 0.64
 #: paper, i.e. 0-indexed groups 1, 2, 3, 4, 6; tzsl fabric config 1). The paper prints percent;
 #: stored here as fractions. row (Flat / Fold / Rand / Average) -> column ("0", "0.1", "1", "10",
 #: "inf", "ESZSL") -> accuracy. The paper's caption reads "inf" as the classification term C only;
-#: tzsl's ``EmbeddingZSL(lam="inf")`` is the regression term R only (see tzsl.models._embedding).
+#: tzsl's ``EmbeddingZSL(lam="inf")`` is the regression term R only (see tzsl.models.embedding._embedding).
 FABRIC_TABLE1: dict[str, dict[str, float]] = {
     "Flat": {"0": 0.6357, "0.1": 0.6701, "1": 0.6014, "10": 0.6529, "inf": 0.6460, "ESZSL": 0.5738},
     "Fold": {"0": 0.8941, "0.1": 0.8613, "1": 0.8722, "10": 0.8412, "inf": 0.8320, "ESZSL": 0.7603},

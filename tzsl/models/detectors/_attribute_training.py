@@ -17,7 +17,7 @@ from sklearn.model_selection import LeaveOneGroupOut
 
 from tzsl.exceptions import ConfigError, SplitError
 from tzsl.features import VariancePCA
-from tzsl.models._grouped_folds import stratified_group_fold_masks
+from tzsl.models.detectors._grouped_folds import stratified_group_fold_masks
 
 __all__ = [
     "AUTO_MAX_EXACT_TRIALS",
@@ -358,7 +358,7 @@ def object_grouped_folds(cv, yb: np.ndarray, groups: np.ndarray, seed: int) -> l
     ----------
     cv : None, int or splitter
         ``None``: leave-one-object-out. int: ``StratifiedGroupKFold(min(cv, n), shuffle=True)``'s folds
-        (:func:`~tzsl.models._grouped_folds.stratified_group_fold_masks`) with ``n`` the number of
+        (:func:`~tzsl.models.detectors._grouped_folds.stratified_group_fold_masks`) with ``n`` the number of
         objects of the rarer class (so every fold keeps both classes).
         A splitter: its ``split(X, y, groups)``.
     yb : ndarray of bool, shape (n_trials,)

@@ -1,7 +1,7 @@
 """PyTorch networks of the deep attribute embedding (F17): frame backbones, CNN+LSTM, F15 loss.
 
-This module imports torch at import time; only :mod:`tzsl.models._deep` imports it, lazily,
-after :func:`tzsl.models._deep.require_torch` has checked that the ``deep`` extra is installed.
+This module imports torch at import time; only :mod:`tzsl.models.embedding.deep._model` imports it, lazily,
+after :func:`tzsl.models.embedding.deep._model.require_torch` has checked that the ``deep`` extra is installed.
 
 Backbones (``name``: what it is, where its weights come from)
 --------------------------------------------------------------
@@ -390,7 +390,7 @@ def f15_loss(F, L, y, w_c: float, w_r: float):
     y : LongTensor (n,)
         Each sample's row in ``L``.
     w_c, w_r : float
-        Weights of C and R (:func:`tzsl.models._embedding.loss_weights` of lambda).
+        Weights of C and R (:func:`tzsl.models.embedding._embedding.loss_weights` of lambda).
 
     Returns
     -------

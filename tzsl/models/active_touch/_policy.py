@@ -2,7 +2,7 @@
 
 Pure numpy functions on per-EP class log-scores ``(n_trials, n_eps, n_classes)`` and on a
 confusion model ``(n_eps, n_attributes, 2, n_bins)``; the fitted model that produces them is
-:class:`tzsl.models._active_touch.PerEPAttributeModel` (whose docstring states the model and its
+:class:`tzsl.models.active_touch._per_ep.PerEPAttributeModel` (whose docstring states the model and its
 assumptions).
 """
 
@@ -13,7 +13,7 @@ from scipy.special import logsumexp
 
 from tzsl.exceptions import ConfigError
 from tzsl.models._dap import break_ties, check_class_attributes
-from tzsl.models._posterior_calibration import fit_temperature
+from tzsl.models.calibration import fit_temperature
 
 __all__ = [
     "TEMPERINGS",

@@ -15,8 +15,8 @@ import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
 from tzsl.exceptions import ModelBundleError, TzslError
-from tzsl.models._deep import DeepAttributeEmbedding
-from tzsl.models._deep_input import require_torch
+from tzsl.models.embedding.deep._input import require_torch
+from tzsl.models.embedding.deep._model import DeepAttributeEmbedding
 
 __all__ = ["deep_model_arrays", "deep_model_from_arrays"]
 

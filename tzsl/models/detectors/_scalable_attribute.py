@@ -58,7 +58,8 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 from tzsl._fit_store import array_digest
 from tzsl._parallel import one_blas_thread
 from tzsl.exceptions import ConfigError
-from tzsl.models._attribute_training import (
+from tzsl.models._zsl_input import share_of_objects
+from tzsl.models.detectors._attribute_training import (
     AttributeTrainingError,
     balanced_object_draws,
     balanced_sample_weights,
@@ -66,8 +67,7 @@ from tzsl.models._attribute_training import (
     fit_platt,
     fit_platt_many,
 )
-from tzsl.models._platt_binary import PlattBinaryClassifierMixin
-from tzsl.models._zsl_input import share_of_objects
+from tzsl.models.detectors._platt_binary import PlattBinaryClassifierMixin
 
 __all__ = ["MAX_TUNE_TRIALS", "ScalableAttributeClassifier"]
 
@@ -132,7 +132,7 @@ class ScalableAttributeClassifier(PlattBinaryClassifierMixin, ClassifierMixin, B
     ----------
     preprocessor : transformer or None, default=None
         Fitted on the training trials (no labels). ``None``:
-        :func:`tzsl.models.attribute_training.default_preprocessor`.
+        :func:`tzsl.models.detectors.default_preprocessor`.
     n_components : int, default=256
         Nystroem landmarks (columns of the approximate RBF feature map); capped at the draw size.
     gamma_range : (float, float), default=(0.001, 1.0)

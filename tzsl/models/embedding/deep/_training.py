@@ -2,7 +2,7 @@
 
 :class:`DeepTrainingMixin` holds the training half of
 :class:`~tzsl.models.DeepAttributeEmbedding` (the estimator, its parameters and inference are in
-:mod:`tzsl.models._deep`).
+:mod:`tzsl.models.embedding.deep._model`).
 
 Early stopping (``early_stopping=True``) is a nested, class-grouped selection of the number of
 epochs on the training classes only - the zero-shot situation in miniature, as the classical
@@ -35,8 +35,8 @@ import numpy as np
 from tzsl._io import atomic_write
 from tzsl._progress import progress_bar
 from tzsl.exceptions import ConfigError
-from tzsl.models._deep_input import FEATURE_CHUNK, deep_nets, pixel_stats, require_torch, sha256_arrays
 from tzsl.models._zsl_input import class_grouped_folds
+from tzsl.models.embedding.deep._input import FEATURE_CHUNK, deep_nets, pixel_stats, require_torch, sha256_arrays
 
 __all__ = ["DeepTrainingMixin", "best_epoch"]
 

@@ -3,7 +3,7 @@
 The linear counterpart of :class:`~tzsl.models.AttributeSVM`: ``C`` is chosen by object-grouped
 cross-validation on the training objects (the class-balanced log-loss of Platt-mapped out-of-fold
 scores, as the SVM's grid is scored), the grid is widened at whichever end the choice sits
-(:func:`~tzsl.models._attribute_search.adaptive_grid_search`, as ``grid="adaptive"``) so that it
+(:func:`~tzsl.models.detectors._attribute_search.adaptive_grid_search`, as ``grid="adaptive"``) so that it
 contains its optimum, and the posterior is Platt's sigmoid of the linear score fitted on the
 out-of-fold scores of training objects. No kernel and no under-sampling: a fit's time is linear in
 trials (``weighting="robust"`` adds ``(robust_rounds + 1) * (folds + 1)`` fits at the chosen ``C``).
@@ -38,8 +38,9 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from tzsl._parallel import one_blas_thread
-from tzsl.models._attribute_search import MAX_GRID_EXTENSIONS, adaptive_grid_search
-from tzsl.models._attribute_training import (
+from tzsl.models._validation import ParameterError, ValidatedParamsMixin
+from tzsl.models.detectors._attribute_search import MAX_GRID_EXTENSIONS, adaptive_grid_search
+from tzsl.models.detectors._attribute_training import (
     AttributeTrainingError,
     balanced_sample_weights,
     binary_training_targets,
@@ -48,8 +49,7 @@ from tzsl.models._attribute_training import (
     object_balanced_weights,
     object_grouped_folds,
 )
-from tzsl.models._platt_binary import PlattBinaryClassifierMixin
-from tzsl.models._validation import ParameterError, ValidatedParamsMixin
+from tzsl.models.detectors._platt_binary import PlattBinaryClassifierMixin
 
 __all__ = ["LINEAR_LOSSES", "TRIAL_WEIGHTINGS", "LinearAttribute"]
 

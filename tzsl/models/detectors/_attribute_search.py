@@ -28,8 +28,8 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from sklearn.svm import _libsvm
 
-from tzsl.models._attribute_training import AttributeTrainingError
 from tzsl.models._zsl_input import extend_at_edge
+from tzsl.models.detectors._attribute_training import AttributeTrainingError
 
 __all__ = ["HALVING_FACTOR", "HALVING_KERNEL_BYTES", "MAX_GRID_EXTENSIONS", "SEARCHES", "UNIT_WEIGHT",
            "adaptive_grid_search", "balanced_class_weight", "fill_grid_lines", "halving_rounds", "successive_halving",
@@ -134,7 +134,7 @@ def successive_halving(
         (criterion, tie-break) of the draw's configurations where ``cells`` (bool, shape
         (n_gammas, n_C)) is True, in row-major (gamma, C) order, on the trials of the draw's first
         ``n_seen`` folds (lower is better). One call per draw and round scores all of the draw's
-        survivors together (one Platt solve for all of them: :func:`~tzsl.models.attribute_training.cv_criteria`).
+        survivors together (one Platt solve for all of them: :func:`~tzsl.models.detectors.cv_criteria`).
     factor : int, default HALVING_FACTOR
 
     Returns

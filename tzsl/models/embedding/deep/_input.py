@@ -1,4 +1,4 @@
-"""Input checks and torch helpers of the deep model (:mod:`tzsl.models._deep`); torch is imported lazily."""
+"""Input checks and torch helpers of the deep model (:mod:`tzsl.models.embedding.deep._model`); torch is lazy."""
 
 from __future__ import annotations
 
@@ -25,9 +25,9 @@ def require_torch():
 
 
 def deep_nets():
-    """The torch-based module :mod:`tzsl.models._deep_backbones` (imports torch)."""
+    """The torch-based module :mod:`tzsl.models.embedding.deep._backbones` (imports torch)."""
     require_torch()
-    from tzsl.models import _deep_backbones  # noqa: PLC0415 - lazy: torch is optional
+    from tzsl.models.embedding.deep import _backbones as _deep_backbones  # noqa: PLC0415 - lazy: torch is optional
 
     return _deep_backbones
 

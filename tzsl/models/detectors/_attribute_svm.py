@@ -44,7 +44,8 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from tzsl._fit_store import array_digest
 from tzsl._parallel import one_blas_thread
-from tzsl.models._attribute_search import (
+from tzsl.models._validation import ParameterError, ValidatedParamsMixin
+from tzsl.models.detectors._attribute_search import (
     HALVING_KERNEL_BYTES,
     MAX_GRID_EXTENSIONS,
     SEARCHES,
@@ -55,7 +56,7 @@ from tzsl.models._attribute_search import (
     successive_halving,
     svc_fit_decision,
 )
-from tzsl.models._attribute_training import (
+from tzsl.models.detectors._attribute_training import (
     GRIDS,
     PLATT_WEIGHTING,
     SCORING,
@@ -70,8 +71,7 @@ from tzsl.models._attribute_training import (
     grid_edges,
     object_grouped_folds,
 )
-from tzsl.models._platt_binary import PlattBinaryClassifierMixin
-from tzsl.models._validation import ParameterError, ValidatedParamsMixin
+from tzsl.models.detectors._platt_binary import PlattBinaryClassifierMixin
 
 __all__ = ["AttributeSVM"]
 
@@ -125,7 +125,7 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
     grid : {"paper", "extended", "adaptive"}, default="extended"
         ``"paper"``: ``gamma`` from ``gamma_range`` and ``n_gamma`` as the DAP paper tuned it.
         ``"extended"``: that grid plus two decades below its low end (0.001, 0.0001 for the
-        paper's range; :func:`tzsl.models.attribute_training.gamma_grid`), because on PHAC-2 most (attribute, sensor)
+        paper's range; :func:`tzsl.models.detectors.gamma_grid`), because on PHAC-2 most (attribute, sensor)
         fits chose the paper grid's low edge. ``"adaptive"``: start from ``"extended"``; while
         the chosen ``C`` or ``gamma`` is at an end of its grid, add one log step beyond that end
         (the ratio of its two outer values) and search again on the same draws and folds, at
@@ -159,7 +159,7 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
         ``tzsl reproduce-tables`` shows the priors side by side).
     search : {"halving", "grid"}, default="halving"
         ``"grid"`` scores every (draw, C, gamma) on all out-of-fold scores; ``"halving"``:
-        successive halving with the folds as the resource (:mod:`tzsl.models._attribute_search`:
+        successive halving with the folds as the resource (:mod:`tzsl.models.detectors._attribute_search`:
         a third of the configurations kept per round, never fewer than three, the last ones
         scored exactly as the grid scores them). With ``undersampling="bagging"`` (draws tuned
         jointly) the grid is searched. ``"halving"`` is the default because, on PHAC-2 with 5
@@ -277,7 +277,8 @@ class AttributeSVM(PlattBinaryClassifierMixin, ValidatedParamsMixin, ClassifierM
         scored by the draw's full model, which never saw it. Per draw and ``gamma`` the kernel of
         the draw is computed once (``np.exp`` in place on one buffer) and each fold's training
         and held-out blocks are gathered once for all ``C``; the fits call libsvm directly
-        (:func:`~tzsl.models._attribute_search.svc_fit_decision`), which gives the same numbers as ``SVC`` bitwise.
+        (:func:`~tzsl.models.detectors._attribute_search.svc_fit_decision`), which gives the same numbers as
+        ``SVC`` bitwise.
         """
         _libsvm.set_verbosity_wrap(0)  # libsvm's global switch; SVC sets it before every fit
         for di, keep in enumerate(draws):

@@ -32,8 +32,8 @@ from sklearn.utils._param_validation import StrOptions
 from tzsl._fit_store import array_digest, resolve_store, spawn_seeds
 from tzsl._profile import timed
 from tzsl.exceptions import ConfigError
-from tzsl.models._attribute_bank import AttributeClassifierBank
-from tzsl.models._detectors import AUTO_CANDIDATES, detector_preprocessor
+from tzsl.models.detectors._attribute_bank import AttributeClassifierBank
+from tzsl.models.detectors._families import AUTO_CANDIDATES, detector_preprocessor
 
 __all__ = ["MultiLabelAttributeClassifier"]
 

@@ -33,11 +33,11 @@ from tzsl._fit_store import fit_cached
 from tzsl._scoring import class_posteriors
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_model_base import attribute_table_tags
-from tzsl.models._attribute_svm import AttributeSVM
 from tzsl.models._dap import break_ties
 from tzsl.models._registry import get_method
 from tzsl.models._validation import ValidatedParamsMixin
 from tzsl.models._zero_shot import zscore_rows
+from tzsl.models.detectors import AttributeSVM
 
 __all__ = ["ScoreEnsembleZSL"]
 

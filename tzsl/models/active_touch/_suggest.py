@@ -9,9 +9,9 @@ import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
 from tzsl.exceptions import ConfigError
-from tzsl.models._active_policy import expected_information_gain, stop_reasons
-from tzsl.models._active_touch import PerEPAttributeModel
 from tzsl.models._dap import check_class_attributes
+from tzsl.models.active_touch._per_ep import PerEPAttributeModel
+from tzsl.models.active_touch._policy import expected_information_gain, stop_reasons
 
 __all__ = ["suggest_next_ep"]
 

@@ -48,8 +48,8 @@ from sklearn.utils._param_validation import Interval, StrOptions
 
 from tzsl._scoring import squared_distances
 from tzsl.exceptions import ConfigError
-from tzsl.models._eszsl import AttributeEmbeddingModel
 from tzsl.models._zsl_input import ZSLInputError, training_classes, validate_features_and_rows
+from tzsl.models.embedding._eszsl import AttributeEmbeddingModel
 
 __all__ = ["EmbeddingZSL", "loss_weights"]
 

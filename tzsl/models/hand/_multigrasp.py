@@ -28,7 +28,7 @@ from sklearn.utils import check_random_state
 
 from tzsl._scoring import sc_mdap
 from tzsl.exceptions import ConfigError
-from tzsl.models._decision import DAPRule
+from tzsl.models.rules import DAPRule
 
 __all__ = [
     "attribute_distance_matrix",

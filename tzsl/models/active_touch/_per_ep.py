@@ -61,7 +61,12 @@ from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
 from tzsl.exceptions import ConfigError
-from tzsl.models._active_policy import (
+from tzsl.models._dap import (
+    attribute_prior,
+    check_class_attributes,
+    fuse_attribute_posteriors,
+)
+from tzsl.models.active_touch._policy import (
     TEMPERINGS,
     binned_confusion,
     done_subset_index,
@@ -72,14 +77,8 @@ from tzsl.models._active_policy import (
     sequential_log_posterior,
     stop_reasons,
 )
-from tzsl.models._attribute_bank import AttributeClassifierBank
-from tzsl.models._dap import (
-    attribute_prior,
-    check_class_attributes,
-    fuse_attribute_posteriors,
-)
-from tzsl.models._decision import DAPRule
-from tzsl.models._logistic_attribute import LogisticAttribute
+from tzsl.models.detectors import AttributeClassifierBank, LogisticAttribute
+from tzsl.models.rules import DAPRule
 from tzsl.value_lists import FUSIONS
 
 __all__ = [

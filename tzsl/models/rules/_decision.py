@@ -14,7 +14,7 @@ sensors, attribute priors and tie-breaking live here, once:
   vector ``f(x)`` (the fabric paper's lambda embedding, SAE), squared Euclidean or cosine.
 
 The hand's single-grasp LDAP (:class:`tzsl.models.HandDAPClassifier`) fuses over fingers inside
-its attribute layer (eqs. 7-10, :func:`tzsl.models.multigrasp.fuse_grasp_posteriors`) and then applies DAP
+its attribute layer (eqs. 7-10, :func:`tzsl.models.hand.fuse_grasp_posteriors`) and then applies DAP
 through this rule with its prior (:meth:`~tzsl.models.HandDAPClassifier.dap_rule`): with ``prior=0.5``,
 ``hand.predict_log_scores(X, K)`` equals
 ``DAPRule(prior="uni").fit(A).decision_function(hand.predict_attribute_proba(X), K)``
@@ -52,13 +52,12 @@ from tzsl.models._validation import ValidatedParamsMixin
 from tzsl.value_lists import FUSIONS, PRIORS
 
 __all__ = [
+    "SCORE_KINDS",
     "CompatibilityRule",
     "DAPRule",
     "DecisionRule",
     "NearestAttributeRule",
     "check_real_class_attributes",
-    "cosine_similarities",
-    "squared_distances",
 ]
 
 #: Kinds of attribute scores an attribute model can give (its ``score_kind`` class attribute).
@@ -93,6 +92,14 @@ def check_real_class_attributes(K, n_attributes: int | None = None, what: str = 
 
 class DecisionRule(ValidatedParamsMixin, BaseEstimator):
     """Base of the decision rules; subclasses define ``accepts`` and ``_class_scores``.
+
+    A rule reads an attribute model's scores for ``n_trials`` trials and a class-attribute table ``K``
+    (n_classes, n_attributes) given at predict time, and gives class scores (n_trials, n_classes), larger
+    is better. A subclass sets ``accepts`` (the ``score_kind`` values of :data:`SCORE_KINDS` it reads),
+    ``binary_attributes`` (True when ``K`` must be 0/1), ``_parameter_constraints`` and
+    ``_class_scores(scores, K) -> (n_trials, n_classes)``; it may override ``_fit_rows(A, groups)`` to keep
+    something of the training rows and ``_check_scores`` for another score shape (DAP's per-sensor
+    posteriors). ``fit``, ``decision_function``, ``predict_proba`` and ``predict`` are written here once.
 
     Attributes
     ----------

@@ -5,7 +5,7 @@
 :class:`~tzsl.models.ScalableAttributeClassifier`) for every attribute and sensor, in parallel
 (joblib, locally or on Dask) and cached, and gives ``predict_proba(X) -> (n, s, m)``. The
 classifier's family (``detector``: RBF-SVM, linear, or chosen on the training objects) is
-:mod:`tzsl.models._detectors`.
+:mod:`tzsl.models.detectors._families`.
 """
 
 from __future__ import annotations
@@ -35,11 +35,11 @@ from tzsl._fit_store import (
 from tzsl._profile import timed
 from tzsl._progress import progress_bar
 from tzsl.exceptions import ConfigError
-from tzsl.models._attribute_training import AUTO_MAX_EXACT_TRIALS, SOLVERS, AttributeTrainingError
-from tzsl.models._detectors import AUTO_CANDIDATES, DETECTORS, choose_detector, detector_template
-from tzsl.models._scalable_attribute import ScalableAttributeClassifier
 from tzsl.models._validation import ValidatedParamsMixin
 from tzsl.models._zsl_input import GridEdgeWarning
+from tzsl.models.detectors._attribute_training import AUTO_MAX_EXACT_TRIALS, SOLVERS, AttributeTrainingError
+from tzsl.models.detectors._families import AUTO_CANDIDATES, DETECTORS, choose_detector, detector_template
+from tzsl.models.detectors._scalable_attribute import ScalableAttributeClassifier
 from tzsl.value_lists import JOBLIB_BACKENDS
 
 __all__ = ["AttributeClassifierBank"]
@@ -81,7 +81,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         ``fit(X, y, groups)`` and give ``predict_proba``. ``None``: :class:`AttributeSVM` with
         default parameters. Must be None with any other ``detector``.
     detector : {"rbf-svm", "logistic", "linear-svm", "robust-logistic", "logistic-c1", "auto"}, default="rbf-svm"
-        Family of the per-(attribute, sensor) classifier (:mod:`tzsl.models._detectors`):
+        Family of the per-(attribute, sensor) classifier (:mod:`tzsl.models.detectors._families`):
         ``"rbf-svm"``: ``estimator``; ``"logistic"`` / ``"linear-svm"``:
         :class:`~tzsl.models.LinearAttribute` (L2 logistic regression / linear SVM on z-scored
         features, ``C`` by object-grouped CV, Platt posteriors); ``"robust-logistic"``: the

@@ -51,8 +51,8 @@ from sklearn.utils.validation import check_is_fitted
 from tzsl._parallel import one_blas_thread, reissued, relayed
 from tzsl.exceptions import ConfigError, SplitError, TzslError
 from tzsl.features import unpack_grasp_features
-from tzsl.models._decision import DAPRule
 from tzsl.models._validation import ParameterError, ValidatedParamsMixin
+from tzsl.models.rules import DAPRule
 
 __all__ = ["FUSIONS", "HandDAPClassifier", "NoContactError", "fuse_grasp_posteriors"]
 

@@ -25,12 +25,14 @@ from sklearn.base import clone
 from sklearn.preprocessing import StandardScaler
 
 from tzsl.exceptions import ConfigError
-from tzsl.models._attribute_svm import AttributeSVM
-from tzsl.models._attribute_training import default_preprocessor
-from tzsl.models._linear_attribute import LinearAttribute
-from tzsl.models._logistic_attribute import LogisticAttribute
 from tzsl.models._pseudo_unseen import pseudo_unseen_scores
+from tzsl.models._zero_shot import ZeroShotClassifier
 from tzsl.models._zsl_input import GridEdgeWarning, ZSLInputError
+from tzsl.models.detectors._attribute_svm import AttributeSVM
+from tzsl.models.detectors._attribute_training import default_preprocessor
+from tzsl.models.detectors._linear_attribute import LinearAttribute
+from tzsl.models.detectors._logistic_attribute import LogisticAttribute
+from tzsl.models.rules import DAPRule
 
 __all__ = ["AUTO_CANDIDATES", "AUTO_FOLDS", "DETECTORS", "FIXED_DETECTORS", "LINEAR_DETECTORS", "STUDY_DETECTOR",
            "choose_detector", "detector_preprocessor", "detector_template"]
@@ -94,7 +96,7 @@ def detector_preprocessor(template):
     """The preprocessor a detector template applies: its own, or its family's default (unfitted).
 
     :class:`LinearAttribute` and :class:`LogisticAttribute`: ``StandardScaler`` (z-score); otherwise
-    :func:`~tzsl.models.attribute_training.default_preprocessor` (z-score + PCA), as
+    :func:`~tzsl.models.detectors.default_preprocessor` (z-score + PCA), as
     :class:`AttributeSVM` uses.
     """
     own = template.get_params().get("preprocessor")
@@ -148,9 +150,6 @@ def choose_detector(bank, X: np.ndarray, A: np.ndarray, groups, candidates=AUTO_
         classes", "n_folds", "n_held_out_trials", "scores": {candidate: {"accuracy",
         "attribute_log_loss"}}}``; accuracy in [0, 1], log-loss in nats per (trial, attribute).
     """
-    from tzsl.models._decision import DAPRule  # noqa: PLC0415 (the decision rules import the bank's package)
-    from tzsl.models._zero_shot import ZeroShotClassifier  # noqa: PLC0415
-
     if not candidates or "auto" in candidates or not set(candidates) <= set(DETECTORS):
         raise ConfigError(f"detector candidates must be families of {DETECTORS[:-1]}, got {tuple(candidates)!r}")
     scores: dict[str, dict[str, float]] = {}

