@@ -314,3 +314,87 @@ def test_tzsl_bundle_keeps_users_imports_working():
 
     assert old.load_bundle is bundle.load_bundle and old.save_bundle is bundle.save_bundle
     assert old.read_bundle_header is bundle.read_bundle_header and old.is_trusted_type is skops_bundles.is_trusted_type
+
+
+# --------------------------------------------------------------------------- classes that moved (issue 43)
+
+
+def _with_schema(payload: bytes, edit) -> bytes:
+    """``payload`` (a skops zip) with ``edit(schema)`` applied to its schema.json, other members unchanged."""
+    import io
+    import zipfile
+
+    with zipfile.ZipFile(io.BytesIO(payload)) as archive:
+        schema = edit(json.loads(archive.read("schema.json")))
+        out = io.BytesIO()
+        with zipfile.ZipFile(out, "w") as copy_to:
+            for info in archive.infolist():
+                copy_to.writestr(info, json.dumps(schema).encode() if info.filename == "schema.json"
+                                 else archive.read(info))
+    return out.getvalue()
+
+
+def _modules_renamed(node, names: dict):
+    if isinstance(node, dict):
+        node = {k: _modules_renamed(v, names) for k, v in node.items()}
+        if node.get("__module__") in names:
+            node["__module__"] = names[node["__module__"]]
+    elif isinstance(node, list):
+        node = [_modules_renamed(v, names) for v in node]
+    return node
+
+
+@pytest.fixture
+def zero_shot_model():
+    from tzsl.models import SAE, NearestAttributeRule, ZeroShotClassifier
+
+    rng = np.random.default_rng(1)
+    rows = np.array([[1, 0, 1], [0, 1, 1], [1, 1, 0], [0, 0, 1], [1, 0, 0]], float)
+    y = np.repeat(np.arange(5), 12)
+    X = rows[y] @ rng.normal(size=(3, 6)) + 0.3 * rng.normal(size=(60, 6))
+    model = ZeroShotClassifier(attribute_model=SAE(), decision_rule=NearestAttributeRule(metric="cosine"))
+    return model.fit(X, rows[y]), X, rows
+
+
+def test_a_model_file_saved_before_the_rooms_loads(tmp_path, zero_shot_model):
+    """A payload naming the classes by their modules before issue 43 (``tzsl.models._sae``) loads and ranks
+    as the model it was saved from: :data:`MOVED_MODULES` is applied when reading."""
+    from tzsl.inference.skops_bundles import MOVED_MODULES, renamed_moved_modules, skops_payload
+
+    model, X, rows = zero_shot_model
+    payload = skops_payload(model)
+    old = _with_schema(payload, lambda s: _modules_renamed(s, {new: old for old, new in MOVED_MODULES.items()}))
+    assert b"tzsl.models._sae" not in payload  # the fixture is what a file saved before the move holds
+    import io
+    import zipfile
+    schema = zipfile.ZipFile(io.BytesIO(old)).read("schema.json").decode()
+    assert '"tzsl.models._sae"' in schema and '"tzsl.models._decision"' in schema
+    assert renamed_moved_modules(payload) is payload  # nothing moved: the same bytes
+    loaded, _ = load_bundle(_craft(tmp_path / "old.tzsl", old))
+    assert type(loaded.attribute_model_).__module__ == "tzsl.models.embedding._sae"
+    np.testing.assert_array_equal(loaded.decision_function(X, rows), model.decision_function(X, rows))
+
+
+def test_a_moved_module_name_smuggles_nothing_in(tmp_path, zero_shot_model):
+    """The renamed type is checked like any other: a name imported into a moved module is still refused."""
+    from tzsl.inference.skops_bundles import skops_payload
+
+    def smuggle(schema):
+        schema["content"]["content"]["decision_rule"].update({"__module__": "tzsl.models._hand_dap",
+                                                              "__class__": "ConfigError"})
+        return schema
+
+    payload = _with_schema(skops_payload(zero_shot_model[0]), smuggle)
+    with pytest.raises(ModelBundleError, match=r"does not trust: tzsl\.models\.hand\._hand_dap\.ConfigError"):
+        load_bundle(_craft(tmp_path / "odd.tzsl", payload))
+
+
+def test_the_moved_modules_map_names_old_paths_gone_and_new_paths_present():
+    import importlib.util
+
+    from tzsl.inference.skops_bundles import MOVED_MODULES
+
+    assert MOVED_MODULES
+    gone = [old for old in MOVED_MODULES if importlib.util.find_spec(old) is not None]
+    missing = [new for new in MOVED_MODULES.values() if importlib.util.find_spec(new) is None]
+    assert not gone and not missing, (gone, missing)

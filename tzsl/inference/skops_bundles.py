@@ -7,13 +7,17 @@ anything is built (:func:`is_trusted_type`, naming the type): the types skops tr
 (builtins, numpy arrays and scalars), classes defined in ``sklearn`` and in ``tzsl.models`` /
 ``tzsl.features`` (each resolved and checked to be a class defined where its name says, so a name
 cannot smuggle in a function or a module), and :data:`EXTRA_TRUSTED_TYPES`. pandas tables inside a
-model (skops cannot store them) are written as plain columns and rebuilt on load.
+model (skops cannot store them) are written as plain columns and rebuilt on load. A payload saved before
+``tzsl.models`` was split into subpackages names its classes by their old modules; reading renames those
+modules by :data:`MOVED_MODULES` first, and the renamed types pass the same trust check.
 """
 
 from __future__ import annotations
 
 import copy
 import importlib
+import io
+import json
 import sys
 import zipfile
 from collections.abc import Sequence
@@ -25,8 +29,8 @@ import pandas as pd
 
 from tzsl.exceptions import ModelBundleError
 
-__all__ = ["EXTRA_TRUSTED_TYPES", "SKOPS_SKIPPED_LIBRARIES", "TRUSTED_MODULE_PREFIXES", "is_trusted_type",
-           "read_skops_payload", "skops_io", "skops_payload"]
+__all__ = ["EXTRA_TRUSTED_TYPES", "MOVED_MODULES", "SKOPS_SKIPPED_LIBRARIES", "TRUSTED_MODULE_PREFIXES",
+           "is_trusted_type", "read_skops_payload", "renamed_moved_modules", "skops_io", "skops_payload"]
 
 _PANDAS = "__tzsl_pandas__"
 
@@ -35,6 +39,42 @@ _PANDAS = "__tzsl_pandas__"
 TRUSTED_MODULE_PREFIXES: tuple[str, ...] = ("sklearn.", "tzsl.models.", "tzsl.features.")
 #: Further type names trusted in skops payloads (skops leaves them out of its defaults).
 EXTRA_TRUSTED_TYPES: frozenset[str] = frozenset({"numpy.dtype"})
+
+#: Modules of tzsl.models whose classes moved when the package was split into subpackages by role (issue 43):
+#: the module a model file saved before the move names -> the module the class is defined in now. The one map of
+#: moved class paths: a type ``old.Name`` of a payload is read as ``new.Name`` (:func:`renamed_moved_modules`),
+#: and must then be trusted like any other (:func:`is_trusted_type`). Add a line when a class moves again.
+MOVED_MODULES: dict[str, str] = {
+    "tzsl.models._active_policy": "tzsl.models.active_touch._policy",
+    "tzsl.models._active_suggest": "tzsl.models.active_touch._suggest",
+    "tzsl.models._active_touch": "tzsl.models.active_touch._per_ep",
+    "tzsl.models._attribute_bank": "tzsl.models.detectors._attribute_bank",
+    "tzsl.models._attribute_search": "tzsl.models.detectors._attribute_search",
+    "tzsl.models._attribute_svm": "tzsl.models.detectors._attribute_svm",
+    "tzsl.models._attribute_training": "tzsl.models.detectors._attribute_training",
+    "tzsl.models._compatibility": "tzsl.models.embedding._compatibility",
+    "tzsl.models._decision": "tzsl.models.rules._decision",
+    "tzsl.models._deep": "tzsl.models.embedding.deep._model",
+    "tzsl.models._deep_backbones": "tzsl.models.embedding.deep._backbones",
+    "tzsl.models._deep_bundle": "tzsl.models.embedding.deep._bundle",
+    "tzsl.models._deep_input": "tzsl.models.embedding.deep._input",
+    "tzsl.models._deep_training": "tzsl.models.embedding.deep._training",
+    "tzsl.models._detectors": "tzsl.models.detectors._families",
+    "tzsl.models._embedding": "tzsl.models.embedding._embedding",
+    "tzsl.models._eszsl": "tzsl.models.embedding._eszsl",
+    "tzsl.models._grouped_folds": "tzsl.models.detectors._grouped_folds",
+    "tzsl.models._hand_dap": "tzsl.models.hand._hand_dap",
+    "tzsl.models._iap": "tzsl.models.detectors._iap",
+    "tzsl.models._linear_attribute": "tzsl.models.detectors._linear_attribute",
+    "tzsl.models._logistic_attribute": "tzsl.models.detectors._logistic_attribute",
+    "tzsl.models._multigrasp": "tzsl.models.hand._multigrasp",
+    "tzsl.models._multilabel": "tzsl.models.detectors._multilabel",
+    "tzsl.models._platt_binary": "tzsl.models.detectors._platt_binary",
+    "tzsl.models._posterior_calibration": "tzsl.models.calibration._posterior_calibration",
+    "tzsl.models._sae": "tzsl.models.embedding._sae",
+    "tzsl.models._scalable_attribute": "tzsl.models.detectors._scalable_attribute",
+    "tzsl.models._score_ensemble": "tzsl.models.ensemble._score_ensemble",
+}
 
 #: Optional array libraries that importing skops would import for nothing: skops lists every
 #: scikit-learn estimator when it is first imported (``sklearn.utils.all_estimators``), which walks
@@ -80,6 +120,41 @@ def is_trusted_type(name: str) -> bool:
         return False
     obj = _resolve(name)
     return isinstance(obj, type) and f"{obj.__module__}.{obj.__qualname__}" == name
+
+
+def _renamed(node: Any) -> Any:
+    """A skops schema node with every ``__module__`` of :data:`MOVED_MODULES` renamed, recursively."""
+    if isinstance(node, dict):
+        out = {k: _renamed(v) for k, v in node.items()}
+        if isinstance(out.get("__module__"), str) and out["__module__"] in MOVED_MODULES:
+            out["__module__"] = MOVED_MODULES[out["__module__"]]
+        return out
+    if isinstance(node, list):
+        return [_renamed(v) for v in node]
+    return node
+
+
+def renamed_moved_modules(payload: bytes) -> bytes:
+    """A skops payload whose types name their modules as they are now (:data:`MOVED_MODULES`).
+
+    A payload naming no moved module is returned as it is (the same bytes); otherwise its ``schema.json``
+    is rewritten and every other member copied unchanged. Anything that is not a readable skops archive
+    is returned as it is, for :func:`read_skops_payload` to refuse.
+    """
+    try:
+        with zipfile.ZipFile(io.BytesIO(payload)) as archive:
+            schema = json.loads(archive.read("schema.json"))
+            renamed = _renamed(schema)
+            if renamed == schema:
+                return payload
+            out = io.BytesIO()
+            with zipfile.ZipFile(out, "w", compression=zipfile.ZIP_DEFLATED) as copy_to:
+                for info in archive.infolist():
+                    data = json.dumps(renamed).encode() if info.filename == "schema.json" else archive.read(info)
+                    copy_to.writestr(info, data)
+            return out.getvalue()
+    except (zipfile.BadZipFile, KeyError, ValueError):
+        return payload
 
 
 # ----------------------------------------------------------------------------- skops
@@ -178,8 +253,14 @@ def read_skops_payload(path: Path, payload: bytes) -> Any:
     ModelBundleError
         Not a readable skops file, a type tzsl does not trust, or deserialising failed (one line
         naming ``path``).
+
+    Notes
+    -----
+    Types of modules that moved (:data:`MOVED_MODULES`) are renamed first, so a model file saved before
+    the move loads; a renamed type is trusted or refused like any other.
     """
     sio = skops_io()
+    payload = renamed_moved_modules(payload)
     try:
         untrusted = sio.get_untrusted_types(data=payload)
     except Exception as exc:  # noqa: BLE001 - a corrupt skops archive raises many types
