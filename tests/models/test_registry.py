@@ -24,6 +24,7 @@ from tzsl.models import (
     available_methods,
     build_method,
     get_method,
+    method_aliases,
     register_method,
     unregister_method,
 )
@@ -79,8 +80,9 @@ def test_toy_method_fits_and_predicts_through_the_registry(toy_method):
 
 def test_builtin_methods_and_their_parameters():
     names = available_methods()
-    for name in ("dap-avg", "dap-max", "multilabel-dap", "ldap", "eszsl", "embedding", "cnn-lstm"):
+    for name in ("dap", "multilabel-dap", "ldap", "eszsl", "embedding", "cnn-lstm"):
         assert name in names
+    assert not set(method_aliases()) & set(names)  # dap-avg, dap-max, ...: aliases, not methods
     dap_max = get_method("dap-max")
     params = dap_max.parameters()
     # the SVMs' balanced Platt posteriors pair with the uniform prior (a train prior would correct twice)

@@ -31,17 +31,21 @@ def test_paper_presets_keep_the_rbf_svm_and_the_generic_study_takes_the_chosen_f
     assert template.config.svm.detector == STUDY_DETECTOR
 
 
-def test_an_unknown_detector_or_the_study_dap_in_compare_is_one_line_naming_the_key(tmp_path):
+def test_an_unknown_detector_is_one_line_naming_the_key(tmp_path):
     with pytest.raises(TzslError, match=r"svm\.detector.*unknown detector 'rbf'"):
         load_experiment(_experiment(tmp_path, '[svm]\ndetector = "rbf"\n'))
-    with pytest.raises(TzslError, match=r"methods\.compare.*dap-avg-logistic-c1 is the study's own DAP"):
-        load_experiment(_experiment(tmp_path, '[methods]\ncompare = ["dap-avg-logistic-c1"]\n'
-                                              '[svm]\ndetector = "logistic-c1"\n'))
+
+
+def test_the_study_dap_named_in_compare_is_read_from_the_study_fits(tmp_path):
+    """Issue 43: no longer refused; the entry names the study's own DAP row, fitted once."""
+    exp = load_experiment(_experiment(tmp_path, '[methods]\ncompare = ["dap-avg-logistic-c1", "eszsl"]\n'
+                                                '[svm]\ndetector = "logistic-c1"\n'))
+    assert exp.config.methods.compare == [{"name": "eszsl"}]
 
 
 def test_dap_labels_name_the_family_except_the_papers():
     assert dap_label("avg") == "dap-avg" and dap_label("max", "rbf-svm") == "dap-max"
-    assert dap_label("avg", "logistic-c1") == "dap-avg-logistic-c1"  # the registered method it is
+    assert dap_label("avg", "logistic-c1") == "dap-avg-logistic-c1"  # the alias of that configuration
 
 
 def test_a_study_with_a_linear_detector_labels_its_dap_rows_and_pairs_with_them(tmp_path):

@@ -31,6 +31,7 @@ The fit store the estimators share is :mod:`tzsl.fit_store`.
 from tzsl.models import _builtin_methods  # noqa: F401  (registers the shipped methods)
 from tzsl.models._choices import INHERITED_CHOICES
 from tzsl.models._registry import (
+    DAP_METHOD,
     FAMILIES,
     INPUT_KINDS,
     Method,
@@ -38,6 +39,8 @@ from tzsl.models._registry import (
     available_methods,
     build_method,
     get_method,
+    method_aliases,
+    register_alias,
     register_method,
     unregister_method,
 )
@@ -91,6 +94,7 @@ __all__: list[str] = [
     "ScoreEnsembleZSL",
     "CalibratedZeroShotClassifier",
     # the method registry
+    "DAP_METHOD",
     "FAMILIES",
     "INPUT_KINDS",
     "Method",
@@ -98,6 +102,8 @@ __all__: list[str] = [
     "available_methods",
     "build_method",
     "get_method",
+    "method_aliases",
+    "register_alias",
     "register_method",
     "unregister_method",
     # exceptions and warnings

@@ -2,7 +2,14 @@
 
 from __future__ import annotations
 
-from tzsl.models._registry import DAP_PAPER, ESZSL_PAPER, FABRIC_PAPER, register_method
+from tzsl.models._registry import (
+    DAP_METHOD,
+    DAP_PAPER,
+    ESZSL_PAPER,
+    FABRIC_PAPER,
+    register_alias,
+    register_method,
+)
 from tzsl.models.detectors import IAP, AttributeClassifierBank, MultiLabelAttributeClassifier
 from tzsl.models.embedding import ALE, ESZSLCV, SAECV, SJE, DeepAttributeEmbedding, DeViSE, EmbeddingZSL
 from tzsl.models.ensemble import ScoreEnsembleZSL
@@ -30,39 +37,24 @@ DEVISE_PAPER = (
 
 _PROB = "attribute-classifier"
 register_method(
-    "dap-avg", family=_PROB, paper=DAP_PAPER, attribute_model=AttributeClassifierBank, decision_rule=DAPRule,
-    preset={"fusion": "avg", "prior": "uni"}, input_ndim=3,
-    description="per-(attribute, sensor) RBF-SVMs, AVGDAP over sensors (eq. 6), uniform prior (balanced Platt "
-                "posteriors: a train prior would correct twice)",
+    DAP_METHOD, family=_PROB, paper=DAP_PAPER, attribute_model=AttributeClassifierBank, decision_rule=DAPRule,
+    defaults={"prior": "uni"}, input_ndim=3,
+    description="per-(attribute, sensor) attribute detectors (detector: the paper's RBF-SVMs, linear or logistic "
+                "ones, or chosen on the training objects), MAXDAP or AVGDAP over sensors (fusion, eqs. 5-6), uniform "
+                "prior by default (balanced Platt posteriors: a train prior would correct twice)",
 )
-register_method(
-    "dap-max", family=_PROB, paper=DAP_PAPER, attribute_model=AttributeClassifierBank, decision_rule=DAPRule,
-    preset={"fusion": "max", "prior": "uni"}, input_ndim=3,
-    description="per-(attribute, sensor) RBF-SVMs, MAXDAP over sensors (eq. 5), uniform prior",
-)
-register_method(
-    "dap-avg-logistic", family=_PROB, paper=DAP_PAPER, attribute_model=AttributeClassifierBank, decision_rule=DAPRule,
-    preset={"detector": "logistic", "fusion": "avg", "prior": "uni"}, input_ndim=3,
-    description="per-(attribute, sensor) L2 logistic regressions (z-scored, C by object-grouped CV, Platt), AVGDAP, "
-                "uniform prior",
-)
-register_method(
-    "dap-avg-linear-svm", family=_PROB, paper=DAP_PAPER, attribute_model=AttributeClassifierBank, decision_rule=DAPRule,
-    preset={"detector": "linear-svm", "fusion": "avg", "prior": "uni"}, input_ndim=3,
-    description="per-(attribute, sensor) linear SVMs (z-scored, C by object-grouped CV, Platt), AVGDAP, uniform prior",
-)
-register_method(
-    "dap-avg-robust-logistic", family=_PROB, paper=DAP_PAPER, attribute_model=AttributeClassifierBank,
-    decision_rule=DAPRule, preset={"detector": "robust-logistic", "fusion": "avg", "prior": "uni"}, input_ndim=3,
-    description="per-(attribute, sensor) logistic regressions trained group-robustly over training objects, AVGDAP, "
-                "uniform prior",
-)
-register_method(
-    "dap-avg-logistic-c1", family=_PROB, paper=DAP_PAPER, attribute_model=AttributeClassifierBank,
-    decision_rule=DAPRule, preset={"detector": "logistic-c1", "fusion": "avg", "prior": "uni"}, input_ndim=3,
-    description="per-(attribute, sensor) class-balanced L2 logistic regressions (z-scored, C = 1, nothing tuned), "
-                "AVGDAP, uniform prior",
-)
+#: Older names of DAP configurations, still accepted (experiment files, --method, build_method): each fixes
+#: what it was registered with; its name is the row label of that configuration (dap_label).
+DAP_ALIASES: dict[str, dict[str, str]] = {
+    "dap-avg": {"fusion": "avg", "prior": "uni"},
+    "dap-max": {"fusion": "max", "prior": "uni"},
+    "dap-avg-logistic": {"detector": "logistic", "fusion": "avg", "prior": "uni"},
+    "dap-avg-linear-svm": {"detector": "linear-svm", "fusion": "avg", "prior": "uni"},
+    "dap-avg-robust-logistic": {"detector": "robust-logistic", "fusion": "avg", "prior": "uni"},
+    "dap-avg-logistic-c1": {"detector": "logistic-c1", "fusion": "avg", "prior": "uni"},
+}
+for _alias, _fixed in DAP_ALIASES.items():
+    register_alias(_alias, DAP_METHOD, preset=_fixed)
 register_method(
     "multilabel-dap", family=_PROB, paper=DAP_PAPER, attribute_model=MultiLabelAttributeClassifier,
     decision_rule=DAPRule, preset={"prior": "uni"}, input_ndim=3,

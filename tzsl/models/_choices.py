@@ -29,7 +29,8 @@ __all__ = ["DEFAULT_METHOD", "INHERITED_CHOICES", "NO_SELECTION_SPLITS", "Inheri
 #: The selection entry of a choice made on no recorded splits.
 NO_SELECTION_SPLITS = "none recorded"
 
-#: The registry method `tzsl train-attributes` trains without --method (the choice "default-method" below).
+#: The registry method `tzsl train-attributes` trains without --method (the choice "default-method" below): the
+#: alias of `dap` with the paper's RBF-SVM detectors, AVGDAP and the uniform prior (its row label everywhere).
 DEFAULT_METHOD = "dap-avg"
 
 #: The benchmark that makes the method choice on selection splits and reports it on confirmation splits.
@@ -112,7 +113,7 @@ INHERITED_CHOICES: tuple[InheritedChoice, ...] = (
     InheritedChoice(
         "default-method",
         "the method of `tzsl train-attributes` without --method, and the reference of every comparison of the "
-        "paper presets: registry method `dap-avg` (AVGDAP over sensors, RBF-SVM detectors) with these fixed "
+        "paper presets: `dap-avg`, the registry's `dap` (AVGDAP over sensors, RBF-SVM detectors) with these fixed "
         "settings (the generic study's reference is its own DAP, of the detector family `study-detector`)",
         lambda: dict(get_method(DEFAULT_METHOD).preset),
         "none: the DAP paper's method (Abderrahmane et al. 2018), kept as the reference; the uniform prior was "

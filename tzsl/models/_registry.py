@@ -14,8 +14,16 @@ or, as a decorator on the attribute model class::
     class MyAttributeModel(BaseEstimator): ...
 
 Parameters and their defaults are read from the classes' ``__init__`` signatures (never
-written twice); ``preset`` fixes some of them for the method (``dap-max`` is ``DAPRule``
-with ``fusion="max"``). A study builds a method with :func:`build_method`.
+written twice); ``preset`` fixes some of them for the method (``ldap`` is ``HandDAPClassifier``
+with ``fusion="ldap"``) and ``defaults`` changes a default the method keeps settable (``dap``'s
+uniform prior). The string values a parameter accepts are read from its class's
+``_parameter_constraints`` (:meth:`Method.options`) and checked when the method is built. A study
+builds a method with :func:`build_method`.
+
+An *alias* is an older name of one configuration of a method, which experiment files, ``--method``
+and :func:`get_method` still accept: ``register_alias("dap-max", "dap", preset={"fusion": "max",
+"prior": "uni"})``. :func:`available_methods` lists methods, :func:`method_aliases` the aliases,
+each as the method entry it names.
 
 A *calibratable* method (every attribute model + decision rule method, and estimators registered
 with ``calibratable=True``) is built inside a
@@ -29,15 +37,17 @@ from __future__ import annotations
 
 import inspect
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 
 from sklearn.base import BaseEstimator
+from sklearn.utils._param_validation import StrOptions
 
 from tzsl.exceptions import ConfigError
 from tzsl.models.calibration import CalibratedZeroShotClassifier
 
 __all__ = [
+    "DAP_METHOD",
     "FAMILIES",
     "INPUT_KINDS",
     "Method",
@@ -45,6 +55,8 @@ __all__ = [
     "available_methods",
     "build_method",
     "get_method",
+    "method_aliases",
+    "register_alias",
     "register_method",
     "unregister_method",
 ]
@@ -62,8 +74,13 @@ DAP_PAPER = (
 )
 FABRIC_PAPER = "Fabric recognition using zero-shot learning (Tsinghua Sci. Technol. 2019), F15 loss C + lambda R"
 ESZSL_PAPER = "Romera-Paredes, Torr (2015): An embarrassingly simple approach to zero-shot learning. ICML"
+#: The registered name of DAP: its ``detector``, ``fusion`` and ``prior`` are parameters, and the older
+#: names of some of its configurations (``dap-avg``, ``dap-max``, ``dap-avg-logistic-c1``, ...) are aliases.
+DAP_METHOD = "dap"
 
 _REGISTRY: dict[str, Method] = {}
+#: Alias -> (the method it names, the parameters it fixes).
+_ALIASES: dict[str, tuple[str, Mapping[str, object]]] = {}
 
 
 def _init_defaults(cls: type[object]) -> dict[str, object]:
@@ -83,7 +100,7 @@ class Method:
     Attributes
     ----------
     name : str
-        Registry name (``"dap-avg"``, ``"eszsl"``, ...).
+        Registry name (``"dap"``, ``"eszsl"``, ...), or the alias it was looked up by.
     family : str
         One of :data:`FAMILIES`.
     paper : str
@@ -94,6 +111,8 @@ class Method:
         A self-contained estimator class instead (hand, deep).
     preset : mapping
         Parameters fixed for this method.
+    defaults : mapping
+        Settable parameters whose default the method changes from its class's (``dap``: ``prior="uni"``).
     description : str
         One line for ``tzsl methods``.
     input_ndim : {2, 3}
@@ -104,6 +123,8 @@ class Method:
     calibratable : bool
         Built inside a :class:`~tzsl.models.CalibratedZeroShotClassifier` (parameters
         ``calibration``, ``calibration_folds``).
+    alias_of : str or None
+        The method an alias names (its ``preset`` holds the parameters the alias fixes); None for a method.
     """
 
     name: str
@@ -117,6 +138,8 @@ class Method:
     input_ndim: int = 2
     input_kind: str = "features"
     calibratable: bool = False
+    defaults: Mapping[str, object] = field(default_factory=dict)
+    alias_of: str | None = None
 
     def components(self) -> list[type]:
         """Classes whose parameters the method exposes (estimator, or model then rule)."""
@@ -131,12 +154,35 @@ class Method:
         for cls in self.components():
             for name, default in _init_defaults(cls).items():
                 if name not in self.preset:
-                    out.setdefault(name, default)
+                    out.setdefault(name, self.defaults.get(name, default))
         if self.estimator is None:
             out.setdefault("random_state", None)  # the classifier's tie-breaking seed
         if self.calibratable:
             out.update(_calibration_parameters())
         return out
+
+    def options(self) -> dict[str, tuple[str, ...]]:
+        """The string values each settable parameter accepts, sorted (``{"detector": ("auto", ...), ...}``).
+
+        Read from the ``StrOptions`` of the classes' ``_parameter_constraints`` (a parameter that also
+        accepts any string is left out); never listed a second time.
+        """
+        settable = self.parameters()
+        out: dict[str, tuple[str, ...]] = {}
+        for name, constraints in _constraints(self).items():
+            if name not in settable or str in constraints:
+                continue
+            values = {v for c in constraints if isinstance(c, StrOptions) for v in c.options - c.deprecated}
+            if values:
+                out[name] = tuple(sorted(values))
+        return out
+
+    def value_problems(self, params: Mapping[str, object]) -> dict[str, str]:
+        """Each string parameter value of ``params`` that is not among :meth:`options`, with one line saying so."""
+        options = self.options()
+        return {key: f"method {self.name!r}: {key} = {value!r} is not one of {', '.join(options[key])}"
+                for key, value in params.items()
+                if key in options and isinstance(value, str) and value not in options[key]}
 
     def build(self, **params) -> BaseEstimator:
         """An unfitted estimator of this method.
@@ -155,7 +201,8 @@ class Method:
         Raises
         ------
         ConfigError
-            An unknown parameter, or one fixed by the method's preset.
+            An unknown parameter, one fixed by the method's preset, or a string value the
+            parameter does not accept (:meth:`options`).
         """
         fixed = sorted(set(params) & set(self.preset))
         if fixed:
@@ -165,7 +212,10 @@ class Method:
             raise ConfigError(
                 f"method {self.name!r}: unknown parameter(s) {unknown}; known: {sorted(self.parameters())}"
             )
-        merged = {**self.preset, **params}
+        problems = self.value_problems(params)
+        if problems:
+            raise ConfigError(next(iter(problems.values())))
+        merged = {**{k: v for k, v in self.defaults.items() if k not in self.preset}, **self.preset, **params}
         calibrator = _calibrator()
         calibration = {k: merged.pop(k) for k in list(merged)
                        if self.calibratable and k in _calibration_parameters()}
@@ -191,6 +241,16 @@ def _calibrator() -> type:
     return CalibratedZeroShotClassifier
 
 
+def _constraints(method: Method) -> dict[str, list]:
+    """The ``_parameter_constraints`` of the method's classes (and of its calibrator), first class first."""
+    classes = [*method.components(), *([_calibrator()] if method.calibratable else [])]
+    out: dict[str, list] = {}
+    for cls in classes:
+        for name, constraints in getattr(cls, "_parameter_constraints", {}).items():
+            out.setdefault(name, list(constraints))
+    return out
+
+
 def _calibration_parameters() -> dict[str, object]:
     """The calibrator's own parameters and defaults (its ``estimator`` and ``random_state`` are the method's)."""
     return {k: v for k, v in _init_defaults(_calibrator()).items() if k not in ("estimator", "random_state")}
@@ -210,6 +270,7 @@ def register_method(
     input_ndim: int = 2,
     input_kind: str = "features",
     calibratable: bool | None = None,
+    defaults: Mapping[str, object] | None = None,
 ):
     """Register a method; without a model class, return a class decorator that registers it.
 
@@ -238,6 +299,8 @@ def register_method(
         Build it inside a :class:`~tzsl.models.CalibratedZeroShotClassifier` (the estimator must
         take ``fit(X, Y, groups)`` and ``decision_function(X, class_attributes)``). Default: True
         for attribute model + decision rule methods, False for self-contained estimators.
+    defaults : mapping, optional
+        Settable parameters whose default the method changes from its class's signature.
 
     Returns
     -------
@@ -249,7 +312,7 @@ def register_method(
             kw = {"estimator": cls} if decision_rule is None else {"attribute_model": cls}
             register_method(name, family=family, paper=paper, decision_rule=decision_rule, preset=preset,
                             description=description, replace=replace, input_ndim=input_ndim,
-                            input_kind=input_kind, calibratable=calibratable, **kw)
+                            input_kind=input_kind, calibratable=calibratable, defaults=defaults, **kw)
             return cls
 
         return decorator
@@ -263,40 +326,105 @@ def register_method(
         raise ConfigError(f"method {name!r}: input_kind must be one of {INPUT_KINDS}, got {input_kind!r}")
     if name in _REGISTRY and not replace:
         raise ConfigError(f"method {name!r} is already registered")
+    if name in _ALIASES:
+        raise ConfigError(f"method {name!r}: the name is an alias of {_ALIASES[name][0]!r}")
     method = Method(name=name, family=family, paper=paper, attribute_model=attribute_model,
                     decision_rule=decision_rule, estimator=estimator,
                     preset=MappingProxyType(dict(preset or {})), description=description,
                     input_ndim=input_ndim, input_kind=input_kind,
-                    calibratable=(estimator is None) if calibratable is None else bool(calibratable))
-    unknown = sorted(set(method.preset) - {k for c in method.components() for k in _init_defaults(c)})
+                    calibratable=(estimator is None) if calibratable is None else bool(calibratable),
+                    defaults=MappingProxyType(dict(defaults or {})))
+    known = {k for c in method.components() for k in _init_defaults(c)}
+    unknown = sorted((set(method.preset) | set(method.defaults)) - known)
     if unknown:
-        raise ConfigError(f"method {name!r}: preset names unknown parameter(s) {unknown}")
+        raise ConfigError(f"method {name!r}: preset or defaults name unknown parameter(s) {unknown}")
     _REGISTRY[name] = method
     return method
 
 
-def unregister_method(name: str) -> None:
-    """Remove a method (e.g. a test's toy method)."""
-    _REGISTRY.pop(name, None)
+def register_alias(name: str, method: str, *, preset: Mapping[str, object], replace: bool = False) -> None:
+    """Register ``name`` as an alias of ``method`` with the parameters ``preset`` fixed.
 
+    :func:`get_method` (and so :func:`build_method`, experiment files and ``--method``) accepts the
+    alias; :func:`available_methods` does not list it (:func:`method_aliases` does).
 
-def get_method(name: str) -> Method:
-    """The registered method called ``name``.
+    Parameters
+    ----------
+    name : str
+        The alias (``"dap-avg-logistic-c1"``).
+    method : str
+        A registered method (not an alias).
+    preset : mapping
+        Settable parameters of ``method`` that the alias fixes, with accepted values.
+    replace : bool, default=False
+        Allow replacing an alias of the same name.
 
     Raises
     ------
     ConfigError
-        No such method (the message lists the known ones).
+        ``name`` is a method or (without ``replace``) an alias already; ``method`` is unknown; a
+        parameter of ``preset`` is not settable or its value not accepted.
     """
-    try:
+    if name in _REGISTRY:
+        raise ConfigError(f"alias {name!r}: a method has that name")
+    if name in _ALIASES and not replace:
+        raise ConfigError(f"alias {name!r} is already registered (of {_ALIASES[name][0]!r})")
+    if method not in _REGISTRY:
+        raise ConfigError(f"alias {name!r}: {method!r} is not a registered method")
+    target = _REGISTRY[method]
+    unknown = sorted(set(preset) - set(target.parameters()))
+    if unknown:
+        raise ConfigError(f"alias {name!r}: {unknown} are not settable parameters of method {method!r}")
+    problems = target.value_problems(preset)
+    if problems:
+        raise ConfigError(f"alias {name!r}: {next(iter(problems.values()))}")
+    _ALIASES[name] = (method, MappingProxyType(dict(preset)))
+
+
+def unregister_method(name: str) -> None:
+    """Remove a method (e.g. a test's toy method) or an alias, and the aliases of a removed method."""
+    _REGISTRY.pop(name, None)
+    _ALIASES.pop(name, None)
+    for alias in [a for a, (target, _) in _ALIASES.items() if target == name]:
+        del _ALIASES[alias]
+
+
+def get_method(name: str) -> Method:
+    """The registered method called ``name``, or the configuration an alias names.
+
+    An alias gives its method with the alias's name, its fixed parameters added to the method's
+    ``preset`` (so they cannot be set again) and ``alias_of`` the method's name.
+
+    Raises
+    ------
+    ConfigError
+        No such method or alias (the message lists the known ones).
+    """
+    if name in _REGISTRY:
         return _REGISTRY[name]
-    except KeyError:
-        raise ConfigError(f"unknown method {name!r}; known: {available_methods()}") from None
+    if name in _ALIASES:
+        target, fixed = _ALIASES[name]
+        method = _REGISTRY[target]
+        return replace(method, name=name, alias_of=target, preset=MappingProxyType({**method.preset, **fixed}),
+                       defaults=MappingProxyType({k: v for k, v in method.defaults.items() if k not in fixed}))
+    raise ConfigError(f"unknown method {name!r}; known: {available_methods()}; aliases: {sorted(_ALIASES)}")
 
 
 def available_methods() -> list[str]:
-    """Names of every registered method, sorted."""
+    """Names of every registered method, sorted (aliases left out: :func:`method_aliases`)."""
     return sorted(_REGISTRY)
+
+
+def method_aliases() -> dict[str, dict[str, object]]:
+    """Every alias as the method entry it names, sorted by alias.
+
+    Returns
+    -------
+    dict
+        ``{"dap-max": {"name": "dap", "fusion": "max", "prior": "uni"}, ...}``: the alias's method and
+        the parameters it fixes (an entry :func:`build_method` and ``[methods] compare`` take).
+    """
+    return {alias: {"name": target, **fixed} for alias, (target, fixed) in sorted(_ALIASES.items())}
 
 
 def build_method(name: str, **params) -> BaseEstimator:

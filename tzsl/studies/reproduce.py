@@ -165,6 +165,7 @@ def run_studies(
         outputs = get_study(exp.study).hook("outputs")
         if outputs is not None:
             results.check_free(outputs(exp.config))
+    from tzsl.models import DAP_METHOD  # noqa: PLC0415 (the registry, read when a study list runs)
     from tzsl.studies.comparison.method_runs import COMPARISON_FILE, FEW_CLASSES, combine_comparisons  # noqa: PLC0415
 
     results.check_free(["manifest.json"] + ([COMPARISON_FILE] if stack else []))
@@ -189,7 +190,7 @@ def run_studies(
         if on_study is not None:
             on_study(name, done)
     if stack and done_tables:
-        dap = {name: FEW_CLASSES for name in ("dap-avg", "dap-max", "multilabel-dap")}
+        dap = {name: FEW_CLASSES for name in (DAP_METHOD, "multilabel-dap")}
         results.write_csv(COMPARISON_FILE, combine_comparisons(done_tables, {"fabric": dap, "hand": dap}))
         tables.append(COMPARISON_FILE[: -len(".csv")])
     results.write_manifest({"studies": records}, data_files=data_files,

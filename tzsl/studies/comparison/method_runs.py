@@ -39,7 +39,7 @@ from tzsl.fit_store import fit_cached
 from tzsl.models import available_methods, get_method
 from tzsl.models.protocol import attribute_rows
 from tzsl.studies.comparison.calibration import CALIBRATION_COLUMNS, add_calibration, method_posteriors
-from tzsl.studies.config import method_label
+from tzsl.studies.config import method_label, registered_method
 
 __all__ = [
     "COMPARISON_COLUMNS",
@@ -285,9 +285,10 @@ def combine_comparisons(tables: list[pd.DataFrame], reasons: dict[str, dict[str,
     """Stack study comparisons into one table of every method x study (and split kind).
 
     A registered method missing from a study (split kind) gets a row without accuracy whose note says why:
-    its input kind, ``reasons[study prefix][method]`` (e.g. ``{"fabric": {"dap-avg": ...}}``),
-    or "not run in this study". Studies (and their split kinds) keep their order; within each, the
-    rows run, then the rows not run.
+    its input kind, ``reasons[study prefix][method]`` (e.g. ``{"fabric": {"dap": ...}}``),
+    or "not run in this study"; a row of any DAP configuration (``dap-avg``, ``dap-max-logistic-c1``) is a
+    run of ``dap`` (:func:`~tzsl.studies.config.registered_method`). Studies (and their split kinds) keep
+    their order; within each, the rows run, then the rows not run.
     """
     reasons = reasons or {}
     parts = []
@@ -295,7 +296,7 @@ def combine_comparisons(tables: list[pd.DataFrame], reasons: dict[str, dict[str,
         for (study, split_kind), sub in table.groupby(["study", "split_kind"], sort=False):
             parts.append(sub)
             kind = _STUDY_INPUT.get(str(study).split("-")[0], "features")
-            ran = {str(m).split("_")[0] for m in sub["method"]}
+            ran = {registered_method(str(m)) for m in sub["method"]}  # dap-max-logistic-c1: dap
             missing = []
             for name in available_methods():
                 if name in ran:

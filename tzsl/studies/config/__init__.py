@@ -23,6 +23,7 @@ from tzsl.studies.config._common import (
     check_n_jobs,
     dap_label,
     method_label,
+    registered_method,
 )
 from tzsl.studies.config._load import (
     OPTION_KEYS,
@@ -82,5 +83,5 @@ __all__ = [
     "SvmSettings", "ZeroShotMethods", "ZeroShotSettings", "ZeroShotSplits", "ZeroShotStudy", "every_feature_method",
     "with_preset_defaults", "builtin_names", "builtin_text", "check_n_jobs", "config_from_options", "defaults",
     "estimator_parameters", "load_experiment", "OPTION_KEYS", "option_values", "to_toml", "dap_label", "method_label",
-    "validate",
+    "registered_method", "validate",
 ]

@@ -6,7 +6,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from tzsl.value_lists import STUDY_BACKENDS
+from tzsl.value_lists import FUSIONS, PRIORS, STUDY_BACKENDS
 
 #: Largest seed numpy's legacy RandomState and scikit-learn accept (exclusive).
 SEED_LIMIT = 2**32
@@ -100,34 +100,88 @@ def lambdas_ok(values: list) -> list:
 #: ``methods.compare`` entries: a registry name, or ``{name = "...", <parameter> = value, ...}``.
 MethodEntry = str | dict[str, Any]
 
-COMPARE_DESCRIPTION = ('registry methods (tzsl methods) run on the same splits: "eszsl" or '
-                       '{name = "embedding", lam = 0.1}')
+COMPARE_DESCRIPTION = ('registry methods (tzsl methods) run on the same splits: "eszsl", '
+                       '{name = "embedding", lam = 0.1} or {name = "dap", detector = "logistic"}')
+
+
+#: The parameters of the registry's DAP (``tzsl.models.DAP_METHOD``) that its row label names (:func:`dap_label`).
+DAP_LABEL_KEYS = ("fusion", "detector", "prior")
+
+
+def dap_settings(spec: dict) -> dict | None:
+    """The fusion, detector and prior of a method entry of the registry's DAP, else None.
+
+    The entry names ``dap`` or one of its aliases (``dap-max``: ``fusion = "max"``); what it does not
+    set is the method's default (:meth:`tzsl.models.Method.parameters`). None for another method or an
+    unknown name (which :func:`methods_ok` reports).
+    """
+    from tzsl.models import DAP_METHOD, get_method, method_aliases  # noqa: PLC0415 (the registry, read when named)
+
+    name = spec.get("name")
+    if not isinstance(name, str):
+        return None
+    entry = {**method_aliases().get(name, {"name": name}), **{k: v for k, v in spec.items() if k != "name"}}
+    if entry["name"] != DAP_METHOD:
+        return None
+    defaults = get_method(DAP_METHOD).parameters()
+    return {key: entry.get(key, defaults[key]) for key in DAP_LABEL_KEYS}
 
 
 def method_label(spec: dict) -> str:
-    """Column/row label of a method entry: ``{"name": "embedding", "lam": 0.1}`` -> ``embedding_lam_0.1``."""
-    parts = [spec["name"]]
+    """Column/row label of a method entry: ``{"name": "embedding", "lam": 0.1}`` -> ``embedding_lam_0.1``.
+
+    An entry of the registry's DAP (``dap`` or an alias) is named by :func:`dap_label` of its fusion,
+    detector and prior, then its other parameters: ``"dap-avg-logistic-c1"`` and ``{name = "dap",
+    detector = "logistic-c1"}`` are both ``dap-avg-logistic-c1``, ``{name = "dap-avg", solver =
+    "exact"}`` is ``dap-avg_solver_exact``.
+    """
+    dap = dap_settings(spec)
+    named: tuple[str, ...] = ()
+    if dap is not None and all(isinstance(value, str) for value in dap.values()):
+        parts = [dap_label(dap["fusion"], dap["detector"], prior=dap["prior"])]
+        named = DAP_LABEL_KEYS
+    else:
+        parts = [spec["name"]]
     for key, value in spec.items():
-        if key != "name":
+        if key != "name" and key not in named:
             parts.append(f"{key}_{value:g}" if isinstance(value, float) else f"{key}_{value}")
     return "_".join(parts)
 
 
 def dap_label(fusion: str, detector: str = "rbf-svm", *, prior: str = "uni") -> str:
-    """Row label of the study's own DAP with ``fusion`` and ``prior``.
+    """Row label of a DAP configuration: the study's own DAP with ``fusion`` and ``prior``, or the registry's
+    ``dap`` with these parameters (:func:`method_label`).
 
     ``dap-avg`` / ``dap-max`` with the paper's RBF-SVM detectors and the uniform prior; with another
-    ``[svm] detector`` the family follows the fusion (``dap-avg-logistic-c1``: the name of the registered
-    method it is); another prior follows last (``dap-max-train-prior``, ``dap-avg-logistic-c1-test-prior``).
+    detector the family follows the fusion (``dap-avg-logistic-c1``, also the name of the alias of that
+    configuration); another prior follows last (``dap-max-train-prior``, ``dap-avg-logistic-c1-test-prior``).
     """
     base = f"dap-{fusion}" if detector == "rbf-svm" else f"dap-{fusion}-{detector}"
     return base if prior == "uni" else f"{base}-{prior}-prior"
 
 
+def registered_method(label: str) -> str:
+    """The registered method a row label of a method comparison is a configuration of.
+
+    ``dap`` for every DAP label (:func:`dap_label` of any fusion, detector and prior: the study's own rows
+    and the registry's ``dap`` entries, aliases included), else the method an alias names, else the label
+    up to its first ``_`` (``embedding_lam_0.1``: ``embedding``).
+    """
+    from tzsl.models import DAP_METHOD, method_aliases  # noqa: PLC0415 (the registry, read when a table is stacked)
+    from tzsl.models.detectors import DETECTORS  # noqa: PLC0415 (the models, read when a table is stacked)
+
+    name = label.split("_")[0]
+    if name in {dap_label(f, d, prior=p) for f in FUSIONS for d in DETECTORS for p in PRIORS}:
+        return DAP_METHOD
+    return str(method_aliases().get(name, {"name": name})["name"])
+
+
 def methods_ok(values: list, taken: tuple[str, ...] = ()) -> list[dict]:
     """``methods.compare`` checked against the method registry, each entry as ``{"name": ..., **params}``.
 
-    ``taken``: labels the study already runs (refused here, so no column is computed twice).
+    A name is a method or an alias (``dap-avg``); a string value a parameter does not take is reported
+    at its key (``@methods.compare[0].detector: ...``). ``taken``: labels the study already runs
+    (refused here, so no column is computed twice).
     """
     from tzsl.exceptions import ConfigError  # noqa: PLC0415
     from tzsl.models import get_method  # noqa: PLC0415 (the registry; imported only when methods are listed)
@@ -142,7 +196,12 @@ def methods_ok(values: list, taken: tuple[str, ...] = ()) -> list[dict]:
             continue
         try:
             method = get_method(name)
-            method.build(**{k: v for k, v in spec.items() if k != "name"})
+            params = {k: v for k, v in spec.items() if k != "name"}
+            refused = method.value_problems(params)  # one line per value, at its key
+            if refused:
+                problems += [f"@{key}.{param}: {why}" for param, why in refused.items()]
+                continue
+            method.build(**params)
         except ConfigError as exc:
             where = f"{key}.name" if str(exc).startswith("unknown method") else key
             problems.append(f"@{where}: {exc}")

@@ -28,6 +28,7 @@ from tzsl.studies.config._common import (
     Section,
     Seed,
     dap_label,
+    dap_settings,
     distinct,
     lambdas_ok,
     method_label,
@@ -102,17 +103,17 @@ class SignalFeatures(Section):
     channels: list[str] | None = Field(default=None, description="signal channels to use, in order")
 
 
-#: Registry methods read from the zero-shot study's own DAP posteriors (no fit of their own).
-FROM_DAP_POSTERIORS = ("dap-avg", "dap-max", "multilabel-dap")
+#: Registry methods read from the study's own DAP posteriors, besides the registry's DAP (tzsl.models.DAP_METHOD).
+FROM_DAP_POSTERIORS = ("multilabel-dap",)
 
 
 def every_feature_method() -> list[dict]:
-    """``[{"name": m}, ...]`` for every registered method on feature vectors, except those read
-    from the DAP posteriors (:data:`FROM_DAP_POSTERIORS`)."""
-    from tzsl.models import available_methods, get_method  # noqa: PLC0415
+    """``[{"name": m}, ...]`` for every registered method on feature vectors (not aliases), except those
+    read from the study's own DAP posteriors (the registry's DAP and :data:`FROM_DAP_POSTERIORS`)."""
+    from tzsl.models import DAP_METHOD, available_methods, get_method  # noqa: PLC0415 (the registry, read when used)
 
     return [{"name": name} for name in available_methods()
-            if get_method(name).input_kind == "features" and name not in FROM_DAP_POSTERIORS]
+            if get_method(name).input_kind == "features" and name not in {DAP_METHOD, *FROM_DAP_POSTERIORS}]
 
 
 def _every_feature_entry() -> list[MethodEntry]:
@@ -273,9 +274,10 @@ class SvmSettings(Section):
                     "(linear, C by object-grouped CV), 'logistic-c1' (class-balanced L2 logistic regression, C = 1) or "
                     "'auto' (rbf-svm or logistic, chosen on pseudo-unseen training classes); the other keys of [svm] "
                     "apply to 'rbf-svm' (and 'auto''s RBF-SVM). The DAP rows are labelled with it: dap-avg for "
-                    "'rbf-svm', dap-avg-<detector> (the registered method) otherwise. Default: the zero-shot study's "
-                    "tzsl.models.attribute_training.STUDY_DETECTOR, chosen on PHAC-2 selection splits "
-                    "(tzsl.models.INHERITED_CHOICES, study-detector); the paper presets: the paper's 'rbf-svm'")
+                    "'rbf-svm', dap-avg-<detector> otherwise (the label of {name = 'dap', detector = ...}). Default: "
+                    "the detector of the first DAP entry of [methods] compare (dap-avg: 'rbf-svm'), else the "
+                    "zero-shot study's tzsl.models.attribute_training.STUDY_DETECTOR, chosen on PHAC-2 selection "
+                    "splits (tzsl.models.INHERITED_CHOICES, study-detector); the paper presets: the paper's 'rbf-svm'")
 
     @field_validator("detector")
     @classmethod
@@ -341,7 +343,17 @@ class ZeroShotSettings(Section):
     @classmethod
     def _preset_defaults(cls, data: Any) -> Any:
         study = data.get("study") if isinstance(data, dict) else None
-        return default_compare(with_preset_defaults(data, study) if study in PRESET_DEFAULTS else data)
+        return default_compare(default_detector(with_preset_defaults(data, study) if study in PRESET_DEFAULTS
+                                                else data))
+
+    @model_validator(mode="after")
+    def _own_dap_entries(self):
+        """A ``compare`` entry that is one of the study's own DAP rows (``dap-avg`` when ``[svm] detector`` is
+        ``'rbf-svm'``) is read from the study's own fits: it leaves ``compare`` instead of being fitted twice."""
+        own = {dap_label(fusion, self.svm.detector) for fusion in FUSIONS}
+        compare = cast("list[dict[str, Any]]", self.methods.compare)  # methods_ok made every entry a dict
+        self.methods.compare = [spec for spec in compare if method_label(spec) not in own]
+        return self
 
     @property
     def study_seed(self) -> int:
@@ -385,10 +397,33 @@ def with_preset_defaults(raw: Any, preset: str) -> Any:
     return filled
 
 
+def default_detector(data: Any) -> Any:
+    """A study file's tables with the ``[svm] detector`` of the first DAP entry of ``[methods] compare``
+    (``"dap-avg"``: ``'rbf-svm'``) when ``[svm]`` gives none, so the study's own DAP (the reference) is the DAP
+    asked for; without a valid one (or in a preset, which sets it) the default stays."""
+    from tzsl.models.detectors import DETECTORS  # noqa: PLC0415 (the models, read when a file is read)
+
+    if not isinstance(data, dict):
+        return data
+    methods, svm = data.get("methods") or {}, data.get("svm") or {}
+    compare = methods.get("compare") if isinstance(methods, dict) else None
+    if not isinstance(svm, dict) or "detector" in svm or not isinstance(compare, list):
+        return data
+    for entry in compare:
+        spec = {"name": entry} if isinstance(entry, str) else entry
+        dap = dap_settings(spec) if isinstance(spec, dict) else None
+        if dap is not None and dap["detector"] in DETECTORS:
+            return {**data, "svm": {**svm, "detector": dap["detector"]}}
+    return data
+
+
 def default_compare(data: Any) -> Any:
-    """A study file's tables with the default ``[methods] compare`` of a non-RBF ``[svm] detector``: every
-    feature method but the registered one the study's own DAP already is (``dap-avg-<detector>``), with the
-    paper's ``dap-avg`` beside it. A file that lists ``compare`` (or a preset that sets it) keeps its own."""
+    """A study file's tables with the default ``[methods] compare`` of a non-RBF ``[svm] detector``: the paper's
+    DAP (``{name = "dap", detector = "rbf-svm"}``, row ``dap-avg``) beside the study's own, then every other
+    feature method (:func:`every_feature_method`: one row per method, not one per detector). A file that lists
+    ``compare`` (or a preset that sets it) keeps its own."""
+    from tzsl.models import DAP_METHOD  # noqa: PLC0415 (the registry, read when a file is read)
+
     if not isinstance(data, dict):
         return data
     methods, svm = data.get("methods") or {}, data.get("svm") or {}
@@ -397,9 +432,9 @@ def default_compare(data: Any) -> Any:
     detector = (svm.get("detector") if isinstance(svm, dict) else getattr(svm, "detector", None)) or _study_detector()
     if detector == PAPER_DETECTOR:
         return data
-    own = {dap_label(fusion, detector) for fusion in FUSIONS}
     switched = {name for name in ("eszsl", "embedding") if methods.get(name)}
-    compare = [{"name": "dap-avg"}] + [spec for spec in every_feature_method() if spec["name"] not in own | switched]
+    compare = [{"name": DAP_METHOD, "detector": PAPER_DETECTOR}] + [spec for spec in every_feature_method()
+                                                                    if spec["name"] not in switched]
     return {**data, "methods": {**methods, "compare": compare}}
 
 
@@ -423,11 +458,6 @@ class ZeroShotStudy(ZeroShotSettings):
         if kinds == ["file"] and self.splits.file is None and self.dataset.plain is None:
             problems.append(("splits.kinds", "['file'] needs file = a split CSV (or a plain dataset folder "
                                              "with splits.csv)"))
-        own = {dap_label(fusion, self.svm.detector) for fusion in FUSIONS}
-        twice = sorted(own & {method_label(spec) for spec in self.methods.compare})
-        if twice:
-            problems.append(("methods.compare", f"{', '.join(twice)} is the study's own DAP ([svm] detector = "
-                                                f"{self.svm.detector!r}); leave it out of compare"))
         if "challenging" in self.methods.compare_on and "challenging" not in kinds:
             problems.append(("methods.compare_on", "'challenging' needs 'challenging' in splits.kinds"))
         if self.methods.gzsl and kinds == ["challenging"]:
