@@ -7,7 +7,8 @@ import json
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-from tzsl.models import available_methods, get_method
+from tzsl.models import available_methods, get_method, method_aliases
+from tzsl.models.detectors import DETECTORS
 
 
 def test_methods_table_lists_every_method():
@@ -23,6 +24,25 @@ def test_methods_json():
     assert result.exit_code == 0, result.output
     records = {r["name"]: r for r in json.loads(result.output)}
     assert sorted(records) == available_methods()
-    assert records["dap-max"]["preset"] == {"fusion": "max", "prior": "uni"}
+    assert records["multilabel-dap"]["preset"] == {"prior": "uni"}
+    assert records["dap"]["aliases"]["dap-max"] == {"fusion": "max", "prior": "uni"}
+    assert records["dap"]["values"]["detector"] == list(get_method("dap").options()["detector"])
     assert records["eszsl"]["parameters"]["gammas"] == list(get_method("eszsl").parameters()["gammas"])
     assert records["embedding"]["family"] == "embedding" and records["embedding"]["parameters"]["lam"] == 1.0
+
+
+def test_dap_is_listed_once_with_its_detectors_as_values_and_its_aliases():
+    """Issue 43, item 3: one DAP method; the detector families are values of its parameter, the older
+    method names its aliases (each shown as the configuration it names)."""
+    result = CliRunner().invoke(cli, ["methods"])
+    assert result.exit_code == 0, result.output
+    lines = result.output.splitlines()
+    methods = [line.split()[0] for line in lines[1:] if line and not line[0].isspace()]
+    assert methods == available_methods() and methods.count("dap") == 1
+    assert not {"dap-avg", "dap-max", "dap-avg-logistic-c1"} & set(methods)
+    values = next(line for line in lines if "detector: " in line and " | " in line)
+    assert values.split("detector: ")[1] == " | ".join(sorted(DETECTORS))
+    for alias, entry in method_aliases().items():
+        fixed = ", ".join(f"{k}={v!r}" for k, v in entry.items() if k != "name")
+        assert sum(line.strip().endswith(f"{alias} = dap({fixed})") for line in lines) == 1, alias
+    assert "dap-avg-logistic-c1 = dap(detector='logistic-c1', fusion='avg', prior='uni')" in result.output

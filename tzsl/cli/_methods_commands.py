@@ -19,16 +19,24 @@ def _jsonable(value):
     return repr(value)
 
 
+def call(entry: dict[str, Any]) -> str:
+    """A method entry as a call: ``{"name": "dap", "fusion": "max"}`` -> ``dap(fusion='max')``."""
+    return f"{entry['name']}({', '.join(f'{k}={v!r}' for k, v in entry.items() if k != 'name')})"
+
+
 @cli.command()
 @click.option("--json", "as_json", is_flag=True, help="Print the methods as JSON instead of a table.")
 def methods(as_json: bool) -> None:
-    """List every zero-shot method: name, family, parameters with defaults, paper.
+    """List every zero-shot method: name, family, parameters with defaults, their values, aliases, paper.
 
     A method is built by name (tzsl.models.build_method(NAME, **params)); the defaults shown
-    are read from the estimators' signatures.
+    are read from the estimators' signatures and the string values a parameter takes from
+    their parameter constraints. An alias (an older name, e.g. dap-avg) is one configuration of a
+    method, accepted wherever a method is named.
     """
-    from tzsl.models import available_methods, get_method  # noqa: PLC0415 (keep --help fast)
+    from tzsl.models import available_methods, get_method, method_aliases  # noqa: PLC0415 (keep --help fast)
 
+    aliases = method_aliases()
     records: list[dict[str, Any]] = []
     for name in available_methods():
         m = get_method(name)
@@ -39,6 +47,9 @@ def methods(as_json: bool) -> None:
             "components": [c.__name__ for c in m.components()],
             "preset": {k: _jsonable(v) for k, v in m.preset.items()},
             "parameters": {k: _jsonable(v) for k, v in m.parameters().items()},
+            "values": {k: list(v) for k, v in m.options().items()},
+            "aliases": {alias: {k: _jsonable(v) for k, v in entry.items() if k != "name"}
+                        for alias, entry in aliases.items() if entry["name"] == name},
             "paper": m.paper,
         })
     if as_json:
@@ -48,10 +59,15 @@ def methods(as_json: bool) -> None:
     fam = max(len(r["family"]) for r in records)
     click.echo(f"{'method':<{width}}  {'family':<{fam}}  description")
     for r in records:
+        pad = f"{'':<{width}}  {'':<{fam}}  "
         click.echo(f"{r['name']:<{width}}  {r['family']:<{fam}}  {r['description']}")
         built = " + ".join(r["components"])
         preset = ", ".join(f"{k}={v!r}" for k, v in r["preset"].items())
-        click.echo(f"{'':<{width}}  {'':<{fam}}  estimator: {built}" + (f" ({preset})" if preset else ""))
+        click.echo(f"{pad}estimator: {built}" + (f" ({preset})" if preset else ""))
         params = ", ".join(f"{k}={v!r}" for k, v in r["parameters"].items())
-        click.echo(f"{'':<{width}}  {'':<{fam}}  parameters: {params}")
-        click.echo(f"{'':<{width}}  {'':<{fam}}  paper: {r['paper']}")
+        click.echo(f"{pad}parameters: {params}")
+        for i, (key, values) in enumerate(r["values"].items()):
+            click.echo(f"{pad}{'string values: ' if i == 0 else ' ' * 15}{key}: {' | '.join(values)}")
+        for i, (alias, fixed) in enumerate(r["aliases"].items()):
+            click.echo(f"{pad}{'aliases: ' if i == 0 else ' ' * 9}{alias} = {call({'name': r['name'], **fixed})}")
+        click.echo(f"{pad}paper: {r['paper']}")
