@@ -137,15 +137,19 @@ def splits(kind, n_splits, n_test, purpose, out, dataset, features_file, plain_d
 @click.option("--splits", "splits_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Train on the training objects of one split of this CSV (see --split-name).")
 @click.option("--split-name", default=None, help="Which split of --splits (default: the first).")
-@click.option("--fusion", type=click.Choice(FUSIONS), default="avg", show_default=True,
-              help="Sensor fusion stored in the bundle for 'tzsl predict'.")
-@click.option("--prior", type=click.Choice(PRIORS), default="uni", show_default=True,
-              help="Attribute prior stored in the bundle.")
+@click.option("--fusion", type=click.Choice(FUSIONS), default=None,
+              help="Sensor fusion of the default DAP model's rule [default: the default method's].")
+@click.option("--prior", type=click.Choice(PRIORS), default=None,
+              help="Attribute prior of the default DAP model's rule [default: the default method's].")
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="Model bundle to write (e.g. model.tzsl).")
 @click.option("--method", default=None,
               help="A registered attribute model + decision rule method ('tzsl methods'), fitted with its defaults "
-                   "[default: the DAP study's tuned per-(attribute, sensor) SVMs with --fusion and --prior].")
+                   "[default: tzsl.models.choices.DEFAULT_METHOD, the generic zero-shot study's default; a DAP "
+                   "method takes --cv, --grid, --undersampling, --fusion and --prior].")
+@click.option("--from-results", "from_results", type=click.Path(path_type=Path), default=None,
+              help="Train the method a zero-shot study chose (FOLDER/deployment.json of 'tzsl run'): that method "
+                   "and configuration, on every object of the study's dataset, with the study's seed.")
 @click.option("--per-ep", is_flag=True,
               help="Fit one attribute model per exploratory procedure (PHAC-2 features '<ep>:<name>') and the EPs' "
                    "confusion, for 'tzsl predict --eps-done ... --suggest-next' (active touch).")
@@ -159,16 +163,18 @@ def splits(kind, n_splits, n_test, purpose, out, dataset, features_file, plain_d
 @_study_options
 @data_dir_option
 @force_option
-def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep, min_objects, dataset, features_file,
-                     plain_dir, path, undersampling, cv, grid, no_progress, no_cache, seed, n_jobs, backend, scheduler,
-                     data_dir, force):
+def train_attributes(splits_file, split_name, fusion, prior, out, method, from_results, per_ep, min_objects, dataset,
+                     features_file, plain_dir, path, undersampling, cv, grid, no_progress, no_cache, seed, n_jobs,
+                     backend, scheduler, data_dir, force):
     """Fit a zero-shot model and save it as a model bundle for 'tzsl predict'.
 
     Without --splits every object trains the model (a model for recognising new objects);
-    with --splits only that split's training objects do. An attribute too rare to learn (too few
-    positive or negative training objects, the zero-shot study's rule for a split) is left out
-    with a 'note:' line and recorded in the bundle; 'tzsl predict' then ranks classes on the
-    attributes kept.
+    with --splits only that split's training objects do. Without --method it is the generic
+    default (tzsl.models.choices.DEFAULT_METHOD), the method a zero-shot study keeps unless
+    another beats it clearly; --from-results FOLDER trains the method that study chose. An
+    attribute too rare to learn (too few positive or negative training objects, the zero-shot
+    study's rule for a split) is left out with a 'note:' line and recorded in the bundle;
+    'tzsl predict' then ranks classes on the attributes kept.
     """
     from tzsl.studies.engine import check_experiment  # noqa: PLC0415
     from tzsl.studies.zero_shot.runner import load_study_features  # noqa: PLC0415
@@ -178,10 +184,21 @@ def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep
     if per_ep and method is not None:
         raise ConfigError("--per-ep and --method exclude each other")
     ctx = click.get_current_context()
-    given = [f"--{p}" for p in ("fusion", "prior")
+    given = [p for p in ("fusion", "prior", "method", "per_ep", "splits_file", "split_name", "min_objects",
+                         "undersampling", "cv", "grid", "seed")
              if ctx.get_parameter_source(p) is not click.core.ParameterSource.DEFAULT]
-    if given and (per_ep or method is not None):
-        raise ConfigError(f"{', '.join(given)} set(s) the default DAP model; with --method or --per-ep the "
+    if from_results is not None:
+        if given:
+            options = {q.name: q.opts[0] for q in ctx.command.params}
+            names = ", ".join(options[p] for p in given)
+            raise ConfigError(f"--from-results sets the method, its settings, the seed and the dataset's attribute "
+                              f"filter from the study; leave out {names}")
+        _train_from_results(from_results, out, dataset, features_file, plain_dir, path, data_dir, no_progress,
+                            no_cache, n_jobs, backend, scheduler, force)
+        return
+    rule = [f"--{p}" for p, value in (("fusion", fusion), ("prior", prior)) if value is not None]
+    if rule and (per_ep or method is not None):
+        raise ConfigError(f"{', '.join(rule)} set(s) the default DAP model; with --method or --per-ep the "
                           "method's own decision rule is saved")
     if method is not None:
         from tzsl.models import get_method  # noqa: PLC0415
@@ -192,18 +209,52 @@ def train_attributes(splits_file, split_name, fusion, prior, out, method, per_ep
                        **_study_values(seed, n_jobs, backend, scheduler, undersampling, cv, grid, no_progress,
                                        no_cache)})
     check_experiment(exp)  # paths and the Dask scheduler, before any data is read
-    features = load_study_features(exp)
-    start = time.perf_counter()
     if per_ep:
+        features = load_study_features(exp)
+        start = time.perf_counter()
         _train_per_ep(features, out, splits_file, split_name, exp, force)
         click.echo(f"fitted in {time.perf_counter() - start:.1f} s; wrote {out}")
         return
+    from tzsl.inference.model_bundles import command_entry  # noqa: PLC0415
+
+    entry = command_entry(exp.config, method, fusion, prior)
+    _fit_entry(entry, load_study_features(exp), exp, out, force, splits_file=splits_file, split_name=split_name)
+
+
+def _fit_entry(entry: dict, features, exp, out: Path, force: bool, **options) -> None:
+    """Fit a deployable entry, save its bundle and print what was fitted."""
     from tzsl.inference.model_bundles import train_attribute_bundle  # noqa: PLC0415
 
-    summary = train_attribute_bundle(features, exp.config, out, method=method, splits_file=splits_file,
-                                     split_name=split_name, fusion=fusion, prior=prior, force=force, echo=click.echo)
+    start = time.perf_counter()
+    summary = train_attribute_bundle(features, exp.config, out, entry=entry, force=force, echo=click.echo, **options)
     click.echo(summary.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
-    click.echo(f"fitted {method or 'the attribute classifiers'} in {time.perf_counter() - start:.1f} s; wrote {out}")
+    click.echo(f"fitted {entry['label']} in {time.perf_counter() - start:.1f} s; wrote {out}")
+
+
+def _train_from_results(folder: Path, out: Path, dataset, features_file, plain_dir, path, data_dir, no_progress,
+                        no_cache, n_jobs, backend, scheduler, force) -> None:
+    """``train-attributes --from-results``: the entry of the study's deployment.json, on the study's dataset."""
+    from tzsl.studies.config import option_values  # noqa: PLC0415
+    from tzsl.studies.engine import check_experiment  # noqa: PLC0415
+    from tzsl.studies.zero_shot.deployment import check_dataset, dataset_values, read_deployment  # noqa: PLC0415
+    from tzsl.studies.zero_shot.runner import load_study_features  # noqa: PLC0415
+
+    source, record = read_deployment(folder)
+    given = {"builtin": dataset, "features": None if features_file is None else str(features_file),
+             "plain": None if plain_dir is None else str(plain_dir), "path": None if path is None else str(path)}
+    values = dataset_values(source, record, given)
+    if data_dir is not None:
+        values.update(option_values(STUDY, {"data_dir": data_dir}))
+    shared = option_values(STUDY, {"n_jobs": n_jobs, "backend": backend, "scheduler": scheduler,
+                                   "progress": not no_progress})
+    exp = _experiment({**values, **shared, "compute.cache": not no_cache})
+    check_experiment(exp)
+    features = load_study_features(exp)
+    check_dataset(source, record, features)
+    click.echo(f"{source}: {record['label']} ({record['reason']})")
+    chosen = {"file": str(source.resolve()), "branch": record["branch"], "reason": record["reason"],
+              "study": record.get("experiment")}
+    _fit_entry(record, features, exp, out, force, deployment=chosen)
 
 
 def _train_per_ep(features, out, splits_file, split_name, exp, force) -> None:

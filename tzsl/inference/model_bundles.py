@@ -3,15 +3,19 @@
 Each function fits a model on a dataset's training objects (with the study's settings: the
 study code is imported when a model is trained, never when this module is imported) and writes
 it as a ``"zero-shot"`` bundle (:mod:`tzsl.inference.zero_shot_bundles`: arrays for linear and
-DAP models, skops for the others). The per-EP (active touch) model is
+DAP models, skops for the others). What ``train-attributes`` fits is one *deployable entry*,
+whoever asks for it (:func:`command_entry`: ``--method`` or the generic default; a zero-shot
+study's ``deployment.json``: ``--from-results`` and ``[output] model = true``), built by
+:func:`deployed_estimator` and fitted by :func:`train_attribute_bundle`. The per-EP (active touch) model is
 :func:`tzsl.inference.predict_active.train_per_ep_bundle`; the deep model's bundle is
 :mod:`tzsl.inference.deep_bundles`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -28,6 +32,8 @@ from tzsl.models import (
 )
 
 __all__ = [
+    "command_entry",
+    "deployed_estimator",
     "left_out_notes",
     "train_attribute_bundle",
     "train_hand_bundle",
@@ -114,76 +120,133 @@ def training_record(features: FeatureSet, left_out: list[dict]) -> dict:
     return {"min_objects": None if min_objects is None else int(min_objects), "left_out_attributes": list(left_out)}
 
 
-def train_attribute_bundle(features: FeatureSet, config, save, *, method: str | None = None, splits_file=None,
-                           split_name: str | None = None, fusion: str = "avg", prior: str = "uni",
-                           force: bool = False, echo: Callable[[str], None] | None = None) -> pd.DataFrame:
-    """Fit a zero-shot model (all objects, or one split's training objects) and save a bundle.
+def command_entry(config, method: str | None = None, fusion: str | None = None,
+                  prior: str | None = None) -> dict:
+    """The deployable entry ``tzsl train-attributes`` fits without ``--from-results``.
+
+    ``method``: a registered method, fitted with its defaults (``svm`` None). None: the generic default
+    :data:`tzsl.models.choices.DEFAULT_METHOD`, the method a zero-shot study keeps unless another beats it
+    clearly; a DAP method is built from ``config``'s ``[svm]`` settings (the command's ``--cv``,
+    ``--grid``, ``--undersampling``) and ``fusion`` / ``prior`` replace its rule's.
+
+    Returns
+    -------
+    dict
+        ``{"label", "method": {"name": ..., **parameters}, "svm": settings or None}``, as a study's
+        ``deployment.json`` holds it.
+    """
+    from tzsl.models import DAP_METHOD  # noqa: PLC0415
+    from tzsl.models.choices import DEFAULT_METHOD  # noqa: PLC0415
+    from tzsl.studies.config import dap_settings, method_label  # noqa: PLC0415
+
+    spec: dict[str, Any] = {"name": method or DEFAULT_METHOD}
+    given = {k: v for k, v in (("fusion", fusion), ("prior", prior)) if v is not None}
+    dap = dap_settings(spec)
+    if method is not None or dap is None:
+        if given:
+            raise ConfigError(f"--{', --'.join(given)} set(s) the rule of the default DAP model; {spec['name']} "
+                              "saves its own decision rule")
+        return {"label": method_label(spec), "method": spec, "svm": None}
+    if given:  # the default's detector, this rule
+        spec = {"name": DAP_METHOD, **{**dap, **given}}
+    return {"label": method_label(spec), "method": spec, "svm": config.svm.model_dump(mode="json")}
+
+
+def deployed_estimator(entry: Mapping[str, Any], config, attributes: Sequence[str], seed: int):
+    """The unfitted estimator of a deployable entry (:func:`command_entry`, a study's ``deployment.json``).
+
+    ``svm`` None: the registry's method with the entry's parameters, seeded with ``seed``
+    (:func:`tzsl.studies.comparison.method_runs.study_estimator`, as the study fitted it on each split).
+    ``svm`` settings: the study's own DAP: per-(attribute, sensor) detectors of the entry's family built
+    from those ``[svm]`` settings (:func:`tzsl.studies.zero_shot.study.attribute_bank`, ``config``'s
+    ``[compute]``), the entry's fusion and prior, calibrated.
+    """
+    from tzsl.studies.comparison.method_runs import study_estimator  # noqa: PLC0415
+    from tzsl.studies.config import SvmSettings, dap_settings  # noqa: PLC0415
+    from tzsl.studies.zero_shot.study import attribute_bank  # noqa: PLC0415
+
+    spec = dict(entry["method"])
+    if entry.get("svm") is None:
+        return study_estimator(spec, seed)
+    dap = dap_settings(spec)
+    if dap is None:
+        raise ConfigError(f"method {spec['name']!r}: [svm] settings apply to DAP only")
+    settings = config.model_copy(update={"svm": SvmSettings.model_validate({**entry["svm"],
+                                                                            "detector": dap["detector"]})})
+    model = ZeroShotClassifier(attribute_model=attribute_bank(settings, list(attributes), seed),
+                               decision_rule=DAPRule(fusion=dap["fusion"], prior=dap["prior"]), random_state=seed)
+    return CalibratedZeroShotClassifier(estimator=model, random_state=seed)  # its default calibration
+
+
+def train_attribute_bundle(features: FeatureSet, config, save, *, entry: Mapping[str, Any], splits_file=None,
+                           split_name: str | None = None, force: bool = False,
+                           echo: Callable[[str], None] | None = None, **provenance) -> pd.DataFrame:
+    """Fit a deployable entry (all objects, or one split's training objects) and save a bundle.
 
     Parameters
     ----------
     features : FeatureSet
     config : tzsl.studies.config.ZeroShotSettings
-        The study's attribute-SVM settings (used when ``method`` is None).
+        ``[splits]`` (seed, which attributes a model can learn) and ``[compute]`` of the fit.
     save : path
-    method : str, optional
-        A registered attribute model + decision rule method (``tzsl methods``), fitted with its
-        defaults and ``config.splits.seed``. None: the DAP study's tuned per-(attribute, sensor) SVMs
-        with ``fusion`` and ``prior``.
+    entry : dict
+        What to fit (:func:`command_entry`, or a study's ``deployment.json``): ``label`` (the bundle's
+        ``method``, shown by ``tzsl predict``), ``method`` (a registry entry) and ``svm``
+        (:func:`deployed_estimator`); the bundle records ``method_entry`` and ``svm_settings``.
     splits_file, split_name
         Train on the training objects of this split only.
-    fusion : {"avg", "max"}
-    prior : {"uni", "train", "test"}
     force : bool
     echo : callable, optional
         Called with a ``note: ...`` line for each attribute left out (:func:`training_subset` with the
         study's rule; the bundle records them as ``left_out_attributes``), before the fit.
+    **provenance
+        More JSON metadata for the bundle (``deployment``: where the choice came from).
 
     Returns
     -------
     DataFrame
-        DAP: one row per (attribute, sensor) with the chosen ``C``, ``gamma``, under-sampling
-        draw and positive training objects; other methods: one row per attribute with its
-        positive training objects.
+        DAP built from ``[svm]`` settings: one row per (attribute, sensor) with the chosen ``C``,
+        ``gamma``, under-sampling draw and positive training objects; other methods: one row per
+        attribute with its positive training objects.
     """
     from tzsl.models.protocol import attribute_rows  # noqa: PLC0415
-    from tzsl.studies.comparison.method_runs import method_input, study_estimator  # noqa: PLC0415
+    from tzsl.studies.comparison.method_runs import method_input  # noqa: PLC0415
     from tzsl.studies.zero_shot.relaxations import trainable_attribute_rule  # noqa: PLC0415
-    from tzsl.studies.zero_shot.study import attribute_bank, check_cv_folds, compute_context  # noqa: PLC0415
+    from tzsl.studies.zero_shot.study import check_cv_folds, compute_context  # noqa: PLC0415
 
+    spec = dict(entry["method"])
+    registered = get_method(str(spec["name"]))
+    if registered.estimator is not None:
+        raise ConfigError(f"method {spec['name']!r} is a self-contained estimator; train-attributes saves attribute "
+                          "model + decision rule methods (see 'tzsl methods')")
     sub, split_record, left_out = training_subset(features, splits_file, split_name,
                                                   **trainable_attribute_rule(config.splits))
     if echo is not None:
         for note in left_out_notes(left_out):
             echo(f"note: {note}")
     attributes = list(sub.attributes.columns)
-    A = sub.trial_attributes()
-    provenance = {"training_objects": sorted(set(sub.objects)), "split": split_record, "seed": config.splits.seed,
-                  **training_record(sub, left_out)}
-    if method is None:
-        check_cv_folds(config.svm.estimator_params().get("cv"), len(set(sub.objects)), "command line")
-        dap = ZeroShotClassifier(attribute_model=attribute_bank(config, attributes, config.splits.seed),
-                                 decision_rule=DAPRule(fusion=fusion, prior=prior), random_state=config.splits.seed)
-        clf = CalibratedZeroShotClassifier(estimator=dap, random_state=config.splits.seed)  # its default calibration
+    seed = config.splits.seed
+    record = {"training_objects": sorted(set(sub.objects)), "split": split_record, "seed": seed,
+              **training_record(sub, left_out), "method_entry": spec, "svm_settings": entry.get("svm"), **provenance}
+    clf = deployed_estimator(entry, config, attributes, seed)
+    svm = entry.get("svm")
+    if svm is not None:
+        check_cv_folds(svm.get("cv"), len(set(sub.objects)), "command line")
         with compute_context(config):
-            clf.fit(sub.X, A, sub.objects)
-        save_zero_shot_bundle(save, clf, sub, method=f"dap-{fusion}", ndim=3, force=force,
-                              undersampling=config.svm.undersampling, **provenance)
-        rows = [{"attribute": name, "sensor": sensor, "C": getattr(est, "C_", np.nan),
-                 "gamma": getattr(est, "gamma_", np.nan), "draw": getattr(est, "draw_", -1),
-                 "positive_objects": int(sub.attributes[name].sum())}
-                for j, name in enumerate(attributes)
-                for est, sensor in zip(clf.estimator_.attribute_model_.estimators_[j], sub.sensors, strict=True)]
-        return pd.DataFrame(rows)
-    spec = {"name": method}
-    registered = get_method(method)
-    if registered.estimator is not None:
-        raise ConfigError(f"method {method!r} is a self-contained estimator; train-attributes saves attribute "
-                          "model + decision rule methods (see 'tzsl methods')")
-    clf = study_estimator(spec, config.splits.seed)
+            clf.fit(sub.X, sub.trial_attributes(), sub.objects)
+        save_zero_shot_bundle(save, clf, sub, method=str(entry["label"]), ndim=3, force=force,
+                              undersampling=svm.get("undersampling"), **record)
+        return pd.DataFrame([{"attribute": name, "sensor": sensor, "C": getattr(est, "C_", np.nan),
+                              "gamma": getattr(est, "gamma_", np.nan), "draw": getattr(est, "draw_", -1),
+                              "positive_objects": int(sub.attributes[name].sum())}
+                             for j, name in enumerate(attributes)
+                             for est, sensor in zip(clf.estimator_.attribute_model_.estimators_[j], sub.sensors,
+                                                    strict=True)])
     objects = sub.objects
     class_rows = sub.attributes.loc[np.unique(objects), attributes].to_numpy(dtype=float)
     clf.fit(method_input(spec, sub.X), attribute_rows(objects, class_rows), objects)
-    save_zero_shot_bundle(save, clf, sub, method=method, ndim=registered.input_ndim, force=force, **provenance)
+    save_zero_shot_bundle(save, clf, sub, method=str(entry["label"]), ndim=registered.input_ndim, force=force,
+                          **record)
     return pd.DataFrame({"attribute": attributes,
                          "positive_objects": [int(sub.attributes[a].sum()) for a in attributes]})
 

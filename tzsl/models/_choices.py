@@ -112,9 +112,11 @@ _PRE_PROTOCOL = "before selection/confirmation purposes existed, so these splits
 INHERITED_CHOICES: tuple[InheritedChoice, ...] = (
     InheritedChoice(
         "default-method",
-        "the method of `tzsl train-attributes` without --method, and the reference of every comparison of the "
-        "paper presets: `dap-avg`, the registry's `dap` (AVGDAP over sensors, RBF-SVM detectors) with these fixed "
-        "settings (the generic study's reference is its own DAP, of the detector family `study-detector`)",
+        "the method of `tzsl train-attributes` without --method, the method a zero-shot study deploys unless "
+        "another beats it clearly on its random splits (its deployment.json), and the reference of every "
+        "comparison of the paper presets: `dap-avg`, the registry's `dap` (AVGDAP over sensors, RBF-SVM "
+        "detectors) with these fixed settings (the generic study's reference is its own DAP, of the detector "
+        "family `study-detector`)",
         lambda: dict(get_method(DEFAULT_METHOD).preset),
         "none: the DAP paper's method (Abderrahmane et al. 2018), kept as the reference; the uniform prior was "
         "reasoned from the balanced Platt posteriors and checked on a Platt ablation whose splits were not "

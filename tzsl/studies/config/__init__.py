@@ -22,6 +22,7 @@ from tzsl.studies.config._common import (
     Output,
     check_n_jobs,
     dap_label,
+    dap_settings,
     method_label,
     registered_method,
 )
@@ -83,5 +84,5 @@ __all__ = [
     "SvmSettings", "ZeroShotMethods", "ZeroShotSettings", "ZeroShotSplits", "ZeroShotStudy", "every_feature_method",
     "with_preset_defaults", "builtin_names", "builtin_text", "check_n_jobs", "config_from_options", "defaults",
     "estimator_parameters", "load_experiment", "OPTION_KEYS", "option_values", "to_toml", "dap_label", "method_label",
-    "registered_method", "validate",
+    "dap_settings", "registered_method", "validate",
 ]

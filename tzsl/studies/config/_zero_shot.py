@@ -322,6 +322,9 @@ class PrefixedOutput(Output):
                         description="written before every file name of the run (``PREFIX_table1_fusion.csv``) "
                                             "and after its study label in method comparisons, so two runs can share "
                                             "one folder (reproduce-tables); lower-case letters, digits, '-', '_'")
+    model: bool = Field(default=False, description="study = 'zero-shot': after the run, also write model.tzsl, the "
+                                                   "method of deployment.json (the study's deploy choice) trained on "
+                                                   "every object, as 'tzsl train-attributes --from-results' trains it")
 
 
 class ZeroShotSettings(Section):
@@ -462,6 +465,8 @@ class ZeroShotStudy(ZeroShotSettings):
             problems.append(("methods.compare_on", "'challenging' needs 'challenging' in splits.kinds"))
         if self.methods.gzsl and kinds == ["challenging"]:
             problems.append(("methods.gzsl", "runs on the random (or file) splits; kinds has neither"))
+        if self.output.model and self.study != "zero-shot":
+            problems.append(("output.model", "the deploy choice and its model belong to study = 'zero-shot'"))
         if self.compute.scheduler is not None and self.compute.backend != "dask":
             problems.append(("compute.scheduler", "needs backend = 'dask'"))
         if problems:

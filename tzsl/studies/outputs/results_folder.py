@@ -23,7 +23,7 @@ import platform
 import shutil
 import subprocess
 import sys
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from datetime import datetime, timezone
 from importlib import metadata
 from pathlib import Path
@@ -265,6 +265,10 @@ class ResultsDir:
             shutil.copyfile(source, p)
 
         return self._record(atomic_write(target, write))
+
+    def write_file(self, name: str, write: Callable[[Path], object]) -> Path:
+        """Write ``name`` with ``write(path)`` (a model bundle's writer), atomically and checked like the others."""
+        return self._record(atomic_write(self._target(name), write))
 
     @timed("figures")
     def write_figure(self, name: str, figure: Any, dpi: int = 120) -> Path:

@@ -40,6 +40,7 @@ from tzsl.studies.config import dap_label
 from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
 from tzsl.studies.papers.numbers import DAP_MULTILABEL_ACCURACY, DAP_TABLE1, DAP_TABLE3
 from tzsl.studies.papers.run_labels import StudyLabels
+from tzsl.studies.zero_shot.deployment import class_accuracy
 from tzsl.studies.zero_shot.tables import split_label
 
 if TYPE_CHECKING:
@@ -154,7 +155,7 @@ def _is_builtin(spec: dict) -> bool:
 def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed: int = 0,
                       methods: tuple[dict, ...] | list[dict] = DEFAULT_METHODS,
                       labels: StudyLabels | None = None, purpose: str = "", split_kind: str = "random",
-                      n_jobs: int = 1) -> dict[str, pd.DataFrame]:
+                      n_jobs: int = 1, per_class: dict[str, pd.DataFrame] | None = None) -> dict[str, pd.DataFrame]:
     """Registry methods and AVGDAP on the same PHAC-2 splits (trial accuracy).
 
     Each method entry ``{"name": ..., **parameters}`` is built from the registry; a method
@@ -166,7 +167,9 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
     real data) name the tables and say whether the paper's numbers and notes go beside;
     ``purpose`` (``"select"`` / ``"confirm"``, :data:`tzsl.evaluation.PURPOSES`) fills the
     ``purpose`` column of both tables; ``n_jobs``: the (split, method) fits run in that many
-    joblib workers.
+    joblib workers; ``per_class``, when a dict, receives under ``split_kind`` every method's accuracy per
+    (split, test class) (:func:`tzsl.studies.zero_shot.deployment.class_accuracy`: the scores the deploy
+    choice reads).
 
     Returns
     -------
@@ -233,6 +236,8 @@ def method_comparison(features: FeatureSet, results: list[SplitPosteriors], seed
     if detector != "rbf-svm":
         notes[reference] = f"{notes[reference]}; attribute detector {detector} ([svm] detector)"
     trials = pd.concat(trials, ignore_index=True)
+    if per_class is not None:
+        per_class[split_kind] = class_accuracy(trials)
     summary = method_summary(trials, seconds, chance, reference,
                              study=labels.study, data=labels.data, paper=paper,
                              notes=notes, grid_edge=edges, purpose=purpose, split_kind=split_kind)

@@ -76,6 +76,10 @@ def zero_shot_outputs(config) -> list[str]:
         if methods.method_specs() and "challenging" in methods.compare_on:
             names += [f"{labels.methods_table}.csv", f"{labels.comparison_table}.csv",
                       f"{labels.reliability_table}.csv", f"{labels.reliability_table}.png"]
+    if config.study == "zero-shot":
+        from tzsl.studies.zero_shot.deployment import DEPLOYMENT_FILE, MODEL_FILE  # noqa: PLC0415
+
+        names += [DEPLOYMENT_FILE, *([MODEL_FILE] if config.output.model else [])]
     return ["manifest.json", *dict.fromkeys(prefixed(config.output.prefix, n) for n in names)]
 
 
@@ -181,6 +185,26 @@ def relaxation_notes(exp: Experiment) -> list[str]:
     return [f"relaxed {relaxed.line()}" for relaxed in prepare(exp).relaxations]
 
 
+def _deploy(exp: Experiment, features: FeatureSet, per_class: dict[str, pd.DataFrame], out: PrefixedResults) -> dict:
+    """The study's deploy choice (:mod:`tzsl.studies.zero_shot.deployment`), written as ``deployment.json``; with
+    ``[output] model = true`` also its bundle, trained on every object (what ``train-attributes --from-results``
+    writes)."""
+    from tzsl.studies.zero_shot.deployment import DEPLOYMENT_FILE, MODEL_FILE, study_deployment  # noqa: PLC0415
+
+    kind = "file" if "file" in per_class else "random"
+    empty = pd.DataFrame(columns=["method", "split", "class", "accuracy"])
+    deployment = study_deployment(exp, features, per_class.get(kind, empty), kind)
+    out.write_json(out.name(DEPLOYMENT_FILE), deployment)
+    if exp.config.output.model:
+        from tzsl.inference.model_bundles import train_attribute_bundle  # noqa: PLC0415
+
+        chosen = {"branch": deployment["branch"], "reason": deployment["reason"], "study": exp.source}
+        with stage("model"):
+            out.write_file(out.name(MODEL_FILE), lambda path: train_attribute_bundle(
+                features, exp.config, path, entry=deployment, force=True, deployment=chosen))
+    return deployment
+
+
 def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], None]) -> StudyRun:
     """``study = "zero-shot"`` and its paper preset ``"phac2-dap"``: one study, labelled by
     :func:`~tzsl.studies.papers.run_labels.study_labels` (the paper's numbers only on its data)."""
@@ -207,7 +231,9 @@ def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], Non
     options = {"methods": methods.method_specs()}
     solver_record: dict = {}
     out = PrefixedResults(results, c.output.prefix)
-    tables = run_zero_shot_tables(features, out, c, splits=prepared.splits, record=solver_record, labels=labels)
+    per_class: dict[str, pd.DataFrame] = {}
+    tables = run_zero_shot_tables(features, out, c, splits=prepared.splits, record=solver_record, labels=labels,
+                                  per_class=per_class)
     for text in solver_lines(solver_record["attribute_solver"]):
         say(text)
     gzsl_notes = []
@@ -235,5 +261,7 @@ def run_zero_shot(exp: Experiment, results: ResultsDir, say: Callable[[str], Non
                                                     "paper": labels.paper, "note": labels.note},
               "relaxations": [r.record() for r in relaxed] + [{"setting": "gzsl", "why": n} for n in gzsl_notes],
               "dataset": features.dataset, "dataset_size": {k: int(v) for k, v in size.items()}, **solver_record}
+    if study == "zero-shot":
+        record["deployment"] = _deploy(exp, features, per_class, out)
     data_files = list(features.info.get("data_files", [])) + ([] if split_file is None else [split_file])
     return StudyRun(shown, record, data_files)

@@ -188,7 +188,7 @@ def add_refit_spread(table: pd.DataFrame, refits: pd.DataFrame | None) -> pd.Dat
 def evidence_tables(features: FeatureSet, by_kind: dict[str, tuple[list[SplitPosteriors], int]], *, seed: int,
                     labels: StudyLabels, methods: list[dict], compare_on, refit_seeds: int,
                     refit_splits: int | None, refit: Callable[[Split, int, int], SplitPosteriors], purpose: str = "",
-                    n_jobs: int = 1) -> dict[str, pd.DataFrame]:
+                    n_jobs: int = 1, per_class: dict[str, pd.DataFrame] | None = None) -> dict[str, pd.DataFrame]:
     """The method comparison on each split kind of ``compare_on``, the fusion x prior table and the refit spread.
 
     Parameters
@@ -205,6 +205,8 @@ def evidence_tables(features: FeatureSet, by_kind: dict[str, tuple[list[SplitPos
     compare_on : sequence of {"random", "challenging"}
     refit_seeds, refit_splits, refit
         See :func:`refit_accuracy` (``refit_seeds = 0``: no refits, ``sd_over_refit_seeds`` NaN).
+    per_class : dict, optional
+        Filled by each compared kind's :func:`~tzsl.studies.zero_shot.methods.method_comparison`.
 
     Returns
     -------
@@ -217,7 +219,7 @@ def evidence_tables(features: FeatureSet, by_kind: dict[str, tuple[list[SplitPos
     compared = {kind: [dict(m) for m in methods] for kind, (results, _) in by_kind.items()
                 if results and methods and ("random" if kind == "file" else kind) in compare_on}
     parts = [method_comparison(features, by_kind[kind][0], seed=seed + by_kind[kind][1], methods=specs,
-                               labels=labels, purpose=purpose, split_kind=kind, n_jobs=n_jobs)
+                               labels=labels, purpose=purpose, split_kind=kind, n_jobs=n_jobs, per_class=per_class)
              for kind, specs in compared.items()]
     tables = {name: pd.concat([p[name] for p in parts], ignore_index=True) for name in (parts[0] if parts else {})}
     fitted = {kind: results for kind, (results, _) in by_kind.items() if results}

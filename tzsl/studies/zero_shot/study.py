@@ -35,6 +35,7 @@ from tzsl.studies.comparison.method_runs import split_masks
 from tzsl.studies.config import ZeroShotSettings
 from tzsl.studies.outputs.failures import ERROR_COLUMN, attempt
 from tzsl.studies.papers.run_labels import StudyLabels
+from tzsl.studies.zero_shot.deployment import dap_class_accuracy
 from tzsl.studies.zero_shot.split_posteriors import SplitPosteriors
 from tzsl.studies.zero_shot.spread import evidence_tables, model_seed
 from tzsl.studies.zero_shot.tables import (
@@ -248,6 +249,7 @@ def run_zero_shot_tables(
     echo=None,
     record: dict | None = None,
     labels: StudyLabels | None = None,
+    per_class: dict[str, pd.DataFrame] | None = None,
 ) -> dict[str, pd.DataFrame]:
     """Fit and score DAP (and the compared methods) on the study's splits; write its tables and figures into ``out``.
 
@@ -275,6 +277,10 @@ def run_zero_shot_tables(
     labels : StudyLabels or None
         How the tables name the run and whether the paper's numbers go beside
         (:func:`tzsl.studies.papers.run_labels.study_labels`); default: a generic run, no paper.
+    per_class : dict or None
+        Filled, by split kind, with every method's accuracy per (split, test class)
+        (:func:`tzsl.studies.zero_shot.deployment.class_accuracy`; the DAP rows alone on the random or file
+        splits when no method is compared on them): what the deploy choice reads.
 
     Returns
     -------
@@ -335,8 +341,10 @@ def run_zero_shot_tables(
             purpose=config.splits.purpose, n_jobs=config.compute.n_jobs,
             methods=config.methods.method_specs(),
             refit_seeds=config.splits.refit_seeds, refit_splits=config.splits.refit_splits,
-            refit=lambda split, index, k: fit_split(features, split, config, index, refit=k))
+            refit=lambda split, index, k: fit_split(features, split, config, index, refit=k), per_class=per_class)
         tables.update(evidence)
+        if per_class is not None and random_results and scored not in per_class:
+            per_class[scored] = dap_class_accuracy(random_results)
         write_reliability_figure(out, tables, labels.reliability_table, labels.comparison_table)
         if failed:
             tables[FAILED_SPLITS] = pd.DataFrame(failed)
