@@ -70,7 +70,8 @@ def test_the_template_run_fits_one_screen_verbose_prints_the_tables_and_no_bar_i
     assert "relaxed: " in text and "note: relaxed " in text  # the study's notes, then how many
     assert "random splits, 2 splits, " in text and "accuracy [95% interval], chance " in text
     assert "intervals clear chance" in text or "no interval clears chance" in text
-    assert f"deploy: not chosen here; tzsl train-attributes trains {DEFAULT_METHOD} by default" in text
+    assert "deploy: " in text and " (deployment.json): " in text  # the study's choice (tests/cli/test_deploy_choice.py)
+    assert f"model: tzsl train-attributes --from-results {Path('results/plain')} --out model.tzsl" in text
     assert "tables: 12 CSV and 3 figures in results/plain" in text
     assert "report: tzsl report results/plain" in text and "wrote " in lines[-1]
     assert "Methods vs" not in text  # the tables are --verbose's
@@ -138,7 +139,8 @@ def test_many_groups_and_long_notes_stay_within_the_screen():
         assert lines[1] == "relaxed: 3 setting(s) to fit the dataset (the notes above; manifest.json 'relaxations')"
         assert lines[2].startswith("zero-shot-0, random splits")  # the first split kind is always said
         assert any("more split kinds or studies" in line for line in lines)
-        assert lines[-3].startswith("deploy:") and lines[-1].startswith("report:")
+        assert lines[-3].startswith(f"deploy: not chosen here; tzsl train-attributes trains {DEFAULT_METHOD}")
+        assert lines[-1].startswith("report:")
     per_study = study_lines(tables)
     assert sum("splits: most accurate m11 0.610 [0.300, 0.700]" in line for line in per_study) == 12
     assert all(len(line) <= WIDTH for line in per_study)

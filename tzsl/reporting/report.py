@@ -3,9 +3,10 @@
 The report of a **generic study** (a lab's dataset run with ``study = "zero-shot"``) opens with the
 dataset's name and card (what ``tzsl validate`` knows: classes, attributes, trials, sensors;
 :mod:`tzsl.reporting.summary`), then a summary: the most accurate method against chance and the
-trivial baseline with intervals, whether any method's interval clears chance, and what the run
-relaxed to fit the dataset. Its sections are named for what they show (:data:`SECTIONS`), and no
-paper heading, paper text or paper number appears.
+trivial baseline with intervals, whether any method's interval clears chance, what the run
+relaxed to fit the dataset and the method it would deploy (:mod:`tzsl.reporting.deployment`). Its
+sections are named for what they show (:data:`SECTIONS`), and no paper heading, paper text or paper
+number appears.
 
 The report of the **paper studies** (``tzsl reproduce-tables``, the presets ``phac2-dap``,
 ``fabric``, ``hand``) is organised by the papers' tables and figures, each accuracy shown as
@@ -43,6 +44,7 @@ from tzsl._io import atomic_write
 from tzsl.evaluation import INTERVAL_DOC
 from tzsl.exceptions import ConfigError, DataFileError
 from tzsl.reporting.best_method import findings
+from tzsl.reporting.deployment import deploy_choice, deployment_lines
 from tzsl.reporting.manifests import (
     config_items,
     dataset_names,
@@ -159,13 +161,15 @@ def _opening(root: Path, paper: bool, records: dict[str, dict], manifests: dict[
         lists = [s for s in (m.get("reproduce_studies") for m in manifests.values()) if s]
         studies = ", ".join(lists[0] if lists else records) or root.resolve().name
         return {"title": f"tzsl results: {studies}", "dataset": None, "description": None, "card": [],
-                "card_note": None, "summary": [], "relaxed": []}
+                "card_note": None, "summary": [], "relaxed": [], "deploy": []}
     data_files = {k: v for m in manifests.values() for k, v in (m.get("data_files") or {}).items()}
     card, note = dataset_card_items(next(iter(records.values())), data_files) if len(records) == 1 else ([], None)
     descriptions = [m.get("description") for m in manifests.values() if m.get("description")]
     return {"title": f"{', '.join(names) or root.resolve().name}: zero-shot study",
             "dataset": ", ".join(names) or None, "description": descriptions[0] if descriptions else None,
-            "card": card, "card_note": note, "summary": headline(frames), "relaxed": relaxations(records)}
+            "card": card, "card_note": note, "summary": headline(frames), "relaxed": relaxations(records),
+            "deploy": [line.removeprefix("deploy: ") for record in records.values() if deploy_choice(record)
+                       for line in deployment_lines(record, root)]}
 
 
 def render_report(folder: str | os.PathLike, title: str | None = None, exclude: Sequence[Path] = ()) -> str:

@@ -6,8 +6,8 @@ run`` then ends with :func:`run_summary`, fitted with what was printed before in
 lines of at most :data:`WIDTH` characters (a path longer than that stays whole): the dataset in a
 line, how many settings were relaxed, per split kind the most accurate methods and the reference
 with their 95% intervals against chance, how many intervals clear chance, the paired difference of
-the most accurate method to the reference, the method a robot would be given
-(:func:`deployment_line`), and where the CSVs and the report are. ``tzsl reproduce-tables`` and
+the most accurate method to the reference, the method a robot would be given (the study's deploy
+choice, :mod:`tzsl.reporting.deployment`), and where the CSVs and the report are. ``tzsl reproduce-tables`` and
 ``tzsl evidence`` print :func:`study_lines` after each study. Every number comes from the tables the
 study wrote (the same data frames as its CSVs), through the report's own reading of them
 (:func:`tzsl.reporting.summary.chance_verdicts`, :func:`tzsl.reporting.manifests.relaxations`);
@@ -23,10 +23,11 @@ from typing import Any
 
 import pandas as pd
 
+from tzsl.reporting.deployment import deployment_lines
 from tzsl.reporting.manifests import dict_at, relaxations
 from tzsl.reporting.summary import ChanceVerdict, chance_verdicts, trivial_baseline
 
-__all__ = ["MAX_LINES", "TOP_METHODS", "WIDTH", "deployment_line", "notes_only", "run_summary", "study_lines"]
+__all__ = ["MAX_LINES", "TOP_METHODS", "WIDTH", "notes_only", "run_summary", "study_lines"]
 
 #: Most lines a run prints without ``--verbose`` (its first and last lines and the study's notes included).
 MAX_LINES = 40
@@ -130,15 +131,11 @@ def _verdict_lines(verdict: ChanceVerdict, label: str, baseline: str | None, mor
     return lines
 
 
-def deployment_line() -> str:
-    """What a robot would be given: this run chooses no method yet, so the default of ``tzsl train-attributes``
-    (:data:`tzsl.models.choices.DEFAULT_METHOD`, the inherited choice ``default-method``)."""
-    from tzsl.models import get_method  # noqa: PLC0415 - the registry, read only when a summary is printed
-    from tzsl.models.choices import DEFAULT_METHOD  # noqa: PLC0415
-
-    preset = ", ".join(f"{key}={value}" for key, value in get_method(DEFAULT_METHOD).preset.items())
-    return (f"deploy: not chosen here; tzsl train-attributes trains {DEFAULT_METHOD} by default"
-            + (f" ({preset})" if preset else ""))
+def _deployment_lines(record: Mapping[str, Any], root: Path) -> list[str]:
+    """What a robot would be given (:func:`tzsl.reporting.deployment.deployment_lines`), wrapped: the study's
+    deploy choice, or ``tzsl train-attributes``' default when it made none."""
+    first, *rest = deployment_lines(record, root)
+    return [*_wrap(first), *(line for text in rest for line in _wrap(text, "  "))]
 
 
 def _where_lines(root: Path, written: Sequence[Path]) -> list[str]:
@@ -206,11 +203,11 @@ def run_summary(tables: Mapping[str, pd.DataFrame], record: Mapping[str, Any], r
     list of str
         The dataset, what was relaxed, per split kind the most accurate methods and the reference
         with their intervals against chance (a split kind that does not fit in full in a line or
-        two, then ``... N more``), the method to deploy, where the CSVs and the report are.
+        two, then ``... N more``), the method to deploy and its model, where the CSVs and the report are.
     """
     head = [*_dataset_line(record), _relaxed_line(record)]  # the study's notes were said as it ran
     blocks = _verdict_blocks(tables, _comparison_file(tables, written))
-    tail = [line for text in (deployment_line(),) for line in _wrap(text)] + _where_lines(root, written)
+    tail = _deployment_lines(record, root) + _where_lines(root, written)
     budget = MAX_LINES - FRAME_LINES - printed - len(head) - len(tail)
     middle: list[str] = [] if blocks else _wrap(f"tables: {', '.join(sorted(tables))}")[:2]
     for n, (full, compact) in enumerate(blocks):
