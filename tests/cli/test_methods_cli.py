@@ -46,3 +46,24 @@ def test_dap_is_listed_once_with_its_detectors_as_values_and_its_aliases():
         fixed = ", ".join(f"{k}={v!r}" for k, v in entry.items() if k != "name")
         assert sum(line.strip().endswith(f"{alias} = dap({fixed})") for line in lines) == 1, alias
     assert "dap-avg-logistic-c1 = dap(detector='logistic-c1', fusion='avg', prior='uni')" in result.output
+
+
+def test_train_attributes_takes_an_old_name_and_dap_with_a_detector(tmp_path):
+    """``--method`` accepts an alias and ``dap`` (the bundle names that configuration); an unknown name fails
+    before any data is read, listing the methods and the aliases. The dataset is SIMULATED."""
+    from tests.studies.test_zero_shot_study import simulated_dataset
+    from tzsl.inference.bundle import read_bundle_header
+    from tzsl.studies.config import method_label
+
+    data = simulated_dataset(tmp_path / "data", 8, 3, 2, seed=2)
+    for name in ("dap-avg-logistic-c1", "dap"):
+        model = tmp_path / f"{name}.tzsl"
+        result = CliRunner().invoke(cli, ["train-attributes", "--plain", str(data), "--method", name, "--no-cache",
+                                          "--no-progress", "--out", str(model)])
+        assert result.exit_code == 0, result.output + result.stderr
+        recorded = read_bundle_header(model).metadata["method"]  # the name given, or its row label
+        assert method_label({"name": recorded}) == method_label({"name": name})
+    result = CliRunner().invoke(cli, ["train-attributes", "--plain", str(data), "--method", "dap-svm",
+                                      "--out", str(tmp_path / "x.tzsl")])
+    assert result.exit_code != 0 and "unknown method 'dap-svm'" in result.output + result.stderr
+    assert "aliases: [" in result.output + result.stderr and not (tmp_path / "x.tzsl").exists()
