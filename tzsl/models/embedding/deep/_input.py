@@ -27,9 +27,9 @@ def require_torch():
 def deep_nets():
     """The torch-based module :mod:`tzsl.models.embedding.deep._backbones` (imports torch)."""
     require_torch()
-    from tzsl.models.embedding.deep import _backbones as _deep_backbones  # noqa: PLC0415 - lazy: torch is optional
+    from tzsl.models.embedding.deep import _backbones  # noqa: PLC0415 - lazy: torch is optional
 
-    return _deep_backbones
+    return _backbones
 
 
 def sha256_arrays(*arrays) -> str:
