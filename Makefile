@@ -31,18 +31,32 @@ DEV_LOCK := requirements/dev.lock.txt
 # the lock tool of `make lock`
 UV_VERSION := 0.13.8
 
+# Locked installs go through uv (the same wheels as pip, in seconds where pip takes minutes on CI's machine).
+# uv reads no pip configuration, so the one pip would use is handed over: its index,
+# extra indexes, local wheel folders and constraints (`pip config get`, PIP_FIND_LINKS), every index searched for
+# the best version as pip does (--index-strategy unsafe-best-match), certificates from the system's store.
+define uv_install
+	pipcfg() { $(BIN)/pip config get global.$$1 2>/dev/null || true; }; \
+	  index="$$(pipcfg index-url)"; extra="$$(pipcfg extra-index-url)"; links="$$(pipcfg find-links) $${PIP_FIND_LINKS:-}"; \
+	  constraint="$$(pipcfg constraint)"; \
+	  $(BIN)/uv pip install --quiet --python $(BIN)/python --native-tls --index-strategy unsafe-best-match \
+	    $${index:+--index-url "$$index"} $$(for u in $$extra; do echo "--extra-index-url $$u"; done) \
+	    $$(for f in $$links; do echo "--find-links $$f"; done) $${constraint:+--constraint "$$constraint"} $(1)
+endef
+
 # The core package alone, at the locked versions: all that reproduce-tables, evidence and the number blocks
 # need (no torch, no test extras).
 $(VENV)/.installed-core: pyproject.toml $(CORE_LOCK) $(BIN)/activate
-	$(BIN)/pip install --quiet -r $(CORE_LOCK)
-	$(BIN)/pip install --quiet --no-deps -e .
+	$(BIN)/pip install --quiet uv==$(UV_VERSION)
+	$(call uv_install,-r $(CORE_LOCK))
+	$(call uv_install,--no-deps -e .)
 	touch $@
 
 # Everything: the test, Dask, docs and lint extras at the locked versions, and the deep extra (torch, pinned
 # exactly in pyproject.toml; torch's own dependencies are not in the lock), for the test suite and the docs.
 $(VENV)/.installed: $(VENV)/.installed-core $(DEV_LOCK)
-	$(BIN)/pip install --quiet -r $(DEV_LOCK)
-	$(BIN)/pip install --quiet -c $(DEV_LOCK) -e '.[deep]'
+	$(call uv_install,-r $(DEV_LOCK))
+	$(call uv_install,-c $(DEV_LOCK) -e '.[deep]')
 	touch $@
 
 install-core: $(VENV)/.installed-core
@@ -61,8 +75,10 @@ lint: install
 	$(BIN)/ruff check .
 	$(BIN)/mypy
 
+# --dist loadfile: a file's tests share a worker, so the docs build (tests/test_docs.py) is made once and no
+# worker waits for it (the locked pytest and pytest-xdist ignore xdist_group marks).
 test: install browser lint
-	$(BIN)/pytest -q -n $(TEST_WORKERS) --dist loadgroup
+	$(BIN)/pytest -q -n $(TEST_WORKERS) --dist loadfile
 
 # Resolve the locks again from pyproject.toml (CPython 3.11 on this platform, the versions the index serves
 # today); then run reproduce-tables and `make numbers`, and say in CHANGELOG.md what moved.

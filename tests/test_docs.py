@@ -28,22 +28,33 @@ def _text(page: Path) -> str:
     return html_escape.unescape(re.sub(r"<[^>]+>", "", page.read_text(encoding="utf-8")))
 
 
-#: One Sphinx build at a time: it writes the API stubs into the source tree (``docs/``), so two pytest-xdist
-#: workers building at once remove each other's files. ``make test`` runs this group in one worker
-#: (``--dist loadgroup``), and the build holds a lock shared by the workers whatever the scheduling.
-pytestmark = pytest.mark.xdist_group("sphinx-build")
+#: One Sphinx build per test run: it writes the API stubs into the source tree (``docs/``), so two builds at once
+#: remove each other's files, and a build costs minutes. ``make test`` keeps this file on one pytest-xdist worker
+#: (``--dist loadfile``); whatever the scheduling, the build is made once under a lock shared by the workers and
+#: read by every worker that needs it.
+
+
+def _run_folder(tmp_path_factory) -> Path:
+    """The folder every xdist worker of this run shares (the base temp folder without xdist)."""
+    base = tmp_path_factory.getbasetemp()
+    return base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
 
 
 @pytest.fixture(scope="module")
 def html(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("docs")
+    run = _run_folder(tmp_path_factory)
+    out = run / "docs-build"
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
            "MPLBACKEND": "Agg"}
-    lock_path = tmp_path_factory.getbasetemp().parent / "sphinx-build.lock"  # shared by the xdist workers
-    with open(lock_path, "w") as lock:
+    with open(run / "sphinx-build.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
-        build = _sphinx(out, env)
-    assert build.returncode == 0, f"sphinx-build -W failed:\n{build.stdout[-3000:]}\n{build.stderr[-6000:]}"
+        outcome = out / "outcome.txt"
+        if not outcome.exists():
+            out.mkdir(parents=True, exist_ok=True)
+            build = _sphinx(out, env)
+            outcome.write_text(f"{build.returncode}\n{build.stdout[-3000:]}\n{build.stderr[-6000:]}", encoding="utf-8")
+    code, _, logs = outcome.read_text(encoding="utf-8").partition("\n")
+    assert code == "0", f"sphinx-build -W failed:\n{logs}"
     return out / "html"
 
 

@@ -82,3 +82,15 @@ def test_a_manifest_records_the_environment_against_the_lock(tmp_path):
     assert record["lock_file"] == "requirements/core.lock.txt"
     assert record["installed"]["numpy"] == installed_distributions()["numpy"]
     assert isinstance(record["matches_lock"], bool)
+
+
+def test_make_test_keeps_a_files_tests_on_one_worker_and_no_test_relies_on_xdist_groups():
+    """The locked pytest (9.2) names a test by a structured id that pytest-xdist 3.8 cannot suffix, so
+    ``--dist loadgroup`` silently spread ``xdist_group`` tests over the workers and the docs were built twice
+    (one worker waiting minutes for the other's lock). ``make test`` schedules by file instead."""
+    makefile = (REPO / "Makefile").read_text(encoding="utf-8")
+    test_recipe = makefile.split("\ntest: ", 1)[1].split("\n\n", 1)[0]
+    assert "--dist loadfile" in test_recipe
+    marked = [p.relative_to(REPO) for p in (REPO / "tests").rglob("*.py")
+              if "mark.xdist_" + "group" in p.read_text(encoding="utf-8")]
+    assert marked == [], f"xdist groups are ignored by the locked pytest: {marked}"

@@ -32,7 +32,7 @@ from threadpoolctl import threadpool_limits
 from tzsl.models.protocol import LAST_BIT_NOTE
 from tzsl.studies.reproduce import REPRODUCE_STUDIES, reproduce_tables
 
-pytestmark = [pytest.mark.slow, pytest.mark.realdata, pytest.mark.xdist_group("last_bit")]
+pytestmark = [pytest.mark.slow, pytest.mark.realdata]
 
 #: Relative size of the perturbation.
 RELATIVE = 1e-12
