@@ -138,7 +138,7 @@ def test_run_train_from_results_and_predict_use_the_same_method(tmp_path, monkey
     monkeypatch.chdir(tmp_path)
     dataset = _dataset(tmp_path / "my_dataset")
     text = TEMPLATE.read_text().replace('folder = "results/my_dataset"', 'folder = "results/lab"\nmodel = true')
-    (tmp_path / "lab.toml").write_text(text + FAST_TEMPLATE + 'detector = "rbf-svm"\n')  # the default is run
+    (tmp_path / "lab.toml").write_text(text + FAST_TEMPLATE)  # the study's own DAP is the default: it is run
     out = _ok(["run", "lab.toml"])
     results = tmp_path / "results" / "lab"
     record = json.loads((results / DEPLOYMENT_FILE).read_text())

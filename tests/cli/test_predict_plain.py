@@ -17,6 +17,7 @@ from click.testing import CliRunner
 from tzsl.cli import cli
 from tzsl.datasets import write_plain_dataset
 from tzsl.inference.bundle import read_bundle_header
+from tzsl.models.choices import DEFAULT_METHOD
 
 ATTRS = ["hard", "soft", "rough"]
 CLASSES = pd.DataFrame(list(itertools.product([0, 1], repeat=3)), columns=ATTRS,
@@ -65,7 +66,7 @@ def test_signal_dataset_train_then_predict_unseen_from_signal_files(signal_datas
               "--no-progress", "--out", model)
     assert "wrote" in out
     meta = read_bundle_header(model).metadata
-    assert meta["method"] == "dap-avg" and meta["attribute_names"] == ATTRS
+    assert meta["method"] == DEFAULT_METHOD and meta["attribute_names"] == ATTRS
     assert sorted(meta["training_objects"]) == sorted(set(CLASSES.index) - set(UNSEEN))
     assert meta["input"]["signals"] == {"channels": ["p", "q", "r"], "statistics": ["mean", "std"],
                                         "baseline_rows": 0}

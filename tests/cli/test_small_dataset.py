@@ -22,6 +22,7 @@ from tests.study_settings import FAST_TEMPLATE
 from tzsl.cli import EXIT_TZSL_ERROR, cli
 from tzsl.datasets import write_plain_dataset
 from tzsl.inference.bundle import read_bundle_header
+from tzsl.models.choices import DEFAULT_METHOD
 
 REPO = Path(__file__).resolve().parents[2]
 TEMPLATE = REPO / "experiments" / "my_dataset_template.toml"
@@ -114,7 +115,7 @@ def test_the_readme_own_data_steps_run_end_to_end_on_a_small_dataset(lab_dataset
         for name, reason in RARE.items():
             assert f"note: attribute {name!r} left out of the model: {reason}" in out, out
         meta = read_bundle_header(model).metadata
-        assert meta["method"] == (method or "dap-avg") and meta["attribute_names"] == KEPT
+        assert meta["method"] == (method or DEFAULT_METHOD) and meta["attribute_names"] == KEPT
         assert _left_out(model) == RARE and meta["min_objects"] is None
         text = _ok("predict", "--model", model, "--classes", lab_dataset, grasp)
         notes = [line for line in text.splitlines() if line.startswith("note: ")]

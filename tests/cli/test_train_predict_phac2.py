@@ -10,6 +10,7 @@ from tzsl.cli import cli
 from tzsl.datasets._feature_table import read_feature_table, write_feature_table
 from tzsl.inference.bundle import read_bundle_header
 from tzsl.inference.zero_shot_bundles import load_predictor
+from tzsl.models.choices import DEFAULT_METHOD
 
 
 def _ok(args):
@@ -25,7 +26,7 @@ def test_train_on_split_then_predict_unseen_object(data_dir, tmp_path):
                "--data-dir", data_dir])
     assert "wrote" in out
     header = read_bundle_header(model)
-    assert header.kind == "zero-shot" and header.metadata["method"] == "dap-avg"
+    assert header.kind == "zero-shot" and header.metadata["method"] == DEFAULT_METHOD
     meta = header.metadata
     table = pd.read_csv(splits)
     test_objects = table.loc[table["role"] == "test", "object"].tolist()

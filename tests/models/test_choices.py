@@ -15,7 +15,7 @@ from tzsl.models import (
     ScoreEnsembleZSL,
     get_method,
 )
-from tzsl.models.choices import NO_SELECTION_SPLITS, inherited_choices
+from tzsl.models.choices import DEFAULT_METHOD, NO_SELECTION_SPLITS, inherited_choices
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 
@@ -39,7 +39,7 @@ def test_values_are_read_from_the_code_not_typed():
     by_key = {c.key: c for c in INHERITED_CHOICES}
     members = inspect.signature(ScoreEnsembleZSL).parameters["methods"].default
     assert by_key["ensemble-members"].read() == members
-    assert by_key["default-method"].read() == dict(get_method("dap-avg").preset)
+    assert by_key["default-method"].read() == dict(get_method(DEFAULT_METHOD).preset)
     assert by_key["attribute-svm-grid"].read()["grid"] == AttributeSVM().grid
 
 
