@@ -289,3 +289,7 @@ def test_relaxation_notes_say_each_reason_once_with_its_splits():
     assert relaxation_notes(cells) == [
         "splits random-3, random-4: stacking of dap skipped: E: absent in 1 object(s); need 2",
         "split random-3: stacking of eszsl skipped: Z"]
+    # a reason ending "; split left out" is not a split of its own (it printed an empty 'note: relaxed gzsl')
+    left_out = "split random-2: every test object shares its attribute row with a training object; split left out"
+    assert relaxation_notes(pd.Series([left_out, left_out.replace("random-2", "random-5")])) == [
+        "splits random-2, random-5: every test object shares its attribute row with a training object; split left out"]

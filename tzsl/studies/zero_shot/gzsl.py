@@ -347,10 +347,11 @@ def relaxation_notes(cells: pd.Series) -> list[str]:
 
     A cell holds ``"; "``-joined parts, each ``"split NAME: reason"`` (a reason may hold ``"; "`` itself);
     ``"split random-3: x"`` and ``"split random-4: x"`` become ``"splits random-3, random-4: x"``.
+    A part starts at ``"; split NAME: "`` only (a reason such as ``"...; split left out"`` stays whole).
     """
     by_reason: dict[str, list[str]] = {}
     for cell in cells.fillna("").astype(str):
-        for part in filter(None, (p.strip() for p in re.split(r"; (?=split )", cell))):
+        for part in filter(None, (p.strip() for p in re.split(r"; (?=split [^\s:;]+: )", cell))):
             if part == "-":
                 continue
             name, sep, reason = part.partition(": ") if part.startswith("split ") else ("", "", part)
