@@ -7,6 +7,7 @@ import shutil
 import pooch
 import pytest
 
+from tests.datasets.biotac_slide_release import catalog_files
 from tzsl.datasets import _registry, fetch, load_phac2_hold_mat, load_phac2_penn, registered_files
 from tzsl.exceptions import ChecksumError, DataMissingError
 
@@ -38,7 +39,8 @@ def test_registry_covers_the_provenance_tables():
 
 @pytest.mark.realdata
 def test_every_registered_file_verifies_on_the_real_data(data_dir):
-    paths = [fetch(rel, data_dir) for rel in registered_files()]
+    """Every file of the shared data's datasets (the catalog's are fetched on first use, not shared)."""
+    paths = [fetch(rel, data_dir) for rel in registered_files() if rel not in catalog_files()]
     assert all(p.is_file() for p in paths)
 
 

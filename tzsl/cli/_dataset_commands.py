@@ -205,12 +205,21 @@ def convert(source: str | None, mapping: Path | None, allow_outside: bool, datas
                    f"trials, {len(done['sensors'])} sensor(s), {len(done['channels'])} channels per signal file; "
                    f"next: tzsl validate {folder}")
         return
-    from tzsl.datasets import feature_set_to_plain, get_dataset, write_plain_dataset  # noqa: PLC0415
+    from tzsl.datasets import CatalogDataset, feature_set_to_plain, get_dataset, write_plain_dataset  # noqa: PLC0415
     from tzsl.features import BIOTAC_CHANNELS, dataset_features, raw_trial_signals  # noqa: PLC0415
 
     assert dataset is not None  # exactly one of --from and --dataset, checked above
     if out.exists() and (not out.is_dir() or any(out.iterdir())) and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite")
+    builtin = get_dataset(dataset)
+    if isinstance(builtin, CatalogDataset):  # its own loader writes the folder, every attribute as published
+        from tzsl.datasets import read_plain_dataset  # noqa: PLC0415
+
+        written = read_plain_dataset(builtin.convert(out, data_dir, force=force, signal_format=signal_format))
+        click.echo(f"wrote {out}: {len(written.classes)} classes x {written.classes.shape[1]} attributes, "
+                   f"{written.n_trials} trials, {len(written.sensors)} sensor(s), {len(written.channels or ())} "
+                   f"channels per signal file; next: tzsl validate {out}")
+        return
     features = dataset_features(dataset, data_dir=data_dir, min_objects=min_objects)
     if get_dataset(dataset).content == "static-features":
         feature_set_to_plain(features, out, force=force)

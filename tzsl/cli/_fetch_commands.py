@@ -63,7 +63,7 @@ def fetch(names: tuple[str, ...], mirror: str | None, timeout: float | None, wor
     Files already present with the registered sha256 are kept, so an interrupted fetch goes on
     where it stopped; a download is checked before it is moved into place, and temporary files
     a killed fetch left behind are removed. Names: the registry's datasets (phac2, fabric,
-    gelsight_press).
+    gelsight_press, and the catalog's public datasets such as biotac-slide).
     """
     from tzsl.datasets import fetch_datasets, get_data_home  # noqa: PLC0415
     from tzsl.exceptions import DataMissingError  # noqa: PLC0415

@@ -12,8 +12,10 @@ from typing import Any
 
 #: Public name -> the module of this package that defines it.
 _EXPORTS: dict[str, str] = {
-    **dict.fromkeys(["TactileDataset", "builtin_data_files", "dataset_names", "get_dataset", "register_dataset"],
-                    "_builtin"),
+    **dict.fromkeys(["CatalogDataset", "TactileDataset", "builtin_data_files", "dataset_names", "get_dataset",
+                     "register_dataset"], "_builtin"),
+    **dict.fromkeys(["BIOTAC_SLIDE_CHANNELS", "MaterialTable", "convert_biotac_slide", "read_biotac_slide_attributes",
+                     "read_biotac_slide_csv"], "_biotac_slide"),
     **dict.fromkeys(["FINGER_NAMES", "Grasp", "HandTable", "JOINT_NAMES", "grasp_from_arrays", "load_hand_table4",
         "read_grasps", "write_grasps"], "_grasps"),
     **dict.fromkeys(["SimulatedGrasps", "simulate_grasps"], "_hand_simulator"),
@@ -67,6 +69,7 @@ def __dir__() -> list[str]:
 
 
 __all__ = [
+    "CatalogDataset",
     "TactileDataset",
     "builtin_data_files",
     "dataset_names",
@@ -94,6 +97,11 @@ __all__ = [
     "read_feature_table",
     "write_feature_table",
     "get_data_home",
+    "BIOTAC_SLIDE_CHANNELS",
+    "MaterialTable",
+    "convert_biotac_slide",
+    "read_biotac_slide_attributes",
+    "read_biotac_slide_csv",
     "get_cache_dir",
     "CACHE_DIR_ENV",
     "SignalTable",

@@ -8,18 +8,31 @@ features); :func:`tzsl.features.dataset_features` turns what it reads into a
 (``tzsl formats``) and the lab readers (``tzsl convert --from``) cover it.
 
 Adding a built-in dataset: a subclass with its metadata and ``load`` (and ``labels`` for raw
-signals), then one :func:`register_dataset` line.
+signals), then one :func:`register_dataset` line. A public dataset of the catalog
+(``docs/user_guide/dataset_catalog.md``) is a :class:`CatalogDataset`: its files registered, a
+``convert`` that writes it as a plain-file folder, and ``load`` reads that folder (converted once).
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
 import warnings
 from abc import ABC, abstractmethod
+from importlib import resources
+from pathlib import Path
 from typing import ClassVar, Literal
 
 import pandas as pd
 
+from tzsl.datasets._biotac_slide import (
+    ATTRIBUTE_TABLE,
+    BIOTAC_SLIDE,
+    BIOTAC_SLIDE_COMMIT,
+    BIOTAC_SLIDE_DIR,
+    convert_biotac_slide,
+)
+from tzsl.datasets._catalog import converted_folder
 from tzsl.datasets._fabric import (
     FABRIC_ATTRIBUTE_SETS,
     FABRIC_DEPTH_DIR,
@@ -32,11 +45,12 @@ from tzsl.datasets._hand_simulator import SimulatedGrasps, simulate_grasps
 from tzsl.datasets._phac2_h5 import load_phac2_h5
 from tzsl.datasets._phac2_hold_mat import HOLD_DIR, LABELS_CSV, load_phac2_hold_mat, load_phac2_labels
 from tzsl.datasets._phac2_penn import PENN_STATIC_DIR, PennStaticData, load_phac2_penn
-from tzsl.datasets._registry import registered_files
+from tzsl.datasets._plain import PlainDataset, read_plain_dataset
+from tzsl.datasets._registry import registered_files, registered_hash
 from tzsl.datasets._types import PHAC2_EPS, RawTrial
 from tzsl.exceptions import ConfigError
 
-__all__ = ["TactileDataset", "builtin_data_files", "dataset_names", "get_dataset", "register_dataset"]
+__all__ = ["CatalogDataset", "TactileDataset", "builtin_data_files", "dataset_names", "get_dataset", "register_dataset"]
 
 PathLike = str | os.PathLike
 
@@ -52,12 +66,14 @@ class TactileDataset(ABC):
         One line: what it holds (trials, sensors, features).
     source : str
         Where it comes from (publication or release).
-    content : {"static-features", "signals", "depth-images", "simulated-grasps"}
+    content : {"static-features", "signals", "depth-images", "simulated-grasps", "plain"}
         ``load`` returns per-trial features as published (:class:`~tzsl.datasets.PennStaticData`),
         raw signals (a list of :class:`~tzsl.datasets.RawTrial`, with ``labels``), the fabric
         depth-image table (:class:`~tzsl.datasets.FabricData`; features: texture descriptors) or
         simulated Shadow-hand grasps (:class:`~tzsl.datasets.SimulatedGrasps`, with ``labels``;
-        features: the packed grasp features).
+        features: the packed grasp features), or a plain-file dataset folder
+        (:class:`~tzsl.datasets.PlainDataset`, a :class:`CatalogDataset`; features as the plain format
+        computes them).
     eps : tuple of str
         The exploratory procedures its trials hold.
     needs_path : bool
@@ -76,7 +92,7 @@ class TactileDataset(ABC):
     name: ClassVar[str]
     description: ClassVar[str]
     source: ClassVar[str]
-    content: ClassVar[Literal["static-features", "signals", "depth-images", "simulated-grasps"]]
+    content: ClassVar[Literal["static-features", "signals", "depth-images", "simulated-grasps", "plain"]]
     eps: ClassVar[tuple[str, ...]]
     needs_path: ClassVar[bool] = False
     convertible: ClassVar[bool] = True
@@ -84,8 +100,8 @@ class TactileDataset(ABC):
     registry_files: ClassVar[tuple[str, ...]] = ()
 
     @abstractmethod
-    def load(self, data_dir: PathLike | None = None,
-             path: PathLike | None = None) -> PennStaticData | list[RawTrial] | FabricData | SimulatedGrasps:
+    def load(self, data_dir: PathLike | None = None, path: PathLike | None = None
+             ) -> PennStaticData | list[RawTrial] | FabricData | SimulatedGrasps | PlainDataset:
         """The data as published (files read from the data home, or ``path``)."""
 
     def labels(self, data_dir: PathLike | None = None) -> pd.DataFrame:
@@ -201,6 +217,57 @@ class HandSimulated(TactileDataset):
         return []
 
 
+class CatalogDataset(TactileDataset):
+    """A public tactile dataset of the catalog: fetched as published, written once as a plain-file folder.
+
+    A subclass names its registered files (:attr:`registry_files`) and implements :meth:`convert`;
+    :meth:`load` converts into the cache folder the first time (``<cache folder>/catalog/<name>-<key>``,
+    the key a digest of the registered hashes of the files, :attr:`version` and
+    :meth:`conversion_inputs`) and reads that folder.
+    """
+
+    content = "plain"
+    #: The loader's version: raise it when :meth:`convert` writes something else from the same files.
+    version: ClassVar[str] = "1"
+
+    @abstractmethod
+    def convert(self, out: PathLike, data_dir: PathLike | None = None, *, force: bool = False,
+                signal_format: str = "npz") -> Path:
+        """Write the dataset as a plain-file folder ``out`` from the registered files in the data home."""
+
+    def conversion_inputs(self) -> list[str]:
+        """What :meth:`convert` depends on besides the registered files (e.g. a class table's digest)."""
+        return []
+
+    def load(self, data_dir: PathLike | None = None, path: PathLike | None = None) -> PlainDataset:
+        parts = [self.name, self.version, *self.conversion_inputs(),
+                 *(f"{r} {registered_hash(r)}" for r in builtin_data_files(self.name))]
+        return read_plain_dataset(converted_folder(self.name, parts, lambda out: self.convert(out, data_dir)))
+
+    def data_files(self, loaded: PlainDataset) -> list[str]:  # type: ignore[override]  # given only its own load()
+        return sorted(str(p) for p in loaded.folder.rglob("*") if p.is_file())
+
+
+class BiotacSlide(CatalogDataset):
+    """dexrob/BioTac_slide_20_50: one trial per slide, object and class = the material
+    (:func:`~tzsl.datasets.convert_biotac_slide`; the catalog page gives its attributes' sources)."""
+
+    name = BIOTAC_SLIDE
+    description = ("20 materials x 50 BioTac slides (the raw 44-channel CSVs), one trial per slide; 3 attributes "
+                   "from the release's material property document; per-channel signal statistics")
+    source = (f"Gao et al. (IROS 2020); github.com/dexrob/BioTac_slide_20_50 at commit {BIOTAC_SLIDE_COMMIT[:7]}, "
+              "fetched on first use")
+    eps = ("slide",)
+    registry_files = (BIOTAC_SLIDE_DIR,)
+
+    def convert(self, out, data_dir=None, *, force=False, signal_format="npz") -> Path:
+        return convert_biotac_slide(out, data_dir, force=force, signal_format=signal_format)
+
+    def conversion_inputs(self) -> list[str]:
+        table = resources.files("tzsl.datasets").joinpath(ATTRIBUTE_TABLE).read_bytes()
+        return [hashlib.sha256(table).hexdigest()]
+
+
 _DATASETS: dict[str, TactileDataset] = {}
 
 
@@ -247,3 +314,4 @@ register_dataset(Phac2H5())
 register_dataset(Phac2HoldMat())
 register_dataset(FabricDepth())
 register_dataset(HandSimulated())
+register_dataset(BiotacSlide())

@@ -193,7 +193,8 @@ def fetch_datasets(
     Parameters
     ----------
     names : sequence of str
-        Dataset names (:func:`registered_datasets`: ``phac2``, ``fabric``, ``gelsight_press``).
+        Dataset names (:func:`registered_datasets`: ``phac2``, ``fabric``, ``gelsight_press``, and the
+        catalog's public datasets such as ``biotac-slide``).
     data_dir : path-like, optional
         Data home (:func:`tzsl.datasets.get_data_home`).
     mirror : str, optional

@@ -71,6 +71,11 @@ _SOURCES: tuple[tuple[str, str], ...] = (
         "a20cbfa4057a33888f6c1be106407e8a607a89ad, folder data/",
     ),
     (
+        "biotac-slide/",
+        "https://github.com/dexrob/BioTac_slide_20_50 at commit c19638b040791b7b32f2fcf12eee315ca901f80a, "
+        "folder raw_data/ (the catalog's biotac-slide; docs/user_guide/dataset_catalog.md)",
+    ),
+    (
         "gelsight_press/",
         "https://github.com/GelSight-lab/EstimateModulus at commit "
         "12cb13717ac71c09aae428b1efd0fe0190599372, folder example_data/2023-12-06/",

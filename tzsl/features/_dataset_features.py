@@ -2,8 +2,8 @@
 
 Every study, ``tzsl extract`` and ``tzsl convert --dataset`` read their features through
 :func:`load_features`; a built-in dataset (:func:`tzsl.datasets.get_dataset`) is turned into
-features by :func:`dataset_features` according to what it publishes (static features or raw
-signals).
+features by :func:`dataset_features` according to what it publishes (static features, raw
+signals, or, for a dataset of the catalog, the plain-file folder it is converted to).
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from tzsl.datasets import FeatureSet, get_dataset, read_feature_table
 from tzsl.exceptions import ConfigError
 from tzsl.features._builtin_feature_sets import fabric_depth_feature_set, simulated_grasp_feature_set
 from tzsl.features._feature_sets import penn_feature_set, raw_feature_set
-from tzsl.features._signal_features import load_plain_dataset
+from tzsl.features._signal_features import load_plain_dataset, plain_feature_set
 
 __all__ = ["DEFAULT_MIN_OBJECTS", "dataset_features", "load_features"]
 
@@ -34,8 +34,9 @@ def dataset_features(name: str, data_dir: str | os.PathLike | None = None, path:
         A registered dataset, e.g. ``"phac2-penn"`` (Penn static features: 600 trials x 2 BioTacs
         x 52), ``"phac2-h5"`` (the raw HDF5 release at ``path``: 2 x 104 with 4 EPs) or
         ``"phac2-hold-mat"`` (60 raw HOLD-phase trials: 2 x 26), ``"fabric-depth"`` (1300 depth
-        images: 1 x 99 texture descriptors) or ``"hand-simulated"`` (simulated grasps: 1 x the
-        packed grasp features).
+        images: 1 x 99 texture descriptors), ``"hand-simulated"`` (simulated grasps: 1 x the
+        packed grasp features) or a catalog dataset such as ``"biotac-slide"`` (its plain-file folder:
+        1 x the per-channel statistics of its ``dataset.toml``).
     data_dir : path-like or None
         Data home (see :func:`tzsl.datasets.get_data_home`).
     path : path-like or None
@@ -54,6 +55,8 @@ def dataset_features(name: str, data_dir: str | os.PathLike | None = None, path:
         features = penn_feature_set(loaded, min_objects=min_objects)
     elif dataset.content == "depth-images":
         features = fabric_depth_feature_set(loaded, min_objects=min_objects)
+    elif dataset.content == "plain":
+        features = plain_feature_set(loaded, min_objects=min_objects)
     elif dataset.content == "simulated-grasps":
         features = simulated_grasp_feature_set(loaded, dataset.labels(data_dir), min_objects=min_objects)
     else:

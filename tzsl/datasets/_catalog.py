@@ -1,0 +1,63 @@
+"""The catalog's converted folders: a public dataset written once as a plain-file folder in the cache folder.
+
+A catalog dataset (:class:`~tzsl.datasets.CatalogDataset`) is fetched into the data home as published
+(its registered files, each with a sha256) and converted by its loader into a plain-file dataset
+folder. :func:`converted_folder` keeps that folder under ``<cache folder>/catalog/<name>-<key>``,
+where the key is a digest of everything the conversion depends on (the registered hashes of the
+files it reads, the loader's version, its class table), so a study reads the folder written by an
+earlier one and a changed input gives a new folder. The folder is written atomically by the plain
+format's writer; two processes converting at once leave one folder.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from tzsl.cache import get_cache_dir
+from tzsl.datasets._tables import CLASSES_FILE
+from tzsl.exceptions import ConfigError
+
+__all__ = ["CATALOG_FOLDER", "conversion_key", "converted_folder"]
+
+#: Sub-folder of the cache folder holding the converted catalog datasets.
+CATALOG_FOLDER = "catalog"
+
+
+def conversion_key(parts: Sequence[str]) -> str:
+    """A 16-hex-digit digest of ``parts`` (the inputs of a conversion, in order)."""
+    return hashlib.sha256(json.dumps(list(parts)).encode("utf-8")).hexdigest()[:16]
+
+
+def converted_folder(name: str, parts: Sequence[str], build: Callable[[Path], object],
+                     cache_dir: str | Path | None = None) -> Path:
+    """The converted folder of catalog dataset ``name``, written by ``build(folder)`` when absent.
+
+    Parameters
+    ----------
+    name : str
+        The dataset.
+    parts : sequence of str
+        What the conversion depends on (:func:`conversion_key`).
+    build : callable
+        Writes the plain-file folder it is given (which does not exist yet), atomically.
+    cache_dir : path-like, optional
+        The cache folder (:func:`tzsl.cache.get_cache_dir`).
+
+    Returns
+    -------
+    Path
+        ``<cache folder>/catalog/<name>-<key>``, holding a plain-file dataset.
+    """
+    folder = get_cache_dir(cache_dir) / CATALOG_FOLDER / f"{name}-{conversion_key(parts)}"
+    if (folder / CLASSES_FILE).is_file():
+        return folder
+    try:
+        build(folder)
+    except ConfigError:
+        if (folder / CLASSES_FILE).is_file():  # another process wrote it meanwhile
+            return folder
+        raise
+    return folder
