@@ -102,9 +102,10 @@ test-wide: install
 test-last-bit: install
 	TZSL_LAST_BIT_ALL=1 $(BIN)/pytest -q -p no:cacheprovider tests/studies/test_last_bit.py
 
-# The papers' data into the data home (or TZSL_DATA_DIR), downloaded and checked against the registry.
+# The papers' data into the data home (or TZSL_DATA_DIR), downloaded and checked against the registry (the
+# catalog's public datasets, e.g. biotac-slide, are fetched by name or on first use).
 data: install-core
-	$(BIN)/tzsl data fetch
+	$(BIN)/tzsl data fetch phac2 fabric gelsight_press
 
 # What the two papers report, with our intervals, chance, baselines and controls, and nothing else
 # (the built-in phac2-dap, fabric, hand-simulated): the core package only.
