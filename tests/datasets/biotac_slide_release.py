@@ -19,6 +19,7 @@ from tzsl.datasets import (
     dataset_names,
     get_dataset,
     read_biotac_slide_attributes,
+    registered_files,
 )
 
 #: Materials of the small release: their rows of the shipped table cover its 5 distinct rows, and every
@@ -60,7 +61,14 @@ def release_registry(path: Path, files: dict[str, bytes], base: str) -> pooch.Po
                               for name, content in files.items()])
 
 
+#: The registry folders of the shared data (``../shared/data``): the papers' datasets.
+SHARED_DATASETS = ("phac2", "fabric", "gelsight_press")
+
+
 def catalog_files() -> set[str]:
-    """The registered files of the catalog's datasets (fetched on first use; not in the shared data)."""
-    return {relpath for name in dataset_names() if isinstance(get_dataset(name), CatalogDataset)
-            for relpath in builtin_data_files(name)}
+    """The registered files outside the shared data's datasets: the catalog's public datasets, fetched by
+    name or on first use (every built-in catalog dataset's files are among them)."""
+    files = {relpath for relpath in registered_files() if relpath.split("/", 1)[0] not in SHARED_DATASETS}
+    assert {relpath for name in dataset_names() if isinstance(get_dataset(name), CatalogDataset)
+            for relpath in builtin_data_files(name)} <= files
+    return files

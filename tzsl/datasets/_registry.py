@@ -76,6 +76,11 @@ _SOURCES: tuple[tuple[str, str], ...] = (
         "folder raw_data/ (the catalog's biotac-slide; docs/user_guide/dataset_catalog.md)",
     ),
     (
+        "bts3/",
+        "https://github.com/yayaneath/biotac-sp-images at commit bdd90cc376e673d8ac2f7c879af47c99ecc56783 "
+        "(the BioTacSP Stability Set; docs/user_guide/dataset_catalog.md)",
+    ),
+    (
         "gelsight_press/",
         "https://github.com/GelSight-lab/EstimateModulus at commit "
         "12cb13717ac71c09aae428b1efd0fe0190599372, folder example_data/2023-12-06/",
