@@ -95,16 +95,18 @@ def test_the_methods_fits_in_this_process_use_one_blas_thread():
 
 
 def test_long_fits_are_dispatched_first_and_the_order_does_not_change_a_table(monkeypatch):
-    """Ensembles, then per-sensor attribute-bank methods, then feature methods (each in split order): the long
-    fits start first, so no worker runs one alone at the end; dispatching in the listed order instead gives the
-    same tables."""
+    """Every method but the ensembles, then the ensembles (whose members can be those methods' fits); in each
+    phase the per-sensor attribute-bank methods and ensembles, then the feature methods (each in split order):
+    the long fits start first, so no worker runs one alone at the end; dispatching in the listed order instead
+    gives the same tables."""
     from tzsl.studies.zero_shot import methods as comparison
 
     specs = [{"name": "eszsl"}, {"name": "dap-avg-logistic"}, {"name": "ensemble"}, {"name": "no-such-method"}]
-    jobs = sorted(((split, spec) for split in (1, 0) for spec in specs), key=comparison._longest_first)
-    assert [(split, spec["name"]) for split, spec in jobs] == [
-        (0, "ensemble"), (1, "ensemble"), (0, "dap-avg-logistic"), (1, "dap-avg-logistic"),
-        (0, "eszsl"), (0, "no-such-method"), (1, "eszsl"), (1, "no-such-method")]
+    phases = comparison._phases([(split, spec) for split in (1, 0) for spec in specs])
+    assert [[(split, spec["name"]) for split, spec in phase] for phase in phases] == [
+        [(0, "dap-avg-logistic"), (1, "dap-avg-logistic"), (0, "eszsl"), (0, "no-such-method"), (1, "eszsl"),
+         (1, "no-such-method")], [(0, "ensemble"), (1, "ensemble")]]
+    assert comparison._phases([(0, {"name": "eszsl"})]) == [[(0, {"name": "eszsl"})]]  # no empty phase
     features = synthetic_features(n_objects=20)
     config = _config(n_test=5, n_splits=2)
     results = fit_splits(features, make_splits(features, "random", config)[0], config)

@@ -22,6 +22,7 @@ import numpy as np
 from sklearn.base import clone
 from sklearn.utils import check_random_state
 
+from tzsl._fit_store import fit_cached
 from tzsl.models._zsl_input import GridEdgeWarning, ZSLInputError, class_grouped_folds, share_of_objects
 
 __all__ = ["MAX_CALIBRATION_TRIALS", "MIN_FOLD_CLASSES", "PER_CLASSIFIER_PARAMS", "calibration_subsample",
@@ -86,7 +87,9 @@ def pseudo_unseen_scores(estimator, X, Y, groups=None, *, n_folds: int = 3, rand
     Parameters
     ----------
     estimator : unfitted zero-shot estimator
-        ``fit(X, Y, groups)`` and ``decision_function(X, class_attributes)``; cloned per fold.
+        ``fit(X, Y, groups)`` and ``decision_function(X, class_attributes)``; a clone is fitted per fold,
+        through the fit store (:func:`tzsl.fit_store.fit_cached`: a fold fit another caller asked for with
+        the same parameters and rows is read back).
     X : array-like of shape (n_trials, ...)
     Y : array-like of shape (n_trials, n_attributes)
         Attribute row of each training trial's class.
@@ -134,8 +137,8 @@ def pseudo_unseen_scores(estimator, X, Y, groups=None, *, n_folds: int = 3, rand
             raise ZSLInputError("posterior calibration: a fold's training classes leave no attribute to learn")
         with warnings.catch_warnings():  # a fold's grid edges are not the user's: the final fit reports its own
             warnings.simplefilter("ignore", GridEdgeWarning)
-            fitted = on_attributes(clone(estimator), keep).fit(X[train], Y[train][:, keep],
-                                                                 None if g is None else g[train])
+            fitted = fit_cached(on_attributes(clone(estimator), keep), X[train], Y[train][:, keep],
+                                None if g is None else g[train])
         K, y = np.unique(Y[held][:, keep], axis=0, return_inverse=True)
         out.append((score(fitted, X[held], K), y.ravel(), int((~keep).sum())))
     return out

@@ -28,10 +28,13 @@ training trials only, by the zero-shot protocol itself:
 3. ``T`` minimises the log-loss of those held-out trials (one scalar, bounded search on ``log
    T``).
 
-The method is fitted on all training trials first; an attribute model that tunes its own
-hyper-parameters and offers ``selected_params()`` (ESZSL's ridges, SAE's ``lam``, the DAP
-attribute bank's exact or approximate solver and, with ``calibration_refit="pinned"``, the
-default, each of its attribute classifiers' chosen ``C`` / ``gamma``) is refitted on the folds
+The method is fitted on all training trials first, through the fit store
+(:func:`tzsl.fit_store.fit_cached`; each fold's refit too): the same method with the same parameters,
+seed and training rows, asked for bare (a score ensemble's member) or inside another calibrator, is
+fitted once. An attribute model that tunes its own hyper-parameters and offers ``selected_params()``
+(ESZSL's ridges, SAE's ``lam``, the DAP attribute bank's exact or approximate solver and, with
+``calibration_refit="pinned"``, the default, each of its attribute classifiers' chosen ``C`` /
+``gamma``) is refitted on the folds
 with its choice pinned, so the fold scores have the scale of the final model (a re-tuned ridge,
 or an exact model where the final one is approximate, changes the scale of the class scores, and
 with it the temperature) and a fold refit costs one fit per attribute classifier instead of its
@@ -61,6 +64,7 @@ from sklearn.base import BaseEstimator, clone
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
+from tzsl._fit_store import fit_cached
 from tzsl._scoring import tempered_proba
 from tzsl.exceptions import ConfigError
 from tzsl.models._attribute_model_base import attribute_table_tags
@@ -286,7 +290,7 @@ class CalibratedZeroShotClassifier(ValidatedParamsMixin, BaseEstimator):
             raise ConfigError("CalibratedZeroShotClassifier: estimator is required")
         if Y is None:
             raise ValueError(f"{type(self).__name__} requires y to be passed, but the target y is None")
-        self.estimator_ = clone(self.estimator).fit(X, Y, groups)
+        self.estimator_ = fit_cached(self.estimator, X, Y, groups)  # one fit per configuration (module docstring)
         A = np.asarray(Y, dtype=np.float64)
         A = A.reshape(-1, 1) if A.ndim == 1 else A
         n_classes = len(np.unique(A, axis=0))

@@ -14,6 +14,7 @@ reliability diagram (``phac2_reliability.csv``; ``reliability.csv`` outside the 
 
 from __future__ import annotations
 
+import os
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -25,6 +26,7 @@ from tzsl._profile import stage
 from tzsl.datasets import FeatureSet
 from tzsl.evaluation import Split, summarise_over_splits
 from tzsl.exceptions import TzslError
+from tzsl.fit_store import count_fits, fit_store_counts
 from tzsl.models import get_method
 from tzsl.studies.comparison.calibration import dap_split_posteriors, posterior_columns, reliability_by_method
 from tzsl.studies.comparison.method_runs import (
@@ -109,39 +111,78 @@ def _fit_every_method(features: FeatureSet, results: list[SplitPosteriors], meth
 
     The (split, method) fits of tzsl's own methods run in ``n_jobs`` joblib workers, each seeded as in
     a serial run (identical results); a method registered at run time by the caller's code (a plug-in)
-    exists only in this process, so its fits run here.
+    exists only in this process, so its fits run here. The score ensembles run after every other
+    method (:func:`_phases`): a member configured as a compared method (same estimator, parameters,
+    seed and training rows) is that method's fit, read back from the fit store instead of fitted again.
+    The workers' fit-store events (``hit``: a fit read back) are counted in this run's profile.
     """
     jobs = [(i, spec) for i in range(len(results)) for spec in methods]
-    shipped = sorted((job for job in jobs if _is_builtin(job[1])), key=_longest_first)
+    fits = {}
     # many small fits: one BLAS thread each (in this process; joblib's workers have one already), parallel
     # over fits; on 2 cores threaded BLAS spent many times the CPU of one thread on ESZSL's SVD
     with one_blas_thread():
-        with stage("fit"):  # the methods' fits (and their test scores), in joblib workers
-            done = Parallel(n_jobs=n_jobs)(delayed(relayed(attempt))(fit_predict_split, spec, features,
-                                                                      results[i].split, seed + i)
-                                           for i, spec in shipped)
-        fits = {(i, method_label(spec)): reissued(item) for (i, spec), item in zip(shipped, done, strict=True)}
+        for phase in _phases([job for job in jobs if _is_builtin(job[1])]):
+            with stage("fit"):  # the methods' fits (and their test scores), in joblib workers
+                done = Parallel(n_jobs=n_jobs)(delayed(relayed(_counted_fit))(spec, features, results[i].split,
+                                                                              seed + i) for i, spec in phase)
+            for (i, spec), item in zip(phase, done, strict=True):
+                fits[(i, method_label(spec))] = _recount(*reissued(item))
         for i, spec in jobs:
             if (i, method_label(spec)) not in fits:
                 fits[(i, method_label(spec))] = attempt(fit_predict_split, spec, features, results[i].split, seed + i)
     return fits
 
 
-def _longest_first(job: tuple[int, dict]) -> tuple[int, int]:
-    """Dispatch order of a (split, method) fit: score ensembles, then the per-sensor attribute-bank methods (DAP
-    and its detector variants), then the feature methods, each in split order.
+def _counted_fit(spec: dict, features: FeatureSet, split: Split, seed: int) -> tuple[tuple, int, dict[str, int]]:
+    """:func:`fit_predict_split` as a job: ``(attempt's (result, error), process id, its fit-store events)``."""
+    before = fit_store_counts()
+    done = attempt(fit_predict_split, spec, features, split, seed)
+    return done, os.getpid(), fit_store_counts(since=before)
 
-    Their fits differ in length by two orders of magnitude (an ensemble refits all its members once per
-    pseudo-unseen calibration fold; ESZSL is one solve), so dispatching the long ones first keeps the last
-    worker from running one alone at the end of the run. Results do not depend on the order: every fit is
-    seeded by its split and read back by (split, method).
+
+def _recount(done: tuple, pid: int, events: dict[str, int]) -> tuple:
+    """``done``, after counting a worker's fit-store ``events`` here (a job run in this process counted them)."""
+    for name, n in events.items() if pid != os.getpid() else ():
+        count_fits(name, n)
+    return done
+
+
+def _phases(jobs: list[tuple[int, dict]]) -> list[list[tuple[int, dict]]]:
+    """The (split, method) fits in dispatch order: every method but the score ensembles, then the ensembles,
+    each phase longest first (:func:`_longest_first`); an empty phase is left out.
+
+    An ensemble's members are registry methods; where a study compares a method configured as a member,
+    the member's fit is that method's. Fitting the ensembles after every other method makes those fits
+    exist (in the fit store) before an ensemble asks for them, instead of two workers fitting them at once.
+    """
+    ensembles = [job for job in jobs if _family(job[1]) == "ensemble"]
+    others = [job for job in jobs if _family(job[1]) != "ensemble"]
+    return [sorted(phase, key=_longest_first) for phase in (others, ensembles) if phase]
+
+
+def _family(spec: dict) -> str:
+    """The registry family of a method entry (empty for an unknown name: its error is recorded when it runs)."""
+    try:
+        return get_method(spec["name"]).family
+    except TzslError:
+        return ""
+
+
+def _longest_first(job: tuple[int, dict]) -> tuple[int, int]:
+    """Dispatch order of a (split, method) fit within its phase: the per-sensor attribute-bank methods (DAP and
+    its detector variants) and score ensembles, then the feature methods, each in split order.
+
+    Their fits differ in length by two orders of magnitude (a DAP bank searches every attribute classifier's
+    hyper-parameters; ESZSL is one solve), so dispatching the long ones first keeps the last worker from
+    running one alone at the end of the run. Results do not depend on the order: every fit is seeded by its
+    split and read back by (split, method).
     """
     split, spec = job
     try:
         method = get_method(spec["name"])
     except TzslError:  # an unknown name: its error is recorded whenever it runs
-        return 2, split
-    return (0 if method.family == "ensemble" else 1 if method.input_ndim == 3 else 2), split
+        return 1, split
+    return (0 if method.input_ndim == 3 else 1), split
 
 
 def _is_builtin(spec: dict) -> bool:
