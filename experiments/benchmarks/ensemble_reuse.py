@@ -44,9 +44,10 @@ and each ensemble's fit-store events (``hit``: a fit read back, ``miss``: fitted
 Run::
 
     export TZSL_DATA_DIR=/path/to/data
-    nice -n 5 python experiments/benchmarks/ensemble_reuse.py --purpose select --seed 0 --out /tmp/tzsl_bench/select
-    nice -n 5 python experiments/benchmarks/ensemble_reuse.py --purpose confirm --seed 1 --out /tmp/tzsl_bench/confirm
-    make numbers BENCH_RESULTS=/tmp/tzsl_bench
+    cd experiments/benchmarks
+    nice -n 5 python ensemble_reuse.py --purpose select --seed 0 --out /tmp/tzsl_bench/reuse-select
+    nice -n 5 python ensemble_reuse.py --purpose confirm --seed 1 --out /tmp/tzsl_bench/reuse-confirm
+    cd ../.. && make numbers BENCH_RESULTS=/tmp/tzsl_bench
 
 Each writes ``ensemble_reuse_trials_<purpose>_seed<seed>.csv`` (one row per ensemble and test trial) and
 ``ensemble_reuse_summary_<purpose>_seed<seed>.csv`` (one row: both ensembles' accuracy and ECE with

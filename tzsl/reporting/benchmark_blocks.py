@@ -14,10 +14,11 @@ import pandas as pd
 from tzsl.exceptions import ConfigError
 from tzsl.reporting.markdown_cells import find_table, number, ours, signed
 
-__all__ = ["BEST_METHOD_FILE", "ENSEMBLE_CALIBRATION_FILES", "ESZSL_PUBLIC_FILE", "EXACT_SOLVER_FILES",
-           "SELECTION_CRITERION_FILES", "MissingResults", "benchmark_accuracy_block", "benchmark_table",
-           "best_method_block", "ensemble_calibration_block", "eszsl_public_block", "exact_solver_threshold_block",
-           "runs_by_purpose", "search_benchmark_block", "selection_criterion_block"]
+__all__ = ["BEST_METHOD_FILE", "ENSEMBLE_CALIBRATION_FILES", "ENSEMBLE_REUSE_FILES", "ESZSL_PUBLIC_FILE",
+           "EXACT_SOLVER_FILES", "SELECTION_CRITERION_FILES", "MissingResults", "benchmark_accuracy_block",
+           "benchmark_table", "best_method_block", "ensemble_calibration_block", "ensemble_reuse_block",
+           "eszsl_public_block", "exact_solver_threshold_block", "runs_by_purpose", "search_benchmark_block",
+           "selection_criterion_block"]
 
 #: The decision CSV of ``experiments/benchmarks/phac2_best_method.py``.
 BEST_METHOD_FILE = "phac2_best_method.csv"
@@ -25,6 +26,8 @@ BEST_METHOD_FILE = "phac2_best_method.csv"
 ESZSL_PUBLIC_FILE = "eszsl_public.csv"
 #: The summary CSVs of ``experiments/benchmarks/calibration_refit.py --method ensemble`` (one per purpose and seed).
 ENSEMBLE_CALIBRATION_FILES = "calibration_refit_summary_phac2_ensemble_*.csv"
+#: The summary CSVs of ``experiments/benchmarks/ensemble_reuse.py`` (one per purpose and seed).
+ENSEMBLE_REUSE_FILES = "ensemble_reuse_summary_*.csv"
 #: The summary CSVs of ``experiments/benchmarks/exact_solver_threshold.py --data phac2`` (one per purpose and seed).
 EXACT_SOLVER_FILES = "exact_solver_threshold_phac2_*.csv"
 #: The summary CSVs of ``experiments/benchmarks/selection_criterion.py`` (one per purpose and seed).
@@ -249,6 +252,57 @@ def ensemble_calibration_block(results: str | Path) -> str:
                       f"({'holds' if cpu_ok else 'does not hold'}): "
                       + ("the members are pinned by default." if ece_ok and cpu_ok else "the members keep searching.")]
     return "\n".join(lines)
+
+
+def ensemble_reuse_block(results: str | Path) -> str:
+    """Today's ensemble against the one whose members are the comparison's fits (``ensemble_reuse.py``).
+
+    Reads every :data:`ENSEMBLE_REUSE_FILES` under ``results``, selection splits first, and states the
+    rule's verdict as the selection file records it (``accuracy_within``, ``ece_within``).
+
+    Raises
+    ------
+    MissingResults
+        No such file under ``results``.
+    """
+    table = runs_by_purpose(results, ENSEMBLE_REUSE_FILES, "ensemble_reuse.py --purpose select")
+    lines = ["Generated from `ensemble_reuse_summary_*.csv` by `make numbers`: trial accuracy and ECE [95% interval] "
+             "of the calibrated `ensemble` on PHAC-2 random splits with today's members (`separate`: the DAP "
+             "member's `AttributeSVM(cv=5, grid=\"paper\")`, each member's seed drawn from the ensemble's, members "
+             "searching again in the calibration folds) and with the members as the comparison fits those methods "
+             "(`reusing`: the registered `dap-avg`, `eszsl` and `sae` with their defaults and the ensemble's seed, "
+             "pinned in the folds), the paired differences reusing minus separate on the same trials "
+             "[95% interval], and the CPU seconds (one core, summed over the splits) of each ensemble fitted after "
+             "the compared `dap-avg`, `eszsl` and `sae` of the same splits in one fit store (their own CPU "
+             "seconds in brackets), with the fits each ensemble read back from the store (hits) and made (misses).",
+             "", "| purpose | seed | splits (trials) | chance | accuracy separate | accuracy reusing | reusing - "
+             "separate | ECE separate | ECE reusing | reusing - separate | CPU separate (s) | CPU reusing (s) | fits "
+             "read back / made (separate; reusing) |", "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for _, r in table.iterrows():
+        lines.append(f"| {r['purpose']} | {int(r['seed'])} | {int(r['n_splits'])} ({int(r['n_trials'])}) | "
+                     f"{number(r['chance'])} | {ours(r, 'separate_accuracy')} | {ours(r, 'reusing_accuracy')} | "
+                     f"{_paired(r, 'accuracy_difference')} | {ours(r, 'separate_ece')} | {ours(r, 'reusing_ece')} | "
+                     f"{_paired(r, 'ece_difference')} | "
+                     f"{float(r['separate_cpu_s']):.1f} | {float(r['reusing_cpu_s']):.1f} "
+                     f"({float(r['compared_cpu_s']):.1f}) | {int(r['separate_fit_store_hit'])} / "
+                     f"{int(r['separate_fit_store_miss'])}; {int(r['reusing_fit_store_hit'])} / "
+                     f"{int(r['reusing_fit_store_miss'])} |")
+    select = table[table["purpose"] == "select"]
+    if len(select):
+        r = select.iloc[0]
+        accuracy, ece = bool(r["accuracy_within"]), bool(r["ece_within"])
+        lines += ["", "The rule, fixed before measuring: the reusing members become the default if on the selection "
+                      "splits the reusing ensemble's accuracy lies within the 95% interval of today's "
+                      f"({'holds' if accuracy else 'does not hold'}) and its ECE within the 95% interval of today's "
+                      f"({'holds' if ece else 'does not hold'}): "
+                      + ("the ensemble's members are the compared methods' fits by default." if accuracy and ece
+                         else "today's members stay.")]
+    return "\n".join(lines)
+
+
+def _paired(row: pd.Series, column: str) -> str:
+    """``row[column]`` with its interval ``<column>_ci95_low`` / ``_high``, signs shown."""
+    return signed(row[column], row[f"{column}_ci95_low"], row[f"{column}_ci95_high"])
 
 
 def exact_solver_threshold_block(results: str | Path) -> str:

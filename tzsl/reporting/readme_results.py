@@ -51,6 +51,7 @@ from tzsl.reporting.benchmark_blocks import (
     benchmark_accuracy_block,
     best_method_block,
     ensemble_calibration_block,
+    ensemble_reuse_block,
     eszsl_public_block,
     exact_solver_threshold_block,
     search_benchmark_block,
@@ -398,7 +399,7 @@ BLOCKS: dict[str, Callable[[Path], str]] = {
     "attribute-search-benchmark": search_benchmark_block, "phac2-best-method": best_method_block,
     "eszsl-public-benchmark": eszsl_public_block, "ensemble-calibration-benchmark": ensemble_calibration_block,
     "exact-solver-threshold-benchmark": exact_solver_threshold_block,
-    "selection-criterion-benchmark": selection_criterion_block}
+    "selection-criterion-benchmark": selection_criterion_block, "ensemble-reuse-benchmark": ensemble_reuse_block}
 
 
 def block_spans(text: str) -> list[tuple[int, int]]:
