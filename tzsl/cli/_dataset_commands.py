@@ -216,9 +216,10 @@ def convert(source: str | None, mapping: Path | None, allow_outside: bool, datas
         from tzsl.datasets import read_plain_dataset  # noqa: PLC0415
 
         written = read_plain_dataset(builtin.convert(out, data_dir, force=force, signal_format=signal_format))
+        per = (f"{len(written.channels or ())} channels per signal file" if written.kind == "signals"
+               else f"{len(written.feature_names or ())} feature columns per sensor")
         click.echo(f"wrote {out}: {len(written.classes)} classes x {written.classes.shape[1]} attributes, "
-                   f"{written.n_trials} trials, {len(written.sensors)} sensor(s), {len(written.channels or ())} "
-                   f"channels per signal file; next: tzsl validate {out}")
+                   f"{written.n_trials} trials, {len(written.sensors)} sensor(s), {per}; next: tzsl validate {out}")
         return
     features = dataset_features(dataset, data_dir=data_dir, min_objects=min_objects)
     if get_dataset(dataset).content == "static-features":

@@ -14,7 +14,7 @@ from typing import Any
 _EXPORTS: dict[str, str] = {
     **dict.fromkeys(["CatalogDataset", "TactileDataset", "builtin_data_files", "dataset_names", "get_dataset",
                      "register_dataset"], "_builtin"),
-    **dict.fromkeys(["Bts3Grasps", "load_bts3", "read_bts3_csv"], "_bts3"),
+    **dict.fromkeys(["Bts3Grasps", "convert_bts3", "load_bts3", "read_bts3_attributes", "read_bts3_csv"], "_bts3"),
     **dict.fromkeys(["BIOTAC_SLIDE_CHANNELS", "MaterialTable", "convert_biotac_slide", "read_biotac_slide_attributes",
                      "read_biotac_slide_csv"], "_biotac_slide"),
     **dict.fromkeys(["FINGER_NAMES", "Grasp", "HandTable", "JOINT_NAMES", "grasp_from_arrays", "load_hand_table4",
@@ -104,7 +104,9 @@ __all__ = [
     "read_biotac_slide_attributes",
     "read_biotac_slide_csv",
     "Bts3Grasps",
+    "convert_bts3",
     "load_bts3",
+    "read_bts3_attributes",
     "read_bts3_csv",
     "get_cache_dir",
     "CACHE_DIR_ENV",

@@ -32,6 +32,8 @@ from tzsl.datasets._biotac_slide import (
     BIOTAC_SLIDE_DIR,
     convert_biotac_slide,
 )
+from tzsl.datasets._bts3 import ATTRIBUTE_TABLE as BTS3_TABLE
+from tzsl.datasets._bts3 import BTS3, BTS3_COMMIT, convert_bts3
 from tzsl.datasets._catalog import converted_folder
 from tzsl.datasets._fabric import (
     FABRIC_ATTRIBUTE_SETS,
@@ -268,6 +270,27 @@ class BiotacSlide(CatalogDataset):
         return [hashlib.sha256(table).hexdigest()]
 
 
+class Bts3(CatalogDataset):
+    """yayaneath/biotac-sp-images (BTS3): one trial per grasp, object and class = the grasped object, three
+    fingertip sensors with their 24 electrode values as features (:func:`~tzsl.datasets.convert_bts3`;
+    the catalog page gives its attributes' sources)."""
+
+    name = BTS3
+    description = ("41 objects x 2,549 Shadow-hand grasps, 3 BioTac SP fingertips (sensors ff, mf, th) x 24 "
+                   "electrode values per grasp; 12 attributes from the object names and photo")
+    source = (f"Zapata-Impata et al. (IROS 2018 workshop, arXiv:1809.05551); github.com/yayaneath/biotac-sp-images "
+              f"at commit {BTS3_COMMIT[:7]}, fetched on first use")
+    eps = ("grasp",)
+    registry_files = (f"{BTS3}/",)
+
+    def convert(self, out, data_dir=None, *, force=False, signal_format="npz") -> Path:
+        return convert_bts3(out, data_dir, force=force)  # feature columns: no signal files to format
+
+    def conversion_inputs(self) -> list[str]:
+        table = resources.files("tzsl.datasets").joinpath(BTS3_TABLE).read_bytes()
+        return [hashlib.sha256(table).hexdigest()]
+
+
 _DATASETS: dict[str, TactileDataset] = {}
 
 
@@ -315,3 +338,4 @@ register_dataset(Phac2HoldMat())
 register_dataset(FabricDepth())
 register_dataset(HandSimulated())
 register_dataset(BiotacSlide())
+register_dataset(Bts3())
