@@ -126,7 +126,7 @@ def _ensemble(pin_members=True):
 
 
 def _calibrated_ensembles(X, rows, y):
-    """Calibrated ensembles: members pinned, members searching (the default), and refit="search" with pinning asked."""
+    """Calibrated ensembles: members pinned (the default), members searching, and refit="search" with pinning asked."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return {name: CalibratedZeroShotClassifier(estimator=_ensemble(pin), calibration_refit=refit,
@@ -136,8 +136,9 @@ def _calibrated_ensembles(X, rows, y):
 
 
 def test_ensemble_pins_each_member_s_choice_in_its_calibration_folds_when_asked():
-    """pin_members=True (issue 33): the folds refit each member with its own choice; by default they search."""
-    assert ScoreEnsembleZSL().pin_members is False  # kept on selection splits (ensemble-calibration-refit)
+    """pin_members=True (issue 33; the default since issue 43): the folds refit each member with its own choice;
+    with False they search."""
+    assert ScoreEnsembleZSL().pin_members is True  # chosen on selection splits (ensemble-calibration-refit)
     rows, X, y = _data()
     fits = _calibrated_ensembles(X, rows, y)
     info = fits["pinned"].calibration_info_["pinned"]

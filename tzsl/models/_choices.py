@@ -61,6 +61,20 @@ ENSEMBLE_CALIBRATION_COMMAND = (
     "python experiments/benchmarks/calibration_refit.py --data phac2 --method ensemble --seed 0 --purpose select "
     "--n-splits 5 --out DIR && python experiments/benchmarks/calibration_refit.py --data phac2 --method ensemble "
     "--seed 1 --purpose confirm --n-splits 5 --out DIR")
+#: The benchmark that made the ensemble's members the comparison's fits (issue 43: selection splits of seed 0, then
+#: confirmation splits of seed 1).
+ENSEMBLE_REUSE_COMMAND = (
+    "python experiments/benchmarks/ensemble_reuse.py --purpose select --seed 0 --out DIR/reuse-select && "
+    "python experiments/benchmarks/ensemble_reuse.py --purpose confirm --seed 1 --out DIR/reuse-confirm")
+#: What the issue 43 benchmark decided, and by which rule (the members' configuration, seed and calibration folds
+#: as one change).
+_ENSEMBLE_REUSE_SELECTION = (
+    "PHAC-2 (Penn features), 10 random splits of seed 0 (purpose 'select', 10 test objects), by a rule written "
+    "before measuring (experiments/benchmarks/ensemble_reuse.py): the members as the comparison fits those "
+    "methods (the registered dap-avg, eszsl and sae with their defaults, the ensemble's own seed, pinned in the "
+    "calibration folds) replace the former ones (the DAP member's AttributeSVM(cv=5, grid='paper'), a seed drawn "
+    "per member, searching folds) if the ensemble's accuracy and ECE stay within the 95% intervals of the former "
+    "ensemble's; both did (issue 43, one fit per configuration)")
 #: The benchmark that kept accuracy as the zero-shot searches' criterion (selection splits, then confirmation splits).
 SELECTION_CRITERION_COMMAND = (
     "python experiments/benchmarks/selection_criterion.py --purpose select --seed 0 --n-splits 10 --out DIR/select && "
@@ -159,30 +173,36 @@ INHERITED_CHOICES: tuple[InheritedChoice, ...] = (
                             "random confirmation splits with a paired interval excluding 0)"),
     InheritedChoice(
         "ensemble-members",
-        "members of the registered `ensemble` (tzsl.models.ScoreEnsembleZSL, DEFAULT_MEMBERS)",
+        "members of the registered `ensemble` (tzsl.models.ScoreEnsembleZSL, DEFAULT_MEMBERS), each with its "
+        "method's defaults and the ensemble's seed, so a member a study also compares is that method's fit",
         lambda: DEFAULT_MEMBERS,
         "first: PHAC-2 (Penn features), the accuracy benchmark's 20 random splits of seed 0 and the 5 challenging "
         "splits, " + _PRE_PROTOCOL + "; chosen again (issue 32) on " + DETECTOR_SELECTION + " among the "
         "RBF-SVM DAP, the DAP of the chosen detector (logistic-c1) or both, each with ESZSL and SAE, by the mean "
-        "of the random-split and the challenging-split mean accuracy: the RBF-SVM DAP stayed",
+        "of the random-split and the challenging-split mean accuracy: the RBF-SVM DAP stayed; its configuration "
+        "and the members' seeds then on " + _ENSEMBLE_REUSE_SELECTION,
         "the detector benchmark's confirmation splits (50 random of seed 32, purpose 'confirm', and the 5 "
-        "challenging splits; its ensemble-* rows) and, as a whole method, the best-method benchmark's 25 random "
-        "confirmation splits of seed 0 (its block in experiments/benchmarks/README.md)",
-        DETECTORS_COMMAND),
+        "challenging splits; its ensemble-* rows), as a whole method the best-method benchmark's 25 random "
+        "confirmation splits of seed 0 (its block in experiments/benchmarks/README.md), and for the members' "
+        "configuration 10 random confirmation splits of seed 1 (the ensemble-reuse-benchmark block)",
+        DETECTORS_COMMAND + "; " + ENSEMBLE_REUSE_COMMAND),
     InheritedChoice(
         "ensemble-calibration-refit",
         "how the pseudo-unseen calibration folds of the registered `ensemble` refit its members "
         "(tzsl.models.ScoreEnsembleZSL pin_members): True refits each with the hyper-parameters its fit chose (the "
-        "DAP bank's C / gamma per classifier, ESZSL's ridges, SAE's lam), False lets every member search again",
+        "DAP bank's C / gamma per classifier, ESZSL's ridges, SAE's lam), as a calibrated method on its own does, "
+        "so the folds of a member a study also compares are that method's; False lets every member search again",
         _default(ScoreEnsembleZSL, "pin_members"),
-        "PHAC-2 (Penn features), 5 random splits of seed 0 (purpose 'select', 10 test objects), by a rule written "
-        "before measuring: pin if the paired ECE difference pinned minus search has its 95% interval's upper end at "
-        "most the script's RULE_MAX_ECE_DIFFERENCE and the calibration CPU falls by at least a third (issue 33 item "
-        "4). The CPU criterion held and the ECE one did not (the selection rows of the same block), so the members "
-        "keep searching",
-        "5 random confirmation splits of seed 1 (purpose 'confirm'): the ensemble-calibration-benchmark block of "
-        "experiments/benchmarks/README.md",
-        ENSEMBLE_CALIBRATION_COMMAND),
+        "first (issue 33 item 4): PHAC-2 (Penn features), 5 random splits of seed 0 (purpose 'select', 10 test "
+        "objects), by a rule written before measuring: pin if the paired ECE difference pinned minus search has its "
+        "95% interval's upper end at most calibration_refit.py's RULE_MAX_ECE_DIFFERENCE and the calibration CPU "
+        "falls by at least a third; the CPU criterion held and the ECE one did not, so the members kept searching. "
+        "Then, with the members' configuration and seeds as one change, on " + _ENSEMBLE_REUSE_SELECTION + ": "
+        "the members are pinned",
+        "10 random confirmation splits of seed 1 (purpose 'confirm'): the ensemble-reuse-benchmark block of "
+        "experiments/benchmarks/README.md; pinning alone against searching (issue 33): the "
+        "ensemble-calibration-benchmark block (5 random confirmation splits of seed 1)",
+        ENSEMBLE_REUSE_COMMAND),
     InheritedChoice(
         "attribute-svm-grid",
         "the gamma grid of tzsl.models.AttributeSVM (`grid`; the paper-reproduction studies pin 'paper')",

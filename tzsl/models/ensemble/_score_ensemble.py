@@ -19,6 +19,14 @@ by the method comparison of ``tzsl run phac2-dap`` (``phac2_method_comparison.cs
 is kept here, so none can describe code that is no longer shipped. The splits the default members
 were chosen on, and the confirmation splits of ``experiments/benchmarks/phac2_best_method.py`` that
 report the method, are recorded in :data:`tzsl.models.INHERITED_CHOICES` (``ensemble-members``).
+
+One fit per configuration: a member is built from the registry as a study builds a compared method
+(the method's defaults, the ensemble's own seed) and fitted through the fit store
+(:func:`tzsl.fit_store.fit_cached`), and so are its refits in posterior calibration's folds, each with
+the hyper-parameters its fit chose (``pin_members``), as a calibrated method on its own refits them.
+Where a study also compares the member's method with the same parameters (the template compares
+``dap-avg``, ``eszsl`` and ``sae``), the member is that method's fit on the same training rows,
+read back instead of fitted again; a member configured otherwise is fitted on its own.
 """
 
 from __future__ import annotations
@@ -37,17 +45,16 @@ from tzsl.models._dap import break_ties
 from tzsl.models._registry import get_method
 from tzsl.models._validation import ValidatedParamsMixin
 from tzsl.models._zero_shot import zscore_rows
-from tzsl.models.detectors import AttributeSVM
 
 __all__ = ["ScoreEnsembleZSL"]
 
-#: Members of the shipped ensemble (registry entries): AVGDAP with the uniform prior and the PHAC-2
-#: study's attribute SVMs (5 object-grouped folds, the paper's gamma grid: the configuration
-#: measured; balanced Platt posteriors pair with the uniform prior, see AttributeSVM), ESZSL and SAE.
-#: Chosen again on selection splits against the DAP of the generic study's detector in its place or
-#: beside it (issue 32; INHERITED_CHOICES, "ensemble-members"): the RBF-SVM DAP stayed.
-DEFAULT_MEMBERS: tuple = ({"name": "dap-avg", "estimator": AttributeSVM(cv=5, grid="paper")},
-                          "eszsl", "sae")
+#: Members of the shipped ensemble, registry names with the methods' defaults: AVGDAP with the uniform
+#: prior and the registry's RBF-SVM detectors (balanced Platt posteriors pair with the uniform prior, see
+#: AttributeSVM), ESZSL and SAE. The RBF-SVM DAP was chosen on selection splits against the DAP of the
+#: generic study's detector in its place or beside it (issue 32); its detector is the registry's default
+#: (before issue 43: AttributeSVM(cv=5, grid="paper")), so a study comparing dap-avg fits it once for both
+#: (INHERITED_CHOICES, "ensemble-members"; experiments/benchmarks/ensemble_reuse.py).
+DEFAULT_MEMBERS: tuple = ("dap-avg", "eszsl", "sae")
 
 
 def _spec(entry) -> dict:
@@ -66,22 +73,24 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
     ----------
     methods : sequence of str or dict, default=DEFAULT_MEMBERS
         Registry methods (``tzsl methods``), each a name or ``{"name": ..., **parameters}``.
-        Default: ``dap-avg`` with ``AttributeSVM(cv=5, grid="paper")`` and ``prior="uni"``,
-        ``eszsl``, ``sae``.
+        Default: ``dap-avg`` (the registry's RBF-SVM detectors, ``prior="uni"``), ``eszsl``, ``sae``,
+        each with its defaults.
         Per-sensor methods (``input_ndim = 3``, e.g. DAP) get ``(n, n_sensors, n_features)``,
         the others the sensors side by side.
     weights : sequence of float or None, default=None
         Non-negative weight of each member; ``None``: equal weights.
-    pin_members : bool, default=False
+    pin_members : bool, default=True
         How posterior calibration's pseudo-unseen folds (``calibration_refit="pinned"``, see
         :class:`tzsl.models.CalibratedZeroShotClassifier`) refit the members: True, each with the
-        hyper-parameters its fit chose (the DAP bank's ``C`` / ``gamma`` per classifier, ESZSL's
-        ridges, SAE's ``lam``), at a fraction of the calibration's CPU; False, every member
-        searches again. False was kept on selection splits (the inherited choice
-        ``ensemble-calibration-refit``; its numbers: the ``ensemble-calibration-benchmark`` block of
-        ``experiments/benchmarks/README.md``).
-    random_state : int or None, default=None
-        Seeds members that take a seed (the DAP SVM draws) and the breaking of exact ties.
+        hyper-parameters its fit chose (the DAP bank's solver and ``C`` / ``gamma`` per classifier,
+        ESZSL's ridges, SAE's ``lam``), as a calibrated method on its own refits them, so a member's
+        fold refits are that method's; False, every member searches again (several times the CPU).
+        True since issue 43 (the inherited choice ``ensemble-calibration-refit``; its numbers: the
+        ``ensemble-reuse-benchmark`` block of ``experiments/benchmarks/README.md``).
+    random_state : int, RandomState instance or None, default=None
+        The seed of every member that takes one (the DAP SVM draws, each member's tie-breaking) and of
+        the breaking of exact ties: the seed a study gives every compared method, so a member
+        configured as a compared method is the same fit; a member entry's own ``random_state`` wins.
 
     Attributes
     ----------
@@ -107,7 +116,7 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
         "random_state": [None, "random_state"],
     }
 
-    def __init__(self, *, methods=DEFAULT_MEMBERS, weights=None, pin_members=False, random_state=None):
+    def __init__(self, *, methods=DEFAULT_MEMBERS, weights=None, pin_members=True, random_state=None):
         self.methods = methods
         self.weights = weights
         self.pin_members = pin_members
@@ -166,16 +175,14 @@ class ScoreEnsembleZSL(ValidatedParamsMixin, BaseEstimator):
         if A.shape[0] != X.shape[0]:
             raise ValueError(f"X has {X.shape[0]} trials but Y has {A.shape[0]} rows")
         self.estimators_, self.member_input_ndims_ = [], []
-        for i, entry in enumerate(self.methods):
+        for entry in self.methods:
             spec = _spec(entry)
             method = get_method(spec["name"])
             params = {k: v for k, v in spec.items() if k != "name"}
             if method.calibratable:  # the ensemble's posterior is calibrated as a whole, not per member
                 params.setdefault("calibration", "none")
-            if (self.random_state is not None and "random_state" in method.parameters()
-                    and "random_state" not in params):
-                seed = np.random.SeedSequence([int(self.random_state), i]).generate_state(1)[0]
-                params["random_state"] = int(seed >> 1)
+            if self.random_state is not None and "random_state" in method.parameters():
+                params.setdefault("random_state", self.random_state)  # as a study seeds a compared method
             self.member_input_ndims_.append(method.input_ndim)
             est = method.build(**params)  # a new instance
             self.estimators_.append(fit_cached(est, self._member_input(method.input_ndim, X), A, groups))
