@@ -25,6 +25,7 @@ BANKS = {
     "rbf-svm approximate (Nystroem)": {"estimator": AttributeSVM(cv=2), "solver": "approximate"},
     "logistic": {"detector": "logistic"},
     "linear-svm": {"detector": "linear-svm"},
+    "logistic-c1": {"detector": "logistic-c1"},  # the generic default's detectors (tzsl.models.choices.DEFAULT_METHOD)
 }
 
 

@@ -19,7 +19,7 @@ The classes and their attributes are the package's ``bts3_attributes.csv`` (:dat
 one line per object and attribute: ``object,class,attribute,value,source,evidence``. The release
 describes its objects only by their names and the photo ``objects.jpg`` (sha256
 :data:`OBJECTS_PHOTO_SHA256` at that commit: 41 labelled panels, one per object, in 7 rows of 6,
-:data:`BTS3_PANELS`); its README cites an IROS 2018 workshop paper (arXiv:1809.05551) whose text
+:data:`BTS3_PANELS`); its README cites an IROS 2018 workshop paper (``arXiv:1809.05551``) whose text
 was not available to read. So every value is read from the object's panel (``source`` = ``objects.jpg,
 row <r>, column <c>``, ``evidence`` = what the panel shows) or from its name (``source`` = ``object name
 '<object>'``, ``evidence`` = the word that says it). The rule of judgement: an attribute

@@ -3,7 +3,8 @@
 A ``"zero-shot"`` bundle (:mod:`tzsl.inference.zero_shot_bundles`) whose attribute model is an
 :class:`~tzsl.models.AttributeClassifierBank` (one detector per (attribute, sensor): the
 DAP paper's RBF-SVM, its approximate Nystroem solver, or the linear detectors
-``detector="logistic"`` / ``"linear-svm"`` / ``"robust-logistic"``) and whose rule is a
+``detector="logistic"`` / ``"linear-svm"`` / ``"robust-logistic"``, and ``"logistic-c1"``, whose logistic
+regression is stored as a linear score with Platt ``(1, 0)``) and whose rule is a
 :class:`~tzsl.models.DAPRule` is saved as an ``.npz`` payload of plain arrays. Each detector is
 
 1. a standardisation ``z = (x - mean) / scale`` of its sensor's features,
@@ -260,8 +261,20 @@ def _preprocessor_arrays(pre: Any) -> dict | None:
 
 def _detector_arrays(est: Any) -> dict | None:
     """The arrays of one fitted detector (module docstring), or None when it is not one tzsl can store so."""
-    from tzsl.models import AttributeSVM, LinearAttribute, ScalableAttributeClassifier  # noqa: PLC0415
+    from tzsl.models import (  # noqa: PLC0415
+        AttributeSVM,
+        LinearAttribute,
+        LogisticAttribute,
+        ScalableAttributeClassifier,
+    )
 
+    if type(est) is LogisticAttribute:  # z-score + logistic regression: its logit is the score, Platt (1, 0)
+        scaler, logistic = est.pipeline_[0], est.pipeline_[-1]
+        pre = _preprocessor_arrays(scaler) if len(est.pipeline_) == 2 else None
+        if pre is None or [int(c) for c in est.classes_] != [0, 1]:
+            return None
+        return {**pre, "platt": np.array([1.0, 0.0]), "family": "linear", "coef": np.ravel(logistic.coef_),
+                "intercept": float(logistic.intercept_[0])}
     pre = _preprocessor_arrays(getattr(est, "preprocessor_", None))
     if pre is None:
         return None
