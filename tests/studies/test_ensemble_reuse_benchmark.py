@@ -81,4 +81,4 @@ def test_the_block_states_the_rule_s_verdict_both_ways(bench, tmp_path):
     assert r["ece_difference_ci95_low"] <= r["ece_difference"] <= r["ece_difference_ci95_high"]
     bench.write_results(_trials(bench, 3.0), far, tmp_path, purpose="select", seed=0)
     block = ensemble_reuse_block(tmp_path)
-    assert "today's members stay." in block and "(does not hold)" in block
+    assert "the former members stay." in block and "(does not hold)" in block

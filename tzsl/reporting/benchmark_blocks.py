@@ -255,7 +255,7 @@ def ensemble_calibration_block(results: str | Path) -> str:
 
 
 def ensemble_reuse_block(results: str | Path) -> str:
-    """Today's ensemble against the one whose members are the comparison's fits (``ensemble_reuse.py``).
+    """The ensemble's former members against the comparison's fits as members (``ensemble_reuse.py``).
 
     Reads every :data:`ENSEMBLE_REUSE_FILES` under ``results``, selection splits first, and states the
     rule's verdict as the selection file records it (``accuracy_within``, ``ece_within``).
@@ -267,7 +267,7 @@ def ensemble_reuse_block(results: str | Path) -> str:
     """
     table = runs_by_purpose(results, ENSEMBLE_REUSE_FILES, "ensemble_reuse.py --purpose select")
     lines = ["Generated from `ensemble_reuse_summary_*.csv` by `make numbers`: trial accuracy and ECE [95% interval] "
-             "of the calibrated `ensemble` on PHAC-2 random splits with today's members (`separate`: the DAP "
+             "of the calibrated `ensemble` on PHAC-2 random splits with its former members (`separate`: the DAP "
              "member's `AttributeSVM(cv=5, grid=\"paper\")`, each member's seed drawn from the ensemble's, members "
              "searching again in the calibration folds) and with the members as the comparison fits those methods "
              "(`reusing`: the registered `dap-avg`, `eszsl` and `sae` with their defaults and the ensemble's seed, "
@@ -292,11 +292,11 @@ def ensemble_reuse_block(results: str | Path) -> str:
         r = select.iloc[0]
         accuracy, ece = bool(r["accuracy_within"]), bool(r["ece_within"])
         lines += ["", "The rule, fixed before measuring: the reusing members become the default if on the selection "
-                      "splits the reusing ensemble's accuracy lies within the 95% interval of today's "
-                      f"({'holds' if accuracy else 'does not hold'}) and its ECE within the 95% interval of today's "
-                      f"({'holds' if ece else 'does not hold'}): "
+                      "splits the reusing ensemble's accuracy lies within the 95% interval of the former one's "
+                      f"({'holds' if accuracy else 'does not hold'}) and its ECE within the 95% interval of the former "
+                      f"one's ({'holds' if ece else 'does not hold'}): "
                       + ("the ensemble's members are the compared methods' fits by default." if accuracy and ece
-                         else "today's members stay.")]
+                         else "the former members stay.")]
     return "\n".join(lines)
 
 
