@@ -40,3 +40,13 @@ def test_scanner_finds_planted_numbers_and_skips_blocks_code_and_definitions(tmp
                      ("tzsl/m.py", 6, "speed-up")}
     assert main([str(tmp_path)]) == 1
     assert "docs/page.md:2: speed-up" in capsys.readouterr().out
+
+
+def test_what_a_docs_build_writes_from_the_code_is_not_scanned(tmp_path):
+    """docs/_generated (registry tables, API stubs) exists only after a docs build: scanning it made the
+    check depend on whether the build ran first in the same test run (a dataset's source string, an arXiv id)."""
+    for folder in ("_generated", "_build", "auto_examples"):
+        (tmp_path / "docs" / folder).mkdir(parents=True)
+        (tmp_path / "docs" / folder / "table.md").write_text("| x | reaches 0.31 |\n")
+    (tmp_path / "docs" / "page.md").write_text("It reaches 0.31.\n")
+    assert [f.path for f in scan(tmp_path)] == ["docs/page.md"]

@@ -90,9 +90,14 @@ class Finding:
 
 
 def scanned_files(root: Path) -> list[Path]:
-    """The files :func:`scan` reads, sorted, relative to ``root``."""
+    """The files :func:`scan` reads, sorted, relative to ``root``.
+
+    Left out: what a docs build writes from the code (``_build``, the gallery's ``auto_examples``, and
+    ``_generated``: the registry tables and API stubs, made from strings of the code, and present in the
+    tree only after a build, so a scan would depend on whether one ran first).
+    """
     files = {p.relative_to(root) for pattern in SCANNED for p in root.glob(pattern) if p.is_file()}
-    return sorted(p for p in files if "_build" not in p.parts and "auto_examples" not in p.parts)
+    return sorted(p for p in files if not {"_build", "auto_examples", "_generated"} & set(p.parts))
 
 
 def _markdown_prose(text: str) -> list[tuple[int, str]]:
