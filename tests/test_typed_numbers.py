@@ -47,6 +47,6 @@ def test_what_a_docs_build_writes_from_the_code_is_not_scanned(tmp_path):
     check depend on whether the build ran first in the same test run (a dataset's source string, an arXiv id)."""
     for folder in ("_generated", "_build", "auto_examples"):
         (tmp_path / "docs" / folder).mkdir(parents=True)
-        (tmp_path / "docs" / folder / "table.md").write_text("| x | reaches 0.31 |\n")
-    (tmp_path / "docs" / "page.md").write_text("It reaches 0.31.\n")
+        (tmp_path / "docs" / folder / "table.md").write_text("The ensemble gains +0.097 [+0.03, +0.10].\n")
+    (tmp_path / "docs" / "page.md").write_text("The ensemble gains +0.097 [+0.03, +0.10].\n")
     assert [f.path for f in scan(tmp_path)] == ["docs/page.md"]
