@@ -177,6 +177,8 @@ compare = ["toy"]
 [splits]
 configs = [1]
 n_seeds = 1
+[zero_shot]
+enabled = false   # the fabric comparison is what this checks; the generic tables fit every method (minutes)
 [compute]
 progress = false
 """)
