@@ -81,6 +81,16 @@ _SOURCES: tuple[tuple[str, str], ...] = (
         "(the BioTacSP Stability Set; docs/user_guide/dataset_catalog.md)",
     ),
     (
+        "icub-grasp/",
+        "https://github.com/clear-nus/icub_grasp_dataset at commit 87dceecaa2f8056025f2ad42b55cb5f46fb77229, "
+        "folder iCubGraspDataset/ (the iCub Grasp Dataset; docs/user_guide/dataset_catalog.md)",
+    ),
+    (
+        "physiclear/",
+        "https://github.com/clear-nus/octopi at commit b7f0b0b56a5be950a10c46aa40277dfd51050eab, folder dataset/ "
+        "and utils/constants.py (PhysiCLeAR; docs/user_guide/dataset_catalog.md)",
+    ),
+    (
         "gelsight_press/",
         "https://github.com/GelSight-lab/EstimateModulus at commit "
         "12cb13717ac71c09aae428b1efd0fe0190599372, folder example_data/2023-12-06/",
