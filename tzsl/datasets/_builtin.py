@@ -44,9 +44,14 @@ from tzsl.datasets._fabric import (
 )
 from tzsl.datasets._grasps import load_hand_table4
 from tzsl.datasets._hand_simulator import SimulatedGrasps, simulate_grasps
+from tzsl.datasets._icub_grasp import ATTRIBUTE_TABLE as ICUB_GRASP_TABLE
+from tzsl.datasets._icub_grasp import ICUB_GRASP, ICUB_GRASP_COMMIT, ICUB_GRASP_DIR, convert_icub_grasp
 from tzsl.datasets._phac2_h5 import load_phac2_h5
 from tzsl.datasets._phac2_hold_mat import HOLD_DIR, LABELS_CSV, load_phac2_hold_mat, load_phac2_labels
 from tzsl.datasets._phac2_penn import PENN_STATIC_DIR, PennStaticData, load_phac2_penn
+from tzsl.datasets._physiclear import PHYSICLEAR_VIDEO_DIR, convert_physiclear
+from tzsl.datasets._physiclear_table import ATTRIBUTE_TABLE as PHYSICLEAR_TABLE
+from tzsl.datasets._physiclear_table import PHYSICLEAR, PHYSICLEAR_COMMIT
 from tzsl.datasets._plain import PlainDataset, read_plain_dataset
 from tzsl.datasets._registry import registered_files, registered_hash
 from tzsl.datasets._types import PHAC2_EPS, RawTrial
@@ -291,6 +296,49 @@ class Bts3(CatalogDataset):
         return [hashlib.sha256(table).hexdigest()]
 
 
+class IcubGrasp(CatalogDataset):
+    """clear-nus/icub_grasp_dataset: one trial per grasp, object and class = the grasped object, one sensor
+    ``hand`` (9 joint encoders and 5 x 12 fingertip readings per time slice); per-channel signal statistics
+    (:func:`~tzsl.datasets.convert_icub_grasp`; the catalog page gives its attributes' sources)."""
+
+    name = ICUB_GRASP
+    description = ("9 objects x 20 iCub-hand grasps (9 joint encoders, 5 fingertips x 12 taxels per time slice), "
+                   "one trial per grasp; 6 attributes from the README's object list; per-channel signal statistics")
+    source = (f"Soh, Su and Demiris (IROS 2012); github.com/clear-nus/icub_grasp_dataset at commit "
+              f"{ICUB_GRASP_COMMIT[:7]}, fetched on first use")
+    eps = ("grasp",)
+    registry_files = (ICUB_GRASP_DIR,)
+
+    def convert(self, out, data_dir=None, *, force=False, signal_format="npz") -> Path:
+        return convert_icub_grasp(out, data_dir, force=force, signal_format=signal_format)
+
+    def conversion_inputs(self) -> list[str]:
+        table = resources.files("tzsl.datasets").joinpath(ICUB_GRASP_TABLE).read_bytes()
+        return [hashlib.sha256(table).hexdigest()]
+
+
+class Physiclear(CatalogDataset):
+    """clear-nus/octopi (PhysiCLeAR): one trial per GelSight video, object and class = the object, one sensor
+    ``gelsight`` whose features are texture descriptors of 5 key frames (:func:`~tzsl.datasets.convert_physiclear`;
+    the catalog page gives its attributes' sources)."""
+
+    name = PHYSICLEAR
+    description = ("74 objects x 408 GelSight Mini videos (press and rotation), one trial per video; hardness, "
+                   "roughness and bumpiness ranks (one attribute per level) and materials; texture descriptors of "
+                   "5 key frames")
+    source = (f"Yu et al. (RSS 2024, arXiv:2405.02794); github.com/clear-nus/octopi at commit "
+              f"{PHYSICLEAR_COMMIT[:7]}, fetched on first use")
+    eps = ("press-rotation",)
+    registry_files = (PHYSICLEAR_VIDEO_DIR,)
+
+    def convert(self, out, data_dir=None, *, force=False, signal_format="npz") -> Path:
+        return convert_physiclear(out, data_dir, force=force)  # feature columns: no signal files to format
+
+    def conversion_inputs(self) -> list[str]:
+        table = resources.files("tzsl.datasets").joinpath(PHYSICLEAR_TABLE).read_bytes()
+        return [hashlib.sha256(table).hexdigest()]
+
+
 _DATASETS: dict[str, TactileDataset] = {}
 
 
@@ -339,3 +387,5 @@ register_dataset(FabricDepth())
 register_dataset(HandSimulated())
 register_dataset(BiotacSlide())
 register_dataset(Bts3())
+register_dataset(Physiclear())
+register_dataset(IcubGrasp())
