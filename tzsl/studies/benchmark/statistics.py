@@ -43,21 +43,9 @@ from scipy import stats
 from tzsl.evaluation import bootstrap_accuracy
 from tzsl.exceptions import ConfigError, TzslError
 
-__all__ = [
-    "MIN_VARIANCE",
-    "N_BOOT",
-    "SCORE_COLUMNS",
-    "FriedmanResult",
-    "critical_difference",
-    "dataset_ranks",
-    "friedman_test",
-    "mean_ranks",
-    "meta_analysis",
-    "nemenyi_q",
-    "paired_effects",
-    "per_dataset_table",
-    "rank_groups",
-]
+__all__ = ["META_COLUMNS", "MIN_VARIANCE", "N_BOOT", "RANK_DECIMALS", "SCORE_COLUMNS", "FriedmanResult",
+           "critical_difference", "dataset_ranks", "friedman_test", "mean_ranks", "meta_analysis", "nemenyi_q",
+           "paired_effects", "per_dataset_table", "rank_groups"]
 
 #: Columns the long scores table must have.
 SCORE_COLUMNS: tuple[str, ...] = ("dataset", "method", "split", "score")
@@ -69,8 +57,7 @@ N_BOOT = 2000
 #: whose differences are the same on every split (standard error 0) weighs a lot, not infinitely.
 MIN_VARIANCE = 1e-12
 
-#: Decimals mean scores are rounded to before ranking, so equal means computed in different
-#: orders tie.
+#: Decimals mean scores are rounded to before ranking, so equal means computed in another order tie.
 RANK_DECIMALS = 12
 
 
@@ -79,16 +66,13 @@ class FriedmanResult(NamedTuple):
 
     Attributes
     ----------
-    chi2 : float
+    chi2, chi2_pvalue : float
         Friedman's statistic, chi-square with ``n_methods - 1`` degrees of freedom under the null.
-    chi2_pvalue : float
-    f : float
+    f, f_pvalue : float
         Iman and Davenport's statistic, F with ``n_methods - 1`` and
         ``(n_methods - 1)(n_datasets - 1)`` degrees of freedom (inf when every dataset ranks
         the methods alike).
-    f_pvalue : float
-    n_datasets : int
-    n_methods : int
+    n_datasets, n_methods : int
     """
 
     chi2: float
