@@ -49,9 +49,10 @@ from tzsl.datasets._icub_grasp import ICUB_GRASP, ICUB_GRASP_COMMIT, ICUB_GRASP_
 from tzsl.datasets._phac2_h5 import load_phac2_h5
 from tzsl.datasets._phac2_hold_mat import HOLD_DIR, LABELS_CSV, load_phac2_hold_mat, load_phac2_labels
 from tzsl.datasets._phac2_penn import PENN_STATIC_DIR, PennStaticData, load_phac2_penn
-from tzsl.datasets._physiclear import PHYSICLEAR_VIDEO_DIR, convert_physiclear
+from tzsl.datasets._physiclear import convert_physiclear
 from tzsl.datasets._physiclear_table import ATTRIBUTE_TABLE as PHYSICLEAR_TABLE
 from tzsl.datasets._physiclear_table import PHYSICLEAR, PHYSICLEAR_COMMIT
+from tzsl.datasets._physiclear_table import SPLIT_FILE as PHYSICLEAR_SPLITS
 from tzsl.datasets._plain import PlainDataset, read_plain_dataset
 from tzsl.datasets._registry import registered_files, registered_hash
 from tzsl.datasets._types import PHAC2_EPS, RawTrial
@@ -329,14 +330,15 @@ class Physiclear(CatalogDataset):
     source = (f"Yu et al. (RSS 2024, arXiv:2405.02794); github.com/clear-nus/octopi at commit "
               f"{PHYSICLEAR_COMMIT[:7]}, fetched on first use")
     eps = ("press-rotation",)
-    registry_files = (PHYSICLEAR_VIDEO_DIR,)
+    registry_files = (f"{PHYSICLEAR}/",)  # the videos and utils/constants.py, the source of the shipped table
 
     def convert(self, out, data_dir=None, *, force=False, signal_format="npz") -> Path:
         return convert_physiclear(out, data_dir, force=force)  # feature columns: no signal files to format
 
     def conversion_inputs(self) -> list[str]:
-        table = resources.files("tzsl.datasets").joinpath(PHYSICLEAR_TABLE).read_bytes()
-        return [hashlib.sha256(table).hexdigest()]
+        files = resources.files("tzsl.datasets")
+        return [hashlib.sha256(files.joinpath(name).read_bytes()).hexdigest()
+                for name in (PHYSICLEAR_TABLE, PHYSICLEAR_SPLITS)]
 
 
 _DATASETS: dict[str, TactileDataset] = {}
