@@ -1,6 +1,7 @@
 """Imports every command module so each registers its commands on the root group."""
 
 from tzsl.cli import (
+    _benchmark_commands,  # noqa: F401
     _cache_commands,  # noqa: F401
     _dap_commands,  # noqa: F401
     _data_commands,  # noqa: F401

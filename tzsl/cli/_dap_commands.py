@@ -109,11 +109,16 @@ purpose_option = schema_option(
                help="Test objects per random split.")
 @purpose_option
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path), required=True, help="Split CSV to write.")
+@click.option("--standard", metavar="VERSION", default=None,
+              help="Write the standard splits VERSION (v1) shipped for the built-in --dataset, those of --purpose, "
+                   "instead of drawing: the same test objects for everyone who names them ('tzsl benchmark "
+                   "--list' lists the datasets; docs: benchmark).")
 @_source_options
 @seed_option
 @data_dir_option
 @force_option
-def splits(kind, n_splits, n_test, purpose, out, dataset, features_file, plain_dir, path, seed, data_dir, force):
+def splits(kind, n_splits, n_test, purpose, out, standard, dataset, features_file, plain_dir, path, seed, data_dir,
+           force):
     """Write object splits as CSV (split, object, role), usable with 'tzsl evaluate --splits'."""
     from tzsl.evaluation import write_splits_csv  # noqa: PLC0415
     from tzsl.studies.zero_shot.runner import load_study_features  # noqa: PLC0415
@@ -124,7 +129,17 @@ def splits(kind, n_splits, n_test, purpose, out, dataset, features_file, plain_d
     exp = _experiment({**_dataset_values(dataset, features_file, plain_dir, path, data_dir),
                        "splits.n_splits": n_splits, "splits.n_test": n_test, "splits.seed": seed,
                        "splits.purpose": purpose})
-    made, _ = make_splits(load_study_features(exp), kind, exp.config)
+    if standard is not None:
+        from tzsl.studies.benchmark.splits import read_standard_splits, standard_split_file  # noqa: PLC0415
+
+        if exp.config.dataset.builtin is None:
+            raise ConfigError("--standard needs a built-in --dataset: standard splits exist for the benchmark's "
+                              "datasets ('tzsl benchmark --list')")
+        standard_split_file(exp.config.dataset.builtin, standard)  # an unknown version or dataset before any read
+        made = read_standard_splits(exp.config.dataset.builtin, load_study_features(exp).attributes, purpose,
+                                    standard)
+    else:
+        made, _ = make_splits(load_study_features(exp), kind, exp.config)
     write_splits_csv(made, out)
     for s in made:
         excluded = ", ".join(a for a, _ in s.excluded_attributes) or "none"

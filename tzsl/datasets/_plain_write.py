@@ -5,7 +5,6 @@ The format is described in :data:`tzsl.datasets._plain.PLAIN_FORMAT_HELP` and ``
 
 from __future__ import annotations
 
-import json
 import os
 import re
 import shutil
@@ -18,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 from tzsl._io import ensure_folder
+from tzsl._toml import toml_text
 from tzsl.datasets._tables import (
     CLASS_COLUMN,
     CLASSES_FILE,
@@ -31,25 +31,12 @@ from tzsl.datasets._types import FeatureSet
 from tzsl.exceptions import ConfigError
 
 
-def _toml_value(value: object) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, (int, np.integer)):
-        return str(int(value))
-    if isinstance(value, str):
-        return json.dumps(value)
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    raise ConfigError(f"cannot write {value!r} to {SETTINGS_FILE}")
-
-
 def settings_to_toml(settings: Mapping) -> str:
     """``dataset.toml`` text of a settings mapping (top-level scalars, then one-level tables)."""
-    lines = [f"{k} = {_toml_value(v)}" for k, v in settings.items() if not isinstance(v, Mapping)]
-    for table, entries in settings.items():
-        if isinstance(entries, Mapping):
-            lines += ["", f"[{table}]"] + [f"{k} = {_toml_value(v)}" for k, v in entries.items()]
-    return "\n".join(lines) + "\n"
+    try:
+        return toml_text(settings)
+    except TypeError as exc:
+        raise ConfigError(f"{exc} to {SETTINGS_FILE}") from None
 
 
 def _safe_name(text: str) -> str:

@@ -268,6 +268,7 @@ def random_object_splits(
     min_train_negatives: int = 1,
     max_draws: int = 1000,
     purpose: str | None = None,
+    distinct: bool = False,
 ) -> list[Split]:
     """Random object splits with mutually different test attribute vectors (DAP paper 4.2).
 
@@ -294,13 +295,18 @@ def random_object_splits(
         Draw only test sets of this purpose (:func:`split_purpose`), from the generator seeded
         with :func:`purpose_seed`; needs an integer ``random_state``. None: every test set, from
         ``random_state`` itself.
+    distinct : bool, default False
+        Reject a draw whose test set an earlier split of this call has (the standard splits of
+        :mod:`tzsl.studies.benchmark`). The splits then end early when ``max_draws`` draws in a
+        row give no new valid test set (a small dataset has fewer distinct test sets than
+        ``n_splits``): at most ``n_splits`` are returned, at least one.
 
     Returns
     -------
     list of Split
         ``kind="random"``, names ``random-1`` .. ``random-<n_splits>``, ``seed`` = the
         integer ``random_state`` (None otherwise); with ``purpose``, every split's
-        :func:`split_purpose` is ``purpose``.
+        :func:`split_purpose` is ``purpose``; with ``distinct``, no two share a test set.
 
     Raises
     ------
@@ -333,15 +339,19 @@ def random_object_splits(
     rng = check_random_state(random_state if purpose is None else purpose_seed(seed, purpose))
     names = np.asarray(objects, dtype=object)
 
-    splits = []
+    splits: list[Split] = []
+    seen: set[bytes] = set()
     for k in range(n_splits):
         rejected = {"duplicate test vectors": 0, "every attribute excluded": 0,
-                    f"a test set of the {_other(purpose)} splits": 0}
+                    f"a test set of the {_other(purpose)} splits": 0, "a test set of an earlier split": 0}
         for _ in range(max_draws):
             test = np.zeros(n_objects, dtype=bool)
             test[rng.choice(n_objects, size=n_test, replace=False)] = True
             if purpose is not None and split_purpose(names[test]) != purpose:
                 rejected[f"a test set of the {_other(purpose)} splits"] += 1
+                continue
+            if distinct and test.tobytes() in seen:
+                rejected["a test set of an earlier split"] += 1
                 continue
             excluded = attribute_exclusions(A[~test], attributes, min_train_positives, min_train_negatives)
             kept = kept_mask(attributes, excluded)
@@ -353,11 +363,14 @@ def random_object_splits(
                 continue
             break
         else:
+            if distinct and splits:  # every distinct valid test set (or all max_draws found) is drawn
+                break
             why = ", ".join(f"{n} rejected for {r}" for r, n in rejected.items() if n)
             raise SplitError(
                 f"random split {k + 1}: no valid draw of {n_test} test objects out of {n_objects} "
                 f"in {max_draws} draws ({why}); lower n_test or min_train_positives, or raise max_draws"
             )
+        seen.add(test.tobytes())
         splits.append(
             Split(
                 name=f"random-{k + 1}",

@@ -13,6 +13,7 @@ from tzsl.features._builtin_feature_sets import (
     descriptor_memory,
     descriptor_params,
     fabric_depth_feature_set,
+    fabric_group_table,
     files_digest,
     simulated_grasp_feature_set,
 )
@@ -53,6 +54,7 @@ __all__: list[str] = [
     "descriptor_memory",
     "descriptor_params",
     "fabric_depth_feature_set",
+    "fabric_group_table",
     "files_digest",
     "simulated_grasp_feature_set",
     "dataset_features",

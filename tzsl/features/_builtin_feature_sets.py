@@ -30,6 +30,7 @@ from tzsl.features._grasp_features import MATERIAL_FEATURES, grasp_features
 from tzsl.features._texture import DESCRIPTOR_CHUNK, TextureDescriptor, texture_feature_names
 
 __all__ = ["depth_image_descriptors", "descriptor_memory", "descriptor_params", "fabric_depth_feature_set",
+           "fabric_group_table",
            "files_digest", "simulated_grasp_feature_set"]
 
 
@@ -117,6 +118,27 @@ def _feature_set(X: np.ndarray, trials: pd.DataFrame, object_rows: pd.DataFrame,
                       dataset=dataset, info={"dropped_attributes": dropped, "min_objects": int(min_objects), **info})
 
 
+def fabric_group_table(fabric: FabricData, groups: np.ndarray | None = None) -> pd.DataFrame:
+    """The ``fabric-depth`` object-attribute table: one row per fabric group (``group-<g>``), unfiltered.
+
+    Parameters
+    ----------
+    fabric : FabricData
+        From :func:`tzsl.datasets.load_fabric` (``images=False`` suffices).
+    groups : ndarray of int, optional
+        The groups the trials hold (default: every group of the attribute matrix).
+
+    Returns
+    -------
+    DataFrame (n_groups, n_attributes) of int64 0/1
+        Indexed by ``object_name``, groups in ascending order.
+    """
+    order = sorted(set((fabric.attributes.index if groups is None else groups).tolist()))
+    rows = fabric.attributes.loc[order].astype(np.int64)
+    rows.index = pd.Index([f"group-{g}" for g in order], name="object_name")
+    return rows
+
+
 def fabric_depth_feature_set(fabric: FabricData, min_objects: int = 3) -> FeatureSet:
     """The ``fabric-depth`` dataset: one trial per depth image, one object per fabric group.
 
@@ -152,9 +174,7 @@ def fabric_depth_feature_set(fabric: FabricData, min_objects: int = 3) -> Featur
         "class": names_of.to_numpy(),
         "fabric": images["fabric_name"].astype(str).to_numpy(),
     })
-    order = sorted(set(groups.tolist()))
-    rows = fabric.attributes.loc[order].astype(np.int64)
-    rows.index = pd.Index([f"group-{g}" for g in order], name="object_name")
+    rows = fabric_group_table(fabric, groups)
     names = texture_feature_names(descriptor_params(TextureDescriptor()))
     return _feature_set(X, trials, rows, "depth", names, "fabric-depth", min_objects,
                         {"attribute_set": fabric.attribute_set,

@@ -18,6 +18,7 @@ from typing import Any, overload
 
 from pydantic import BaseModel, ValidationError
 
+from tzsl._toml import toml_value
 from tzsl.exceptions import ConfigError, problems_error
 from tzsl.studies.config._registry import get_study, study_names
 
@@ -280,20 +281,6 @@ def option_values(study: str, options: Mapping[str, Any], strict: bool = True) -
 # --------------------------------------------------------------------------- printing
 
 
-def _toml_value(value: Any) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int | float):
-        return repr(value)
-    if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    if isinstance(value, list | tuple):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    if isinstance(value, dict):
-        return "{" + ", ".join(f"{k} = {_toml_value(v)}" for k, v in value.items()) + "}"
-    raise TypeError(f"cannot write {value!r} as TOML")
-
-
 #: Tables :func:`to_toml` writes before the others, when the study has them.
 _LEADING_TABLES = ("dataset", "features")
 
@@ -306,7 +293,7 @@ def to_toml(config: BaseModel) -> str:
     lines = []
     for key, value in data.items():
         if not isinstance(value, dict):
-            lines.append(f"{key} = {_toml_value(value)}")
+            lines.append(f"{key} = {toml_value(value)}")
     for table, values in data.items():
         if not isinstance(values, dict):
             continue
@@ -318,8 +305,8 @@ def to_toml(config: BaseModel) -> str:
             elif isinstance(value, dict):
                 nested[key] = value
             else:
-                lines.append(f"{key} = {_toml_value(value)}")
+                lines.append(f"{key} = {toml_value(value)}")
         for key, value in nested.items():
             lines.append(f"\n[{table}.{key}]")
-            lines += [f"{k} = {_toml_value(v)}" for k, v in value.items() if v is not None]
+            lines += [f"{k} = {toml_value(v)}" for k, v in value.items() if v is not None]
     return "\n".join(lines) + "\n"

@@ -57,6 +57,9 @@ __all__ = [
 
 #: The file of a results folder that holds the deploy choice.
 DEPLOYMENT_FILE = "deployment.json"
+#: Per (method, split, test class): the share of the class's test trials recognised, on the splits the choice
+#: reads (the random or the file splits); a split's per-class mean accuracy is the mean of its classes' rows.
+CLASS_ACCURACY_FILE = "class_accuracy.csv"
 #: The model bundle ``[output] model = true`` writes beside it.
 MODEL_FILE = "model.tzsl"
 #: Fewest completed random splits the choice is made on; below it the generic default is kept.

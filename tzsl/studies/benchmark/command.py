@@ -1,0 +1,102 @@
+"""``tzsl benchmark``: run the datasets' studies, then write the tables and figures across them and a manifest.
+
+The folder a benchmark writes (``--out``, default ``results/benchmark``):
+
+* ``scores.csv``: one row per (dataset, method, split): per-class mean accuracy (primary), trial
+  accuracy, chance (:func:`~tzsl.studies.benchmark.runner.collect_scores`);
+* ``datasets.csv``: per dataset and method, the mean per-class accuracy over the splits with its 95%
+  interval, chance and the gain over chance; ``gzsl.csv`` the GZSL harmonic mean beside;
+* ``ranks.csv``: the methods' mean rank and mean gain over chance across datasets; ``friedman.csv``:
+  the Friedman test and the Nemenyi critical difference; ``critical_difference.png`` (Demsar 2006);
+* ``meta_analysis.csv`` / ``meta_analysis.png``: every pair of methods' paired difference on shared
+  splits, meta-analysed across datasets (random effects);
+* ``experiments/``, ``splits/`` and ``datasets/``: each dataset's experiment file, split file and study;
+* ``manifest.json``: the datasets, their status and failures, the split files' hashes, the methods.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import pandas as pd
+
+from tzsl.exceptions import ConfigError, PartialRunError
+from tzsl.studies.benchmark.catalog import BENCHMARK_DATASETS, benchmark_datasets
+from tzsl.studies.benchmark.runner import DatasetRun, collect_gzsl, collect_scores, run_benchmark
+from tzsl.studies.benchmark.splits import SPLITS_VERSION, standard_index
+from tzsl.studies.benchmark.summary import BENCHMARK_FILES, summarise, terminal_lines
+from tzsl.studies.outputs.results_folder import ResultsDir
+
+__all__ = ["list_benchmark", "run_benchmark_command"]
+
+
+def list_benchmark() -> list[str]:
+    """One line per benchmark dataset: its standard splits (unseen classes, splits per purpose)."""
+    index = standard_index()
+    lines = [f"standard splits {SPLITS_VERSION} (tzsl/studies/benchmark/splits/{SPLITS_VERSION}):"]
+    for d in BENCHMARK_DATASETS:
+        entry = index.get(d.name)
+        lines.append(f"  {d.name}: " + ("no standard splits" if entry is None else
+                                        f"{entry['n_objects']} classes, {entry['n_test']} unseen per split, "
+                                        f"{entry['n_select']} selection + {entry['n_confirm']} confirmation "
+                                        f"splits, sha256 {entry['sha256'][:12]}"))
+    return lines
+
+
+def _method_entries(methods: Sequence[str]) -> list[dict] | None:
+    if not methods:
+        return None
+    from tzsl.models import get_method  # noqa: PLC0415
+
+    for name in methods:
+        get_method(name)  # an unknown name: one line with the registered ones
+    return [{"name": name} for name in methods]
+
+
+def run_benchmark_command(*, datasets: Sequence[str] = (), added: Sequence[str | os.PathLike] = (),
+                          catalog: bool = True, methods: Sequence[str] = (), purpose: str = "confirm",
+                          out: str | os.PathLike, n_jobs: int = 1, data_dir: str | os.PathLike | None = None,
+                          force: bool = False, echo: Callable[[str], None] = print) -> list[DatasetRun]:
+    """Run the benchmark into ``out`` and write its tables, figures and manifest (``tzsl benchmark``).
+
+    Raises
+    ------
+    ConfigError
+        ``out`` holds an earlier benchmark and ``force`` is off (checked before any fit); an unknown
+        dataset or method; no dataset completed.
+    PartialRunError
+        After everything is written, when a dataset failed or some (split, method) fits failed.
+    """
+    chosen = benchmark_datasets(datasets, added, catalog=catalog)
+    entries = _method_entries(methods)
+    results = ResultsDir(Path(out), force=force)
+    results.check_free(BENCHMARK_FILES)
+    echo(f"benchmark: {len(chosen)} dataset(s), standard splits {SPLITS_VERSION} ({purpose}) -> {out}")
+    runs = run_benchmark(chosen, out, purpose, methods=entries, n_jobs=n_jobs, data_dir=data_dir, echo=echo)
+    scores = collect_scores(runs)
+    gzsl = collect_gzsl(runs)
+    summary = summarise(scores, gzsl, results)
+    for line in terminal_lines(summary):
+        echo(line)
+    index = standard_index()
+    results.write_manifest({"study": "benchmark", "purpose": purpose, "splits_version": SPLITS_VERSION,
+                            "methods": entries or "every registered method",
+                            "datasets": [{"name": r.dataset, "status": r.status, "restored": r.restored,
+                                          "results": str(r.results), "failures": r.failures,
+                                          "standard_splits": index.get(r.dataset)} for r in runs]})
+    failures = [f"{r.dataset}: {line}" for r in runs for line in r.failures]
+    n_files = len(results.written)
+    echo(f"wrote {n_files} files to {out}; per dataset: {out}/datasets; report: tzsl report {out}")
+    if failures:
+        raise PartialRunError(results.root, failures)
+    return runs
+
+
+def read_scores(folder: str | os.PathLike) -> pd.DataFrame:
+    """The ``scores.csv`` of a benchmark folder."""
+    path = Path(folder) / "scores.csv"
+    if not path.is_file():
+        raise ConfigError(f"{path}: missing; run tzsl benchmark --out {folder} first")
+    return pd.read_csv(path)

@@ -1,0 +1,133 @@
+"""The benchmark's tables and figures across datasets, and its lines on the terminal.
+
+:func:`summarise` turns the collected scores (:func:`~tzsl.studies.benchmark.runner.collect_scores`)
+into the per-dataset table (mean per-class accuracy with its 95% interval, chance, gain over chance,
+trial accuracy and GZSL's harmonic mean beside), the mean ranks across datasets, the Friedman test
+with Nemenyi's critical difference and its diagram, and the meta-analysed paired effects with their
+forest plot against the generic default (:data:`tzsl.models.choices.DEFAULT_METHOD`), all written
+into the benchmark's results folder.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from tzsl.exceptions import TzslError, first_line
+from tzsl.studies.benchmark.figures import critical_difference_diagram, meta_analysis_figure
+from tzsl.studies.benchmark.statistics import (
+    critical_difference,
+    friedman_test,
+    mean_ranks,
+    meta_analysis,
+    per_dataset_table,
+)
+
+__all__ = ["BENCHMARK_FILES", "summarise", "terminal_lines"]
+
+#: What a benchmark writes at the top of its folder (checked free before any fit).
+BENCHMARK_FILES = ("scores.csv", "datasets.csv", "gzsl.csv", "ranks.csv", "friedman.csv", "meta_analysis.csv",
+                   "critical_difference.png", "meta_analysis.png", "manifest.json")
+#: The primary metric of the benchmark (a column of scores.csv).
+PRIMARY = "per_class_accuracy"
+#: Significance level of the Friedman test and the critical difference.
+ALPHA = 0.05
+#: Methods shown on the terminal's rank line (the table has them all).
+SHOWN_RANKS = 5
+
+
+def _reference() -> str:
+    from tzsl.models.choices import DEFAULT_METHOD  # noqa: PLC0415
+
+    return DEFAULT_METHOD
+
+
+def _dataset_table(scores: pd.DataFrame, gzsl: pd.DataFrame) -> pd.DataFrame:
+    """:func:`per_dataset_table` of the primary metric, with mean trial accuracy and GZSL's H beside."""
+    long = scores.rename(columns={PRIMARY: "score"})[["dataset", "method", "split", "score", "chance"]]
+    table = per_dataset_table(long)
+    trial = scores.groupby(["dataset", "method"])["trial_accuracy"].mean().rename("trial_accuracy")
+    table = table.merge(trial.reset_index(), on=["dataset", "method"], how="left")
+    if not gzsl.empty:
+        harmonic = gzsl.groupby(["dataset", "method"])["harmonic"].mean().rename("gzsl_harmonic")
+        table = table.merge(harmonic.reset_index(), on=["dataset", "method"], how="left")
+    else:
+        table["gzsl_harmonic"] = np.nan
+    return table.rename(columns={"score": PRIMARY})
+
+
+def summarise(scores: pd.DataFrame, gzsl: pd.DataFrame, results: Any) -> dict[str, Any]:
+    """Write the benchmark's tables and figures into ``results`` (a :class:`~tzsl.studies.outputs.ResultsDir`).
+
+    Parameters
+    ----------
+    scores : DataFrame
+        :func:`~tzsl.studies.benchmark.runner.collect_scores` (one row per dataset, method, split).
+    gzsl : DataFrame
+        :func:`~tzsl.studies.benchmark.runner.collect_gzsl`.
+    results : ResultsDir
+
+    Returns
+    -------
+    dict
+        ``datasets``, ``ranks``, ``friedman`` (DataFrames; ``friedman`` holds one row, or the reason
+        the test could not run), ``meta`` and ``reference`` (the method the forest plot compares with).
+    """
+    results.write_csv("scores.csv", scores)
+    results.write_csv("gzsl.csv", gzsl)
+    datasets = _dataset_table(scores, gzsl)
+    results.write_csv("datasets.csv", datasets)
+    long = scores.rename(columns={PRIMARY: "score"})[["dataset", "method", "split", "score", "chance"]]
+    ranks = mean_ranks(long)
+    results.write_csv("ranks.csv", ranks)
+    n_datasets = int(ranks["n_datasets"].iloc[0]) if len(ranks) else 0
+    try:
+        test = friedman_test(ranks)
+        cd = critical_difference(test.n_methods, test.n_datasets, ALPHA)
+        friedman = pd.DataFrame([{**test._asdict(), "alpha": ALPHA, "critical_difference": cd, "note": ""}])
+    except TzslError as exc:  # one dataset: ranks exist, a test across datasets does not
+        cd = float("nan")
+        friedman = pd.DataFrame([{"n_datasets": n_datasets, "n_methods": len(ranks), "alpha": ALPHA,
+                                  "critical_difference": cd, "note": first_line(exc)}])
+    results.write_csv("friedman.csv", friedman)
+    title = (f"mean rank of {PRIMARY.replace('_', ' ')} over {n_datasets} dataset(s); "
+             f"CD = {cd:.2f} (Nemenyi, alpha {ALPHA})" if np.isfinite(cd) else
+             f"mean rank over {n_datasets} dataset")
+    results.write_file("critical_difference.png",
+                       lambda path: critical_difference_diagram(ranks, cd if np.isfinite(cd) else 0.0, path,
+                                                                title=title))
+    meta = meta_analysis(long)
+    results.write_csv("meta_analysis.csv", meta)
+    reference = _reference()
+    if reference not in set(long["method"]):
+        reference = str(ranks["method"].iloc[0])
+    results.write_file("meta_analysis.png", lambda path: meta_analysis_figure(
+        meta, reference, path, title=f"paired difference from {reference}, pooled over datasets (95% CI)"))
+    return {"datasets": datasets, "ranks": ranks, "friedman": friedman, "meta": meta, "reference": reference}
+
+
+def terminal_lines(summary: dict[str, Any]) -> list[str]:
+    """A screenful: per dataset its best method beside the reference and chance; the top mean ranks; the test."""
+    datasets, ranks, friedman = summary["datasets"], summary["ranks"], summary["friedman"].iloc[0]
+    reference = summary["reference"]
+    lines = [f"per-class mean accuracy (95% interval over splits); reference {reference}:"]
+    for name, table in datasets.groupby("dataset", sort=False):
+        best = table.loc[table[PRIMARY].idxmax()]
+        ref = table[table["method"] == reference]
+        shown = (f"  {name}: best {best['method']} {best[PRIMARY]:.3f} "
+                 f"[{best['ci95_low']:.3f}, {best['ci95_high']:.3f}]")
+        if len(ref):
+            r = ref.iloc[0]
+            shown += f"; {reference} {r[PRIMARY]:.3f} [{r['ci95_low']:.3f}, {r['ci95_high']:.3f}]"
+        lines.append(f"{shown}; chance {best['chance']:.3f} ({int(best['n_splits'])} splits)")
+    top = ", ".join(f"{r.method} {r.mean_rank:.2f}" for r in ranks.head(SHOWN_RANKS).itertuples())
+    lines.append(f"mean rank over {int(friedman['n_datasets'])} dataset(s), best first: {top}")
+    if friedman["note"]:
+        lines.append(f"note: no Friedman test: {friedman['note']}")
+    else:
+        lines.append(f"Friedman chi2 = {friedman['chi2']:.2f} (p = {friedman['chi2_pvalue']:.3g}), Iman-Davenport "
+                     f"F = {friedman['f']:.2f} (p = {friedman['f_pvalue']:.3g}); critical difference "
+                     f"{friedman['critical_difference']:.2f} ranks (Nemenyi, alpha {ALPHA})")
+    return lines
