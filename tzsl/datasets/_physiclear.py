@@ -1,7 +1,7 @@
 """``physiclear``: PhysiCLeAR (clear-nus/octopi), GelSight videos of everyday objects, as a plain-file dataset.
 
 The release (https://github.com/clear-nus/octopi at commit :data:`PHYSICLEAR_COMMIT`) holds 476 videos
-``dataset/<object>_<k>.mov`` (MPEG-4 part 2 in a QuickTime container, 320 x 240 pixels, about 5 s)
+``dataset/<object>_<k>.mov`` (MPEG-4 part 2 in a QuickTime container, 320 x 240 pixels, a few seconds)
 recorded by hand with a GelSight Mini: one video is one exploration of one object, a press then a
 rotation of the sensor against the object (the paper's two exploratory procedures, "pressing and
 rotation"), the first frames before contact. The registry lists every video and ``utils/constants.py``
@@ -11,15 +11,15 @@ fetch physiclear``). The objects, their ranks, materials and split are the shipp
 
 Key frames (:func:`contact_key_frames`), the fabric paper's idea with the first frame as reference, as
 these videos allow: ``Diff(t) = mean |V(t) - V(1)|`` over pixels and channels (the per-pixel measure of
-:func:`tzsl.features.frame_differences`: a GelSight Mini press changes the mean intensity of a frame by
-less than one grey level, brighter and darker regions cancelling); the contact is every frame whose
+:func:`tzsl.features.frame_differences`: a GelSight Mini press barely changes the mean intensity of a frame,
+brighter and darker regions cancelling); the contact is every frame whose
 ``Diff(t) - floor`` exceeds :data:`CONTACT_LEVEL` (one half) of ``peak - floor`` (``floor`` and ``peak`` the
 least and largest difference after the first frame: the full width at half maximum of the contact). The
 fabric paper ends its key frames at the maximum difference (the end of a press); here the contact goes
 on with the rotation, so the key frames are :data:`N_KEY_FRAMES` (5) frames evenly spaced from the first
-to the last frame of the contact. A half-maximum, not the fabric default 10 % onset: the MPEG-4 codec's
-noise after release stays above 10 % of the range in these videos, so a 10 % level would not end the
-contact.
+to the last frame of the contact. A half-maximum, not the fabric default onset at a tenth of the range:
+the MPEG-4 codec's noise after release stays above a tenth of the range in these videos, so such a
+level would not end the contact.
 
 Features: every key frame's grey image minus the first frame's (the imprint, without the sensor's own
 illumination pattern that every video shares), described by :class:`tzsl.features.TextureDescriptor`
