@@ -38,7 +38,7 @@ from tzsl.datasets._physiclear_table import (
     ATTRIBUTE_TABLE,
     PHYSICLEAR_COMMIT,
     physiclear_records,
-    physiclear_splits_text,
+    physiclear_splits_from_constants,
 )
 from tzsl.evaluation import read_splits_csv
 from tzsl.exceptions import ConfigError, DataFileError
@@ -130,7 +130,7 @@ def test_the_table_and_split_are_made_from_constants_py(tmp_path):
     shipped = pd.read_csv(TABLE, dtype=str).set_index(["object", "property"])["value"]
     assert records.set_index(["object", "property"])["value"].to_dict() == shipped.loc[list(OBJECTS)].to_dict()
     classes = read_physiclear_attributes().classes.loc[list(OBJECTS)]
-    split_lines = physiclear_splits_text(constants, classes).splitlines()
+    split_lines = physiclear_splits_from_constants(constants, classes).splitlines()
     assert split_lines[0] == "split,object,role" and "physiclear-test,orange,test" in split_lines
 
 

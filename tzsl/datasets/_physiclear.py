@@ -40,8 +40,8 @@ from tzsl.datasets._physiclear_table import (
     PHYSICLEAR,
     PhysiclearTable,
     physiclear_split_roles,
+    physiclear_split_text,
     read_physiclear_attributes,
-    split_text,
 )
 from tzsl.datasets._plain_write import write_plain_dataset
 from tzsl.datasets._registry import fetch, registered_files
@@ -194,7 +194,7 @@ def convert_physiclear(out: str | os.PathLike, data_dir: str | os.PathLike | Non
     Path
         ``out``, holding ``classes.csv``, ``trials.csv`` (one sensor, ``N_KEY_FRAMES * d`` feature columns),
         ``dataset.toml`` and ``splits.csv`` (the paper's split over the written objects,
-        :func:`~tzsl.datasets._physiclear_table.split_text`; attributes that are 0 or 1 for every written object
+        :func:`~tzsl.datasets.physiclear_split_text`; attributes that are 0 or 1 for every written object
         are left out).
 
     Raises
@@ -238,5 +238,5 @@ def convert_physiclear(out: str | os.PathLike, data_dir: str | os.PathLike | Non
     classes = classes.loc[:, classes.nunique() > 1]  # an attribute no written object has (a part of the release)
     folder = write_plain_dataset(out, classes, trials, sensors=[PHYSICLEAR_SENSOR], X=X, feature_names=names,
                                  settings=PHYSICLEAR_SETTINGS, force=force)
-    (folder / "splits.csv").write_text(split_text(physiclear_split_roles(), classes), encoding="utf-8")
+    (folder / "splits.csv").write_text(physiclear_split_text(physiclear_split_roles(), classes), encoding="utf-8")
     return folder

@@ -50,7 +50,7 @@ from tzsl.exceptions import ConfigError, DataFileError, first_line
 __all__ = ["ATTRIBUTE_TABLE", "CONSTANTS_FILE", "ENCODINGS", "MIN_MATERIAL_OBJECTS", "PHYSICLEAR",
            "PHYSICLEAR_COMMIT", "PROPERTIES", "SPLIT_FILE", "SPLIT_VARIABLES", "OctopiConstants",
            "PhysiclearTable", "physiclear_records", "physiclear_split_file", "physiclear_split_roles",
-           "physiclear_splits_text", "split_text",
+           "physiclear_splits_from_constants", "physiclear_split_text",
            "read_octopi_constants", "read_physiclear_attributes", "write_physiclear_attributes"]
 
 #: The dataset's registry folder.
@@ -286,19 +286,19 @@ def encode_materials(materials: pd.Series, min_objects: int) -> pd.DataFrame:
                         index=materials.index)
 
 
-def physiclear_splits_text(constants: OctopiConstants, classes: pd.DataFrame) -> str:
+def physiclear_splits_from_constants(constants: OctopiConstants, classes: pd.DataFrame) -> str:
     """The paper's split as a split file (:mod:`tzsl.evaluation` format) over the objects of ``classes``.
 
     Two splits: ``physiclear-validation`` (train: ``TRAIN_OBJECTS``, test: ``VAL_OBJECTS``), for choosing,
     and ``physiclear-test`` (train: ``TRAIN_OBJECTS`` and ``VAL_OBJECTS``, test: ``TEST_OBJECTS``), for
-    reporting, as the paper trains, validates and tests (:func:`split_text`).
+    reporting, as the paper trains, validates and tests (:func:`physiclear_split_text`).
     """
     roles = {name: [o.removeprefix(KEY_PREFIX) for o, _ in constants.lists[v]] for name, v in SPLIT_VARIABLES.items()}
-    return split_text(roles, classes)
+    return physiclear_split_text(roles, classes)
 
 
-def split_text(roles: dict[str, list[str]], classes: pd.DataFrame) -> str:
-    """The two splits of :func:`physiclear_splits_text` from the objects of each role, over ``classes``.
+def physiclear_split_text(roles: dict[str, list[str]], classes: pd.DataFrame) -> str:
+    """The two splits of :func:`physiclear_splits_from_constants` from the objects of each role, over ``classes``.
 
     Parameters
     ----------
@@ -336,7 +336,7 @@ def split_text(roles: dict[str, list[str]], classes: pd.DataFrame) -> str:
 
 
 def physiclear_split_roles(path: str | os.PathLike | None = None) -> dict[str, list[str]]:
-    """The objects of each role (``train``, ``validation``, ``test``) of a split file of :func:`split_text`
+    """The objects of each role (``train``, ``validation``, ``test``) of a split file of :func:`physiclear_split_text`
     (default: the shipped one)."""
     path = Path(path) if path is not None else physiclear_split_file()
     frame = pd.read_csv(path, dtype=str, keep_default_na=False)
@@ -348,5 +348,5 @@ def physiclear_split_roles(path: str | os.PathLike | None = None) -> dict[str, l
 
 
 def physiclear_split_file() -> Path:
-    """The shipped split file (:data:`SPLIT_FILE`, :func:`physiclear_splits_text` of the pinned release)."""
+    """The shipped split file (:data:`SPLIT_FILE`, :func:`physiclear_splits_from_constants` of the pinned release)."""
     return Path(str(resources.files("tzsl.datasets").joinpath(SPLIT_FILE)))
