@@ -284,3 +284,19 @@ def test_a_damaged_video_is_one_line_naming_it(tmp_path, served, monkeypatch, da
     assert str(home / damaged) in lines[0]
     assert ("tzsl data fetch physiclear" if damage == "hash" else "cannot decode video") in lines[0]
     assert not (tmp_path / "plain").exists()
+
+
+def test_the_shipped_table_and_split_are_those_of_the_pinned_constants_py():
+    """Against the release's own file when the data home holds it (``tzsl data fetch physiclear``)."""
+    from tzsl.datasets import fetch, get_data_home
+    from tzsl.datasets._physiclear_table import CONSTANTS_FILE
+
+    if not (get_data_home() / CONSTANTS_FILE).is_file():
+        pytest.skip(f"{CONSTANTS_FILE} is not in the data home")
+    constants = read_octopi_constants(fetch(CONSTANTS_FILE))
+    stems = sorted({Path(r).stem.rpartition("_")[0] for r in registered_files("physiclear/dataset/")})
+    records, left_out = physiclear_records(constants, stems)
+    assert len(stems) == 87 and len(left_out) == 13
+    assert records.to_csv(index=False, lineterminator="\n") == TABLE.read_text()
+    table = read_physiclear_attributes()
+    assert physiclear_splits_from_constants(constants, table.classes) == physiclear_split_file().read_text()
