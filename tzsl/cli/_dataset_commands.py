@@ -16,10 +16,10 @@ from tzsl.exceptions import ConfigError, DataFileError
 
 
 def _statistics_help() -> str:
-    from tzsl.features import SIGNAL_STATISTICS  # noqa: PLC0415
+    from tzsl.features import SIGNAL_STATISTICS, SIGNAL_TRANSFORMS  # noqa: PLC0415
 
     width = max(map(len, SIGNAL_STATISTICS))
-    rows = [f"    {name:<{width}}  {text}" for name, text in SIGNAL_STATISTICS.items()]
+    rows = [f"    {name:<{width}}  {text}" for name, text in {**SIGNAL_STATISTICS, **SIGNAL_TRANSFORMS}.items()]
     return ("signal statistics ([signals] statistics), per channel over the rows of a trial;\n"
             "features are named <channel>_<statistic>, channel-major\n" + "\n".join(rows) + "\n")
 
@@ -116,9 +116,14 @@ def validate(dataset_dir: Path, as_json: bool) -> None:
     for the format.
     """
     from tzsl.datasets import card_lines, read_plain_dataset, validate_dataset  # noqa: PLC0415
-    from tzsl.features import DEFAULT_SIGNAL_STATISTICS, SIGNAL_STATISTICS  # noqa: PLC0415
+    from tzsl.features import (  # noqa: PLC0415
+        DEFAULT_ROCKET_KERNELS,
+        DEFAULT_SIGNAL_STATISTICS,
+        SIGNAL_STATISTICS,
+        SIGNAL_TRANSFORMS,
+    )
 
-    problems = validate_dataset(dataset_dir, statistics=tuple(SIGNAL_STATISTICS))
+    problems = validate_dataset(dataset_dir, statistics=(*SIGNAL_STATISTICS, *SIGNAL_TRANSFORMS))
     data = None
     if not problems:
         data = read_plain_dataset(dataset_dir)
@@ -134,8 +139,10 @@ def validate(dataset_dir: Path, as_json: bool) -> None:
         config = data.settings.get("signals", {})
         stats = config.get("statistics", list(DEFAULT_SIGNAL_STATISTICS))
         baseline = config.get("baseline_rows", 0)
-        dims = (f"{len(data.channels) * len(stats)} per sensor from signal files: {len(data.channels)} channels x "
-                f"{len(stats)} statistics ({', '.join(stats)}), baseline_rows={baseline}")
+        per_channel = sum(2 * DEFAULT_ROCKET_KERNELS if s in SIGNAL_TRANSFORMS else 1 for s in stats)
+        dims = (f"{len(data.channels) * per_channel} per sensor from signal files: {len(data.channels)} channels x "
+                f"{per_channel} {'statistics' if per_channel == len(stats) else 'features'} ({', '.join(stats)}), "
+                f"baseline_rows={baseline}")
     card = _card(data)
     if as_json:
         click.echo(json.dumps({"dataset": data.name, "folder": str(dataset_dir), "valid": True,

@@ -38,7 +38,18 @@ from tzsl.features._penn_columns import (
     select_penn_columns,
 )
 from tzsl.features._raw_features import RawTrialFeatures
-from tzsl.features._signal_features import load_plain_dataset, plain_feature_set, raw_trial_signals
+from tzsl.features._rocket_features import (
+    DEFAULT_ROCKET_KERNELS,
+    ROCKET_INSTALL_HINT,
+    SIGNAL_TRANSFORMS,
+    RocketFeatures,
+)
+from tzsl.features._signal_features import (
+    load_plain_dataset,
+    plain_feature_set,
+    raw_trial_signals,
+    split_signal_features,
+)
 from tzsl.features._signal_stats import (
     DEFAULT_SIGNAL_STATISTICS,
     SIGNAL_STATISTICS,
@@ -99,4 +110,9 @@ __all__: list[str] = [
     "load_plain_dataset",
     "plain_feature_set",
     "raw_trial_signals",
+    "split_signal_features",
+    "DEFAULT_ROCKET_KERNELS",
+    "ROCKET_INSTALL_HINT",
+    "SIGNAL_TRANSFORMS",
+    "RocketFeatures",
 ]

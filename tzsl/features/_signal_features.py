@@ -19,6 +19,7 @@ from tzsl.datasets import FeatureSet, PlainDataset, RawTrial, read_plain_dataset
 from tzsl.exceptions import ConfigError
 from tzsl.features._attribute_filter import filter_attributes
 from tzsl.features._baseline import check_raw_trial
+from tzsl.features._rocket_features import SIGNAL_TRANSFORMS, RocketFeatures
 from tzsl.features._signal_stats import (
     DEFAULT_SIGNAL_STATISTICS,
     SignalStatistics,
@@ -54,8 +55,10 @@ def plain_feature_set(
         What the dataset must hold; "auto" accepts either. A mismatch is a ConfigError.
     statistics : sequence of str, optional
         Per-channel statistics for signal datasets (names of
-        :data:`~tzsl.features.SIGNAL_STATISTICS`); default ``[signals] statistics`` of
-        ``dataset.toml``, else ``("mean", "std", "min", "max")``.
+        :data:`~tzsl.features.SIGNAL_STATISTICS`, and ``"rocket"`` for the ROCKET features of
+        :class:`~tzsl.features.RocketFeatures`, appended after the statistics; needs
+        ``tzsl[timeseries]``); default ``[signals] statistics`` of ``dataset.toml``, else
+        ``("mean", "std", "min", "max")``.
     baseline_rows : int, optional
         Baseline rows for signal datasets (0: none); default ``[signals] baseline_rows``,
         else 0.
@@ -77,9 +80,10 @@ def plain_feature_set(
     FeatureSet
         ``X`` (n_trials, n_sensors, d): the feature columns, or for signals
         ``d = n_channels * n_statistics`` named ``"<channel>_<statistic>"`` (channel-major,
-        in signal units); see :meth:`tzsl.datasets.PlainDataset.to_feature_set` for the
-        rest. ``info`` also holds ``statistics``, ``baseline_rows`` and ``channels`` for
-        signal datasets.
+        in signal units), then with ``"rocket"`` the ``n_channels * 2 * 25`` ROCKET features
+        (:data:`~tzsl.features.DEFAULT_ROCKET_KERNELS` kernels); see
+        :meth:`tzsl.datasets.PlainDataset.to_feature_set` for the rest. ``info`` also holds
+        ``statistics``, ``baseline_rows`` and ``channels`` for signal datasets.
 
     Raises
     ------
@@ -116,27 +120,67 @@ def _signal_feature_set(
     cache: bool | str | os.PathLike | None,
 ) -> FeatureSet:
     config = data.settings.get("signals", {})
-    stats = check_statistics(tuple(statistics) if statistics is not None
-                             else tuple(config.get("statistics", DEFAULT_SIGNAL_STATISTICS)))
+    named = tuple(statistics) if statistics is not None else tuple(config.get("statistics", DEFAULT_SIGNAL_STATISTICS))
+    stats, transforms = split_signal_features(named)
     baseline = int(config.get("baseline_rows", 0)) if baseline_rows is None else baseline_rows
     if channels is not None:
         if isinstance(channels, str) or not isinstance(channels, Sequence) or not channels:
             raise ConfigError(f"channels must be a non-empty sequence of names, got {channels!r}")
         data = _with_channels(data, tuple(channels))
-    need = min_rows_for(stats, baseline)
-    extractor = SignalStatistics(statistics=stats, baseline_rows=baseline or None, channels=data.channels)
+    need = max(min_rows_for(stats, baseline), 2 if transforms else 1)
+    extractors: list[SignalStatistics | RocketFeatures] = []
+    if stats:
+        extractors.append(SignalStatistics(statistics=stats, baseline_rows=baseline or None, channels=data.channels))
+    if "rocket" in transforms:  # kernels of seed 0, the same for every split and run
+        extractors.append(RocketFeatures(baseline_rows=baseline or None, channels=data.channels, random_state=0))
     n_trials, n_sensors = data.n_trials, len(data.sensors)
-    X = np.empty((n_trials, n_sensors, len(data.channels) * len(stats)))
     table = read_signal_table(data, need, n_jobs=n_jobs, cache=cache)
-    extractor.fit(table.signals(0, 0, 1))
+    first = table.signals(0, 0, 1)
+    for extractor in extractors:
+        extractor.fit(first)  # reads the channel count only (each trial is summarised on its own)
+    names = [n for extractor in extractors for n in extractor.get_feature_names_out()]
+    X = np.empty((n_trials, n_sensors, len(names)))
     for s in range(n_sensors):
         for lo in range(0, n_trials, _BATCH):
             batch = table.signals(s, lo, min(lo + _BATCH, n_trials))
-            X[lo:lo + len(batch), s] = extractor.transform(batch)
+            X[lo:lo + len(batch), s] = np.concatenate([e.transform(batch) for e in extractors], axis=1)
     return data.to_feature_set(
-        X, tuple(extractor.get_feature_names_out()),
-        info={"statistics": list(stats), "baseline_rows": int(baseline or 0), "channels": list(data.channels)},
+        X, tuple(names),
+        info={"statistics": list(named), "baseline_rows": int(baseline or 0), "channels": list(data.channels)},
     )
+
+
+def split_signal_features(names: object) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """A ``statistics`` setting -> (its per-channel statistics, its transforms), in the given order.
+
+    Parameters
+    ----------
+    names : sequence of str
+        Names of :data:`~tzsl.features.SIGNAL_STATISTICS` and of
+        :data:`~tzsl.features.SIGNAL_TRANSFORMS` (``"rocket"``), each at most once; at least one.
+
+    Returns
+    -------
+    tuple of str, tuple of str
+        The statistics (checked; may be empty when a transform is named) and the transforms.
+
+    Raises
+    ------
+    ConfigError
+        Not a non-empty sequence of distinct known names (one line listing the known names).
+    """
+    if isinstance(names, str) or not isinstance(names, Sequence) or len(names) == 0:
+        return check_statistics(names), ()  # its one-line error
+    transforms = tuple(n for n in names if n in SIGNAL_TRANSFORMS)
+    stats = tuple(n for n in names if n not in SIGNAL_TRANSFORMS)
+    if len(set(transforms)) != len(transforms):
+        raise ConfigError(f"statistics lists a name twice: {list(names)}")
+    if stats:
+        try:
+            check_statistics(stats)
+        except ConfigError as exc:
+            raise ConfigError(f"{exc}, or the transform(s) {', '.join(SIGNAL_TRANSFORMS)}") from None
+    return stats, transforms
 
 
 def _with_channels(data: PlainDataset, channels: tuple[str, ...]) -> PlainDataset:
