@@ -126,6 +126,7 @@ evidence: install-core
 NUMBERS := README.md:readme=$(RESULTS) README.md:evidence=$(EVIDENCE) README.md:detectors=$(EVIDENCE) \
 	docs/user_guide/reproducing.md:results-evidence=$(EVIDENCE) \
 	experiments/benchmarks/README.md=$(BENCH_RESULTS) \
+	docs/user_guide/datasets.md:features-axis-benchmark=$(BENCH_RESULTS) \
 	docs/user_guide/performance.md=$(SEARCH_RESULTS)
 # readme_results arguments of one NUMBERS entry (in $$pair): FOLDER FILE [--block BLOCK]
 NUMBERS_ARGS = $${pair\#*=} $${target%%:*} $$([ "$${target\#*:}" = "$$target" ] || echo --block $${target\#*:})

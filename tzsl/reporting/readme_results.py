@@ -18,10 +18,9 @@ written by the shipped code:
   and methods per split kind on many splits with paired differences and the split and seed-refit
   spreads, and every method x study of ``method_comparison.csv``;
 * the benchmarks' blocks (:mod:`tzsl.reporting.benchmark_blocks`), each from its own CSV:
-  ``phac2-accuracy-benchmark``, ``phac2-best-method``, ``eszsl-public-benchmark``,
+  ``phac2-accuracy-benchmark``, ``phac2-best-method``, ``eszsl-public-benchmark``, ``features-axis-benchmark``,
   ``ensemble-calibration-benchmark``, ``exact-solver-threshold-benchmark``, ``selection-criterion-benchmark``
-  (``experiments/benchmarks/README.md``),
-  ``attribute-search-benchmark`` (``docs/user_guide/performance.md``).
+  (``experiments/benchmarks/README.md``), ``attribute-search-benchmark`` (``docs/user_guide/performance.md``).
 
 A block whose CSVs are missing (the benchmarks', the evidence blocks') is left as it is and the run
 says so; the ``readme`` block needs its folder. The papers' and the evidence blocks name the
@@ -57,6 +56,7 @@ from tzsl.reporting.benchmark_blocks import (
     search_benchmark_block,
     selection_criterion_block,
 )
+from tzsl.reporting.feature_blocks import features_axis_block
 from tzsl.reporting.manifests import produced_by
 from tzsl.reporting.markdown_cells import (
     MOVES_WITH_LAST_BIT,
@@ -398,7 +398,7 @@ BLOCKS: dict[str, Callable[[Path], str]] = {
     "results-evidence": evidence_block, "phac2-accuracy-benchmark": benchmark_accuracy_block,
     "attribute-search-benchmark": search_benchmark_block, "phac2-best-method": best_method_block,
     "eszsl-public-benchmark": eszsl_public_block, "ensemble-calibration-benchmark": ensemble_calibration_block,
-    "exact-solver-threshold-benchmark": exact_solver_threshold_block,
+    "exact-solver-threshold-benchmark": exact_solver_threshold_block, "features-axis-benchmark": features_axis_block,
     "selection-criterion-benchmark": selection_criterion_block, "ensemble-reuse-benchmark": ensemble_reuse_block}
 
 
