@@ -18,12 +18,13 @@ Data: the raw-signal datasets tzsl has here, as plain-file folders (``tzsl conve
   relaxed number of test objects).
 
 Splits: the library's seeded random object splits of ``--purpose`` (``select``: seed 0, the rule's; ``confirm``:
-seed 1, the numbers shown), :data:`N_DRAWS` draws, repeated test-object sets dropped (a small dataset draws
-the same set again). Method: the generic default :data:`tzsl.models.choices.DEFAULT_METHOD`, fitted as a
-study's comparison fits it (:func:`tzsl.studies.zero_shot.methods.fit_predict_split`, seed ``seed + split``),
-the same splits and seeds for every feature set; its z-scoring is fitted on each split's training trials.
-ROCKET's kernels do not depend on the data and every trial is transformed on its own, so the features are
-computed once per dataset without leakage (tests/features/test_rocket_features.py checks it).
+seed 1, the numbers shown), :data:`N_DRAWS` draws, repeated test-object sets dropped (a small dataset draws the same
+set again), the first :data:`MAX_SPLITS` distinct ones kept. Method: the generic default
+:data:`tzsl.models.choices.DEFAULT_METHOD`, fitted as a study's comparison fits it
+(:func:`tzsl.studies.zero_shot.methods.fit_predict_split`, seed ``seed + split``), the same splits and seeds for
+every feature set; its z-scoring is fitted on each split's training trials. ROCKET's kernels do not depend on the
+data and every trial is transformed on its own, so the features are computed once per dataset without leakage
+(tests/features/test_rocket_features.py checks it).
 
 Hypothesis and rule, written before any of these numbers was measured
 ---------------------------------------------------------------------
@@ -75,8 +76,10 @@ from tzsl.studies.zero_shot.methods import fit_predict_split
 from tzsl.studies.zero_shot.relaxations import relaxed_n_test
 from tzsl.studies.zero_shot.study import make_splits
 
-#: Random split draws per dataset and run (repeated test-object sets are dropped).
+#: Random split draws per dataset and run (repeated test-object sets are dropped) ...
 N_DRAWS = 20
+#: ... and the first this many distinct ones are used.
+MAX_SPLITS = 10
 #: Feature set name -> its ``statistics`` setting; the first is today's, the reference of every difference.
 FEATURE_SETS: dict[str, tuple[str, ...]] = {
     "statistics": ("mean", "std", "min", "max"),
@@ -89,7 +92,8 @@ SPLIT_SETTINGS: dict[str, dict] = {"phac2-hold": {"n_test": 2, "min_train_negati
 
 
 def dataset_splits(features, name: str, purpose: str, seed: int) -> list:
-    """The distinct random splits of ``features`` for ``purpose`` (:data:`N_DRAWS` draws of seed ``seed``)."""
+    """The first :data:`MAX_SPLITS` distinct random splits of ``features`` for ``purpose`` (:data:`N_DRAWS` draws of
+    seed ``seed``)."""
     extra = dict(SPLIT_SETTINGS[name])
     if "n_test" not in extra:
         extra["n_test"] = relaxed_n_test(features.attributes, ZeroShotSettings().splits)
@@ -99,7 +103,7 @@ def dataset_splits(features, name: str, purpose: str, seed: int) -> list:
     splits = []
     for split in drawn:
         key = tuple(sorted(split.test_objects))
-        if key not in seen:
+        if key not in seen and len(splits) < MAX_SPLITS:
             seen.add(key)
             splits.append(split)
     return splits
