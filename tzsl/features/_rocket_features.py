@@ -6,8 +6,8 @@ ROCKET (Dempster, Petitjean and Webb, 2020) convolves every series with random k
 of the convolution and the proportion of positive values (PPV). The kernels are those of
 :class:`pyts.transformation.ROCKET` (pyts, the optional extra ``tzsl[timeseries]``). aeon's and
 sktime's MiniRocket were the first choices but cannot be installed beside tzsl's locked versions
-(aeon 1.6 needs numba < 0.64, whose numpy is < 2.4; sktime 1.2 needs pandas < 3.1); pyts installs
-with them, and offers ROCKET, not MiniRocket.
+(aeon 1.6 caps numba below the first release that supports numpy 2.4; sktime 1.2 caps pandas below
+3.1); pyts installs with them, and offers ROCKET, not MiniRocket.
 
 How a trial of shape (n_rows, n_channels) becomes one vector, every step per trial and channel:
 
