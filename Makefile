@@ -19,7 +19,7 @@ N_JOBS ?= 2
 # pytest-xdist workers of `make test`: the suite is mostly single-threaded, so two workers halve it on CI's 2 cores.
 TEST_WORKERS ?= 2
 
-.PHONY: install install-core browser lint lock test test-wide test-last-bit evidence reproduce-tables readme-results numbers numbers-check docs bench bench-evidence bench-fit bench-predict bench-scale data clean
+.PHONY: install install-core browser lint lock test test-wide test-last-bit evidence benchmark reproduce-tables readme-results numbers numbers-check docs bench bench-evidence bench-fit bench-predict bench-scale data clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -119,6 +119,15 @@ reproduce-tables: install-core
 evidence: install-core
 	$(BIN)/tzsl evidence --out $(EVIDENCE) --n-jobs $(N_JOBS) --force
 
+# The tactile zero-shot benchmark (docs/user_guide/benchmark.md): every registered method on every catalog dataset's
+# standard selection splits, then its confirmation splits with the defaults chosen across datasets (leave one dataset
+# out on the selection scores); fetches the public datasets on first use; the study cache makes reruns quick.
+BENCHMARK ?= $(RESULTS)/benchmark
+BENCHMARK_SELECT ?= $(RESULTS)/benchmark-select
+benchmark: install-core
+	$(BIN)/tzsl benchmark --purpose select --out $(BENCHMARK_SELECT) --n-jobs $(N_JOBS) --force
+	$(BIN)/tzsl benchmark --defaults $(BENCHMARK_SELECT) --out $(BENCHMARK) --n-jobs $(N_JOBS) --force
+
 # Every published number is generated between markers from the CSVs of the shipped code, never
 # typed (tzsl.reporting.readme_results): each entry is FILE[:BLOCK]=FOLDER, the results folder that
 # block (default: every block of the file) reads. The evidence blocks are left as they are (with a
@@ -127,7 +136,8 @@ NUMBERS := README.md:readme=$(RESULTS) README.md:evidence=$(EVIDENCE) README.md:
 	docs/user_guide/reproducing.md:results-evidence=$(EVIDENCE) \
 	experiments/benchmarks/README.md=$(BENCH_RESULTS) \
 	docs/user_guide/datasets.md:features-axis-benchmark=$(BENCH_RESULTS) \
-	docs/user_guide/performance.md=$(SEARCH_RESULTS)
+	docs/user_guide/performance.md=$(SEARCH_RESULTS) \
+	docs/user_guide/benchmark.md:leaderboard=$(BENCHMARK)
 # readme_results arguments of one NUMBERS entry (in $$pair): FOLDER FILE [--block BLOCK]
 NUMBERS_ARGS = $${pair\#*=} $${target%%:*} $$([ "$${target\#*:}" = "$$target" ] || echo --block $${target\#*:})
 

@@ -25,11 +25,19 @@ from tzsl.cli._root import cli, data_dir_option, force_option, n_jobs_option
                    "choose a default on).")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=Path("results/benchmark"),
               show_default=True, help="Folder of the benchmark's tables, figures, experiment files and studies.")
+@click.option("--max-splits", type=click.IntRange(min=1), default=None, metavar="N",
+              help="Run only the first N standard splits of each dataset: a quick look (said so on the terminal and "
+                   "in the manifest), not the benchmark's numbers.")
+@click.option("--defaults", "defaults_from", type=click.Path(file_okay=False, path_type=Path), default=None,
+              metavar="SELECT_FOLDER",
+              help="Also choose the defaults across datasets: on the selection scores of SELECT_FOLDER (a --purpose "
+                   "select benchmark) with each dataset left out, scored on this run's splits (defaults.csv).")
 @click.option("--list", "list_only", is_flag=True, help="List the benchmark's datasets and their standard splits.")
 @n_jobs_option(study="zero-shot")
 @data_dir_option
 @force_option
-def benchmark(datasets, added, no_catalog, methods, purpose, out, list_only, n_jobs, data_dir, force) -> None:
+def benchmark(datasets, added, no_catalog, methods, purpose, out, max_splits, defaults_from, list_only, n_jobs,
+              data_dir, force) -> None:
     """Run the tactile zero-shot benchmark: every registered method on every catalog dataset.
 
     Each dataset is one zero-shot study on its standard splits (tzsl splits v1), run through the same
@@ -47,4 +55,5 @@ def benchmark(datasets, added, no_catalog, methods, purpose, out, list_only, n_j
             click.echo(line)
         return
     run_benchmark_command(datasets=datasets, added=added, catalog=not no_catalog, methods=methods, purpose=purpose,
-                          out=out, n_jobs=n_jobs, data_dir=data_dir, force=force, echo=click.echo)
+                          out=out, n_jobs=n_jobs, data_dir=data_dir, force=force, max_splits=max_splits,
+                          defaults_from=defaults_from, echo=click.echo)

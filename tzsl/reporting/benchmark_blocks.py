@@ -7,6 +7,7 @@ block as it is and says so, so one benchmark's numbers are regenerated without t
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import pandas as pd
@@ -14,8 +15,9 @@ import pandas as pd
 from tzsl.exceptions import ConfigError
 from tzsl.reporting.markdown_cells import find_table, number, ours, signed
 
-__all__ = ["BEST_METHOD_FILE", "ENSEMBLE_CALIBRATION_FILES", "ENSEMBLE_REUSE_FILES", "ESZSL_PUBLIC_FILE",
-           "EXACT_SOLVER_FILES", "SELECTION_CRITERION_FILES", "MissingResults", "benchmark_accuracy_block",
+__all__ = ["BENCHMARK_BLOCKS", "BEST_METHOD_FILE", "ENSEMBLE_CALIBRATION_FILES", "ENSEMBLE_REUSE_FILES",
+           "ESZSL_PUBLIC_FILE", "EXACT_SOLVER_FILES", "SELECTION_CRITERION_FILES", "MissingResults",
+           "benchmark_accuracy_block",
            "benchmark_table", "best_method_block", "ensemble_calibration_block", "ensemble_reuse_block",
            "eszsl_public_block", "exact_solver_threshold_block", "runs_by_purpose", "search_benchmark_block",
            "selection_criterion_block"]
@@ -395,3 +397,13 @@ def selection_criterion_block(results: str | Path) -> str:
                          + ("neg_log_loss becomes its default." if a and b else
                             "accuracy stays its default; its published numbers can move with the last bit."))
     return "\n".join(lines)
+
+
+#: Block name -> the function that makes it, for the benchmarks' blocks of this module
+#: (:data:`tzsl.reporting.readme_results.BLOCKS` holds them with the others).
+BENCHMARK_BLOCKS: dict[str, Callable[[Path], str]] = {
+    "phac2-accuracy-benchmark": benchmark_accuracy_block, "attribute-search-benchmark": search_benchmark_block,
+    "phac2-best-method": best_method_block, "eszsl-public-benchmark": eszsl_public_block,
+    "ensemble-calibration-benchmark": ensemble_calibration_block,
+    "exact-solver-threshold-benchmark": exact_solver_threshold_block,
+    "selection-criterion-benchmark": selection_criterion_block, "ensemble-reuse-benchmark": ensemble_reuse_block}

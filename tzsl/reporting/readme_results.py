@@ -20,7 +20,9 @@ written by the shipped code:
 * the benchmarks' blocks (:mod:`tzsl.reporting.benchmark_blocks`), each from its own CSV:
   ``phac2-accuracy-benchmark``, ``phac2-best-method``, ``eszsl-public-benchmark``, ``features-axis-benchmark``,
   ``ensemble-calibration-benchmark``, ``exact-solver-threshold-benchmark``, ``selection-criterion-benchmark``
-  (``experiments/benchmarks/README.md``), ``attribute-search-benchmark`` (``docs/user_guide/performance.md``).
+  (``experiments/benchmarks/README.md``), ``attribute-search-benchmark`` (``docs/user_guide/performance.md``);
+* ``leaderboard`` (``docs/user_guide/benchmark.md``): the tables of a ``tzsl benchmark`` folder
+  (:mod:`tzsl.reporting.leaderboard`).
 
 A block whose CSVs are missing (the benchmarks', the evidence blocks') is left as it is and the run
 says so; the ``readme`` block needs its folder. The papers' and the evidence blocks name the
@@ -45,18 +47,9 @@ import pandas as pd
 from tzsl._io import atomic_write
 from tzsl.exceptions import ConfigError
 from tzsl.models.protocol import LAST_BIT_NOTE
-from tzsl.reporting.benchmark_blocks import (
-    MissingResults,
-    benchmark_accuracy_block,
-    best_method_block,
-    ensemble_calibration_block,
-    ensemble_reuse_block,
-    eszsl_public_block,
-    exact_solver_threshold_block,
-    search_benchmark_block,
-    selection_criterion_block,
-)
+from tzsl.reporting.benchmark_blocks import BENCHMARK_BLOCKS, MissingResults
 from tzsl.reporting.feature_blocks import features_axis_block
+from tzsl.reporting.leaderboard import leaderboard_block
 from tzsl.reporting.manifests import produced_by
 from tzsl.reporting.markdown_cells import (
     MOVES_WITH_LAST_BIT,
@@ -395,11 +388,8 @@ def detectors_block(results: str | Path) -> str:
 #: Block name -> the function that makes its Markdown from a results folder.
 BLOCKS: dict[str, Callable[[Path], str]] = {
     "readme": results_block, "evidence": evidence_summary_block, "detectors": detectors_block,
-    "results-evidence": evidence_block, "phac2-accuracy-benchmark": benchmark_accuracy_block,
-    "attribute-search-benchmark": search_benchmark_block, "phac2-best-method": best_method_block,
-    "eszsl-public-benchmark": eszsl_public_block, "ensemble-calibration-benchmark": ensemble_calibration_block,
-    "exact-solver-threshold-benchmark": exact_solver_threshold_block, "features-axis-benchmark": features_axis_block,
-    "selection-criterion-benchmark": selection_criterion_block, "ensemble-reuse-benchmark": ensemble_reuse_block}
+    "results-evidence": evidence_block, **BENCHMARK_BLOCKS, "features-axis-benchmark": features_axis_block,
+    "leaderboard": leaderboard_block}
 
 
 def block_spans(text: str) -> list[tuple[int, int]]:

@@ -57,6 +57,15 @@ _FUSION = ("per-sensor attribute posteriors fused by their maximum or average. T
 
 #: Report order (the papers' where they have one).
 SECTIONS: tuple[Section, ...] = (
+    Section("benchmark", "The benchmark: every method on every dataset, compared across datasets",
+            "tzsl benchmark: each dataset's standard splits, per-class mean accuracy with its 95% interval over the "
+            "splits, chance and the gain over it (datasets); each method's mean rank across datasets (ranks) with "
+            "the Friedman test and Nemenyi's critical difference (friedman; diagram: methods joined by a bar do not "
+            "differ significantly, Demsar 2006); every pair of methods' paired difference on shared splits, pooled "
+            "across datasets by a random-effects meta-analysis (meta_analysis; forest plot against the generic "
+            "default). Each dataset's own study follows in the sections below.",
+            tables=("datasets", "ranks", "friedman", "meta_analysis", "defaults"),
+            figures=("critical_difference", "meta_analysis")),
     Section("fusion", "Sensor fusion on random unseen-class splits: MAXDAP and AVGDAP",
             "DAP on random splits of {dataset} ({n_splits} random splits of {n_test_objects} unseen classes each), "
             "uniform attribute prior; " + _FUSION,

@@ -25,7 +25,7 @@ The estimators are also at the top of :mod:`tzsl.models`; the training helpers w
 """
 
 
-from tzsl.models.detectors._attribute_bank import AttributeClassifierBank
+from tzsl.models.detectors._attribute_bank import MIN_OBJECTS_PER_LABEL, AttributeClassifierBank
 from tzsl.models.detectors._attribute_search import MAX_GRID_EXTENSIONS, SEARCHES
 from tzsl.models.detectors._attribute_svm import AttributeSVM
 from tzsl.models.detectors._attribute_training import (
@@ -66,6 +66,7 @@ __all__ = [
     # what training them shares, and the detector families
     "AUTO_CANDIDATES",
     "AUTO_MAX_EXACT_TRIALS",
+    "MIN_OBJECTS_PER_LABEL",
     "DETECTORS",
     "GRIDS",
     "MAX_GRID_EXTENSIONS",

@@ -42,7 +42,11 @@ from tzsl.models.detectors._families import AUTO_CANDIDATES, DETECTORS, choose_d
 from tzsl.models.detectors._scalable_attribute import ScalableAttributeClassifier
 from tzsl.value_lists import JOBLIB_BACKENDS
 
-__all__ = ["AttributeClassifierBank"]
+__all__ = ["MIN_OBJECTS_PER_LABEL", "AttributeClassifierBank"]
+
+#: Fewest training objects with each value (present, absent) of an attribute the bank learns: its
+#: object-grouped CV folds need both values in more than one object.
+MIN_OBJECTS_PER_LABEL = 2
 
 #: Test trials from which :meth:`AttributeClassifierBank.predict_proba` runs the (attribute, sensor)
 #: models in parallel on the bank's backend (below it, one after another in this process).
@@ -341,10 +345,10 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
         for j, nm in enumerate(names):  # fail fast, before any parallel work
             for label, mask in (("present", A[:, j] == 1), ("absent", A[:, j] == 0)):
                 k = np.unique(g[mask]).size
-                if k < 2:
+                if k < MIN_OBJECTS_PER_LABEL:
                     raise AttributeTrainingError(
-                        f"attribute {nm!r}: {label} in only {k} training object(s); need at least 2 "
-                        "(leave the attribute out of this split)"
+                        f"attribute {nm!r}: {label} in only {k} training object(s); need at least "
+                        f"{MIN_OBJECTS_PER_LABEL} (leave the attribute out of this split)"
                     )
         per_model = self._per_model_params(A.shape[1], s)
         self._choose_detector(X, A, groups)

@@ -11,11 +11,14 @@ The folder a benchmark writes (``--out``, default ``results/benchmark``):
 * ``meta_analysis.csv`` / ``meta_analysis.png``: every pair of methods' paired difference on shared
   splits, meta-analysed across datasets (random effects);
 * ``experiments/``, ``splits/`` and ``datasets/``: each dataset's experiment file, split file and study;
+* ``defaults.csv`` (with ``--defaults SELECT_FOLDER``): the defaults chosen with each dataset left out,
+  their regret against the dataset's hindsight best, beside ``detector="auto"`` and the shipped default;
 * ``manifest.json``: the datasets, their status and failures, the split files' hashes, the methods.
 """
 
 from __future__ import annotations
 
+import json
 import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -24,12 +27,16 @@ import pandas as pd
 
 from tzsl.exceptions import ConfigError, PartialRunError
 from tzsl.studies.benchmark.catalog import BENCHMARK_DATASETS, benchmark_datasets
+from tzsl.studies.benchmark.defaults import leave_one_dataset_out
 from tzsl.studies.benchmark.runner import DatasetRun, collect_gzsl, collect_scores, run_benchmark
 from tzsl.studies.benchmark.splits import SPLITS_VERSION, standard_index
-from tzsl.studies.benchmark.summary import BENCHMARK_FILES, summarise, terminal_lines
+from tzsl.studies.benchmark.summary import BENCHMARK_FILES, PRIMARY, complete_splits, summarise, terminal_lines
 from tzsl.studies.outputs.results_folder import ResultsDir
 
-__all__ = ["list_benchmark", "run_benchmark_command"]
+__all__ = ["DEFAULTS_FILE", "list_benchmark", "read_selection", "run_benchmark_command", "write_defaults"]
+
+#: The leave-one-dataset-out table a run with ``--defaults`` writes.
+DEFAULTS_FILE = "defaults.csv"
 
 
 def list_benchmark() -> list[str]:
@@ -58,45 +65,83 @@ def _method_entries(methods: Sequence[str]) -> list[dict] | None:
 def run_benchmark_command(*, datasets: Sequence[str] = (), added: Sequence[str | os.PathLike] = (),
                           catalog: bool = True, methods: Sequence[str] = (), purpose: str = "confirm",
                           out: str | os.PathLike, n_jobs: int = 1, data_dir: str | os.PathLike | None = None,
-                          force: bool = False, echo: Callable[[str], None] = print) -> list[DatasetRun]:
+                          force: bool = False, max_splits: int | None = None,
+                          defaults_from: str | os.PathLike | None = None,
+                          echo: Callable[[str], None] = print) -> list[DatasetRun]:
     """Run the benchmark into ``out`` and write its tables, figures and manifest (``tzsl benchmark``).
+
+    ``defaults_from``: the folder of a ``--purpose select`` benchmark; the defaults are then chosen on its
+    selection scores with each dataset left out and scored on this run's confirmation splits
+    (:mod:`tzsl.studies.benchmark.defaults`, ``defaults.csv``).
 
     Raises
     ------
     ConfigError
         ``out`` holds an earlier benchmark and ``force`` is off (checked before any fit); an unknown
-        dataset or method; no dataset completed.
+        dataset or method; no dataset completed; ``defaults_from`` is not a selection benchmark.
     PartialRunError
         After everything is written, when a dataset failed or some (split, method) fits failed.
     """
     chosen = benchmark_datasets(datasets, added, catalog=catalog)
     entries = _method_entries(methods)
     results = ResultsDir(Path(out), force=force)
-    results.check_free(BENCHMARK_FILES)
+    results.check_free(BENCHMARK_FILES + ((DEFAULTS_FILE,) if defaults_from is not None else ()))
+    select = None if defaults_from is None else read_selection(defaults_from)
     echo(f"benchmark: {len(chosen)} dataset(s), standard splits {SPLITS_VERSION} ({purpose}) -> {out}")
-    runs = run_benchmark(chosen, out, purpose, methods=entries, n_jobs=n_jobs, data_dir=data_dir, echo=echo)
+    if max_splits is not None:
+        echo(f"note: only the first {max_splits} standard splits of each dataset: a quick look, not the benchmark's "
+             "numbers")
+    runs = run_benchmark(chosen, out, purpose, methods=entries, n_jobs=n_jobs, data_dir=data_dir,
+                         max_splits=max_splits, echo=echo)
     scores = collect_scores(runs)
     gzsl = collect_gzsl(runs)
     summary = summarise(scores, gzsl, results)
     for line in terminal_lines(summary):
         echo(line)
+    if select is not None:
+        for line in write_defaults(select, scores, results):
+            echo(line)
     index = standard_index()
     results.write_manifest({"study": "benchmark", "purpose": purpose, "splits_version": SPLITS_VERSION,
+                            "max_splits": max_splits,
+                            "defaults_from": None if defaults_from is None else str(defaults_from),
                             "methods": entries or "every registered method",
                             "datasets": [{"name": r.dataset, "status": r.status, "restored": r.restored,
                                           "results": str(r.results), "failures": r.failures,
                                           "standard_splits": index.get(r.dataset)} for r in runs]})
     failures = [f"{r.dataset}: {line}" for r in runs for line in r.failures]
     n_files = len(results.written)
-    echo(f"wrote {n_files} files to {out}; per dataset: {out}/datasets; report: tzsl report {out}")
+    echo(f"wrote {n_files} files to {out} (each dataset's study in datasets/); report: tzsl report {out}")
     if failures:
         raise PartialRunError(results.root, failures)
     return runs
 
 
-def read_scores(folder: str | os.PathLike) -> pd.DataFrame:
-    """The ``scores.csv`` of a benchmark folder."""
-    path = Path(folder) / "scores.csv"
-    if not path.is_file():
-        raise ConfigError(f"{path}: missing; run tzsl benchmark --out {folder} first")
-    return pd.read_csv(path)
+def read_selection(folder: str | os.PathLike) -> pd.DataFrame:
+    """The ``scores.csv`` of a ``--purpose select`` benchmark folder (its manifest must say so)."""
+    path, manifest = Path(folder) / "scores.csv", Path(folder) / "manifest.json"
+    if not path.is_file() or not manifest.is_file():
+        raise ConfigError(f"{folder}: no benchmark here; run tzsl benchmark --purpose select --out {folder} first")
+    config = json.loads(manifest.read_text(encoding="utf-8")).get("config", {})
+    if config.get("purpose") != "select" or config.get("max_splits"):
+        raise ConfigError(f"{manifest}: --defaults needs a full benchmark of the selection splits (--purpose select, "
+                          f"no --max-splits); this one ran purpose {config.get('purpose')!r}")
+    return pd.read_csv(path, dtype={"split": str})
+
+
+def write_defaults(select: pd.DataFrame, confirm: pd.DataFrame, results: ResultsDir) -> list[str]:
+    """Write ``defaults.csv`` (:func:`~tzsl.studies.benchmark.defaults.leave_one_dataset_out`); its terminal lines."""
+    from tzsl.models.choices import DEFAULT_METHOD  # noqa: PLC0415
+
+    def long(scores: pd.DataFrame) -> pd.DataFrame:
+        return complete_splits(scores.rename(columns={PRIMARY: "score"})[["dataset", "method", "split", "score"]])
+
+    table = leave_one_dataset_out(long(select), long(confirm), DEFAULT_METHOD)
+    results.write_csv(DEFAULTS_FILE, table)
+    lines = ["defaults chosen with each dataset left out (mean rank on the others' selection splits), their regret "
+             "against each dataset's hindsight best on its confirmation splits:"]
+    for choice, part in table.groupby("choice", sort=False):
+        lines.append(f"  {choice}: chose {', '.join(sorted(set(part['chosen'])))}; mean regret "
+                     f"{part['regret'].mean():.3f} (auto {part['auto_regret'].mean():.3f}, shipped "
+                     f"{DEFAULT_METHOD} {part['shipped_regret'].mean():.3f}) over {len(part)} datasets")
+    return lines

@@ -58,7 +58,7 @@ def benchmark_methods() -> tuple[str, list[dict]]:
 
 def dataset_experiment(dataset: BenchmarkDataset, folder: str | os.PathLike, purpose: str = "confirm", *,
                        methods: Sequence[dict] | None = None, n_jobs: int = 1,
-                       data_dir: str | os.PathLike | None = None) -> Path:
+                       data_dir: str | os.PathLike | None = None, max_splits: int | None = None) -> Path:
     """Write the experiment file of ``dataset``'s study and its split file into the benchmark ``folder``.
 
     Parameters
@@ -74,6 +74,8 @@ def dataset_experiment(dataset: BenchmarkDataset, folder: str | os.PathLike, pur
         ``[compute] n_jobs``.
     data_dir : path-like, optional
         The data home (``[dataset] data_dir``).
+    max_splits : int, optional
+        Run only the first ``max_splits`` standard splits (a quick look, not the benchmark's numbers).
 
     Returns
     -------
@@ -86,7 +88,8 @@ def dataset_experiment(dataset: BenchmarkDataset, folder: str | os.PathLike, pur
         splits = read_standard_splits(dataset.name, table, purpose)
     else:  # a lab's dataset: the same recipe, drawn on its table (recorded in the benchmark's manifest)
         splits = [s for s in standard_splits(table) if s.name.startswith(f"{purpose}-")]
-    split_file = write_splits_csv(splits, ensure_folder(folder / SPLITS) / f"{dataset.name}.{purpose}.csv")
+    split_file = _write_if_changed(splits[:max_splits],
+                                   ensure_folder(folder / SPLITS) / f"{dataset.name}.{purpose}.csv")
     detector, default_methods = benchmark_methods()
     compare = list(default_methods if methods is None else methods)
     source = {**dataset.dataset_table(), **({} if data_dir is None else {"data_dir": str(Path(data_dir).resolve())})}
@@ -103,6 +106,17 @@ def dataset_experiment(dataset: BenchmarkDataset, folder: str | os.PathLike, pur
                       **tables})
     path = ensure_folder(folder / EXPERIMENTS) / f"{dataset.name}.toml"
     atomic_write_bytes(path, text.encode("utf-8"))
+    return path
+
+
+def _write_if_changed(splits: list, path: Path) -> Path:
+    """Write the split file, leaving an identical one untouched: the study cache keys a split file by its size and
+    modification time, so a rerun of the same splits is restored, not fitted again."""
+    fresh = write_splits_csv(splits, path.with_name(f".{path.name}.new"))
+    if path.is_file() and path.read_bytes() == fresh.read_bytes():
+        fresh.unlink()
+    else:
+        fresh.replace(path)
     return path
 
 
@@ -132,7 +146,7 @@ class DatasetRun:
 
 def run_benchmark(datasets: Sequence[BenchmarkDataset], folder: str | os.PathLike, purpose: str = "confirm", *,
                   methods: Sequence[dict] | None = None, n_jobs: int = 1, data_dir: str | os.PathLike | None = None,
-                  echo: Callable[[str], None] | None = None) -> list[DatasetRun]:
+                  max_splits: int | None = None, echo: Callable[[str], None] | None = None) -> list[DatasetRun]:
     """Run every dataset's study into ``folder`` (their experiment files, split files and results).
 
     A dataset whose study stops (missing data, a split that cannot be read) is recorded as failed with
@@ -147,7 +161,7 @@ def run_benchmark(datasets: Sequence[BenchmarkDataset], folder: str | os.PathLik
         run = DatasetRun(dataset.name, out)
         try:
             experiment = dataset_experiment(dataset, folder, purpose, methods=methods, n_jobs=n_jobs,
-                                            data_dir=data_dir)
+                                            data_dir=data_dir, max_splits=max_splits)
             try:
                 _, done = run_experiment(experiment, force=True)
             except PartialRunError as exc:
@@ -163,9 +177,10 @@ def run_benchmark(datasets: Sequence[BenchmarkDataset], folder: str | os.PathLik
 
 
 def _read(path: Path) -> pd.DataFrame:
+    """A study's table, split labels as written ("01", not 1)."""
     if not path.is_file():
         raise ConfigError(f"{path}: missing; run the benchmark again")
-    return pd.read_csv(path)
+    return pd.read_csv(path, dtype={"split": str})
 
 
 def collect_scores(runs: Sequence[DatasetRun]) -> pd.DataFrame:
@@ -191,8 +206,6 @@ def collect_scores(runs: Sequence[DatasetRun]) -> pd.DataFrame:
                           if c not in {"split", "split_kind", "purpose", "chance", "error"}]
         trial = per_split.melt(id_vars=["split", "chance"], value_vars=method_columns, var_name="method",
                                value_name="trial_accuracy")
-        for frame in (per_class, trial):
-            frame["split"] = frame["split"].astype(str)
         merged = trial.merge(per_class, on=["method", "split"], how="left")
         merged.insert(0, "dataset", run.dataset)
         frames.append(merged[["dataset", "method", "split", "per_class_accuracy", "trial_accuracy", "chance"]])
@@ -208,11 +221,11 @@ def collect_gzsl(runs: Sequence[DatasetRun]) -> pd.DataFrame:
         path = run.results / "gzsl.csv"
         if run.status == "failed" or not path.is_file():
             continue
-        gzsl = pd.read_csv(path)
+        gzsl = _read(path)
         if "calibrated" in gzsl.columns:
             gzsl = gzsl[gzsl["calibrated"].astype(str) == "True"]
         gzsl = gzsl[~gzsl["split"].astype(str).isin(["mean", "std"])]
-        frames.append(gzsl.assign(dataset=run.dataset, split=gzsl["split"].astype(str))[
+        frames.append(gzsl.assign(dataset=run.dataset)[
             ["dataset", "method", "split", "seen", "unseen", "harmonic"]])
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(
         columns=["dataset", "method", "split", "seen", "unseen", "harmonic"])

@@ -25,7 +25,7 @@ from tzsl.studies.benchmark.statistics import (
     per_dataset_table,
 )
 
-__all__ = ["BENCHMARK_FILES", "summarise", "terminal_lines"]
+__all__ = ["BENCHMARK_FILES", "complete_splits", "summarise", "terminal_lines"]
 
 #: What a benchmark writes at the top of its folder (checked free before any fit).
 BENCHMARK_FILES = ("scores.csv", "datasets.csv", "gzsl.csv", "ranks.csv", "friedman.csv", "meta_analysis.csv",
@@ -58,6 +58,27 @@ def _dataset_table(scores: pd.DataFrame, gzsl: pd.DataFrame) -> pd.DataFrame:
     return table.rename(columns={"score": PRIMARY})
 
 
+def complete_splits(long: pd.DataFrame) -> pd.DataFrame:
+    """The rows of the splits on which every method run on their dataset has a score.
+
+    Ranks, the Friedman test and the paired effects compare methods on the same splits: a split where
+    one method failed (NaN) is left out for all of them on that dataset (complete cases).
+
+    Parameters
+    ----------
+    long : DataFrame
+        Columns ``dataset``, ``method``, ``split``, ``score`` (NaN: a failed fit), ...
+
+    Returns
+    -------
+    DataFrame
+        The same columns, only complete splits, no NaN score.
+    """
+    methods = long.groupby("dataset")["method"].transform("nunique")
+    present = long["score"].notna().groupby([long["dataset"], long["split"]]).transform("sum")
+    return long[present.eq(methods) & long["score"].notna()].reset_index(drop=True)
+
+
 def summarise(scores: pd.DataFrame, gzsl: pd.DataFrame, results: Any) -> dict[str, Any]:
     """Write the benchmark's tables and figures into ``results`` (a :class:`~tzsl.studies.outputs.ResultsDir`).
 
@@ -74,12 +95,15 @@ def summarise(scores: pd.DataFrame, gzsl: pd.DataFrame, results: Any) -> dict[st
     dict
         ``datasets``, ``ranks``, ``friedman`` (DataFrames; ``friedman`` holds one row, or the reason
         the test could not run), ``meta`` and ``reference`` (the method the forest plot compares with).
+        The per-dataset table reads every score; the ranks, the test and the paired effects the splits
+        every method completed (:func:`complete_splits`).
     """
     results.write_csv("scores.csv", scores)
     results.write_csv("gzsl.csv", gzsl)
     datasets = _dataset_table(scores, gzsl)
     results.write_csv("datasets.csv", datasets)
-    long = scores.rename(columns={PRIMARY: "score"})[["dataset", "method", "split", "score", "chance"]]
+    long = complete_splits(scores.rename(columns={PRIMARY: "score"})[["dataset", "method", "split", "score",
+                                                                        "chance"]])
     ranks = mean_ranks(long)
     results.write_csv("ranks.csv", ranks)
     n_datasets = int(ranks["n_datasets"].iloc[0]) if len(ranks) else 0
@@ -127,7 +151,7 @@ def terminal_lines(summary: dict[str, Any]) -> list[str]:
     if friedman["note"]:
         lines.append(f"note: no Friedman test: {friedman['note']}")
     else:
-        lines.append(f"Friedman chi2 = {friedman['chi2']:.2f} (p = {friedman['chi2_pvalue']:.3g}), Iman-Davenport "
-                     f"F = {friedman['f']:.2f} (p = {friedman['f_pvalue']:.3g}); critical difference "
-                     f"{friedman['critical_difference']:.2f} ranks (Nemenyi, alpha {ALPHA})")
+        lines.append(f"Friedman chi2 {friedman['chi2']:.2f} (p {friedman['chi2_pvalue']:.3g}), Iman-Davenport F "
+                     f"{friedman['f']:.2f} (p {friedman['f_pvalue']:.3g}); critical difference "
+                     f"{friedman['critical_difference']:.2f} ranks (Nemenyi, {ALPHA})")
     return lines

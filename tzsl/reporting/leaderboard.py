@@ -1,0 +1,97 @@
+"""The leaderboard block of the docs: the benchmark's tables as Markdown (``make numbers``, never typed).
+
+:func:`leaderboard_block` reads a ``tzsl benchmark`` folder (``datasets.csv``, ``ranks.csv``,
+``friedman.csv``, ``meta_analysis.csv``, ``manifest.json``, and ``defaults.csv`` when the defaults
+were chosen across datasets) and writes: per method and dataset the per-class mean accuracy with its
+95% interval over the standard confirmation splits, chance beside; the mean rank and the mean gain
+over chance; the Friedman test and the critical difference; and each method's difference from the
+generic default pooled across datasets.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pandas as pd
+
+from tzsl.reporting.benchmark_blocks import MissingResults
+from tzsl.reporting.markdown_cells import number, signed
+
+__all__ = ["leaderboard_block"]
+
+#: The files of a benchmark folder the block reads.
+LEADERBOARD_FILES = ("datasets.csv", "ranks.csv", "friedman.csv", "meta_analysis.csv")
+
+
+def _read(root: Path, name: str) -> pd.DataFrame:
+    path = root / name
+    if not path.is_file():
+        raise MissingResults(f"{root}: no {name}; run make benchmark (tzsl benchmark --out {root}) first")
+    return pd.read_csv(path)
+
+
+def _cell(row: pd.Series) -> str:
+    return (f"{number(row['per_class_accuracy'])} [{number(row['ci95_low'])}, {number(row['ci95_high'])}]"
+            if not pd.isna(row["ci95_low"]) else number(row["per_class_accuracy"]))
+
+
+def leaderboard_block(results: str | Path) -> str:
+    """The leaderboard's Markdown from the benchmark folder ``results``.
+
+    Raises
+    ------
+    MissingResults
+        A file of :data:`LEADERBOARD_FILES` is missing (the block is left as it is).
+    """
+    root = Path(results)
+    datasets, ranks, friedman, meta = (_read(root, name) for name in LEADERBOARD_FILES)
+    manifest = json.loads((root / "manifest.json").read_text()) if (root / "manifest.json").is_file() else {}
+    config = manifest.get("config", {})
+    if config.get("max_splits"):
+        raise MissingResults(f"{root}: a quick look (--max-splits {config['max_splits']}), not the benchmark")
+    names = list(dict.fromkeys(datasets["dataset"]))
+    chance = datasets.groupby("dataset")["chance"].first()
+    splits = datasets.groupby("dataset")["n_splits"].max()
+    lines = [f"Generated from `{root.name}/` (`tzsl benchmark`, standard splits "
+             f"{config.get('splits_version', 'v1')}, {config.get('purpose', 'confirm')} splits) by `make numbers`: "
+             "per-class mean accuracy over each dataset's splits [95% interval over splits]; a method's mean rank "
+             "and mean gain over chance are over the datasets every method completed (lower rank is better).", "",
+             "| method | " + " | ".join(f"{n} ({int(splits[n])} splits)" for n in names)
+             + " | mean rank | mean gain over chance |",
+             "|---" * (len(names) + 3) + "|",
+             "| chance | " + " | ".join(number(chance[n]) for n in names) + " | | |"]
+    cells = datasets.set_index(["method", "dataset"])
+    for r in ranks.itertuples():
+        row = [(_cell(cells.loc[(r.method, n)]) if (r.method, n) in cells.index else "-") for n in names]
+        lines.append(f"| `{r.method}` | " + " | ".join(row) + f" | {r.mean_rank:.2f} | "
+                     f"{number(r.mean_gain_over_chance)} |")
+    f = friedman.iloc[0]
+    lines.append("")
+    if isinstance(f.get("note"), str) and f["note"]:
+        lines.append(f"No Friedman test: {f['note']}.")
+    else:
+        lines.append(f"Friedman test over {int(f['n_datasets'])} datasets and {int(f['n_methods'])} methods: "
+                     f"chi2 = {float(f['chi2']):.2f} (p = {float(f['chi2_pvalue']):.3g}), Iman-Davenport F = "
+                     f"{float(f['f']):.2f} (p = {float(f['f_pvalue']):.3g}); Nemenyi critical difference "
+                     f"{float(f['critical_difference']):.2f} ranks at alpha {float(f['alpha']):g} (Demsar 2006): "
+                     "two methods whose mean ranks differ by less do not differ significantly.")
+    reference = _reference(meta, ranks)
+    pooled = meta[meta["method_b"] == reference].set_index("method_a")
+    lines += ["", f"Each method minus `{reference}` (the generic default), paired on shared splits and pooled over "
+                  "datasets by a random-effects meta-analysis (DerSimonian-Laird) [95% interval]:", "",
+              "| method | difference | datasets | I2 |", "|---|---|---|---|"]
+    for r in ranks.itertuples():
+        if r.method == reference or r.method not in pooled.index:
+            continue
+        m = pooled.loc[r.method]
+        lines.append(f"| `{r.method}` | {signed(m['effect'], m['ci95_low'], m['ci95_high'])} | "
+                     f"{int(m['n_datasets'])} | {number(m['i2'], 2)} |")
+    return "\n".join(lines)
+
+
+def _reference(meta: pd.DataFrame, ranks: pd.DataFrame) -> str:
+    """The generic default when the benchmark ran it, else the best mean rank."""
+    from tzsl.models.choices import DEFAULT_METHOD  # noqa: PLC0415
+
+    return DEFAULT_METHOD if DEFAULT_METHOD in set(meta["method_b"]) else str(ranks["method"].iloc[0])

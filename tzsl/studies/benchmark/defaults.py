@@ -1,0 +1,110 @@
+"""Defaults chosen across datasets: leave one dataset out, and the regret against each dataset's hindsight best.
+
+A default (the generic study's method, its DAP detector) is inherited by every user on every dataset,
+so it is chosen across datasets, on selection splits, and judged on datasets it did not see:
+
+* **the rule**, fixed before any result: the method with the best mean rank of per-class mean
+  accuracy over the datasets' *selection* splits (ties: the higher mean score, then the name), among
+  the benchmark's methods (``default``) or among its DAP rows only (``detector``);
+* **leave one dataset out**: for each dataset, the rule applied to the *other* datasets' selection
+  scores; the method chosen is scored on the left-out dataset's *confirmation* splits, beside that
+  dataset's hindsight best (the best method on those same confirmation splits, known only
+  afterwards): the difference is the **regret**;
+* beside both, the per-dataset choice made on a user's training objects alone: DAP with
+  ``detector="auto"`` (pseudo-unseen CV over detector families), and the shipped default.
+
+:func:`leave_one_dataset_out` makes the table (``defaults.csv`` of ``tzsl benchmark --defaults``);
+:func:`choose` applies the rule to every dataset (the choice the shipped default should equal).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+
+from tzsl.exceptions import ConfigError
+from tzsl.studies.benchmark.statistics import mean_ranks
+
+__all__ = ["AUTO_METHOD", "choose", "is_dap_row", "leave_one_dataset_out"]
+
+#: The benchmark row of the per-dataset detector choice made on training objects (``dap`` with ``detector="auto"``).
+AUTO_METHOD = "dap-avg-auto"
+
+
+def is_dap_row(method: str) -> bool:
+    """Whether a benchmark row is a DAP with uniform prior and average fusion (one per detector)."""
+    return method == "dap-avg" or method.startswith("dap-avg-")
+
+
+def choose(select: pd.DataFrame, candidates: Sequence[str] | None = None) -> str:
+    """The rule: the best mean rank over the datasets of ``select`` (ties: higher mean score, then name).
+
+    Parameters
+    ----------
+    select : DataFrame
+        Long scores (``dataset``, ``method``, ``split``, ``score``) of selection splits; complete
+        splits only (:func:`tzsl.studies.benchmark.summary.complete_splits`).
+    candidates : sequence of str, optional
+        The methods the choice is among (default: every method of ``select``).
+
+    Raises
+    ------
+    ConfigError
+        No candidate has a score.
+    """
+    scores = select if candidates is None else select[select["method"].isin(list(candidates))]
+    if scores["score"].notna().sum() == 0:
+        raise ConfigError("no selection score to choose a default on")
+    ranks = mean_ranks(scores)
+    best = ranks.sort_values(["mean_rank", "mean_score", "method"], ascending=[True, False, True])
+    return str(best["method"].iloc[0])
+
+
+def _means(confirm: pd.DataFrame) -> pd.DataFrame:
+    return confirm.groupby(["dataset", "method"])["score"].mean().unstack("method")
+
+
+def leave_one_dataset_out(select: pd.DataFrame, confirm: pd.DataFrame, default_method: str) -> pd.DataFrame:
+    """The defaults chosen with each dataset left out, scored on it, beside its hindsight best.
+
+    Parameters
+    ----------
+    select, confirm : DataFrame
+        Long scores (``dataset``, ``method``, ``split``, ``score``) of the selection and confirmation
+        splits (complete splits only); the datasets of ``confirm`` are each left out in turn.
+    default_method : str
+        The shipped default (:data:`tzsl.models.choices.DEFAULT_METHOD`), shown beside.
+
+    Returns
+    -------
+    DataFrame
+        One row per (dataset, choice), choice ``default`` (among every method) or ``detector`` (among
+        the DAP rows): ``chosen`` (on the other datasets' selection splits), ``seen`` (those datasets),
+        ``chosen_score`` (its mean per-class accuracy on the left-out dataset's confirmation splits),
+        ``best`` and ``best_score`` (the hindsight best there, among the same candidates), ``regret``
+        (best minus chosen, >= 0), and the same score and regret for ``auto`` (:data:`AUTO_METHOD`)
+        and ``shipped`` (``default_method``); NaN where that method has no score.
+    """
+    means = _means(confirm)
+    rows = []
+    for dataset in means.index:
+        others = select[select["dataset"] != dataset]
+        if others["dataset"].nunique() == 0:
+            raise ConfigError(f"leave-one-dataset-out needs selection scores of a dataset other than {dataset!r}")
+        seen = ", ".join(sorted(others["dataset"].unique()))
+        on = means.loc[dataset].dropna()
+        for choice, candidates in (("default", list(on.index)), ("detector", [m for m in on.index if is_dap_row(m)])):
+            if not candidates:
+                continue
+            chosen = choose(others, candidates)
+            best = str(on[candidates].idxmax())
+            row = {"dataset": dataset, "choice": choice, "chosen": chosen, "seen": seen,
+                   "chosen_score": on.get(chosen, np.nan), "best": best, "best_score": on[best]}
+            row["regret"] = row["best_score"] - row["chosen_score"]
+            for label, method in (("auto", AUTO_METHOD), ("shipped", default_method)):
+                row[f"{label}_score"] = on.get(method, np.nan)
+                row[f"{label}_regret"] = row["best_score"] - row[f"{label}_score"]
+            rows.append(row)
+    return pd.DataFrame(rows)
