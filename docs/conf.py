@@ -93,6 +93,11 @@ html_theme_options = {
     "footer_start": ["copyright"],
     "footer_end": ["sphinx-version"],
 }
+# No section navigation on the generated page of each public name: the API section's sidebar lists every
+# name of every module (about 800 links), which made each such page ~160 kB (the site ~140 MB) and its
+# rendering most of a docs build's time. Those pages keep the top bar, the breadcrumbs to their module's
+# page (whose sidebar lists the modules and their names) and the page's own contents.
+html_sidebars = {"_generated/api/generated/*": []}
 html_static_path: list[str] = []
 html_show_sourcelink = False
 

@@ -91,6 +91,10 @@ def test_api_reference_documents_every_public_name(html):
                 f"{package}.{name} is neither documented nor linked"
     bank = (html / "_generated" / "api" / "generated" / "tzsl.models.ZeroShotClassifier.html").read_text("utf-8")
     assert "class_attributes" in bank and "Parameters" in bank  # numpydoc sections rendered
+    # a name's page has no section navigation (every name of every module: most of a build's time, see conf.py);
+    # its module's page has it
+    assert "bd-docs-nav" not in bank and "bd-breadcrumbs" in bank
+    assert "bd-docs-nav" in (html / "_generated" / "api" / "tzsl.models.html").read_text(encoding="utf-8")
 
 
 @pytest.mark.slow
