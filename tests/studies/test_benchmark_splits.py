@@ -11,7 +11,13 @@ import pytest
 from click.testing import CliRunner
 
 from tzsl.cli import cli
-from tzsl.datasets import load_fabric, read_biotac_slide_attributes, read_bts3_attributes
+from tzsl.datasets import (
+    load_fabric,
+    read_biotac_slide_attributes,
+    read_bts3_attributes,
+    read_icub_grasp_attributes,
+    read_physiclear_attributes,
+)
 from tzsl.evaluation import PURPOSES, random_object_splits, read_splits_csv, split_purpose, write_splits_csv
 from tzsl.exceptions import DataFileError
 from tzsl.features import DEFAULT_MIN_OBJECTS, fabric_group_table, filter_attributes
@@ -19,7 +25,9 @@ from tzsl.studies.benchmark import splits as standard
 from tzsl.studies.benchmark.catalog import BENCHMARK_DATASETS
 
 PACKAGED_TABLES = {"biotac-slide": lambda: read_biotac_slide_attributes().classes,
-                   "bts3": lambda: read_bts3_attributes().classes}
+                   "bts3": lambda: read_bts3_attributes().classes,
+                   "icub-grasp": lambda: read_icub_grasp_attributes().classes,
+                   "physiclear": lambda: read_physiclear_attributes().classes}
 
 
 def _study_table(table: pd.DataFrame) -> pd.DataFrame:

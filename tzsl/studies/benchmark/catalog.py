@@ -63,7 +63,8 @@ class BenchmarkDataset:
 
 #: The built-in datasets of the benchmark, in the order of its tables.
 BENCHMARK_DATASETS: tuple[BenchmarkDataset, ...] = tuple(
-    BenchmarkDataset(name, builtin=name) for name in ("phac2-penn", "fabric-depth", "biotac-slide", "bts3"))
+    BenchmarkDataset(name, builtin=name)
+    for name in ("phac2-penn", "fabric-depth", "biotac-slide", "bts3", "icub-grasp", "physiclear"))
 
 
 def plain_dataset(folder: str | os.PathLike) -> BenchmarkDataset:

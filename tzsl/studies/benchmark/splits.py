@@ -16,7 +16,8 @@ The recipe of v1 (:func:`standard_splits`), fixed before any result was seen:
 * :func:`n_test_of` unseen classes per split: one in six of the objects (the DAP paper's 10 of 60
   PHAC-2 objects), at least 2 and at most 10, and never more than the distinct attribute rows;
 * the DAP paper's rules of every split: mutually different test rows, attributes with fewer than 3
-  positive training objects left out of that split;
+  positive training objects left out of that split, and (so that every attribute a split keeps can be
+  learnt) fewer than :data:`~tzsl.models.detectors.MIN_OBJECTS_PER_LABEL` negative ones;
 * the objects sorted by name before the draws, so the splits depend on the objects and their rows, not on
   the order a loader lists them in.
 
@@ -37,6 +38,7 @@ import pandas as pd
 from tzsl._io import atomic_write_bytes, file_sha256
 from tzsl.evaluation import PURPOSES, Split, random_object_splits, read_splits_csv, write_splits_csv
 from tzsl.exceptions import ConfigError, DataFileError
+from tzsl.models.detectors import MIN_OBJECTS_PER_LABEL
 
 __all__ = ["N_SPLITS", "SEED", "SPLITS_VERSION", "n_test_of", "read_standard_splits", "standard_index",
            "standard_split_file", "standard_splits", "write_standard_splits"]
@@ -49,6 +51,8 @@ N_SPLITS = 20
 SEED = 0
 #: Share of the objects left unseen per split (the DAP paper: 10 of 60), and the bounds on the count.
 TEST_SHARE, MIN_TEST, MAX_TEST = 1 / 6, 2, 10
+#: The DAP paper's fewest positive training objects of an attribute a split keeps (section 4.2).
+MIN_TRAIN_POSITIVES = 3
 #: The index of a version's files: their hashes and recipe numbers.
 INDEX_FILE = "index.json"
 
@@ -89,7 +93,8 @@ def standard_splits(object_attributes: pd.DataFrame) -> list[Split]:
     splits = []
     for purpose in PURPOSES:
         drawn = random_object_splits(object_attributes, n_test=n_test, n_splits=N_SPLITS, random_state=SEED,
-                                     purpose=purpose, distinct=True)
+                                     min_train_positives=MIN_TRAIN_POSITIVES,
+                                     min_train_negatives=MIN_OBJECTS_PER_LABEL, purpose=purpose, distinct=True)
         splits += [dataclasses.replace(s, name=f"{purpose}-{k:02d}") for k, s in enumerate(drawn, 1)]
     return splits
 
