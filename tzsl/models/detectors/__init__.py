@@ -25,12 +25,13 @@ The estimators are also at the top of :mod:`tzsl.models`; the training helpers w
 """
 
 
-from tzsl.models.detectors._attribute_bank import MIN_OBJECTS_PER_LABEL, AttributeClassifierBank
+from tzsl.models.detectors._attribute_bank import AttributeClassifierBank
 from tzsl.models.detectors._attribute_search import MAX_GRID_EXTENSIONS, SEARCHES
 from tzsl.models.detectors._attribute_svm import AttributeSVM
 from tzsl.models.detectors._attribute_training import (
     AUTO_MAX_EXACT_TRIALS,
     GRIDS,
+    MIN_OBJECTS_PER_LABEL,
     SOLVERS,
     AttributeTrainingError,
     balanced_object_draws,

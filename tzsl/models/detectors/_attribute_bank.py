@@ -37,16 +37,17 @@ from tzsl._progress import progress_bar
 from tzsl.exceptions import ConfigError
 from tzsl.models._validation import ValidatedParamsMixin
 from tzsl.models._zsl_input import GridEdgeWarning
-from tzsl.models.detectors._attribute_training import AUTO_MAX_EXACT_TRIALS, SOLVERS, AttributeTrainingError
+from tzsl.models.detectors._attribute_training import (
+    AUTO_MAX_EXACT_TRIALS,
+    SOLVERS,
+    AttributeTrainingError,
+    check_label_objects,
+)
 from tzsl.models.detectors._families import AUTO_CANDIDATES, DETECTORS, choose_detector, detector_template
 from tzsl.models.detectors._scalable_attribute import ScalableAttributeClassifier
 from tzsl.value_lists import JOBLIB_BACKENDS
 
-__all__ = ["MIN_OBJECTS_PER_LABEL", "AttributeClassifierBank"]
-
-#: Fewest training objects with each value (present, absent) of an attribute the bank learns: its
-#: object-grouped CV folds need both values in more than one object.
-MIN_OBJECTS_PER_LABEL = 2
+__all__ = ["AttributeClassifierBank"]
 
 #: Test trials from which :meth:`AttributeClassifierBank.predict_proba` runs the (attribute, sensor)
 #: models in parallel on the bank's backend (below it, one after another in this process).
@@ -341,15 +342,7 @@ class AttributeClassifierBank(ValidatedParamsMixin, BaseEstimator):
             raise ConfigError(f"groups must have shape ({n},), got {groups.shape}")
         if groups is not None:  # object names -> codes in sorted order: the same folds and draws, but each
             groups = np.unique(groups, return_inverse=True)[1].reshape(n)  # grouping is integer work
-        g = np.arange(n) if groups is None else groups
-        for j, nm in enumerate(names):  # fail fast, before any parallel work
-            for label, mask in (("present", A[:, j] == 1), ("absent", A[:, j] == 0)):
-                k = np.unique(g[mask]).size
-                if k < MIN_OBJECTS_PER_LABEL:
-                    raise AttributeTrainingError(
-                        f"attribute {nm!r}: {label} in only {k} training object(s); need at least "
-                        f"{MIN_OBJECTS_PER_LABEL} (leave the attribute out of this split)"
-                    )
+        check_label_objects(A, np.arange(n) if groups is None else groups, names)  # fail fast, before parallel work
         per_model = self._per_model_params(A.shape[1], s)
         self._choose_detector(X, A, groups)
         template = self._choose_template(n)

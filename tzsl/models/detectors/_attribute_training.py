@@ -21,6 +21,7 @@ from tzsl.models.detectors._grouped_folds import stratified_group_fold_masks
 
 __all__ = [
     "AUTO_MAX_EXACT_TRIALS",
+    "MIN_OBJECTS_PER_LABEL",
     "PLATT_WEIGHTING",
     "SCORING",
     "SOLVERS",
@@ -30,6 +31,7 @@ __all__ = [
     "balanced_object_draws",
     "balanced_sample_weights",
     "binary_training_targets",
+    "check_label_objects",
     "cv_criteria",
     "default_preprocessor",
     "fit_platt",
@@ -39,6 +41,35 @@ __all__ = [
     "object_balanced_weights",
     "object_grouped_folds",
 ]
+
+#: Fewest training objects with each value (present, absent) of an attribute an attribute bank learns: its
+#: object-grouped CV folds need both values in more than one object.
+MIN_OBJECTS_PER_LABEL = 2
+
+
+def check_label_objects(A: np.ndarray, groups: np.ndarray, names) -> None:
+    """Refuse an attribute present (or absent) in fewer than :data:`MIN_OBJECTS_PER_LABEL` training objects.
+
+    Parameters
+    ----------
+    A : ndarray of shape (n_trials, n_attributes)
+        0/1 attribute targets of the training trials.
+    groups : ndarray of shape (n_trials,)
+        The object of each trial.
+    names : sequence of str
+        The attributes, for the message.
+
+    Raises
+    ------
+    AttributeTrainingError
+        Naming the first such attribute, its value and its object count.
+    """
+    for j, name in enumerate(names):
+        for label, mask in (("present", A[:, j] == 1), ("absent", A[:, j] == 0)):
+            k = np.unique(groups[mask]).size
+            if k < MIN_OBJECTS_PER_LABEL:
+                raise AttributeTrainingError(f"attribute {name!r}: {label} in only {k} training object(s); need at "
+                                             f"least {MIN_OBJECTS_PER_LABEL} (leave the attribute out of this split)")
 
 UNDERSAMPLING = ("select", "bagging", "none")
 SOLVERS = ("exact", "approximate", "auto")
