@@ -211,7 +211,8 @@ def choices_page(out: Path) -> None:
     lines = []
     for c in choices:
         lines += [f"### `{c['key']}`", "", c["what"][:1].upper() + c["what"][1:] + ".", "",
-                  f"* **value:** `{c['value']}`", f"* **chosen on:** {c['selection']}",
+                  f"* **value:** `{c['value']}`", f"* **datasets it saw:** {c['datasets']}",
+                  f"* **chosen on:** {c['selection']}",
                   f"* **numbers shown for it:** {c['numbers']}",
                   f"* **makes the choice again:** {'`' + c['command'] + '`' if c['command'] else 'no command'}", ""]
     _write(out / "choices_table.md", "\n".join(lines))

@@ -27,6 +27,8 @@ def test_every_choice_is_complete_and_named_once():
         assert all(c[field] for field in ("key", "what", "value", "selection", "numbers")), c
         # an honest entry: either splits are named, or it says there were none
         assert NO_SELECTION_SPLITS in c["selection"] or "split" in c["selection"] or c["selection"].startswith("none")
+        # the datasets it saw: none exactly when it was made on no splits (issue 42: which datasets a choice saw)
+        assert c["datasets"] and (c["datasets"].startswith("none") == c["selection"].startswith(NO_SELECTION_SPLITS))
 
 
 def test_the_choices_a_user_meets_are_listed():

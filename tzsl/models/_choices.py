@@ -28,6 +28,12 @@ __all__ = ["DEFAULT_METHOD", "INHERITED_CHOICES", "NO_SELECTION_SPLITS", "Inheri
 
 #: The selection entry of a choice made on no recorded splits.
 NO_SELECTION_SPLITS = "none recorded"
+#: The datasets of a choice made on PHAC-2 splits alone; a choice made across the benchmark's datasets (leave one
+#: dataset out: ``make benchmark``'s defaults.csv, docs/user_guide/benchmark.md) names them.
+PHAC2_ONLY = ("PHAC-2 (Penn features) only, one dataset of the benchmark's; the choice across its datasets (leave "
+              "one dataset out) is made by make benchmark (defaults.csv)")
+#: The datasets of a choice made on no splits.
+NO_DATASETS = "none (made on no splits)"
 
 
 def _alias_of(entry: dict[str, object]) -> str:
@@ -103,6 +109,8 @@ class InheritedChoice:
         Where the numbers shown for it come from (confirmation splits), or that there are none yet.
     command : str
         The command that makes the choice again (empty when no command makes it).
+    datasets : str
+        The datasets whose splits the choice saw (its data; none for a choice made on no splits).
     """
 
     key: str
@@ -111,6 +119,7 @@ class InheritedChoice:
     selection: str
     numbers: str
     command: str = ""
+    datasets: str = PHAC2_ONLY
 
     @property
     def value(self) -> str:
@@ -120,7 +129,7 @@ class InheritedChoice:
     def record(self) -> dict[str, str]:
         """The choice as a JSON-friendly dict (``value`` read now)."""
         return {"key": self.key, "what": self.what, "value": self.value, "selection": self.selection,
-                "numbers": self.numbers, "command": self.command}
+                "numbers": self.numbers, "command": self.command, "datasets": self.datasets}
 
 
 def _default(estimator, *names: str) -> Callable[[], object]:
@@ -224,7 +233,7 @@ INHERITED_CHOICES: tuple[InheritedChoice, ...] = (
         NO_SELECTION_SPLITS + ": reasoned (a proper scoring rule for posteriors; balanced posteriors pair with "
                               "DAP's uniform prior), no selection splits recorded",
         "none on confirmation splits",
-        ""),
+        "", datasets=NO_DATASETS),
     InheritedChoice(
         "approximate-solver",
         "settings of the approximate attribute model (tzsl.models.AttributeClassifierBank solver='approximate': "
@@ -247,7 +256,8 @@ INHERITED_CHOICES: tuple[InheritedChoice, ...] = (
         "PHAC-2 confirmation splits (5 random splits of seed 1, purpose confirm, and the 5 challenging splits: "
         "also used for selection), paired approximate minus exact: the exact-solver-threshold-benchmark block of "
         "experiments/benchmarks/README.md",
-        "python experiments/benchmarks/exact_solver_threshold.py --data phac2 --out DIR"),
+        "python experiments/benchmarks/exact_solver_threshold.py --data phac2 --out DIR",
+        datasets="SIMULATED grasps (cost) and PHAC-2 (Penn features; accuracy), not the benchmark's other datasets"),
     InheritedChoice(
         "eszsl-grid",
         "ridge grids of tzsl.models.ESZSLCV (registry `eszsl`) and the adaptive extension at a selected edge",
@@ -264,7 +274,7 @@ INHERITED_CHOICES: tuple[InheritedChoice, ...] = (
         NO_SELECTION_SPLITS + ": the grid's values have no recorded selection splits; the extension rule was "
                               "adopted from ESZSL's without selection splits of its own",
         "none on confirmation splits",
-        ""),
+        "", datasets=NO_DATASETS),
     InheritedChoice(
         "zero-shot-search-criterion",
         "the held-out criterion and tie rule of the zero-shot searches: ESZSLCV's and SAECV's `scoring` and "
@@ -287,7 +297,7 @@ INHERITED_CHOICES: tuple[InheritedChoice, ...] = (
                  for cls in (ALE, SJE, DeViSE)},
         NO_SELECTION_SPLITS + ": not tuned on tactile splits",
         "their rows of method_comparison.csv (the run's own splits and purpose)",
-        BEST_METHOD_COMMAND),
+        BEST_METHOD_COMMAND, datasets=NO_DATASETS),
 )
 
 
