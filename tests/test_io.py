@@ -13,7 +13,7 @@ import zipfile
 import numpy as np
 import pytest
 
-from tzsl._io import MAX_NPZ_BYTES_ENV, atomic_write, file_sha256, read_npz
+from tzsl._io import MAX_NPZ_BYTES_ENV, atomic_write, file_sha256, read_npy, read_npz
 from tzsl.exceptions import ConfigError, DataFileError
 
 
@@ -187,3 +187,16 @@ def test_file_sha256_of_empty_file(tmp_path):
     path = tmp_path / "empty"
     path.write_bytes(b"")
     assert file_sha256(path) == hashlib.sha256(b"").hexdigest()
+
+
+@pytest.mark.parametrize("at, xor", [(64, 91), (61, 8)])
+def test_a_flipped_header_byte_is_one_line(tmp_path, at, xor):
+    """A damaged .npy header makes numpy's header parser raise the tokenizer's errors (found by the lab-file
+    property test: byte 64 xor 91 gave TokenError and a traceback); every one is a one-line DataFileError."""
+    path = tmp_path / "t1.npy"
+    np.save(path, np.arange(24.0).reshape(12, 2))  # byte 64 is in the shape: "(12,{2)" after the flip
+    raw = path.read_bytes()
+    path.write_bytes(raw[:at] + bytes([raw[at] ^ xor]) + raw[at + 1:])
+    with pytest.raises(DataFileError, match=r"t1\.npy: ") as info:
+        read_npy(path)
+    assert "\n" not in str(info.value)

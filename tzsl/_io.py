@@ -8,6 +8,7 @@ import tempfile
 import zipfile
 from collections.abc import Callable
 from pathlib import Path
+from tokenize import TokenError
 from typing import IO
 
 import numpy as np
@@ -217,7 +218,8 @@ def read_npz(source: str | Path | IO[bytes], *, name: str | Path | None = None,
         raise DataFileError(where, "is a folder, not an .npz file") from None
     except zipfile.BadZipFile as exc:
         raise DataFileError(where, f"not a readable .npz archive (truncated or not a zip file: {exc})") from None
-    except (OSError, ValueError, EOFError, KeyError, zipfile.LargeZipFile, NotImplementedError) as exc:
+    except (OSError, ValueError, EOFError, KeyError, zipfile.LargeZipFile, NotImplementedError, SyntaxError,
+            TokenError) as exc:  # numpy parses a header with the tokenizer: a damaged one raises its errors
         raise DataFileError(where, f"not a readable .npz archive ({type(exc).__name__}: {exc})") from None
 
 
@@ -247,7 +249,7 @@ def read_npy(path: str | Path, *, limit: int | None = None) -> np.ndarray:
         raise DataFileError(path, "file not found") from None
     except IsADirectoryError:
         raise DataFileError(path, "is a folder, not an .npy file") from None
-    except (OSError, ValueError, EOFError) as exc:
+    except (OSError, ValueError, EOFError, SyntaxError, TokenError) as exc:  # header parsing: see read_npz
         text = str(exc).strip().splitlines()
         raise DataFileError(path, f"not a readable .npy array ({type(exc).__name__}: "
                             f"{text[0] if text else 'empty or truncated'})") from None

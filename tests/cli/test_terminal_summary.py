@@ -72,7 +72,7 @@ def test_the_template_run_fits_one_screen_verbose_prints_the_tables_and_no_bar_i
     assert "intervals clear chance" in text or "no interval clears chance" in text
     assert "deploy: " in text and " (deployment.json): " in text  # the study's choice (tests/cli/test_deploy_choice.py)
     assert f"model: tzsl train-attributes --from-results {Path('results/plain')} --out model.tzsl" in text
-    assert "tables: 12 CSV and 3 figures in results/plain" in text
+    assert "tables: 13 CSV and 3 figures in results/plain" in text  # with class_accuracy.csv (per split and class)
     assert "report: tzsl report results/plain" in text and "wrote " in lines[-1]
     assert "Methods vs" not in text  # the tables are --verbose's
     # --verbose: the tables before the summary, and the same files
