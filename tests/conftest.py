@@ -45,25 +45,3 @@ def _isolated_cache(tmp_path_factory, monkeypatch):
     monkeypatch.setenv("TZSL_CACHE_DIR", str(tmp_path_factory.getbasetemp() / "tzsl-cache"))
     monkeypatch.setenv("TZSL_STUDY_CACHE", "0")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "user-cache"))
-
-
-#: The test files that hold a worker longest (measured in a quiet CI run: the docs build, the template's property
-#: test, the reproduce byte-identity, the fabric study and descriptors, the damaged-lab-file properties, the wheel),
-#: longest first. They are collected first, so with ``--dist loadfile`` the workers start them early and end
-#: together, instead of one worker running the last long file alone (the suite's wall time is the slower worker's).
-LONG_FILES_FIRST = ("test_docs.py", "studies/test_zero_shot_study.py", "studies/test_reproduce.py",
-                    "studies/test_fabric_study.py", "datasets/test_builtin_computed.py",
-                    "datasets/test_lab_properties.py", "studies/test_bench_reproduce.py", "test_wheel.py")
-
-
-def pytest_collection_modifyitems(config, items):
-    """Run :data:`LONG_FILES_FIRST` first (a stable sort: every other test keeps its order)."""
-    tests = Path(__file__).resolve().parent
-    rank = {name: i for i, name in enumerate(LONG_FILES_FIRST)}
-
-    def first(item) -> int:
-        path = Path(str(item.fspath)).resolve()
-        relative = path.relative_to(tests).as_posix() if path.is_relative_to(tests) else path.name
-        return rank.get(relative, len(rank))
-
-    items.sort(key=first)

@@ -94,15 +94,3 @@ def test_make_test_keeps_a_files_tests_on_one_worker_and_no_test_relies_on_xdist
     marked = [p.relative_to(REPO) for p in (REPO / "tests").rglob("*.py")
               if "mark.xdist_" + "group" in p.read_text(encoding="utf-8")]
     assert marked == [], f"xdist groups are ignored by the locked pytest: {marked}"
-
-
-def test_the_long_files_run_first_and_exist():
-    """conftest's LONG_FILES_FIRST names real files (a renamed file would silently fall back to the end)."""
-    import importlib.util
-
-    tests = Path(__file__).resolve().parent
-    spec = importlib.util.spec_from_file_location("tests_conftest", tests / "conftest.py")
-    assert spec is not None and spec.loader is not None
-    conftest = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(conftest)
-    assert conftest.LONG_FILES_FIRST and all((tests / n).is_file() for n in conftest.LONG_FILES_FIRST)
