@@ -80,7 +80,7 @@ def test_the_template_run_fits_one_screen_verbose_prints_the_tables_and_no_bar_i
     assert "Methods vs" in verbose and "MAXDAP vs AVGDAP" in verbose
     assert verbose.count("deploy: ") == 1 and verbose.index("Methods vs") < verbose.index("deploy: ")
     assert runs["plain_csvs"] == runs["verbose_csvs"]  # byte for byte, but the wall-clock fit_seconds
-    assert len(runs["plain_csvs"]) == 12
+    assert len(runs["plain_csvs"]) == 13  # with class_accuracy.csv
     # no carriage-return bar reaches a stream that is not a terminal (CliRunner's are not)
     for name in ("plain", "verbose"):
         assert "\r" not in runs[name].output + runs[name].stderr
