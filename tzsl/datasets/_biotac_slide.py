@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Sequence
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -36,8 +35,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from tzsl.datasets._catalog import RegisteredSignals
 from tzsl.datasets._plain_write import write_plain_dataset
-from tzsl.datasets._registry import fetch, registered_files
+from tzsl.datasets._registry import registered_files
 from tzsl.datasets._signal_files import check_signal_values
 from tzsl.exceptions import DataFileError, DataMissingError, first_line
 
@@ -250,19 +250,6 @@ def slide_files() -> list[tuple[str, int, str]]:
     return sorted(slides, key=lambda s: (int(s[0].removeprefix("mat")), s[1]))
 
 
-class _Signals(Sequence):
-    """The signals of the registered slides, read (and hash-checked) one at a time as the writer asks."""
-
-    def __init__(self, relpaths: list[str], data_dir: str | os.PathLike | None) -> None:
-        self.relpaths, self.data_dir = relpaths, data_dir
-
-    def __len__(self) -> int:
-        return len(self.relpaths)
-
-    def __getitem__(self, i):  # the writer indexes one trial at a time
-        return [read_biotac_slide_csv(fetch(self.relpaths[i], self.data_dir))]
-
-
 def convert_biotac_slide(out: str | os.PathLike, data_dir: str | os.PathLike | None = None, *, force: bool = False,
                          signal_format: str = "npz", table: MaterialTable | None = None) -> Path:
     """Write ``biotac-slide`` as a plain-file dataset folder (module docstring).
@@ -308,7 +295,7 @@ def convert_biotac_slide(out: str | os.PathLike, data_dir: str | os.PathLike | N
         "object": [table.materials[m] for m, _, _ in slides],
         "trial_index": [n for _, n, _ in slides],
     })
-    signals = _Signals([relpath for _, _, relpath in slides], data_dir)
+    signals = RegisteredSignals([relpath for _, _, relpath in slides], data_dir, read_biotac_slide_csv)
     return write_plain_dataset(out, table.classes, trials, sensors=[SENSOR], signals=signals,
                                channels=BIOTAC_SLIDE_CHANNELS, settings=BIOTAC_SLIDE_SETTINGS,
                                signal_format=signal_format, force=force)

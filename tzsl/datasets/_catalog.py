@@ -13,14 +13,18 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+import numpy as np
+
 from tzsl.cache import get_cache_dir
+from tzsl.datasets._registry import fetch
 from tzsl.datasets._tables import CLASSES_FILE
 from tzsl.exceptions import ConfigError
 
-__all__ = ["CATALOG_FOLDER", "conversion_key", "converted_folder"]
+__all__ = ["CATALOG_FOLDER", "RegisteredSignals", "conversion_key", "converted_folder"]
 
 #: Sub-folder of the cache folder holding the converted catalog datasets.
 CATALOG_FOLDER = "catalog"
@@ -61,3 +65,30 @@ def converted_folder(name: str, parts: Sequence[str], build: Callable[[Path], ob
             return folder
         raise
     return folder
+
+
+class RegisteredSignals(Sequence):
+    """The signals of registered files, each fetched (hash-checked) and read only when the plain-format writer asks.
+
+    Parameters
+    ----------
+    relpaths : list of str
+        One registered file per trial (paths relative to the data home).
+    data_dir : path-like or None
+        The data home.
+    read : callable
+        ``read(path) -> ndarray (n_samples, n_channels)``: the loader's reader of one file as published.
+
+    ``signals[i]`` is ``[read(fetch(relpaths[i]))]``: trial ``i``'s one sensor, as
+    :func:`~tzsl.datasets.write_plain_dataset` takes it, so a conversion never holds every trial at once.
+    """
+
+    def __init__(self, relpaths: list[str], data_dir: str | os.PathLike | None,
+                 read: Callable[[Path], np.ndarray]) -> None:
+        self.relpaths, self.data_dir, self.read = relpaths, data_dir, read
+
+    def __len__(self) -> int:
+        return len(self.relpaths)
+
+    def __getitem__(self, i):  # the writer indexes one trial at a time
+        return [self.read(fetch(self.relpaths[i], self.data_dir))]

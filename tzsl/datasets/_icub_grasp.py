@@ -31,7 +31,6 @@ material is not stated), the fill level (not stated for the lotion), softness be
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
 from importlib import resources
 from pathlib import Path
 
@@ -39,8 +38,9 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets._biotac_slide import MaterialTable
+from tzsl.datasets._catalog import RegisteredSignals
 from tzsl.datasets._plain_write import write_plain_dataset
-from tzsl.datasets._registry import fetch, registered_files
+from tzsl.datasets._registry import registered_files
 from tzsl.exceptions import DataFileError, DataMissingError
 
 __all__ = ["ATTRIBUTE_TABLE", "ICUB_GRASP", "ICUB_GRASP_ATTRIBUTES", "ICUB_GRASP_CHANNELS", "ICUB_GRASP_COMMIT",
@@ -254,19 +254,6 @@ def grasp_files() -> list[tuple[str, int, str]]:
     return sorted(grasps, key=lambda g: (order.index(g[0]), g[1]))
 
 
-class _Signals(Sequence):
-    """The signals of the registered grasps, read (and hash-checked) one at a time as the writer asks."""
-
-    def __init__(self, relpaths: list[str], data_dir: str | os.PathLike | None) -> None:
-        self.relpaths, self.data_dir = relpaths, data_dir
-
-    def __len__(self) -> int:
-        return len(self.relpaths)
-
-    def __getitem__(self, i):  # the writer indexes one trial at a time
-        return [read_icub_grasp_trial(fetch(self.relpaths[i], self.data_dir))]
-
-
 def convert_icub_grasp(out: str | os.PathLike, data_dir: str | os.PathLike | None = None, *, force: bool = False,
                        signal_format: str = "npz", table: MaterialTable | None = None) -> Path:
     """Write ``icub-grasp`` as a plain-file dataset folder (module docstring).
@@ -308,7 +295,7 @@ def convert_icub_grasp(out: str | os.PathLike, data_dir: str | os.PathLike | Non
         "object": [o for o, _, _ in grasps],
         "trial_index": [n for _, n, _ in grasps],
     })
-    signals = _Signals([relpath for _, _, relpath in grasps], data_dir)
+    signals = RegisteredSignals([relpath for _, _, relpath in grasps], data_dir, read_icub_grasp_trial)
     return write_plain_dataset(out, table.classes, trials, sensors=[SENSOR], signals=signals,
                                channels=ICUB_GRASP_CHANNELS, settings=ICUB_GRASP_SETTINGS,
                                signal_format=signal_format, force=force)
