@@ -239,3 +239,15 @@ def test_a_registered_but_malformed_csv_names_its_file_and_line(tmp_path, releas
     line = _error_line(err)
     assert code != 0 and f"{home / name}:6: a value ('oops') follows the last channel" in line
     shutil.rmtree(home)
+
+
+def test_a_malformed_class_table_is_one_line(tmp_path):
+    """The class table's reader (shared by every catalog dataset) refuses a CSV it cannot parse in one line."""
+    from tzsl.datasets import read_biotac_slide_attributes
+    from tzsl.exceptions import DataFileError
+
+    bad = tmp_path / "table.csv"
+    bad.write_bytes(b'material,class\n"unclosed,quote\n')
+    with pytest.raises(DataFileError, match=r"table\.csv: not a readable CSV table") as info:
+        read_biotac_slide_attributes(bad)
+    assert "\n" not in str(info.value)

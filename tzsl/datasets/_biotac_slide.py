@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from tzsl.datasets._catalog import RegisteredSignals
+from tzsl.datasets._catalog import RegisteredSignals, read_class_table
 from tzsl.datasets._plain_write import write_plain_dataset
 from tzsl.datasets._registry import registered_files
 from tzsl.datasets._signal_files import check_signal_values
@@ -200,9 +200,7 @@ def read_biotac_slide_attributes(path: str | os.PathLike | None = None) -> Mater
         with resources.as_file(resources.files("tzsl.datasets").joinpath(ATTRIBUTE_TABLE)) as shipped:
             return read_biotac_slide_attributes(shipped)
     path = Path(path)
-    table = pd.read_csv(path, dtype=str, keep_default_na=False)
-    if tuple(table.columns) != _TABLE_COLUMNS:
-        raise DataFileError(path, f"columns are {list(table.columns)}; expected {list(_TABLE_COLUMNS)}", line=1)
+    table = read_class_table(path, _TABLE_COLUMNS)
     materials: dict[str, str] = {}
     seen: set[tuple[str, str]] = set()
     for i, row in enumerate(table.itertuples(index=False), start=2):

@@ -40,6 +40,7 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets._biotac_slide import MaterialTable
+from tzsl.datasets._catalog import read_class_table
 from tzsl.datasets._plain_write import write_plain_dataset
 from tzsl.datasets._registry import fetch
 from tzsl.exceptions import DataFileError, first_line
@@ -219,12 +220,7 @@ def read_bts3_attributes(path: str | os.PathLike | None = None) -> MaterialTable
         with resources.as_file(resources.files("tzsl.datasets").joinpath(ATTRIBUTE_TABLE)) as shipped:
             return read_bts3_attributes(shipped)
     path = Path(path)
-    try:
-        table = pd.read_csv(path, dtype=str, keep_default_na=False)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, OSError, UnicodeDecodeError) as exc:
-        raise DataFileError(path, f"not a readable CSV table ({type(exc).__name__}: {first_line(exc)})") from None
-    if tuple(table.columns) != _TABLE_COLUMNS:
-        raise DataFileError(path, f"columns are {list(table.columns)}; expected {list(_TABLE_COLUMNS)}", line=1)
+    table = read_class_table(path, _TABLE_COLUMNS)
     seen: set[tuple[str, str]] = set()
     for i, row in enumerate(table.itertuples(index=False), start=2):
         obj, cls, attribute, value, source, evidence = (str(v).strip() for v in row)

@@ -18,13 +18,14 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from tzsl.cache import get_cache_dir
 from tzsl.datasets._registry import fetch
 from tzsl.datasets._tables import CLASSES_FILE
-from tzsl.exceptions import ConfigError
+from tzsl.exceptions import ConfigError, DataFileError, first_line
 
-__all__ = ["CATALOG_FOLDER", "RegisteredSignals", "conversion_key", "converted_folder"]
+__all__ = ["CATALOG_FOLDER", "RegisteredSignals", "conversion_key", "converted_folder", "read_class_table"]
 
 #: Sub-folder of the cache folder holding the converted catalog datasets.
 CATALOG_FOLDER = "catalog"
@@ -92,3 +93,32 @@ class RegisteredSignals(Sequence):
 
     def __getitem__(self, i):  # the writer indexes one trial at a time
         return [self.read(fetch(self.relpaths[i], self.data_dir))]
+
+
+def read_class_table(path: str | os.PathLike, columns: Sequence[str]) -> pd.DataFrame:
+    """A catalog dataset's sourced class-attribute table as text cells, its header checked (every loader's reader).
+
+    Parameters
+    ----------
+    path : path-like
+        The CSV (one line per object and attribute, with the value's source).
+    columns : sequence of str
+        The header it must have, in order.
+
+    Returns
+    -------
+    DataFrame
+        Every cell as written (strings; an empty cell stays ``""``).
+
+    Raises
+    ------
+    DataFileError
+        Not a readable CSV, or another header (line 1), in one line naming the file.
+    """
+    try:
+        table = pd.read_csv(path, dtype=str, keep_default_na=False)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, OSError, UnicodeDecodeError) as exc:
+        raise DataFileError(path, f"not a readable CSV table ({type(exc).__name__}: {first_line(exc)})") from None
+    if tuple(table.columns) != tuple(columns):
+        raise DataFileError(path, f"columns are {list(table.columns)}; expected {list(columns)}", line=1)
+    return table

@@ -38,7 +38,7 @@ import numpy as np
 import pandas as pd
 
 from tzsl.datasets._biotac_slide import MaterialTable
-from tzsl.datasets._catalog import RegisteredSignals
+from tzsl.datasets._catalog import RegisteredSignals, read_class_table
 from tzsl.datasets._plain_write import write_plain_dataset
 from tzsl.datasets._registry import registered_files
 from tzsl.exceptions import DataFileError, DataMissingError
@@ -192,12 +192,7 @@ def read_icub_grasp_attributes(path: str | os.PathLike | None = None) -> Materia
         with resources.as_file(resources.files("tzsl.datasets").joinpath(ATTRIBUTE_TABLE)) as shipped:
             return read_icub_grasp_attributes(shipped)
     path = Path(path)
-    try:
-        table = pd.read_csv(path, dtype=str, keep_default_na=False)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, OSError, UnicodeDecodeError) as exc:
-        raise DataFileError(path, f"not a readable CSV table ({type(exc).__name__})") from None
-    if tuple(table.columns) != _TABLE_COLUMNS:
-        raise DataFileError(path, f"columns are {list(table.columns)}; expected {list(_TABLE_COLUMNS)}", line=1)
+    table = read_class_table(path, _TABLE_COLUMNS)
     table = table.apply(lambda column: column.str.strip())
     seen: set[tuple[str, str]] = set()
     for i, (obj, cls, attribute, value, source, evidence) in enumerate(table.itertuples(index=False), start=2):

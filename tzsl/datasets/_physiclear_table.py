@@ -45,6 +45,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from tzsl.datasets._catalog import read_class_table
 from tzsl.exceptions import ConfigError, DataFileError, first_line
 
 __all__ = ["ATTRIBUTE_TABLE", "CONSTANTS_FILE", "ENCODINGS", "MIN_MATERIAL_OBJECTS", "PHYSICLEAR",
@@ -225,12 +226,7 @@ def read_physiclear_attributes(path: str | os.PathLike | None = None, *, encodin
         with resources.as_file(resources.files("tzsl.datasets").joinpath(ATTRIBUTE_TABLE)) as shipped:
             return read_physiclear_attributes(shipped, encoding=encoding, min_material_objects=min_material_objects)
     path = Path(path)
-    try:
-        table = pd.read_csv(path, dtype=str, keep_default_na=False)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, OSError, UnicodeDecodeError) as exc:
-        raise DataFileError(path, f"not a readable CSV table ({type(exc).__name__}: {first_line(exc)})") from None
-    if tuple(table.columns) != _COLUMNS:
-        raise DataFileError(path, f"columns are {list(table.columns)}; expected {list(_COLUMNS)}", line=1)
+    table = read_class_table(path, _COLUMNS)
     table = table.apply(lambda column: column.str.strip())
     variables = {p: v for p, (v, _) in PROPERTIES.items()} | {"material": MATERIALS_VARIABLE}
     seen: set[tuple[str, str]] = set()
