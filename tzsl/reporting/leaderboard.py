@@ -17,6 +17,7 @@ import pandas as pd
 
 from tzsl.reporting.benchmark_blocks import MissingResults
 from tzsl.reporting.markdown_cells import number, signed
+from tzsl.studies.benchmark.summary import reference_method
 
 __all__ = ["leaderboard_block"]
 
@@ -76,7 +77,7 @@ def leaderboard_block(results: str | Path) -> str:
                      f"{float(f['f']):.2f} (p = {float(f['f_pvalue']):.3g}); Nemenyi critical difference "
                      f"{float(f['critical_difference']):.2f} ranks at alpha {float(f['alpha']):g} (Demsar 2006): "
                      "two methods whose mean ranks differ by less do not differ significantly.")
-    reference = _reference(meta, ranks)
+    reference = reference_method(meta["method_b"], ranks)
     pooled = meta[meta["method_b"] == reference].set_index("method_a")
     lines += ["", f"Each method minus `{reference}` (the generic default), paired on shared splits and pooled over "
                   "datasets by a random-effects meta-analysis (DerSimonian-Laird) [95% interval]:", "",
@@ -88,10 +89,3 @@ def leaderboard_block(results: str | Path) -> str:
         lines.append(f"| `{r.method}` | {signed(m['effect'], m['ci95_low'], m['ci95_high'])} | "
                      f"{int(m['n_datasets'])} | {number(m['i2'], 2)} |")
     return "\n".join(lines)
-
-
-def _reference(meta: pd.DataFrame, ranks: pd.DataFrame) -> str:
-    """The generic default when the benchmark ran it, else the best mean rank."""
-    from tzsl.models.choices import DEFAULT_METHOD  # noqa: PLC0415
-
-    return DEFAULT_METHOD if DEFAULT_METHOD in set(meta["method_b"]) else str(ranks["method"].iloc[0])

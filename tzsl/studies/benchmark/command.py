@@ -30,7 +30,7 @@ from tzsl.studies.benchmark.catalog import BENCHMARK_DATASETS, benchmark_dataset
 from tzsl.studies.benchmark.defaults import leave_one_dataset_out
 from tzsl.studies.benchmark.runner import DatasetRun, collect_gzsl, collect_scores, run_benchmark
 from tzsl.studies.benchmark.splits import SPLITS_VERSION, standard_index
-from tzsl.studies.benchmark.summary import BENCHMARK_FILES, PRIMARY, complete_splits, summarise, terminal_lines
+from tzsl.studies.benchmark.summary import BENCHMARK_FILES, complete_splits, long_scores, summarise, terminal_lines
 from tzsl.studies.outputs.results_folder import ResultsDir
 
 __all__ = ["DEFAULTS_FILE", "list_benchmark", "read_selection", "run_benchmark_command", "write_defaults"]
@@ -133,10 +133,8 @@ def write_defaults(select: pd.DataFrame, confirm: pd.DataFrame, results: Results
     """Write ``defaults.csv`` (:func:`~tzsl.studies.benchmark.defaults.leave_one_dataset_out`); its terminal lines."""
     from tzsl.models.choices import DEFAULT_METHOD  # noqa: PLC0415
 
-    def long(scores: pd.DataFrame) -> pd.DataFrame:
-        return complete_splits(scores.rename(columns={PRIMARY: "score"})[["dataset", "method", "split", "score"]])
-
-    table = leave_one_dataset_out(long(select), long(confirm), DEFAULT_METHOD)
+    table = leave_one_dataset_out(complete_splits(long_scores(select)), complete_splits(long_scores(confirm)),
+                                  DEFAULT_METHOD)
     results.write_csv(DEFAULTS_FILE, table)
     lines = ["defaults chosen with each dataset left out (mean rank on the others' selection splits), their regret "
              "against each dataset's hindsight best on its confirmation splits:"]

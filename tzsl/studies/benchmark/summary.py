@@ -10,6 +10,7 @@ into the benchmark's results folder.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -25,7 +26,7 @@ from tzsl.studies.benchmark.statistics import (
     per_dataset_table,
 )
 
-__all__ = ["BENCHMARK_FILES", "complete_splits", "summarise", "terminal_lines"]
+__all__ = ["BENCHMARK_FILES", "complete_splits", "long_scores", "reference_method", "summarise", "terminal_lines"]
 
 #: What a benchmark writes at the top of its folder (checked free before any fit).
 BENCHMARK_FILES = ("scores.csv", "datasets.csv", "gzsl.csv", "ranks.csv", "friedman.csv", "meta_analysis.csv",
@@ -38,16 +39,22 @@ ALPHA = 0.05
 SHOWN_RANKS = 5
 
 
-def _reference() -> str:
+def long_scores(scores: pd.DataFrame) -> pd.DataFrame:
+    """The primary metric of collected scores as the statistics' long table: ``dataset``, ``method``, ``split``,
+    ``score``, ``chance`` (:mod:`tzsl.studies.benchmark.statistics`)."""
+    return scores.rename(columns={PRIMARY: "score"})[["dataset", "method", "split", "score", "chance"]]
+
+
+def reference_method(methods: Iterable[str], ranks: pd.DataFrame) -> str:
+    """The method others are compared with: the generic default when it ran, else the best mean rank."""
     from tzsl.models.choices import DEFAULT_METHOD  # noqa: PLC0415
 
-    return DEFAULT_METHOD
+    return DEFAULT_METHOD if DEFAULT_METHOD in set(methods) else str(ranks["method"].iloc[0])
 
 
 def _dataset_table(scores: pd.DataFrame, gzsl: pd.DataFrame) -> pd.DataFrame:
     """:func:`per_dataset_table` of the primary metric, with mean trial accuracy and GZSL's H beside."""
-    long = scores.rename(columns={PRIMARY: "score"})[["dataset", "method", "split", "score", "chance"]]
-    table = per_dataset_table(long)
+    table = per_dataset_table(long_scores(scores))
     trial = scores.groupby(["dataset", "method"])["trial_accuracy"].mean().rename("trial_accuracy")
     table = table.merge(trial.reset_index(), on=["dataset", "method"], how="left")
     if not gzsl.empty:
@@ -102,8 +109,7 @@ def summarise(scores: pd.DataFrame, gzsl: pd.DataFrame, results: Any) -> dict[st
     results.write_csv("gzsl.csv", gzsl)
     datasets = _dataset_table(scores, gzsl)
     results.write_csv("datasets.csv", datasets)
-    long = complete_splits(scores.rename(columns={PRIMARY: "score"})[["dataset", "method", "split", "score",
-                                                                        "chance"]])
+    long = complete_splits(long_scores(scores))
     ranks = mean_ranks(long)
     results.write_csv("ranks.csv", ranks)
     n_datasets = int(ranks["n_datasets"].iloc[0]) if len(ranks) else 0
@@ -124,9 +130,7 @@ def summarise(scores: pd.DataFrame, gzsl: pd.DataFrame, results: Any) -> dict[st
                                                                 title=title))
     meta = meta_analysis(long)
     results.write_csv("meta_analysis.csv", meta)
-    reference = _reference()
-    if reference not in set(long["method"]):
-        reference = str(ranks["method"].iloc[0])
+    reference = reference_method(long["method"], ranks)
     results.write_file("meta_analysis.png", lambda path: meta_analysis_figure(
         meta, reference, path, title=f"paired difference from {reference}, pooled over datasets (95% CI)"))
     return {"datasets": datasets, "ranks": ranks, "friedman": friedman, "meta": meta, "reference": reference}
