@@ -243,9 +243,13 @@ class CatalogDataset(TactileDataset):
                 signal_format: str = "npz") -> Path:
         """Write the dataset as a plain-file folder ``out`` from the registered files in the data home."""
 
+    #: Files of the package :meth:`convert` reads besides the registered ones (its class table, a split file).
+    package_files: ClassVar[tuple[str, ...]] = ()
+
     def conversion_inputs(self) -> list[str]:
-        """What :meth:`convert` depends on besides the registered files (e.g. a class table's digest)."""
-        return []
+        """What :meth:`convert` depends on besides the registered files: the sha256 of each of :attr:`package_files`."""
+        files = resources.files("tzsl.datasets")
+        return [hashlib.sha256(files.joinpath(name).read_bytes()).hexdigest() for name in self.package_files]
 
     def load(self, data_dir: PathLike | None = None, path: PathLike | None = None) -> PlainDataset:
         parts = [self.name, self.version, *self.conversion_inputs(),
@@ -267,13 +271,10 @@ class BiotacSlide(CatalogDataset):
               "fetched on first use")
     eps = ("slide",)
     registry_files = (BIOTAC_SLIDE_DIR,)
+    package_files = (ATTRIBUTE_TABLE,)
 
     def convert(self, out, data_dir=None, *, force=False, signal_format="npz") -> Path:
         return convert_biotac_slide(out, data_dir, force=force, signal_format=signal_format)
-
-    def conversion_inputs(self) -> list[str]:
-        table = resources.files("tzsl.datasets").joinpath(ATTRIBUTE_TABLE).read_bytes()
-        return [hashlib.sha256(table).hexdigest()]
 
 
 class Bts3(CatalogDataset):
@@ -288,13 +289,10 @@ class Bts3(CatalogDataset):
               f"at commit {BTS3_COMMIT[:7]}, fetched on first use")
     eps = ("grasp",)
     registry_files = (f"{BTS3}/",)
+    package_files = (BTS3_TABLE,)
 
     def convert(self, out, data_dir=None, *, force=False, signal_format="npz") -> Path:
         return convert_bts3(out, data_dir, force=force)  # feature columns: no signal files to format
-
-    def conversion_inputs(self) -> list[str]:
-        table = resources.files("tzsl.datasets").joinpath(BTS3_TABLE).read_bytes()
-        return [hashlib.sha256(table).hexdigest()]
 
 
 class IcubGrasp(CatalogDataset):
@@ -309,13 +307,10 @@ class IcubGrasp(CatalogDataset):
               f"{ICUB_GRASP_COMMIT[:7]}, fetched on first use")
     eps = ("grasp",)
     registry_files = (ICUB_GRASP_DIR,)
+    package_files = (ICUB_GRASP_TABLE,)
 
     def convert(self, out, data_dir=None, *, force=False, signal_format="npz") -> Path:
         return convert_icub_grasp(out, data_dir, force=force, signal_format=signal_format)
-
-    def conversion_inputs(self) -> list[str]:
-        table = resources.files("tzsl.datasets").joinpath(ICUB_GRASP_TABLE).read_bytes()
-        return [hashlib.sha256(table).hexdigest()]
 
 
 class Physiclear(CatalogDataset):
@@ -331,14 +326,10 @@ class Physiclear(CatalogDataset):
               f"{PHYSICLEAR_COMMIT[:7]}, fetched on first use")
     eps = ("press-rotation",)
     registry_files = (f"{PHYSICLEAR}/",)  # the videos and utils/constants.py, the source of the shipped table
+    package_files = (PHYSICLEAR_TABLE, PHYSICLEAR_SPLITS)
 
     def convert(self, out, data_dir=None, *, force=False, signal_format="npz") -> Path:
         return convert_physiclear(out, data_dir, force=force)  # feature columns: no signal files to format
-
-    def conversion_inputs(self) -> list[str]:
-        files = resources.files("tzsl.datasets")
-        return [hashlib.sha256(files.joinpath(name).read_bytes()).hexdigest()
-                for name in (PHYSICLEAR_TABLE, PHYSICLEAR_SPLITS)]
 
 
 _DATASETS: dict[str, TactileDataset] = {}
