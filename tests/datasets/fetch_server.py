@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import hashlib
 import http.server
 import threading
 import time
@@ -130,6 +131,30 @@ def registry_of(path: Path, lines: list[str]) -> pooch.Pooch:
     pup = pooch.create(path=".", base_url="", registry=None)
     pup.load_registry(str(path))
     return pup
+
+
+@contextlib.contextmanager
+def registered_release(folder: Path, files: dict[str, bytes], registry_file: Path, monkeypatch) -> Iterator[str]:
+    """Serve ``folder`` on 127.0.0.1 and register ``files`` (registered path -> content) at it, instead of
+    tzsl's registry, for the test's duration (a catalog dataset's small release); yields the base URL."""
+    from tzsl.datasets import _fetch, _registry
+
+    with serve_folder(folder) as (base, _requested):
+        pup = registry_of(registry_file, [f"{r} sha256:{hashlib.sha256(c).hexdigest()} {base}/{r}"
+                                          for r, c in files.items()])
+        monkeypatch.setattr(_registry, "registry", lambda: pup)
+        monkeypatch.setattr(_fetch, "registry", lambda: pup)
+        yield base
+
+
+def run_cli(*args) -> tuple[int, str, str]:
+    """``tzsl ARGS`` in-process: exit code, standard output, standard error."""
+    from click.testing import CliRunner
+
+    from tzsl.cli import cli
+
+    result = CliRunner().invoke(cli, [str(a) for a in args])
+    return result.exit_code, result.stdout, result.stderr
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -13,12 +13,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
 from tests.datasets.biotac_slide_release import MATERIALS, release_registry, write_release
-from tests.datasets.fetch_server import serve_folder
+from tests.datasets.fetch_server import run_cli, serve_folder
 from tests.study_settings import FAST_TEMPLATE
-from tzsl.cli import cli
 from tzsl.datasets import (
     BIOTAC_SLIDE_CHANNELS,
     _fetch,
@@ -43,11 +41,6 @@ def _fresh_verdicts():
     _registry.clear_verification_cache()
 
 
-def _run(*args) -> tuple[int, str, str]:
-    result = CliRunner().invoke(cli, [str(a) for a in args])
-    return result.exit_code, result.stdout, result.stderr
-
-
 def _error_line(stderr: str) -> str:
     lines = [line for line in stderr.splitlines() if line.strip()]
     assert len(lines) == 1 and lines[0].startswith("tzsl: error: "), stderr
@@ -67,7 +60,7 @@ def test_the_registry_pins_the_1000_slides_at_one_commit():
     assert all(_registry.registered_hash(f).startswith("sha256:") for f in files)
     assert sum(registered_size(f) for f in files) == 115_306_989
     assert "biotac-slide" in dataset_names(convertible=True)
-    code, out, _ = _run("datasets", "--json")
+    code, out, _ = run_cli("datasets", "--json")
     assert code == 0 and "biotac-slide" in [d["name"] for d in json.loads(out)]
 
 
@@ -164,14 +157,14 @@ def release(tmp_path, monkeypatch):
 def test_fetch_convert_validate(tmp_path, release):
     _, _, files = release
     home = tmp_path / "home"
-    code, out, err = _run("data", "fetch", "biotac-slide", "--data-dir", home, "--no-progress")
+    code, out, err = run_cli("data", "fetch", "biotac-slide", "--data-dir", home, "--no-progress")
     assert code == 0, err
     assert f"biotac-slide: 0 present, {len(files)} downloaded" in out
     assert all((home / relpath).read_bytes() == content for relpath, content in files.items())
-    code, out, err = _run("convert", "--dataset", "biotac-slide", "--data-dir", home, "--out", tmp_path / "plain")
+    code, out, err = run_cli("convert", "--dataset", "biotac-slide", "--data-dir", home, "--out", tmp_path / "plain")
     assert code == 0, err
     assert f"20 classes x 3 attributes, {len(files)} trials, 1 sensor(s), 44 channels" in out
-    code, out, err = _run("validate", tmp_path / "plain")
+    code, out, err = run_cli("validate", tmp_path / "plain")
     assert code == 0, err + out
     assert "features:   176 per sensor from signal files: 44 channels x 4 statistics" in out
     assert f"classes:              20 ({len(MATERIALS)} with trials, 5 distinct attribute rows)" in out
@@ -190,7 +183,7 @@ def test_a_study_fetches_it_on_first_use_and_runs(tmp_path, release, monkeypatch
         f'study = "zero-shot"\ndescription = "biotac-slide, small release"\n'
         f'[dataset]\nbuiltin = "biotac-slide"\ndata_dir = "{home}"\n'
         f'[output]\nfolder = "results"\n' + FAST_TEMPLATE)
-    code, out, err = _run("run", "slide.toml", "--no-progress")
+    code, out, err = run_cli("run", "slide.toml", "--no-progress")
     assert code == 0, err + out
     assert f"first use: fetching {len(files)} data files of biotac-slide" in out + err
     assert all((home / relpath).is_file() for relpath in files)
@@ -207,15 +200,15 @@ def test_a_damaged_download_or_file_is_one_line_naming_it(tmp_path, release):
     home = tmp_path / "home"
     first = next(iter(files))
     (served / first).write_bytes(files[first].replace(b"\n", b"\n0", 1))  # the server's copy changed
-    code, _, err = _run("data", "fetch", "biotac-slide", "--data-dir", home, "--no-progress", "--workers", "1")
+    code, _, err = run_cli("data", "fetch", "biotac-slide", "--data-dir", home, "--no-progress", "--workers", "1")
     line = _error_line(err)
     assert Path(first).name in line and "sha256" in line.lower() and base in line
     assert not (home / first).exists()
     (served / first).write_bytes(files[first])
-    assert _run("data", "fetch", "biotac-slide", "--data-dir", home, "--no-progress")[0] == 0
+    assert run_cli("data", "fetch", "biotac-slide", "--data-dir", home, "--no-progress")[0] == 0
     second = sorted(files)[1]
     (home / second).write_bytes(files[second][:-40])  # damaged in the data home after the fetch
-    code, _, err = _run("convert", "--dataset", "biotac-slide", "--data-dir", home, "--out", tmp_path / "plain")
+    code, _, err = run_cli("convert", "--dataset", "biotac-slide", "--data-dir", home, "--out", tmp_path / "plain")
     line = _error_line(err)
     assert code != 0 and str(home / second) in line and "tzsl data fetch biotac-slide" in line
     assert not (tmp_path / "plain").exists()
@@ -235,7 +228,7 @@ def test_a_registered_but_malformed_csv_names_its_file_and_line(tmp_path, releas
         (home / relpath).write_bytes(content)
     pup = release_registry(tmp_path / "broken.txt", broken, base)
     monkeypatch.setattr(_registry, "registry", lambda: pup)
-    code, _, err = _run("convert", "--dataset", "biotac-slide", "--data-dir", home, "--out", tmp_path / "plain")
+    code, _, err = run_cli("convert", "--dataset", "biotac-slide", "--data-dir", home, "--out", tmp_path / "plain")
     line = _error_line(err)
     assert code != 0 and f"{home / name}:6: a value ('oops') follows the last channel" in line
     shutil.rmtree(home)

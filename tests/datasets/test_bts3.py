@@ -13,14 +13,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
 from tests.datasets.bts3_release import OBJECTS, write_release
-from tests.datasets.fetch_server import registry_of, serve_folder
+from tests.datasets.fetch_server import registered_release, registry_of, run_cli, serve_folder
 from tests.study_settings import FAST_TEMPLATE
-from tzsl.cli import cli
 from tzsl.datasets import (
-    _fetch,
     _registry,
     builtin_data_files,
     dataset_names,
@@ -192,41 +189,32 @@ def test_an_object_or_attribute_left_out_is_refused_in_one_line(tmp_path):
 # ----------------------------------------------------------------------------- the whole way, on a served release
 
 
-def _run(*args) -> tuple[int, str, str]:
-    result = CliRunner().invoke(cli, [str(a) for a in args])
-    return result.exit_code, result.stdout, result.stderr
-
-
 @pytest.fixture
 def served(tmp_path, monkeypatch):
     """The small release served on 127.0.0.1 and registered instead of tzsl's registry; yields
     (served folder, registered path -> content)."""
     folder = tmp_path / "served"
     files = write_release(folder)
-    with serve_folder(folder) as (base, _requested):
-        pup = registry_of(tmp_path / "registry.txt", [f"{r} sha256:{hashlib.sha256(c).hexdigest()} {base}/{r}"
-                                                      for r, c in files.items()])
-        monkeypatch.setattr(_registry, "registry", lambda: pup)
-        monkeypatch.setattr(_fetch, "registry", lambda: pup)
+    with registered_release(folder, files, tmp_path / "registry.txt", monkeypatch):
         yield folder, files
 
 
 def test_it_is_a_builtin_catalog_dataset():
     assert "bts3" in dataset_names(convertible=True) and builtin_data_files("bts3") == sorted(BTS3_FILES.values())
-    code, out, _ = _run("datasets", "--json")
+    code, out, _ = run_cli("datasets", "--json")
     assert code == 0 and "bts3" in [d["name"] for d in json.loads(out)]
 
 
 def test_fetch_convert_validate(tmp_path, served):
     _, files = served
     home, plain = tmp_path / "home", tmp_path / "plain"
-    code, out, err = _run("data", "fetch", "bts3", "--data-dir", home, "--no-progress")
+    code, out, err = run_cli("data", "fetch", "bts3", "--data-dir", home, "--no-progress")
     assert code == 0 and "bts3: 0 present, 2 downloaded" in out, err
-    code, out, err = _run("convert", "--dataset", "bts3", "--data-dir", home, "--out", plain)
+    code, out, err = run_cli("convert", "--dataset", "bts3", "--data-dir", home, "--out", plain)
     assert code == 0, err
     n = 2 * 2 * len(OBJECTS)
     assert f"41 classes x 12 attributes, {n} trials, 3 sensor(s), 24 feature columns per sensor" in out
-    code, out, err = _run("validate", plain)
+    code, out, err = run_cli("validate", plain)
     assert code == 0 and out.rstrip().endswith("valid"), err + out
     assert "sensors:    3 (ff, mf, th)" in out and "24 feature columns per sensor" in out
     trials = (plain / "trials.csv").read_text().splitlines()
@@ -243,7 +231,7 @@ def test_a_study_fetches_it_on_first_use_and_runs(tmp_path, served, monkeypatch)
     (tmp_path / "bts3.toml").write_text(
         f'study = "zero-shot"\ndescription = "bts3, small release"\n[dataset]\nbuiltin = "bts3"\n'
         f'data_dir = "{home}"\n[output]\nfolder = "results"\n' + FAST_TEMPLATE)
-    code, out, err = _run("run", "bts3.toml", "--no-progress")
+    code, out, err = run_cli("run", "bts3.toml", "--no-progress")
     assert code == 0, err + out
     assert "first use: fetching 2 data files of bts3" in out + err
     manifest = json.loads((tmp_path / "results" / "manifest.json").read_text())
@@ -257,10 +245,10 @@ def test_a_study_fetches_it_on_first_use_and_runs(tmp_path, served, monkeypatch)
 def test_a_damaged_file_in_the_data_home_is_one_line_naming_it(tmp_path, served):
     _, files = served
     home = tmp_path / "home"
-    assert _run("data", "fetch", "bts3", "--data-dir", home, "--no-progress")[0] == 0
+    assert run_cli("data", "fetch", "bts3", "--data-dir", home, "--no-progress")[0] == 0
     damaged = BTS3_FILES["palm_side"]
     (home / damaged).write_bytes(files[damaged][:-30])
-    code, _, err = _run("convert", "--dataset", "bts3", "--data-dir", home, "--out", tmp_path / "plain")
+    code, _, err = run_cli("convert", "--dataset", "bts3", "--data-dir", home, "--out", tmp_path / "plain")
     lines = [line for line in err.splitlines() if line.strip()]
     assert code != 0 and len(lines) == 1 and lines[0].startswith("tzsl: error: "), err
     assert str(home / damaged) in lines[0] and "tzsl data fetch bts3" in lines[0]

@@ -7,21 +7,17 @@ line for a damaged file."""
 from __future__ import annotations
 
 import csv
-import hashlib
 import json
 import re
 from pathlib import Path
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
-from tests.datasets.fetch_server import registry_of, serve_folder
+from tests.datasets.fetch_server import registered_release, run_cli
 from tests.study_settings import FAST_TEMPLATE
-from tzsl.cli import cli
 from tzsl.datasets import (
     ICUB_GRASP_CHANNELS,
-    _fetch,
     _registry,
     builtin_data_files,
     dataset_names,
@@ -209,41 +205,32 @@ def test_a_malformed_table_is_one_line_naming_it(tmp_path):
 # ----------------------------------------------------------------------------- the whole way, on a served release
 
 
-def _run(*args) -> tuple[int, str, str]:
-    result = CliRunner().invoke(cli, [str(a) for a in args])
-    return result.exit_code, result.stdout, result.stderr
-
-
 @pytest.fixture
 def served(tmp_path, monkeypatch):
     """The small release served on 127.0.0.1 and registered instead of tzsl's registry; yields
     registered path -> content."""
     folder = tmp_path / "served"
     files = write_release(folder)
-    with serve_folder(folder) as (base, _requested):
-        pup = registry_of(tmp_path / "registry.txt", [f"{r} sha256:{hashlib.sha256(c).hexdigest()} {base}/{r}"
-                                                      for r, c in files.items()])
-        monkeypatch.setattr(_registry, "registry", lambda: pup)
-        monkeypatch.setattr(_fetch, "registry", lambda: pup)
+    with registered_release(folder, files, tmp_path / "registry.txt", monkeypatch):
         yield files
 
 
 def test_it_is_a_builtin_catalog_dataset():
     assert "icub-grasp" in dataset_names(convertible=True)
     assert builtin_data_files("icub-grasp") == registered_files(ICUB_GRASP_DIR)
-    code, out, _ = _run("datasets", "--json")
+    code, out, _ = run_cli("datasets", "--json")
     assert code == 0 and "icub-grasp" in [d["name"] for d in json.loads(out)]
 
 
 def test_fetch_convert_validate(tmp_path, served):
     home, plain = tmp_path / "home", tmp_path / "plain"
     n = GRASPS * len(ICUB_GRASP_OBJECTS)
-    code, out, err = _run("data", "fetch", "icub-grasp", "--data-dir", home, "--no-progress")
+    code, out, err = run_cli("data", "fetch", "icub-grasp", "--data-dir", home, "--no-progress")
     assert code == 0 and f"icub-grasp: 0 present, {n} downloaded" in out, err
-    code, out, err = _run("convert", "--dataset", "icub-grasp", "--data-dir", home, "--out", plain)
+    code, out, err = run_cli("convert", "--dataset", "icub-grasp", "--data-dir", home, "--out", plain)
     assert code == 0, err
     assert f"9 classes x 6 attributes, {n} trials, 1 sensor(s), 74 channels per signal file" in out
-    code, out, err = _run("validate", plain)
+    code, out, err = run_cli("validate", plain)
     assert code == 0 and out.rstrip().endswith("valid"), err + out
     assert "sensors:    1 (hand)" in out and "6 distinct attribute rows" in out
     trials = (plain / "trials.csv").read_text().splitlines()
@@ -262,7 +249,7 @@ def test_a_study_fetches_it_on_first_use_and_runs(tmp_path, served, monkeypatch)
     (tmp_path / "icub.toml").write_text(
         f'study = "zero-shot"\ndescription = "icub-grasp, small release"\n[dataset]\nbuiltin = "icub-grasp"\n'
         f'data_dir = "{home}"\n[output]\nfolder = "results"\n' + FAST_TEMPLATE)
-    code, out, err = _run("run", "icub.toml", "--no-progress")
+    code, out, err = run_cli("run", "icub.toml", "--no-progress")
     assert code == 0, err + out
     assert f"first use: fetching {GRASPS * 9} data files of icub-grasp" in out + err
     manifest = json.loads((tmp_path / "results" / "manifest.json").read_text())
@@ -274,10 +261,10 @@ def test_a_study_fetches_it_on_first_use_and_runs(tmp_path, served, monkeypatch)
 
 def test_a_damaged_file_in_the_data_home_is_one_line_naming_it(tmp_path, served):
     home = tmp_path / "home"
-    assert _run("data", "fetch", "icub-grasp", "--data-dir", home, "--no-progress")[0] == 0
+    assert run_cli("data", "fetch", "icub-grasp", "--data-dir", home, "--no-progress")[0] == 0
     damaged = f"{ICUB_GRASP_DIR}book_2.txt"
     (home / damaged).write_bytes(served[damaged][:-30])
-    code, _, err = _run("convert", "--dataset", "icub-grasp", "--data-dir", home, "--out", tmp_path / "plain")
+    code, _, err = run_cli("convert", "--dataset", "icub-grasp", "--data-dir", home, "--out", tmp_path / "plain")
     lines = [line for line in err.splitlines() if line.strip()]
     assert code != 0 and len(lines) == 1 and lines[0].startswith("tzsl: error: "), err
     assert str(home / damaged) in lines[0] and "tzsl data fetch icub-grasp" in lines[0]

@@ -15,14 +15,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from click.testing import CliRunner
 
-from tests.datasets.fetch_server import registry_of, serve_folder
+from tests.datasets.fetch_server import registered_release, registry_of, run_cli
 from tests.datasets.physiclear_release import OBJECTS, constants_source, press_video, write_release
 from tests.study_settings import FAST_TEMPLATE
-from tzsl.cli import cli
 from tzsl.datasets import (
-    _fetch,
     _registry,
     builtin_data_files,
     contact_key_frames,
@@ -208,34 +205,25 @@ def test_a_video_is_described_by_its_key_frames(tmp_path):
 # ----------------------------------------------------------------------------- the whole way, on a served release
 
 
-def _run(*args) -> tuple[int, str, str]:
-    result = CliRunner().invoke(cli, [str(a) for a in args])
-    return result.exit_code, result.stdout, result.stderr
-
-
 @pytest.fixture
 def served(tmp_path, monkeypatch):
     """The small release served on 127.0.0.1 and registered instead of tzsl's registry; yields
     (served folder, registered path -> content)."""
     folder = tmp_path / "served"
     files = write_release(folder)
-    with serve_folder(folder) as (base, _requested):
-        pup = registry_of(tmp_path / "registry.txt", [f"{r} sha256:{hashlib.sha256(c).hexdigest()} {base}/{r}"
-                                                      for r, c in files.items()])
-        monkeypatch.setattr(_registry, "registry", lambda: pup)
-        monkeypatch.setattr(_fetch, "registry", lambda: pup)
+    with registered_release(folder, files, tmp_path / "registry.txt", monkeypatch):
         yield folder, files
 
 
 def test_fetch_convert_validate(tmp_path, served):
     _, files = served
     home, plain = tmp_path / "home", tmp_path / "plain"
-    code, out, err = _run("data", "fetch", "physiclear", "--data-dir", home, "--no-progress")
+    code, out, err = run_cli("data", "fetch", "physiclear", "--data-dir", home, "--no-progress")
     assert code == 0 and f"physiclear: 0 present, {len(files)} downloaded" in out, err
-    code, out, err = _run("convert", "--dataset", "physiclear", "--data-dir", home, "--out", plain)
+    code, out, err = run_cli("convert", "--dataset", "physiclear", "--data-dir", home, "--out", plain)
     assert code == 0, err
     assert f"{len(OBJECTS)} classes x 14 attributes, {2 * len(OBJECTS)} trials, 1 sensor(s)" in out  # no paper, wood
-    code, out, err = _run("validate", plain)
+    code, out, err = run_cli("validate", plain)
     assert code == 0 and out.rstrip().endswith("valid"), err + out
     trials = pd.read_csv(plain / "trials.csv")
     assert trials["trial_id"].tolist()[:2] == ["aluminium_foil_0", "aluminium_foil_1"]
@@ -254,7 +242,7 @@ def test_a_study_fetches_it_on_first_use_and_runs(tmp_path, served, monkeypatch)
     (tmp_path / "physiclear.toml").write_text(
         f'study = "zero-shot"\ndescription = "physiclear, small release"\n[dataset]\nbuiltin = "physiclear"\n'
         f'data_dir = "{home}"\n[output]\nfolder = "results"\n' + FAST_TEMPLATE)
-    code, out, err = _run("run", "physiclear.toml", "--no-progress")
+    code, out, err = run_cli("run", "physiclear.toml", "--no-progress")
     assert code == 0, err + out
     assert f"first use: fetching {2 * len(OBJECTS) + 1} data files of physiclear" in out + err
     manifest = json.loads((tmp_path / "results" / "manifest.json").read_text())
@@ -267,7 +255,7 @@ def test_a_study_fetches_it_on_first_use_and_runs(tmp_path, served, monkeypatch)
 def test_a_damaged_video_is_one_line_naming_it(tmp_path, served, monkeypatch, damage):
     folder, files = served
     home = tmp_path / "home"
-    assert _run("data", "fetch", "physiclear", "--data-dir", home, "--no-progress")[0] == 0
+    assert run_cli("data", "fetch", "physiclear", "--data-dir", home, "--no-progress")[0] == 0
     damaged = "physiclear/dataset/egg_1.mov"
     if damage == "hash":
         (home / damaged).write_bytes(files[damaged][:-30])
@@ -278,7 +266,7 @@ def test_a_damaged_video_is_one_line_naming_it(tmp_path, served, monkeypatch, da
                  for r, c in files.items()]
         pup = registry_of(tmp_path / "registry2.txt", lines)
         monkeypatch.setattr(_registry, "registry", lambda: pup)
-    code, _, err = _run("convert", "--dataset", "physiclear", "--data-dir", home, "--out", tmp_path / "plain")
+    code, _, err = run_cli("convert", "--dataset", "physiclear", "--data-dir", home, "--out", tmp_path / "plain")
     lines = [line for line in err.splitlines() if line.strip()]
     assert code != 0 and len(lines) == 1 and lines[0].startswith("tzsl: error: "), err
     assert str(home / damaged) in lines[0]
