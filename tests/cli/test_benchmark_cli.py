@@ -12,8 +12,9 @@ from click.testing import CliRunner
 from tzsl.cli import cli
 from tzsl.datasets import write_synthetic_dataset
 from tzsl.features import load_features
+from tzsl.studies.benchmark.runner import BENCHMARK_DETECTORS, benchmark_methods
 from tzsl.studies.benchmark.splits import n_test_of, standard_splits
-from tzsl.studies.benchmark.summary import BENCHMARK_FILES, complete_splits
+from tzsl.studies.benchmark.summary import BENCHMARK_FILES, complete_splits, ranked_methods, summarise
 
 METHODS = ("eszsl", "sae")
 #: Standard splits per dataset the tests run (the benchmark's 20 would take minutes).
@@ -77,6 +78,34 @@ def test_two_labs_datasets_give_every_table_and_a_rerun_is_restored(labs, tmp_pa
     assert (out / "scores.csv").read_bytes() == before
 
 
+def _fit_misses(out, dataset: str) -> int:
+    """Fits the dataset's study made (not read back from the fit store), from its manifest's profile."""
+    manifest = json.loads((out / "datasets" / dataset / "manifest.json").read_text())
+    return sum(int(r["calls"]) for r in manifest["config"]["profile"] if r["stage"] == "fit_store.miss")
+
+
+def test_a_new_method_costs_only_its_own_fits_and_a_new_dataset_only_its_study(labs, tmp_path, monkeypatch):
+    def run(cache, out, methods, *datasets):
+        monkeypatch.setenv("TZSL_CACHE_DIR", str(tmp_path / cache))
+        args = ["benchmark", "--no-catalog", *(a for d in datasets for a in ("--add", str(labs / d))),
+                *(a for m in methods for a in ("--method", m)), "--max-splits", "1", "--out", str(tmp_path / out),
+                "--force"]
+        result = CliRunner().invoke(cli, args)
+        assert result.exit_code == 0, result.output
+        return result.output
+
+    monkeypatch.setenv("TZSL_STUDY_CACHE", "1")
+    run("cache", "first", ["eszsl"], "lab_a")
+    run("fresh", "both", ["eszsl", "sae"], "lab_a")
+    run("cache", "second", ["eszsl", "sae"], "lab_a")
+    # the study DAP's and eszsl's fits come back from the fit store: only sae's are made again
+    own = _fit_misses(tmp_path / "both", "lab_a") - _fit_misses(tmp_path / "first", "lab_a")
+    assert own > 0 and _fit_misses(tmp_path / "second", "lab_a") == own
+    # a dataset added to the same benchmark: the one already run is restored from the study cache, the new one runs
+    output = run("cache", "second", ["eszsl", "sae"], "lab_a", "lab_b")
+    assert "lab_a: restored from the study cache" in output and "lab_b: done" in output
+
+
 def test_a_dataset_that_cannot_run_is_recorded_and_the_others_complete(labs, tmp_path):
     broken = tmp_path / "lab_broken"
     broken.mkdir()
@@ -107,6 +136,34 @@ def test_ranks_compare_methods_on_the_splits_every_method_completed():
                          "score": [0.5, np.nan, 0.7, 0.4, 0.6, 0.2], "chance": 0.5})
     kept = complete_splits(long)
     assert kept["split"].eq("2").all() and len(kept) == 3
+
+
+def test_a_method_that_never_ran_on_a_dataset_leaves_its_splits_and_the_ranks_but_not_the_dataset(tmp_path):
+    from tzsl.studies.outputs.results_folder import ResultsDir
+
+    # "auto" cannot run on d2 (NaN on every split): d2 keeps both its splits for a and b, and auto is not ranked
+    rows = [{"dataset": d, "method": m, "split": k, "per_class_accuracy": v, "trial_accuracy": v, "chance": 0.5}
+            for d, by_method in {"d1": {"a": 0.7, "b": 0.5, "auto": 0.6}, "d2": {"a": 0.6, "b": 0.8, "auto": np.nan}}
+            .items() for m, v in by_method.items() for k in ("1", "2")]
+    scores = pd.DataFrame(rows)
+    long = scores.rename(columns={"per_class_accuracy": "score"})
+    kept = complete_splits(long)
+    assert kept.groupby("dataset")["split"].nunique().to_dict() == {"d1": 2, "d2": 2}
+    assert set(kept.loc[kept["dataset"] == "d2", "method"]) == {"a", "b"}
+    assert ranked_methods(kept) == (["a", "b"], {"auto": ["d2"]})
+    summary = summarise(scores, pd.DataFrame(), ResultsDir(tmp_path))
+    assert set(summary["ranks"]["method"]) == {"a", "b"} and summary["ranks"]["n_datasets"].eq(2).all()
+    assert summary["unranked"] == {"auto": ["d2"]}
+
+
+def test_the_benchmark_runs_dap_with_its_detectors_and_any_detector_asked_for():
+    detector, methods = benchmark_methods()
+    daps = [m["detector"] for m in methods if m["name"] == "dap"]
+    assert daps == [d for d in BENCHMARK_DETECTORS if d != detector]
+    _, more = benchmark_methods(["robust-logistic", "rbf-svm", detector])
+    assert [m["detector"] for m in more if m["name"] == "dap"] == [*daps, "robust-logistic"]
+    unknown = CliRunner().invoke(cli, ["benchmark", "--detector", "forest", "--out", "o"])
+    assert unknown.exit_code == 3 and "unknown detector 'forest'" in unknown.output
 
 
 def _scores(means: dict[str, dict[str, float]], n_splits: int = 4) -> pd.DataFrame:

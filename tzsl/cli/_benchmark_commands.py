@@ -19,7 +19,9 @@ from tzsl.cli._root import cli, data_dir_option, force_option, n_jobs_option
               help="Run only the --add datasets (with the benchmark's methods, metrics and split recipe).")
 @click.option("--method", "methods", multiple=True, metavar="NAME",
               help="Run only these registered methods ('tzsl methods'; repeat) [default: every registered method, "
-                   "and DAP with each registered detector].")
+                   "and DAP with the rbf-svm and auto detectors beside the study's].")
+@click.option("--detector", "detectors", multiple=True, metavar="FAMILY",
+              help="Also run DAP with this detector family (e.g. robust-logistic; repeat for several).")
 @click.option("--purpose", type=click.Choice(["select", "confirm"]), default="confirm", show_default=True,
               help="The standard splits to run: confirmation (to report, the leaderboard's) or selection (to "
                    "choose a default on).")
@@ -36,8 +38,8 @@ from tzsl.cli._root import cli, data_dir_option, force_option, n_jobs_option
 @n_jobs_option(study="zero-shot")
 @data_dir_option
 @force_option
-def benchmark(datasets, added, no_catalog, methods, purpose, out, max_splits, defaults_from, list_only, n_jobs,
-              data_dir, force) -> None:
+def benchmark(datasets, added, no_catalog, methods, detectors, purpose, out, max_splits, defaults_from, list_only,
+              n_jobs, data_dir, force) -> None:
     """Run the tactile zero-shot benchmark: every registered method on every catalog dataset.
 
     Each dataset is one zero-shot study on its standard splits (tzsl splits v1), run through the same
@@ -54,6 +56,7 @@ def benchmark(datasets, added, no_catalog, methods, purpose, out, max_splits, de
         for line in list_benchmark():
             click.echo(line)
         return
-    run_benchmark_command(datasets=datasets, added=added, catalog=not no_catalog, methods=methods, purpose=purpose,
+    run_benchmark_command(datasets=datasets, added=added, catalog=not no_catalog, methods=methods,
+                          detectors=detectors, purpose=purpose,
                           out=out, n_jobs=n_jobs, data_dir=data_dir, force=force, max_splits=max_splits,
                           defaults_from=defaults_from, echo=click.echo)

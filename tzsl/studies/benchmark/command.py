@@ -28,7 +28,14 @@ import pandas as pd
 from tzsl.exceptions import ConfigError, PartialRunError
 from tzsl.studies.benchmark.catalog import BENCHMARK_DATASETS, benchmark_datasets
 from tzsl.studies.benchmark.defaults import leave_one_dataset_out
-from tzsl.studies.benchmark.runner import DatasetRun, collect_gzsl, collect_scores, run_benchmark
+from tzsl.studies.benchmark.runner import (
+    DatasetRun,
+    benchmark_methods,
+    collect_gzsl,
+    collect_scores,
+    detector_entries,
+    run_benchmark,
+)
 from tzsl.studies.benchmark.splits import SPLITS_VERSION, standard_index
 from tzsl.studies.benchmark.summary import BENCHMARK_FILES, complete_splits, long_scores, summarise, terminal_lines
 from tzsl.studies.outputs.results_folder import ResultsDir
@@ -52,24 +59,28 @@ def list_benchmark() -> list[str]:
     return lines
 
 
-def _method_entries(methods: Sequence[str]) -> list[dict] | None:
+def _method_entries(methods: Sequence[str], detectors: Sequence[str]) -> list[dict] | None:
+    """The ``[methods] compare`` entries of ``--method`` and ``--detector`` (None: the benchmark's own)."""
     if not methods:
-        return None
+        return benchmark_methods(detectors)[1] if detectors else None
     from tzsl.models import get_method  # noqa: PLC0415
 
     for name in methods:
         get_method(name)  # an unknown name: one line with the registered ones
-    return [{"name": name} for name in methods]
+    return [{"name": name} for name in methods] + detector_entries(detectors)
 
 
 def run_benchmark_command(*, datasets: Sequence[str] = (), added: Sequence[str | os.PathLike] = (),
-                          catalog: bool = True, methods: Sequence[str] = (), purpose: str = "confirm",
+                          catalog: bool = True, methods: Sequence[str] = (),
+                          detectors: Sequence[str] = (), purpose: str = "confirm",
                           out: str | os.PathLike, n_jobs: int = 1, data_dir: str | os.PathLike | None = None,
                           force: bool = False, max_splits: int | None = None,
                           defaults_from: str | os.PathLike | None = None,
                           echo: Callable[[str], None] = print) -> list[DatasetRun]:
     """Run the benchmark into ``out`` and write its tables, figures and manifest (``tzsl benchmark``).
 
+    ``methods`` / ``detectors``: run only these registered methods, and DAP with these detector families
+    beside (only ``detectors``: the benchmark's methods and these detectors too).
     ``defaults_from``: the folder of a ``--purpose select`` benchmark; the defaults are then chosen on its
     selection scores with each dataset left out and scored on this run's confirmation splits
     (:mod:`tzsl.studies.benchmark.defaults`, ``defaults.csv``).
@@ -83,7 +94,7 @@ def run_benchmark_command(*, datasets: Sequence[str] = (), added: Sequence[str |
         After everything is written, when a dataset failed or some (split, method) fits failed.
     """
     chosen = benchmark_datasets(datasets, added, catalog=catalog)
-    entries = _method_entries(methods)
+    entries = _method_entries(methods, detectors)
     results = ResultsDir(Path(out), force=force)
     results.check_free(BENCHMARK_FILES + ((DEFAULTS_FILE,) if defaults_from is not None else ()))
     select = None if defaults_from is None else read_selection(defaults_from)
@@ -106,6 +117,7 @@ def run_benchmark_command(*, datasets: Sequence[str] = (), added: Sequence[str |
                             "max_splits": max_splits,
                             "defaults_from": None if defaults_from is None else str(defaults_from),
                             "methods": entries or "every registered method",
+                            "unranked": summary["unranked"],
                             "datasets": [{"name": r.dataset, "status": r.status, "restored": r.restored,
                                           "results": str(r.results), "failures": r.failures,
                                           "standard_splits": index.get(r.dataset)} for r in runs]})

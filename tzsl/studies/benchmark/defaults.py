@@ -26,6 +26,7 @@ import pandas as pd
 
 from tzsl.exceptions import ConfigError
 from tzsl.studies.benchmark.statistics import mean_ranks
+from tzsl.studies.benchmark.summary import ranked_methods
 
 __all__ = ["AUTO_METHOD", "choose", "is_dap_row", "leave_one_dataset_out"]
 
@@ -39,7 +40,8 @@ def is_dap_row(method: str) -> bool:
 
 
 def choose(select: pd.DataFrame, candidates: Sequence[str] | None = None) -> str:
-    """The rule: the best mean rank over the datasets of ``select`` (ties: higher mean score, then name).
+    """The rule: the best mean rank over the datasets of ``select`` (ties: higher mean score, then name), among the
+    candidates with a score on every one of them.
 
     Parameters
     ----------
@@ -55,8 +57,10 @@ def choose(select: pd.DataFrame, candidates: Sequence[str] | None = None) -> str
         No candidate has a score.
     """
     scores = select if candidates is None else select[select["method"].isin(list(candidates))]
+    ranked, _ = ranked_methods(scores)  # a default must run on every dataset it was chosen on
+    scores = scores[scores["method"].isin(ranked)]
     if scores["score"].notna().sum() == 0:
-        raise ConfigError("no selection score to choose a default on")
+        raise ConfigError("no selection score to choose a default on (no candidate has scores on every dataset)")
     ranks = mean_ranks(scores)
     best = ranks.sort_values(["mean_rank", "mean_score", "method"], ascending=[True, False, True])
     return str(best["method"].iloc[0])

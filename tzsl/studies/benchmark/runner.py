@@ -32,28 +32,62 @@ from tzsl.exceptions import ConfigError, PartialRunError, TzslError, first_line
 from tzsl.studies.benchmark.catalog import BenchmarkDataset
 from tzsl.studies.benchmark.splits import SEED, SPLITS_VERSION, read_standard_splits, standard_splits
 
-__all__ = ["DatasetRun", "benchmark_methods", "collect_gzsl", "collect_scores", "dataset_experiment",
-           "run_benchmark"]
+__all__ = ["BENCHMARK_DETECTORS", "DatasetRun", "benchmark_methods", "collect_gzsl", "collect_scores",
+           "dataset_experiment", "detector_entries", "run_benchmark"]
 
 #: Sub-folders of a benchmark's folder: the experiment files, the split files they read, the studies' results.
 EXPERIMENTS, SPLITS, DATASETS = "experiments", "splits", "datasets"
 
 
-def benchmark_methods() -> tuple[str, list[dict]]:
+#: The DAP detector families the benchmark runs beside the study's own (:data:`~tzsl.models.detectors.STUDY_DETECTOR`):
+#: the DAP paper's ``rbf-svm`` (also the registered ``ensemble``'s member, so its fits are the ensemble's, read
+#: back from the fit store) and ``auto``, the per-dataset choice made on a user's training objects. The tuned
+#: linear families (``logistic``, ``linear-svm``, ``robust-logistic``) lost to ``logistic-c1`` on PHAC-2's
+#: detector benchmark (:data:`tzsl.models.INHERITED_CHOICES`, ``study-detector``) and cost one to three RBF-SVM
+#: banks a split on the larger datasets; ``tzsl benchmark --detector NAME`` adds any of them.
+BENCHMARK_DETECTORS = ("rbf-svm", "auto")
+
+
+def benchmark_methods(detectors: Sequence[str] = ()) -> tuple[str, list[dict]]:
     """The study detector and the ``[methods] compare`` entries of the benchmark: every registered method.
 
     The study's own DAP uses :data:`~tzsl.models.detectors.STUDY_DETECTOR` (the generic default's
     detector); every registered feature method is compared beside it, and the registry's ``dap`` once
-    per other detector it offers (``rbf-svm`` is the DAP paper's), so the detector is an axis of the
-    benchmark too.
+    per detector of :data:`BENCHMARK_DETECTORS` and of ``detectors`` (the detector is an axis of the
+    benchmark: the default's detector is chosen among them).
+
+    Parameters
+    ----------
+    detectors : sequence of str
+        More detector families (:data:`~tzsl.models.detectors.DETECTORS`) to run DAP with.
+
+    Raises
+    ------
+    ConfigError
+        An unknown detector family.
+    """
+    from tzsl.models.detectors import STUDY_DETECTOR  # noqa: PLC0415
+    from tzsl.studies.config import every_feature_method  # noqa: PLC0415
+
+    return STUDY_DETECTOR, [*every_feature_method(), *detector_entries((*BENCHMARK_DETECTORS, *detectors))]
+
+
+def detector_entries(detectors: Sequence[str]) -> list[dict]:
+    """``[methods] compare`` entries of the registry's ``dap`` with each of ``detectors`` (once each), except the
+    study's own detector (its DAP is the study's).
+
+    Raises
+    ------
+    ConfigError
+        An unknown detector family.
     """
     from tzsl.models import DAP_METHOD  # noqa: PLC0415
     from tzsl.models.detectors import DETECTORS, STUDY_DETECTOR  # noqa: PLC0415
-    from tzsl.studies.config import every_feature_method  # noqa: PLC0415
 
-    detectors = list(DETECTORS)
-    return STUDY_DETECTOR, [*every_feature_method(),
-                            *({"name": DAP_METHOD, "detector": d} for d in detectors if d != STUDY_DETECTOR)]
+    unknown = [d for d in detectors if d not in DETECTORS]
+    if unknown:
+        raise ConfigError(f"unknown detector {unknown[0]!r}; choose from {', '.join(DETECTORS)}")
+    return [{"name": DAP_METHOD, "detector": d} for d in dict.fromkeys(detectors) if d != STUDY_DETECTOR]
 
 
 def dataset_experiment(dataset: BenchmarkDataset, folder: str | os.PathLike, purpose: str = "confirm", *,

@@ -26,7 +26,8 @@ from tzsl.studies.benchmark.statistics import (
     per_dataset_table,
 )
 
-__all__ = ["BENCHMARK_FILES", "complete_splits", "long_scores", "reference_method", "summarise", "terminal_lines"]
+__all__ = ["BENCHMARK_FILES", "complete_splits", "long_scores", "ranked_methods", "reference_method", "summarise",
+           "terminal_lines"]
 
 #: What a benchmark writes at the top of its folder (checked free before any fit).
 BENCHMARK_FILES = ("scores.csv", "datasets.csv", "gzsl.csv", "ranks.csv", "friedman.csv", "meta_analysis.csv",
@@ -66,10 +67,13 @@ def _dataset_table(scores: pd.DataFrame, gzsl: pd.DataFrame) -> pd.DataFrame:
 
 
 def complete_splits(long: pd.DataFrame) -> pd.DataFrame:
-    """The rows of the splits on which every method run on their dataset has a score.
+    """The rows of the splits on which every method that ran on their dataset has a score.
 
     Ranks, the Friedman test and the paired effects compare methods on the same splits: a split where
-    one method failed (NaN) is left out for all of them on that dataset (complete cases).
+    one method failed (NaN) is left out for all of them on that dataset (complete cases). A method with no
+    score on any split of a dataset (one that cannot run there, e.g. ``detector="auto"`` with too few
+    training classes for its pseudo-unseen folds) did not run on it: it leaves no split out there, and
+    :func:`ranked_methods` leaves it out of the ranks across datasets.
 
     Parameters
     ----------
@@ -81,9 +85,28 @@ def complete_splits(long: pd.DataFrame) -> pd.DataFrame:
     DataFrame
         The same columns, only complete splits, no NaN score.
     """
+    scored = long["score"].notna()
+    ran = scored.groupby([long["dataset"], long["method"]]).transform("any")
+    long, scored = long[ran], scored[ran]
     methods = long.groupby("dataset")["method"].transform("nunique")
-    present = long["score"].notna().groupby([long["dataset"], long["split"]]).transform("sum")
-    return long[present.eq(methods) & long["score"].notna()].reset_index(drop=True)
+    present = scored.groupby([long["dataset"], long["split"]]).transform("sum")
+    return long[present.eq(methods) & scored].reset_index(drop=True)
+
+
+def ranked_methods(long: pd.DataFrame) -> tuple[list[str], dict[str, list[str]]]:
+    """The methods scored on every dataset of ``long`` (a Friedman block must be complete), and the others.
+
+    Returns
+    -------
+    ranked : list of str
+    unranked : dict
+        ``{method: [datasets it has no score on]}``.
+    """
+    datasets = sorted(long["dataset"].unique())
+    scored = long[long["score"].notna()].groupby("method")["dataset"].agg(set)
+    methods = sorted(long["method"].unique())
+    unranked = {m: [d for d in datasets if d not in scored.get(m, set())] for m in methods}
+    return [m for m in methods if not unranked[m]], {m: ds for m, ds in unranked.items() if ds}
 
 
 def summarise(scores: pd.DataFrame, gzsl: pd.DataFrame, results: Any) -> dict[str, Any]:
@@ -101,16 +124,18 @@ def summarise(scores: pd.DataFrame, gzsl: pd.DataFrame, results: Any) -> dict[st
     -------
     dict
         ``datasets``, ``ranks``, ``friedman`` (DataFrames; ``friedman`` holds one row, or the reason
-        the test could not run), ``meta`` and ``reference`` (the method the forest plot compares with).
-        The per-dataset table reads every score; the ranks, the test and the paired effects the splits
-        every method completed (:func:`complete_splits`).
+        the test could not run), ``meta``, ``reference`` (the method the forest plot compares with) and
+        ``unranked`` (:func:`ranked_methods`: the methods with no score on some dataset, left out of the
+        ranks and the test). The per-dataset table reads every score; the ranks, the test and the paired
+        effects the splits every method completed (:func:`complete_splits`).
     """
     results.write_csv("scores.csv", scores)
     results.write_csv("gzsl.csv", gzsl)
     datasets = _dataset_table(scores, gzsl)
     results.write_csv("datasets.csv", datasets)
     long = complete_splits(long_scores(scores))
-    ranks = mean_ranks(long)
+    ranked, unranked = ranked_methods(long)
+    ranks = mean_ranks(long[long["method"].isin(ranked)])
     results.write_csv("ranks.csv", ranks)
     n_datasets = int(ranks["n_datasets"].iloc[0]) if len(ranks) else 0
     try:
@@ -133,7 +158,8 @@ def summarise(scores: pd.DataFrame, gzsl: pd.DataFrame, results: Any) -> dict[st
     reference = reference_method(long["method"], ranks)
     results.write_file("meta_analysis.png", lambda path: meta_analysis_figure(
         meta, reference, path, title=f"paired difference from {reference}, pooled over datasets (95% CI)"))
-    return {"datasets": datasets, "ranks": ranks, "friedman": friedman, "meta": meta, "reference": reference}
+    return {"datasets": datasets, "ranks": ranks, "friedman": friedman, "meta": meta, "reference": reference,
+            "unranked": unranked}
 
 
 def terminal_lines(summary: dict[str, Any]) -> list[str]:
@@ -152,6 +178,8 @@ def terminal_lines(summary: dict[str, Any]) -> list[str]:
         lines.append(f"{shown}; chance {best['chance']:.3f} ({int(best['n_splits'])} splits)")
     top = ", ".join(f"{r.method} {r.mean_rank:.2f}" for r in ranks.head(SHOWN_RANKS).itertuples())
     lines.append(f"mean rank over {int(friedman['n_datasets'])} dataset(s), best first: {top}")
+    if summary.get("unranked"):
+        lines.append("not ranked, no score on some dataset (manifest): " + ", ".join(summary["unranked"]))
     if friedman["note"]:
         lines.append(f"note: no Friedman test: {friedman['note']}")
     else:
