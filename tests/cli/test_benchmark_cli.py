@@ -159,7 +159,10 @@ def test_a_method_that_never_ran_on_a_dataset_leaves_its_splits_and_the_ranks_bu
 def test_the_benchmark_runs_dap_with_its_detectors_and_any_detector_asked_for():
     detector, methods = benchmark_methods()
     daps = [m["detector"] for m in methods if m["name"] == "dap"]
-    assert daps == [d for d in BENCHMARK_DETECTORS if d != detector]
+    assert daps == [d for d in BENCHMARK_DETECTORS["confirm"] if d != detector] and "auto" in daps
+    # auto is what a default is compared with on the confirmation splits, not a candidate chosen on selection ones
+    _, select = benchmark_methods(purpose="select")
+    assert [m["detector"] for m in select if m["name"] == "dap"] == ["rbf-svm"]
     _, more = benchmark_methods(["robust-logistic", "rbf-svm", detector])
     assert [m["detector"] for m in more if m["name"] == "dap"] == [*daps, "robust-logistic"]
     unknown = CliRunner().invoke(cli, ["benchmark", "--detector", "forest", "--out", "o"])
@@ -186,7 +189,9 @@ def test_leave_one_dataset_out_scores_a_choice_on_the_dataset_it_did_not_see(tmp
     means = {"d1": {"eszsl": 0.6, "sae": 0.5, "dap-avg-logistic-c1": 0.4, "dap-avg": 0.45},
              "d2": {"eszsl": 0.7, "sae": 0.5, "dap-avg-logistic-c1": 0.55, "dap-avg": 0.5},
              "d3": {"eszsl": 0.3, "sae": 0.5, "dap-avg-logistic-c1": 0.35, "dap-avg": 0.4}}
-    select, confirm = _scores(means), _scores(means)
+    select = _scores(means)
+    # auto runs on the confirmation splits only (and not on d2): shown beside, never chosen nor the hindsight best
+    confirm = _scores({d: {**m, **({} if d == "d2" else {"dap-avg-auto": 0.9})} for d, m in means.items()})
     results = ResultsDir(tmp_path)
     lines = write_defaults(select, confirm, results)
     table = pd.read_csv(tmp_path / "defaults.csv")
@@ -199,6 +204,8 @@ def test_leave_one_dataset_out_scores_a_choice_on_the_dataset_it_did_not_see(tmp
     detector = table[table["choice"] == "detector"].set_index("dataset")
     assert set(detector["chosen"]) <= {"dap-avg", "dap-avg-logistic-c1"}
     assert (table["regret"] >= -1e-12).all()
+    assert "dap-avg-auto" not in set(table["chosen"]) | set(table["best"])
+    assert default.loc["d3", "auto_score"] == pytest.approx(0.9, abs=0.02) and np.isnan(default.loc["d2", "auto_score"])
     assert lines[0].startswith("defaults chosen with each dataset left out")
 
 

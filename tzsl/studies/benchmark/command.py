@@ -59,10 +59,10 @@ def list_benchmark() -> list[str]:
     return lines
 
 
-def _method_entries(methods: Sequence[str], detectors: Sequence[str]) -> list[dict] | None:
+def _method_entries(methods: Sequence[str], detectors: Sequence[str], purpose: str) -> list[dict] | None:
     """The ``[methods] compare`` entries of ``--method`` and ``--detector`` (None: the benchmark's own)."""
     if not methods:
-        return benchmark_methods(detectors)[1] if detectors else None
+        return benchmark_methods(detectors, purpose)[1] if detectors else None
     from tzsl.models import get_method  # noqa: PLC0415
 
     for name in methods:
@@ -94,7 +94,7 @@ def run_benchmark_command(*, datasets: Sequence[str] = (), added: Sequence[str |
         After everything is written, when a dataset failed or some (split, method) fits failed.
     """
     chosen = benchmark_datasets(datasets, added, catalog=catalog)
-    entries = _method_entries(methods, detectors)
+    entries = _method_entries(methods, detectors, purpose)
     results = ResultsDir(Path(out), force=force)
     results.check_free(BENCHMARK_FILES + ((DEFAULTS_FILE,) if defaults_from is not None else ()))
     select = None if defaults_from is None else read_selection(defaults_from)

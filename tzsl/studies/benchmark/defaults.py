@@ -87,7 +87,8 @@ def leave_one_dataset_out(select: pd.DataFrame, confirm: pd.DataFrame, default_m
         One row per (dataset, choice), choice ``default`` (among every method) or ``detector`` (among
         the DAP rows): ``chosen`` (on the other datasets' selection splits), ``seen`` (those datasets),
         ``chosen_score`` (its mean per-class accuracy on the left-out dataset's confirmation splits),
-        ``best`` and ``best_score`` (the hindsight best there, among the same candidates), ``regret``
+        ``best`` and ``best_score`` (the hindsight best there, among the same candidates: every method but
+        :data:`AUTO_METHOD`, which is compared with a default, not a candidate for one), ``regret``
         (best minus chosen, >= 0), and the same score and regret for ``auto`` (:data:`AUTO_METHOD`)
         and ``shipped`` (``default_method``); NaN where that method has no score.
     """
@@ -99,7 +100,8 @@ def leave_one_dataset_out(select: pd.DataFrame, confirm: pd.DataFrame, default_m
             raise ConfigError(f"leave-one-dataset-out needs selection scores of a dataset other than {dataset!r}")
         seen = ", ".join(sorted(others["dataset"].unique()))
         on = means.loc[dataset].dropna()
-        for choice, candidates in (("default", list(on.index)), ("detector", [m for m in on.index if is_dap_row(m)])):
+        eligible = [m for m in on.index if m != AUTO_METHOD]  # auto is compared with a default, not one
+        for choice, candidates in (("default", eligible), ("detector", [m for m in eligible if is_dap_row(m)])):
             if not candidates:
                 continue
             chosen = choose(others, candidates)

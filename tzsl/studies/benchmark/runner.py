@@ -39,27 +39,31 @@ __all__ = ["BENCHMARK_DETECTORS", "DatasetRun", "benchmark_methods", "collect_gz
 EXPERIMENTS, SPLITS, DATASETS = "experiments", "splits", "datasets"
 
 
-#: The DAP detector families the benchmark runs beside the study's own (:data:`~tzsl.models.detectors.STUDY_DETECTOR`):
-#: the DAP paper's ``rbf-svm`` (also the registered ``ensemble``'s member, so its fits are the ensemble's, read
-#: back from the fit store) and ``auto``, the per-dataset choice made on a user's training objects. The tuned
-#: linear families (``logistic``, ``linear-svm``, ``robust-logistic``) lost to ``logistic-c1`` on PHAC-2's
-#: detector benchmark (:data:`tzsl.models.INHERITED_CHOICES`, ``study-detector``) and cost one to three RBF-SVM
-#: banks a split on the larger datasets; ``tzsl benchmark --detector NAME`` adds any of them.
-BENCHMARK_DETECTORS = ("rbf-svm", "auto")
+#: The DAP detector families the benchmark runs beside the study's own (:data:`~tzsl.models.detectors.STUDY_DETECTOR`),
+#: by purpose: the DAP paper's ``rbf-svm`` (also the registered ``ensemble``'s member, so its fits are the
+#: ensemble's, read back from the fit store) on both; ``auto``, the per-dataset choice made on a user's training
+#: objects, on the confirmation splits only: it is what a default chosen across datasets is compared with there
+#: (``defaults.csv``), not a candidate for it, and it costs two to three RBF-SVM banks a split (a bank per
+#: candidate family and pseudo-unseen fold). The tuned linear families (``logistic``, ``linear-svm``,
+#: ``robust-logistic``) lost to ``logistic-c1`` on PHAC-2's detector benchmark
+#: (:data:`tzsl.models.INHERITED_CHOICES`, ``study-detector``) and cost one to three RBF-SVM banks a split on the
+#: larger datasets; ``tzsl benchmark --detector NAME`` adds any of them.
+BENCHMARK_DETECTORS: dict[str, tuple[str, ...]] = {"select": ("rbf-svm",), "confirm": ("rbf-svm", "auto")}
 
 
-def benchmark_methods(detectors: Sequence[str] = ()) -> tuple[str, list[dict]]:
+def benchmark_methods(detectors: Sequence[str] = (), purpose: str = "confirm") -> tuple[str, list[dict]]:
     """The study detector and the ``[methods] compare`` entries of the benchmark: every registered method.
 
     The study's own DAP uses :data:`~tzsl.models.detectors.STUDY_DETECTOR` (the generic default's
     detector); every registered feature method is compared beside it, and the registry's ``dap`` once
-    per detector of :data:`BENCHMARK_DETECTORS` and of ``detectors`` (the detector is an axis of the
-    benchmark: the default's detector is chosen among them).
+    per detector of :data:`BENCHMARK_DETECTORS` (of the run's ``purpose``) and of ``detectors`` (the
+    detector is an axis of the benchmark: the default's detector is chosen among them).
 
     Parameters
     ----------
     detectors : sequence of str
         More detector families (:data:`~tzsl.models.detectors.DETECTORS`) to run DAP with.
+    purpose : {"select", "confirm"}
 
     Raises
     ------
@@ -69,7 +73,8 @@ def benchmark_methods(detectors: Sequence[str] = ()) -> tuple[str, list[dict]]:
     from tzsl.models.detectors import STUDY_DETECTOR  # noqa: PLC0415
     from tzsl.studies.config import every_feature_method  # noqa: PLC0415
 
-    return STUDY_DETECTOR, [*every_feature_method(), *detector_entries((*BENCHMARK_DETECTORS, *detectors))]
+    return STUDY_DETECTOR, [*every_feature_method(),
+                            *detector_entries((*BENCHMARK_DETECTORS[purpose], *detectors))]
 
 
 def detector_entries(detectors: Sequence[str]) -> list[dict]:
@@ -124,7 +129,7 @@ def dataset_experiment(dataset: BenchmarkDataset, folder: str | os.PathLike, pur
         splits = [s for s in standard_splits(table) if s.name.startswith(f"{purpose}-")]
     split_file = _write_if_changed(splits[:max_splits],
                                    ensure_folder(folder / SPLITS) / f"{dataset.name}.{purpose}.csv")
-    detector, default_methods = benchmark_methods()
+    detector, default_methods = benchmark_methods(purpose=purpose)
     compare = list(default_methods if methods is None else methods)
     source = {**dataset.dataset_table(), **({} if data_dir is None else {"data_dir": str(Path(data_dir).resolve())})}
     tables = {
