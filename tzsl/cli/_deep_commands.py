@@ -120,21 +120,28 @@ def deep_model_params(*, epochs, lam, backbone, weights_path, finetune, image_si
 
 def train_deep_values(out: Path, results: Path | None, config: str, attributes: str, gelsight_root: Path | None,
                       conditions: tuple[str, ...], data_dir: Path | None, seed: int, no_progress: bool,
-                      lam, **model_options) -> dict:
+                      lam, dataset: str = "fabric", **model_options) -> dict:
     """``tzsl train-deep``'s options as the keys of a ``study = "fabric-deep"`` experiment."""
     from tzsl.studies.config import option_values  # noqa: PLC0415
 
     if conditions and gelsight_root is None:
         raise ConfigError("--condition needs --gelsight-root")
-    return {
+    fit = {
         "output.folder": str(results if results is not None else (out.parent if str(out.parent) else Path("."))),
-        "output.model": str(out), "splits.configs": [int(config)], "splits.n_seeds": 1,
-        "methods.embedding_lambdas": [parse_lam(str(lam))], "dataset.attributes": attributes,
-        "dataset.gelsight_root": None if gelsight_root is None else str(gelsight_root),
-        "features.gelsight_conditions": list(conditions) or None,
+        "output.model": str(out), "splits.n_seeds": 1, "methods.embedding_lambdas": [parse_lam(str(lam))],
         "methods.model": deep_model_params(lam=lam, **model_options),
         **option_values("fabric-deep", {"seed": seed, "data_dir": data_dir, "progress": not no_progress}),
     }
+    if dataset == "physiclear":
+        fabric_only = [name for name, given in (("--config", config != "1"), ("--attributes", attributes != "a8"),
+                                                ("--gelsight-root", gelsight_root is not None)) if given]
+        if fabric_only:
+            raise ConfigError(f"{', '.join(fabric_only)}: fabric data only; --dataset physiclear reads its own "
+                              "videos, class-attribute table and object split")
+        return {**fit, "dataset.builtin": "physiclear"}
+    return {**fit, "splits.configs": [int(config)], "dataset.attributes": attributes,
+            "dataset.gelsight_root": None if gelsight_root is None else str(gelsight_root),
+            "features.gelsight_conditions": list(conditions) or None}
 
 
 @cli.command("train-deep")
@@ -143,6 +150,10 @@ def train_deep_values(out: Path, results: Path | None, config: str, attributes: 
 @click.option("--results", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="Folder of the run's tables (fabric_deep_runs.csv, fabric_deep_table.csv, manifest) "
                    "[default: the bundle's folder].")
+@click.option("--dataset", type=click.Choice(["fabric", "physiclear"]), default="fabric", show_default=True,
+              help="fabric: the fabric depth images (or --gelsight-root); physiclear: the 5 contact key frames of "
+                   "PhysiCLeAR's GelSight videos, fitted on the paper's training objects and scored on its test "
+                   "objects (fetch: tzsl data fetch physiclear).")
 @click.option("--config", "config", type=click.Choice(["1", "2"]), default="1", show_default=True,
               help="Fabric zero-shot split: 1 = the paper's (test groups 0, 5, 7), 2 = test groups 0, 4, 7.")
 @click.option("--attributes", type=click.Choice(["a8", "a4", "a12", "three_value_a8", "three_value_a8v2"]),
@@ -157,15 +168,15 @@ def train_deep_values(out: Path, results: Path | None, config: str, attributes: 
 @seed_option(study=None)
 @force_option
 @no_progress_option
-def train_deep(out: Path, results: Path | None, config: str, attributes: str, gelsight_root: Path | None,
-               conditions: tuple[str, ...], data_dir: Path | None, seed: int, force: bool, no_progress: bool,
-               **model_options) -> None:
+def train_deep(out: Path, results: Path | None, dataset: str, config: str, attributes: str,
+               gelsight_root: Path | None, conditions: tuple[str, ...], data_dir: Path | None, seed: int, force: bool,
+               no_progress: bool, **model_options) -> None:
     """Train the CNN + LSTM attribute model (fabric paper), save it, and write its train/test accuracy.
 
     A front-end of the fabric-deep study: the same as 'tzsl run' of a study = "fabric-deep" file with
     one config, one lambda, one seed and [output] model = OUT. Sequences: each fabric's depth images
     in capture order (5 evenly spaced), or the 5 key frames of every press video under
-    --gelsight-root.
+    --gelsight-root, or (--dataset physiclear) the 5 contact key frames of every PhysiCLeAR video.
     """
     from tzsl.studies.config import config_from_options  # noqa: PLC0415
     from tzsl.studies.engine import run_experiment  # noqa: PLC0415
@@ -173,7 +184,7 @@ def train_deep(out: Path, results: Path | None, config: str, attributes: str, ge
     if out.exists() and not force:
         raise ConfigError(f"{out} already exists; use --force to overwrite it")
     values = train_deep_values(out, results, config, attributes, gelsight_root, conditions, data_dir, seed,
-                               no_progress, **model_options)
+                               no_progress, dataset=dataset, **model_options)
     require_torch()
     folder, _ = run_experiment(config_from_options("fabric-deep", values), force=force, echo=click.echo)
     click.echo(f"wrote {out} and {', '.join(p.name for p in folder.written)} to {folder.root}")

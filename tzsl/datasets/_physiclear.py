@@ -50,7 +50,7 @@ from tzsl.exceptions import DataFileError
 
 __all__ = ["CONTACT_LEVEL", "N_KEY_FRAMES", "PHYSICLEAR_SENSOR", "PHYSICLEAR_SETTINGS", "PHYSICLEAR_VIDEO_DIR",
            "NoContactError", "contact_key_frames", "convert_physiclear", "describe_physiclear_video",
-           "physiclear_videos"]
+           "physiclear_key_frames", "physiclear_videos"]
 
 #: The registry folder of the videos.
 PHYSICLEAR_VIDEO_DIR = f"{PHYSICLEAR}/dataset/"
@@ -133,6 +133,42 @@ def contact_key_frames(difference: np.ndarray, *, n_key: int = N_KEY_FRAMES, lev
     return np.floor(np.linspace(first, last, n_key) + 0.5).astype(np.int64)
 
 
+def physiclear_key_frames(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
+    """The imprints of one video's key frames (module docstring): every key frame's grey image minus the first's.
+
+    The one key-frame rule of ``physiclear``: the texture descriptors (:func:`describe_physiclear_video`) and
+    the CNN + LSTM of the ``fabric-deep`` study (``[dataset] builtin = "physiclear"``) both read these.
+
+    Parameters
+    ----------
+    path : path-like
+        A video file.
+
+    Returns
+    -------
+    images : ndarray of shape (N_KEY_FRAMES, H, W), float64
+        Grey key frame minus grey first frame (:func:`skimage.color.rgb2gray`, so in [-1, 1]), in time order.
+    keys : ndarray of shape (N_KEY_FRAMES,), int64
+        Their 0-based frame indices (:func:`contact_key_frames`).
+
+    Raises
+    ------
+    DataFileError
+        An unreadable video or one whose frames are not RGB (one line naming it); :class:`NoContactError`
+        (a DataFileError) for one whose contact cannot give the key frames.
+    """
+    # tzsl.features imports tzsl.datasets: imported here, when a video is read, not at import time
+    from skimage.color import rgb2gray  # noqa: PLC0415 - scikit-image is slow to import; only reading videos needs it
+
+    from tzsl.features import frame_differences  # noqa: PLC0415 - tzsl.features imports tzsl.datasets
+
+    video = read_video(path)
+    if video.ndim != 4 or video.shape[-1] != 3:
+        raise DataFileError(path, f"decoded frames of shape {video.shape[1:]}; expected RGB (H, W, 3)")
+    keys = contact_key_frames(frame_differences(video, "mean_abs", source=str(path)), source=path)
+    return rgb2gray(video[keys]) - rgb2gray(video[0])[None], keys
+
+
 def describe_physiclear_video(path: str | os.PathLike, descriptor=None) -> tuple[np.ndarray, list[str]]:
     """The features of one video (module docstring).
 
@@ -156,16 +192,9 @@ def describe_physiclear_video(path: str | os.PathLike, descriptor=None) -> tuple
         An unreadable video (one line naming it); :class:`NoContactError` (a DataFileError) for one whose
         contact cannot give the key frames.
     """
-    # tzsl.features imports tzsl.datasets: imported here, when a video is described, not at import time
-    from skimage.color import rgb2gray  # noqa: PLC0415 - scikit-image is slow to import; only conversion needs it
+    from tzsl.features import TextureDescriptor  # noqa: PLC0415 - tzsl.features imports tzsl.datasets
 
-    from tzsl.features import TextureDescriptor, frame_differences  # noqa: PLC0415 - tzsl.features imports tzsl.datasets
-
-    video = read_video(path)
-    if video.ndim != 4 or video.shape[-1] != 3:
-        raise DataFileError(path, f"decoded frames of shape {video.shape[1:]}; expected RGB (H, W, 3)")
-    keys = contact_key_frames(frame_differences(video, "mean_abs", source=str(path)), source=path)
-    images = rgb2gray(video[keys]) - rgb2gray(video[0])[None]
+    images, keys = physiclear_key_frames(path)
     descriptor = TextureDescriptor() if descriptor is None else descriptor
     features = descriptor.fit_transform(images[None])[0]
     names = [f"key{k}_{name}" for k in range(1, len(keys) + 1) for name in descriptor.feature_names_per_image_]

@@ -50,9 +50,10 @@ from tzsl.exceptions import ConfigError, DataFileError, first_line
 
 __all__ = ["ATTRIBUTE_TABLE", "CONSTANTS_FILE", "ENCODINGS", "MIN_MATERIAL_OBJECTS", "PHYSICLEAR",
            "PHYSICLEAR_COMMIT", "PROPERTIES", "SPLIT_FILE", "SPLIT_VARIABLES", "OctopiConstants",
-           "PhysiclearTable", "physiclear_records", "physiclear_split_file", "physiclear_split_roles",
-           "physiclear_splits_from_constants", "physiclear_split_text",
-           "read_octopi_constants", "read_physiclear_attributes", "write_physiclear_attributes"]
+           "PhysiclearTable", "physiclear_distinct_objects", "physiclear_kept_attributes", "physiclear_records",
+           "physiclear_split_file", "physiclear_split_roles", "physiclear_splits_from_constants",
+           "physiclear_split_text", "read_octopi_constants", "read_physiclear_attributes",
+           "write_physiclear_attributes"]
 
 #: The dataset's registry folder.
 PHYSICLEAR = "physiclear"
@@ -320,15 +321,42 @@ def physiclear_split_text(roles: dict[str, list[str]], classes: pd.DataFrame) ->
     for split, train, test in (("physiclear-validation", roles["train"], roles["validation"]),
                                ("physiclear-test", roles["train"] + roles["validation"], roles["test"])):
         writer.writerows((split, o, "train") for o in train)
-        positives = classes.loc[train].sum()
-        kept = classes.columns[(positives >= MIN_TRAIN_POSITIVES) & (positives < len(train))]
-        rows: set[tuple[int, ...]] = set()
-        for o in test:
-            row = tuple(int(v) for v in classes.loc[o, kept])
-            if row not in rows:
-                writer.writerow((split, o, "test"))
-            rows.add(row)
+        writer.writerows((split, o, "test") for o in physiclear_distinct_objects(classes, train, test))
     return buffer.getvalue()
+
+
+def physiclear_kept_attributes(classes: pd.DataFrame, train: list[str]) -> list[str]:
+    """The attributes the study's default rule keeps when ``train`` are the training objects: at least
+    :data:`MIN_TRAIN_POSITIVES` positive and one negative training object.
+
+    Parameters
+    ----------
+    classes : DataFrame (n_objects, n_attributes) of 0/1
+        The class-attribute rows, indexed by object.
+    train : list of str
+        Training objects (rows of ``classes``).
+
+    Returns
+    -------
+    list of str
+        The kept columns, in the table's order.
+    """
+    positives = classes.loc[train].sum()
+    return classes.columns[(positives >= MIN_TRAIN_POSITIVES) & (positives < len(train))].tolist()
+
+
+def physiclear_distinct_objects(classes: pd.DataFrame, train: list[str], test: list[str]) -> list[str]:
+    """``test`` without every object whose row over :func:`physiclear_kept_attributes` of ``train`` repeats an
+    earlier test object's (zero-shot learning cannot tell two classes with one attribute row apart), in order."""
+    kept = physiclear_kept_attributes(classes, train)
+    rows: set[tuple[int, ...]] = set()
+    out = []
+    for o in test:
+        row = tuple(int(v) for v in classes.loc[o, kept])
+        if row not in rows:
+            out.append(o)
+        rows.add(row)
+    return out
 
 
 def physiclear_split_roles(path: str | os.PathLike | None = None) -> dict[str, list[str]]:

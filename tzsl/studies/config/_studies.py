@@ -135,6 +135,26 @@ class FabricStudy(Section):
 # --------------------------------------------------------------------------- fabric-deep
 
 
+class DeepDataset(FabricDataset):
+    """The fabric data (default), or ``builtin = "physiclear"``: the 5 contact key frames of PhysiCLeAR's
+    GelSight videos, its class-attribute table and the paper's object split
+    (:mod:`tzsl.studies.fabric.deep_physiclear`)."""
+
+    builtin: Literal["fabric", "physiclear"] = Field(  # type: ignore[assignment]
+        default="fabric", description='"fabric" (depth images or gelsight_root) or "physiclear" (GelSight videos)')
+
+    @model_validator(mode="after")
+    def _physiclear_reads_its_own_table(self):
+        if self.builtin != "physiclear":
+            return self
+        fabric_only = [k for k, set_ in (("attributes", self.attributes != "a8"),
+                                         ("gelsight_root", self.gelsight_root is not None)) if set_]
+        if fabric_only:
+            raise ValueError(f"{', '.join(fabric_only)}: fabric data only; builtin = 'physiclear' reads its own "
+                             "videos and class-attribute table")
+        return self
+
+
 class DeepMethods(Section):
     embedding_lambdas: list[float | Literal["inf"]] = Field(default=PAPER_LAMBDAS, description="the paper's grid")
     model: dict[str, Any] = Field(default_factory=dict, description="DeepAttributeEmbedding parameters "
@@ -177,7 +197,7 @@ class FabricDeepStudy(Section):
 
     study: Literal["fabric-deep"] = "fabric-deep"
     description: str = ""
-    dataset: FabricDataset = Field(default_factory=FabricDataset)
+    dataset: DeepDataset = Field(default_factory=DeepDataset)
     features: DeepFeatures = Field(default_factory=DeepFeatures)
     methods: DeepMethods = Field(default_factory=DeepMethods)
     splits: DeepSplits = Field(default_factory=DeepSplits)
@@ -188,7 +208,8 @@ class FabricDeepStudy(Section):
     def _one_fit_for_a_model(self):
         if self.output.model is None:
             return self
-        many = [f"{key} has {n}" for key, n in (("splits.configs", len(self.splits.configs)),
+        physiclear = self.dataset.builtin == "physiclear"  # one object split: configs are the fabric's
+        many = [f"{key} has {n}" for key, n in (("splits.configs", 1 if physiclear else len(self.splits.configs)),
                                                   ("methods.embedding_lambdas", len(self.methods.embedding_lambdas)),
                                                   ("splits.n_seeds", self.splits.n_seeds)) if n != 1]
         conditions = self.features.gelsight_conditions

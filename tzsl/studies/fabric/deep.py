@@ -45,6 +45,7 @@ __all__ = [
     "fabric_depth_sequences",
     "format_deep_result",
     "gelsight_video_sequences",
+    "deep_table",
     "format_deep_table",
     "load_deep_sequences",
     "run_deep_fabric",
@@ -409,16 +410,7 @@ def run_deep_fabric_study(
 
                         save_deep_bundle(r.model, save_model, force=out.force)
     runs = pd.DataFrame(rows)
-    stats = ["accuracy", "per_class_mean_accuracy", "train_accuracy", "seconds_per_epoch"]
-    summary = summarise_over_splits(runs[["seed", *keys, *stats]], split_column="seed", by=keys, ddof=0)
-    mean = summary[summary["seed"] == "mean"].drop(columns="seed").reset_index(drop=True)
-    std = summary.loc[summary["seed"] == "std", stats].fillna(0.0).reset_index(drop=True)
-    table = pd.concat([mean, std.add_suffix("_std")], axis=1)
-    table.insert(4, "n_seeds", runs.groupby(keys, sort=False).size().to_numpy())
-    firsts = runs.groupby(keys, sort=False)[["zero_shot", "test_groups"]].first().reset_index(drop=True)
-    table.insert(4, "zero_shot", firsts["zero_shot"].to_numpy())
-    table.insert(5, "test_groups", firsts["test_groups"].to_numpy())
-    table = add_trust_columns(table.assign(seed="mean"), outcomes, per_split_rows=False).drop(columns="seed")
+    table = deep_table(runs, outcomes, ["zero_shot", "test_groups"])
     out.write_csv(DEEP_RUNS_FILE, runs)
     out.write_csv(DEEP_TABLE_FILE, table)
     data_files = sorted({Path(p) for _, seqs in sources if "path" in seqs.table for p in seqs.table["path"]})
@@ -431,6 +423,38 @@ def run_deep_fabric_study(
             "model_params": {k: str(v) for k, v in DeepAttributeEmbedding(**params).get_params().items()}},
             "data_files": list(data_files)})
     return {"runs": runs, "table": table}
+
+
+def deep_table(runs: pd.DataFrame, outcomes: Outcomes, carried: list[str]) -> pd.DataFrame:
+    """The deep study's table: mean and std over seeds of every (``outcomes.by``) row of ``runs``, with intervals.
+
+    Parameters
+    ----------
+    runs : DataFrame
+        One row per fit: ``seed``, the key columns ``outcomes.by`` (4 of them), ``carried``, ``accuracy``,
+        ``per_class_mean_accuracy``, ``train_accuracy``, ``seconds_per_epoch``.
+    outcomes : Outcomes
+        The test trials of every fit (``split_column="seed"``; :func:`tzsl.evaluation.add_trust_columns`).
+    carried : list of str
+        Columns of ``runs`` constant within a key, carried to the table after the keys.
+
+    Returns
+    -------
+    DataFrame
+        One row per key: the keys, ``carried``, ``n_seeds``, the means, their ``<col>_ci95_low`` /
+        ``<col>_ci95_high`` (bootstrap over seeds and test classes), ``<col>_std`` and ``chance``.
+    """
+    keys = list(outcomes.by)
+    stats = ["accuracy", "per_class_mean_accuracy", "train_accuracy", "seconds_per_epoch"]
+    summary = summarise_over_splits(runs[["seed", *keys, *stats]], split_column="seed", by=keys, ddof=0)
+    mean = summary[summary["seed"] == "mean"].drop(columns="seed").reset_index(drop=True)
+    std = summary.loc[summary["seed"] == "std", stats].fillna(0.0).reset_index(drop=True)
+    table = pd.concat([mean, std.add_suffix("_std")], axis=1)
+    table.insert(len(keys), "n_seeds", runs.groupby(keys, sort=False).size().to_numpy())
+    firsts = runs.groupby(keys, sort=False)[carried].first().reset_index(drop=True)
+    for i, column in enumerate(carried):
+        table.insert(len(keys) + i, column, firsts[column].to_numpy())
+    return add_trust_columns(table.assign(seed="mean"), outcomes, per_split_rows=False).drop(columns="seed")
 
 
 def format_deep_table(table: pd.DataFrame) -> str:

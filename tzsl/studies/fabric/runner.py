@@ -49,6 +49,17 @@ def run_fabric_deep(exp: Experiment, results: ResultsDir, say: Callable[[str], N
 
     c = exp.config
     record: dict = {"study_kind": "fabric-deep"}
+    if c.dataset.builtin == "physiclear":
+        from tzsl.studies.fabric.deep_physiclear import (  # noqa: PLC0415
+            format_physiclear_deep_table,
+            run_deep_physiclear_study,
+        )
+
+        tables = run_deep_physiclear_study(results, c, data_dir=exp.resolve(c.dataset.data_dir),
+                                           save_model=exp.resolve(c.output.model), record=record)
+        say("\nPhysiCLeAR unseen objects, CNN + LSTM over the lambda grid (fitted on the training objects; "
+            "* = chosen on validation)\n" + format_physiclear_deep_table(tables["table"]))
+        return StudyRun(dict(tables), record, record.pop("data_files"))
     tables = run_deep_fabric_study(results, c, data_dir=exp.resolve(c.dataset.data_dir),
                                    gelsight_root=exp.resolve(c.dataset.gelsight_root),
                                    save_model=exp.resolve(c.output.model), record=record)
