@@ -241,9 +241,12 @@ def test_a_study_fetches_it_on_first_use_and_runs(tmp_path, served, monkeypatch)
     home.mkdir()
     (tmp_path / "physiclear.toml").write_text(
         f'study = "zero-shot"\ndescription = "physiclear, small release"\n[dataset]\nbuiltin = "physiclear"\n'
-        f'data_dir = "{home}"\n[output]\nfolder = "results"\n' + FAST_TEMPLATE)
+        f'data_dir = "{home}"\n[output]\nfolder = "results"\n'
+        + FAST_TEMPLATE.replace("[splits]\nn_splits = 2", '[splits]\nkinds = ["file"]'))  # its own split, no path
     code, out, err = run_cli("run", "physiclear.toml", "--no-progress")
     assert code == 0, err + out
+    splits = pd.read_csv(tmp_path / "results" / "splits.csv")
+    assert set(splits["split"]) == {"physiclear-validation", "physiclear-test"} and splits["kind"].eq("file").all()
     assert f"first use: fetching {2 * len(OBJECTS) + 1} data files of physiclear" in out + err
     manifest = json.loads((tmp_path / "results" / "manifest.json").read_text())
     size = manifest["config"]["dataset_size"]

@@ -47,7 +47,8 @@ def dataset_features(name: str, data_dir: str | os.PathLike | None = None, path:
     Returns
     -------
     FeatureSet
-        ``X`` (n_trials, n_sensors, n_features); ``info["data_files"]``: the files read.
+        ``X`` (n_trials, n_sensors, n_features); ``info["data_files"]``: the files read; a catalog dataset's
+        ``info["plain_folder"]``: its converted plain-file folder.
     """
     dataset = get_dataset(name)
     loaded = dataset.load(data_dir, path)
@@ -57,6 +58,7 @@ def dataset_features(name: str, data_dir: str | os.PathLike | None = None, path:
         features = fabric_depth_feature_set(loaded, min_objects=min_objects)
     elif dataset.content == "plain":
         features = plain_feature_set(loaded, min_objects=min_objects)
+        features.info["plain_folder"] = str(loaded.folder)  # a catalog dataset's converted folder (its splits.csv)
     elif dataset.content == "simulated-grasps":
         features = simulated_grasp_feature_set(loaded, dataset.labels(data_dir), min_objects=min_objects)
     else:

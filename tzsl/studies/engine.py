@@ -63,7 +63,10 @@ def _path_problems(exp: Experiment) -> list[str]:
     for key, kind in DATASET_PATHS.items():
         wanted.append((f"dataset.{key}", getattr(ds, key, None), kind))
     if "file" in getattr(getattr(c, "splits", None), "kinds", ()):
-        split_file = c.splits.file if c.splits.file is not None else os.path.join(c.dataset.plain, "splits.csv")
+        # a catalog dataset's own splits.csv is checked once its folder is converted (zero_shot.runner)
+        plain = getattr(ds, "plain", None)
+        split_file = c.splits.file if c.splits.file is not None else (
+            None if plain is None else os.path.join(plain, "splits.csv"))
         wanted.append(("splits.file" if c.splits.file else "splits.kinds", split_file, "file"))
     problems = []
     for key, value, kind in wanted:

@@ -211,8 +211,8 @@ class ZeroShotSplits(Section):
     n_test: int = Field(default=5, ge=1, description="test (unseen) objects per random split")
     seed: int = Seed
     purpose: Literal["select", "confirm"] = Purpose
-    file: str | None = Field(default=None, description="split CSV for kinds = ['file'] (default: the plain folder's "
-                                                       "splits.csv)")
+    file: str | None = Field(default=None, description="split CSV for kinds = ['file'] (default: the splits.csv of the "
+                                                       "plain folder, or of a catalog dataset that ships one)")
     random_min_train_positives: int = Field(default=2, ge=1)
     challenging_min_train_positives: int = Field(default=3, ge=1)
     min_train_negatives: int = Field(default=1, ge=1, description="a split leaves out an attribute with fewer negative "
@@ -458,9 +458,9 @@ class ZeroShotStudy(ZeroShotSettings):
         if given and self.dataset.plain is None:
             problems.append(("features", f"{', '.join(given)} apply to plain signal datasets only"))
         kinds = self.splits.kinds
-        if kinds == ["file"] and self.splits.file is None and self.dataset.plain is None:
-            problems.append(("splits.kinds", "['file'] needs file = a split CSV (or a plain dataset folder "
-                                             "with splits.csv)"))
+        if kinds == ["file"] and self.splits.file is None and (self.dataset.plain or self.dataset.builtin) is None:
+            problems.append(("splits.kinds", "['file'] needs file = a split CSV (or a plain dataset folder, or a "
+                                             "catalog dataset, with splits.csv)"))
         if "challenging" in self.methods.compare_on and "challenging" not in kinds:
             problems.append(("methods.compare_on", "'challenging' needs 'challenging' in splits.kinds"))
         if self.methods.gzsl and kinds == ["challenging"]:

@@ -16,6 +16,7 @@ import pandas as pd
 
 from tzsl._profile import stage
 from tzsl.datasets import FeatureSet
+from tzsl.exceptions import ConfigError
 from tzsl.studies.config import Experiment
 from tzsl.studies.outputs.results_folder import PrefixedResults, ResultsDir, prefixed
 from tzsl.studies.outputs.study_run import StudyRun, format_table
@@ -108,6 +109,17 @@ def load_study_features(exp: Experiment):
                          **plain_options)
 
 
+def _default_split_file(exp: Experiment, features) -> Path:
+    """``[splits] kinds = ["file"]`` without ``file``: the ``splits.csv`` of the plain folder, or of a catalog
+    dataset's converted folder (one that ships its publication's split, e.g. ``physiclear``)."""
+    ds = exp.config.dataset
+    folder = exp.resolve(ds.plain) if ds.plain is not None else features.info.get("plain_folder")
+    if folder is None or not (Path(folder) / "splits.csv").is_file():
+        raise ConfigError(f"{exp.source}: splits: kinds = ['file'] needs file = a split CSV ('tzsl splits'); "
+                          f"{ds.builtin or ds.features} ships no split file")
+    return Path(folder) / "splits.csv"
+
+
 def _check_folds(exp: Experiment, n_train_objects: int) -> None:
     from tzsl.studies.zero_shot.study import check_cv_folds  # noqa: PLC0415
 
@@ -156,7 +168,7 @@ def prepare(exp: Experiment) -> PreparedStudy:
     (:func:`tzsl.studies.zero_shot.relaxations.relax_to_dataset`, which draws the splits it checks).
     """
     from tzsl.evaluation import read_splits_csv  # noqa: PLC0415
-    from tzsl.exceptions import ConfigError, SplitError  # noqa: PLC0415
+    from tzsl.exceptions import SplitError  # noqa: PLC0415
     from tzsl.studies.zero_shot.relaxations import relax_to_dataset  # noqa: PLC0415
     from tzsl.studies.zero_shot.study import make_splits  # noqa: PLC0415
 
@@ -166,8 +178,7 @@ def prepare(exp: Experiment) -> PreparedStudy:
     c = exp.config
     split_file = None
     if c.splits.kinds == ["file"]:
-        split_file = exp.resolve(c.splits.file) if c.splits.file is not None else (
-            exp.resolve(c.dataset.plain) / "splits.csv")
+        split_file = exp.resolve(c.splits.file) if c.splits.file is not None else _default_split_file(exp, features)
         drawn["file"] = (read_splits_csv(split_file, features.attributes,
                                          min_train_positives=c.splits.random_min_train_positives), None)
         _check_folds(exp, min(len(s.train_objects) for s in drawn["file"][0]))
