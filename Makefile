@@ -19,7 +19,7 @@ N_JOBS ?= 2
 # pytest-xdist workers of `make test`: the suite is mostly single-threaded, so two workers halve it on CI's 2 cores.
 TEST_WORKERS ?= 2
 
-.PHONY: install install-core browser lint lock test test-wide test-last-bit evidence benchmark reproduce-tables readme-results numbers numbers-check docs bench bench-evidence bench-fit bench-predict bench-scale data clean
+.PHONY: install install-core browser lint lock test test-wide test-last-bit evidence benchmark physiclear reproduce-tables readme-results numbers numbers-check docs bench bench-evidence bench-fit bench-predict bench-scale data clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -128,6 +128,13 @@ benchmark: install-core
 	$(BIN)/tzsl benchmark --purpose select --out $(BENCHMARK_SELECT) --n-jobs $(N_JOBS) --force
 	$(BIN)/tzsl benchmark --defaults $(BENCHMARK_SELECT) --out $(BENCHMARK) --n-jobs $(N_JOBS) --force
 
+# The fabric paper's pipeline on PhysiCLeAR's unseen objects (docs/user_guide/dataset_catalog.md): the key-frame
+# descriptors with the embedding model's lambda grid, ESZSL, SAE and DAP, and the CNN + LSTM (the deep extra).
+PHYSICLEAR ?= $(RESULTS)/physiclear
+physiclear: install
+	$(BIN)/tzsl run physiclear --out $(PHYSICLEAR)/zero-shot --n-jobs $(N_JOBS) --force
+	$(BIN)/tzsl run physiclear-deep --out $(PHYSICLEAR)/deep --force
+
 # Every published number is generated between markers from the CSVs of the shipped code, never
 # typed (tzsl.reporting.readme_results): each entry is FILE[:BLOCK]=FOLDER, the results folder that
 # block (default: every block of the file) reads. The evidence blocks are left as they are (with a
@@ -137,7 +144,8 @@ NUMBERS := README.md:readme=$(RESULTS) README.md:evidence=$(EVIDENCE) README.md:
 	experiments/benchmarks/README.md=$(BENCH_RESULTS) \
 	docs/user_guide/datasets.md:features-axis-benchmark=$(BENCH_RESULTS) \
 	docs/user_guide/performance.md=$(SEARCH_RESULTS) \
-	docs/user_guide/benchmark.md:leaderboard=$(BENCHMARK)
+	docs/user_guide/benchmark.md:leaderboard=$(BENCHMARK) \
+	docs/user_guide/dataset_catalog.md:physiclear-pipeline=$(PHYSICLEAR)
 # readme_results arguments of one NUMBERS entry (in $$pair): FOLDER FILE [--block BLOCK]
 NUMBERS_ARGS = $${pair\#*=} $${target%%:*} $$([ "$${target\#*:}" = "$$target" ] || echo --block $${target\#*:})
 

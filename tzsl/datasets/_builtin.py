@@ -95,6 +95,9 @@ class TactileDataset(ABC):
         The registered files ``load`` and ``labels`` read from the data home (paths, or folder
         prefixes ending in ``/``, of the dataset registry): what a study on it fetches first
         (:func:`builtin_data_files`).
+    ships_splits : bool
+        Its plain-file folder holds its publication's split (``splits.csv``), which a study's
+        ``[splits] kinds = ["file"]`` reads when no ``file`` is given.
     """
 
     name: ClassVar[str]
@@ -106,6 +109,7 @@ class TactileDataset(ABC):
     convertible: ClassVar[bool] = True
     simulated: ClassVar[bool] = False
     registry_files: ClassVar[tuple[str, ...]] = ()
+    ships_splits: ClassVar[bool] = False
 
     @abstractmethod
     def load(self, data_dir: PathLike | None = None, path: PathLike | None = None
@@ -327,6 +331,7 @@ class Physiclear(CatalogDataset):
     eps = ("press-rotation",)
     registry_files = (f"{PHYSICLEAR}/",)  # the videos and utils/constants.py, the source of the shipped table
     package_files = (PHYSICLEAR_TABLE, PHYSICLEAR_SPLITS)
+    ships_splits = True  # the paper's validation and test objects
 
     def convert(self, out, data_dir=None, *, force=False, signal_format="npz") -> Path:
         return convert_physiclear(out, data_dir, force=force)  # feature columns: no signal files to format

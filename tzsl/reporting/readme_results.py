@@ -23,6 +23,8 @@ written by the shipped code:
   (``experiments/benchmarks/README.md``), ``attribute-search-benchmark`` (``docs/user_guide/performance.md``);
 * ``leaderboard`` (``docs/user_guide/benchmark.md``): the tables of a ``tzsl benchmark`` folder
   (:mod:`tzsl.reporting.leaderboard`).
+* ``physiclear-pipeline`` (``docs/user_guide/dataset_catalog.md``): the fabric paper's pipeline on PhysiCLeAR,
+  the built-in studies ``physiclear`` and ``physiclear-deep`` (:mod:`tzsl.reporting.physiclear_block`).
 
 A block whose CSVs are missing (the benchmarks', the evidence blocks') is left as it is and the run
 says so; the ``readme`` block needs its folder. The papers' and the evidence blocks name the
@@ -50,6 +52,7 @@ from tzsl.models.protocol import LAST_BIT_NOTE
 from tzsl.reporting.benchmark_blocks import BENCHMARK_BLOCKS, MissingResults
 from tzsl.reporting.feature_blocks import features_axis_block
 from tzsl.reporting.leaderboard import leaderboard_block
+from tzsl.reporting.physiclear_block import physiclear_block
 from tzsl.reporting.manifests import produced_by
 from tzsl.reporting.markdown_cells import (
     MOVES_WITH_LAST_BIT,
@@ -389,7 +392,7 @@ def detectors_block(results: str | Path) -> str:
 BLOCKS: dict[str, Callable[[Path], str]] = {
     "readme": results_block, "evidence": evidence_summary_block, "detectors": detectors_block,
     "results-evidence": evidence_block, **BENCHMARK_BLOCKS, "features-axis-benchmark": features_axis_block,
-    "leaderboard": leaderboard_block}
+    "leaderboard": leaderboard_block, "physiclear-pipeline": physiclear_block}
 
 
 def block_spans(text: str) -> list[tuple[int, int]]:

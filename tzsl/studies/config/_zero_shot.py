@@ -457,10 +457,10 @@ class ZeroShotStudy(ZeroShotSettings):
         given = [k for k, v in self.features.model_dump().items() if v is not None]
         if given and self.dataset.plain is None:
             problems.append(("features", f"{', '.join(given)} apply to plain signal datasets only"))
-        kinds = self.splits.kinds
-        if kinds == ["file"] and self.splits.file is None and (self.dataset.plain or self.dataset.builtin) is None:
-            problems.append(("splits.kinds", "['file'] needs file = a split CSV (or a plain dataset folder, or a "
-                                             "catalog dataset, with splits.csv)"))
+        kinds, ds = self.splits.kinds, self.dataset
+        if kinds == ["file"] and self.splits.file is None and ds.plain is None and not (  # a folder's splits.csv
+                ds.builtin and get_dataset(ds.builtin).ships_splits):
+            problems.append(("splits.kinds", "['file'] needs file = a split CSV (or a dataset with its splits.csv)"))
         if "challenging" in self.methods.compare_on and "challenging" not in kinds:
             problems.append(("methods.compare_on", "'challenging' needs 'challenging' in splits.kinds"))
         if self.methods.gzsl and kinds == ["challenging"]:
