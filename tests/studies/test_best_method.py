@@ -107,3 +107,11 @@ def test_the_benchmark_block_shows_the_choice_and_the_verdict(tmp_path):
 def test_the_shipped_benchmark_readme_has_the_block():
     readme = Path(__file__).resolve().parents[2] / "experiments" / "benchmarks" / "README.md"
     assert "results:begin phac2-best-method" in readme.read_text()
+
+
+def test_the_split_kind_of_a_method_comparison_is_its_own_column_not_the_study_label():
+    """A zero-shot study on a split file (or challenging splits) is not called random on the terminal."""
+    table = pd.DataFrame({"study": "zero-shot", "split_kind": ["file", "challenging", "random"], "method": "dap",
+                          "accuracy": 0.5})
+    assert split_kinds(table).tolist() == ["file", "challenging", "random"]
+    assert split_kinds(table.drop(columns="split_kind")).tolist() == ["random"] * 3

@@ -26,11 +26,12 @@ KIND_COLUMN = "kind"
 
 
 def split_kinds(table: pd.DataFrame) -> pd.Series:
-    """The split kind of every row: the :data:`KIND_COLUMN` where present, else read from the study
+    """The split kind of every row: the :data:`KIND_COLUMN` (or ``split_kind``) where present, else read from the study
     label (``...challenging...`` -> challenging; the PHAC-2 and zero-shot studies' comparisons are
     on random splits; other studies keep their own label)."""
-    if KIND_COLUMN in table.columns:
-        return table[KIND_COLUMN].astype(str)
+    for column in (KIND_COLUMN, "split_kind"):  # a method comparison names its split kind (file splits too)
+        if column in table.columns:
+            return table[column].astype(str)
     study = table["study"].astype(str)
     random = study.str.startswith(("phac2", "zero-shot")) & ~study.str.contains("challenging")
     return pd.Series(np.where(study.str.contains("challenging"), "challenging",
