@@ -60,3 +60,19 @@ def test_the_report_opens_with_the_benchmark(tmp_path):
     page = render_report(folder)
     assert "The benchmark: every method on every dataset" in page
     assert page.count("data:image/png;base64") >= 2  # the critical-difference diagram and the forest plot
+
+
+def test_the_leaderboard_shows_the_defaults_chosen_across_datasets(tmp_path):
+    from tzsl.studies.benchmark.command import write_defaults
+
+    folder, scores, summary = _folder(tmp_path)
+    write_defaults(scores, scores, ResultsDir(folder, force=True))
+    text = leaderboard_block(folder)
+    lodo = [line for line in text.splitlines() if line.startswith(("| alpha |", "| beta |"))]
+    assert len(lodo) == 4  # each dataset left out, for the default and for the detector
+    assert all(line.count("`") >= 4 for line in lodo)  # the choice made on the other dataset, the hindsight best
+    assert "Mean regret of the default chosen with each dataset left out:" in text and "(the goal: at most 0.02)" in text
+    ranks = summary["ranks"].set_index("method")["mean_rank"]
+    chosen = ranks.idxmin()  # the rule on both datasets: the best mean rank (the scores are both splits' purposes here)
+    assert f"Chosen on every dataset's selection splits: default `{chosen}`" in text
+    assert "critical-difference diagram" in text

@@ -15,12 +15,16 @@ from pathlib import Path
 
 import pandas as pd
 
+from tzsl.models.choices import DEFAULT_METHOD
 from tzsl.reporting.benchmark_blocks import MissingResults
 from tzsl.reporting.markdown_cells import number, signed
+from tzsl.studies.benchmark.defaults import EVERY_DATASET
 from tzsl.studies.benchmark.summary import reference_method
 
 __all__ = ["leaderboard_block"]
 
+#: The defaults chosen across datasets (``tzsl benchmark --defaults``), read when present.
+DEFAULTS_FILE = "defaults.csv"
 #: The files of a benchmark folder the block reads.
 LEADERBOARD_FILES = ("datasets.csv", "ranks.csv", "friedman.csv", "meta_analysis.csv")
 
@@ -88,4 +92,46 @@ def leaderboard_block(results: str | Path) -> str:
         m = pooled.loc[r.method]
         lines.append(f"| `{r.method}` | {signed(m['effect'], m['ci95_low'], m['ci95_high'])} | "
                      f"{int(m['n_datasets'])} | {number(m['i2'], 2)} |")
+    if (root / DEFAULTS_FILE).is_file():
+        lines += _defaults_lines(pd.read_csv(root / DEFAULTS_FILE), ranks, friedman.iloc[0])
     return "\n".join(lines)
+
+
+def _defaults_lines(defaults: pd.DataFrame, ranks: pd.DataFrame, friedman: pd.Series) -> list[str]:
+    """The defaults chosen across datasets (``defaults.csv``): leave one dataset out, the regret, ``auto`` beside."""
+    every = defaults[defaults["dataset"] == EVERY_DATASET].set_index("choice")
+    lodo = defaults[defaults["dataset"] != EVERY_DATASET]
+    lines = ["", "Defaults chosen across datasets (best mean rank on the selection splits): with each dataset left "
+                 "out, the choice made on the others, scored on the left-out dataset's confirmation splits beside "
+                 f"its hindsight best there (the regret), DAP with `detector = \"auto\"` (chosen on each split's "
+                 f"training objects) and the shipped default `{DEFAULT_METHOD}`:", "",
+             "| left out | choice | chosen on the others | score | hindsight best | regret | `auto` (regret) | "
+             "shipped (regret) |", "|---|---|---|---|---|---|---|---|"]
+    for r in lodo.itertuples():
+        lines.append(f"| {r.dataset} | {r.choice} | `{r.chosen}` | {number(r.chosen_score)} | `{r.best}` "
+                     f"{number(r.best_score)} | {number(r.regret)} | {number(r.auto_score)} ({number(r.auto_regret)}) "
+                     f"| {number(r.shipped_score)} ({number(r.shipped_regret)}) |")
+    for choice, part in lodo.groupby("choice", sort=False):
+        lines.append("")
+        lines.append(f"Mean regret of the {choice} chosen with each dataset left out: {number(part['regret'].mean())} "
+                     f"over {len(part)} datasets (the goal: at most 0.02); `auto` "
+                     f"{number(part['auto_regret'].mean())} over {int(part['auto_regret'].notna().sum())}, the shipped "
+                     f"default {number(part['shipped_regret'].mean())}.")
+    if "default" in every.index:
+        chosen = str(every.loc["default", "chosen"])
+        lines.append("")
+        choices = ", ".join(f"{c} `{name}`" for c, name in every["chosen"].items())
+        lines.append(f"Chosen on every dataset's selection splits: {choices} (shipped: `{DEFAULT_METHOD}`)."
+                     + _beaten(chosen, ranks, friedman))
+    return lines
+
+
+def _beaten(method: str, ranks: pd.DataFrame, friedman: pd.Series) -> str:
+    """Which methods' mean ranks on these splits beat ``method``'s by more than the critical difference."""
+    cd = float(friedman.get("critical_difference", float("nan")))
+    by = ranks.set_index("method")["mean_rank"]
+    if method not in by.index or pd.isna(cd):
+        return ""
+    better = [m for m, rank in by.items() if by[method] - rank > cd]
+    return (" On the critical-difference diagram no method is significantly better than it." if not better else
+            f" Significantly better on the critical-difference diagram: {', '.join(f'`{m}`' for m in better)}.")

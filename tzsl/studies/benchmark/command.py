@@ -27,7 +27,7 @@ import pandas as pd
 
 from tzsl.exceptions import ConfigError, PartialRunError
 from tzsl.studies.benchmark.catalog import BENCHMARK_DATASETS, benchmark_datasets
-from tzsl.studies.benchmark.defaults import leave_one_dataset_out
+from tzsl.studies.benchmark.defaults import choose_on_every_dataset, leave_one_dataset_out
 from tzsl.studies.benchmark.runner import (
     DatasetRun,
     benchmark_methods,
@@ -42,7 +42,7 @@ from tzsl.studies.outputs.results_folder import ResultsDir
 
 __all__ = ["DEFAULTS_FILE", "list_benchmark", "read_selection", "run_benchmark_command", "write_defaults"]
 
-#: The leave-one-dataset-out table a run with ``--defaults`` writes.
+#: The leave-one-dataset-out table a run with ``--defaults`` writes, and the choice made on every dataset.
 DEFAULTS_FILE = "defaults.csv"
 
 
@@ -145,13 +145,16 @@ def write_defaults(select: pd.DataFrame, confirm: pd.DataFrame, results: Results
     """Write ``defaults.csv`` (:func:`~tzsl.studies.benchmark.defaults.leave_one_dataset_out`); its terminal lines."""
     from tzsl.models.choices import DEFAULT_METHOD  # noqa: PLC0415
 
-    table = leave_one_dataset_out(complete_splits(long_scores(select)), complete_splits(long_scores(confirm)),
-                                  DEFAULT_METHOD)
-    results.write_csv(DEFAULTS_FILE, table)
+    selection = complete_splits(long_scores(select))
+    table = leave_one_dataset_out(selection, complete_splits(long_scores(confirm)), DEFAULT_METHOD)
+    every = choose_on_every_dataset(selection)
+    results.write_csv(DEFAULTS_FILE, pd.concat([table, every], ignore_index=True))
     lines = ["defaults chosen with each dataset left out (mean rank on the others' selection splits), their regret "
              "against each dataset's hindsight best on its confirmation splits:"]
     for choice, part in table.groupby("choice", sort=False):
         lines.append(f"  {choice}: chose {', '.join(sorted(set(part['chosen'])))}; mean regret "
                      f"{part['regret'].mean():.3f} (auto {part['auto_regret'].mean():.3f}, shipped "
                      f"{DEFAULT_METHOD} {part['shipped_regret'].mean():.3f}) over {len(part)} datasets")
+    lines.append("chosen on every dataset's selection splits: " + ", ".join(
+        f"{r.choice} {r.chosen}" for r in every.itertuples()) + f" (shipped: {DEFAULT_METHOD})")
     return lines

@@ -28,10 +28,12 @@ from tzsl.exceptions import ConfigError
 from tzsl.studies.benchmark.statistics import mean_ranks
 from tzsl.studies.benchmark.summary import ranked_methods
 
-__all__ = ["AUTO_METHOD", "choose", "is_dap_row", "leave_one_dataset_out"]
+__all__ = ["AUTO_METHOD", "EVERY_DATASET", "choose", "choose_on_every_dataset", "is_dap_row", "leave_one_dataset_out"]
 
 #: The benchmark row of the per-dataset detector choice made on training objects (``dap`` with ``detector="auto"``).
 AUTO_METHOD = "dap-avg-auto"
+#: ``dataset`` of the rows of the choice made on every dataset's selection splits (what a default should be).
+EVERY_DATASET = "(every dataset)"
 
 
 def is_dap_row(method: str) -> bool:
@@ -114,3 +116,20 @@ def leave_one_dataset_out(select: pd.DataFrame, confirm: pd.DataFrame, default_m
                 row[f"{label}_regret"] = row["best_score"] - row[f"{label}_score"]
             rows.append(row)
     return pd.DataFrame(rows)
+
+
+def choose_on_every_dataset(select: pd.DataFrame) -> pd.DataFrame:
+    """The rule applied to every dataset's selection splits: the default (and detector) the package should ship.
+
+    Returns
+    -------
+    DataFrame
+        One row per choice (``default``: among every method; ``detector``: among the DAP rows), with
+        ``dataset`` :data:`EVERY_DATASET`, ``chosen`` and ``seen`` (the datasets); :func:`leave_one_dataset_out`
+        estimates how such a choice fares on a dataset it did not see.
+    """
+    methods = [m for m in dict.fromkeys(select["method"]) if m != AUTO_METHOD]
+    seen = ", ".join(sorted(select["dataset"].unique()))
+    choices = (("default", methods), ("detector", [m for m in methods if is_dap_row(m)]))
+    return pd.DataFrame([{"dataset": EVERY_DATASET, "choice": choice, "chosen": choose(select, candidates),
+                          "seen": seen} for choice, candidates in choices if candidates])
