@@ -84,26 +84,22 @@ def _fit_misses(out, dataset: str) -> int:
     return sum(int(r["calls"]) for r in manifest["config"]["profile"] if r["stage"] == "fit_store.miss")
 
 
-def test_a_new_method_costs_only_its_own_fits_and_a_new_dataset_only_its_study(labs, tmp_path, monkeypatch):
-    def run(cache, out, methods, *datasets):
-        monkeypatch.setenv("TZSL_CACHE_DIR", str(tmp_path / cache))
+def test_a_fit_made_once_is_never_made_again_so_a_new_method_or_dataset_costs_only_its_own(labs, tmp_path,
+                                                                                         monkeypatch):
+    monkeypatch.setenv("TZSL_CACHE_DIR", str(tmp_path / "cache"))  # an empty fit store: this test's own fits
+
+    def run(out, methods, *datasets):
         args = ["benchmark", "--no-catalog", *(a for d in datasets for a in ("--add", str(labs / d))),
-                *(a for m in methods for a in ("--method", m)), "--max-splits", "1", "--out", str(tmp_path / out),
-                "--force"]
+                *(a for m in methods for a in ("--method", m)), "--max-splits", "1", "--out", str(tmp_path / out)]
         result = CliRunner().invoke(cli, args)
         assert result.exit_code == 0, result.output
-        return result.output
 
-    monkeypatch.setenv("TZSL_STUDY_CACHE", "1")
-    run("cache", "first", ["eszsl"], "lab_a")
-    run("fresh", "both", ["eszsl", "sae"], "lab_a")
-    run("cache", "second", ["eszsl", "sae"], "lab_a")
-    # the study DAP's and eszsl's fits come back from the fit store: only sae's are made again
-    own = _fit_misses(tmp_path / "both", "lab_a") - _fit_misses(tmp_path / "first", "lab_a")
-    assert own > 0 and _fit_misses(tmp_path / "second", "lab_a") == own
-    # a dataset added to the same benchmark: the one already run is restored from the study cache, the new one runs
-    output = run("cache", "second", ["eszsl", "sae"], "lab_a", "lab_b")
-    assert "lab_a: restored from the study cache" in output and "lab_b: done" in output
+    run("first", ["eszsl", "sae"], "lab_a")
+    # lab_a's methods changed (its study is not restored), and lab_b is new: every fit lab_a's study asks for (its
+    # DAP's and eszsl's) comes back from the fit store; only lab_b's are made
+    run("second", ["eszsl"], "lab_a", "lab_b")
+    assert _fit_misses(tmp_path / "first", "lab_a") > 0 and _fit_misses(tmp_path / "second", "lab_b") > 0
+    assert _fit_misses(tmp_path / "second", "lab_a") == 0
 
 
 def test_a_dataset_that_cannot_run_is_recorded_and_the_others_complete(labs, tmp_path):
