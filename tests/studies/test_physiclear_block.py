@@ -19,7 +19,8 @@ def _zero_shot(folder):
             for m, per_split in ACCURACY.items() for split, accs in zip(PHYSICLEAR_SPLITS, per_split, strict=True)
             for k, a in enumerate(accs)]
     pd.DataFrame(rows).to_csv(folder / "class_accuracy.csv", index=False)
-    per_split = pd.DataFrame([{"split": s, **{m: 0.5 + i / 10 for m in ACCURACY}} for i, s in enumerate(PHYSICLEAR_SPLITS)])
+    per_split = pd.DataFrame([{"split": s, **{m: 0.5 + i / 10 for m in ACCURACY}}
+                              for i, s in enumerate(PHYSICLEAR_SPLITS)])
     per_split.to_csv(folder / "methods_per_split.csv", index=False)
 
 

@@ -52,7 +52,6 @@ from tzsl.models.protocol import LAST_BIT_NOTE
 from tzsl.reporting.benchmark_blocks import BENCHMARK_BLOCKS, MissingResults
 from tzsl.reporting.feature_blocks import features_axis_block
 from tzsl.reporting.leaderboard import leaderboard_block
-from tzsl.reporting.physiclear_block import physiclear_block
 from tzsl.reporting.manifests import produced_by
 from tzsl.reporting.markdown_cells import (
     MOVES_WITH_LAST_BIT,
@@ -62,6 +61,7 @@ from tzsl.reporting.markdown_cells import (
     ours,
     signed,
 )
+from tzsl.reporting.physiclear_block import physiclear_block
 from tzsl.value_lists import SPLIT_KINDS
 
 __all__ = ["BEGIN", "BLOCKS", "END", "begin", "block_spans", "comparison_lines", "detectors_block", "end",
