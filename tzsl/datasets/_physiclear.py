@@ -31,7 +31,9 @@ from __future__ import annotations
 
 import os
 import warnings
+from collections.abc import Callable, Iterable
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 import pandas as pd
@@ -50,7 +52,9 @@ from tzsl.exceptions import DataFileError
 
 __all__ = ["CONTACT_LEVEL", "N_KEY_FRAMES", "PHYSICLEAR_SENSOR", "PHYSICLEAR_SETTINGS", "PHYSICLEAR_VIDEO_DIR",
            "NoContactError", "contact_key_frames", "convert_physiclear", "describe_physiclear_video",
-           "physiclear_key_frames", "physiclear_videos"]
+           "each_contact_video", "physiclear_key_frames", "physiclear_videos"]
+
+T = TypeVar("T")
 
 #: The registry folder of the videos.
 PHYSICLEAR_VIDEO_DIR = f"{PHYSICLEAR}/dataset/"
@@ -201,6 +205,32 @@ def describe_physiclear_video(path: str | os.PathLike, descriptor=None) -> tuple
     return features.astype(np.float64), names
 
 
+def each_contact_video(read: Callable[[Path], T], paths: Iterable[Path]) -> tuple[list[T], list[int]]:
+    """``read`` of every video of ``paths`` that holds a contact, and their positions in ``paths``.
+
+    A video without a contact (:class:`NoContactError`) is left out; one warning names them all.
+
+    Raises
+    ------
+    DataFileError
+        No video holds a contact.
+    """
+    done, kept, left_out = [], [], []
+    for i, path in enumerate(paths):
+        try:
+            done.append(read(path))
+        except NoContactError as exc:
+            left_out.append(f"{Path(path).name} ({exc.problem})")
+            continue
+        kept.append(i)
+    if left_out:
+        warnings.warn(f"physiclear: {len(left_out)} video(s) without a contact to take key frames from are left "
+                      f"out: {'; '.join(left_out)}", UserWarning, stacklevel=3)
+    if not done:
+        raise DataFileError(None, "no physiclear video holds a contact to take key frames from")
+    return done, kept
+
+
 def convert_physiclear(out: str | os.PathLike, data_dir: str | os.PathLike | None = None, *, force: bool = False,
                        encoding: str = "levels", table: PhysiclearTable | None = None) -> Path:
     """Write ``physiclear`` as a plain-file dataset folder (module docstring), with the paper's split.
@@ -245,22 +275,10 @@ def convert_physiclear(out: str | os.PathLike, data_dir: str | os.PathLike | Non
     videos = physiclear_videos(table)
     if videos.empty:
         raise DataFileError(None, f"no registered video under {PHYSICLEAR_VIDEO_DIR} of the table's objects")
-    rows, names, kept, left_out = [], None, [], []
-    for i, relpath in enumerate(videos["relpath"]):
-        try:
-            features, names = describe_physiclear_video(fetch(relpath, data_dir))
-        except NoContactError as exc:
-            left_out.append(f"{Path(relpath).name} ({exc.problem})")
-            continue
-        rows.append(features)
-        kept.append(i)
-    if left_out:
-        warnings.warn(f"physiclear: {len(left_out)} video(s) without a contact to take key frames from are left "
-                      f"out: {'; '.join(left_out)}", UserWarning, stacklevel=2)
-    if not rows:
-        raise DataFileError(None, "no video of the table's objects holds a contact to take key frames from")
+    described, kept = each_contact_video(describe_physiclear_video, (fetch(r, data_dir) for r in videos["relpath"]))
+    names = described[0][1]
     videos = videos.iloc[kept].reset_index(drop=True)
-    X = np.stack(rows)[:, None, :]
+    X = np.stack([features for features, _ in described])[:, None, :]
     trials = pd.DataFrame({"trial_id": videos["trial_id"], "class": videos["object"], "object": videos["object"],
                            "trial_index": videos.groupby("object", sort=False).cumcount().to_numpy() + 1})
     classes = table.classes.loc[list(dict.fromkeys(videos["object"]))]

@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import os
 import time
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -82,25 +81,14 @@ def physiclear_sequences(data_dir: str | os.PathLike | None = None, *, table: Ph
         A video that cannot be decoded, no video with a contact, or videos of different frame sizes.
     """
     from tzsl._progress import progress_bar  # noqa: PLC0415
-    from tzsl.datasets import NoContactError, fetch, physiclear_key_frames, physiclear_videos  # noqa: PLC0415
+    from tzsl.datasets import each_contact_video, fetch, physiclear_key_frames, physiclear_videos  # noqa: PLC0415
 
     videos = physiclear_videos(table or read_physiclear_attributes())
-    frames, keys, kept, left_out = [], [], [], []
     paths = [fetch(r, data_dir) for r in videos["relpath"]]
-    for i, path in enumerate(progress_bar(paths, show=progress, desc="key frames", unit="video", leave=False)):
-        try:
-            images, index = physiclear_key_frames(path)
-        except NoContactError as exc:
-            left_out.append(f"{path.name} ({exc.problem})")
-            continue
-        frames.append(images.astype(np.float32))
-        keys.append(index.tolist())
-        kept.append(i)
-    if left_out:
-        warnings.warn(f"physiclear: {len(left_out)} video(s) without a contact to take key frames from are left "
-                      f"out: {'; '.join(left_out)}", UserWarning, stacklevel=2)
-    if not frames:
-        raise DataFileError(None, "no physiclear video holds a contact to take key frames from")
+    read, kept = each_contact_video(physiclear_key_frames, progress_bar(paths, show=progress, desc="key frames",
+                                                                        unit="video", leave=False))
+    frames = [images.astype(np.float32) for images, _ in read]
+    keys = [index.tolist() for _, index in read]
     shapes = sorted({f.shape for f in frames})
     if len(shapes) > 1:
         raise DataFileError(None, f"physiclear videos have different frame shapes {shapes}; the deep model needs one")
