@@ -8,10 +8,12 @@ import numpy as np
 import pandas as pd
 import pytest
 from click.testing import CliRunner
+from sklearn.base import BaseEstimator
 
 from tzsl.cli import cli
 from tzsl.datasets import write_synthetic_dataset
 from tzsl.features import load_features
+from tzsl.models import NearestAttributeRule, register_method, unregister_method
 from tzsl.studies.benchmark.runner import BENCHMARK_DETECTORS, benchmark_methods
 from tzsl.studies.benchmark.splits import n_test_of, standard_splits
 from tzsl.studies.benchmark.summary import BENCHMARK_FILES, complete_splits, ranked_methods, summarise
@@ -102,19 +104,38 @@ def test_a_fit_made_once_is_never_made_again_so_a_new_method_or_dataset_costs_on
     assert _fit_misses(tmp_path / "second", "lab_a") == 0
 
 
+class NeverFits(BaseEstimator):
+    """A plug-in attribute model whose every fit fails."""
+
+    score_kind = "embedding"
+
+    def fit(self, X, Y, groups=None):
+        raise ValueError("a lab's method that cannot fit here")
+
+
 def test_a_dataset_that_cannot_run_is_recorded_and_the_others_complete(labs, tmp_path):
     broken = tmp_path / "lab_broken"
     broken.mkdir()
     (broken / "classes.csv").write_text("class,a\nx,1\n")
     out = tmp_path / "bench"
-    result = CliRunner().invoke(cli, ["benchmark", "--no-catalog", "--add", str(labs / "lab_a"), "--add",
-                                      str(broken), "--method", "eszsl", "--max-splits", "1", "--out", str(out)])
+    register_method("never-fits", family="embedding", paper="test only", attribute_model=NeverFits,
+                    decision_rule=NearestAttributeRule, calibratable=False)
+    try:
+        result = CliRunner().invoke(cli, ["benchmark", "--no-catalog", "--add", str(labs / "lab_a"), "--add",
+                                          str(broken), "--method", "eszsl", "--method", "never-fits",
+                                          "--max-splits", "2", "--out", str(out)])
+    finally:
+        unregister_method("never-fits")
     assert result.exit_code == 1, result.output
     assert "lab_broken: failed (" in result.output
     assert set(pd.read_csv(out / "scores.csv")["dataset"]) == {"lab_a"}
     manifest = json.loads((out / "manifest.json").read_text())
     status = {d["name"]: d["status"] for d in manifest["config"]["datasets"]}
-    assert status == {"lab_a": "done", "lab_broken": "failed"}
+    assert status == {"lab_a": "partial", "lab_broken": "failed"}
+    # one line per dataset whose fits failed, however many failed: the count, the first reason, the manifest
+    lab_a = [line for line in result.stderr.splitlines() if line.startswith("lab_a: ")]
+    assert len(lab_a) == 1 and lab_a[0].startswith("lab_a: 2 table row(s) with failed fits (its manifest.json lists")
+    assert "never-fits: ValueError: a lab's method that cannot fit here" in lab_a[0] and len(lab_a[0]) < 250
 
 
 def test_usage_errors_are_one_line(tmp_path):

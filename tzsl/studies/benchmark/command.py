@@ -121,12 +121,24 @@ def run_benchmark_command(*, datasets: Sequence[str] = (), added: Sequence[str |
                             "datasets": [{"name": r.dataset, "status": r.status, "restored": r.restored,
                                           "results": str(r.results), "failures": r.failures,
                                           "standard_splits": index.get(r.dataset)} for r in runs]})
-    failures = [f"{r.dataset}: {line}" for r in runs for line in r.failures]
+    failures = [_failure_line(r) for r in runs if r.failures]
     n_files = len(results.written)
     echo(f"wrote {n_files} files to {out} (each dataset's study in datasets/); report: tzsl report {out}")
     if failures:
         raise PartialRunError(results.root, failures)
     return runs
+
+
+#: Characters of a dataset's first failure shown on the terminal (every failure is in its manifest).
+FAILURE_CHARS = 160
+
+
+def _failure_line(run: DatasetRun) -> str:
+    """One terminal line per dataset: why it failed, or how many of its fits failed and the first reason."""
+    if run.status == "failed":
+        return f"{run.dataset}: {run.failures[0]}"
+    first = run.failures[0] if len(run.failures[0]) <= FAILURE_CHARS else run.failures[0][:FAILURE_CHARS] + "..."
+    return f"{run.dataset}: {len(run.failures)} table row(s) with failed fits (its manifest.json lists them); {first}"
 
 
 def read_selection(folder: str | os.PathLike) -> pd.DataFrame:
