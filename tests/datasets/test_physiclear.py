@@ -205,12 +205,18 @@ def test_a_video_is_described_by_its_key_frames(tmp_path):
 # ----------------------------------------------------------------------------- the whole way, on a served release
 
 
+@pytest.fixture(scope="module")
+def release(tmp_path_factory):
+    """The small release, written once for the module (its videos take seconds to encode); tests read it only."""
+    folder = tmp_path_factory.mktemp("physiclear") / "served"
+    return folder, write_release(folder)
+
+
 @pytest.fixture
-def served(tmp_path, monkeypatch):
+def served(release, tmp_path, monkeypatch):
     """The small release served on 127.0.0.1 and registered instead of tzsl's registry; yields
     (served folder, registered path -> content)."""
-    folder = tmp_path / "served"
-    files = write_release(folder)
+    folder, files = release
     with registered_release(folder, files, tmp_path / "registry.txt", monkeypatch):
         yield folder, files
 

@@ -22,12 +22,18 @@ FAST = ["--backbone", "small-cnn", "--image-size", "16", "--hidden-size", "8", "
         "--n-threads", "1"]
 
 
-@pytest.fixture
-def home(tmp_path, monkeypatch):
-    """A data home holding the small release, registered instead of tzsl's registry."""
+@pytest.fixture(scope="module")
+def release(tmp_path_factory):
+    """The small release, written once for the module (its videos take seconds to encode)."""
     pytest.importorskip("torch", reason="PyTorch is not installed (the optional deep extra)")
-    folder = tmp_path / "home"
-    files = write_release(folder)
+    folder = tmp_path_factory.mktemp("physiclear") / "home"
+    return folder, write_release(folder)
+
+
+@pytest.fixture
+def home(release, tmp_path, monkeypatch):
+    """A data home holding the small release, registered instead of tzsl's registry; the test's own cache."""
+    folder, files = release
     monkeypatch.setenv("TZSL_CACHE_DIR", str(tmp_path / "cache"))
     with registered_release(folder, files, tmp_path / "registry.txt", monkeypatch):
         yield folder
