@@ -18,13 +18,11 @@ import pandas as pd
 from tzsl.models.choices import DEFAULT_METHOD
 from tzsl.reporting.benchmark_blocks import MissingResults
 from tzsl.reporting.markdown_cells import number, signed
-from tzsl.studies.benchmark.defaults import EVERY_DATASET
+from tzsl.studies.benchmark.defaults import DEFAULTS_FILE, EVERY_DATASET
 from tzsl.studies.benchmark.summary import reference_method
 
 __all__ = ["leaderboard_block"]
 
-#: The defaults chosen across datasets (``tzsl benchmark --defaults``), read when present.
-DEFAULTS_FILE = "defaults.csv"
 #: The files of a benchmark folder the block reads.
 LEADERBOARD_FILES = ("datasets.csv", "ranks.csv", "friedman.csv", "meta_analysis.csv")
 

@@ -27,7 +27,7 @@ import pandas as pd
 
 from tzsl.exceptions import ConfigError, PartialRunError
 from tzsl.studies.benchmark.catalog import BENCHMARK_DATASETS, benchmark_datasets
-from tzsl.studies.benchmark.defaults import choose_on_every_dataset, leave_one_dataset_out
+from tzsl.studies.benchmark.defaults import DEFAULTS_FILE, choose_on_every_dataset, leave_one_dataset_out
 from tzsl.studies.benchmark.runner import (
     DatasetRun,
     benchmark_methods,
@@ -42,8 +42,6 @@ from tzsl.studies.outputs.results_folder import ResultsDir
 
 __all__ = ["DEFAULTS_FILE", "list_benchmark", "read_selection", "run_benchmark_command", "write_defaults"]
 
-#: The leave-one-dataset-out table a run with ``--defaults`` writes, and the choice made on every dataset.
-DEFAULTS_FILE = "defaults.csv"
 
 
 def list_benchmark() -> list[str]:

@@ -28,10 +28,13 @@ from tzsl.exceptions import ConfigError
 from tzsl.studies.benchmark.statistics import mean_ranks
 from tzsl.studies.benchmark.summary import ranked_methods
 
-__all__ = ["AUTO_METHOD", "EVERY_DATASET", "choose", "choose_on_every_dataset", "is_dap_row", "leave_one_dataset_out"]
+__all__ = ["AUTO_METHOD", "DEFAULTS_FILE", "EVERY_DATASET", "choose", "choose_on_every_dataset", "is_dap_row",
+           "leave_one_dataset_out"]
 
 #: The benchmark row of the per-dataset detector choice made on training objects (``dap`` with ``detector="auto"``).
 AUTO_METHOD = "dap-avg-auto"
+#: The leave-one-dataset-out table a benchmark run with ``--defaults`` writes, and the choice made on every dataset.
+DEFAULTS_FILE = "defaults.csv"
 #: ``dataset`` of the rows of the choice made on every dataset's selection splits (what a default should be).
 EVERY_DATASET = "(every dataset)"
 
