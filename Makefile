@@ -78,7 +78,7 @@ lint: install
 # --dist loadfile: a file's tests share a worker, so the docs build (tests/test_docs.py) is made once and no
 # worker waits for it (the locked pytest and pytest-xdist ignore xdist_group marks).
 test: install browser lint
-	$(BIN)/pytest -q -n $(TEST_WORKERS) --dist loadfile
+	$(BIN)/pytest -q -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder
 
 # Resolve the locks again from pyproject.toml (CPython 3.11 on this platform, the versions the index serves
 # today); then run reproduce-tables and `make numbers`, and say in CHANGELOG.md what moved.

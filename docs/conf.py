@@ -88,6 +88,9 @@ html_theme = "pydata_sphinx_theme"
 html_title = f"tzsl {release}"
 html_theme_options = {
     "navbar_align": "left",
+    # the section sidebar opens the current page's branch only: the API branch lists every public name, and
+    # expanded on every page it made each page heavy and its rendering a large share of a build
+    "collapse_navigation": True,
     "show_toc_level": 2,
     "secondary_sidebar_items": ["page-toc"],
     "footer_start": ["copyright"],

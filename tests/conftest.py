@@ -1,4 +1,4 @@
-"""Shared fixtures: where the real data lives, and small synthetic helpers."""
+"""Shared fixtures: where the real data lives, and small synthetic helpers; the order test files are handed out."""
 
 from __future__ import annotations
 
@@ -45,3 +45,25 @@ def _isolated_cache(tmp_path_factory, monkeypatch):
     monkeypatch.setenv("TZSL_CACHE_DIR", str(tmp_path_factory.getbasetemp() / "tzsl-cache"))
     monkeypatch.setenv("TZSL_STUDY_CACHE", "0")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "user-cache"))
+
+
+def pytest_collection_modifyitems(config, items):
+    """Hand out the longest test files first, so that no xdist worker is left alone at the end of a run.
+
+    ``make test`` runs ``--dist loadfile --no-loadscope-reorder``: a worker takes whole files in the order
+    collected here. A file marked ``schedule_first(seconds)`` (a docs build, a wheel install: minutes of one
+    process; ``seconds`` is its rough cost on one worker, an ordering hint) comes first, longest first; the
+    others follow by their number of tests, largest first, as pytest-xdist orders them by default. Started last,
+    the docs build (about 150 s) kept one worker busy while the other had nothing left to run.
+    """
+    per_file: dict[str, int] = {}
+    for item in items:
+        per_file[item.nodeid.split("::")[0]] = per_file.get(item.nodeid.split("::")[0], 0) + 1
+
+    def rank(item) -> tuple[int, float]:
+        first = item.get_closest_marker("schedule_first")
+        if first is not None:
+            return 0, -float(first.args[0])
+        return 1, -per_file[item.nodeid.split("::")[0]]
+
+    items.sort(key=rank)  # stable: a file's tests stay together and in their order

@@ -19,6 +19,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.schedule_first(150)  # a Sphinx build of minutes: handed out first (conftest.py)
+
 REPO = Path(__file__).resolve().parents[1]
 DOCS = REPO / "docs"
 

@@ -15,6 +15,8 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "tests" / "studies"))
 from test_reproduce import TINY_HAND  # noqa: E402
 
+pytestmark = pytest.mark.schedule_first(35)  # a wheel built and installed: handed out first (conftest.py)
+
 
 @pytest.mark.slow
 def test_wheel_install_runs_builtin_studies(tmp_path):
