@@ -5,6 +5,12 @@ Studies call :func:`attempt` around each (split, method) fit. A failure becomes 
 the other fits go on. :func:`table_failures` reads every ``error`` column of the tables a run
 wrote; the engine (:func:`tzsl.studies.engine.run_experiment`) records them in the manifest
 and ``tzsl run`` lists them on stderr and exits with :data:`EXIT_PARTIAL` at the end.
+
+A failure whose every error is a :class:`tzsl.exceptions.TzslError` is a *refusal*
+(:func:`only_refusals`): the method declined this split's input on purpose (too few training classes
+for its folds), the same on every run of the same code, data and settings. Any other exception may
+come from the machine (a killed worker, a full disk) and is tried again by the next run (the study
+cache keeps a study whose failures are all refusals, :mod:`tzsl.studies.outputs.study_cache`).
 """
 
 from __future__ import annotations
@@ -12,16 +18,20 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import Any, TypeVar
 
+import re
+
 import pandas as pd
 
-from tzsl.exceptions import error_text  # re-exported: the one-line text of a failed fit
+from tzsl.exceptions import TzslError, error_text  # re-exported: the one-line text of a failed fit
 
-__all__ = ["ERROR_COLUMN", "EXIT_PARTIAL", "attempt", "error_text", "table_failures"]
+__all__ = ["ERROR_COLUMN", "EXIT_PARTIAL", "attempt", "error_text", "only_refusals", "table_failures"]
 
 #: Column of a study table that holds the failure of that row's fit (empty when it succeeded).
 ERROR_COLUMN = "error"
 #: Exit code of a run that completed but with failed (split, method) fits (see tzsl.cli._root).
 EXIT_PARTIAL = 1
+#: An exception's type name as :func:`error_text` writes it (``ZSLInputError``, ``LinAlgError``, ``ConvergenceWarning``).
+_TYPE_NAME = re.compile(r"\b[A-Z]\w*(?:Error|Exception|Warning|Exit|Interrupt)\b")
 
 T = TypeVar("T")
 
@@ -53,3 +63,28 @@ def table_failures(tables: Mapping[str, pd.DataFrame]) -> list[str]:
             where = ", ".join(f"{k}={row[k]}" for k in keys if not pd.isna(row[k]))
             lines.append(f"{name}: {where}: {row[ERROR_COLUMN]}")
     return lines
+
+
+def _subclass_names(cls: type) -> set[str]:
+    return {cls.__name__}.union(*(_subclass_names(sub) for sub in cls.__subclasses__()))
+
+
+def only_refusals(failures: list[str]) -> bool:
+    """Whether every failure line names only :class:`TzslError` types (refusals of the input, not accidents).
+
+    Parameters
+    ----------
+    failures : list of str
+        Lines of :func:`table_failures` (an ``error`` cell may join several ``"method: Type: message"``).
+
+    Returns
+    -------
+    bool
+        True for an empty list. False when a line names another exception type, or none that can be read.
+    """
+    ours = _subclass_names(TzslError)
+    for line in failures:
+        named = set(_TYPE_NAME.findall(line))
+        if not named or not named <= ours:
+            return False
+    return True

@@ -25,10 +25,12 @@ The key is everything that decides a study's output:
 It lives in ``<cache folder>/studies/<key>/``, the cache folder of :func:`tzsl.cache.get_cache_dir`
 (``$TZSL_CACHE_DIR``, else the user cache folder), and is on by default: ``TZSL_STUDY_CACHE=0``
 turns it off while keeping the fit store, and a study whose settings say ``compute.cache =
-false`` is never cached. A run that failed, or whose tables hold failed (split, method) fits, is
-not stored. After an entry is stored, the study cache and the fit store are pruned to the size
-cap, least recently used first (:func:`tzsl.cache.enforce_size_cap`); a restored entry is marked
-used before it is read, so a concurrent prune keeps it (see :mod:`tzsl.cache`).
+false`` is never cached. A run that failed, or whose tables hold a failed (split, method) fit other
+than a refusal (:func:`tzsl.studies.outputs.failures.only_refusals`: the method declined that split's
+input, as it will on every run with this key), is not stored, so the next run tries it again. After
+an entry is stored, the study cache and the fit store are pruned to the size cap, least recently
+used first (:func:`tzsl.cache.enforce_size_cap`); a restored entry is marked used before it is
+read, so a concurrent prune keeps it (see :mod:`tzsl.cache`).
 """
 
 from __future__ import annotations
@@ -64,6 +66,7 @@ from tzsl.cache import (
 )
 from tzsl.datasets import get_data_home
 from tzsl.studies.config import DATASET_PATHS, get_study
+from tzsl.studies.outputs.failures import only_refusals
 from tzsl.studies.outputs.results_folder import ResultsDir, package_versions
 from tzsl.studies.outputs.study_run import StudyRun
 
@@ -225,7 +228,7 @@ def run_cached(exp, results: ResultsDir, runner: Callable[[Callable[[str], None]
     start = time.perf_counter()
     with recorded_warnings() as shown:
         run = runner(say)
-    if not run.failures:
+    if only_refusals(run.failures):
         with stage("write"):
             _store(folder, key, results, results.written[n_written:], {
                 "run": run, "lines": lines, "warnings": shown.lines, "seconds": time.perf_counter() - start,
