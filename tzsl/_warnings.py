@@ -9,11 +9,12 @@ raised while it ran, with its count, in its manifest (:class:`recorded_warnings`
 from __future__ import annotations
 
 import re
+import sys
 import warnings
 from collections.abc import Callable
 from types import TracebackType
 
-__all__ = ["TerminalWarnings", "one_line", "recorded_warnings", "warning_kind"]
+__all__ = ["TerminalWarnings", "one_line", "recorded_warnings", "warn_again", "warning_kind"]
 
 #: Categories too general to be a kind by themselves: their kind is the message's wording.
 _GENERIC = (UserWarning, RuntimeWarning, Warning)
@@ -40,6 +41,7 @@ class recorded_warnings:
 
     def __init__(self) -> None:
         self._counts: dict[str, int] = {}
+        self._categories: dict[str, type[Warning]] = {}
         self._previous: Callable[..., None] | None = None  # warnings.showwarning while the block runs
 
     def __enter__(self) -> recorded_warnings:
@@ -48,6 +50,7 @@ class recorded_warnings:
         def show(message, category, filename, lineno, file=None, line=None):
             text = one_line(message, category)[len("tzsl: warning: "):]
             self._counts[text] = self._counts.get(text, 0) + 1
+            self._categories.setdefault(text, category)
             previous(message, category, filename, lineno, file, line)
 
         warnings.showwarning = show
@@ -62,6 +65,28 @@ class recorded_warnings:
     def lines(self) -> list[str]:
         """The warnings shown, one line each, in first-seen order."""
         return [text if n == 1 else f"{text} (x{n})" for text, n in self._counts.items()]
+
+    @property
+    def shown(self) -> list[tuple[str, str, int]]:
+        """``(text, category, count)`` of each warning, in first-seen order; ``category`` is
+        ``"module:QualName"`` (:func:`warn_again` raises it again as it was)."""
+        return [(text, f"{self._categories[text].__module__}:{self._categories[text].__qualname__}", n)
+                for text, n in self._counts.items()]
+
+
+def warn_again(shown: list[tuple[str, str, int]], stacklevel: int = 2) -> None:
+    """Raise again the warnings of :attr:`recorded_warnings.shown`, each with its category and count.
+
+    A category whose module is not imported in this process (or that is no Warning) is raised as a
+    ``UserWarning`` with the same text, which names the category.
+    """
+    for text, category_path, n in shown:
+        module, _, name = category_path.partition(":")
+        category = getattr(sys.modules.get(module), name, None)
+        if not (isinstance(category, type) and issubclass(category, Warning)):
+            category = UserWarning
+        for _ in range(n):
+            warnings.warn(text, category, stacklevel=stacklevel + 1)
 
 
 def warning_kind(message: Warning | str, category: type[Warning]) -> str:

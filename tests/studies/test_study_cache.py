@@ -32,6 +32,10 @@ PLUGIN = "cache-test"
 CALLS: list[int] = []
 
 
+class PluginWarning(UserWarning):
+    """A warning category of the plug-in's own (the command line groups warnings by category)."""
+
+
 class CacheCompute(Compute):
     cache: bool = True
 
@@ -62,6 +66,8 @@ def run_plugin(exp, results, say) -> StudyRun:
     results.write_csv("plugin.csv", table)
     say(f"plugin: {exp.config.n} rows")
     warnings.warn("the plug-in always warns", UserWarning, stacklevel=1)
+    for _ in range(2):  # a category of its own, twice: a restored run raises it again, as often
+        warnings.warn("the plug-in's own kind", PluginWarning, stacklevel=1)
     return StudyRun({"plugin": table}, {"study_kind": PLUGIN}, data_files=sorted(folder.glob("*.txt")))
 
 
@@ -90,7 +96,9 @@ def _run(toml: Path, out: Path) -> tuple[Path, dict, list[str]]:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         results, _ = run_experiment(toml, out=out, echo=lines.append)
-    assert [str(w.message) for w in caught] == ["the plug-in always warns"]
+    assert [(str(w.message).split(" (")[0], w.category) for w in caught] == [
+        ("the plug-in always warns", UserWarning), ("the plug-in's own kind", PluginWarning),
+        ("the plug-in's own kind", PluginWarning)]
     return results.root, json.loads((results.root / "manifest.json").read_text()), lines
 
 
@@ -104,7 +112,8 @@ def test_a_study_run_again_is_restored_byte_for_byte(plugin):
     assert manifest1["config"]["study_cache"]["restored"] is False
     assert manifest2["config"]["study_cache"]["restored"] is True
     assert manifest2["config"]["study_cache"]["key"] == manifest1["config"]["study_cache"]["key"]
-    assert manifest2["warnings"] == manifest1["warnings"] == ["the plug-in always warns"]
+    assert manifest2["warnings"] == manifest1["warnings"] == [
+        "the plug-in always warns", "the plug-in's own kind (PluginWarning) (x2)"]
     assert manifest2["data_files"] == manifest1["data_files"]
     assert manifest2["outputs"]["plugin.csv"] == manifest1["outputs"]["plugin.csv"]
     assert lines2[1].startswith("note: restored from the study cache") and lines2[2:] == lines1[1:]

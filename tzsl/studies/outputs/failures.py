@@ -15,10 +15,9 @@ cache keeps a study whose failures are all refusals, :mod:`tzsl.studies.outputs.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Mapping
 from typing import Any, TypeVar
-
-import re
 
 import pandas as pd
 
@@ -30,7 +29,7 @@ __all__ = ["ERROR_COLUMN", "EXIT_PARTIAL", "attempt", "error_text", "only_refusa
 ERROR_COLUMN = "error"
 #: Exit code of a run that completed but with failed (split, method) fits (see tzsl.cli._root).
 EXIT_PARTIAL = 1
-#: An exception's type name as :func:`error_text` writes it (``ZSLInputError``, ``LinAlgError``, ``ConvergenceWarning``).
+#: An exception's type name as :func:`error_text` writes it (``ZSLInputError``, ``LinAlgError``, ...).
 _TYPE_NAME = re.compile(r"\b[A-Z]\w*(?:Error|Exception|Warning|Exit|Interrupt)\b")
 
 T = TypeVar("T")
@@ -66,7 +65,12 @@ def table_failures(tables: Mapping[str, pd.DataFrame]) -> list[str]:
 
 
 def _subclass_names(cls: type) -> set[str]:
-    return {cls.__name__}.union(*(_subclass_names(sub) for sub in cls.__subclasses__()))
+    """The names of ``cls`` and of every subclass of it defined so far."""
+    names = {cls.__name__}
+    subclasses: list[type] = cls.__subclasses__()
+    for sub in subclasses:
+        names |= _subclass_names(sub)
+    return names
 
 
 def only_refusals(failures: list[str]) -> bool:

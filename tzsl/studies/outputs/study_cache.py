@@ -53,7 +53,7 @@ import joblib
 
 from tzsl._io import ensure_folder
 from tzsl._profile import stage
-from tzsl._warnings import recorded_warnings
+from tzsl._warnings import recorded_warnings, warn_again
 from tzsl.cache import (
     STUDIES_FOLDER,
     STUDY_CACHE_ENV,
@@ -74,7 +74,7 @@ __all__ = ["NEUTRAL_SETTINGS", "run_cached", "study_cache_folder", "study_key"]
 
 #: Settings (``table.key``) that cannot change what a study writes, left out of its key.
 NEUTRAL_SETTINGS = frozenset({"output.folder", "compute.progress"})
-_ENTRY_FORMAT = 1
+_ENTRY_FORMAT = 2  # 2: warnings kept with their category and count
 _RUN_FILE = "run.joblib"
 _FILES = "files"
 
@@ -231,7 +231,7 @@ def run_cached(exp, results: ResultsDir, runner: Callable[[Callable[[str], None]
     if only_refusals(run.failures):
         with stage("write"):
             _store(folder, key, results, results.written[n_written:], {
-                "run": run, "lines": lines, "warnings": shown.lines, "seconds": time.perf_counter() - start,
+                "run": run, "lines": lines, "warnings": shown.shown, "seconds": time.perf_counter() - start,
                 "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
                 "splits": {k: v for k, v in results.splits.items() if k not in splits_before},
                 "data_files": {k: v for k, v in results.data_files.items() if k not in data_before}})
@@ -298,8 +298,7 @@ def _restore(payload: dict[str, Any], entry: Path, key: str, results: ResultsDir
          f"{payload['seconds']:.1f} s); {STUDY_CACHE_ENV}=0 computes it again")
     for line in payload["lines"]:
         study_echo(line)
-    for line in payload["warnings"]:
-        warnings.warn(line, UserWarning, stacklevel=2)
+    warn_again(payload["warnings"])  # each with its category and count: the terminal groups them as it did
     run: StudyRun = payload["run"]
     run.record["study_cache"] = {"key": key, "restored": True, "created": payload["created"],
                                  "seconds": round(payload["seconds"], 3)}
