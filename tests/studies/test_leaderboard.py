@@ -68,8 +68,8 @@ def test_the_leaderboard_shows_the_defaults_chosen_across_datasets(tmp_path):
     folder, scores, summary = _folder(tmp_path)
     write_defaults(scores, scores, ResultsDir(folder, force=True))
     text = leaderboard_block(folder)
-    lodo = [line for line in text.splitlines() if line.startswith(("| alpha |", "| beta |"))]
-    assert len(lodo) == 4  # each dataset left out, for the default and for the detector
+    lodo = [line for line in text.splitlines() if line.startswith(("| alpha (6) |", "| beta (6) |"))]
+    assert len(lodo) == 4  # each dataset left out (its 6 complete splits), for the default and for the detector
     assert all(line.count("`") >= 4 for line in lodo)  # the choice made on the other dataset, the hindsight best
     assert "Mean regret of the default chosen with each dataset left out:" in text
     assert "(the goal: at most 0.02)" in text
@@ -77,3 +77,10 @@ def test_the_leaderboard_shows_the_defaults_chosen_across_datasets(tmp_path):
     chosen = ranks.idxmin()  # the rule on both datasets: the best mean rank (the scores are both splits' purposes here)
     assert f"Chosen on every dataset's selection splits: default `{chosen}`" in text
     assert "critical-difference diagram" in text
+    # the standing rule: the choice replaces the shipped default only if its pooled difference is above 0
+    if chosen == DEFAULT_METHOD:
+        assert "It is the shipped default." in text
+    else:
+        meta = pd.read_csv(folder / "meta_analysis.csv").set_index(["method_a", "method_b"])
+        above = meta.loc[(chosen, DEFAULT_METHOD), "ci95_low"] > 0
+        assert ("the shipped default should become it" if above else "the shipped default stays") in text

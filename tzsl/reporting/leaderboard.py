@@ -91,24 +91,29 @@ def leaderboard_block(results: str | Path) -> str:
         lines.append(f"| `{r.method}` | {signed(m['effect'], m['ci95_low'], m['ci95_high'])} | "
                      f"{int(m['n_datasets'])} | {number(m['i2'], 2)} |")
     if (root / DEFAULTS_FILE).is_file():
-        lines += _defaults_lines(pd.read_csv(root / DEFAULTS_FILE), ranks, friedman.iloc[0])
+        lines += _defaults_lines(pd.read_csv(root / DEFAULTS_FILE), ranks, friedman.iloc[0], pooled)
     return "\n".join(lines)
 
 
-def _defaults_lines(defaults: pd.DataFrame, ranks: pd.DataFrame, friedman: pd.Series) -> list[str]:
-    """The defaults chosen across datasets (``defaults.csv``): leave one dataset out, the regret, ``auto`` beside."""
+def _defaults_lines(defaults: pd.DataFrame, ranks: pd.DataFrame, friedman: pd.Series,
+                    pooled: pd.DataFrame) -> list[str]:
+    """The defaults chosen across datasets (``defaults.csv``): leave one dataset out, the regret, ``auto`` beside;
+    ``pooled``: each method minus the shipped default, pooled over datasets (rows by ``method_a``)."""
     every = defaults[defaults["dataset"] == EVERY_DATASET].set_index("choice")
     lodo = defaults[defaults["dataset"] != EVERY_DATASET]
     lines = ["", "Defaults chosen across datasets (best mean rank on the selection splits): with each dataset left "
                  "out, the choice made on the others, scored on the left-out dataset's confirmation splits beside "
                  f"its hindsight best there (the regret), DAP with `detector = \"auto\"` (chosen on each split's "
-                 f"training objects) and the shipped default `{DEFAULT_METHOD}`:", "",
-             "| left out | choice | chosen on the others | score | hindsight best | regret | `auto` (regret) | "
-             "shipped (regret) |", "|---|---|---|---|---|---|---|---|"]
+                 f"training objects) and the shipped default `{DEFAULT_METHOD}`. Every score of a row is a mean over "
+                 "the same splits, those of the left-out dataset on which every method ran (complete splits, as in "
+                 "the ranks); the hindsight best is the highest of about ten noisy means, so on a dataset of few "
+                 "splits the regret is large even for a sound choice:", "",
+             "| left out (complete splits) | choice | chosen on the others | score | hindsight best | regret | "
+             "`auto` (regret) | shipped (regret) |", "|---|---|---|---|---|---|---|---|"]
     for r in lodo.itertuples():
-        lines.append(f"| {r.dataset} | {r.choice} | `{r.chosen}` | {number(r.chosen_score)} | `{r.best}` "
-                     f"{number(r.best_score)} | {number(r.regret)} | {number(r.auto_score)} ({number(r.auto_regret)}) "
-                     f"| {number(r.shipped_score)} ({number(r.shipped_regret)}) |")
+        lines.append(f"| {r.dataset} ({int(r.n_splits)}) | {r.choice} | `{r.chosen}` | {number(r.chosen_score)} | "
+                     f"`{r.best}` {number(r.best_score)} | {number(r.regret)} | {number(r.auto_score)} "
+                     f"({number(r.auto_regret)}) | {number(r.shipped_score)} ({number(r.shipped_regret)}) |")
     for choice, part in lodo.groupby("choice", sort=False):
         lines.append("")
         lines.append(f"Mean regret of the {choice} chosen with each dataset left out: {number(part['regret'].mean())} "
@@ -120,8 +125,23 @@ def _defaults_lines(defaults: pd.DataFrame, ranks: pd.DataFrame, friedman: pd.Se
         lines.append("")
         choices = ", ".join(f"{c} `{name}`" for c, name in every["chosen"].items())
         lines.append(f"Chosen on every dataset's selection splits: {choices} (shipped: `{DEFAULT_METHOD}`)."
-                     + _beaten(chosen, ranks, friedman))
+                     + _beaten(chosen, ranks, friedman) + _successor(chosen, pooled))
     return lines
+
+
+def _successor(chosen: str, pooled: pd.DataFrame) -> str:
+    """Whether ``chosen`` replaces the shipped default: its pooled confirmation difference must exclude 0."""
+    if chosen == DEFAULT_METHOD:
+        return " It is the shipped default."
+    if chosen not in pooled.index:
+        return f" `{chosen}` has no pooled difference from the shipped default, so the default stays."
+    m = pooled.loc[chosen]
+    verdict = ("above 0: the shipped default should become it" if m["ci95_low"] > 0 else
+               "below 0: the shipped default stays" if m["ci95_high"] < 0 else
+               "it includes 0: the shipped default stays")
+    return (f" It replaces the shipped default only if its pooled difference from it on these confirmation splits "
+            f"has an interval above 0 ({{doc}}`choices`): {signed(m['effect'], m['ci95_low'], m['ci95_high'])}, "
+            f"{verdict}.")
 
 
 def _beaten(method: str, ranks: pd.DataFrame, friedman: pd.Series) -> str:

@@ -92,10 +92,12 @@ def leave_one_dataset_out(select: pd.DataFrame, confirm: pd.DataFrame, default_m
         One row per (dataset, choice), choice ``default`` (among every method) or ``detector`` (among
         the DAP rows): ``chosen`` (on the other datasets' selection splits), ``seen`` (those datasets),
         ``chosen_score`` (its mean per-class accuracy on the left-out dataset's confirmation splits),
-        ``best`` and ``best_score`` (the hindsight best there, among the same candidates: every method but
-        :data:`AUTO_METHOD`, which is compared with a default, not a candidate for one), ``regret``
-        (best minus chosen, >= 0), and the same score and regret for ``auto`` (:data:`AUTO_METHOD`)
-        and ``shipped`` (``default_method``); NaN where that method has no score.
+        ``n_splits`` (the left-out dataset's complete confirmation splits, those every method ran on: every
+        score of the row is a mean over them), ``best`` and ``best_score`` (the hindsight best there, among
+        the same candidates: every method but :data:`AUTO_METHOD`, which is compared with a default, not a
+        candidate for one), ``regret`` (best minus chosen, >= 0), and the same score and regret for
+        ``auto`` (:data:`AUTO_METHOD`) and ``shipped`` (``default_method``); NaN where that method has
+        no score.
     """
     means = _means(confirm)
     rows = []
@@ -112,6 +114,7 @@ def leave_one_dataset_out(select: pd.DataFrame, confirm: pd.DataFrame, default_m
             chosen = choose(others, candidates)
             best = str(on[candidates].idxmax())
             row = {"dataset": dataset, "choice": choice, "chosen": chosen, "seen": seen,
+                   "n_splits": confirm.loc[confirm["dataset"] == dataset, "split"].nunique(),
                    "chosen_score": on.get(chosen, np.nan), "best": best, "best_score": on[best]}
             row["regret"] = row["best_score"] - row["chosen_score"]
             for label, method in (("auto", AUTO_METHOD), ("shipped", default_method)):
