@@ -106,8 +106,8 @@ def _defaults_lines(defaults: pd.DataFrame, ranks: pd.DataFrame, friedman: pd.Se
                  f"its hindsight best there (the regret), DAP with `detector = \"auto\"` (chosen on each split's "
                  f"training objects) and the shipped default `{DEFAULT_METHOD}`. Every score of a row is a mean over "
                  "the same splits, those of the left-out dataset on which every method ran (complete splits, as in "
-                 "the ranks); the hindsight best is the highest of about ten noisy means, so on a dataset of few "
-                 "splits the regret is large even for a sound choice:", "",
+                 f"the ranks); the hindsight best is the highest of {len(ranks)} noisy means, so on a dataset of "
+                 "few splits the regret is large even for a sound choice:", "",
              "| left out (complete splits) | choice | chosen on the others | score | hindsight best | regret | "
              "`auto` (regret) | shipped (regret) |", "|---|---|---|---|---|---|---|---|"]
     for r in lodo.itertuples():
