@@ -31,6 +31,17 @@ def test_every_choice_is_complete_and_named_once():
         assert c["datasets"] and (c["datasets"].startswith("none") == c["selection"].startswith(NO_SELECTION_SPLITS))
 
 
+def test_the_defaults_checked_across_datasets_name_the_benchmark_catalog():
+    """Issue 42: the default method and the study's detector say which datasets the benchmark checked them on."""
+    from tzsl.models.choices import BENCHMARK_CHECKED
+    from tzsl.studies.benchmark.catalog import BENCHMARK_DATASETS
+
+    assert sorted(BENCHMARK_CHECKED) == sorted(d.name for d in BENCHMARK_DATASETS)
+    by_key = {c["key"]: c for c in inherited_choices()}
+    for key in ("default-method", "study-detector"):
+        assert all(name in by_key[key]["datasets"] for name in BENCHMARK_CHECKED), key
+
+
 def test_the_choices_a_user_meets_are_listed():
     assert {"default-method", "ensemble-members", "attribute-svm-grid", "approximate-solver", "eszsl-grid",
             "sae-grid", "compatibility-sgd"} <= {c.key for c in INHERITED_CHOICES}

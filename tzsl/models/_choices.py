@@ -24,7 +24,8 @@ from tzsl.models.detectors import AUTO_MAX_EXACT_TRIALS, STUDY_DETECTOR, Attribu
 from tzsl.models.embedding import ALE, ESZSLCV, SAECV, SJE, DeViSE
 from tzsl.models.ensemble import DEFAULT_MEMBERS, ScoreEnsembleZSL
 
-__all__ = ["DEFAULT_METHOD", "INHERITED_CHOICES", "NO_SELECTION_SPLITS", "InheritedChoice", "inherited_choices"]
+__all__ = ["BENCHMARK_CHECKED", "DEFAULT_METHOD", "INHERITED_CHOICES", "NO_SELECTION_SPLITS", "InheritedChoice",
+           "inherited_choices"]
 
 #: The selection entry of a choice made on no recorded splits.
 NO_SELECTION_SPLITS = "none recorded"
@@ -34,6 +35,15 @@ PHAC2_ONLY = ("PHAC-2 (Penn features) only, one dataset of the benchmark's; the 
               "one dataset out) is made by make benchmark (defaults.csv)")
 #: The datasets of a choice made on no splits.
 NO_DATASETS = "none (made on no splits)"
+#: The catalog datasets the benchmark checked a default on (tzsl.studies.benchmark.catalog.BENCHMARK_DATASETS;
+#: tests/models/test_choices.py checks the list).
+BENCHMARK_CHECKED = ("biotac-slide", "bts3", "fabric-depth", "icub-grasp", "phac2-penn", "physiclear")
+#: The datasets of a default chosen on PHAC-2 and checked across the benchmark's datasets.
+CHECKED_ACROSS_DATASETS = (
+    "PHAC-2 (Penn features) when it was chosen; then the benchmark's datasets (" + ", ".join(BENCHMARK_CHECKED)
+    + "; make benchmark): the rule applied to every dataset's selection splits, its leave-one-dataset-out regret "
+    "and the standing rule's verdict on their confirmation splits are in the leaderboard block of "
+    "docs/user_guide/benchmark.md (defaults.csv)")
 
 
 def _alias_of(entry: dict[str, object]) -> str:
@@ -163,7 +173,8 @@ INHERITED_CHOICES: tuple[InheritedChoice, ...] = (
         "the default's row of every generic method_comparison.csv (the run's own splits and purpose) and the "
         "dap-avg-logistic-c1 rows of phac2-headlines (make evidence; the detectors block of README.md)",
         BEST_METHOD_COMMAND + " (the default changes only if a method beats it on confirmation splits "
-                              "with an interval excluding 0)"),
+                              "with an interval excluding 0)",
+        datasets=CHECKED_ACROSS_DATASETS),
     InheritedChoice(
         "study-detector",
         "the attribute detector family of the generic zero-shot study's DAP (`[svm] detector` of study = "
@@ -179,7 +190,8 @@ INHERITED_CHOICES: tuple[InheritedChoice, ...] = (
         "challenging splits (the detector benchmark's summary.csv); the dap-avg-logistic-c1 rows of phac2-headlines "
         "(make evidence; the detectors block of README.md)",
         DETECTORS_COMMAND + " (the generic study's default changes only if the chosen family beats dap-avg on the "
-                            "random confirmation splits with a paired interval excluding 0)"),
+                            "random confirmation splits with a paired interval excluding 0)",
+        datasets=CHECKED_ACROSS_DATASETS),
     InheritedChoice(
         "ensemble-members",
         "members of the registered `ensemble` (tzsl.models.ScoreEnsembleZSL, DEFAULT_MEMBERS), each with its "
