@@ -213,6 +213,11 @@ def test_leave_one_dataset_out_scores_a_choice_on_the_dataset_it_did_not_see(tmp
     assert (table["regret"].dropna() >= -1e-12).all()
     assert "dap-avg-auto" not in set(table["chosen"]) | set(table["best"])
     assert default.loc["d3", "auto_score"] == pytest.approx(0.9, abs=0.02) and np.isnan(default.loc["d2", "auto_score"])
+    # the choice made on the left-out dataset's own selection splits: here the same means, so its best, no regret
+    own = default.drop(index="(every dataset)")
+    assert own["own_chosen"].to_dict() == {"d1": "eszsl", "d2": "eszsl", "d3": "sae"}
+    assert own["own_regret"].to_numpy() == pytest.approx(0.0, abs=1e-12)
+    assert detector.loc["d3", "own_chosen"] == "dap-avg"
     assert lines[0].startswith("defaults chosen with each dataset left out")
     every = table[table["dataset"] == "(every dataset)"].set_index("choice")
     assert every.loc["default", "chosen"] == "eszsl" and every.loc["detector", "chosen"] == "dap-avg"

@@ -104,22 +104,25 @@ def _defaults_lines(defaults: pd.DataFrame, ranks: pd.DataFrame, friedman: pd.Se
     lines = ["", "Defaults chosen across datasets (best mean rank on the selection splits): with each dataset left "
                  "out, the choice made on the others, scored on the left-out dataset's confirmation splits beside "
                  f"its hindsight best there (the regret), DAP with `detector = \"auto\"` (chosen on each split's "
-                 f"training objects) and the shipped default `{DEFAULT_METHOD}`. Every score of a row is a mean over "
+                 f"training objects), the shipped default `{DEFAULT_METHOD}`, and the rule applied to the left-out "
+                 "dataset's own selection splits (`own`: a choice made on that dataset's data, the regret left "
+                 "when datasets need not agree). Every score of a row is a mean over "
                  "the same splits, those of the left-out dataset on which every method ran (complete splits, as in "
                  f"the ranks); the hindsight best is the highest of {len(ranks)} noisy means, so on a dataset of "
                  "few splits the regret is large even for a sound choice:", "",
              "| left out (complete splits) | choice | chosen on the others | score | hindsight best | regret | "
-             "`auto` (regret) | shipped (regret) |", "|---|---|---|---|---|---|---|---|"]
+             "`auto` (regret) | shipped (regret) | `own` (regret) |", "|---|---|---|---|---|---|---|---|---|"]
     for r in lodo.itertuples():
         lines.append(f"| {r.dataset} ({int(r.n_splits)}) | {r.choice} | `{r.chosen}` | {number(r.chosen_score)} | "
                      f"`{r.best}` {number(r.best_score)} | {number(r.regret)} | {number(r.auto_score)} "
-                     f"({number(r.auto_regret)}) | {number(r.shipped_score)} ({number(r.shipped_regret)}) |")
+                     f"({number(r.auto_regret)}) | {number(r.shipped_score)} ({number(r.shipped_regret)}) | "
+                     f"{_own(r)} |")
     for choice, part in lodo.groupby("choice", sort=False):
         lines.append("")
         lines.append(f"Mean regret of the {choice} chosen with each dataset left out: {number(part['regret'].mean())} "
                      f"over {len(part)} datasets (the goal: at most 0.02); `auto` "
                      f"{number(part['auto_regret'].mean())} over {int(part['auto_regret'].notna().sum())}, the shipped "
-                     f"default {number(part['shipped_regret'].mean())}.")
+                     f"default {number(part['shipped_regret'].mean())}, `own` {number(part['own_regret'].mean())}.")
     if "default" in every.index:
         chosen = str(every.loc["default", "chosen"])
         lines.append("")
@@ -127,6 +130,13 @@ def _defaults_lines(defaults: pd.DataFrame, ranks: pd.DataFrame, friedman: pd.Se
         lines.append(f"Chosen on every dataset's selection splits: {choices} (shipped: `{DEFAULT_METHOD}`)."
                      + _beaten(chosen, ranks, friedman) + _successor(chosen, pooled))
     return lines
+
+
+def _own(row) -> str:
+    """The ``own`` cell of a leave-one-dataset-out row: the method, its score and regret (``-`` without one)."""
+    if not isinstance(row.own_chosen, str):
+        return "-"
+    return f"`{row.own_chosen}` {number(row.own_score)} ({number(row.own_regret)})"
 
 
 def _successor(chosen: str, pooled: pd.DataFrame) -> str:

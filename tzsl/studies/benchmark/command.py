@@ -164,7 +164,8 @@ def write_defaults(select: pd.DataFrame, confirm: pd.DataFrame, results: Results
     for choice, part in table.groupby("choice", sort=False):
         lines.append(f"  {choice}: chose {', '.join(sorted(set(part['chosen'])))}; mean regret "
                      f"{part['regret'].mean():.3f} (auto {part['auto_regret'].mean():.3f}, shipped "
-                     f"{DEFAULT_METHOD} {part['shipped_regret'].mean():.3f}) over {len(part)} datasets")
+                     f"{DEFAULT_METHOD} {part['shipped_regret'].mean():.3f}, chosen on the dataset's own selection "
+                     f"splits {part['own_regret'].mean():.3f}) over {len(part)} datasets")
     lines.append("chosen on every dataset's selection splits: " + ", ".join(
         f"{r.choice} {r.chosen}" for r in every.itertuples()) + f" (shipped: {DEFAULT_METHOD})")
     return lines

@@ -11,7 +11,11 @@ so it is chosen across datasets, on selection splits, and judged on datasets it 
   dataset's hindsight best (the best method on those same confirmation splits, known only
   afterwards): the difference is the **regret**;
 * beside both, the per-dataset choice made on a user's training objects alone: DAP with
-  ``detector="auto"`` (pseudo-unseen CV over detector families), and the shipped default.
+  ``detector="auto"`` (pseudo-unseen CV over detector families), and the shipped default;
+* and the rule applied to the left-out dataset's *own* selection splits (``own``): a choice made on
+  that dataset's data, whose regret is what is left when datasets need not agree, so beside a
+  default's regret it tells how much of it is the datasets disagreeing and how much the noise of
+  the scores.
 
 :func:`leave_one_dataset_out` makes the table (``defaults.csv`` of ``tzsl benchmark --defaults``);
 :func:`choose` applies the rule to every dataset (the choice the shipped default should equal).
@@ -95,9 +99,10 @@ def leave_one_dataset_out(select: pd.DataFrame, confirm: pd.DataFrame, default_m
         ``n_splits`` (the left-out dataset's complete confirmation splits, those every method ran on: every
         score of the row is a mean over them), ``best`` and ``best_score`` (the hindsight best there, among
         the same candidates: every method but :data:`AUTO_METHOD`, which is compared with a default, not a
-        candidate for one), ``regret`` (best minus chosen, >= 0), and the same score and regret for
-        ``auto`` (:data:`AUTO_METHOD`) and ``shipped`` (``default_method``); NaN where that method has
-        no score.
+        candidate for one), ``regret`` (best minus chosen, >= 0), the same score and regret for
+        ``auto`` (:data:`AUTO_METHOD`) and ``shipped`` (``default_method``), and ``own_chosen``,
+        ``own_score`` and ``own_regret`` for the rule applied to the left-out dataset's own selection
+        splits; NaN where that method has no score (or the dataset no selection scores).
     """
     means = _means(confirm)
     rows = []
@@ -120,6 +125,10 @@ def leave_one_dataset_out(select: pd.DataFrame, confirm: pd.DataFrame, default_m
             for label, method in (("auto", AUTO_METHOD), ("shipped", default_method)):
                 row[f"{label}_score"] = on.get(method, np.nan)
                 row[f"{label}_regret"] = row["best_score"] - row[f"{label}_score"]
+            own = select[(select["dataset"] == dataset) & select["method"].isin(candidates)]
+            row["own_chosen"] = choose(own) if own["score"].notna().any() else None
+            row["own_score"] = on.get(row["own_chosen"], np.nan) if row["own_chosen"] else np.nan
+            row["own_regret"] = row["best_score"] - row["own_score"]
             rows.append(row)
     return pd.DataFrame(rows)
 
