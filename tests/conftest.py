@@ -37,12 +37,27 @@ def data_dir() -> Path:
     return found
 
 
+@pytest.fixture(scope="session")
+def run_folder(tmp_path_factory) -> Path:
+    """The temporary folder every xdist worker of this test run shares (the base temp folder without xdist)."""
+    base = tmp_path_factory.getbasetemp()
+    return base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+
+
+@pytest.fixture(scope="session")
+def shared_cache(run_folder) -> Path:
+    """The cache folder of this test run, shared by its xdist workers: a fit or a feature table one worker
+    computed (the fit store and the feature caches key on content and write atomically) is read by the other."""
+    return run_folder / "tzsl-cache"
+
+
 @pytest.fixture(autouse=True)
-def _isolated_cache(tmp_path_factory, monkeypatch):
-    """Keep joblib caches of tests out of the user's cache directory; the study cache is off (tests run
-    a study again after changing what it does; tests/studies/test_study_cache.py turns it on). The
-    platform's user cache folder is a temporary one too, for the tests that unset TZSL_CACHE_DIR."""
-    monkeypatch.setenv("TZSL_CACHE_DIR", str(tmp_path_factory.getbasetemp() / "tzsl-cache"))
+def _isolated_cache(shared_cache, tmp_path_factory, monkeypatch):
+    """Keep joblib caches of tests out of the user's cache directory (in the run's shared cache folder, so a
+    test asserting a cold cache makes its own); the study cache is off (tests run a study again after changing
+    what it does; tests/studies/test_study_cache.py turns it on). The platform's user cache folder is a
+    temporary one too, for the tests that unset TZSL_CACHE_DIR."""
+    monkeypatch.setenv("TZSL_CACHE_DIR", str(shared_cache))
     monkeypatch.setenv("TZSL_STUDY_CACHE", "0")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "user-cache"))
 

@@ -36,15 +36,9 @@ def _text(page: Path) -> str:
 #: read by every worker that needs it.
 
 
-def _run_folder(tmp_path_factory) -> Path:
-    """The folder every xdist worker of this run shares (the base temp folder without xdist)."""
-    base = tmp_path_factory.getbasetemp()
-    return base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
-
-
 @pytest.fixture(scope="module")
-def html(tmp_path_factory) -> Path:
-    run = _run_folder(tmp_path_factory)
+def html(run_folder) -> Path:
+    run = run_folder
     out = run / "docs-build"
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
            "MPLBACKEND": "Agg"}

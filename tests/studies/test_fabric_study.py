@@ -184,10 +184,10 @@ def _settings(seeds=None, lams=None, partitions=None, **flat) -> FabricStudy:
 
 
 @pytest.fixture(scope="module")
-def real_study(data_dir, tmp_path_factory):
+def real_study(data_dir, tmp_path_factory, shared_cache):
     out = tmp_path_factory.mktemp("fabric_results")
     # a module fixture runs before the autouse cache isolation of conftest: use the same folder
-    cache = tmp_path_factory.getbasetemp() / "tzsl-cache"
+    cache = shared_cache
     record: dict = {}  # what the run's one manifest.json records of the study (the engine writes it)
     result = run_fabric_study(ResultsDir(out), _settings(configs=(1, 2), **REDUCED), data_dir=data_dir, cache_dir=cache,
                               record=record)

@@ -25,8 +25,6 @@ from tzsl.studies.reproduce import (
     reproduce_tables,
 )
 
-pytestmark = pytest.mark.schedule_first(60)  # whole reproduce runs: handed out first (conftest.py)
-
 
 def test_reproduce_runs_the_builtin_files_unchanged():
     assert REPRODUCE_STUDIES == ("phac2-dap", "fabric", "hand-simulated")

@@ -24,8 +24,6 @@ from tzsl.datasets import write_plain_dataset
 from tzsl.studies.config import load_experiment
 from tzsl.studies.papers.run_labels import paper_protocol
 
-pytestmark = pytest.mark.schedule_first(90)  # whole template studies: handed out first (conftest.py)
-
 REPO = Path(__file__).resolve().parents[2]
 TEMPLATE = REPO / "experiments" / "my_dataset_template.toml"
 
