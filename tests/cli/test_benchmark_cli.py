@@ -214,7 +214,15 @@ def test_leave_one_dataset_out_scores_a_choice_on_the_dataset_it_did_not_see(tmp
     assert "dap-avg-auto" not in set(table["chosen"]) | set(table["best"])
     assert default.loc["d3", "auto_score"] == pytest.approx(0.9, abs=0.02) and np.isnan(default.loc["d2", "auto_score"])
     # the choice made on the left-out dataset's own selection splits: here the same means, so its best, no regret
-    own = default.drop(index="(every dataset)")
+    # the bound: the one method with the least mean regret on the confirmation splits, in hindsight
+    # (eszsl: regrets 0, 0 and 0.2 on d1-d3; among the DAP rows dap-avg: 0, 0.05, 0)
+    bound = table[table["dataset"] == "(one method, in hindsight)"].set_index("choice")
+    assert bound.loc["default", "chosen"] == "eszsl"
+    assert bound.loc["default", "regret"] == pytest.approx(0.2 / 3, abs=0.01)
+    assert bound.loc["detector", "chosen"] == "dap-avg"
+    assert bound.loc["detector", "regret"] == pytest.approx(0.05 / 3, abs=0.01)
+    assert "the least any one method reaches, in hindsight: 0.06" in lines[1]
+    own = default.drop(index=["(every dataset)", "(one method, in hindsight)"])
     assert own["own_chosen"].to_dict() == {"d1": "eszsl", "d2": "eszsl", "d3": "sae"}
     assert own["own_regret"].to_numpy() == pytest.approx(0.0, abs=1e-12)
     assert detector.loc["d3", "own_chosen"] == "dap-avg"

@@ -12,6 +12,8 @@ so it is chosen across datasets, on selection splits, and judged on datasets it 
   afterwards): the difference is the **regret**;
 * beside both, the per-dataset choice made on a user's training objects alone: DAP with
   ``detector="auto"`` (pseudo-unseen CV over detector families), and the shipped default;
+* the least mean regret any single method reaches, picked in hindsight on the confirmation splits
+  (:func:`hindsight_single_method`): no default, however chosen, does better on these splits;
 * and the rule applied to the left-out dataset's *own* selection splits (``own``): a choice made on
   that dataset's data, whose regret is what is left when datasets need not agree, so beside a
   default's regret it tells how much of it is the datasets disagreeing and how much the noise of
@@ -32,8 +34,8 @@ from tzsl.exceptions import ConfigError
 from tzsl.studies.benchmark.statistics import mean_ranks
 from tzsl.studies.benchmark.summary import ranked_methods
 
-__all__ = ["AUTO_METHOD", "DEFAULTS_FILE", "EVERY_DATASET", "choose", "choose_on_every_dataset", "is_dap_row",
-           "leave_one_dataset_out"]
+__all__ = ["AUTO_METHOD", "DEFAULTS_FILE", "EVERY_DATASET", "HINDSIGHT", "choose", "choose_on_every_dataset",
+           "hindsight_single_method", "is_dap_row", "leave_one_dataset_out"]
 
 #: The benchmark row of the per-dataset detector choice made on training objects (``dap`` with ``detector="auto"``).
 AUTO_METHOD = "dap-avg-auto"
@@ -41,6 +43,8 @@ AUTO_METHOD = "dap-avg-auto"
 DEFAULTS_FILE = "defaults.csv"
 #: ``dataset`` of the rows of the choice made on every dataset's selection splits (what a default should be).
 EVERY_DATASET = "(every dataset)"
+#: The ``dataset`` of the rows of :func:`hindsight_single_method` in ``defaults.csv``.
+HINDSIGHT = "(one method, in hindsight)"
 
 
 def is_dap_row(method: str) -> bool:
@@ -148,3 +152,38 @@ def choose_on_every_dataset(select: pd.DataFrame) -> pd.DataFrame:
     choices = (("default", methods), ("detector", [m for m in methods if is_dap_row(m)]))
     return pd.DataFrame([{"dataset": EVERY_DATASET, "choice": choice, "chosen": choose(select, candidates),
                           "seen": seen} for choice, candidates in choices if candidates])
+
+
+def hindsight_single_method(confirm: pd.DataFrame) -> pd.DataFrame:
+    """The single method with the least mean regret over the datasets, picked on the confirmation splits.
+
+    What no default (one method for every dataset), however it is chosen, can beat on these splits: a
+    bound on the leave-one-dataset-out regret, not a choice (it is made on the splits it is scored on).
+
+    Parameters
+    ----------
+    confirm : DataFrame
+        Long scores of the confirmation splits (complete splits only), as for :func:`leave_one_dataset_out`.
+
+    Returns
+    -------
+    DataFrame
+        One row per choice (``default``: among every method scored on every dataset but
+        :data:`AUTO_METHOD`; ``detector``: among its DAP rows), ``dataset`` :data:`HINDSIGHT`, ``chosen``,
+        ``seen`` (the datasets) and ``regret`` (its mean over the datasets of each dataset's best among
+        the same candidates minus the method's score).
+    """
+    means = _means(confirm)
+    means = means.loc[:, means.notna().all() & (means.columns != AUTO_METHOD)]
+    seen = ", ".join(sorted(means.index))
+    rows = []
+    for choice, candidates in (("default", list(means.columns)),
+                               ("detector", [m for m in means.columns if is_dap_row(m)])):
+        if not candidates:
+            continue
+        part = means[candidates]
+        regret = part.max(axis=1).to_numpy()[:, None] - part
+        mean_regret = regret.mean().sort_index().sort_values(kind="stable")
+        rows.append({"dataset": HINDSIGHT, "choice": choice, "chosen": str(mean_regret.index[0]), "seen": seen,
+                     "regret": float(mean_regret.iloc[0])})
+    return pd.DataFrame(rows)
