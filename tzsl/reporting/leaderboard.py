@@ -18,7 +18,7 @@ import pandas as pd
 from tzsl.models.choices import DEFAULT_METHOD
 from tzsl.reporting.benchmark_blocks import MissingResults
 from tzsl.reporting.markdown_cells import number, signed
-from tzsl.studies.benchmark.defaults import DEFAULTS_FILE, EVERY_DATASET, HINDSIGHT
+from tzsl.studies.benchmark.defaults import DEFAULTS_FILE, EVERY_DATASET, left_out_rows, mean_regrets
 from tzsl.studies.benchmark.summary import reference_method
 
 __all__ = ["leaderboard_block"]
@@ -100,8 +100,7 @@ def _defaults_lines(defaults: pd.DataFrame, ranks: pd.DataFrame, friedman: pd.Se
     """The defaults chosen across datasets (``defaults.csv``): leave one dataset out, the regret, ``auto`` beside;
     ``pooled``: each method minus the shipped default, pooled over datasets (rows by ``method_a``)."""
     every = defaults[defaults["dataset"] == EVERY_DATASET].set_index("choice")
-    bound = defaults[defaults["dataset"] == HINDSIGHT].set_index("choice")
-    lodo = defaults[~defaults["dataset"].isin([EVERY_DATASET, HINDSIGHT])]
+    lodo = left_out_rows(defaults)
     lines = ["", "Defaults chosen across datasets (best mean rank on the selection splits): with each dataset left "
                  "out, the choice made on the others, scored on the left-out dataset's confirmation splits beside "
                  f"its hindsight best there (the regret), DAP with `detector = \"auto\"` (chosen on each split's "
@@ -118,15 +117,15 @@ def _defaults_lines(defaults: pd.DataFrame, ranks: pd.DataFrame, friedman: pd.Se
                      f"`{r.best}` {number(r.best_score)} | {number(r.regret)} | {number(r.auto_score)} "
                      f"({number(r.auto_regret)}) | {number(r.shipped_score)} ({number(r.shipped_regret)}) | "
                      f"{_own(r)} |")
-    for choice, part in lodo.groupby("choice", sort=False):
+    for choice, m in mean_regrets(defaults).iterrows():
         lines.append("")
-        lines.append(f"Mean regret of the {choice} chosen with each dataset left out: {number(part['regret'].mean())} "
-                     f"over {len(part)} datasets (the goal: at most 0.02); `auto` "
-                     f"{number(part['auto_regret'].mean())} over {int(part['auto_regret'].notna().sum())}, the shipped "
-                     f"default {number(part['shipped_regret'].mean())}, `own` {number(part['own_regret'].mean())}."
+        lines.append(f"Mean regret of the {choice} chosen with each dataset left out: {number(m['regret'])} "
+                     f"over {m['n_datasets']} datasets (the goal: at most 0.02); `auto` {number(m['auto_regret'])} "
+                     f"over {m['n_auto']}, the shipped default {number(m['shipped_regret'])}, `own` "
+                     f"{number(m['own_regret'])}."
                      + (f" The least mean regret any one method reaches on these splits, picked in hindsight: "
-                        f"{number(bound.loc[choice, 'regret'])} (`{bound.loc[choice, 'chosen']}`); no {choice} "
-                        "chosen once for every dataset does better." if choice in bound.index else ""))
+                        f"{number(m['bound_regret'])} (`{m['bound_method']}`); no {choice} chosen once for every "
+                        "dataset does better." if m["bound_method"] is not None else ""))
     if "default" in every.index:
         chosen = str(every.loc["default", "chosen"])
         lines.append("")

@@ -32,6 +32,7 @@ from tzsl.studies.benchmark.defaults import (
     choose_on_every_dataset,
     hindsight_single_method,
     leave_one_dataset_out,
+    mean_regrets,
 )
 from tzsl.studies.benchmark.runner import (
     DatasetRun,
@@ -156,28 +157,23 @@ def read_selection(folder: str | os.PathLike) -> pd.DataFrame:
     return pd.read_csv(path, dtype={"split": str})
 
 
-def _bound(bound: pd.DataFrame, choice: str) -> str:
-    """``"0.035 (dap-avg-logistic-c1)"``: the least mean regret one method reaches for ``choice``, in hindsight."""
-    row = bound[bound["choice"] == choice]
-    return "-" if row.empty else f"{row['regret'].iloc[0]:.3f} ({row['chosen'].iloc[0]})"
-
-
 def write_defaults(select: pd.DataFrame, confirm: pd.DataFrame, results: ResultsDir) -> list[str]:
     """Write ``defaults.csv`` (:func:`~tzsl.studies.benchmark.defaults.leave_one_dataset_out`); its terminal lines."""
     from tzsl.models.choices import DEFAULT_METHOD  # noqa: PLC0415
 
     selection, confirmation = complete_splits(long_scores(select)), complete_splits(long_scores(confirm))
     table = leave_one_dataset_out(selection, confirmation, DEFAULT_METHOD)
-    every, bound = choose_on_every_dataset(selection), hindsight_single_method(confirmation)
-    results.write_csv(DEFAULTS_FILE, pd.concat([table, every, bound], ignore_index=True))
+    every = choose_on_every_dataset(selection)
+    defaults = pd.concat([table, every, hindsight_single_method(confirmation)], ignore_index=True)
+    results.write_csv(DEFAULTS_FILE, defaults)
     lines = ["defaults chosen with each dataset left out (mean rank on the others' selection splits), their regret "
              "against each dataset's hindsight best on its confirmation splits:"]
-    for choice, part in table.groupby("choice", sort=False):
-        lines.append(f"  {choice}: chose {', '.join(sorted(set(part['chosen'])))}; mean regret "
-                     f"{part['regret'].mean():.3f} (auto {part['auto_regret'].mean():.3f}, shipped "
-                     f"{DEFAULT_METHOD} {part['shipped_regret'].mean():.3f}, chosen on the dataset's own selection "
-                     f"splits {part['own_regret'].mean():.3f}) over {len(part)} datasets; the least any one method "
-                     f"reaches, in hindsight: {_bound(bound, choice)}")
+    for choice, m in mean_regrets(defaults).iterrows():
+        bound = "-" if m["bound_method"] is None else f"{m['bound_regret']:.3f} ({m['bound_method']})"
+        lines.append(f"  {choice}: chose {m['chosen']}; mean regret {m['regret']:.3f} (auto {m['auto_regret']:.3f}, "
+                     f"shipped {DEFAULT_METHOD} {m['shipped_regret']:.3f}, chosen on the dataset's own selection "
+                     f"splits {m['own_regret']:.3f}) over {m['n_datasets']} datasets; the least any one method "
+                     f"reaches, in hindsight: {bound}")
     lines.append("chosen on every dataset's selection splits: " + ", ".join(
         f"{r.choice} {r.chosen}" for r in every.itertuples()) + f" (shipped: {DEFAULT_METHOD})")
     return lines

@@ -35,7 +35,7 @@ from tzsl.studies.benchmark.statistics import mean_ranks
 from tzsl.studies.benchmark.summary import ranked_methods
 
 __all__ = ["AUTO_METHOD", "DEFAULTS_FILE", "EVERY_DATASET", "HINDSIGHT", "choose", "choose_on_every_dataset",
-           "hindsight_single_method", "is_dap_row", "leave_one_dataset_out"]
+           "hindsight_single_method", "is_dap_row", "leave_one_dataset_out", "left_out_rows", "mean_regrets"]
 
 #: The benchmark row of the per-dataset detector choice made on training objects (``dap`` with ``detector="auto"``).
 AUTO_METHOD = "dap-avg-auto"
@@ -115,6 +115,7 @@ def leave_one_dataset_out(select: pd.DataFrame, confirm: pd.DataFrame, default_m
         if others["dataset"].nunique() == 0:
             raise ConfigError(f"leave-one-dataset-out needs selection scores of a dataset other than {dataset!r}")
         seen = ", ".join(sorted(others["dataset"].unique()))
+        n_splits = confirm.loc[confirm["dataset"] == dataset, "split"].nunique()
         on = means.loc[dataset].dropna()
         eligible = [m for m in on.index if m != AUTO_METHOD]  # auto is compared with a default, not one
         for choice, candidates in (("default", eligible), ("detector", [m for m in eligible if is_dap_row(m)])):
@@ -123,7 +124,7 @@ def leave_one_dataset_out(select: pd.DataFrame, confirm: pd.DataFrame, default_m
             chosen = choose(others, candidates)
             best = str(on[candidates].idxmax())
             row = {"dataset": dataset, "choice": choice, "chosen": chosen, "seen": seen,
-                   "n_splits": confirm.loc[confirm["dataset"] == dataset, "split"].nunique(),
+                   "n_splits": n_splits,
                    "chosen_score": on.get(chosen, np.nan), "best": best, "best_score": on[best]}
             row["regret"] = row["best_score"] - row["chosen_score"]
             for label, method in (("auto", AUTO_METHOD), ("shipped", default_method)):
@@ -187,3 +188,30 @@ def hindsight_single_method(confirm: pd.DataFrame) -> pd.DataFrame:
         rows.append({"dataset": HINDSIGHT, "choice": choice, "chosen": str(mean_regret.index[0]), "seen": seen,
                      "regret": float(mean_regret.iloc[0])})
     return pd.DataFrame(rows)
+
+
+def left_out_rows(defaults: pd.DataFrame) -> pd.DataFrame:
+    """The leave-one-dataset-out rows of a ``defaults.csv`` table (not the :data:`EVERY_DATASET` or
+    :data:`HINDSIGHT` rows)."""
+    return defaults[~defaults["dataset"].isin([EVERY_DATASET, HINDSIGHT])]
+
+
+def mean_regrets(defaults: pd.DataFrame) -> pd.DataFrame:
+    """The mean regrets of a ``defaults.csv`` table, per choice, as the terminal and the leaderboard give them.
+
+    Returns
+    -------
+    DataFrame
+        Indexed by ``choice`` (in the table's order): ``chosen`` (the methods chosen with a dataset left
+        out, sorted, comma-joined), ``n_datasets``, the mean ``regret``, ``auto_regret`` (over the
+        ``n_auto`` datasets where ``auto`` ran), ``shipped_regret``, ``own_regret``, and the
+        :data:`HINDSIGHT` bound: ``bound_method`` and ``bound_regret`` (None / NaN without that row).
+    """
+    bound = defaults[defaults["dataset"] == HINDSIGHT].set_index("choice")
+    rows = [{"choice": choice, "chosen": ", ".join(sorted(set(part["chosen"]))), "n_datasets": len(part),
+             "regret": part["regret"].mean(), "auto_regret": part["auto_regret"].mean(),
+             "n_auto": int(part["auto_regret"].notna().sum()), "shipped_regret": part["shipped_regret"].mean(),
+             "own_regret": part["own_regret"].mean(),
+             "bound_method": bound["chosen"].get(choice), "bound_regret": bound["regret"].get(choice, np.nan)}
+            for choice, part in left_out_rows(defaults).groupby("choice", sort=False)]
+    return pd.DataFrame(rows).set_index("choice")
