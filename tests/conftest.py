@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from collections import Counter
 from pathlib import Path
 
 import pytest
@@ -71,14 +72,12 @@ def pytest_collection_modifyitems(config, items):
     others follow by their number of tests, largest first, as pytest-xdist orders them by default. Started last,
     the docs build (about 150 s) kept one worker busy while the other had nothing left to run.
     """
-    per_file: dict[str, int] = {}
-    for item in items:
-        per_file[item.nodeid.split("::")[0]] = per_file.get(item.nodeid.split("::")[0], 0) + 1
+    per_file = Counter(item.path for item in items)
 
     def rank(item) -> tuple[int, float]:
         first = item.get_closest_marker("schedule_first")
         if first is not None:
             return 0, -float(first.args[0])
-        return 1, -per_file[item.nodeid.split("::")[0]]
+        return 1, -per_file[item.path]
 
     items.sort(key=rank)  # stable: a file's tests stay together and in their order
