@@ -49,6 +49,7 @@ __all__ = [
     "NEUTRAL_PARAMS",
     "FitStore",
     "array_digest",
+    "code_sources",
     "count_fits",
     "fit_cached",
     "fit_clone",
@@ -79,18 +80,25 @@ class _Unstorable(Exception):
     """A parameter value that makes a fit unrepeatable (a random generator instance)."""
 
 
+def code_sources() -> list[Path]:
+    """This store's source and every ``.py`` file of the model, feature and evaluation packages, sub-packages
+    included (sorted): the code a stored fit depends on."""
+    here = Path(__file__).resolve()
+    return [here] + [path for package in _CODE_PACKAGES for path in sorted((here.parent / package).rglob("*.py"))]
+
+
 @cache
 def code_digest() -> str:
-    """Digest of this store's, the model, feature and evaluation sources and of the numeric libraries' versions."""
+    """Digest of :func:`code_sources` (their paths inside the package and bytes) and of the numeric libraries'
+    versions."""
     import scipy  # noqa: PLC0415
     import sklearn  # noqa: PLC0415
 
     digest = hashlib.sha256(f"{_STORE_FORMAT} {np.__version__} {scipy.__version__} {sklearn.__version__} "
                             f"{joblib.__version__}".encode())
-    here = Path(__file__).resolve()
-    sources = [here] + [path for package in _CODE_PACKAGES for path in sorted((here.parent / package).glob("*.py"))]
-    for path in sources:
-        digest.update(path.name.encode())
+    root = Path(__file__).resolve().parent
+    for path in code_sources():
+        digest.update(path.relative_to(root).as_posix().encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()
 

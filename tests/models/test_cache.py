@@ -4,6 +4,7 @@ backends."""
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import joblib
 import numpy as np
@@ -11,11 +12,12 @@ import pytest
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.linear_model import LogisticRegression
 
+import tzsl
 from tzsl._fit_store import FitStore, array_digest, fit_clone, parallel_context, spawn_seeds
 from tzsl._profile import profiling
 from tzsl.cache import CACHE_DIR_ENV
 from tzsl.exceptions import ConfigError
-from tzsl.fit_store import FITS_FOLDER, fit_cached, fit_store_counts, resolve_store
+from tzsl.fit_store import FITS_FOLDER, code_sources, fit_cached, fit_store_counts, resolve_store
 from tzsl.models import AttributeClassifierBank, AttributeSVM
 
 
@@ -122,6 +124,17 @@ def test_the_key_is_parameters_data_and_code_not_labels_or_parallelism(tmp_path,
     groups = np.repeat(np.arange(8), 10)
     assert (store.key(AttributeSVM(), *d, array_digest(groups))
             != store.key(AttributeSVM(), *d, array_digest(groups % 4)))
+
+
+def test_the_code_in_a_key_covers_every_model_feature_and_evaluation_source_sub_packages_included():
+    # a fit's key named only the packages' top-level files, so an edit of an estimator in a sub-package
+    # (tzsl/models/detectors/, ...) read back fits made by the old code
+    root = Path(tzsl.__file__).resolve().parent
+    sources = set(code_sources())
+    every = {path for package in ("models", "features", "evaluation") for path in (root / package).rglob("*.py")}
+    assert every <= sources
+    assert root / "models" / "detectors" / "_scalable_attribute.py" in sources
+    assert root / "models" / "ensemble" / "_score_ensemble.py" in sources
 
 
 def test_a_generator_instance_is_never_stored(tmp_path, data):
