@@ -14,7 +14,7 @@ from tzsl.cli import cli
 from tzsl.datasets import write_synthetic_dataset
 from tzsl.features import load_features
 from tzsl.models import NearestAttributeRule, register_method, unregister_method
-from tzsl.studies.benchmark.runner import BENCHMARK_DETECTORS, benchmark_methods
+from tzsl.studies.benchmark.runner import BENCHMARK_DETECTORS, DEFAULTS_DETECTORS, benchmark_methods
 from tzsl.studies.benchmark.splits import n_test_of, standard_splits
 from tzsl.studies.benchmark.summary import BENCHMARK_FILES, complete_splits, ranked_methods, summarise
 
@@ -166,14 +166,16 @@ def test_a_method_that_never_ran_on_a_dataset_leaves_its_splits_and_the_ranks_bu
 def test_the_benchmark_runs_dap_with_its_detectors_and_any_detector_asked_for():
     detector, methods = benchmark_methods()
     daps = [m["detector"] for m in methods if m["name"] == "dap"]
-    assert daps == [d for d in BENCHMARK_DETECTORS["confirm"] if d != detector] and "auto" in daps
-    # auto is what a default is compared with on the confirmation splits, not a candidate chosen on selection ones
-    _, select = benchmark_methods(purpose="select")
-    assert [m["detector"] for m in select if m["name"] == "dap"] == ["rbf-svm"]
+    assert daps == [d for d in BENCHMARK_DETECTORS if d != detector] and "auto" not in daps
+    # auto is what a default is compared with (a --defaults run), not a candidate: make benchmark does not pay for it
+    _, defaults = benchmark_methods(defaults=True)
+    assert [m["detector"] for m in defaults if m["name"] == "dap"] == [*daps, *DEFAULTS_DETECTORS]
     _, more = benchmark_methods(["robust-logistic", "rbf-svm", detector])
     assert [m["detector"] for m in more if m["name"] == "dap"] == [*daps, "robust-logistic"]
     unknown = CliRunner().invoke(cli, ["benchmark", "--detector", "forest", "--out", "o"])
     assert unknown.exit_code == 3 and "unknown detector 'forest'" in unknown.output
+    select = CliRunner().invoke(cli, ["benchmark", "--purpose", "select", "--defaults", "s", "--out", "o"])
+    assert select.exit_code == 3 and "--defaults scores the defaults on the confirmation splits" in select.output
 
 
 def _scores(means: dict[str, dict[str, float]], n_splits: int = 4) -> pd.DataFrame:
@@ -197,7 +199,8 @@ def test_leave_one_dataset_out_scores_a_choice_on_the_dataset_it_did_not_see(tmp
              "d2": {"eszsl": 0.7, "sae": 0.5, "dap-avg-logistic-c1": 0.55, "dap-avg": 0.5},
              "d3": {"eszsl": 0.3, "sae": 0.5, "dap-avg-logistic-c1": 0.35, "dap-avg": 0.4}}
     select = _scores(means)
-    # auto runs on the confirmation splits only (and not on d2): shown beside, never chosen nor the hindsight best
+    # auto runs in the --defaults run on the confirmation splits only (and not on d2): shown beside, never chosen
+    # nor the hindsight best
     confirm = _scores({d: {**m, **({} if d == "d2" else {"dap-avg-auto": 0.9})} for d, m in means.items()})
     results = ResultsDir(tmp_path)
     lines = write_defaults(select, confirm, results)

@@ -19,7 +19,7 @@ from tzsl.cli._root import cli, data_dir_option, force_option, n_jobs_option
               help="Run only the --add datasets (with the benchmark's methods, metrics and split recipe).")
 @click.option("--method", "methods", multiple=True, metavar="NAME",
               help="Run only these registered methods ('tzsl methods'; repeat) [default: every registered method, "
-                   "and DAP with the rbf-svm and auto detectors beside the study's].")
+                   "and DAP with the rbf-svm detector beside the study's; with --defaults also the auto one].")
 @click.option("--detector", "detectors", multiple=True, metavar="FAMILY",
               help="Also run DAP with this detector family (e.g. robust-logistic; repeat for several).")
 @click.option("--purpose", type=click.Choice(["select", "confirm"]), default="confirm", show_default=True,
@@ -33,7 +33,8 @@ from tzsl.cli._root import cli, data_dir_option, force_option, n_jobs_option
 @click.option("--defaults", "defaults_from", type=click.Path(file_okay=False, path_type=Path), default=None,
               metavar="SELECT_FOLDER",
               help="Also choose the defaults across datasets: on the selection scores of SELECT_FOLDER (a --purpose "
-                   "select benchmark) with each dataset left out, scored on this run's splits (defaults.csv).")
+                   "select benchmark) with each dataset left out, scored on this run's confirmation splits "
+                   "(defaults.csv), beside DAP with detector auto, which such a run adds.")
 @click.option("--list", "list_only", is_flag=True, help="List the benchmark's datasets and their standard splits.")
 @n_jobs_option(study="zero-shot")
 @data_dir_option

@@ -30,9 +30,9 @@ __all__ = ["BENCHMARK_CHECKED", "DEFAULT_METHOD", "INHERITED_CHOICES", "NO_SELEC
 #: The selection entry of a choice made on no recorded splits.
 NO_SELECTION_SPLITS = "none recorded"
 #: The datasets of a choice made on PHAC-2 splits alone; a choice made across the benchmark's datasets (leave one
-#: dataset out: ``make benchmark``'s defaults.csv, docs/user_guide/benchmark.md) names them.
+#: dataset out: ``make benchmark-defaults``'s defaults.csv, docs/user_guide/benchmark.md) names them.
 PHAC2_ONLY = ("PHAC-2 (Penn features) only, one dataset of the benchmark's; the choice across its datasets (leave "
-              "one dataset out) is made by make benchmark (defaults.csv)")
+              "one dataset out) is made by make benchmark-defaults (defaults.csv)")
 #: The datasets of a choice made on no splits.
 NO_DATASETS = "none (made on no splits)"
 #: The catalog datasets the benchmark checked a default on (tzsl.studies.benchmark.catalog.BENCHMARK_DATASETS;
@@ -41,8 +41,8 @@ BENCHMARK_CHECKED = ("biotac-slide", "bts3", "fabric-depth", "icub-grasp", "phac
 #: The datasets of a default chosen on PHAC-2 and checked across the benchmark's datasets.
 CHECKED_ACROSS_DATASETS = (
     "PHAC-2 (Penn features) when it was chosen; then the benchmark's datasets (" + ", ".join(BENCHMARK_CHECKED)
-    + "; make benchmark): the rule applied to every dataset's selection splits, its leave-one-dataset-out regret "
-    "and the standing rule's verdict on their confirmation splits are in the leaderboard block of "
+    + "; make benchmark-defaults): the rule applied to every dataset's selection splits, its leave-one-dataset-out "
+    "regret and the standing rule's verdict on their confirmation splits are in the leaderboard block of "
     "docs/user_guide/benchmark.md (defaults.csv)")
 
 

@@ -12,7 +12,8 @@ The folder a benchmark writes (``--out``, default ``results/benchmark``):
   splits, meta-analysed across datasets (random effects);
 * ``experiments/``, ``splits/`` and ``datasets/``: each dataset's experiment file, split file and study;
 * ``defaults.csv`` (with ``--defaults SELECT_FOLDER``): the defaults chosen with each dataset left out,
-  their regret against the dataset's hindsight best, beside ``detector="auto"`` and the shipped default;
+  their regret against the dataset's hindsight best, beside ``detector="auto"`` (which such a run adds to the
+  methods, :data:`~tzsl.studies.benchmark.runner.DEFAULTS_DETECTORS`) and the shipped default;
 * ``manifest.json``: the datasets, their status and failures, the split files' hashes, the methods.
 """
 
@@ -35,6 +36,7 @@ from tzsl.studies.benchmark.defaults import (
     mean_regrets,
 )
 from tzsl.studies.benchmark.runner import (
+    DEFAULTS_DETECTORS,
     DatasetRun,
     benchmark_methods,
     collect_gzsl,
@@ -63,15 +65,18 @@ def list_benchmark() -> list[str]:
     return lines
 
 
-def _method_entries(methods: Sequence[str], detectors: Sequence[str], purpose: str) -> list[dict] | None:
-    """The ``[methods] compare`` entries of ``--method`` and ``--detector`` (None: the benchmark's own)."""
+def _method_entries(methods: Sequence[str], detectors: Sequence[str], defaults: bool) -> list[dict] | None:
+    """The ``[methods] compare`` entries of ``--method`` and ``--detector``, with DAP's
+    :data:`~tzsl.studies.benchmark.runner.DEFAULTS_DETECTORS` when the run chooses the defaults (None: the
+    benchmark's own)."""
     if not methods:
-        return benchmark_methods(detectors, purpose)[1] if detectors else None
+        return benchmark_methods(detectors, defaults=defaults)[1] if detectors or defaults else None
     from tzsl.models import get_method  # noqa: PLC0415
 
     for name in methods:
         get_method(name)  # an unknown name: one line with the registered ones
-    return [{"name": name} for name in methods] + detector_entries(detectors)
+    more = (*DEFAULTS_DETECTORS, *detectors) if defaults else tuple(detectors)
+    return [{"name": name} for name in methods] + detector_entries(more)
 
 
 def run_benchmark_command(*, datasets: Sequence[str] = (), added: Sequence[str | os.PathLike] = (),
@@ -87,18 +92,22 @@ def run_benchmark_command(*, datasets: Sequence[str] = (), added: Sequence[str |
     beside (only ``detectors``: the benchmark's methods and these detectors too).
     ``defaults_from``: the folder of a ``--purpose select`` benchmark; the defaults are then chosen on its
     selection scores with each dataset left out and scored on this run's confirmation splits
-    (:mod:`tzsl.studies.benchmark.defaults`, ``defaults.csv``).
+    (:mod:`tzsl.studies.benchmark.defaults`, ``defaults.csv``), and DAP with ``detector="auto"`` runs beside
+    (:data:`~tzsl.studies.benchmark.runner.DEFAULTS_DETECTORS`).
 
     Raises
     ------
     ConfigError
         ``out`` holds an earlier benchmark and ``force`` is off (checked before any fit); an unknown
-        dataset or method; no dataset completed; ``defaults_from`` is not a selection benchmark.
+        dataset or method; no dataset completed; ``defaults_from`` is not a selection benchmark or
+        ``purpose`` is not ``"confirm"`` with it.
     PartialRunError
         After everything is written, when a dataset failed or some (split, method) fits failed.
     """
+    if defaults_from is not None and purpose != "confirm":
+        raise ConfigError("--defaults scores the defaults on the confirmation splits; drop --purpose select")
     chosen = benchmark_datasets(datasets, added, catalog=catalog)
-    entries = _method_entries(methods, detectors, purpose)
+    entries = _method_entries(methods, detectors, defaults_from is not None)
     results = ResultsDir(Path(out), force=force)
     results.check_free(BENCHMARK_FILES + ((DEFAULTS_FILE,) if defaults_from is not None else ()))
     select = None if defaults_from is None else read_selection(defaults_from)

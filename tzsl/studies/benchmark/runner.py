@@ -32,38 +32,43 @@ from tzsl.exceptions import ConfigError, PartialRunError, TzslError, first_line
 from tzsl.studies.benchmark.catalog import BenchmarkDataset
 from tzsl.studies.benchmark.splits import SEED, SPLITS_VERSION, read_standard_splits, standard_splits
 
-__all__ = ["BENCHMARK_DETECTORS", "DatasetRun", "benchmark_methods", "collect_gzsl", "collect_scores",
-           "dataset_experiment", "detector_entries", "run_benchmark"]
+__all__ = ["BENCHMARK_DETECTORS", "DEFAULTS_DETECTORS", "DatasetRun", "benchmark_methods", "collect_gzsl",
+           "collect_scores", "dataset_experiment", "detector_entries", "run_benchmark"]
 
 #: Sub-folders of a benchmark's folder: the experiment files, the split files they read, the studies' results.
 EXPERIMENTS, SPLITS, DATASETS = "experiments", "splits", "datasets"
 
 
-#: The DAP detector families the benchmark runs beside the study's own (:data:`~tzsl.models.detectors.STUDY_DETECTOR`),
-#: by purpose: the DAP paper's ``rbf-svm`` (also the registered ``ensemble``'s member, so its fits are the
-#: ensemble's, read back from the fit store) on both; ``auto``, the per-dataset choice made on a user's training
-#: objects, on the confirmation splits only: it is what a default chosen across datasets is compared with there
-#: (``defaults.csv``), not a candidate for it, and it costs two to three RBF-SVM banks a split (a bank per
-#: candidate family and pseudo-unseen fold). The tuned linear families (``logistic``, ``linear-svm``,
-#: ``robust-logistic``) lost to ``logistic-c1`` on PHAC-2's detector benchmark
-#: (:data:`tzsl.models.INHERITED_CHOICES`, ``study-detector``) and cost one to three RBF-SVM banks a split on the
-#: larger datasets; ``tzsl benchmark --detector NAME`` adds any of them.
-BENCHMARK_DETECTORS: dict[str, tuple[str, ...]] = {"select": ("rbf-svm",), "confirm": ("rbf-svm", "auto")}
+#: The DAP detector families the benchmark runs beside the study's own (:data:`~tzsl.models.detectors.STUDY_DETECTOR`):
+#: the DAP paper's ``rbf-svm`` (also the registered ``ensemble``'s member, so its fits are the ensemble's, read
+#: back from the fit store). The tuned linear families (``logistic``, ``linear-svm``, ``robust-logistic``) lost to
+#: ``logistic-c1`` on PHAC-2's detector benchmark (:data:`tzsl.models.INHERITED_CHOICES`, ``study-detector``) and
+#: cost one to three RBF-SVM banks a split on the larger datasets; ``tzsl benchmark --detector NAME`` adds any of
+#: them.
+BENCHMARK_DETECTORS: tuple[str, ...] = ("rbf-svm",)
+#: The detector families a run that chooses the defaults (``tzsl benchmark --defaults``) adds: ``auto``, the
+#: per-dataset choice made on a user's training objects, which a default chosen across datasets is compared with
+#: (``defaults.csv``). It is not a candidate for a default, and it costs two to three RBF-SVM banks a split (a bank
+#: per candidate family and pseudo-unseen fold), more than every registered method together on the largest
+#: datasets, so the benchmark itself (``make benchmark``) does not run it.
+DEFAULTS_DETECTORS: tuple[str, ...] = ("auto",)
 
 
-def benchmark_methods(detectors: Sequence[str] = (), purpose: str = "confirm") -> tuple[str, list[dict]]:
+def benchmark_methods(detectors: Sequence[str] = (), *, defaults: bool = False) -> tuple[str, list[dict]]:
     """The study detector and the ``[methods] compare`` entries of the benchmark: every registered method.
 
     The study's own DAP uses :data:`~tzsl.models.detectors.STUDY_DETECTOR` (the generic default's
     detector); every registered feature method is compared beside it, and the registry's ``dap`` once
-    per detector of :data:`BENCHMARK_DETECTORS` (of the run's ``purpose``) and of ``detectors`` (the
-    detector is an axis of the benchmark: the default's detector is chosen among them).
+    per detector of :data:`BENCHMARK_DETECTORS`, of :data:`DEFAULTS_DETECTORS` (when ``defaults``) and of
+    ``detectors`` (the detector is an axis of the benchmark: the default's detector is chosen among them).
 
     Parameters
     ----------
     detectors : sequence of str
         More detector families (:data:`~tzsl.models.detectors.DETECTORS`) to run DAP with.
-    purpose : {"select", "confirm"}
+    defaults : bool
+        The run chooses the defaults across datasets (``tzsl benchmark --defaults``): add
+        :data:`DEFAULTS_DETECTORS`.
 
     Raises
     ------
@@ -73,8 +78,8 @@ def benchmark_methods(detectors: Sequence[str] = (), purpose: str = "confirm") -
     from tzsl.models.detectors import STUDY_DETECTOR  # noqa: PLC0415
     from tzsl.studies.config import every_feature_method  # noqa: PLC0415
 
-    return STUDY_DETECTOR, [*every_feature_method(),
-                            *detector_entries((*BENCHMARK_DETECTORS[purpose], *detectors))]
+    more = (*DEFAULTS_DETECTORS, *detectors) if defaults else tuple(detectors)
+    return STUDY_DETECTOR, [*every_feature_method(), *detector_entries((*BENCHMARK_DETECTORS, *more))]
 
 
 def detector_entries(detectors: Sequence[str]) -> list[dict]:
@@ -129,7 +134,7 @@ def dataset_experiment(dataset: BenchmarkDataset, folder: str | os.PathLike, pur
         splits = [s for s in standard_splits(table) if s.name.startswith(f"{purpose}-")]
     split_file = _write_if_changed(splits[:max_splits],
                                    ensure_folder(folder / SPLITS) / f"{dataset.name}.{purpose}.csv")
-    detector, default_methods = benchmark_methods(purpose=purpose)
+    detector, default_methods = benchmark_methods()
     compare = list(default_methods if methods is None else methods)
     source = {**dataset.dataset_table(), **({} if data_dir is None else {"data_dir": str(Path(data_dir).resolve())})}
     tables = {
