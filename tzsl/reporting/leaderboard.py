@@ -30,7 +30,8 @@ LEADERBOARD_FILES = ("datasets.csv", "ranks.csv", "friedman.csv", "meta_analysis
 def _read(root: Path, name: str) -> pd.DataFrame:
     path = root / name
     if not path.is_file():
-        raise MissingResults(f"{root}: no {name}; run make benchmark (tzsl benchmark --out {root}) first")
+        raise MissingResults(f"{root}: no {name}; run make benchmark or make benchmark-defaults "
+                             f"(tzsl benchmark --out {root}) first")
     return pd.read_csv(path)
 
 
@@ -56,7 +57,8 @@ def leaderboard_block(results: str | Path) -> str:
     names = list(dict.fromkeys(datasets["dataset"]))
     chance = datasets.groupby("dataset")["chance"].first()
     splits = datasets.groupby("dataset")["n_splits"].max()
-    lines = [f"Generated from `{root.name}/` (`tzsl benchmark`, standard splits "
+    command = "tzsl benchmark --defaults" if config.get("defaults_from") else "tzsl benchmark"
+    lines = [f"Generated from `{root.name}/` (`{command}`, standard splits "
              f"{config.get('splits_version', 'v1')}, {config.get('purpose', 'confirm')} splits) by `make numbers`: "
              "per-class mean accuracy over each dataset's splits [95% interval over splits]; a method's mean rank "
              "and mean gain over chance are over the datasets every method completed (lower rank is better).", "",
