@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import re
+from functools import cache
 from importlib import metadata
 from pathlib import Path
 
@@ -42,14 +43,22 @@ def locked_versions(lock: Path) -> dict[str, str]:
     return pins
 
 
-def installed_distributions() -> dict[str, str]:
-    """``{normalised name: version}`` of every distribution importable in this interpreter, sorted."""
+@cache
+def _distributions() -> tuple[tuple[str, str], ...]:
+    """Read once per process: parsing every distribution's metadata takes a noticeable part of a second, and a
+    benchmark writes a manifest per dataset."""
     found: dict[str, str] = {}
     for dist in metadata.distributions():
         name = dist.metadata["Name"]
         if name:
             found.setdefault(_normalised(name), dist.version)
-    return dict(sorted(found.items()))
+    return tuple(sorted(found.items()))
+
+
+def installed_distributions() -> dict[str, str]:
+    """``{normalised name: version}`` of every distribution importable in this interpreter (as it was at its first
+    call in this process), sorted."""
+    return dict(_distributions())
 
 
 def environment_record(source: Path | None = None) -> dict:
