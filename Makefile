@@ -70,24 +70,15 @@ browser:
 	  && apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; } \
 	  || echo "make: chromium is not installed; the report layout test needs it"
 
-# Ruff (every Python file) and mypy (the package), configured in pyproject.toml; make test runs both.
-RUFF = $(BIN)/ruff check .
-MYPY = $(BIN)/mypy
+# Ruff (every Python file) and mypy (the package), configured in pyproject.toml; make test runs it first.
 lint: install
-	$(RUFF)
-	$(MYPY)
+	$(BIN)/ruff check .
+	$(BIN)/mypy
 
 # --dist loadfile: a file's tests share a worker, so the docs build (tests/test_docs.py) is made once and no
-# worker waits for it (the locked pytest and pytest-xdist ignore xdist_group marks). Ruff first (a second); mypy
-# beside the tests, its output printed after theirs: on a clean clone it has no cache and takes a minute and a
-# half on one core, which run before the tests left the other core idle. Either failing fails make test.
-test: install browser
-	$(RUFF)
-	@types_log=$$(mktemp); $(MYPY) > $$types_log 2>&1 & types=$$!; \
-	  echo "$(MYPY) (beside the tests; its output follows theirs)"; \
-	  $(BIN)/pytest -q -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder; tests_rc=$$?; \
-	  wait $$types; types_rc=$$?; cat $$types_log; rm -f $$types_log; \
-	  [ $$tests_rc -eq 0 ] && [ $$types_rc -eq 0 ]
+# worker waits for it (the locked pytest and pytest-xdist ignore xdist_group marks).
+test: install browser lint
+	$(BIN)/pytest -q -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder
 
 # Resolve the locks again from pyproject.toml (CPython 3.11 on this platform, the versions the index serves
 # today); then run reproduce-tables and `make numbers`, and say in CHANGELOG.md what moved.
