@@ -36,8 +36,8 @@ from tzsl.studies.benchmark.defaults import (
     mean_regrets,
 )
 from tzsl.studies.benchmark.runner import (
-    DEFAULTS_DETECTORS,
     DatasetRun,
+    asked_detectors,
     benchmark_methods,
     collect_gzsl,
     collect_scores,
@@ -75,8 +75,7 @@ def _method_entries(methods: Sequence[str], detectors: Sequence[str], defaults: 
 
     for name in methods:
         get_method(name)  # an unknown name: one line with the registered ones
-    more = (*DEFAULTS_DETECTORS, *detectors) if defaults else tuple(detectors)
-    return [{"name": name} for name in methods] + detector_entries(more)
+    return [{"name": name} for name in methods] + detector_entries(asked_detectors(detectors, defaults=defaults))
 
 
 def run_benchmark_command(*, datasets: Sequence[str] = (), added: Sequence[str | os.PathLike] = (),

@@ -32,8 +32,8 @@ from tzsl.exceptions import ConfigError, PartialRunError, TzslError, first_line
 from tzsl.studies.benchmark.catalog import BenchmarkDataset
 from tzsl.studies.benchmark.splits import SEED, SPLITS_VERSION, read_standard_splits, standard_splits
 
-__all__ = ["BENCHMARK_DETECTORS", "DEFAULTS_DETECTORS", "DatasetRun", "benchmark_methods", "collect_gzsl",
-           "collect_scores", "dataset_experiment", "detector_entries", "run_benchmark"]
+__all__ = ["BENCHMARK_DETECTORS", "DEFAULTS_DETECTORS", "DatasetRun", "asked_detectors", "benchmark_methods",
+           "collect_gzsl", "collect_scores", "dataset_experiment", "detector_entries", "run_benchmark"]
 
 #: Sub-folders of a benchmark's folder: the experiment files, the split files they read, the studies' results.
 EXPERIMENTS, SPLITS, DATASETS = "experiments", "splits", "datasets"
@@ -78,8 +78,14 @@ def benchmark_methods(detectors: Sequence[str] = (), *, defaults: bool = False) 
     from tzsl.models.detectors import STUDY_DETECTOR  # noqa: PLC0415
     from tzsl.studies.config import every_feature_method  # noqa: PLC0415
 
-    more = (*DEFAULTS_DETECTORS, *detectors) if defaults else tuple(detectors)
-    return STUDY_DETECTOR, [*every_feature_method(), *detector_entries((*BENCHMARK_DETECTORS, *more))]
+    return STUDY_DETECTOR, [*every_feature_method(),
+                            *detector_entries((*BENCHMARK_DETECTORS, *asked_detectors(detectors, defaults=defaults)))]
+
+
+def asked_detectors(detectors: Sequence[str], *, defaults: bool) -> tuple[str, ...]:
+    """The detector families a run adds to DAP: :data:`DEFAULTS_DETECTORS` when it chooses the defaults
+    (``tzsl benchmark --defaults``), then ``detectors`` (``--detector``)."""
+    return (*DEFAULTS_DETECTORS, *detectors) if defaults else tuple(detectors)
 
 
 def detector_entries(detectors: Sequence[str]) -> list[dict]:
