@@ -40,8 +40,7 @@ class recorded_warnings:
     """
 
     def __init__(self) -> None:
-        self._counts: dict[str, int] = {}
-        self._categories: dict[str, type[Warning]] = {}
+        self._seen: dict[str, tuple[type[Warning], int]] = {}  # text -> (category first seen with it, count)
         self._previous: Callable[..., None] | None = None  # warnings.showwarning while the block runs
 
     def __enter__(self) -> recorded_warnings:
@@ -49,8 +48,8 @@ class recorded_warnings:
 
         def show(message, category, filename, lineno, file=None, line=None):
             text = one_line(message, category)[len("tzsl: warning: "):]
-            self._counts[text] = self._counts.get(text, 0) + 1
-            self._categories.setdefault(text, category)
+            first, n = self._seen.get(text, (category, 0))
+            self._seen[text] = (first, n + 1)
             previous(message, category, filename, lineno, file, line)
 
         warnings.showwarning = show
@@ -64,14 +63,14 @@ class recorded_warnings:
     @property
     def lines(self) -> list[str]:
         """The warnings shown, one line each, in first-seen order."""
-        return [text if n == 1 else f"{text} (x{n})" for text, n in self._counts.items()]
+        return [text if n == 1 else f"{text} (x{n})" for text, (_, n) in self._seen.items()]
 
     @property
     def shown(self) -> list[tuple[str, str, int]]:
         """``(text, category, count)`` of each warning, in first-seen order; ``category`` is
         ``"module:QualName"`` (:func:`warn_again` raises it again as it was)."""
-        return [(text, f"{self._categories[text].__module__}:{self._categories[text].__qualname__}", n)
-                for text, n in self._counts.items()]
+        return [(text, f"{category.__module__}:{category.__qualname__}", n)
+                for text, (category, n) in self._seen.items()]
 
 
 def warn_again(shown: list[tuple[str, str, int]], stacklevel: int = 2) -> None:
